@@ -1,0 +1,77 @@
+//! Feetech SCS/STS/SMS serial-bus servo protocol: packets, checksums, a
+//! streaming decoder and register maps.
+//!
+//! This crate does no I/O, reads no clock and never allocates while encoding
+//! or decoding: encoders write into a caller-owned buffer that is reused every
+//! control cycle, and decoded packets are views borrowing the bytes they came
+//! from.
+//!
+//! ```text
+//!  0    1    2    3     4            5 .. 5+N-1      5+N
+//! +----+----+----+-----+------------+---------------+----------+
+//! | FF | FF | ID | LEN | INST / ERR | P1 .. PN      | CHECKSUM |
+//! +----+----+----+-----+------------+---------------+----------+
+//!                LEN = N + 2        CHECKSUM = !(ID + LEN + INST + sum P) & 0xFF
+//! ```
+//!
+//! A host sends instruction packets (the fifth byte is the instruction); a
+//! servo answers with a status packet (the fifth byte is its error flags).
+//!
+//! ```
+//! use servobus_protocol::{encode, Instruction};
+//!
+//! let mut buf = [0u8; 16];
+//! // Read two bytes of present position (address 0x38) from servo 1.
+//! let n = encode::read(&mut buf, 1, 0x38, 2).unwrap();
+//! assert_eq!(&buf[..n], &[0xFF, 0xFF, 0x01, 0x04, 0x02, 0x38, 0x02, 0xBE]);
+//!
+//! let (packet, used) = servobus_protocol::parse_frame(&buf[..n]).unwrap();
+//! assert_eq!(used, n);
+//! assert_eq!(packet.instruction(), Some(Instruction::Read));
+//! ```
+#![no_std]
+#![warn(missing_docs)]
+
+#[cfg(feature = "alloc")]
+extern crate alloc;
+#[cfg(feature = "std")]
+extern crate std;
+
+mod checksum;
+pub mod decoder;
+pub mod encode;
+mod instruction;
+mod packet;
+
+pub use checksum::checksum;
+pub use decoder::{Decoder, Event};
+pub use encode::EncodeError;
+pub use instruction::{Instruction, StatusFlags};
+pub use packet::{parse_frame, Packet, ParseError};
+
+/// The two bytes that open every packet.
+pub const HEADER: [u8; 2] = [0xFF, 0xFF];
+/// The broadcast ID: every servo executes the instruction; only PING is answered.
+pub const BROADCAST_ID: u8 = 0xFE;
+/// The highest ID a single servo can have.
+pub const MAX_ID: u8 = 253;
+/// Bytes of a frame besides its parameters: header (2), ID, length, instruction, checksum.
+pub const FRAME_OVERHEAD: usize = 6;
+/// The largest value of the length byte.
+pub const MAX_LENGTH_BYTE: usize = 255;
+/// The largest number of parameters one frame can carry (`MAX_LENGTH_BYTE - 2`).
+pub const MAX_PARAMS: usize = MAX_LENGTH_BYTE - 2;
+/// The longest possible frame in bytes.
+pub const MAX_FRAME_LEN: usize = FRAME_OVERHEAD + MAX_PARAMS;
+
+/// Length in bytes of a frame that carries `params` parameter bytes.
+#[inline]
+pub const fn frame_len(params: usize) -> usize {
+    FRAME_OVERHEAD + params
+}
+
+/// Whether `id` may address a single servo (0..=253).
+#[inline]
+pub const fn is_servo_id(id: u8) -> bool {
+    id <= MAX_ID
+}

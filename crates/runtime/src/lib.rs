@@ -1,0 +1,1 @@
+//! servobus-runtime.

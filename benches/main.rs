@@ -1,8 +1,18 @@
-//! The criterion benches of servobus, one harness for every crate.
+//! The criterion benches of servobus: one harness, one binary, a module per crate.
+//!
+//! Run them with `cargo bench`, or one group with e.g. `cargo bench -- protocol/`.
+#![allow(missing_docs)]
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main};
 
-fn placeholder(_c: &mut Criterion) {}
+mod protocol;
+mod timing;
+mod trajectory;
 
-criterion_group!(benches, placeholder);
+criterion_group!(
+    benches,
+    protocol::benches,
+    timing::benches,
+    trajectory::benches
+);
 criterion_main!(benches);

@@ -1,0 +1,6 @@
+//! Benches of servobus-protocol.
+
+use criterion::Criterion;
+
+/// Registers the benches of this module.
+pub fn benches(_c: &mut Criterion) {}

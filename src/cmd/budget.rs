@@ -1,6 +1,12 @@
-//! `servobus budget`.
+//! `servobus budget`: what one control cycle costs on each bus of a robot,
+//! the fastest rate it allows, and what to change when a rate does not fit.
 
 use std::process::ExitCode;
+
+use anyhow::Context;
+use serde::Serialize;
+use servobus_runtime::config::{load_robot_any_rate, BusConfig};
+use servobus_timing::{Change, Plan};
 
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
@@ -16,7 +22,167 @@ pub struct Args {
     pub json: bool,
 }
 
+/// One bus in `--json` output (the names are the architecture page's).
+#[derive(Debug, Serialize)]
+struct BusBudget {
+    name: String,
+    servos: usize,
+    bytes_per_cycle: usize,
+    wire_time_us: f64,
+    cycle_time_us: f64,
+    max_rate_hz: f64,
+    rate_hz: f64,
+    utilisation: f64,
+    /// Every servo read back every cycle at `rate_hz`.
+    feasible: bool,
+    /// Each servo is read once every this many cycles (0: the rate cannot
+    /// run at all).
+    read_every: usize,
+    /// The changes that would make the full cycle fit, cheapest first.
+    fixes: Vec<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct Budget {
+    buses: Vec<BusBudget>,
+}
+
 /// Runs `servobus budget`.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus budget is not available yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let robot = load_robot_any_rate(&args.robot)?;
+    let rate = args.rate.unwrap_or(robot.rate_hz);
+    if !(rate.is_finite() && rate > 0.0) {
+        anyhow::bail!("--rate must be a positive number of Hz, got {rate}");
+    }
+    let mut out = Budget { buses: Vec::new() };
+    let mut text = String::new();
+    let mut all_run = true;
+    text.push_str(&format!(
+        "robot `{}` ({}) at {} Hz: each cycle writes goal positions and reads present positions\n",
+        robot.name,
+        robot.path.display(),
+        fmt_hz(rate)
+    ));
+    for bus in &robot.buses {
+        let (budget, lines) = bus_budget(bus, rate)?;
+        all_run &= budget.read_every > 0;
+        text.push_str(&lines);
+        out.buses.push(budget);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print!("{text}");
+    }
+    Ok(if all_run {
+        ExitCode::SUCCESS
+    } else {
+        if !args.json {
+            eprintln!("error: {} Hz cannot run on every bus of `{}`", fmt_hz(rate), robot.name);
+        }
+        ExitCode::FAILURE
+    })
+}
+
+/// The figures of one bus at `rate`, and their human-readable lines.
+fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)> {
+    // The full cycle's cost does not depend on the rate: plan at a rate any
+    // bus can run to get it even when `rate` itself cannot run.
+    let reference = bus
+        .plan(f64::MIN_POSITIVE)
+        .with_context(|| format!("bus `{}`", bus.name))?;
+    let at_rate = bus.plan(rate);
+    let full = reference.full_cycle();
+    let (read_every, fixes, reason) = match &at_rate {
+        Ok(p) => (p.read_every(), fix_list(p), None),
+        Err(e) => (0, Vec::new(), Some(e.to_string())),
+    };
+    let feasible = read_every == 1;
+    let budget = BusBudget {
+        name: bus.name.clone(),
+        servos: bus.joints.len(),
+        bytes_per_cycle: full.bytes,
+        wire_time_us: full.wire_time_us(),
+        cycle_time_us: full.cycle_time_us(),
+        max_rate_hz: full.max_rate_hz(),
+        rate_hz: rate,
+        utilisation: full.utilisation(rate),
+        feasible,
+        read_every,
+        fixes: fixes.iter().map(ToString::to_string).collect(),
+    };
+
+    let mut s = String::new();
+    let sync = bus.joints.iter().filter(|j| j.model.series.has_sync_read()).count();
+    s.push_str(&format!(
+        "\nbus `{}`: {} servos at {} baud, adapter latency {} us, return delay {} us\n",
+        bus.name,
+        bus.joints.len(),
+        bus.baud,
+        bus.latency.as_micros(),
+        bus.return_delay.as_micros()
+    ));
+    let feedback = match (sync, bus.joints.len() - sync) {
+        (_, 0) => "one SYNC READ".to_owned(),
+        (0, n) => format!("{n} READs (no SYNC READ on these servos)"),
+        (_, n) => format!("one SYNC READ and {n} READs"),
+    };
+    s.push_str(&format!(
+        "  per cycle: {} bytes in {} SYNC WRITE frame(s) and {feedback}, {} round trip(s)\n",
+        full.bytes, full.write_frames, full.round_trips
+    ));
+    s.push_str(&format!(
+        "  wire time {:.0} us; cycle time {:.0} us with return delays, turnarounds and latency\n",
+        full.wire_time_us(),
+        full.cycle_time_us()
+    ));
+    s.push_str(&format!(
+        "  maximum rate {} Hz (the wire alone: {} Hz)\n",
+        fmt_hz(full.max_rate_hz()),
+        fmt_hz(full.wire_limited_rate_hz())
+    ));
+    s.push_str(&format!(
+        "  at {} Hz: utilisation {:.1} %",
+        fmt_hz(rate),
+        100.0 * budget.utilisation
+    ));
+    match (&at_rate, reason) {
+        (Ok(_), _) if feasible => s.push_str(", fits\n"),
+        (Ok(p), _) => {
+            s.push_str(&format!(
+                "; the full cycle does not fit: reads {} servo(s) per cycle, each every {} cycles\n",
+                p.schedule().per_cycle,
+                p.read_every()
+            ));
+            push_fixes(&mut s, &fixes);
+        }
+        (Err(_), Some(why)) => s.push_str(&format!("; cannot run: {why}\n")),
+        (Err(_), None) => s.push('\n'),
+    }
+    Ok((budget, s))
+}
+
+fn fix_list(p: &Plan) -> Vec<Change> {
+    p.fixes().iter().collect()
+}
+
+fn push_fixes(s: &mut String, fixes: &[Change]) {
+    if fixes.is_empty() {
+        return;
+    }
+    s.push_str("  to read every servo every cycle, any one of:\n");
+    for f in fixes {
+        s.push_str(&format!("    - {f}\n"));
+    }
+}
+
+/// A rate for people: whole hertz above 10 Hz, one decimal below.
+fn fmt_hz(hz: f64) -> String {
+    if hz.is_infinite() {
+        "unlimited".to_owned()
+    } else if hz >= 10.0 {
+        format!("{:.0}", hz.floor())
+    } else {
+        format!("{hz:.1}")
+    }
 }

@@ -1,9 +1,108 @@
 //! servobus-driver: talk to a bus of Feetech servos through any
 //! [`Transport`], with time passed in through a [`Clock`].
+//!
+//! A [`Bus`] does the transactions of the Feetech protocol — PING, READ,
+//! WRITE, REG WRITE + ACTION, SYNC WRITE, SYNC READ, RESET — and the
+//! persistent EEPROM write (unlock, write, verify, lock). Why it is built
+//! the way it is:
+//!
+//! - **Deadlines are derived, never fixed.** Each reply deadline is the wire
+//!   time of request and reply at the baud rate, the servo's return delay,
+//!   the adapter's latency and a margin ([`servobus_timing::Link`]). At
+//!   1 Mbps with a 1 ms adapter a READ waits about 1.4 ms, not the tens of
+//!   milliseconds generic SDKs wait, so a lost reply can be re-asked within
+//!   the same control cycle.
+//! - **Results per servo.** A SYNC READ keeps every answer that came and says
+//!   why each missing servo is missing; it never fails because one servo was
+//!   silent, and never attributes a reply to the wrong servo.
+//! - **Time and bytes are passed in.** The transport is a trait with
+//!   deadlines and the clock is a trait, so the same code runs on a real
+//!   serial port ([`SerialTransport`], feature `serial`) and on the simulator
+//!   in virtual time, deterministically.
+//! - **No allocation on the hot path.** Frames are encoded into buffers the
+//!   bus owns; SYNC READ results live in reused storage.
+//!
+//! ```text
+//!  host                                   servos 1, 2, 3
+//!  |-- SYNC WRITE (broadcast, no reply) --->|
+//!  |-- SYNC READ 1,2,3 -------------------->|
+//!  |<----------------- reply 1 -------------|  each after its return delay,
+//!  |<----------------- reply 2 -------------|  in request order
+//!  |<----------------- reply 3 -------------|
+//!  deadline = wire(request) + n x (return delay + turnaround)
+//!             + wire(replies) + adapter latency + margin
+//! ```
+//!
+//! # Example
+//!
+//! A bus over a transport that answers like one servo with ID 1 (a real
+//! program would use [`SerialTransport`] and [`SystemClock`], or the
+//! simulator's bus and a [`ManualClock`]):
+//!
+//! ```
+//! use std::time::Duration;
+//! use servobus_driver::{Bus, BusSettings, ManualClock, Transport, TransportError};
+//! use servobus_protocol::{encode, parse_frame, registers::Series, StatusFlags};
+//!
+//! /// Answers every READ of servo 1 with the bytes 0x00 0x08 (2048).
+//! struct OneServo { pending: Vec<u8> }
+//! impl Transport for OneServo {
+//!     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+//!         if let Ok((p, _)) = parse_frame(bytes) {
+//!             let mut buf = [0u8; 16];
+//!             let n = encode::status(&mut buf, 1, StatusFlags(0), &[0x00, 0x08]).unwrap();
+//!             if p.id() == 1 { self.pending.extend_from_slice(&buf[..n]); }
+//!         }
+//!         Ok(())
+//!     }
+//!     fn read(&mut self, buf: &mut [u8], _deadline: Duration) -> Result<usize, TransportError> {
+//!         if self.pending.is_empty() { return Err(TransportError::TimedOut); }
+//!         let n = buf.len().min(self.pending.len());
+//!         buf[..n].copy_from_slice(&self.pending[..n]);
+//!         self.pending.drain(..n);
+//!         Ok(n)
+//!     }
+//!     fn discard_input(&mut self) -> Result<(), TransportError> {
+//!         self.pending.clear();
+//!         Ok(())
+//!     }
+//! }
+//!
+//! let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
+//! let mut bus = Bus::new(OneServo { pending: Vec::new() }, ManualClock::new(), settings);
+//! let mut position = [0u8; 2];
+//! let flags = bus.read(1, 56, &mut position)?;
+//! assert!(flags.is_ok());
+//! assert_eq!(u16::from_le_bytes(position), 2048);
+//! // Servo 2 is absent: a typed timeout, after a deadline derived from the link.
+//! let err = bus.read(2, 56, &mut position).unwrap_err();
+//! assert!(err.is_timeout());
+//! assert_eq!(bus.counters().timeouts, 2); // the first try and one retry
+//! # Ok::<(), servobus_driver::BusError>(())
+//! ```
 #![warn(missing_docs)]
 
+mod bus;
 mod clock;
+mod eeprom;
+mod error;
+mod io;
+#[cfg(feature = "serial")]
+mod serial;
+mod settings;
+mod stats;
+mod sync;
+#[cfg(test)]
+mod testing;
 mod transport;
 
+pub use bus::{Bus, LatencyMeasurement};
 pub use clock::{Clock, ManualClock, SystemClock};
+pub use eeprom::EepromWrite;
+pub use error::BusError;
+#[cfg(feature = "serial")]
+pub use serial::{ftdi_latency_timer, FtdiLatency, SerialTransport};
+pub use settings::{BusSettings, ReplyLevel};
+pub use stats::{Counters, RttStats};
+pub use sync::{Missing, MissingReason, SyncRead, SyncReply};
 pub use transport::{Transport, TransportError};

@@ -7,9 +7,15 @@
 //! [`Event::Echo`], a [`Event::Discarded`] range, or the bytes still pending.
 //!
 //! Resynchronisation never skips more than it must: when a frame turns out to
-//! be bad (impossible length, wrong checksum) only its first byte is
-//! discarded and the rest is scanned again, so a valid packet that starts
-//! inside the bad one is still found.
+//! be bad (impossible length, wrong checksum, truncated at the end of the
+//! stream) only its first byte and the bytes up to the next possible header
+//! (`FF FF`) are discarded, and scanning resumes there, so a valid packet that
+//! starts inside the bad one is still found.
+//!
+//! A corrupted length byte can make the decoder wait for up to 259 bytes
+//! before it sees that the frame is bad: packets behind it are then delayed,
+//! not lost. Call [`Decoder::finish`] at the end of a reply window to flush
+//! them.
 
 use crate::packet::{check_frame, ParseError};
 use crate::{Packet, MAX_FRAME_LEN};
@@ -21,14 +27,17 @@ const BUF: usize = 2 * MAX_FRAME_LEN;
 pub enum DiscardReason {
     /// Bytes before a packet header.
     Garbage,
-    /// The first byte of an `FF FF FF` run, or of a header whose ID byte is 0xFF.
+    /// The first byte of an `FF FF FF` run, or a header whose ID byte is 0xFF
+    /// (up to the next possible header).
     InvalidId,
-    /// The first byte of a header whose length byte is below 2.
+    /// A header whose length byte is below 2 (up to the next possible header).
     BadLength,
-    /// The first byte of a frame whose checksum did not match (reported just
-    /// after the matching [`Event::ChecksumError`]).
+    /// A frame whose checksum did not match, up to the next possible header
+    /// inside or after it (reported just after the matching
+    /// [`Event::ChecksumError`]).
     Checksum,
-    /// Bytes of a frame that never completed (reported by [`Decoder::finish`]).
+    /// A frame that never completed, up to the next possible header (reported
+    /// by [`Decoder::finish`]).
     Truncated,
 }
 
@@ -59,7 +68,8 @@ pub enum Event<'a> {
         reason: DiscardReason,
     },
     /// A complete frame whose checksum failed. Consumes nothing itself: its
-    /// first byte is reported as discarded next, and the rest is rescanned.
+    /// bytes up to the next possible header are reported as
+    /// [`DiscardReason::Checksum`] next, and scanning resumes there.
     ChecksumError {
         /// The ID byte of the bad frame.
         id: u8,
@@ -241,8 +251,9 @@ impl Decoder {
     }
 
     /// Declares the end of the stream (or of a reply window): an incomplete
-    /// frame at the front is given up on, its first byte discarded, and the
-    /// remaining bytes scanned again. Call it in a loop until it returns
+    /// frame at the front is given up on (discarded up to the next possible
+    /// header, as [`DiscardReason::Truncated`]) and the remaining bytes are
+    /// scanned again. Call it in a loop until it returns
     /// `None`; afterwards nothing is pending.
     pub fn finish(&mut self) -> Option<Event<'_>> {
         match self.step(true) {
@@ -267,36 +278,39 @@ impl Decoder {
     fn step(&self, at_end: bool) -> Step {
         let w = &self.buf[self.start..self.end];
         if self.checksum_skip {
-            return Step::Discard(1, DiscardReason::Checksum);
+            return Step::Discard(self.checksum_skip_len(), DiscardReason::Checksum);
         }
         if w.is_empty() {
             return Step::NeedMore;
         }
-        // Skip to the first place a header could start: FF followed by FF (or
-        // by nothing yet).
-        let mut i = 0;
-        while i < w.len() && !(w[i] == 0xFF && (i + 1 == w.len() || w[i + 1] == 0xFF)) {
-            i += 1;
-        }
+        let i = next_header(w, 0);
         if i > 0 {
             return Step::Discard(i, DiscardReason::Garbage);
         }
+        // A bad frame gives up only its first byte as such; the bytes up to the
+        // next place a header could start cannot begin a packet either, so
+        // they are discarded with it under the same reason (one event per bad
+        // frame, same accounting as rescanning them one by one).
+        let bad = |reason| Step::Discard(next_header(w, 1), reason);
         match check_frame(w) {
             Ok(len) => Step::Frame(len),
-            Err(ParseError::Incomplete { .. }) if at_end => {
-                Step::Discard(1, DiscardReason::Truncated)
-            }
+            Err(ParseError::Incomplete { .. }) if at_end => bad(DiscardReason::Truncated),
             Err(ParseError::Incomplete { .. }) => Step::NeedMore,
-            Err(ParseError::InvalidId) => Step::Discard(1, DiscardReason::InvalidId),
-            Err(ParseError::BadLength(_)) => Step::Discard(1, DiscardReason::BadLength),
+            Err(ParseError::InvalidId) => bad(DiscardReason::InvalidId),
+            Err(ParseError::BadLength(_)) => bad(DiscardReason::BadLength),
             Err(ParseError::Checksum { expected, found }) => Step::BadChecksum {
                 id: w[2],
                 expected,
                 found,
             },
             // Unreachable after the header scan above; treat as garbage.
-            Err(ParseError::NoHeader) => Step::Discard(1, DiscardReason::Garbage),
+            Err(ParseError::NoHeader) => bad(DiscardReason::Garbage),
         }
+    }
+
+    /// Bytes to discard after a checksum failure at the window's start.
+    fn checksum_skip_len(&self) -> usize {
+        next_header(&self.buf[self.start..self.end], 1)
     }
 
     fn consume(&mut self, n: usize) -> (usize, u64) {
@@ -355,4 +369,30 @@ impl Decoder {
             }
         }
     }
+}
+
+/// The first index at or after `from` where a header could start: `FF FF`,
+/// or a lone `FF` as the last byte (its partner may still arrive). Returns
+/// `w.len()` when there is none.
+fn next_header(w: &[u8], from: usize) -> usize {
+    let mut i = from;
+    while i < w.len() {
+        match memchr_ff(&w[i..]) {
+            None => return w.len(),
+            Some(k) => {
+                let at = i + k;
+                if at + 1 == w.len() || w[at + 1] == 0xFF {
+                    return at;
+                }
+                i = at + 1;
+            }
+        }
+    }
+    w.len()
+}
+
+/// Position of the first `FF` byte.
+#[inline]
+fn memchr_ff(w: &[u8]) -> Option<usize> {
+    w.iter().position(|&b| b == 0xFF)
 }

@@ -238,6 +238,9 @@ where
     let block = usize::from(len) + 1;
     let mut params = 2usize;
     let mut servos = 0usize;
+    // Once the buffer is too small, the remaining items are still checked and
+    // counted (not written) so that the error gives the exact size needed.
+    let mut overflow = false;
     for (id, data) in items {
         check_id(id, false)?;
         if data.len() != usize::from(len) {
@@ -258,15 +261,13 @@ where
                 excess: length - crate::MAX_LENGTH_BYTE,
             });
         }
-        if at + block >= buf.len() {
-            return Err(EncodeError::BufferTooSmall {
-                needed: frame_len(params),
-                available: buf.len(),
-            });
-        }
-        buf[at] = id;
-        buf[at + 1..at + block].copy_from_slice(data);
         servos += 1;
+        // The block ends at `at + block`; the checksum needs one more byte.
+        overflow |= at + block >= buf.len();
+        if !overflow {
+            buf[at] = id;
+            buf[at + 1..at + block].copy_from_slice(data);
+        }
     }
     if servos == 0 {
         return Err(EncodeError::Empty { what: "SYNC WRITE" });

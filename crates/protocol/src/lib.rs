@@ -38,13 +38,16 @@ extern crate alloc;
 extern crate std;
 
 mod checksum;
+mod command;
 pub mod decoder;
 pub mod encode;
 mod instruction;
 mod packet;
+pub mod registers;
 
 pub use checksum::checksum;
-pub use decoder::{Decoder, Event};
+pub use command::{Command, CommandError, SyncWrite};
+pub use decoder::{Decoder, DecoderStats, DiscardReason, Event};
 pub use encode::EncodeError;
 pub use instruction::{Instruction, StatusFlags};
 pub use packet::{parse_frame, Packet, ParseError};

@@ -4,6 +4,8 @@
 use core::time::Duration;
 
 use servobus_protocol::frame_len;
+#[cfg(test)]
+use servobus_protocol::MAX_FRAME_LEN;
 
 /// Bits on the wire per byte with 8N1 framing (start, 8 data, stop).
 pub const BITS_PER_BYTE: u64 = 10;
@@ -64,13 +66,20 @@ impl Link {
     }
 
     /// Wire time of `bytes` bytes in whole nanoseconds, rounded up.
+    ///
+    /// Exact for every input: the bit count is split into whole seconds and
+    /// a remainder below one second so that no intermediate product
+    /// overflows; a result beyond `u64::MAX` ns (584 years) saturates.
     pub const fn wire_nanos(&self, bytes: usize) -> u64 {
+        const NANOS_PER_SEC: u64 = 1_000_000_000;
         let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
         let baud = if self.baud == 0 { 1 } else { self.baud as u64 };
-        // bits * 1e9 fits u64 for any frame count below ~1.8e9 bytes; beyond
-        // that saturate rather than overflow.
-        match bits.checked_mul(1_000_000_000) {
-            Some(n) => n.div_ceil(baud),
+        let whole_secs = bits / baud;
+        // rem < baud <= u32::MAX, so rem * 1e9 < 4.3e18 fits a u64.
+        let rem = bits % baud;
+        let frac = (rem * NANOS_PER_SEC).div_ceil(baud);
+        match whole_secs.checked_mul(NANOS_PER_SEC) {
+            Some(n) => n.saturating_add(frac),
             None => u64::MAX,
         }
     }
@@ -139,6 +148,68 @@ mod tests {
         assert_eq!(Link::new(3).wire_nanos(1), 3_333_333_334);
         assert_eq!(Link::new(0).wire_nanos(1), 10_000_000_000);
         assert_eq!(Link::new(1).wire_nanos(usize::MAX), u64::MAX);
+    }
+
+    /// Wire time of N bytes = ceil(N x 10 x 1e9 / baud) ns, worked out by
+    /// hand for each row.
+    #[test]
+    fn wire_time_table() {
+        let table: [(u32, usize, u64); 22] = [
+            // 1 Mbps: exactly 10 us a byte.
+            (1_000_000, 0, 0),
+            (1_000_000, 1, 10_000),
+            (1_000_000, 255, 2_550_000),
+            (1_000_000, MAX_FRAME_LEN, 2_590_000),
+            (500_000, 1, 20_000),
+            (250_000, 1, 40_000),
+            // 1e10 / 128000 = 78125 exactly: no rounding.
+            (128_000, 1, 78_125),
+            // 1e10 / 115200 = 86805.55.. -> 86806.
+            (115_200, 1, 86_806),
+            // 2.55e12 / 115200 = 22135416.66.. -> 22135417.
+            (115_200, 255, 22_135_417),
+            // 1e10 / 76800 = 130208.33.. -> 130209 (rounds up, not to nearest).
+            (76_800, 1, 130_209),
+            // 1e10 / 57600 = 173611.11.. -> 173612.
+            (57_600, 1, 173_612),
+            // 2.59e12 / 57600 = 44965277.7.. -> 44965278.
+            (57_600, MAX_FRAME_LEN, 44_965_278),
+            // 1e10 / 38400 = 260416.66.. -> 260417.
+            (38_400, 1, 260_417),
+            // 2.55e12 / 38400 = 66406250 exactly.
+            (38_400, 255, 66_406_250),
+            // 2.59e12 / 38400 = 67447916.66.. -> 67447917.
+            (38_400, MAX_FRAME_LEN, 67_447_917),
+            // Non-standard rates.
+            (921_600, 1, 10_851),
+            (921_600, MAX_FRAME_LEN, 2_810_330),
+            (3, 1, 3_333_333_334),
+            (1, 1, 10_000_000_000),
+            // The fastest u32 baud: 1e10 / 4294967295 = 2.3.. -> 3.
+            (u32::MAX, 1, 3),
+            (u32::MAX, MAX_FRAME_LEN, 604),
+            // Far more bytes than any cycle (1e10 bits = 1e4 s): exact, no
+            // overflow although bits x 1e9 would not fit a u64.
+            (1_000_000, 1_000_000_000, 10_000_000_000_000),
+        ];
+        for (baud, bytes, nanos) in table {
+            let l = Link::new(baud);
+            assert_eq!(l.wire_nanos(bytes), nanos, "{bytes} bytes at {baud} baud");
+            assert_eq!(l.wire_time(bytes), Duration::from_nanos(nanos));
+        }
+    }
+
+    #[test]
+    fn wire_time_saturates_instead_of_overflowing() {
+        // 1.9e9 bytes at 1 baud = 1.9e19 ns, over u64::MAX (1.84e19).
+        assert_eq!(Link::new(1).wire_nanos(1_900_000_000), u64::MAX);
+        assert_eq!(Link::new(1_000_000).wire_nanos(usize::MAX), u64::MAX);
+        // usize::MAX bytes saturate to u64::MAX = (2^32 - 1)(2^32 + 1) bits;
+        // at u32::MAX baud that is exactly 2^32 + 1 seconds.
+        assert_eq!(
+            Link::new(u32::MAX).wire_nanos(usize::MAX),
+            4_294_967_297_000_000_000
+        );
     }
 
     #[test]

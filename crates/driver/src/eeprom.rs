@@ -1,0 +1,99 @@
+//! Persistent (EEPROM) writes as one transaction: unlock, write, read back
+//! and verify, lock again.
+//!
+//! The lock register (55 on STS/SMS, 48 on SCS) decides whether EEPROM
+//! writes survive a power cycle; a write applies at once either way. So the
+//! transaction opens the lock, writes, checks the servo now holds the bytes,
+//! and closes the lock — at the new ID when the ID register itself was
+//! written. The servo answers the ID write from its old ID (STS firmware);
+//! a reply from either ID is accepted.
+
+use servobus_protocol::registers::addr;
+use servobus_protocol::{StatusFlags, MAX_PARAMS};
+
+use crate::{Bus, BusError, Clock, Transport};
+
+/// The outcome of [`Bus::write_eeprom`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EepromWrite {
+    /// The servo's ID afterwards (the new one when the ID was written).
+    pub id: u8,
+    /// Status flags of the verifying read.
+    pub flags: StatusFlags,
+}
+
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// Writes `data` at `address` of servo `id` so that it persists:
+    /// unlock, write, read back and compare, lock. When the write covers the
+    /// ID register, the read-back and the lock go to the new ID.
+    ///
+    /// If any step after the unlock fails, the lock is closed again (best
+    /// effort, at whichever ID answers) before the error is returned.
+    ///
+    /// # Errors
+    /// [`BusError::Verify`] when the servo reads back other bytes; the error
+    /// of the first step that failed otherwise.
+    pub fn write_eeprom(
+        &mut self,
+        id: u8,
+        address: u8,
+        data: &[u8],
+    ) -> Result<EepromWrite, BusError> {
+        if data.is_empty() || data.len() > MAX_PARAMS - 1 {
+            return Err(BusError::InvalidRequest(
+                "EEPROM write of no or too many bytes",
+            ));
+        }
+        let lock = self.settings.series.map().lock_address;
+        // Where the ID register falls inside the written range, if it does.
+        let new_id = usize::from(addr::ID)
+            .checked_sub(usize::from(address))
+            .and_then(|at| data.get(at).copied())
+            .unwrap_or(id);
+        if new_id > servobus_protocol::MAX_ID {
+            return Err(BusError::InvalidRequest("new ID above 253"));
+        }
+        self.write(id, lock, &[0])?;
+        match self.write_verify(id, new_id, address, data) {
+            Ok(flags) => {
+                self.write(new_id, lock, &[1])?;
+                Ok(EepromWrite { id: new_id, flags })
+            }
+            Err(e) => {
+                // Best effort: the first error is the one worth reporting.
+                if self.write(new_id, lock, &[1]).is_err() && new_id != id {
+                    let _ = self.write(id, lock, &[1]);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    fn write_verify(
+        &mut self,
+        id: u8,
+        new_id: u8,
+        address: u8,
+        data: &[u8],
+    ) -> Result<StatusFlags, BusError> {
+        match self.write_either(id, new_id, address, data) {
+            Ok(_) => {}
+            // The servo may have taken the new ID and its reply been lost:
+            // the read-back at the new ID decides.
+            Err(e) if new_id != id && e.is_retryable() => {}
+            Err(e) => return Err(e),
+        }
+        let mut back = [0u8; MAX_PARAMS];
+        let back = &mut back[..data.len()];
+        let flags = self.read(new_id, address, back)?;
+        if back != data {
+            return Err(BusError::Verify {
+                id: new_id,
+                address,
+                expected: data.to_vec(),
+                actual: back.to_vec(),
+            });
+        }
+        Ok(flags)
+    }
+}

@@ -1,0 +1,210 @@
+//! The request/reply engine under [`Bus`](crate::Bus): send a frame, then
+//! feed what comes back through the streaming decoder until a sink is
+//! satisfied or the deadline passes.
+//!
+//! Invariants kept here, for every transaction kind:
+//! - input is drained (transport and decoder) before each request, so a late
+//!   reply to an earlier request cannot be taken for the current one;
+//! - a frame identical to the current or the previous request (a half-duplex
+//!   echo, possibly a late one) and any frame with the broadcast ID (only the
+//!   host sends those) is never handed to the sink as a reply;
+//! - every byte received is accounted for: in a reply, an echo, or the
+//!   discarded count.
+
+use std::time::Duration;
+
+use servobus_protocol::{Decoder, Event, Packet, BROADCAST_ID, MAX_FRAME_LEN};
+
+use crate::{Clock, Transport, TransportError};
+
+/// Receives what the engine finds while waiting.
+pub(crate) trait Sink {
+    /// A valid frame that is neither an echo nor a host frame. Returns `true`
+    /// when the wait is over.
+    fn packet(&mut self, packet: &Packet<'_>, now: Duration) -> bool;
+    /// A complete frame with a bad checksum; `id` is its (untrusted) ID byte.
+    fn checksum_error(&mut self, id: u8);
+}
+
+/// What one wait saw, besides what the sink took.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Tally {
+    /// Whether the sink declared the wait over before the deadline.
+    pub done: bool,
+    pub echoes: u64,
+    /// Every byte discarded, stale input included.
+    pub discarded_bytes: u64,
+    /// Bytes discarded that arrived during this wait (garbled replies).
+    pub garbage_bytes: u64,
+    pub checksum_errors: u64,
+}
+
+/// Transport, clock, decoder and the reused frame buffers.
+pub(crate) struct Io<T, C> {
+    pub transport: T,
+    pub clock: C,
+    decoder: Decoder,
+    /// The request being sent: `tx[..tx_len]`.
+    pub tx: [u8; MAX_FRAME_LEN],
+    pub tx_len: usize,
+    /// The request sent before it, kept to recognise a late echo.
+    prev: [u8; MAX_FRAME_LEN],
+    prev_len: usize,
+    rx: [u8; 256],
+    /// Whether the adapter may echo requests (see `BusSettings::echo`).
+    pub echo: bool,
+    /// Decoder totals at the start of the current request.
+    base_discarded: u64,
+    base_echoes: u64,
+    base_checksum: u64,
+    /// Stale bytes dropped by the last `send`.
+    stale: u64,
+}
+
+impl<T: Transport, C: Clock> Io<T, C> {
+    pub fn new(transport: T, clock: C) -> Self {
+        Io {
+            transport,
+            clock,
+            decoder: Decoder::new(),
+            tx: [0; MAX_FRAME_LEN],
+            tx_len: 0,
+            prev: [0; MAX_FRAME_LEN],
+            prev_len: 0,
+            rx: [0; 256],
+            echo: true,
+            base_discarded: 0,
+            base_echoes: 0,
+            base_checksum: 0,
+            stale: 0,
+        }
+    }
+
+    /// Makes room for a new request: the current one becomes the previous.
+    /// Encode into `self.tx` right after and set `tx_len`.
+    pub fn begin(&mut self) {
+        self.prev[..self.tx_len].copy_from_slice(&self.tx[..self.tx_len]);
+        self.prev_len = self.tx_len;
+        self.tx_len = 0;
+    }
+
+    /// Drains input, then sends `tx[..tx_len]`. Returns the time sending
+    /// started, from which reply deadlines are measured.
+    pub fn send(&mut self) -> Result<Duration, TransportError> {
+        self.transport.discard_input()?;
+        // Bytes pending in the decoder belong to an earlier exchange; they
+        // count as discarded in this one, but not as garbage of its reply.
+        self.stale = self.decoder.clear() as u64;
+        let stats = self.decoder.stats();
+        self.base_discarded = stats.discarded_bytes;
+        self.base_echoes = stats.echoes;
+        self.base_checksum = stats.checksum_errors;
+        let start = self.clock.now();
+        self.transport.write_all(&self.tx[..self.tx_len])?;
+        if self.echo {
+            self.decoder.expect_echo(&self.tx[..self.tx_len]);
+        }
+        Ok(start)
+    }
+
+    /// Feeds received bytes to `sink` until it is satisfied or `deadline`
+    /// passes.
+    ///
+    /// # Errors
+    /// Transport failures other than a timeout.
+    pub fn exchange<S: Sink>(
+        &mut self,
+        deadline: Duration,
+        sink: &mut S,
+    ) -> Result<Tally, TransportError> {
+        let mut tally = Tally::default();
+        let mut own = Own {
+            tx: &self.tx[..self.tx_len],
+            prev: &self.prev[..self.prev_len],
+            // Without echo, no frame of ours is expected back: behave as if
+            // the echo had already been skipped, and trust identical frames.
+            echo_seen: !self.echo,
+            prev_is_echo: self.echo,
+        };
+        'wait: loop {
+            let n = match self.transport.read(&mut self.rx, deadline) {
+                Ok(n) => n,
+                Err(TransportError::TimedOut) => {
+                    // Whatever is pending will not complete in time: give up
+                    // on it, but still look for frames inside it.
+                    while let Some(ev) = self.decoder.finish() {
+                        if own.handle(ev, &self.clock, sink, &mut tally) {
+                            break;
+                        }
+                    }
+                    break 'wait;
+                }
+                Err(e) => return Err(e),
+            };
+            let mut input = &self.rx[..n.min(self.rx.len())];
+            while let Some(ev) = self.decoder.decode(&mut input) {
+                if own.handle(ev, &self.clock, sink, &mut tally) {
+                    // Bytes after the awaited reply are not for us.
+                    tally.discarded_bytes += input.len() as u64;
+                    break 'wait;
+                }
+            }
+        }
+        let stats = self.decoder.stats();
+        tally.garbage_bytes = stats.discarded_bytes - self.base_discarded;
+        tally.discarded_bytes += tally.garbage_bytes + self.stale;
+        self.stale = 0;
+        tally.echoes += stats.echoes - self.base_echoes;
+        tally.checksum_errors += stats.checksum_errors - self.base_checksum;
+        self.base_discarded = stats.discarded_bytes;
+        self.base_echoes = stats.echoes;
+        self.base_checksum = stats.checksum_errors;
+        Ok(tally)
+    }
+}
+
+/// The frames this host sent last. One copy of the current request is its
+/// echo; a second identical copy can only be a reply that happens to have
+/// the same bytes (e.g. a PING answered with status 0x01).
+struct Own<'a> {
+    tx: &'a [u8],
+    prev: &'a [u8],
+    echo_seen: bool,
+    prev_is_echo: bool,
+}
+
+impl Own<'_> {
+    /// Handles one decoder event; returns `true` when the sink is done.
+    fn handle<C: Clock, S: Sink>(
+        &mut self,
+        ev: Event<'_>,
+        clock: &C,
+        sink: &mut S,
+        tally: &mut Tally,
+    ) -> bool {
+        match ev {
+            Event::Packet { packet, .. } => {
+                let bytes = packet.bytes();
+                let echo = bytes == self.tx && !self.echo_seen;
+                self.echo_seen |= echo;
+                if echo || (self.prev_is_echo && bytes == self.prev) || packet.id() == BROADCAST_ID
+                {
+                    tally.echoes += 1;
+                    return false;
+                }
+                let done = sink.packet(&packet, clock.now());
+                tally.done |= done;
+                done
+            }
+            Event::ChecksumError { id, .. } => {
+                sink.checksum_error(id);
+                false
+            }
+            Event::Echo { .. } => {
+                self.echo_seen = true;
+                false
+            }
+            Event::Discarded { .. } => false,
+        }
+    }
+}

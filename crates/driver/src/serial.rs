@@ -1,0 +1,257 @@
+//! The real serial port: [`SerialTransport`] over the `serialport` crate.
+//!
+//! 8 data bits, no parity, one stop bit, no flow control, raw mode. Reads
+//! wait with nanosecond deadlines (`ppoll` on Linux) rather than the
+//! tenth-of-a-second granularity of `VTIME`. Pseudo-terminals work too: the
+//! simulator serves on one.
+//!
+//! USB adapters add latency of their own. FTDI chips hold received bytes
+//! for up to their *latency timer* (16 ms by default) before sending them to
+//! the host, which dwarfs the wire time of a reply at 1 Mbps. On Linux,
+//! [`ftdi_latency_timer`] reads the timer from sysfs so that a tool can warn
+//! (see [`FtdiLatency::warning`]) and a bus can take the latency into
+//! account.
+
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serialport::{ClearBuffer, DataBits, FlowControl, Parity, SerialPort, StopBits};
+
+use crate::{Clock, Transport, TransportError};
+
+/// A serial port (or pseudo-terminal) as a [`Transport`], with deadlines on
+/// the time base of `C`.
+pub struct SerialTransport<C: Clock> {
+    port: Box<dyn SerialPort>,
+    clock: C,
+    path: String,
+    ftdi: Option<FtdiLatency>,
+}
+
+impl<C: Clock> std::fmt::Debug for SerialTransport<C> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SerialTransport")
+            .field("path", &self.path)
+            .field("ftdi", &self.ftdi)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<C: Clock> SerialTransport<C> {
+    /// Opens `path` at `baud`, 8N1, raw, with exclusive access.
+    ///
+    /// # Errors
+    /// [`TransportError::Disconnected`] when the port does not exist,
+    /// [`TransportError::Io`] for any other failure to open or configure it.
+    pub fn open(path: &str, baud: u32, clock: C) -> Result<Self, TransportError> {
+        let port = serialport::new(path, baud)
+            .data_bits(DataBits::Eight)
+            .parity(Parity::None)
+            .stop_bits(StopBits::One)
+            .flow_control(FlowControl::None)
+            .timeout(Duration::ZERO)
+            .open()
+            .map_err(|e| match e.kind() {
+                serialport::ErrorKind::NoDevice => {
+                    TransportError::Disconnected(format!("{path}: {e}"))
+                }
+                serialport::ErrorKind::Io(kind) => {
+                    TransportError::Io(io::Error::new(kind, format!("{path}: {e}")))
+                }
+                _ => TransportError::Io(io::Error::other(format!("{path}: {e}"))),
+            })?;
+        let ftdi = ftdi_latency_timer(Path::new(path));
+        Ok(SerialTransport {
+            port,
+            clock,
+            path: path.to_owned(),
+            ftdi,
+        })
+    }
+
+    /// The path the port was opened with.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// The FTDI latency timer of the adapter, when it is an FTDI adapter on
+    /// Linux.
+    pub fn ftdi_latency(&self) -> Option<&FtdiLatency> {
+        self.ftdi.as_ref()
+    }
+
+    /// Changes the baud rate.
+    ///
+    /// # Errors
+    /// [`TransportError::Io`] when the port refuses it.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        self.port.set_baud_rate(baud).map_err(serial_error)
+    }
+
+    /// The clock deadlines are measured on.
+    pub fn clock(&self) -> &C {
+        &self.clock
+    }
+}
+
+fn serial_error(e: serialport::Error) -> TransportError {
+    match e.kind() {
+        serialport::ErrorKind::NoDevice => TransportError::Disconnected(e.to_string()),
+        _ => TransportError::Io(io::Error::other(e.to_string())),
+    }
+}
+
+/// Sorts an I/O error into timeout, disconnection or other.
+fn io_error(e: io::Error) -> TransportError {
+    // EIO is what Linux returns on a pty whose other side closed, and on an
+    // unplugged USB adapter.
+    const EIO: i32 = 5;
+    match e.kind() {
+        io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock => TransportError::TimedOut,
+        io::ErrorKind::BrokenPipe
+        | io::ErrorKind::NotConnected
+        | io::ErrorKind::UnexpectedEof
+        | io::ErrorKind::ConnectionReset => TransportError::Disconnected(e.to_string()),
+        _ if e.raw_os_error() == Some(EIO) || e.to_string().contains("I/O error") => {
+            TransportError::Disconnected(e.to_string())
+        }
+        _ => TransportError::Io(e),
+    }
+}
+
+impl<C: Clock> Transport for SerialTransport<C> {
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        // Writes are bounded by the wire time of the bytes; give the OS a
+        // generous bound derived from nothing but "the port is alive".
+        self.port
+            .set_timeout(Duration::from_secs(1))
+            .map_err(serial_error)?;
+        self.port.write_all(bytes).map_err(io_error)
+    }
+
+    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+        let wait = deadline.saturating_sub(self.clock.now());
+        self.port.set_timeout(wait).map_err(serial_error)?;
+        match self.port.read(buf) {
+            Ok(0) if !buf.is_empty() => Err(TransportError::Disconnected(format!(
+                "{}: end of file",
+                self.path
+            ))),
+            Ok(n) => Ok(n),
+            Err(e) => Err(io_error(e)),
+        }
+    }
+
+    fn discard_input(&mut self) -> Result<(), TransportError> {
+        self.port.clear(ClearBuffer::Input).map_err(serial_error)
+    }
+}
+
+/// The latency timer of an FTDI USB serial adapter (Linux).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FtdiLatency {
+    /// The sysfs file holding it, e.g.
+    /// `/sys/bus/usb-serial/devices/ttyUSB0/latency_timer`.
+    pub sysfs_path: PathBuf,
+    /// Its value.
+    pub latency: Duration,
+}
+
+impl FtdiLatency {
+    /// The best value: 1 ms.
+    pub const BEST: Duration = Duration::from_millis(1);
+
+    /// Whether the timer is above 1 ms (every reply is held that long).
+    pub fn is_too_high(&self) -> bool {
+        self.latency > Self::BEST
+    }
+
+    /// A one-line warning with the fix, when the timer is too high.
+    pub fn warning(&self) -> Option<String> {
+        self.is_too_high().then(|| {
+            format!(
+                "FTDI latency timer is {} ms: every reply waits that long; set it to 1 with \
+                 `echo 1 | sudo tee {}`",
+                self.latency.as_millis(),
+                self.sysfs_path.display()
+            )
+        })
+    }
+}
+
+/// Reads the FTDI latency timer of the adapter behind `port` (a device path
+/// or a symbolic link to one), on Linux. `None` for anything that is not a
+/// USB serial adapter with a latency timer (CDC-ACM adapters, ptys, other
+/// systems).
+pub fn ftdi_latency_timer(port: &Path) -> Option<FtdiLatency> {
+    let dev = std::fs::canonicalize(port).ok()?;
+    let name = dev.file_name()?.to_str()?;
+    if !name.starts_with("ttyUSB") {
+        return None;
+    }
+    let sysfs_path = Path::new("/sys/bus/usb-serial/devices")
+        .join(name)
+        .join("latency_timer");
+    let text = std::fs::read_to_string(&sysfs_path).ok()?;
+    let ms: u64 = text.trim().parse().ok()?;
+    Some(FtdiLatency {
+        sysfs_path,
+        latency: Duration::from_millis(ms),
+    })
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+    use crate::SystemClock;
+
+    #[test]
+    fn a_pty_is_a_serial_port() {
+        let Ok((mut master, slave)) = serialport::TTYPort::pair() else {
+            // No pty support in this environment: nothing to test.
+            return;
+        };
+        let Some(name) = slave.name() else { return };
+        let clock = SystemClock::new();
+        let mut port = SerialTransport::open(&name, 1_000_000, clock)
+            .or_else(|_| {
+                // The pair's slave holds the exclusive lock; drop it and reopen.
+                drop(slave);
+                SerialTransport::open(&name, 1_000_000, clock)
+            })
+            .expect("open pty");
+        assert!(port.ftdi_latency().is_none());
+        port.write_all(&[1, 2, 3]).expect("write");
+        let mut got = [0u8; 8];
+        master.set_timeout(Duration::from_secs(5)).expect("timeout");
+        let n = master.read(&mut got).expect("master read");
+        assert_eq!(&got[..n], &[1, 2, 3]);
+        // Nothing to read: a timeout, not an error.
+        let err = port.read(&mut got, clock.now()).unwrap_err();
+        assert!(err.is_timeout(), "{err}");
+        master.write_all(&[9, 8]).expect("master write");
+        let deadline = clock.now() + Duration::from_secs(5);
+        let n = port.read(&mut got, deadline).expect("read");
+        assert_eq!(&got[..n], &[9, 8][..n]);
+    }
+
+    #[test]
+    fn ftdi_warning_names_the_sysfs_file() {
+        let f = FtdiLatency {
+            sysfs_path: PathBuf::from("/sys/bus/usb-serial/devices/ttyUSB0/latency_timer"),
+            latency: Duration::from_millis(16),
+        };
+        let w = f.warning().unwrap_or_default();
+        assert!(
+            w.contains("16 ms") && w.contains("ttyUSB0/latency_timer"),
+            "{w}"
+        );
+        let ok = FtdiLatency {
+            latency: FtdiLatency::BEST,
+            ..f
+        };
+        assert_eq!(ok.warning(), None);
+        assert_eq!(ftdi_latency_timer(Path::new("/dev/null")), None);
+    }
+}

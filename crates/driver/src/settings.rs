@@ -1,0 +1,116 @@
+//! [`BusSettings`]: everything a [`Bus`](crate::Bus) needs to know about its
+//! servos and link, per bus (two buses in one process may differ).
+
+use std::time::Duration;
+
+use servobus_protocol::registers::Series;
+use servobus_timing::Link;
+
+/// Which instructions the servos answer: their status level (register 8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum ReplyLevel {
+    /// Level 0: only PING and READ are answered; WRITE, REG WRITE, ACTION and
+    /// RESET apply silently.
+    PingAndRead,
+    /// Level 1 (the factory setting): every instruction addressed to one
+    /// servo is answered.
+    #[default]
+    All,
+}
+
+/// Settings of one bus.
+///
+/// ```
+/// use std::time::Duration;
+/// use servobus_driver::BusSettings;
+/// use servobus_protocol::registers::Series;
+///
+/// let s = BusSettings::new(Series::Sts, 1_000_000)
+///     .with_latency(Duration::from_millis(1))
+///     .with_retries(2);
+/// assert_eq!(s.link.baud, 1_000_000);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct BusSettings {
+    /// The servo family: register layout and byte order of this bus.
+    pub series: Series,
+    /// Baud rate, adapter latency, turnaround and margin: every reply
+    /// deadline is derived from it.
+    pub link: Link,
+    /// The servos' return delay (register 7; 2 us per unit).
+    pub return_delay: Duration,
+    /// How many times a failed transaction is tried again (0: never).
+    pub retries: u8,
+    /// Which instructions the servos answer.
+    pub replies: ReplyLevel,
+    /// Whether the adapter may echo requests back (half-duplex adapters
+    /// without automatic direction control). When on (the default), one copy
+    /// of each request and any copy of the previous request are skipped;
+    /// turn it off on an adapter known not to echo, so that a reply which
+    /// happens to be byte-identical to its request (a PING answered with
+    /// status 0x01) is not taken for an echo.
+    pub echo: bool,
+    /// Whether a reply with error flags set fails the transaction
+    /// ([`BusError::Status`](crate::BusError::Status)) instead of returning
+    /// the flags with the data.
+    pub strict_status: bool,
+}
+
+impl BusSettings {
+    /// Settings for a bus of `series` servos at `baud`: no adapter latency,
+    /// return delay 0, one retry, every instruction answered, echo skipped.
+    pub fn new(series: Series, baud: u32) -> Self {
+        BusSettings {
+            series,
+            link: Link::new(baud),
+            return_delay: Duration::ZERO,
+            retries: 1,
+            replies: ReplyLevel::All,
+            echo: true,
+            strict_status: false,
+        }
+    }
+
+    /// The same settings with the adapter latency set.
+    pub fn with_latency(mut self, latency: Duration) -> Self {
+        self.link.latency = latency;
+        self
+    }
+
+    /// The same settings with the servos' return delay set.
+    pub fn with_return_delay(mut self, return_delay: Duration) -> Self {
+        self.return_delay = return_delay;
+        self
+    }
+
+    /// The same settings with the retry count set.
+    pub fn with_retries(mut self, retries: u8) -> Self {
+        self.retries = retries;
+        self
+    }
+
+    /// The same settings with the reply level set.
+    pub fn with_replies(mut self, replies: ReplyLevel) -> Self {
+        self.replies = replies;
+        self
+    }
+
+    /// The same settings with echo skipping on or off.
+    pub fn with_echo(mut self, echo: bool) -> Self {
+        self.echo = echo;
+        self
+    }
+
+    /// The same settings with strict status on or off.
+    pub fn with_strict_status(mut self, strict: bool) -> Self {
+        self.strict_status = strict;
+        self
+    }
+
+    /// The same settings with the whole link replaced.
+    pub fn with_link(mut self, link: Link) -> Self {
+        self.link = link;
+        self
+    }
+}

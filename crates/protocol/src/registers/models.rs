@@ -1,0 +1,109 @@
+//! Servo models: the number a servo reports in register 3 and what it means.
+
+use super::{RegisterMap, Series};
+
+/// A servo model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Model {
+    /// Product name in upper case, e.g. `STS3215`.
+    pub name: &'static str,
+    /// The value of its model-number register (address 3, 2 bytes, in the
+    /// series' byte order).
+    pub number: u16,
+    /// The series, which decides the register map and byte order.
+    pub series: Series,
+    /// Position ticks over [`Model::range_deg`].
+    pub resolution: u32,
+    /// Mechanical range covered by `resolution` ticks, in degrees.
+    pub range_deg: f64,
+    /// Highest useful goal speed, in steps/s.
+    pub max_speed: u32,
+}
+
+impl Model {
+    /// The model's register map.
+    pub const fn map(&self) -> &'static RegisterMap {
+        self.series.map()
+    }
+
+    /// Degrees per position tick.
+    pub fn deg_per_tick(&self) -> f64 {
+        self.range_deg / f64::from(self.resolution)
+    }
+
+    /// The highest position value (`resolution - 1`).
+    pub const fn max_position(&self) -> u32 {
+        self.resolution - 1
+    }
+}
+
+/// Every known model.
+///
+/// Where the numbers come from:
+/// - STS3215 = 777, STS3250 = 2825, SM8512BL = 11272, SCS0009 = 1284:
+///   LeRobot's feetech `tables.py` (`MODEL_NUMBER_TABLE`), which reads them
+///   from real servos; the first three are also in the control-tables
+///   reference.
+/// - SCS15 = 1792 (0x0700): a community driver's model table; not confirmed
+///   by Feetech's SDKs or LeRobot, and another community table lists 14.
+///   Treat it as provisional: a servo reporting an unknown number is still
+///   usable with `--model` given explicitly.
+/// - Resolutions: 4096 ticks per turn for STS/SMS, 1024 over about 300
+///   degrees for SCS (control-tables reference, LeRobot `MODEL_RESOLUTION`).
+/// - `max_speed`: 3400 steps/s for STS3215 at 12 V (control-tables
+///   reference). The other STS/SMS models are given the same figure, and the
+///   SCS figures are estimates from nominal no-load speeds; none of them is
+///   measured, so robot files should set their own velocity limits.
+pub static MODELS: [Model; 5] = [
+    Model {
+        name: "STS3215",
+        number: 777,
+        series: Series::Sts,
+        resolution: 4096,
+        range_deg: 360.0,
+        max_speed: 3400,
+    },
+    Model {
+        name: "STS3250",
+        number: 2825,
+        series: Series::Sts,
+        resolution: 4096,
+        range_deg: 360.0,
+        max_speed: 3400,
+    },
+    Model {
+        name: "SM8512BL",
+        number: 11272,
+        series: Series::Sts,
+        resolution: 4096,
+        range_deg: 360.0,
+        max_speed: 3400,
+    },
+    Model {
+        name: "SCS0009",
+        number: 1284,
+        series: Series::Scs,
+        resolution: 1024,
+        range_deg: 300.0,
+        max_speed: 1500,
+    },
+    Model {
+        name: "SCS15",
+        number: 1792,
+        series: Series::Scs,
+        resolution: 1024,
+        range_deg: 300.0,
+        max_speed: 1000,
+    },
+];
+
+/// The model whose model-number register reads `number`.
+pub fn model_by_number(number: u16) -> Option<&'static Model> {
+    MODELS.iter().find(|m| m.number == number)
+}
+
+/// The model called `name`, ignoring ASCII case and `-`, `_`, space
+/// (`sts3215`, `STS-3215`).
+pub fn model_by_name(name: &str) -> Option<&'static Model> {
+    MODELS.iter().find(|m| super::same_name(m.name, name))
+}

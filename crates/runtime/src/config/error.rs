@@ -1,0 +1,181 @@
+//! The one error type of configuration loading, and the source text it points into.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use super::locate::{locate_nearest, FieldPath, Part};
+
+/// Why a robot or motion file was refused.
+///
+/// Every refusal of a file's content names the file, the 1-based line and
+/// column and the field (`buses[0].joints[2].min`), so that it prints as
+/// `file:line:column: field: reason` — the form editors and terminals turn
+/// into a link.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file was read but its content is wrong.
+    #[error("{}", InvalidDisplay::new(.file, .line, .column, .field, .reason))]
+    Invalid {
+        /// The file.
+        file: PathBuf,
+        /// 1-based line of the offending node.
+        line: usize,
+        /// 1-based column of the offending node.
+        column: usize,
+        /// Path of the field (`keyframes[3].pose.elbow_flex`); empty for the
+        /// document as a whole.
+        field: String,
+        /// What is wrong and, where it helps, what would be right.
+        reason: String,
+    },
+}
+
+impl ConfigError {
+    /// A content error at an explicit position.
+    pub fn invalid(
+        file: impl Into<PathBuf>,
+        line: usize,
+        column: usize,
+        field: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        ConfigError::Invalid {
+            file: file.into(),
+            line,
+            column,
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// The file the error is about.
+    pub fn file(&self) -> &Path {
+        match self {
+            ConfigError::Read { path, .. } => path,
+            ConfigError::Invalid { file, .. } => file,
+        }
+    }
+
+    /// Line and column (1-based), when the error is about content.
+    pub fn position(&self) -> Option<(usize, usize)> {
+        match self {
+            ConfigError::Read { .. } => None,
+            ConfigError::Invalid { line, column, .. } => Some((*line, *column)),
+        }
+    }
+
+    /// The field path, when the error is about content.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            ConfigError::Read { .. } => None,
+            ConfigError::Invalid { field, .. } => Some(field),
+        }
+    }
+}
+
+struct InvalidDisplay<'a> {
+    file: &'a Path,
+    line: usize,
+    column: usize,
+    field: &'a str,
+    reason: &'a str,
+}
+
+impl<'a> InvalidDisplay<'a> {
+    fn new(file: &'a Path, line: &usize, column: &usize, field: &'a str, reason: &'a str) -> Self {
+        InvalidDisplay {
+            file,
+            line: *line,
+            column: *column,
+            field,
+            reason,
+        }
+    }
+}
+
+impl fmt::Display for InvalidDisplay<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}: ", self.file.display(), self.line, self.column)?;
+        if !self.field.is_empty() {
+            write!(f, "{}: ", self.field)?;
+        }
+        f.write_str(self.reason)
+    }
+}
+
+/// A file's path and text, kept while loading so that errors found after
+/// parsing can be located.
+#[derive(Debug, Clone)]
+pub(crate) struct Source {
+    pub(crate) path: PathBuf,
+    pub(crate) text: String,
+}
+
+impl Source {
+    /// Reads `path`.
+    pub(crate) fn read(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Ok(Source {
+            path: path.to_owned(),
+            text,
+        })
+    }
+
+    /// Deserializes the whole text, turning serde_yaml's error into ours.
+    pub(crate) fn parse<T: serde::de::DeserializeOwned>(&self) -> Result<T, ConfigError> {
+        serde_yaml::from_str(&self.text).map_err(|e| self.yaml_error(&e))
+    }
+
+    /// An error about the value at `path`.
+    pub(crate) fn error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
+        self.error_at(path, Part::Value, reason)
+    }
+
+    /// An error about the key of the last segment of `path` (an unknown name).
+    pub(crate) fn key_error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
+        self.error_at(path, Part::Key, reason)
+    }
+
+    fn error_at(&self, path: &FieldPath, part: Part, reason: impl Into<String>) -> ConfigError {
+        let (line, column) = locate_nearest(&self.text, path, part);
+        ConfigError::invalid(&self.path, line, column, path.to_string(), reason)
+    }
+
+    /// Line and column of the value at `path` (or its nearest ancestor).
+    pub(crate) fn position(&self, path: &FieldPath) -> (usize, usize) {
+        locate_nearest(&self.text, path, Part::Value)
+    }
+
+    /// serde_yaml prints `path: message at line L column C`; split that into
+    /// our fields so every error prints the same way.
+    fn yaml_error(&self, e: &serde_yaml::Error) -> ConfigError {
+        let (line, column) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
+        let mut text = e.to_string();
+        let suffix = format!(" at line {line} column {column}");
+        if let Some(i) = text.find(&suffix) {
+            text.replace_range(i..i + suffix.len(), "");
+        }
+        // A leading `path: ` is serde_yaml's field path (it has no spaces;
+        // messages such as `invalid type: ...` do).
+        let (field, reason) = match text.split_once(": ") {
+            Some((head, rest)) if !head.contains(' ') && !head.is_empty() => {
+                (head.to_owned(), rest.to_owned())
+            }
+            _ => (String::new(), text),
+        };
+        ConfigError::invalid(&self.path, line, column, field, reason)
+    }
+}

@@ -1,0 +1,37 @@
+//! Robot and motion files: loading, validation, and joint mapping.
+//!
+//! A robot file describes buses, servos and joint limits; a motion file
+//! describes poses and keyframes for one robot. Both are validated in full
+//! before anything moves, and every problem is reported as
+//! `file:line:column: field: reason`:
+//!
+//! ```text
+//! configs/robots/so101.yaml:14:13: buses[0].joints[1].id: ID 1 is already used on bus `arm` by joint 0
+//! configs/motions/arm-wave.yaml:21:24: keyframes[2].pose.elbow_flex: keyframe 2: 120 deg is outside the limits of joint `elbow_flex` [-100, 95] deg
+//! ```
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use servobus_runtime::config::{load_motion, JointMap};
+//!
+//! let (motion, robot) = load_motion(Path::new("configs/motions/arm-wave.yaml"), None)?;
+//! let joint = robot.joint("elbow_flex").expect("the arm has an elbow");
+//! let map = JointMap::new(joint, robot.units);
+//! let goal = map.goal(motion.units.to_rad(45.0));
+//! println!("{} keyframes; elbow at 45 deg = tick {}", motion.keyframes.len(), goal.value);
+//! # Ok::<(), servobus_runtime::config::ConfigError>(())
+//! ```
+
+mod budget;
+mod error;
+mod locate;
+mod mapping;
+mod motion;
+mod robot;
+mod units;
+
+pub use error::ConfigError;
+pub use mapping::{Clamped, JointMap};
+pub use motion::{load_motion, Interpolation, Keyframe, Motion, OnLimit};
+pub use robot::{load_robot, load_robot_any_rate, BusConfig, JointConfig, Robot};
+pub use units::Units;

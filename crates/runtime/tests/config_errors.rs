@@ -1,0 +1,345 @@
+//! Bad robot and motion files are refused with `file:line:column: field: reason`.
+
+use std::path::{Path, PathBuf};
+
+use servobus_runtime::config::{load_motion, load_robot, ConfigError};
+
+/// Writes `text` to a fresh file named `name` in a directory of its own.
+fn write(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("config_errors")
+        .join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
+/// A valid two-joint robot; tests break one line of it.
+const ROBOT: &str = "\
+name: two
+units: deg
+rate: 100
+buses:
+  - name: bus
+    baud: 1000000
+    joints:
+      - name: a
+        id: 1
+        model: sts3215
+        min: -90
+        max: 90
+        max_velocity: 180
+        max_acceleration: 900
+      - name: b
+        id: 2
+        model: sts3215
+        min: -45
+        max: 45
+        max_velocity: 180
+        max_acceleration: 900
+";
+
+fn robot_error(test: &str, from: &str, to: &str) -> (PathBuf, ConfigError) {
+    assert!(ROBOT.contains(from), "{from}");
+    let p = write(test, "robot.yaml", &ROBOT.replacen(from, to, 1));
+    let e = load_robot(&p).expect_err("the robot must be refused");
+    (p, e)
+}
+
+fn expect(e: &ConfigError, file: &Path, line: usize, column: usize, field: &str, reason: &str) {
+    let text = e.to_string();
+    let prefix = format!("{}:{line}:{column}: {field}: ", file.display());
+    assert!(
+        text.starts_with(&prefix),
+        "got `{text}`, expected prefix `{prefix}`"
+    );
+    assert!(
+        text.contains(reason),
+        "got `{text}`, expected it to mention `{reason}`"
+    );
+    assert_eq!(e.position(), Some((line, column)));
+    assert_eq!(e.field(), Some(field));
+}
+
+#[test]
+fn the_valid_robot_loads() {
+    let p = write("valid", "robot.yaml", ROBOT);
+    let r = load_robot(&p).expect("valid");
+    assert_eq!(r.joint_count(), 2);
+    assert_eq!(r.path, p);
+}
+
+#[test]
+fn duplicate_id_points_at_the_second_id() {
+    let (p, e) = robot_error("dup_id", "id: 2", "id: 1");
+    expect(
+        &e,
+        &p,
+        16,
+        13,
+        "buses[0].joints[1].id",
+        "ID 1 is already used on bus `bus`",
+    );
+}
+
+#[test]
+fn id_out_of_range() {
+    let (p, e) = robot_error("big_id", "id: 2", "id: 254");
+    expect(
+        &e,
+        &p,
+        16,
+        13,
+        "buses[0].joints[1].id",
+        "from 0 to 253, got 254",
+    );
+}
+
+#[test]
+fn unknown_model_lists_the_known_ones() {
+    let (p, e) = robot_error(
+        "model",
+        "model: sts3215\n        min: -45",
+        "model: xl430\n        min: -45",
+    );
+    expect(
+        &e,
+        &p,
+        17,
+        16,
+        "buses[0].joints[1].model",
+        "unknown model `xl430`",
+    );
+    assert!(e.to_string().contains("STS3215"));
+}
+
+#[test]
+fn min_not_below_max() {
+    let (p, e) = robot_error("minmax", "max: 45", "max: -50");
+    expect(
+        &e,
+        &p,
+        19,
+        14,
+        "buses[0].joints[1].max",
+        "must be greater than min",
+    );
+}
+
+#[test]
+fn limits_must_be_positive() {
+    let (p, e) = robot_error(
+        "vel",
+        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+        "max_velocity: 0\n        max_acceleration: 900\n      - name: b",
+    );
+    expect(
+        &e,
+        &p,
+        13,
+        23,
+        "buses[0].joints[0].max_velocity",
+        "must be positive",
+    );
+}
+
+#[test]
+fn limit_beyond_the_servo_range() {
+    let (p, e) = robot_error("range", "min: -90", "min: -200");
+    expect(
+        &e,
+        &p,
+        11,
+        14,
+        "buses[0].joints[0].min",
+        "beyond what the STS3215 can reach",
+    );
+}
+
+#[test]
+fn duplicate_joint_name() {
+    let (p, e) = robot_error("name", "- name: b\n", "- name: a\n");
+    expect(
+        &e,
+        &p,
+        15,
+        15,
+        "buses[0].joints[1].name",
+        "joint name `a` is already used",
+    );
+}
+
+#[test]
+fn type_errors_come_from_serde_yaml_with_their_position() {
+    let (p, e) = robot_error("type", "baud: 1000000", "baud: fast");
+    expect(&e, &p, 6, 11, "buses[0].baud", "invalid type");
+}
+
+#[test]
+fn unknown_fields_are_refused() {
+    let (p, e) = robot_error(
+        "unknown",
+        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+        "max_velocity: 180\n        max_accel: 900\n      - name: b",
+    );
+    expect(
+        &e,
+        &p,
+        14,
+        9,
+        "buses[0].joints[0]",
+        "unknown field `max_accel`",
+    );
+}
+
+#[test]
+fn syntax_errors_have_a_position() {
+    let p = write("syntax", "robot.yaml", "name: x\nbuses: [\n");
+    let e = load_robot(&p).expect_err("broken YAML");
+    let (line, _) = e.position().expect("located");
+    assert!(line >= 2, "{e}");
+    assert!(e.to_string().starts_with(&format!("{}:", p.display())));
+}
+
+#[test]
+fn a_rate_the_bus_cannot_carry_says_what_fits() {
+    let (p, e) = robot_error("rate", "rate: 100", "rate: 5000");
+    expect(&e, &p, 3, 7, "rate", "bus `bus`: 5000 Hz cannot be met");
+    assert!(e.to_string().contains("lower the rate to 2000 Hz"), "{e}");
+}
+
+#[test]
+fn a_missing_file_is_a_read_error() {
+    let e = load_robot(Path::new("/nonexistent/robot.yaml")).expect_err("missing");
+    assert!(matches!(e, ConfigError::Read { .. }));
+    assert_eq!(e.position(), None);
+}
+
+fn motion_error(test: &str, motion: &str) -> (PathBuf, ConfigError) {
+    write(test, "robot.yaml", ROBOT);
+    let p = write(test, "motion.yaml", motion);
+    let e = load_motion(&p, None).expect_err("the motion must be refused");
+    (p, e)
+}
+
+#[test]
+fn a_keyframe_outside_a_limit_names_the_joint_and_limit() {
+    let (p, e) = motion_error(
+        "kf_limit",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10, b: 50}\n",
+    );
+    expect(
+        &e,
+        &p,
+        4,
+        22,
+        "keyframes[1].pose.b",
+        "keyframe 1: 50 deg is outside the limits of joint `b` [-45, 45]",
+    );
+}
+
+#[test]
+fn a_joint_the_robot_lacks_points_at_its_name() {
+    let (p, e) = motion_error(
+        "kf_joint",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose:\n      a: 10\n      elbow: 5\n",
+    );
+    expect(
+        &e,
+        &p,
+        6,
+        7,
+        "keyframes[1].pose.elbow",
+        "has no joint `elbow` (joints: a, b)",
+    );
+}
+
+#[test]
+fn an_unknown_pose_name() {
+    let (p, e) = motion_error(
+        "kf_pose",
+        "robot: robot.yaml\nposes:\n  home: {a: 0}\nkeyframes:\n  - pose: home\n  - pose: hoem\n",
+    );
+    expect(
+        &e,
+        &p,
+        6,
+        11,
+        "keyframes[1].pose",
+        "unknown pose `hoem` (poses: home)",
+    );
+}
+
+#[test]
+fn a_named_pose_outside_a_limit() {
+    let (p, e) = motion_error(
+        "pose_limit",
+        "robot: robot.yaml\nposes:\n  wide: {a: 0, b: -1}\n  bad: {b: 1.0}\nunits: rad\nkeyframes:\n  - pose: wide\n",
+    );
+    expect(
+        &e,
+        &p,
+        3,
+        19,
+        "poses.wide.b",
+        "-1 rad is outside the limits of joint `b`",
+    );
+}
+
+#[test]
+fn times_must_increase() {
+    let (p, e) = motion_error(
+        "kf_time",
+        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 2, pose: {a: 5}}\n  - {at: 1.5, pose: {a: 0}}\n",
+    );
+    expect(
+        &e,
+        &p,
+        5,
+        10,
+        "keyframes[2].at",
+        "1.5 s is not after keyframe 1 at 2 s",
+    );
+}
+
+#[test]
+fn the_motion_rate_is_checked_against_the_bus() {
+    let (p, e) = motion_error(
+        "m_rate",
+        "robot: robot.yaml\nrate: 9000\nkeyframes:\n  - pose: {a: 0}\n",
+    );
+    expect(&e, &p, 2, 7, "rate", "bus `bus`: 9000 Hz cannot be met");
+}
+
+#[test]
+fn errors_in_the_robot_name_the_robot_file() {
+    let dir = "m_robot";
+    let r = write(dir, "robot.yaml", &ROBOT.replacen("id: 2", "id: 1", 1));
+    let p = write(
+        dir,
+        "motion.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n",
+    );
+    let e = load_motion(&p, None).expect_err("bad robot");
+    expect(&e, &r, 16, 13, "buses[0].joints[1].id", "already used");
+}
+
+#[test]
+fn a_motion_without_robot_asks_for_one() {
+    let (p, e) = motion_error("no_robot", "keyframes:\n  - pose: {a: 0}\n");
+    assert!(
+        e.to_string().starts_with(&format!("{}:1:1: ", p.display())),
+        "{e}"
+    );
+    assert!(e.to_string().contains("--robot"));
+}
+
+#[test]
+fn a_repeat_of_zero() {
+    let (p, e) = motion_error(
+        "repeat",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\nrepeat: 0\n",
+    );
+    expect(&e, &p, 4, 9, "repeat", "at least 1");
+}

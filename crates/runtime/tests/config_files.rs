@@ -1,0 +1,80 @@
+//! Every robot and motion file shipped in `configs/` loads and validates.
+
+use std::path::{Path, PathBuf};
+
+use servobus_runtime::config::{load_motion, load_robot, Units};
+
+fn configs() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")
+}
+
+fn yaml_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("configs directory exists")
+        .map(|e| e.expect("readable entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn every_robot_file_validates() {
+    let files = yaml_files(&configs().join("robots"));
+    assert!(
+        files.len() >= 4,
+        "expected the four robots, found {files:?}"
+    );
+    for f in files {
+        let robot = load_robot(&f).unwrap_or_else(|e| panic!("{e}"));
+        assert!(robot.joint_count() > 0, "{}", f.display());
+    }
+}
+
+#[test]
+fn every_motion_file_validates_against_its_robot() {
+    let files = yaml_files(&configs().join("motions"));
+    assert!(
+        files.len() >= 5,
+        "expected the five motions, found {files:?}"
+    );
+    for f in files {
+        let (motion, robot) = load_motion(&f, None).unwrap_or_else(|e| panic!("{e}"));
+        assert!(motion.keyframes.len() >= 2, "{}", f.display());
+        for k in &motion.keyframes {
+            assert_eq!(k.positions.len(), robot.joint_count());
+            for (p, j) in k.positions.iter().zip(robot.joints()) {
+                let v = motion.units.convert(*p, robot.units);
+                assert!(
+                    v >= j.min && v <= j.max,
+                    "{}: {} at {v}",
+                    f.display(),
+                    j.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn shipped_robots_have_the_documented_shape() {
+    let so101 = load_robot(&configs().join("robots/so101.yaml")).expect("so101 loads");
+    assert_eq!(so101.units, Units::Deg);
+    assert_eq!(so101.buses.len(), 1);
+    let ids: Vec<u8> = so101.joints().map(|j| j.id).collect();
+    assert_eq!(ids, [1, 2, 3, 4, 5, 6]);
+    assert!(so101.joints().all(|j| j.model.name == "STS3215"));
+    assert_eq!(so101.buses[0].baud, 1_000_000);
+
+    let hex = load_robot(&configs().join("robots/hexapod.yaml")).expect("hexapod loads");
+    assert_eq!((hex.buses.len(), hex.joint_count()), (1, 18));
+    let hex2 = load_robot(&configs().join("robots/hexapod-2bus.yaml")).expect("2-bus loads");
+    assert_eq!(hex2.buses.len(), 2);
+    assert_eq!(hex2.joint_count(), 18);
+    let names: Vec<&str> = hex.joints().map(|j| j.name.as_str()).collect();
+    let names2: Vec<&str> = hex2.joints().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, names2, "the two hexapods have the same joints");
+
+    let scs = load_robot(&configs().join("robots/scs-mini.yaml")).expect("scs-mini loads");
+    assert!(scs.joints().all(|j| !j.model.series.has_sync_read()));
+}

@@ -1,0 +1,95 @@
+//! Joint angle <-> tick mapping and the last-step clamp.
+
+use servobus_protocol::registers::model_by_name;
+use servobus_runtime::config::{JointConfig, JointMap, Units};
+
+fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointConfig {
+    JointConfig {
+        name: "j".into(),
+        id: 1,
+        model: model_by_name(model).expect("known model"),
+        min,
+        max,
+        max_velocity: 100.0,
+        max_acceleration: 100.0,
+        max_jerk: None,
+        offset,
+        inverted,
+        home: None,
+    }
+}
+
+#[test]
+fn sts3215_zero_is_the_middle_tick_and_90_deg_is_a_quarter_turn() {
+    let m = JointMap::new(&joint("sts3215", -180.0, 179.0, 0.0, false), Units::Deg);
+    assert_eq!(m.to_ticks(0.0), 2048);
+    assert_eq!(m.to_ticks(90f64.to_radians()), 3072);
+    assert_eq!(m.to_ticks(-90f64.to_radians()), 1024);
+    // One tick is 360/4096 deg = 0.087890625 deg; half a tick rounds to nearest.
+    assert_eq!(m.to_ticks(0.04f64.to_radians()), 2048);
+    assert_eq!(m.to_ticks(0.05f64.to_radians()), 2049);
+    assert!((m.from_ticks(3072) - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+}
+
+#[test]
+fn scs0009_has_1024_ticks_over_300_deg() {
+    let m = JointMap::new(&joint("scs0009", -150.0, 149.0, 0.0, false), Units::Deg);
+    assert_eq!(m.to_ticks(0.0), 512);
+    // 150 deg = 512 ticks; the register tops out at 1023.
+    assert_eq!(m.to_ticks(-150f64.to_radians()), 0);
+    assert_eq!(m.to_ticks(150f64.to_radians()), 1023);
+    assert_eq!(m.to_ticks(75f64.to_radians()), 768);
+}
+
+#[test]
+fn inversion_and_offset() {
+    // Servo angle = offset - position: joint 0 sits 30 deg below the middle.
+    let m = JointMap::new(&joint("sts3215", -90.0, 90.0, -30.0, true), Units::Deg);
+    let per_deg: f64 = 4096.0 / 360.0;
+    assert_eq!(m.to_ticks(0.0), (2048.0 - 30.0 * per_deg).round() as i32);
+    assert_eq!(
+        m.to_ticks(10f64.to_radians()),
+        (2048.0 - 40.0 * per_deg).round() as i32
+    );
+    // Reading back inverts the mapping to within half a tick.
+    for deg in [-90.0f64, -12.5, 0.0, 33.3, 90.0] {
+        let rad = deg.to_radians();
+        let back = m.from_ticks(m.to_ticks(rad));
+        assert!((back - rad).abs() <= 0.5 / per_deg * std::f64::consts::PI / 180.0 + 1e-12);
+    }
+}
+
+#[test]
+fn radians_robot_units() {
+    let m = JointMap::new(&joint("sts3215", -1.0, 1.0, 0.0, false), Units::Rad);
+    assert_eq!(m.min_rad, -1.0);
+    assert_eq!(m.max_rad, 1.0);
+    assert_eq!(m.to_ticks(std::f64::consts::PI / 2.0), 3072);
+}
+
+#[test]
+fn clamp_reports_whether_it_clamped() {
+    let m = JointMap::new(&joint("sts3215", -45.0, 45.0, 0.0, false), Units::Deg);
+    let inside = m.goal(10f64.to_radians());
+    assert!(!inside.clamped);
+    let above = m.goal(50f64.to_radians());
+    assert!(above.clamped);
+    assert_eq!(above.value, m.to_ticks(45f64.to_radians()));
+    let below = m.clamp(-1.0);
+    assert!(below.clamped);
+    assert_eq!(below.value, m.min_rad);
+    let nan = m.goal(f64::NAN);
+    assert!(nan.clamped);
+    assert_eq!(nan.value, 2048);
+    // The register range holds even for absurd inputs without limits applied.
+    assert_eq!(m.to_ticks(1e12), 4095);
+    assert_eq!(m.to_ticks(-1e12), 0);
+}
+
+#[test]
+fn unit_conversions() {
+    assert!((Units::Deg.to_rad(180.0) - std::f64::consts::PI).abs() < 1e-15);
+    assert_eq!(Units::Rad.to_rad(1.25), 1.25);
+    assert!((Units::Rad.convert(std::f64::consts::PI, Units::Deg) - 180.0).abs() < 1e-12);
+    assert_eq!(Units::Deg.convert(12.0, Units::Deg), 12.0);
+}

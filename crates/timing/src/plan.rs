@@ -1,0 +1,367 @@
+//! Cycle planning: can this bus run this cycle at this rate, and if not,
+//! what runs instead.
+
+use core::ops::Range;
+use core::time::Duration;
+
+use servobus_protocol::MAX_ID;
+
+use crate::cost::{CycleCost, CycleSpec, Servo};
+use crate::fix::{Change, Fixes};
+use crate::{servos_per_frame, Block, Link};
+
+/// The most servos one bus can have: one per valid ID (0..=253).
+pub const MAX_SERVOS: usize = MAX_ID as usize + 1;
+
+/// The longest block a servo can send back in one reply (its length byte is
+/// L + 2 <= 255).
+pub const MAX_READ_LEN: u8 = 253;
+
+/// Why [`plan`] found no plan.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// The bus has no servos.
+    #[error("the bus has no servos")]
+    NoServos,
+    /// More servos than there are IDs.
+    #[error("{count} servos on one bus: at most 254 (IDs 0..=253)")]
+    TooManyServos {
+        /// Servos given.
+        count: usize,
+    },
+    /// A servo's ID is outside 0..=253.
+    #[error("servo ID {id} is not valid (0..=253)")]
+    InvalidId {
+        /// The ID.
+        id: u8,
+    },
+    /// Two servos share an ID.
+    #[error("servo ID {id} appears twice on the bus")]
+    DuplicateId {
+        /// The ID.
+        id: u8,
+    },
+    /// The rate is not a positive finite number of hertz.
+    #[error("invalid rate {rate_hz} Hz: it must be positive and finite")]
+    InvalidRate {
+        /// The rate given.
+        rate_hz: f64,
+    },
+    /// A block is empty, runs past address 255, or is longer than a frame
+    /// can carry (250 bytes written, 253 read).
+    #[error("invalid block of {} bytes at address {}", .block.len, .block.address)]
+    InvalidBlock {
+        /// The block.
+        block: Block,
+    },
+    /// Not even a cycle reading one servo fits the rate.
+    #[error(
+        "{rate_hz} Hz cannot be met: even reading one servo per cycle takes {} us; {fix}",
+        .min_cycle_time.as_micros()
+    )]
+    Infeasible {
+        /// The rate asked for.
+        rate_hz: f64,
+        /// The shortest cycle possible (all servos written, one read).
+        min_cycle_time: Duration,
+        /// The cheapest change that makes the full cycle fit.
+        fix: Change,
+    },
+}
+
+/// How feedback is spread over cycles: every cycle reads the servos of one
+/// group, groups taking turns, so each servo is read every `every` cycles.
+///
+/// Groups are contiguous runs of `per_cycle` servos in the order given to
+/// [`plan`] (the last may be shorter): group `g` is servos
+/// `g * per_cycle..(g + 1) * per_cycle`, read in cycles `c` with
+/// `c % every == g`. Contiguous groups let a runtime pass a sub-slice of its
+/// ID list straight to a SYNC READ encoder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RoundRobin {
+    /// Each servo is read once every this many cycles (1: every cycle).
+    pub every: usize,
+    /// Servos read per cycle (the size of every group but maybe the last).
+    pub per_cycle: usize,
+    /// The most expensive cycle of the rotation.
+    pub worst: CycleCost,
+}
+
+/// A cycle plan for one bus at one rate. Built by [`plan`]; allocation-free
+/// and `Copy`, so a runtime can keep it in its control loop.
+///
+/// The figures of `servobus budget --json` come straight from it, for the
+/// full cycle (goals written to and feedback read from every servo):
+/// [`servos`](Plan::servos), [`bytes_per_cycle`](Plan::bytes_per_cycle),
+/// [`wire_time_us`](Plan::wire_time_us), [`cycle_time_us`](Plan::cycle_time_us),
+/// [`max_rate_hz`](Plan::max_rate_hz), [`rate_hz`](Plan::rate_hz) and
+/// [`utilisation`](Plan::utilisation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plan {
+    link: Link,
+    rate_hz: f64,
+    write: Option<Block>,
+    read: Option<Block>,
+    full: CycleCost,
+    schedule: RoundRobin,
+    fixes: Fixes,
+    count: usize,
+    ids: [u8; MAX_SERVOS],
+}
+
+impl Plan {
+    /// The link the plan is for.
+    pub fn link(&self) -> &Link {
+        &self.link
+    }
+    /// The block written to every servo each cycle.
+    pub fn write(&self) -> Option<Block> {
+        self.write
+    }
+    /// The block read back.
+    pub fn read(&self) -> Option<Block> {
+        self.read
+    }
+    /// The number of servos on the bus.
+    pub fn servos(&self) -> usize {
+        self.count
+    }
+    /// The servos' IDs in the order given to [`plan`].
+    pub fn ids(&self) -> &[u8] {
+        &self.ids[..self.count]
+    }
+    /// The rate the plan is for, Hz.
+    pub fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    /// The full cycle: every servo written and read back.
+    pub fn full_cycle(&self) -> &CycleCost {
+        &self.full
+    }
+    /// Bytes on the wire per full cycle, both directions.
+    pub fn bytes_per_cycle(&self) -> usize {
+        self.full.bytes
+    }
+    /// Wire time of the full cycle, us.
+    pub fn wire_time_us(&self) -> f64 {
+        self.full.wire_time_us()
+    }
+    /// Expected duration of the full cycle with return delays, turnarounds
+    /// and adapter latencies, us.
+    pub fn cycle_time_us(&self) -> f64 {
+        self.full.cycle_time_us()
+    }
+    /// The highest rate at which the full cycle fits, Hz.
+    pub fn max_rate_hz(&self) -> f64 {
+        self.full.max_rate_hz()
+    }
+    /// The highest rate the wire alone would allow, Hz.
+    pub fn wire_limited_rate_hz(&self) -> f64 {
+        self.full.wire_limited_rate_hz()
+    }
+    /// The fraction of each period the full cycle takes at the plan's rate
+    /// (above 1.0 when it does not fit).
+    pub fn utilisation(&self) -> f64 {
+        self.full.utilisation(self.rate_hz)
+    }
+    /// Whether the full cycle fits the rate (every servo read every cycle).
+    pub fn is_feasible(&self) -> bool {
+        self.fixes.is_empty()
+    }
+
+    /// How feedback is spread over cycles (`every == 1` when the full cycle
+    /// fits).
+    pub fn schedule(&self) -> &RoundRobin {
+        &self.schedule
+    }
+    /// Each servo is read once every this many cycles.
+    pub fn read_every(&self) -> usize {
+        self.schedule.every
+    }
+    /// The most expensive cycle actually run: the full one, or the worst of
+    /// the round-robin rotation.
+    pub fn worst_cycle(&self) -> &CycleCost {
+        &self.schedule.worst
+    }
+    /// Indices (into the servos given to [`plan`]) of the servos read back
+    /// in cycle number `cycle` (counting from 0); empty when nothing is read.
+    pub fn reads_in_cycle(&self, cycle: u64) -> Range<usize> {
+        if self.read.is_none() {
+            return 0..0;
+        }
+        let every = self.schedule.every as u64;
+        // `every` >= 1, and the group index is below `every` <= 254.
+        let group = (cycle % every) as usize;
+        let start = group * self.schedule.per_cycle;
+        let end = (start + self.schedule.per_cycle).min(self.count);
+        start.min(end)..end
+    }
+    /// IDs of the servos read back in cycle number `cycle`, in request order.
+    pub fn read_ids(&self, cycle: u64) -> &[u8] {
+        &self.ids[self.reads_in_cycle(cycle)]
+    }
+
+    /// The changes that would make the full cycle fit, cheapest first
+    /// (empty when it fits).
+    pub fn fixes(&self) -> &Fixes {
+        &self.fixes
+    }
+    /// The cheapest change that would make the full cycle fit.
+    pub fn cheapest_fix(&self) -> Option<Change> {
+        self.fixes.cheapest()
+    }
+}
+
+/// Plans the cycle of a bus: every servo gets the `write` block (one or more
+/// SYNC WRITE frames), then the `read` block comes back (one SYNC READ for
+/// the servos that support it, one READ for each that does not), `rate_hz`
+/// times a second.
+///
+/// When the full cycle does not fit, the plan reads a round-robin subset of
+/// the servos each cycle (the fewest groups that fit, see [`RoundRobin`]) and
+/// lists the changes that would make the full cycle fit ([`Plan::fixes`]).
+/// Nothing allocates.
+///
+/// ```
+/// use core::time::Duration;
+/// use servobus_timing::{plan, Block, Link, Servo};
+///
+/// let link = Link::new(1_000_000).with_turnaround(Duration::ZERO);
+/// let servos: [Servo; 6] = core::array::from_fn(|i| Servo::sts(i as u8 + 1, Duration::ZERO));
+/// let p = plan(&link, &servos, Some(Block::GOAL_POSITION), Some(Block::PRESENT_POSITION), 500.0)?;
+/// assert_eq!(p.bytes_per_cycle(), 26 + 14 + 48);
+/// assert_eq!(p.cycle_time_us(), 880.0);
+/// assert!(p.is_feasible());
+/// # Ok::<(), servobus_timing::PlanError>(())
+/// ```
+///
+/// # Errors
+/// [`PlanError::NoServos`], [`PlanError::TooManyServos`],
+/// [`PlanError::InvalidId`], [`PlanError::DuplicateId`],
+/// [`PlanError::InvalidRate`], [`PlanError::InvalidBlock`], or
+/// [`PlanError::Infeasible`] when no round-robin subset fits either (it names
+/// the cheapest change that would make the full cycle fit).
+pub fn plan(
+    link: &Link,
+    servos: &[Servo],
+    write: Option<Block>,
+    read: Option<Block>,
+    rate_hz: f64,
+) -> Result<Plan, PlanError> {
+    let count = servos.len();
+    if count == 0 {
+        return Err(PlanError::NoServos);
+    }
+    if count > MAX_SERVOS {
+        return Err(PlanError::TooManyServos { count });
+    }
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(PlanError::InvalidRate { rate_hz });
+    }
+    if let Some(block) = write {
+        if !block.is_valid() || servos_per_frame(block.len) == 0 {
+            return Err(PlanError::InvalidBlock { block });
+        }
+    }
+    if let Some(block) = read {
+        if !block.is_valid() || block.len > MAX_READ_LEN {
+            return Err(PlanError::InvalidBlock { block });
+        }
+    }
+    let mut ids = [0u8; MAX_SERVOS];
+    let mut seen = [0u64; 4];
+    for (slot, s) in ids.iter_mut().zip(servos) {
+        if s.id > MAX_ID {
+            return Err(PlanError::InvalidId { id: s.id });
+        }
+        let (word, bit) = (usize::from(s.id / 64), 1u64 << (s.id % 64));
+        if seen[word] & bit != 0 {
+            return Err(PlanError::DuplicateId { id: s.id });
+        }
+        seen[word] |= bit;
+        *slot = s.id;
+    }
+
+    let spec = CycleSpec {
+        link: *link,
+        written: count,
+        write,
+        read_len: read.map(|b| b.len),
+        zero_return_delay: false,
+    };
+    let full = spec.cost(servos);
+    let (schedule, fixes) = if full.fits(rate_hz) {
+        let all = RoundRobin {
+            every: 1,
+            per_cycle: count,
+            worst: full,
+        };
+        (all, Fixes::default())
+    } else {
+        let fixes = Fixes::find(&spec, servos, rate_hz);
+        match round_robin(&spec, servos, rate_hz) {
+            Some(rr) => (rr, fixes),
+            None => {
+                // The cheapest cycle possible: everything written, the
+                // cheapest single servo read (or nothing, if nothing is read).
+                let min_cycle_time = if read.is_some() {
+                    servos
+                        .chunks(1)
+                        .map(|one| spec.cost(one).cycle_time)
+                        .min()
+                        .unwrap_or(full.cycle_time)
+                } else {
+                    full.cycle_time
+                };
+                let fix = fixes.cheapest().unwrap_or(Change::LowerRate {
+                    rate_hz: full.max_rate_hz(),
+                });
+                return Err(PlanError::Infeasible {
+                    rate_hz,
+                    min_cycle_time,
+                    fix,
+                });
+            }
+        }
+    };
+    Ok(Plan {
+        link: *link,
+        rate_hz,
+        write,
+        read,
+        full,
+        schedule,
+        fixes,
+        count,
+        ids,
+    })
+}
+
+/// The round-robin schedule with the fewest groups whose worst cycle fits,
+/// or `None` when even one servo per cycle does not (or nothing is read).
+fn round_robin(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<RoundRobin> {
+    spec.read_len?;
+    let n = servos.len();
+    for every in 2..=n {
+        // Balanced groups: the smallest group size that gives `every` groups.
+        let per_cycle = n.div_ceil(every);
+        if n.div_ceil(per_cycle) != every {
+            // The same group size as a smaller `every` already tried.
+            continue;
+        }
+        let worst = servos
+            .chunks(per_cycle)
+            .map(|group| spec.cost(group))
+            .max_by_key(|c| c.cycle_time)?;
+        if worst.fits(rate_hz) {
+            return Some(RoundRobin {
+                every,
+                per_cycle,
+                worst,
+            });
+        }
+    }
+    None
+}

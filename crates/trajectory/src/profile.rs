@@ -1,0 +1,372 @@
+//! One joint, one segment: jerk-limited velocity profiles in closed form.
+//!
+//! A segment moves a distance `d >= 0` (after normalising the direction to
+//! positive) from speed `v0 >= 0` to speed `v1 >= 0`, with zero acceleration
+//! at both ends. Its profile is
+//!
+//! ```text
+//!  v ^        vc ____________
+//!    |   ramp A /            \ ramp B
+//!  v0|_________/              \________ v1
+//!    +----------------------------------> t
+//!       (S-curve)   cruise     (S-curve)
+//! ```
+//!
+//! where each ramp is an S-curve velocity change (jerk, constant
+//! acceleration, jerk; the middle phase vanishes for small changes and the
+//! jerk phases vanish without a jerk limit). The whole family is indexed by
+//! the cruise speed `vc`: the time-optimal profile has the largest feasible
+//! `vc`, and a longer duration `T` (to finish together with a slower joint)
+//! is met by the unique smaller `vc` whose duration is `T` — the profile is
+//! stretched, never padded with idling at the end. The duration is strictly
+//! decreasing in `vc` wherever the cruise time is non-negative, which makes
+//! the search a safe one-dimensional root find.
+//!
+//! Velocity never changes sign inside a segment, so a joint never overshoots
+//! the segment's end positions.
+
+use crate::JointLimits;
+
+/// A velocity ramp of size `dv >= 0`: jerk phases of `tj`, a constant
+/// acceleration phase of `ta`, reaching acceleration `peak`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Ramp {
+    pub tj: f64,
+    pub ta: f64,
+    pub peak: f64,
+}
+
+impl Ramp {
+    /// The shortest ramp changing the speed by `dv` under `a` and `j`
+    /// (`j` may be infinite).
+    #[inline]
+    pub fn new(dv: f64, a: f64, j: f64) -> Ramp {
+        if dv <= 0.0 {
+            Ramp {
+                tj: 0.0,
+                ta: 0.0,
+                peak: 0.0,
+            }
+        } else if dv * j >= a * a {
+            Ramp {
+                tj: a / j,
+                ta: dv / a - a / j,
+                peak: a,
+            }
+        } else {
+            let tj = (dv / j).sqrt();
+            Ramp {
+                tj,
+                ta: 0.0,
+                peak: j * tj,
+            }
+        }
+    }
+
+    #[inline]
+    pub fn duration(&self) -> f64 {
+        2.0 * self.tj + self.ta
+    }
+}
+
+/// Duration and distance of the ramp from `u` to `w` and their derivatives
+/// with respect to `w`. Distance is `(u + w) / 2 * duration` because an
+/// S-curve ramp is point-symmetric about its midpoint.
+#[inline]
+fn leg(u: f64, w: f64, a: f64, j: f64) -> (f64, f64, f64, f64) {
+    let dv = (w - u).abs();
+    let sgn = if w >= u { 1.0 } else { -1.0 };
+    let (dur, ddur) = if dv * j >= a * a {
+        (dv / a + a / j, 1.0 / a)
+    } else if dv > 0.0 {
+        let r = (dv / j).sqrt();
+        (2.0 * r, 1.0 / (dv * j).sqrt())
+    } else {
+        (0.0, f64::INFINITY)
+    };
+    let ddur_dw = sgn * ddur;
+    let dist = 0.5 * (u + w) * dur;
+    let ddist = 0.5 * dur + 0.5 * (u + w) * ddur_dw;
+    (dur, dist, ddur_dw, ddist)
+}
+
+/// A normalised segment: distance `d >= 0`, boundary speeds `v0, v1 >= 0`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Segment1 {
+    pub d: f64,
+    pub v0: f64,
+    pub v1: f64,
+}
+
+/// The chosen profile of a segment: its cruise speed and duration.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Profile {
+    pub vc: f64,
+    pub duration: f64,
+}
+
+/// Largest `vc` with `vc * ramp_duration(vc) <= dist`: the peak speed of a
+/// rest-to-rest move of `dist` (closed form).
+#[inline]
+pub(crate) fn rest_peak(dist: f64, lim: &JointLimits) -> f64 {
+    let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+    if dist <= 0.0 {
+        return 0.0;
+    }
+    if dist >= vm * Ramp::new(vm, a, j).duration() {
+        return vm;
+    }
+    // Constant-acceleration regime: vc (vc / a + a / j) = dist.
+    let k = a / j;
+    let vc = 0.5 * a * (-k + (k * k + 4.0 * dist / a).sqrt());
+    if vc * j >= a * a {
+        return vc.min(vm);
+    }
+    // Pure jerk regime: dist = 2 vc sqrt(vc / j).
+    (0.25 * dist * dist * j).cbrt().min(vm)
+}
+
+impl Segment1 {
+    /// Total ramp distance and its derivative at cruise speed `vc`.
+    #[inline]
+    fn g(&self, vc: f64, a: f64, j: f64) -> (f64, f64, f64, f64) {
+        let (ta, da, dta, dda) = leg(self.v0, vc, a, j);
+        let (tb, db, dtb, ddb) = leg(self.v1, vc, a, j);
+        (ta + tb, da + db, dta + dtb, dda + ddb)
+    }
+
+    /// Duration at cruise speed `vc > 0` and its derivative.
+    #[inline]
+    fn time(&self, vc: f64, a: f64, j: f64) -> (f64, f64) {
+        let (t, g, dt, dg) = self.g(vc, a, j);
+        let rest = self.d - g;
+        (t + rest / vc, dt - dg / vc - rest / (vc * vc))
+    }
+
+    /// The time-optimal profile. Precondition: the ramps alone fit, i.e.
+    /// `g(max(v0, v1)) <= d` (the planner caps via speeds to ensure it).
+    pub fn fastest(&self, lim: &JointLimits) -> Profile {
+        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+        let vlo = self.v0.max(self.v1).min(vm);
+        if self.d <= 0.0 && vlo <= 0.0 {
+            return Profile {
+                vc: 0.0,
+                duration: 0.0,
+            };
+        }
+        let vc = if self.g(vm, a, j).1 <= self.d {
+            vm
+        } else if self.v0 == 0.0 && self.v1 == 0.0 {
+            rest_peak(self.d, lim)
+        } else if self.g(vlo, a, j).1 >= self.d {
+            vlo
+        } else {
+            solve(|x| {
+                let (_, g, _, dg) = self.g(x, a, j);
+                (g - self.d, dg)
+            }, vlo, vm, vm, true)
+        };
+        let duration = self.time(vc, a, j).0;
+        Profile { vc, duration }
+    }
+
+    /// The profile of duration exactly `t >= fastest.duration`, stretched by
+    /// lowering the cruise speed.
+    pub fn stretched(&self, lim: &JointLimits, fastest: Profile, t: f64) -> Profile {
+        if t <= fastest.duration * (1.0 + 1e-12) || fastest.vc <= 0.0 {
+            return Profile {
+                vc: fastest.vc,
+                duration: t.max(fastest.duration),
+            };
+        }
+        let (a, j) = (lim.max_acceleration, lim.jerk());
+        if self.d <= 0.0 {
+            // Nothing to cover: only possible at rest; hold.
+            return Profile { vc: 0.0, duration: t };
+        }
+        let mut vc = None;
+        if self.v0 == 0.0 && self.v1 == 0.0 {
+            // Rest to rest with a constant-acceleration phase:
+            // vc^2 / a + (a / j - t) vc + d = 0, smaller root.
+            let b = t - a / j;
+            let disc = b * b - 4.0 * self.d / a;
+            if disc >= 0.0 {
+                // The smaller root, in the form without cancellation
+                // (the product of the roots is a * d).
+                let x = 2.0 * self.d / (b + disc.sqrt());
+                if x * j >= a * a && x <= fastest.vc {
+                    vc = Some(x);
+                }
+            }
+        }
+        let vc = match vc {
+            Some(x) => x,
+            None => {
+                // time(vc) - t is decreasing, +inf at 0, <= 0 at fastest.vc.
+                let guess = (self.d / t).min(fastest.vc);
+                solve(|x| {
+                    let (tt, dt) = self.time(x, a, j);
+                    (tt - t, dt)
+                }, 0.0, fastest.vc, guess, false)
+            }
+        };
+        Profile { vc, duration: t }
+    }
+
+    /// The phases (duration, jerk) of the profile, for a positive direction.
+    pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
+        let (a, j) = (lim.max_acceleration, lim.jerk());
+        let ra = Ramp::new((p.vc - self.v0).abs(), a, j);
+        let rb = Ramp::new((p.vc - self.v1).abs(), a, j);
+        let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
+        let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
+        out.push_ramp(&ra, sa, j);
+        let cruise = (p.duration - ra.duration() - rb.duration()).max(0.0);
+        out.push(cruise, 0.0, 0.0);
+        out.push_ramp(&rb, sb, j);
+    }
+}
+
+/// Safeguarded Newton iteration on a monotone function with a bracket:
+/// `increasing` tells the sign convention (`f(lo) <= 0 <= f(hi)` when true,
+/// the reverse otherwise). Falls back to bisection whenever a Newton step
+/// leaves the bracket, so it always converges.
+fn solve(f: impl Fn(f64) -> (f64, f64), mut lo: f64, mut hi: f64, x0: f64, increasing: bool) -> f64 {
+    let mut x = x0.clamp(lo, hi);
+    for _ in 0..100 {
+        let (fx, dfx) = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if (fx < 0.0) == increasing {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut nx = x - fx / dfx;
+        if !(nx > lo && nx < hi) {
+            nx = 0.5 * (lo + hi);
+        }
+        if (nx - x).abs() <= 1e-15 * nx.abs() || hi - lo <= 1e-15 * hi.abs() {
+            return nx;
+        }
+        x = nx;
+    }
+    x
+}
+
+/// Up to 12 constant-jerk phases: enough for a stop (3) followed by a full
+/// segment profile (7).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Phases {
+    pub n: usize,
+    pub dt: [f64; 12],
+    /// Jerk of each phase. For a jerk-free (trapezoidal) phase change the
+    /// acceleration is set directly through `acc`.
+    pub jerk: [f64; 12],
+    /// Acceleration at the start of each phase (only used when the jerk
+    /// bound is infinite: then acceleration jumps between phases).
+    pub acc: [f64; 12],
+}
+
+impl Phases {
+    pub fn new() -> Self {
+        Phases {
+            n: 0,
+            dt: [0.0; 12],
+            jerk: [0.0; 12],
+            acc: [0.0; 12],
+        }
+    }
+
+    pub fn push(&mut self, dt: f64, jerk: f64, acc: f64) {
+        if dt > 0.0 && self.n < 12 {
+            self.dt[self.n] = dt;
+            self.jerk[self.n] = jerk;
+            self.acc[self.n] = acc;
+            self.n += 1;
+        }
+    }
+
+    /// A ramp in direction `s` (+1 speeds up in the positive direction).
+    fn push_ramp(&mut self, r: &Ramp, s: f64, j: f64) {
+        let jj = if j.is_finite() { s * j } else { 0.0 };
+        self.push(r.tj, jj, 0.0);
+        self.push(r.ta, 0.0, s * r.peak);
+        self.push(r.tj, -jj, s * r.peak);
+    }
+
+    /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the
+    /// whole profile mirrored by `dir` (+1 or -1). Returns the end time and
+    /// state. With a finite jerk the acceleration is integrated (continuous);
+    /// with an infinite one it is taken from `acc`.
+    pub fn emit(
+        &self,
+        mut t: f64,
+        mut p: f64,
+        mut v: f64,
+        mut a: f64,
+        dir: f64,
+        finite_jerk: bool,
+        out: &mut Vec<crate::piece::Piece>,
+    ) -> (f64, f64, f64, f64) {
+        for k in 0..self.n {
+            let dt = self.dt[k];
+            let jk = dir * self.jerk[k];
+            if !finite_jerk {
+                a = dir * self.acc[k];
+            }
+            out.push(crate::piece::Piece::jerk(t, dt, p, v, a, jk));
+            p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
+            v += dt * (a + 0.5 * dt * jk);
+            a += dt * jk;
+            t += dt;
+        }
+        if !finite_jerk {
+            a = 0.0;
+        }
+        (t, p, v, a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lim(v: f64, a: f64, j: Option<f64>) -> JointLimits {
+        JointLimits::new(v, a, j)
+    }
+
+    #[test]
+    fn rest_peak_matches_definition() {
+        let l = lim(2.0, 3.0, Some(10.0));
+        for &d in &[0.01, 0.1, 0.5, 1.0, 3.0, 10.0] {
+            let vc = rest_peak(d, &l);
+            let r = Ramp::new(vc, 3.0, 10.0);
+            let dist = vc * r.duration();
+            assert!(vc <= 2.0 + 1e-12);
+            assert!(vc == 2.0 || (dist - d).abs() < 1e-9 * d, "d={d} vc={vc} dist={dist}");
+        }
+    }
+
+    #[test]
+    fn stretched_profile_has_requested_duration_and_distance() {
+        let l = lim(2.0, 3.0, Some(10.0));
+        let s = Segment1 {
+            d: 1.3,
+            v0: 0.4,
+            v1: 0.2,
+        };
+        let f = s.fastest(&l);
+        for k in [1.0, 1.01, 1.5, 3.0, 10.0] {
+            let p = s.stretched(&l, f, f.duration * k);
+            let mut ph = Phases::new();
+            s.phases(&l, p, &mut ph);
+            let mut out = Vec::new();
+            let (t, x, v, a) = ph.emit(0.0, 0.0, 0.4, 0.0, 1.0, true, &mut out);
+            assert!((t - f.duration * k).abs() < 1e-9, "k={k}");
+            assert!((x - 1.3).abs() < 1e-9, "k={k} x={x}");
+            assert!((v - 0.2).abs() < 1e-9 && a.abs() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! The planned path: sampling, cursor, and the figures `servobus plan` prints.
+
+use crate::piece::Piece;
+
+/// Position, velocity and acceleration of one joint.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct JointState {
+    /// Position, in the limits' unit.
+    pub position: f64,
+    /// Velocity, unit per second.
+    pub velocity: f64,
+    /// Acceleration, unit per second squared.
+    pub acceleration: f64,
+}
+
+impl JointState {
+    /// A joint at rest at `position`.
+    pub fn at_rest(position: f64) -> Self {
+        JointState {
+            position,
+            velocity: 0.0,
+            acceleration: 0.0,
+        }
+    }
+}
+
+/// When one segment (the motion arriving at a keyframe) starts and ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentTiming {
+    /// Index, in the keyframe list given to [`plan`](crate::plan), of the
+    /// keyframe this segment arrives at.
+    pub keyframe: usize,
+    /// Which repetition (0-based) of the keyframe list.
+    pub cycle: usize,
+    /// Start time, s.
+    pub start: f64,
+    /// End time (arrival at the keyframe), s.
+    pub end: f64,
+}
+
+/// Extremes of one joint over the whole trajectory.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointSummary {
+    /// Largest speed reached.
+    pub peak_velocity: f64,
+    /// Largest acceleration magnitude reached.
+    pub peak_acceleration: f64,
+    /// Largest jerk magnitude; `f64::INFINITY` when the acceleration jumps
+    /// (trapezoidal profiles of a joint without a jerk limit).
+    pub peak_jerk: f64,
+    /// Lowest position reached.
+    pub min_position: f64,
+    /// Highest position reached.
+    pub max_position: f64,
+}
+
+/// A multi-joint path: a sequence of polynomial pieces per joint, all
+/// starting at time 0 and ending at [`duration`](Self::duration). Before 0
+/// it holds the start state and after the end it holds the final position
+/// at rest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    pub(crate) duration: f64,
+    pub(crate) pieces: Vec<Piece>,
+    /// `first[j]..first[j + 1]` are joint `j`'s pieces (never empty).
+    pub(crate) first: Vec<usize>,
+    pub(crate) segments: Vec<SegmentTiming>,
+}
+
+/// Remembers, per joint, the piece last sampled, so that sampling at
+/// increasing (or slowly changing) times is O(1). Made once by
+/// [`Trajectory::cursor`]; reusable across trajectories (it falls back to a
+/// binary search when its memory does not fit).
+#[derive(Debug, Clone, Default)]
+pub struct Cursor {
+    index: Vec<usize>,
+}
+
+impl Trajectory {
+    /// Builds from per-joint pieces covering `[0, end]` (gaps are not
+    /// allowed; a joint without pieces holds `hold[j]`).
+    pub(crate) fn from_joints(
+        per_joint: Vec<Vec<Piece>>,
+        hold: &[f64],
+        duration: f64,
+        segments: Vec<SegmentTiming>,
+    ) -> Self {
+        let total: usize = per_joint.iter().map(|p| p.len().max(1)).sum();
+        let mut pieces = Vec::with_capacity(total + per_joint.len());
+        let mut first = Vec::with_capacity(per_joint.len() + 1);
+        for (j, joint) in per_joint.into_iter().enumerate() {
+            first.push(pieces.len());
+            let n = pieces.len();
+            pieces.extend(joint.into_iter().filter(|p| p.duration() > 0.0));
+            if pieces.len() == n {
+                pieces.push(Piece::hold(0.0, duration, hold[j]));
+            } else if let Some(last) = pieces.last_mut() {
+                // Rounding in accumulated phase times may leave the last
+                // piece a few ulps short of (or past) the end: snap it.
+                last.t1 = duration.max(last.t0);
+            }
+        }
+        first.push(pieces.len());
+        Trajectory {
+            duration,
+            pieces,
+            first,
+            segments,
+        }
+    }
+
+    /// Number of joints.
+    pub fn joints(&self) -> usize {
+        self.first.len() - 1
+    }
+
+    /// Total duration, s.
+    pub fn duration(&self) -> f64 {
+        self.duration
+    }
+
+    /// Start and end time of every segment, in order.
+    pub fn segments(&self) -> &[SegmentTiming] {
+        &self.segments
+    }
+
+    /// A cursor for [`sample_with`](Self::sample_with). Allocates once.
+    pub fn cursor(&self) -> Cursor {
+        Cursor {
+            index: self.first[..self.joints()].to_vec(),
+        }
+    }
+
+    fn joint_pieces(&self, j: usize) -> &[Piece] {
+        &self.pieces[self.first[j]..self.first[j + 1]]
+    }
+
+    /// Samples every joint at time `t` (s) into `out` by binary search;
+    /// O(log n) per joint, no allocation. Writes `min(out.len(), joints)`
+    /// entries.
+    pub fn sample(&self, t: f64, out: &mut [JointState]) {
+        let t = t.clamp(0.0, self.duration);
+        for (j, o) in out.iter_mut().enumerate().take(self.joints()) {
+            let ps = self.joint_pieces(j);
+            let i = ps.partition_point(|p| p.t1 < t).min(ps.len() - 1);
+            *o = state(&ps[i], t);
+        }
+    }
+
+    /// Samples every joint at time `t` (s) into `out`, starting the search
+    /// at the cursor's pieces: O(1) when `t` moves forward in steps shorter
+    /// than a piece, as in a control loop. No allocation. Writes
+    /// `min(out.len(), joints)` entries.
+    #[inline]
+    pub fn sample_with(&self, cursor: &mut Cursor, t: f64, out: &mut [JointState]) {
+        let t = t.clamp(0.0, self.duration);
+        let n = self.joints().min(out.len());
+        if cursor.index.len() < n {
+            // A cursor of another trajectory: cannot grow without
+            // allocating, so search.
+            self.sample(t, out);
+            return;
+        }
+        for j in 0..n {
+            let (lo, hi) = (self.first[j], self.first[j + 1]);
+            let mut i = cursor.index[j];
+            if i < lo || i >= hi {
+                i = lo;
+            }
+            let p = &self.pieces[i];
+            if t > p.t1 {
+                // Usually the next piece; otherwise search forward.
+                i += 1;
+                if i >= hi || t > self.pieces[i].t1 {
+                    i = lo + self.pieces[lo..hi].partition_point(|p| p.t1 < t);
+                }
+            } else if t < p.t0 {
+                i = lo + self.pieces[lo..hi].partition_point(|p| p.t1 < t);
+            }
+            let i = i.min(hi - 1);
+            cursor.index[j] = i;
+            out[j] = state(&self.pieces[i], t);
+        }
+    }
+
+    /// The state of every joint at the end (at rest at the last keyframe).
+    pub fn final_state(&self, out: &mut [JointState]) {
+        self.sample(self.duration, out);
+    }
+
+    /// Extremes of joint `j` over the whole trajectory (exact: from the
+    /// polynomial pieces, not from samples). `None` if there is no such
+    /// joint.
+    pub fn joint_summary(&self, j: usize) -> Option<JointSummary> {
+        if j >= self.joints() {
+            return None;
+        }
+        let ps = self.joint_pieces(j);
+        let mut s = JointSummary {
+            peak_velocity: 0.0,
+            peak_acceleration: 0.0,
+            peak_jerk: 0.0,
+            min_position: f64::INFINITY,
+            max_position: f64::NEG_INFINITY,
+        };
+        let mut prev_acc: Option<f64> = None;
+        for p in ps {
+            let (lo, hi) = p.range(0);
+            s.min_position = s.min_position.min(lo);
+            s.max_position = s.max_position.max(hi);
+            s.peak_velocity = s.peak_velocity.max(p.peak(1));
+            let acc = p.peak(2);
+            s.peak_acceleration = s.peak_acceleration.max(acc);
+            s.peak_jerk = s.peak_jerk.max(p.peak(3));
+            let a0 = p.eval_local(0.0).2;
+            if let Some(a) = prev_acc {
+                if (a - a0).abs() > 1e-9 * (1.0 + acc) {
+                    s.peak_jerk = f64::INFINITY;
+                }
+            }
+            prev_acc = Some(p.eval_local(p.duration()).2);
+        }
+        Some(s)
+    }
+
+    /// [`joint_summary`](Self::joint_summary) of every joint.
+    pub fn summaries(&self) -> Vec<JointSummary> {
+        (0..self.joints()).filter_map(|j| self.joint_summary(j)).collect()
+    }
+}
+
+#[inline(always)]
+fn state(p: &Piece, t: f64) -> JointState {
+    let (position, velocity, acceleration) = p.eval(t);
+    JointState {
+        position,
+        velocity,
+        acceleration,
+    }
+}

@@ -1,0 +1,146 @@
+//! Untimed keyframes: as fast as the limits allow, through the
+//! intermediate keyframes without stopping where the motion continues.
+//!
+//! Method (blended double-S segments):
+//!
+//! 1. Each joint gets a speed at each intermediate keyframe: zero where the
+//!    joint turns back or pauses there (so it never overshoots), otherwise
+//!    the largest speed, up to `max_velocity`, from which it could still
+//!    stop within a quarter of either neighbouring distance. That cap
+//!    guarantees every segment profile exists for any duration (see
+//!    `profile`), acceleration is zero at every keyframe, so velocity and
+//!    acceleration are continuous there.
+//! 2. Each segment takes the longest of the joints' time-optimal durations;
+//!    every other joint's profile is stretched to that duration by lowering
+//!    its cruise speed, so all joints reach every keyframe together.
+//! 3. Speeds at keyframes are then lowered where a stretched joint would
+//!    otherwise dip and rise again (to at most twice its average speed on
+//!    either side), and the durations are recomputed once. Both steps only
+//!    ever build profiles inside the limits.
+
+use crate::piece::Piece;
+use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::JointLimits;
+
+/// Reused buffers of the untimed planner.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    /// Signed speed per keyframe and joint, `k * joints + j`.
+    via: Vec<f64>,
+    /// Fastest profile per segment and joint.
+    fastest: Vec<Profile>,
+    /// Duration per segment.
+    pub durations: Vec<f64>,
+}
+
+fn seg(d: f64, vin: f64, vout: f64) -> Segment1 {
+    // Speeds are either zero or in the direction of motion (step 1), so
+    // after normalising the direction they are non-negative.
+    Segment1 {
+        d: d.abs(),
+        v0: vin.abs(),
+        v1: vout.abs(),
+    }
+}
+
+/// Plans an untimed section through `pos[0..=n]` starting at `t0` at rest.
+/// Appends pieces to `out[j]`; segment durations are left in
+/// `scratch.durations`. With `stop` every keyframe is a stop (the
+/// comparison baseline).
+pub(crate) fn section(
+    limits: &[JointLimits],
+    pos: &[&[f64]],
+    t0: f64,
+    stop: bool,
+    scratch: &mut Scratch,
+    out: &mut [Vec<Piece>],
+) {
+    let nj = limits.len();
+    let n = pos.len() - 1;
+    let Scratch {
+        via,
+        fastest,
+        durations,
+    } = scratch;
+    via.clear();
+    via.resize((n + 1) * nj, 0.0);
+    fastest.clear();
+    fastest.resize(
+        n * nj,
+        Profile {
+            vc: 0.0,
+            duration: 0.0,
+        },
+    );
+    durations.clear();
+    durations.resize(n, 0.0);
+
+    if !stop {
+        for k in 1..n {
+            for (j, lim) in limits.iter().enumerate() {
+                let (dp, dn) = (pos[k][j] - pos[k - 1][j], pos[k + 1][j] - pos[k][j]);
+                if dp * dn > 0.0 {
+                    let cap = rest_peak(0.5 * dp.abs(), lim).min(rest_peak(0.5 * dn.abs(), lim));
+                    via[k * nj + j] = dp.signum() * cap.min(lim.max_velocity);
+                }
+            }
+        }
+    }
+    let fill = |via: &[f64], fastest: &mut [Profile], durations: &mut [f64]| {
+        for k in 0..n {
+            let mut t: f64 = 0.0;
+            for (j, lim) in limits.iter().enumerate() {
+                let s = seg(pos[k + 1][j] - pos[k][j], via[k * nj + j], via[(k + 1) * nj + j]);
+                let f = s.fastest(lim);
+                fastest[k * nj + j] = f;
+                t = t.max(f.duration);
+            }
+            durations[k] = t;
+        }
+    };
+    fill(via, fastest, durations);
+    if !stop && n > 1 {
+        // Step 3: a joint much faster than the segment's pace would brake
+        // and accelerate again inside the segment; give it a speed in line
+        // with the pace instead.
+        let mut changed = false;
+        for k in 1..n {
+            for j in 0..nj {
+                let v = via[k * nj + j];
+                if v == 0.0 {
+                    continue;
+                }
+                let avg_prev = (pos[k][j] - pos[k - 1][j]).abs() / durations[k - 1];
+                let avg_next = (pos[k + 1][j] - pos[k][j]).abs() / durations[k];
+                let pace = 2.0 * avg_prev.min(avg_next);
+                if pace < v.abs() {
+                    via[k * nj + j] = v.signum() * pace;
+                    changed = true;
+                }
+            }
+        }
+        if changed {
+            fill(via, fastest, durations);
+        }
+    }
+    let mut phases = Phases::new();
+    for (j, lim) in limits.iter().enumerate() {
+        let finite = lim.max_jerk.is_some();
+        let mut t = t0;
+        for k in 0..n {
+            let d = pos[k + 1][j] - pos[k][j];
+            let (vin, vout) = (via[k * nj + j], via[(k + 1) * nj + j]);
+            let s = seg(d, vin, vout);
+            let p = s.stretched(lim, fastest[k * nj + j], durations[k]);
+            phases.n = 0;
+            if s.d == 0.0 && s.v0 == 0.0 && s.v1 == 0.0 {
+                out[j].push(Piece::hold(t, t + durations[k], pos[k][j]));
+            } else {
+                s.phases(lim, p, &mut phases);
+                let dir = if d >= 0.0 { 1.0 } else { -1.0 };
+                phases.emit(t, pos[k][j], vin, 0.0, dir, finite, &mut out[j]);
+            }
+            t += durations[k];
+        }
+    }
+}

@@ -1,0 +1,128 @@
+//! `servobus budget` on the shipped robots, with figures worked out by hand.
+//!
+//! At 1 Mbps a byte takes 10 us. Writing goal positions (2 bytes) to N
+//! servos is one SYNC WRITE of 8 + 3N bytes; reading present positions back
+//! is a SYNC READ request of 8 + N bytes and N replies of 8 bytes. Each reply
+//! also waits the servo's return delay plus the link's default turnaround
+//! (50 us).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn servobus(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_servobus"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the servobus binary runs")
+}
+
+fn budget_json(args: &[&str]) -> serde_json::Value {
+    let out = servobus(args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v[key].as_f64().unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
+}
+
+#[test]
+fn so101_at_1mbps_with_return_delay_zero() {
+    let v = budget_json(&["budget", "--robot", "configs/robots/so101.yaml", "--json"]);
+    let buses = v["buses"].as_array().expect("buses list");
+    assert_eq!(buses.len(), 1);
+    let b = &buses[0];
+    assert_eq!(b["name"], "arm");
+    assert_eq!(b["servos"], 6);
+    // 26 (SYNC WRITE 8 + 6 x 3) + 14 (SYNC READ 8 + 6) + 48 (6 replies of 8).
+    assert_eq!(b["bytes_per_cycle"], 88);
+    assert_eq!(num(b, "wire_time_us"), 880.0);
+    // + 6 turnarounds of 50 us, no return delay, no adapter latency.
+    assert_eq!(num(b, "cycle_time_us"), 1180.0);
+    assert!((num(b, "max_rate_hz") - 1e6 / 1180.0).abs() < 1e-9);
+    // The robot's default rate, 200 Hz: 1180 us of every 5000 us.
+    assert_eq!(num(b, "rate_hz"), 200.0);
+    assert!((num(b, "utilisation") - 0.236).abs() < 1e-12);
+    assert_eq!(b["feasible"], true);
+}
+
+#[test]
+fn hexapod_on_one_and_two_buses() {
+    let one = budget_json(&["budget", "--robot", "configs/robots/hexapod.yaml", "--json"]);
+    let b = &one["buses"][0];
+    // 62 (8 + 18 x 3) + 26 (8 + 18) + 144 (18 x 8) = 232 bytes = 2320 us.
+    assert_eq!(b["bytes_per_cycle"], 232);
+    assert_eq!(num(b, "wire_time_us"), 2320.0);
+    assert_eq!(num(b, "cycle_time_us"), 2320.0 + 18.0 * 50.0);
+
+    let two = budget_json(&["budget", "--robot", "configs/robots/hexapod-2bus.yaml", "--json", "--rate", "500"]);
+    let buses = two["buses"].as_array().expect("buses");
+    assert_eq!(buses.len(), 2);
+    for b in buses {
+        // 35 (8 + 9 x 3) + 17 (8 + 9) + 72 (9 x 8) = 124 bytes.
+        assert_eq!(b["servos"], 9);
+        assert_eq!(b["bytes_per_cycle"], 124);
+        assert_eq!(num(b, "cycle_time_us"), 1240.0 + 9.0 * 50.0);
+        assert_eq!(num(b, "rate_hz"), 500.0);
+        assert!((num(b, "utilisation") - 1690e-6 * 500.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn scs_servos_are_read_one_by_one() {
+    let v = budget_json(&["budget", "--robot", "configs/robots/scs-mini.yaml", "--json"]);
+    let b = &v["buses"][0];
+    // SYNC WRITE 8 + 4 x 3 = 20; four READs of 8 bytes each answered by 8.
+    assert_eq!(b["bytes_per_cycle"], 20 + 4 * 16);
+    assert_eq!(num(b, "cycle_time_us"), 840.0 + 4.0 * 50.0);
+}
+
+fn temp_robot(name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("budget_cli");
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
+#[test]
+fn factory_return_delay_and_what_would_fit() {
+    let so101 = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"))
+        .expect("so101");
+    let factory = so101.replace("return_delay_us: 0 ", "return_delay_us: 500 ");
+    assert_ne!(factory, so101);
+    let p = temp_robot("factory.yaml", &factory);
+    let path = p.to_str().expect("utf-8 path");
+    let v = budget_json(&["budget", "--robot", path, "--json", "--rate", "300"]);
+    let b = &v["buses"][0];
+    // Same 88 bytes, but each of the 6 replies waits 500 + 50 us.
+    assert_eq!(b["bytes_per_cycle"], 88);
+    assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 550.0);
+    assert_eq!(b["feasible"], false);
+    let first_fix = b["fixes"][0].as_str().expect("a fix");
+    assert!(first_fix.contains("return delay to 0"), "{first_fix}");
+
+    let text = servobus(&["budget", "--robot", path, "--rate", "300"]);
+    let stdout = String::from_utf8_lossy(&text.stdout);
+    assert!(stdout.contains("88 bytes"), "{stdout}");
+    assert!(stdout.contains("set the servos' return delay to 0"), "{stdout}");
+}
+
+#[test]
+fn a_rate_no_plan_can_meet_fails() {
+    let out = servobus(&["budget", "--robot", "configs/robots/so101.yaml", "--rate", "5000"]);
+    assert!(!out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("cannot run"), "{stdout}");
+}
+
+#[test]
+fn a_bad_robot_file_is_reported_with_its_position() {
+    let p = temp_robot("bad.yaml", "name: bad\nbuses:\n  - name: b\n    joints:\n      - {name: j, id: 300, model: sts3215, min: 0, max: 1, max_velocity: 1, max_acceleration: 1}\n");
+    let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8 path")]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let want = format!("{}:5:24: buses[0].joints[0].id: servo IDs go from 0 to 253", p.display());
+    assert!(stderr.contains(&want), "{stderr}");
+}

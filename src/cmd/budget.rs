@@ -78,7 +78,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ExitCode::SUCCESS
     } else {
         if !args.json {
-            eprintln!("error: {} Hz cannot run on every bus of `{}`", fmt_hz(rate), robot.name);
+            eprintln!(
+                "error: {} Hz cannot run on every bus of `{}`",
+                fmt_hz(rate),
+                robot.name
+            );
         }
         ExitCode::FAILURE
     })
@@ -113,7 +117,11 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
     };
 
     let mut s = String::new();
-    let sync = bus.joints.iter().filter(|j| j.model.series.has_sync_read()).count();
+    let sync = bus
+        .joints
+        .iter()
+        .filter(|j| j.model.series.has_sync_read())
+        .count();
     s.push_str(&format!(
         "\nbus `{}`: {} servos at {} baud, adapter latency {} us, return delay {} us\n",
         bus.name,

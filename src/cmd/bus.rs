@@ -1,13 +1,49 @@
 //! The bus tools: `servobus scan`, `ping`, `read`, `write` and `set-id`.
+//!
+//! Each opens the serial port (or the simulator's pty), builds a driver
+//! [`Bus`] with reply deadlines derived from the baud rate and the adapter
+//! latency, and reports in one line per fact. Errors are one line and a
+//! non-zero exit code.
 
 use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{bail, Context};
+use servobus_driver::{Bus, BusError, BusSettings, SerialTransport, SystemClock};
+use servobus_protocol::registers::{self, addr, Access, Model, Register, Series};
+use servobus_protocol::MAX_ID;
+
+type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
+
+/// Latency assumed for an adapter that is not an FTDI one (USB CDC and
+/// CH34x adapters deliver in 1 ms USB frames).
+const DEFAULT_LATENCY_US: u64 = 1000;
+/// Latency assumed for a pseudo-terminal: the program behind it (the
+/// simulator) is scheduled by the OS, which costs milliseconds on a busy
+/// machine.
+const PTY_LATENCY_US: u64 = 5000;
+/// The longest latency any adapter is waited for while measuring it (an
+/// FTDI latency timer goes up to 255 ms).
+const LATENCY_CEILING: Duration = Duration::from_millis(300);
+
+/// Options every bus tool shares.
+#[derive(Debug, clap::Args)]
+pub struct PortArgs {
+    /// Serial port (or the pty of `servobus sim`).
+    #[arg(long)]
+    pub port: String,
+    /// The adapter's latency per transaction, in microseconds (default: the
+    /// FTDI latency timer when the adapter is an FTDI one, else 1000).
+    #[arg(long, value_name = "US")]
+    pub latency_us: Option<u64>,
+}
 
 /// Arguments of `servobus scan`.
 #[derive(Debug, clap::Args)]
 pub struct ScanArgs {
-    /// Serial port.
-    #[arg(long)]
-    pub port: String,
+    /// Port and latency.
+    #[command(flatten)]
+    pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
@@ -22,9 +58,9 @@ pub struct ScanArgs {
 /// Arguments of `servobus ping`.
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
-    /// Serial port.
-    #[arg(long)]
-    pub port: String,
+    /// Port and latency.
+    #[command(flatten)]
+    pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
@@ -36,16 +72,16 @@ pub struct PingArgs {
 /// Arguments of `servobus read`.
 #[derive(Debug, clap::Args)]
 pub struct ReadArgs {
-    /// Serial port.
-    #[arg(long)]
-    pub port: String,
+    /// Port and latency.
+    #[command(flatten)]
+    pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Servo ID.
     #[arg(long)]
     pub id: u8,
-    /// Register name, e.g. present_position.
+    /// Register name, e.g. present_position (or its address).
     pub register: String,
     /// Print JSON.
     #[arg(long)]
@@ -55,16 +91,16 @@ pub struct ReadArgs {
 /// Arguments of `servobus write`.
 #[derive(Debug, clap::Args)]
 pub struct WriteArgs {
-    /// Serial port.
-    #[arg(long)]
-    pub port: String,
+    /// Port and latency.
+    #[command(flatten)]
+    pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Servo ID.
     #[arg(long)]
     pub id: u8,
-    /// Register name, e.g. goal_position.
+    /// Register name, e.g. goal_position (or its address).
     pub register: String,
     /// Value to write.
     #[arg(allow_negative_numbers = true)]
@@ -74,9 +110,9 @@ pub struct WriteArgs {
 /// Arguments of `servobus set-id`.
 #[derive(Debug, clap::Args)]
 pub struct SetIdArgs {
-    /// Serial port.
-    #[arg(long)]
-    pub port: String,
+    /// Port and latency.
+    #[command(flatten)]
+    pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
@@ -87,23 +123,444 @@ pub struct SetIdArgs {
     pub new_id: u8,
 }
 
+/// Opens the port and builds a bus; warns about a slow FTDI latency timer.
+fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Result<SerialBus> {
+    let clock = SystemClock::new();
+    let transport = SerialTransport::open(&port.port, baud, clock)
+        .with_context(|| format!("cannot open {}", port.port))?;
+    let ftdi = transport.ftdi_latency().cloned();
+    if let Some(warning) = ftdi.as_ref().and_then(|f| f.warning()) {
+        eprintln!("warning: {warning}");
+    }
+    let latency = match (port.latency_us, ftdi) {
+        (Some(us), _) => Duration::from_micros(us),
+        // The FTDI chip holds bytes up to its timer; add the USB frame.
+        (None, Some(f)) => f.latency + Duration::from_micros(DEFAULT_LATENCY_US),
+        (None, None) if is_pty(&port.port) => Duration::from_micros(PTY_LATENCY_US),
+        (None, None) => Duration::from_micros(DEFAULT_LATENCY_US),
+    };
+    let settings = BusSettings::new(series, baud)
+        .with_latency(latency)
+        .with_retries(retries);
+    Ok(Bus::new(transport, clock, settings))
+}
+
+/// Whether `path` is (a link to) a pseudo-terminal.
+fn is_pty(path: &str) -> bool {
+    std::fs::canonicalize(path).is_ok_and(|p| p.starts_with("/dev/pts"))
+}
+
+/// Measures the adapter's latency with servo `id` and widens the bus's
+/// deadlines to twice it when the assumed latency is too short. Used by
+/// the single-servo tools, which can afford three PINGs to be sure.
+fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
+    let m = bus.measure_latency(id, 3, LATENCY_CEILING)?;
+    if m.max * 2 > bus.settings().link.latency {
+        bus.set_latency(m.max * 2);
+    }
+    Ok(())
+}
+
+fn check_id(id: u8) -> anyhow::Result<()> {
+    if id > MAX_ID {
+        bail!("ID {id} is not a servo ID (0..={MAX_ID})");
+    }
+    Ok(())
+}
+
+/// What one scan found about a servo.
+#[derive(Debug, Clone)]
+struct Found {
+    id: u8,
+    baud: u32,
+    model: Option<&'static Model>,
+    model_number: u16,
+    firmware: (u8, u8),
+    position: Option<i32>,
+    voltage_v: Option<f64>,
+    temperature_c: Option<u8>,
+}
+
+impl Found {
+    /// A servo that answered PING but not the reads that identify it.
+    fn unknown(id: u8, baud: u32) -> Found {
+        Found {
+            id,
+            baud,
+            model: None,
+            model_number: 0,
+            firmware: (0, 0),
+            position: None,
+            voltage_v: None,
+            temperature_c: None,
+        }
+    }
+}
+
+/// The model behind a model-number register, trying both byte orders.
+fn model_of(bytes: [u8; 2]) -> (u16, Option<&'static Model>) {
+    let le = u16::from_le_bytes(bytes);
+    if let Some(m) = registers::model_by_number(le) {
+        return (le, Some(m));
+    }
+    let be = u16::from_be_bytes(bytes);
+    match registers::model_by_number(be) {
+        Some(m) => (be, Some(m)),
+        None => (le, None),
+    }
+}
+
+/// Identifies servo `id` and switches the bus to its series.
+fn identify(bus: &mut SerialBus, id: u8) -> Result<Found, BusError> {
+    let mut head = [0u8; 5];
+    bus.read(id, addr::FIRMWARE_MAJOR, &mut head)?;
+    let (model_number, model) = model_of([head[3], head[4]]);
+    let series = model.map_or(Series::Sts, |m| m.series);
+    let mut settings = *bus.settings();
+    settings.series = series;
+    bus.set_settings(settings);
+    let mut state = [0u8; 8];
+    let (position, voltage_v, temperature_c) =
+        match bus.read(id, addr::PRESENT_POSITION, &mut state) {
+            Ok(_) => {
+                let map = series.map();
+                let pos = map
+                    .at(addr::PRESENT_POSITION)
+                    .and_then(|r| r.decode(&state[..2], series.byte_order()).ok());
+                (pos, Some(f64::from(state[6]) / 10.0), Some(state[7]))
+            }
+            Err(e) if e.is_retryable() && !matches!(e, BusError::Corrupt { .. }) => {
+                (None, None, None)
+            }
+            Err(e) => return Err(e),
+        };
+    Ok(Found {
+        id,
+        baud: bus.settings().link.baud,
+        model,
+        model_number,
+        firmware: (head[0], head[1]),
+        position,
+        voltage_v,
+        temperature_c,
+    })
+}
+
 /// Runs `servobus scan`.
-pub fn scan(_args: ScanArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus scan is not available yet")
+pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
+    let bauds: Vec<u32> = if args.all_bauds {
+        (0..8).filter_map(registers::baud_rate).collect()
+    } else {
+        vec![args.baud]
+    };
+    let mut bus = open(&args.port, bauds[0], Series::Sts, 0)?;
+    let mut found = Vec::new();
+    let mut collisions: Vec<(u8, u32)> = Vec::new();
+    let started = std::time::Instant::now();
+    for &baud in &bauds {
+        if baud != bus.settings().link.baud {
+            bus.transport_mut()
+                .set_baud(baud)
+                .with_context(|| format!("cannot set {} to {baud} baud", args.port.port))?;
+            let mut s = *bus.settings();
+            s.link.baud = baud;
+            bus.set_settings(s);
+        }
+        for id in 0..=MAX_ID {
+            let mut s = *bus.settings();
+            s.series = Series::Sts;
+            bus.set_settings(s);
+            // Absent IDs are asked once: that is what makes the scan fast.
+            s.retries = 0;
+            bus.set_settings(s);
+            let answered = bus.ping(id);
+            s.retries = 1;
+            bus.set_settings(s);
+            let result = match answered {
+                Ok(_) => match identify(&mut bus, id) {
+                    Err(e) if e.is_timeout() => Ok(Found::unknown(id, baud)),
+                    other => other,
+                },
+                Err(e) => Err(e),
+            };
+            match result {
+                Ok(f) => found.push(f),
+                // Two servos answering at once garble each other's replies.
+                Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
+                    collisions.push((id, baud))
+                }
+                Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
+                Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
+            }
+        }
+    }
+    // If the adapter turned out slower than assumed, servos may have been
+    // missed: measure it on a servo that answered and ask the silent IDs
+    // again with deadlines that fit.
+    if args.port.latency_us.is_none() {
+        if let Some(first) = found.first().map(|f| (f.id, f.baud)) {
+            rescan_if_slow(&mut bus, first, &mut found, &mut collisions)?;
+        }
+    }
+    let elapsed = started.elapsed();
+    if args.json {
+        let servos: Vec<_> = found
+            .iter()
+            .map(|f| {
+                serde_json::json!({
+                    "id": f.id,
+                    "baud": f.baud,
+                    "model": f.model.map(|m| m.name),
+                    "model_number": f.model_number,
+                    "firmware": format!("{}.{}", f.firmware.0, f.firmware.1),
+                    "position": f.position,
+                    "voltage_v": f.voltage_v,
+                    "temperature_c": f.temperature_c,
+                })
+            })
+            .collect();
+        let coll: Vec<_> = collisions
+            .iter()
+            .map(|(id, baud)| serde_json::json!({"id": id, "baud": baud}))
+            .collect();
+        let out = serde_json::json!({
+            "port": args.port.port,
+            "servos": servos,
+            "collisions": coll,
+            "elapsed_s": elapsed.as_secs_f64(),
+        });
+        println!("{out}");
+    } else {
+        if !found.is_empty() {
+            println!(
+                "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  BAUD",
+                "ID", "MODEL", "FIRMWARE", "POSITION", "VOLTAGE", "TEMP"
+            );
+        }
+        for f in &found {
+            let model = f
+                .model
+                .map_or_else(|| format!("#{}", f.model_number), |m| m.name.to_string());
+            let opt = |v: Option<String>| v.unwrap_or_else(|| "?".into());
+            println!(
+                "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  {}",
+                f.id,
+                model,
+                format!("{}.{}", f.firmware.0, f.firmware.1),
+                opt(f.position.map(|p| p.to_string())),
+                opt(f.voltage_v.map(|v| format!("{v:.1} V"))),
+                opt(f.temperature_c.map(|t| format!("{t} C"))),
+                f.baud
+            );
+        }
+        println!(
+            "found {} servo(s) on {} in {:.2} s",
+            found.len(),
+            args.port.port,
+            elapsed.as_secs_f64()
+        );
+    }
+    for (id, baud) in &collisions {
+        eprintln!(
+            "warning: ID {id} at {baud} baud: corrupted replies (checksum errors): \
+             probably two servos share this ID; connect them one at a time and use set-id"
+        );
+    }
+    if found.is_empty() && collisions.is_empty() {
+        bail!("no servo answered on {}", args.port.port);
+    }
+    Ok(ExitCode::SUCCESS)
 }
+
+/// Measures the latency on servo `first` and, when it exceeds the one the
+/// scan assumed, asks every silent ID again at that baud rate.
+fn rescan_if_slow(
+    bus: &mut SerialBus,
+    (first, baud): (u8, u32),
+    found: &mut Vec<Found>,
+    collisions: &mut Vec<(u8, u32)>,
+) -> anyhow::Result<()> {
+    let assumed = bus.settings().link.latency;
+    if bus.settings().link.baud != baud {
+        bus.transport_mut().set_baud(baud)?;
+        let mut s = *bus.settings();
+        s.link.baud = baud;
+        bus.set_settings(s);
+    }
+    let Ok(m) = bus.measure_latency(first, 3, LATENCY_CEILING) else {
+        return Ok(());
+    };
+    // Occasional spikes are what retries are for; a typical latency above
+    // the assumed one means the first pass could not hear anyone.
+    if m.mean <= assumed {
+        return Ok(());
+    }
+    eprintln!(
+        "warning: the adapter's latency is about {} us, more than the {} us assumed: \
+         asking silent IDs again (pass --latency-us to skip this)",
+        m.mean.as_micros(),
+        assumed.as_micros()
+    );
+    bus.set_latency(m.max * 2);
+    for id in 0..=MAX_ID {
+        let known =
+            found.iter().any(|f| f.id == id && f.baud == baud) || collisions.contains(&(id, baud));
+        if known {
+            continue;
+        }
+        let mut s = *bus.settings();
+        s.series = Series::Sts;
+        s.retries = 1;
+        bus.set_settings(s);
+        match bus.ping(id).and_then(|_| identify(bus, id)) {
+            Ok(f) => found.push(f),
+            Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
+                collisions.push((id, baud))
+            }
+            Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
+            Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
+        }
+    }
+    found.sort_by_key(|f| (f.baud, f.id));
+    Ok(())
+}
+
 /// Runs `servobus ping`.
-pub fn ping(_args: PingArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus ping is not available yet")
+pub fn ping(args: PingArgs) -> anyhow::Result<ExitCode> {
+    check_id(args.id)?;
+    let mut bus = open(&args.port, args.baud, Series::Sts, 2)?;
+    if args.port.latency_us.is_none() {
+        adapt_latency(&mut bus, args.id)?;
+    }
+    let flags = bus.ping(args.id)?;
+    println!(
+        "servo {} answered in {} us, status {flags}",
+        args.id,
+        bus.last_rtt().as_micros()
+    );
+    Ok(ExitCode::SUCCESS)
 }
+
+/// The register named `name` (or at the address `name`) of `series`.
+fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
+    let map = series.map();
+    let by_address = name.parse::<u8>().ok().and_then(|a| map.at(a));
+    match by_address.or_else(|| map.get(name)) {
+        Some(r) => Ok(r),
+        None => bail!(
+            "no register called {name:?} on {} servos (e.g. present_position, goal_position, id)",
+            series.name().to_uppercase()
+        ),
+    }
+}
+
+/// Opens the bus and learns the servo's series from its model number.
+fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, Found)> {
+    check_id(id)?;
+    let mut bus = open(port, baud, Series::Sts, 2)?;
+    if port.latency_us.is_none() {
+        adapt_latency(&mut bus, id).with_context(|| format!("servo {id}"))?;
+    }
+    let found = identify(&mut bus, id).with_context(|| format!("servo {id}"))?;
+    Ok((bus, found))
+}
+
 /// Runs `servobus read`.
-pub fn read(_args: ReadArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus read is not available yet")
+pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
+    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
+    let series = bus.settings().series;
+    let reg = register(series, &args.register)?;
+    let (value, flags) = bus.read_register(args.id, reg)?;
+    if args.json {
+        let out = serde_json::json!({
+            "id": args.id,
+            "register": reg.name,
+            "address": reg.address,
+            "size": reg.size,
+            "value": value,
+            "unit": reg.unit,
+            "status": flags.bits(),
+        });
+        println!("{out}");
+    } else {
+        let unit = if reg.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", reg.unit)
+        };
+        println!("{} = {value}{unit}", reg.name);
+    }
+    if !flags.is_ok() {
+        eprintln!("warning: servo {} reports {flags}", args.id);
+    }
+    Ok(ExitCode::SUCCESS)
 }
+
+/// Refuses `new_id` when a servo already answers to it.
+fn refuse_taken(bus: &mut SerialBus, new_id: u8) -> anyhow::Result<()> {
+    match bus.ping(new_id) {
+        Err(BusError::Timeout { .. }) => Ok(()),
+        Ok(_) | Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
+            bail!("ID {new_id} is already taken by a servo on this bus")
+        }
+        Err(e) => Err(e).context(format!("checking whether ID {new_id} is free")),
+    }
+}
+
 /// Runs `servobus write`.
-pub fn write(_args: WriteArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus write is not available yet")
+pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
+    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
+    let series = bus.settings().series;
+    let reg = register(series, &args.register)?;
+    let (lo, hi) = reg.range();
+    let value = i32::try_from(args.value)
+        .ok()
+        .filter(|v| (lo..=hi).contains(v))
+        .with_context(|| format!("{} takes {lo}..={hi}, not {}", reg.name, args.value))?;
+    match reg.access {
+        Access::ReadOnly => bail!("{} is read-only", reg.name),
+        Access::Ram => {
+            bus.write_register(args.id, reg, value)?;
+            println!("{} = {value} (RAM: lost at power-off)", reg.name);
+        }
+        Access::Eeprom => {
+            if reg.address == addr::ID {
+                let new_id = u8::try_from(value).unwrap_or(u8::MAX);
+                check_id(new_id)?;
+                if new_id != args.id {
+                    refuse_taken(&mut bus, new_id)?;
+                }
+            }
+            println!(
+                "{} is an EEPROM register: the new value will persist across power cycles",
+                reg.name
+            );
+            let mut buf = [0u8; 4];
+            let bytes = &mut buf[..usize::from(reg.size)];
+            reg.encode(value, series.byte_order(), bytes)
+                .with_context(|| format!("{} cannot hold {value}", reg.name))?;
+            let w = bus.write_eeprom(args.id, reg.address, bytes)?;
+            println!(
+                "{} = {value} on servo {} (unlocked, written, verified, locked)",
+                reg.name, w.id
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }
+
 /// Runs `servobus set-id`.
-pub fn set_id(_args: SetIdArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus set-id is not available yet")
+pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
+    check_id(args.new_id)?;
+    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
+    if args.new_id == args.id {
+        println!("servo {} already has ID {}", args.id, args.new_id);
+        return Ok(ExitCode::SUCCESS);
+    }
+    refuse_taken(&mut bus, args.new_id)?;
+    let w = bus.write_eeprom(args.id, addr::ID, &[args.new_id])?;
+    bus.ping(w.id)
+        .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
+    println!("servo {} is now ID {} (persisted)", args.id, w.id);
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,6 +1,13 @@
-//! `servobus plan`.
+//! `servobus plan`: plan a motion without moving anything, and show its
+//! timing, peaks and ranges per joint (or exactly why it cannot be played).
 
+use std::path::Path;
 use std::process::ExitCode;
+
+use anyhow::Context;
+use serde::Serialize;
+use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot};
+use servobus_trajectory::{JointState, Trajectory};
 
 /// Arguments of `servobus plan`.
 #[derive(Debug, clap::Args)]
@@ -18,7 +25,287 @@ pub struct Args {
     pub plot: Option<std::path::PathBuf>,
 }
 
+/// One joint in `--json` output, in the motion's units (per s, s^2, s^3).
+#[derive(Debug, Serialize)]
+struct JointJson {
+    name: String,
+    peak_velocity: f64,
+    peak_acceleration: f64,
+    /// `null` when the acceleration steps (a joint without a jerk limit).
+    peak_jerk: Option<f64>,
+    min_position: f64,
+    max_position: f64,
+    /// Time the joint spends moving, s.
+    moving_s: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct SegmentJson {
+    keyframe: usize,
+    repetition: usize,
+    start_s: f64,
+    end_s: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct PlanJson {
+    motion: String,
+    robot: String,
+    units: String,
+    rate_hz: f64,
+    duration_s: f64,
+    joints: Vec<JointJson>,
+    segments: Vec<SegmentJson>,
+}
+
 /// Runs `servobus plan`.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus plan is not available yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
+    let traj = plan_motion(&motion, &robot)?;
+    let report = summarise(&motion, &robot, &traj);
+    if let Some(path) = &args.plot {
+        plot(&motion, &traj, path).with_context(|| format!("drawing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&report, &motion);
+        if let Some(path) = &args.plot {
+            println!("plot written to {}", path.display());
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn summarise(motion: &Motion, robot: &Robot, traj: &Trajectory) -> PlanJson {
+    let u = motion.units;
+    let rate = motion.rate_hz(robot);
+    let moving = moving_times(traj, rate);
+    let joints = motion
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let s = traj.joint_summary(j);
+            let f = |get: fn(&servobus_trajectory::JointSummary) -> f64| {
+                s.as_ref().map_or(0.0, |s| u.from_rad(get(s)))
+            };
+            let jerk = f(|s| s.peak_jerk);
+            JointJson {
+                name: name.clone(),
+                peak_velocity: f(|s| s.peak_velocity),
+                peak_acceleration: f(|s| s.peak_acceleration),
+                peak_jerk: jerk.is_finite().then_some(jerk),
+                min_position: tidy(f(|s| s.min_position)),
+                max_position: tidy(f(|s| s.max_position)),
+                moving_s: moving.get(j).copied().unwrap_or(0.0),
+            }
+        })
+        .collect();
+    let segments = traj
+        .segments()
+        .iter()
+        .map(|s| SegmentJson {
+            keyframe: s.keyframe,
+            repetition: s.cycle,
+            start_s: s.start,
+            end_s: s.end,
+        })
+        .collect();
+    PlanJson {
+        motion: motion.path.display().to_string(),
+        robot: motion.robot_path.display().to_string(),
+        units: u.to_string(),
+        rate_hz: rate,
+        duration_s: traj.duration(),
+        joints,
+        segments,
+    }
+}
+
+/// Rounding noise of the unit conversion (`-5e-16`) shown as the 0 it is.
+fn tidy(x: f64) -> f64 {
+    if x.abs() < 1e-9 {
+        0.0
+    } else {
+        x
+    }
+}
+
+/// Seconds each joint moves, sampled at the control rate (the rate the
+/// scheduler will sample at): a cycle counts when the joint's speed is above
+/// a thousandth of a degree per second.
+fn moving_times(traj: &Trajectory, rate_hz: f64) -> Vec<f64> {
+    let n = traj.joints();
+    let mut out = vec![JointState::default(); n];
+    let mut moving = vec![0.0; n];
+    let dt = 1.0 / rate_hz;
+    let mut cursor = traj.cursor();
+    let cycles = (traj.duration() * rate_hz).ceil() as u64;
+    let threshold = 1e-3f64.to_radians();
+    for k in 0..cycles {
+        traj.sample_with(&mut cursor, k as f64 * dt, &mut out);
+        for (m, s) in moving.iter_mut().zip(&out) {
+            if s.velocity.abs() > threshold {
+                *m += dt;
+            }
+        }
+    }
+    moving
+}
+
+fn print_text(r: &PlanJson, motion: &Motion) {
+    let u = &r.units;
+    println!(
+        "{}: {} keyframes{} on `{}`, {:.3} s at {} Hz ({} cycles)",
+        r.motion,
+        motion.keyframes.len(),
+        if motion.repeat > 1 {
+            format!(" x {}", motion.repeat)
+        } else {
+            String::new()
+        },
+        r.robot,
+        r.duration_s,
+        r.rate_hz,
+        (r.duration_s * r.rate_hz).ceil()
+    );
+    let w = r
+        .joints
+        .iter()
+        .map(|j| j.name.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    println!(
+        "\n{:w$}  {:>9}  {:>19}  {:>12}  {:>14}  {:>14}",
+        "joint",
+        "moving s",
+        format!("range {u}"),
+        format!("vel {u}/s"),
+        format!("acc {u}/s^2"),
+        format!("jerk {u}/s^3"),
+    );
+    for j in &r.joints {
+        let jerk = j
+            .peak_jerk
+            .map_or("steps".to_owned(), |x| format!("{x:.0}"));
+        println!(
+            "{:w$}  {:>9.3}  {:>19}  {:>12.1}  {:>14.1}  {:>14}",
+            j.name,
+            j.moving_s,
+            format!("{:.1} .. {:.1}", j.min_position, j.max_position),
+            j.peak_velocity,
+            j.peak_acceleration,
+            jerk,
+        );
+    }
+    println!("\nsegments (arriving at keyframe):");
+    for s in &r.segments {
+        let kf = motion.keyframes.get(s.keyframe);
+        let what = kf
+            .and_then(|k| k.pose.clone())
+            .unwrap_or_else(|| "inline pose".to_owned());
+        let line = kf.map_or(0, |k| k.line);
+        let rep = if motion.repeat > 1 {
+            format!(" (repetition {})", s.repetition + 1)
+        } else {
+            String::new()
+        };
+        let timed = match kf.and_then(|k| k.at) {
+            Some(at) => format!(", at: {at}"),
+            None => String::new(),
+        };
+        println!(
+            "  {:>3} {:<14} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
+            s.keyframe,
+            what,
+            line,
+            s.start_s,
+            s.end_s,
+            s.end_s - s.start_s,
+        );
+    }
+}
+
+/// Position and velocity of every joint over time, one chart above the other.
+fn plot(motion: &Motion, traj: &Trajectory, path: &Path) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+
+    let u = motion.units;
+    let n = traj.joints();
+    let duration = traj.duration().max(1e-3);
+    let samples = 1000usize;
+    let mut out = vec![JointState::default(); n];
+    let mut pos: Vec<Vec<(f64, f64)>> = vec![Vec::with_capacity(samples + 1); n];
+    let mut vel: Vec<Vec<(f64, f64)>> = vec![Vec::with_capacity(samples + 1); n];
+    let mut cursor = traj.cursor();
+    for k in 0..=samples {
+        let t = duration * k as f64 / samples as f64;
+        traj.sample_with(&mut cursor, t, &mut out);
+        for (j, s) in out.iter().enumerate() {
+            pos[j].push((t, u.from_rad(s.position)));
+            vel[j].push((t, u.from_rad(s.velocity)));
+        }
+    }
+    let range = |series: &[Vec<(f64, f64)>]| {
+        let (lo, hi) = series
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, y)| {
+                (lo.min(y), hi.max(y))
+            });
+        let pad = ((hi - lo) * 0.05).max(1e-3);
+        (lo - pad)..(hi + pad)
+    };
+
+    let height = 900u32;
+    let root = SVGBackend::new(path, (1200, height)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let title = format!(
+        "{} — planned path, {:.2} s",
+        motion
+            .path
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
+        traj.duration()
+    );
+    let root = root.titled(&title, ("sans-serif", 24))?;
+    let (top, bottom) = root.split_vertically((height - 40) / 2);
+    for (area, series, what, unit) in [
+        (&top, &pos, "Position", u.to_string()),
+        (&bottom, &vel, "Velocity", format!("{u}/s")),
+    ] {
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("{what} of every joint"), ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..duration, range(series))?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(format!("{} ({unit})", what.to_lowercase()))
+            .draw()?;
+        for (j, points) in series.iter().enumerate() {
+            let color = Palette99::pick(j).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().copied(),
+                    color.stroke_width(2),
+                ))?
+                .label(motion.joints.get(j).cloned().unwrap_or_default())
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
 }

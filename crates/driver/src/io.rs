@@ -34,8 +34,11 @@ pub(crate) struct Tally {
     pub echoes: u64,
     /// Every byte discarded, stale input included.
     pub discarded_bytes: u64,
-    /// Bytes discarded that arrived during this wait (garbled replies).
+    /// Bytes discarded that arrived during this wait and were not merely
+    /// cut off by the deadline (garbled replies).
     pub garbage_bytes: u64,
+    /// Bytes of a frame still incomplete at the deadline (a late reply).
+    pub truncated_bytes: u64,
     pub checksum_errors: u64,
 }
 
@@ -131,12 +134,16 @@ impl<T: Transport, C: Clock> Io<T, C> {
                 Ok(n) => n,
                 Err(TransportError::TimedOut) => {
                     // Whatever is pending will not complete in time: give up
-                    // on it, but still look for frames inside it.
+                    // on it, but still look for frames inside it. What is
+                    // dropped here was cut off by the deadline (a late reply),
+                    // not garbled.
+                    let before = self.decoder.stats().discarded_bytes;
                     while let Some(ev) = self.decoder.finish() {
                         if own.handle(ev, &self.clock, sink, &mut tally) {
                             break;
                         }
                     }
+                    tally.truncated_bytes += self.decoder.stats().discarded_bytes - before;
                     break 'wait;
                 }
                 Err(e) => return Err(e),
@@ -151,8 +158,9 @@ impl<T: Transport, C: Clock> Io<T, C> {
             }
         }
         let stats = self.decoder.stats();
-        tally.garbage_bytes = stats.discarded_bytes - self.base_discarded;
-        tally.discarded_bytes += tally.garbage_bytes + self.stale;
+        let window = stats.discarded_bytes - self.base_discarded;
+        tally.garbage_bytes = window.saturating_sub(tally.truncated_bytes);
+        tally.discarded_bytes += window + self.stale;
         self.stale = 0;
         tally.echoes += stats.echoes - self.base_echoes;
         tally.checksum_errors += stats.checksum_errors - self.base_checksum;

@@ -157,7 +157,7 @@ pub fn write(buf: &mut [u8], id: u8, address: u8, data: &[u8]) -> Result<usize, 
 /// REG WRITE `data` at `address` of servo `id`: held until ACTION.
 ///
 /// # Errors
-/// As [`write`].
+/// As [`write()`].
 pub fn reg_write(buf: &mut [u8], id: u8, address: u8, data: &[u8]) -> Result<usize, EncodeError> {
     check_id(id, true)?;
     if data.is_empty() {

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::config::{load_motion, load_robot, Units};
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, Units};
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")
@@ -41,6 +41,10 @@ fn every_motion_file_validates_against_its_robot() {
     for f in files {
         let (motion, robot) = load_motion(&f, None).unwrap_or_else(|e| panic!("{e}"));
         assert!(motion.keyframes.len() >= 2, "{}", f.display());
+        // Every shipped motion plans within its robot's limits.
+        let traj = plan_motion(&motion, &robot).unwrap_or_else(|e| panic!("{e}"));
+        assert!(traj.duration() > 0.0, "{}", f.display());
+        assert_eq!(traj.joints(), robot.joint_count());
         for k in &motion.keyframes {
             assert_eq!(k.positions.len(), robot.joint_count());
             for (p, j) in k.positions.iter().zip(robot.joints()) {

@@ -225,7 +225,10 @@ impl Engine {
         while k < replies.len() {
             // Replies of one slot: one servo, or several sharing an ID.
             let slot_end = if sequential {
-                k + replies[k..].iter().take_while(|r| r.0 == replies[k].0).count()
+                k + replies[k..]
+                    .iter()
+                    .take_while(|r| r.0 == replies[k].0)
+                    .count()
             } else {
                 replies.len()
             };

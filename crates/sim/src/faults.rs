@@ -15,7 +15,7 @@ use std::time::Duration;
 /// let f: Faults = "drop=0.01,corrupt=0.01,seed=7,vanish=3".parse().unwrap();
 /// assert_eq!(f, Faults::seeded(7).drop(0.01).corrupt(0.01).vanish(3));
 /// ```
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct Faults {
     /// Seed of the random source.
@@ -40,6 +40,13 @@ pub struct Faults {
     pub overheat: Vec<u8>,
 }
 
+impl Default for Faults {
+    /// No faults (the same as [`Faults::none`]).
+    fn default() -> Faults {
+        Faults::none()
+    }
+}
+
 impl Faults {
     /// Default delay of a delayed reply: 2 ms, beyond any derived timeout at 1 Mbps.
     pub const DEFAULT_DELAY: Duration = Duration::from_millis(2);
@@ -47,8 +54,15 @@ impl Faults {
     /// No faults.
     pub fn none() -> Faults {
         Faults {
+            seed: 0,
+            drop: 0.0,
+            corrupt: 0.0,
+            delay: 0.0,
             delay_by: Self::DEFAULT_DELAY,
-            ..Faults::default()
+            echo: false,
+            vanish: Vec::new(),
+            block: Vec::new(),
+            overheat: Vec::new(),
         }
     }
 
@@ -186,7 +200,11 @@ impl FromStr for Faults {
                 "vanish" => f.vanish.push(id()?),
                 "block" => f.block.push(id()?),
                 "overheat" => f.overheat.push(id()?),
-                _ => return Err(FaultSpecError::UnknownKey { key: key.to_owned() }),
+                _ => {
+                    return Err(FaultSpecError::UnknownKey {
+                        key: key.to_owned(),
+                    })
+                }
             }
         }
         Ok(f)
@@ -199,9 +217,10 @@ mod tests {
 
     #[test]
     fn spec_parses_every_key_and_refuses_nonsense() {
-        let f: Faults = "drop=0.5, corrupt=0.25,delay=0.1,delay_us=300,seed=9,echo,block=2,overheat=4"
-            .parse()
-            .unwrap();
+        let f: Faults =
+            "drop=0.5, corrupt=0.25,delay=0.1,delay_us=300,seed=9,echo,block=2,overheat=4"
+                .parse()
+                .unwrap();
         assert_eq!(
             f,
             Faults::seeded(9)
@@ -213,8 +232,17 @@ mod tests {
                 .overheat(4)
         );
         assert_eq!("".parse::<Faults>(), Ok(Faults::none()));
-        assert!(matches!("drop=2".parse::<Faults>(), Err(FaultSpecError::BadValue { .. })));
-        assert!(matches!("vanish=254".parse::<Faults>(), Err(FaultSpecError::BadValue { .. })));
-        assert!(matches!("explode=1".parse::<Faults>(), Err(FaultSpecError::UnknownKey { .. })));
+        assert!(matches!(
+            "drop=2".parse::<Faults>(),
+            Err(FaultSpecError::BadValue { .. })
+        ));
+        assert!(matches!(
+            "vanish=254".parse::<Faults>(),
+            Err(FaultSpecError::BadValue { .. })
+        ));
+        assert!(matches!(
+            "explode=1".parse::<Faults>(),
+            Err(FaultSpecError::UnknownKey { .. })
+        ));
     }
 }

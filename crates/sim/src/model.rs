@@ -293,9 +293,10 @@ impl SimModel {
 
     /// The register that contains byte `address`, if any.
     pub fn register_at(&self, address: usize) -> Option<&'static Reg> {
-        self.registers
-            .iter()
-            .find(|r| (usize::from(r.address)..usize::from(r.address) + usize::from(r.size)).contains(&address))
+        self.registers.iter().find(|r| {
+            (usize::from(r.address)..usize::from(r.address) + usize::from(r.size))
+                .contains(&address)
+        })
     }
 
     /// The register with this name (case-insensitive, `_` optional).

@@ -79,7 +79,10 @@ impl PtyServer {
     ///
     /// # Errors
     /// [`PtyError::Open`] when the system refuses a pseudo-terminal.
-    pub fn open(baud: u32, servos: impl IntoIterator<Item = SimServo>) -> Result<PtyServer, PtyError> {
+    pub fn open(
+        baud: u32,
+        servos: impl IntoIterator<Item = SimServo>,
+    ) -> Result<PtyServer, PtyError> {
         let (master, slave, path) = open_pty(baud).map_err(PtyError::Open)?;
         let mut engine = Engine::new(baud);
         for s in servos {
@@ -167,7 +170,10 @@ impl PtyServer {
                 Some(t) => t.saturating_sub(self.clock.now()),
                 None => Duration::from_millis(50),
             };
-            if wait > Duration::ZERO && wait < Duration::from_millis(2) && self.engine.next_ready().is_some() {
+            if wait > Duration::ZERO
+                && wait < Duration::from_millis(2)
+                && self.engine.next_ready().is_some()
+            {
                 // Short waits: the client is waiting for this reply and sends
                 // nothing meanwhile (half duplex); sleep precisely.
                 std::thread::sleep(wait);

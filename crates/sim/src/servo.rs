@@ -231,13 +231,21 @@ impl SimServo {
     /// them (zeros past the table's end).
     pub fn read(&self, address: u8, len: usize) -> Vec<u8> {
         (0..len)
-            .map(|i| self.table.get(usize::from(address) + i).copied().unwrap_or(0))
+            .map(|i| {
+                self.table
+                    .get(usize::from(address) + i)
+                    .copied()
+                    .unwrap_or(0)
+            })
             .collect()
     }
 
     /// A two-byte register as an unsigned value, in the model's byte order.
     pub fn read_u16(&self, address: u8) -> u16 {
-        let b = [self.register(address), self.register(address.wrapping_add(1))];
+        let b = [
+            self.register(address),
+            self.register(address.wrapping_add(1)),
+        ];
         match self.model.endian {
             Endian::Little => u16::from_le_bytes(b),
             Endian::Big => u16::from_be_bytes(b),
@@ -468,7 +476,9 @@ impl SimServo {
                 Some(Vec::new())
             }
             Instruction::SyncWrite => {
-                let [address, len, ref blocks @ ..] = *p else { return None };
+                let [address, len, ref blocks @ ..] = *p else {
+                    return None;
+                };
                 let block = usize::from(len) + 1;
                 if len == 0 || !broadcast {
                     return None;
@@ -479,7 +489,9 @@ impl SimServo {
                 None
             }
             Instruction::SyncRead => {
-                let [address, len, ref ids @ ..] = *p else { return None };
+                let [address, len, ref ids @ ..] = *p else {
+                    return None;
+                };
                 if !self.model.sync_read || !broadcast || !ids.contains(&id) {
                     return None;
                 }
@@ -571,7 +583,8 @@ impl SimServo {
             self.goal_given = true;
             let target = self.target();
             let t = f64::from(self.read_u16(addr::GOAL_TIME));
-            self.timed_speed = (t > 0.0).then(|| ((target - self.joint.ref_pos).abs() / (t / 1000.0)).max(1.0));
+            self.timed_speed =
+                (t > 0.0).then(|| ((target - self.joint.ref_pos).abs() / (t / 1000.0)).max(1.0));
         }
         if touched(addr::GOAL_TIME, 2) && self.read_u16(addr::GOAL_TIME) == 0 {
             self.timed_speed = None;
@@ -657,7 +670,11 @@ impl SimServo {
 
     fn drive(&self) -> Drive {
         let m = self.model;
-        let mode = if m.offset_sign_bit.is_some() { self.register(addr::MODE) } else { 0 };
+        let mode = if m.offset_sign_bit.is_some() {
+            self.register(addr::MODE)
+        } else {
+            0
+        };
         let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), 15);
         let max_speed = if goal_speed != 0 {
             f64::from(goal_speed.unsigned_abs()).min(m.max_speed)
@@ -667,8 +684,15 @@ impl SimServo {
             m.max_speed
         };
         let acc = self.register(addr::ACCELERATION);
-        let accel = if acc == 0 { f64::INFINITY } else { 100.0 * f64::from(acc) };
-        let dead_zone = f64::from(self.register(addr::CW_DEAD_ZONE).max(self.register(addr::CCW_DEAD_ZONE)));
+        let accel = if acc == 0 {
+            f64::INFINITY
+        } else {
+            100.0 * f64::from(acc)
+        };
+        let dead_zone = f64::from(
+            self.register(addr::CW_DEAD_ZONE)
+                .max(self.register(addr::CCW_DEAD_ZONE)),
+        );
         let max_torque = f64::from(self.read_u16(addr::MAX_TORQUE).min(1000)) / 1000.0;
         let torque_limit = if m.lock_address == addr::LOCK {
             (f64::from(self.read_u16(addr::TORQUE_LIMIT).min(1000)) / 1000.0).min(max_torque)
@@ -759,7 +783,8 @@ impl SimServo {
         self.table[usize::from(addr::MOVING)] = u8::from(moving);
         if self.model.stall_current > 0.0 {
             let idle = if self.torque_enabled() { 2.0 } else { 0.0 };
-            let current = (self.joint.effort.abs() * self.model.stall_current + idle).round() as i32;
+            let current =
+                (self.joint.effort.abs() * self.model.stall_current + idle).round() as i32;
             self.write_u16_raw(addr::PRESENT_CURRENT, sign_magnitude(current, 15), false);
         }
     }

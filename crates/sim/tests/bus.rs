@@ -14,9 +14,8 @@ const US: Duration = Duration::from_micros(1);
 #[test]
 fn a_request_costs_its_wire_time_and_the_reply_its_return_delay() {
     let clock = ManualClock::new();
-    let mut bus = SimBus::new(clock.clone(), 1_000_000).with_servo(
-        SimServo::sts3215(1).with_return_delay(Duration::from_micros(100)),
-    );
+    let mut bus = SimBus::new(clock.clone(), 1_000_000)
+        .with_servo(SimServo::sts3215(1).with_return_delay(Duration::from_micros(100)));
     // READ is 8 bytes: 80 us on the wire.
     bus.write_all(&read(1, addr::PRESENT_POSITION, 2)).unwrap();
     assert_eq!(now(&bus), 80 * US);
@@ -27,7 +26,10 @@ fn a_request_costs_its_wire_time_and_the_reply_its_return_delay() {
     assert_eq!(now(&bus), (80 + 100 + 80) * US);
     // Nothing else comes: the read waits to the deadline.
     let deadline = now(&bus) + 500 * US;
-    assert!(matches!(bus.read(&mut buf, deadline), Err(TransportError::TimedOut)));
+    assert!(matches!(
+        bus.read(&mut buf, deadline),
+        Err(TransportError::TimedOut)
+    ));
     assert_eq!(now(&bus), deadline);
 }
 
@@ -37,7 +39,10 @@ fn a_deadline_inside_a_reply_returns_what_arrived_by_then() {
     bus.write_all(&read(1, addr::PRESENT_POSITION, 2)).unwrap();
     let mut buf = [0u8; 64];
     // The reply's bytes arrive at 90, 100, ... 160 us.
-    assert!(matches!(bus.read(&mut buf, 85 * US), Err(TransportError::TimedOut)));
+    assert!(matches!(
+        bus.read(&mut buf, 85 * US),
+        Err(TransportError::TimedOut)
+    ));
     let n = bus.read(&mut buf, 125 * US).unwrap();
     assert_eq!((n, now(&bus)), (4, 120 * US));
     let n = bus.read(&mut buf, Duration::from_secs(1)).unwrap();
@@ -53,7 +58,8 @@ fn sync_read_replies_follow_each_other_with_each_return_delay() {
     ]);
     // Request: 8 + 2 = 10 bytes = 100 us. Replies of 8 bytes: servo 1 from
     // 120 to 200 us, servo 2 from 240 to 320 us.
-    bus.write_all(&sync_read(addr::PRESENT_POSITION, 2, &[1, 2])).unwrap();
+    bus.write_all(&sync_read(addr::PRESENT_POSITION, 2, &[1, 2]))
+        .unwrap();
     let mut buf = [0u8; 64];
     assert_eq!(bus.read(&mut buf, Duration::from_secs(1)).unwrap(), 8);
     assert_eq!(now(&bus), 200 * US);
@@ -68,9 +74,14 @@ fn the_six_servo_cycle_costs_what_the_budget_says() {
     let mut bus = bus_with(&[1, 2, 3, 4, 5, 6]);
     let goal = 2048u16.to_le_bytes();
     let items: Vec<(u8, &[u8])> = (1..=6).map(|id| (id, &goal[..])).collect();
-    bus.write_all(&sync_write(addr::GOAL_POSITION, &items)).unwrap();
+    bus.write_all(&sync_write(addr::GOAL_POSITION, &items))
+        .unwrap();
     assert_eq!(now(&bus), 260 * US);
-    let got = exchange(&mut bus, &sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3, 4, 5, 6]), MS);
+    let got = exchange(
+        &mut bus,
+        &sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3, 4, 5, 6]),
+        MS,
+    );
     assert_eq!(frames(&got).len(), 6);
     assert_eq!(bus.stats().replies, 6);
     // The exchange waited 1 ms past the request's end; the last byte came at 880 us.
@@ -81,8 +92,12 @@ fn the_six_servo_cycle_costs_what_the_budget_says() {
 fn two_servos_with_one_id_collide_into_corrupted_bytes() {
     let clock = ManualClock::new();
     let mut bus = SimBus::new(clock, 1_000_000).with_servos([
-        SimServo::sts3215(1).with_return_delay(Duration::ZERO).with_position(0x0F0F),
-        SimServo::sts3215(1).with_return_delay(Duration::ZERO).with_position(0x00F0),
+        SimServo::sts3215(1)
+            .with_return_delay(Duration::ZERO)
+            .with_position(0x0F0F),
+        SimServo::sts3215(1)
+            .with_return_delay(Duration::ZERO)
+            .with_position(0x00F0),
     ]);
     let got = exchange(&mut bus, &read(1, addr::PRESENT_POSITION, 2), MS);
     assert_eq!(got.len(), 8, "the replies overlap byte for byte");
@@ -110,7 +125,11 @@ fn dropped_and_corrupted_replies_follow_the_seed() {
         let mut bus = bus_with(&[1, 2, 3]).with_faults(Faults::seeded(seed).drop(0.2).corrupt(0.2));
         let mut got = Vec::new();
         for _ in 0..200 {
-            got.extend(exchange(&mut bus, &sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3]), MS));
+            got.extend(exchange(
+                &mut bus,
+                &sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3]),
+                MS,
+            ));
         }
         (got, bus.stats())
     };
@@ -126,7 +145,8 @@ fn dropped_and_corrupted_replies_follow_the_seed() {
 
 #[test]
 fn a_delayed_reply_misses_a_tight_deadline_and_arrives_later() {
-    let mut bus = bus_with(&[1]).with_faults(Faults::seeded(1).delay(1.0, Duration::from_millis(2)));
+    let mut bus =
+        bus_with(&[1]).with_faults(Faults::seeded(1).delay(1.0, Duration::from_millis(2)));
     assert!(exchange(&mut bus, &ping(1), MS).is_empty());
     // It is still on its way: the next read finds it.
     let mut buf = [0u8; 16];
@@ -160,9 +180,15 @@ fn discard_input_drops_only_what_has_arrived() {
 fn an_unplugged_adapter_reports_disconnected() {
     let mut bus = bus_with(&[1]);
     bus.set_disconnected(true);
-    assert!(matches!(bus.write_all(&ping(1)), Err(TransportError::Disconnected(_))));
+    assert!(matches!(
+        bus.write_all(&ping(1)),
+        Err(TransportError::Disconnected(_))
+    ));
     let mut buf = [0u8; 4];
-    assert!(matches!(bus.read(&mut buf, MS), Err(TransportError::Disconnected(_))));
+    assert!(matches!(
+        bus.read(&mut buf, MS),
+        Err(TransportError::Disconnected(_))
+    ));
 }
 
 #[test]

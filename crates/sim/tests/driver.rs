@@ -111,7 +111,10 @@ fn sync_read_keeps_the_others_when_one_is_missing() -> Result<(), BusError> {
     let r = bus.sync_read(addr::PRESENT_POSITION, 2, &ids)?;
     assert_eq!((r.answered(), r.missing()), (3, 1));
     let missing = r.by_id(3).and_then(Result::err).expect("3 is missing");
-    assert_eq!((missing.reason, missing.attempts), (MissingReason::NoReply, 1));
+    assert_eq!(
+        (missing.reason, missing.attempts),
+        (MissingReason::NoReply, 1)
+    );
     let four = r.by_id(4).and_then(Result::ok).expect("4 answered");
     assert_eq!(le(four.data), 1400);
     assert_eq!(bus.servo_counters(3).timeouts, 1);
@@ -122,7 +125,10 @@ fn sync_read_keeps_the_others_when_one_is_missing() -> Result<(), BusError> {
     let before = sim.stats().requests;
     let budget = Duration::from_millis(50);
     let r = bus.sync_read_within(addr::PRESENT_POSITION, 2, &ids, budget)?;
-    assert_eq!(r.by_id(3).and_then(Result::err).map(|m| m.attempts), Some(3));
+    assert_eq!(
+        r.by_id(3).and_then(Result::err).map(|m| m.attempts),
+        Some(3)
+    );
     // One SYNC READ of all four, then two of servo 3 alone.
     assert_eq!(sim.stats().requests - before, 3);
     assert_eq!(bus.servo_counters(3).retries, 2);
@@ -225,7 +231,13 @@ fn a_reply_from_another_id_is_never_taken() {
     let mut pos = [0u8; 2];
     let err = bus.read(1, addr::PRESENT_POSITION, &mut pos).unwrap_err();
     assert!(
-        matches!(err, BusError::WrongId { expected: 1, actual: 2 }),
+        matches!(
+            err,
+            BusError::WrongId {
+                expected: 1,
+                actual: 2
+            }
+        ),
         "{err}"
     );
     // In a SYNC READ the misrouted reply is not given to servo 2 either:
@@ -345,7 +357,10 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     // SYNC READ of 2 bytes from 6 servos: 14 + 6 x 8 bytes, 6 turnarounds.
     assert_eq!(us(link.sync_read_timeout(6, 2, rd)), 620 + 300 + 1000 + 200);
     // From 18 servos: 26 + 18 x 8 bytes.
-    assert_eq!(us(link.sync_read_timeout(18, 2, rd)), 1700 + 900 + 1000 + 200);
+    assert_eq!(
+        us(link.sync_read_timeout(18, 2, rd)),
+        1700 + 900 + 1000 + 200
+    );
 
     // And the bus waits exactly that long for a servo that is not there.
     let clock = ManualClock::new();
@@ -356,7 +371,9 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     let mut bus = Bus::new(sim, clock.clone(), settings);
     let t0 = clock.now();
     let err = bus.ping(9).unwrap_err();
-    assert!(matches!(err, BusError::Timeout { id: 9, waited } if waited == Duration::from_micros(1370)));
+    assert!(
+        matches!(err, BusError::Timeout { id: 9, waited } if waited == Duration::from_micros(1370))
+    );
     assert_eq!(clock.now() - t0, Duration::from_micros(1370));
     let t0 = clock.now();
     let r = bus.sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3, 4, 5, 6])?;
@@ -388,9 +405,8 @@ fn measured_latency_matches_the_adapter() -> Result<(), BusError> {
 #[test]
 fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     let clock = ManualClock::new();
-    let sim = SimBus::new(clock.clone(), BAUD).with_servos(
-        [1, 2].map(|id| SimServo::scs0009(id).with_return_delay(Duration::ZERO)),
-    );
+    let sim = SimBus::new(clock.clone(), BAUD)
+        .with_servos([1, 2].map(|id| SimServo::scs0009(id).with_return_delay(Duration::ZERO)));
     let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Scs, BAUD));
     let reg = Series::Scs.map().get("model_number").expect("register");
     let (model, _) = bus.read_register(1, reg)?;

@@ -45,15 +45,35 @@ fn trapezoid_profile_cruises_at_goal_speed_and_arrives() {
     while now(&bus) < t0 + Duration::from_millis(2600) {
         wait(&bus, Duration::from_millis(10));
         let s = bus.snapshot(1).unwrap();
-        samples.push(((now(&bus) - t0).as_secs_f64(), s.present_speed(), s.present_position(), s.is_moving()));
+        samples.push((
+            (now(&bus) - t0).as_secs_f64(),
+            s.present_speed(),
+            s.present_position(),
+            s.is_moving(),
+        ));
     }
     let speed_at = |t: f64| samples.iter().find(|s| s.0 >= t).unwrap().1;
     // The shaft trails the profile by the 10 ms lag: a (t - lag) = 450.
-    assert!((430..=520).contains(&speed_at(0.1)), "accelerating: {}", speed_at(0.1));
-    assert!((990..=1010).contains(&speed_at(1.0)), "cruising: {}", speed_at(1.0));
-    assert!(samples.iter().all(|s| s.1 <= 1010), "never above the goal speed");
+    assert!(
+        (430..=520).contains(&speed_at(0.1)),
+        "accelerating: {}",
+        speed_at(0.1)
+    );
+    assert!(
+        (990..=1010).contains(&speed_at(1.0)),
+        "cruising: {}",
+        speed_at(1.0)
+    );
+    assert!(
+        samples.iter().all(|s| s.1 <= 1010),
+        "never above the goal speed"
+    );
     let last = samples.last().unwrap();
-    assert!((last.2 - 3000).abs() <= 1, "arrived within the dead zone: {}", last.2);
+    assert!(
+        (last.2 - 3000).abs() <= 1,
+        "arrived within the dead zone: {}",
+        last.2
+    );
     assert!(!last.3, "no longer moving");
     // Arrival (first sample within 2 ticks) near 2.2 s plus the lag.
     let arrival = samples.iter().find(|s| (s.2 - 3000).abs() <= 2).unwrap().0;
@@ -78,15 +98,22 @@ fn homing_offset_shifts_present_and_goal() {
     wait(&bus, Duration::from_secs(1));
     assert!((bus.present_position(1).unwrap() - 1500).abs() <= 1);
     let shaft = bus.servo(1, |s| s.shaft_position() + 100.0).unwrap();
-    assert!((shaft - 1600.0).abs() <= 1.0, "the shaft sits at goal + offset: {shaft}");
+    assert!(
+        (shaft - 1600.0).abs() <= 1.0,
+        "the shaft sits at goal + offset: {shaft}"
+    );
     // A negative offset (sign-magnitude bit 11): present = actual + 100.
-    exchange(&mut bus, &write(1, addr::OFFSET, &(0x0800u16 | 100).to_le_bytes()), MS);
+    exchange(
+        &mut bus,
+        &write(1, addr::OFFSET, &(0x0800u16 | 100).to_le_bytes()),
+        MS,
+    );
     assert!((bus.present_position(1).unwrap() - 1700).abs() <= 1);
 }
 
 #[test]
 fn torque_off_joint_stays_put_or_sags_under_load() {
-    let mut bus = arm(2000);
+    let bus = arm(2000);
     wait(&bus, Duration::from_secs(2));
     assert_eq!(bus.present_position(1), Some(2000));
     bus.servo(1, |s| s.set_external_load(0.5));
@@ -106,10 +133,17 @@ fn under_load_the_servo_holds_with_an_error_and_reports_load_and_current() {
     let s = bus.snapshot(1).unwrap();
     let sag = 2000 - s.present_position();
     assert!((5..=40).contains(&sag), "holds with a small error: {sag}");
-    assert!((350..=450).contains(&s.present_load()), "load {}", s.present_load());
+    assert!(
+        (350..=450).contains(&s.present_load()),
+        "load {}",
+        s.present_load()
+    );
     let current = s.read_u16(addr::PRESENT_CURRENT);
     assert!(current > 100, "current {current}");
-    assert!(s.register(addr::PRESENT_VOLTAGE) < 120, "the supply sags a little");
+    assert!(
+        s.register(addr::PRESENT_VOLTAGE) < 120,
+        "the supply sags a little"
+    );
     assert!(s.status().is_ok());
 }
 
@@ -126,7 +160,11 @@ fn a_blocked_joint_overloads_after_the_protection_time_and_releases_torque() {
     wait(&bus, Duration::from_secs(2));
     let got = exchange(&mut bus, &ping(1), MS);
     assert_eq!(got, status(1, StatusFlags::OVERLOAD, &[]));
-    assert_eq!(bus.servo(1, |s| s.present_load()), Some(0), "torque released");
+    assert_eq!(
+        bus.servo(1, |s| s.present_load()),
+        Some(0),
+        "torque released"
+    );
     // Unblocked and re-enabled: it clears and moves.
     bus.servo(1, |s| s.set_blocked(false));
     exchange(&mut bus, &write(1, addr::TORQUE_ENABLE, &[1]), MS);
@@ -140,7 +178,10 @@ fn overheat_is_flagged_at_the_temperature_limit_and_clears_when_cool() {
     let mut bus = arm(1000);
     bus.servo(1, |s| s.set_temperature(71.0, 25.0));
     wait(&bus, Duration::from_millis(10));
-    assert_eq!(exchange(&mut bus, &ping(1), MS), status(1, StatusFlags::OVERHEAT, &[]));
+    assert_eq!(
+        exchange(&mut bus, &ping(1), MS),
+        status(1, StatusFlags::OVERHEAT, &[])
+    );
     assert_eq!(
         exchange(&mut bus, &read(1, addr::PRESENT_TEMPERATURE, 1), MS),
         status(1, StatusFlags::OVERHEAT, &[71])
@@ -153,7 +194,10 @@ fn overheat_is_flagged_at_the_temperature_limit_and_clears_when_cool() {
 fn low_supply_voltage_raises_the_voltage_flag() {
     let mut bus = arm(1000);
     bus.servo(1, |s| s.set_supply_voltage(Some(35)));
-    assert_eq!(exchange(&mut bus, &ping(1), MS), status(1, StatusFlags::VOLTAGE, &[]));
+    assert_eq!(
+        exchange(&mut bus, &ping(1), MS),
+        status(1, StatusFlags::VOLTAGE, &[])
+    );
 }
 
 #[test]

@@ -48,10 +48,7 @@ fn write_applies_and_read_only_registers_refuse() {
         exchange(&mut bus, &write(1, addr::MODEL_NUMBER, &[0, 0]), MS),
         status(1, 0, &[])
     );
-    assert_eq!(
-        bus.servo(1, |s| s.read_u16(addr::MODEL_NUMBER)),
-        Some(777)
-    );
+    assert_eq!(bus.servo(1, |s| s.read_u16(addr::MODEL_NUMBER)), Some(777));
     let before = bus.present_position(1);
     exchange(&mut bus, &write(1, addr::PRESENT_POSITION, &[0, 0]), MS);
     assert_eq!(bus.present_position(1), before);
@@ -62,7 +59,11 @@ fn status_level_zero_answers_only_ping_and_read() {
     let mut bus = bus_with(&[1]);
     bus.servo(1, |s| s.write(addr::STATUS_LEVEL, &[0]));
     assert!(exchange(&mut bus, &write(1, addr::ACCELERATION, &[5]), MS).is_empty());
-    assert_eq!(bus.register(1, addr::ACCELERATION), Some(5), "the write still applies");
+    assert_eq!(
+        bus.register(1, addr::ACCELERATION),
+        Some(5),
+        "the write still applies"
+    );
     assert!(exchange(&mut bus, &reg_write(1, addr::ACCELERATION, &[6]), MS).is_empty());
     assert!(exchange(&mut bus, &action(1), MS).is_empty());
     assert_eq!(bus.register(1, addr::ACCELERATION), Some(6));
@@ -108,7 +109,11 @@ fn scs_is_big_endian_has_its_lock_at_48_and_no_sync_read() {
     exchange(&mut bus, &write(1, addr::MAX_TEMPERATURE, &[60]), MS);
     bus.power_cycle();
     assert_eq!(bus.register(1, addr::MAX_TEMPERATURE), Some(60));
-    assert_eq!(bus.register(1, addr::SCS_LOCK), Some(1), "the lock closes at power-up");
+    assert_eq!(
+        bus.register(1, addr::SCS_LOCK),
+        Some(1),
+        "the lock closes at power-up"
+    );
 }
 
 #[test]
@@ -199,10 +204,17 @@ fn sync_write_sets_each_listed_servo_and_is_not_answered() {
 #[test]
 fn sync_read_answers_in_list_order_and_skips_missing_ids() {
     let mut bus = SimBus::new(servobus_driver::ManualClock::new(), 1_000_000).with_servos(
-        [(1, 100), (2, 200), (4, 400)]
-            .map(|(id, p)| SimServo::sts3215(id).with_return_delay(Duration::ZERO).with_position(p)),
+        [(1, 100), (2, 200), (4, 400)].map(|(id, p)| {
+            SimServo::sts3215(id)
+                .with_return_delay(Duration::ZERO)
+                .with_position(p)
+        }),
     );
-    let got = exchange(&mut bus, &sync_read(addr::PRESENT_POSITION, 2, &[4, 3, 1, 2]), MS);
+    let got = exchange(
+        &mut bus,
+        &sync_read(addr::PRESENT_POSITION, 2, &[4, 3, 1, 2]),
+        MS,
+    );
     assert_eq!(
         frames(&got),
         vec![
@@ -223,7 +235,11 @@ fn reset_restores_factory_values_but_keeps_the_id() {
     assert_eq!(bus.register(5, addr::ACCELERATION), Some(0));
     assert_eq!(bus.register(5, addr::RETURN_DELAY), Some(250));
     bus.power_cycle();
-    assert_eq!(bus.register(5, addr::MAX_TEMPERATURE), Some(70), "RESET is saved");
+    assert_eq!(
+        bus.register(5, addr::MAX_TEMPERATURE),
+        Some(70),
+        "RESET is saved"
+    );
 }
 
 #[test]

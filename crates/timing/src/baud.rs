@@ -95,9 +95,6 @@ mod tests {
     fn return_delay_register() {
         assert_eq!(return_delay_from_register(250), FACTORY_RETURN_DELAY);
         assert_eq!(return_delay_from_register(0), Duration::ZERO);
-        assert_eq!(
-            return_delay_from_register(255),
-            Duration::from_micros(510)
-        );
+        assert_eq!(return_delay_from_register(255), Duration::from_micros(510));
     }
 }

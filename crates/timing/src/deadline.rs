@@ -220,10 +220,7 @@ mod tests {
             (Transaction::Action, Some(140)),
             (Transaction::Reset, Some(140)),
             // 14 + 6 x 8 bytes + 6 x 20 us.
-            (
-                Transaction::SyncRead { servos: 6, len: 2 },
-                Some(620 + 120),
-            ),
+            (Transaction::SyncRead { servos: 6, len: 2 }, Some(620 + 120)),
             (Transaction::SyncWrite { servos: 6, len: 2 }, None),
         ];
         for (tx, expected) in table {
@@ -239,12 +236,24 @@ mod tests {
             l.deadline(w, Duration::ZERO, StatusLevel::All),
             Some(US(150))
         );
-        assert_eq!(l.deadline(w, Duration::ZERO, StatusLevel::PingAndRead), None);
-        assert_eq!(l.write_deadline(2, Duration::ZERO, StatusLevel::from_sts(0)), None);
+        assert_eq!(
+            l.deadline(w, Duration::ZERO, StatusLevel::PingAndRead),
+            None
+        );
+        assert_eq!(
+            l.write_deadline(2, Duration::ZERO, StatusLevel::from_sts(0)),
+            None
+        );
         assert_eq!(l.request_time(w), US(90));
         let r = Transaction::Read { len: 2 };
-        assert_eq!(l.deadline(r, Duration::ZERO, StatusLevel::from_sts(0)), Some(US(160)));
-        assert_eq!(l.deadline(r, Duration::ZERO, StatusLevel::from_scs(0)), None);
+        assert_eq!(
+            l.deadline(r, Duration::ZERO, StatusLevel::from_sts(0)),
+            Some(US(160))
+        );
+        assert_eq!(
+            l.deadline(r, Duration::ZERO, StatusLevel::from_scs(0)),
+            None
+        );
         assert_eq!(
             l.deadline(Transaction::Ping, Duration::ZERO, StatusLevel::PingOnly),
             Some(US(120))
@@ -259,7 +268,10 @@ mod tests {
         let l = Link::new(115_200).with_latency(Duration::from_millis(1));
         let rd = US(500);
         let all = StatusLevel::All;
-        assert_eq!(l.deadline(Transaction::Ping, rd, all), Some(l.ping_timeout(rd)));
+        assert_eq!(
+            l.deadline(Transaction::Ping, rd, all),
+            Some(l.ping_timeout(rd))
+        );
         assert_eq!(
             l.deadline(Transaction::Read { len: 15 }, rd, all),
             Some(l.read_timeout(15, rd))

@@ -3,7 +3,7 @@
 use core::fmt;
 use core::time::Duration;
 
-use crate::cost::{nanos, CycleSpec, Servo};
+use crate::cost::{nanos, CycleCost, CycleSpec, Servo};
 use crate::{next_baud_above, Link};
 
 /// One change to the robot or its bus that makes the full cycle (every servo
@@ -94,8 +94,13 @@ impl Fixes {
 
     /// The changes that make the full cycle of `spec` over `servos` fit
     /// `rate_hz`; empty when it already fits.
-    pub(crate) fn find(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Fixes {
-        let full = spec.cost(servos);
+    /// `full` is `spec.cost(servos)`, already known to the caller.
+    pub(crate) fn find(
+        spec: &CycleSpec,
+        servos: &[Servo],
+        full: &CycleCost,
+        rate_hz: f64,
+    ) -> Fixes {
         if full.fits(rate_hz) {
             return Fixes::default();
         }
@@ -132,7 +137,10 @@ impl Fixes {
         let mut baud = spec.link.baud;
         while let Some(next) = next_baud_above(baud) {
             let faster = CycleSpec {
-                link: Link { baud: next, ..spec.link },
+                link: Link {
+                    baud: next,
+                    ..spec.link
+                },
                 ..*spec
             };
             if faster.cost(servos).fits(rate_hz) {

@@ -67,13 +67,17 @@ impl Link {
 
     /// Wire time of `bytes` bytes in whole nanoseconds, rounded up.
     ///
-    /// Exact for every input: the bit count is split into whole seconds and
-    /// a remainder below one second so that no intermediate product
-    /// overflows; a result beyond `u64::MAX` ns (584 years) saturates.
+    /// Exact for every input: when `bits x 1e9` would overflow, the bit count
+    /// is split into whole seconds and a remainder below one second; a result
+    /// beyond `u64::MAX` ns (584 years) saturates.
     pub const fn wire_nanos(&self, bytes: usize) -> u64 {
         const NANOS_PER_SEC: u64 = 1_000_000_000;
         let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
         let baud = if self.baud == 0 { 1 } else { self.baud as u64 };
+        // Every real cycle (below 1.8e10 bits) takes this path: one division.
+        if let Some(n) = bits.checked_mul(NANOS_PER_SEC) {
+            return n.div_ceil(baud);
+        }
         let whole_secs = bits / baud;
         // rem < baud <= u32::MAX, so rem * 1e9 < 4.3e18 fits a u64.
         let rem = bits % baud;

@@ -174,7 +174,11 @@ pub fn pack_sync_write(
             actual: data.len(),
         });
     }
-    let needed = sync_write_bytes(ids.len(), block.len);
+    // The same figures as `sync_write_frames` / `sync_write_bytes`, without
+    // their repeated divisions: this runs every control cycle.
+    let stride = len + 1;
+    let frames = ids.len().div_ceil(per);
+    let needed = frames * frame_len(2) + ids.len() * stride;
     if buf.len() < needed {
         return Err(PackError::BufferTooSmall {
             needed,
@@ -182,19 +186,17 @@ pub fn pack_sync_write(
         });
     }
     let mut at = 0;
-    let mut frames = 0;
     for (ids, data) in ids.chunks(per).zip(data.chunks(per * len)) {
         let items = ids.iter().copied().zip(data.chunks_exact(len));
         // Exactly the frame's size, so the encoder cannot run past it.
-        let size = sync_write_bytes(ids.len(), block.len);
+        let size = frame_len(2) + ids.len() * stride;
         at += encode::sync_write(&mut buf[at..at + size], block.address, block.len, items)?;
-        frames += 1;
     }
     debug_assert_eq!(at, needed);
     Ok(Packed {
         len: at,
         frames,
-        full_frame_len: frame_len(2 + per * (len + 1)),
+        full_frame_len: frame_len(2) + per * stride,
     })
 }
 

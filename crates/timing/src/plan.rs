@@ -300,7 +300,7 @@ pub fn plan(
         };
         (all, Fixes::default())
     } else {
-        let fixes = Fixes::find(&spec, servos, rate_hz);
+        let fixes = Fixes::find(&spec, servos, &full, rate_hz);
         match round_robin(&spec, servos, rate_hz) {
             Some(rr) => (rr, fixes),
             None => {
@@ -344,6 +344,9 @@ pub fn plan(
 fn round_robin(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<RoundRobin> {
     spec.read_len?;
     let n = servos.len();
+    let uniform = servos
+        .windows(2)
+        .all(|w| w[0].return_delay == w[1].return_delay && w[0].sync_read == w[1].sync_read);
     for every in 2..=n {
         // Balanced groups: the smallest group size that gives `every` groups.
         let per_cycle = n.div_ceil(every);
@@ -351,10 +354,15 @@ fn round_robin(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<Round
             // The same group size as a smaller `every` already tried.
             continue;
         }
-        let worst = servos
-            .chunks(per_cycle)
-            .map(|group| spec.cost(group))
-            .max_by_key(|c| c.cycle_time)?;
+        let worst = if uniform {
+            // Alike servos: the first group is the largest, so the costliest.
+            spec.cost(&servos[..per_cycle])
+        } else {
+            servos
+                .chunks(per_cycle)
+                .map(|group| spec.cost(group))
+                .max_by_key(|c| c.cycle_time)?
+        };
         if worst.fits(rate_hz) {
             return Some(RoundRobin {
                 every,

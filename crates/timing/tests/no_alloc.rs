@@ -51,7 +51,8 @@ fn packing_and_planning_allocate_nothing() {
     let data = [0x5Au8; 253 * 7];
     let mut buf = vec![0u8; sync_write_bytes(253, 7)];
     let link = Link::new(1_000_000).with_latency(Duration::from_millis(1));
-    let sts: [Servo; 253] = core::array::from_fn(|i| Servo::sts(i as u8, Duration::from_micros(500)));
+    let sts: [Servo; 253] =
+        core::array::from_fn(|i| Servo::sts(i as u8, Duration::from_micros(500)));
     let scs: [Servo; 18] = core::array::from_fn(|i| Servo::scs(i as u8 + 1, Duration::ZERO));
 
     for n in [6, 18, 64, 253] {
@@ -78,7 +79,12 @@ fn packing_and_planning_allocate_nothing() {
     ];
     for (servos, rate) in cases {
         let (count, result) = allocations_during(|| plan(&link, servos, w, r, rate));
-        assert_eq!(count, 0, "planning {} servos at {rate} Hz allocated", servos.len());
+        assert_eq!(
+            count,
+            0,
+            "planning {} servos at {rate} Hz allocated",
+            servos.len()
+        );
         // Keep the result so the call cannot be optimised away.
         std::hint::black_box(&result);
     }

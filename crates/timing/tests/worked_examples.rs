@@ -20,11 +20,15 @@ fn link(latency: Duration) -> Link {
 }
 
 fn sts(n: usize, return_delay: Duration) -> Vec<Servo> {
-    (1..=n as u8).map(|id| Servo::sts(id, return_delay)).collect()
+    (1..=n as u8)
+        .map(|id| Servo::sts(id, return_delay))
+        .collect()
 }
 
 fn scs(n: usize, return_delay: Duration) -> Vec<Servo> {
-    (1..=n as u8).map(|id| Servo::scs(id, return_delay)).collect()
+    (1..=n as u8)
+        .map(|id| Servo::scs(id, return_delay))
+        .collect()
 }
 
 const POS: Option<Block> = Some(Block::GOAL_POSITION);
@@ -35,7 +39,14 @@ fn so101_six_sts3215_return_delay_zero() {
     // 26 (SYNC WRITE 8 + 6 x 3) + 14 (SYNC READ 8 + 6) + 48 (6 x 8) = 88 bytes
     // = 880 us; nothing else to wait for, so the cycle is the wire:
     // 1 / 880 us = 1136.36 Hz.
-    let p = plan(&link(Duration::ZERO), &sts(6, Duration::ZERO), POS, PRESENT, 1000.0).unwrap();
+    let p = plan(
+        &link(Duration::ZERO),
+        &sts(6, Duration::ZERO),
+        POS,
+        PRESENT,
+        1000.0,
+    )
+    .unwrap();
     assert_eq!(p.bytes_per_cycle(), 88);
     assert_eq!(p.full_cycle().wire_time, US(880));
     assert_eq!(p.full_cycle().cycle_time, US(880));
@@ -91,10 +102,10 @@ fn so101_with_the_factory_return_delay() {
     assert_eq!(p.read_ids(2), &[5, 6]);
     assert_eq!(p.read_ids(3), &[1, 2]);
     assert_eq!(p.reads_in_cycle(u64::MAX), 0..2); // u64::MAX % 3 == 0
-    // Cheapest fix: return delay 0 brings the full cycle back to 880 us.
-    // Reading 1 byte instead of 2 saves only 6 bytes (3820 us): no help.
-    // Already at 1 Mbps, no latency: neither of those either.
-    // Lower rate: floor(257.73) = 257 Hz.
+                                                  // Cheapest fix: return delay 0 brings the full cycle back to 880 us.
+                                                  // Reading 1 byte instead of 2 saves only 6 bytes (3820 us): no help.
+                                                  // Already at 1 Mbps, no latency: neither of those either.
+                                                  // Lower rate: floor(257.73) = 257 Hz.
     let fixes: Vec<Change> = p.fixes().iter().collect();
     assert_eq!(
         fixes,
@@ -228,7 +239,9 @@ fn a_full_bus_splits_both_writes_and_reads() {
     // 254 servos (IDs 0..=253): SYNC WRITE of 2 bytes, 83 per frame -> 4
     // frames: 4 x 8 + 254 x 3 = 794 bytes. SYNC READ lists at most 251 IDs ->
     // 2 requests: 2 x 8 + 254 + 254 x 8 = 2302 bytes. 3096 bytes in all.
-    let servos: Vec<Servo> = (0..=253u8).map(|id| Servo::sts(id, Duration::ZERO)).collect();
+    let servos: Vec<Servo> = (0..=253u8)
+        .map(|id| Servo::sts(id, Duration::ZERO))
+        .collect();
     let p = plan(&link(Duration::ZERO), &servos, POS, PRESENT, 10.0).unwrap();
     assert_eq!(p.full_cycle().write_frames, 4);
     assert_eq!(p.full_cycle().round_trips, 2);
@@ -265,7 +278,13 @@ fn bad_input_is_refused() {
         Err(PlanError::InvalidRate { .. })
     ));
     assert_eq!(
-        plan(&l, &[Servo::sts(1, Duration::ZERO), Servo::scs(1, Duration::ZERO)], POS, PRESENT, 1.0),
+        plan(
+            &l,
+            &[Servo::sts(1, Duration::ZERO), Servo::scs(1, Duration::ZERO)],
+            POS,
+            PRESENT,
+            1.0
+        ),
         Err(PlanError::DuplicateId { id: 1 })
     );
     assert_eq!(
@@ -288,9 +307,42 @@ fn bad_input_is_refused() {
 #[test]
 fn write_only_cycles_have_no_round_trips() {
     // 6 servos, goal position, nothing read: 26 bytes, latency never waited on.
-    let p = plan(&link(Duration::from_millis(16)), &sts(6, Duration::ZERO), POS, None, 1000.0)
-        .unwrap();
+    let p = plan(
+        &link(Duration::from_millis(16)),
+        &sts(6, Duration::ZERO),
+        POS,
+        None,
+        1000.0,
+    )
+    .unwrap();
     assert_eq!(p.cycle_time_us(), 260.0);
     assert_eq!(p.reads_in_cycle(0), 0..0);
     assert!(p.read_ids(5).is_empty());
+}
+
+#[test]
+fn round_robin_sizes_groups_by_their_costliest_member() {
+    // 4 servos, the last two with a 400 us return delay. Full cycle: 20 + 44
+    // bytes = 640 us + 2 x 400 = 1440 us: not at 1 kHz. Two groups of 2:
+    // the first takes 20 + 10 + 16 = 46 bytes = 460 us, but the second
+    // 460 + 800 = 1260 us: no. (3 groups would still be groups of 2.)
+    // Four groups of 1: the worst is 20 + 9 + 8 = 37 bytes = 370 + 400 = 770 us.
+    let servos = [
+        Servo::sts(1, Duration::ZERO),
+        Servo::sts(2, Duration::ZERO),
+        Servo::sts(3, US(400)),
+        Servo::sts(4, US(400)),
+    ];
+    let p = plan(&link(Duration::ZERO), &servos, POS, PRESENT, 1000.0).unwrap();
+    assert_eq!(p.cycle_time_us(), 1440.0);
+    assert_eq!(p.read_every(), 4);
+    assert_eq!(p.worst_cycle().cycle_time, US(770));
+    assert_eq!(p.read_ids(2), &[3]);
+    // Return delay 0 would bring the full cycle to 640 us.
+    assert_eq!(
+        p.cheapest_fix(),
+        Some(Change::ReturnDelayZero {
+            cycle_time: US(640)
+        })
+    );
 }

@@ -77,5 +77,8 @@ pub(crate) fn validate_all(limits: &[JointLimits]) -> Result<(), PlanError> {
     if limits.is_empty() {
         return Err(PlanError::NoJoints);
     }
-    limits.iter().enumerate().try_for_each(|(j, l)| l.validate(j))
+    limits
+        .iter()
+        .enumerate()
+        .try_for_each(|(j, l)| l.validate(j))
 }

@@ -58,12 +58,6 @@ impl Piece {
         self.eval_local(x)
     }
 
-    /// Jerk at local time `x`.
-    pub fn jerk_local(&self, x: f64) -> f64 {
-        let c = &self.c;
-        6.0 * c[3] + x * (24.0 * c[4] + x * 60.0 * c[5])
-    }
-
     /// Coefficients of the `k`-th derivative (k <= 3), low order first.
     fn derivative(&self, k: usize) -> [f64; 6] {
         let mut d = self.c;
@@ -193,7 +187,14 @@ fn push_if_inside(r: f64, len: f64, out: &mut [f64; 5], n: usize) -> usize {
     }
 }
 
-fn bisect_root(c: &[f64; 6], mut a: f64, mut b: f64, len: f64, out: &mut [f64; 5], n: usize) -> usize {
+fn bisect_root(
+    c: &[f64; 6],
+    mut a: f64,
+    mut b: f64,
+    len: f64,
+    out: &mut [f64; 5],
+    n: usize,
+) -> usize {
     let fa = poly(c, a);
     let fb = poly(c, b);
     if fa == 0.0 {

@@ -98,7 +98,11 @@ struct Entry<'a> {
     boundary: bool,
 }
 
-fn validate(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOptions) -> Result<(), PlanError> {
+fn validate(
+    limits: &[JointLimits],
+    keyframes: &[Keyframe],
+    options: &PlanOptions,
+) -> Result<(), PlanError> {
     validate_all(limits)?;
     if keyframes.is_empty() {
         return Err(PlanError::NoKeyframes);
@@ -116,7 +120,10 @@ fn validate(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
         }
         for (j, (&p, l)) in kf.positions.iter().zip(limits).enumerate() {
             if !p.is_finite() {
-                return Err(PlanError::NotFinite { keyframe: k, joint: j });
+                return Err(PlanError::NotFinite {
+                    keyframe: k,
+                    joint: j,
+                });
             }
             if p < l.min_position || p > l.max_position {
                 return Err(PlanError::OutOfRange {
@@ -130,7 +137,10 @@ fn validate(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
         }
         if let Some(at) = kf.at {
             if !at.is_finite() {
-                return Err(PlanError::NotFinite { keyframe: k, joint: 0 });
+                return Err(PlanError::NotFinite {
+                    keyframe: k,
+                    joint: 0,
+                });
             }
         }
     }
@@ -144,7 +154,8 @@ fn validate(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
 
 fn expand<'a>(keyframes: &'a [Keyframe], options: &PlanOptions) -> Vec<Entry<'a>> {
     let timed_in_cycle = keyframes[1..].iter().any(|k| k.at.is_some());
-    let closed = keyframes.len() > 1 && keyframes[0].positions == keyframes[keyframes.len() - 1].positions;
+    let closed =
+        keyframes.len() > 1 && keyframes[0].positions == keyframes[keyframes.len() - 1].positions;
     let mut e = Vec::with_capacity(keyframes.len() * options.repeat as usize);
     for cycle in 0..options.repeat as usize {
         for (index, kf) in keyframes.iter().enumerate() {
@@ -210,11 +221,17 @@ fn expand<'a>(keyframes: &'a [Keyframe], options: &PlanOptions) -> Vec<Entry<'a>
 /// [`PlanError::TimeNotIncreasing`], [`PlanError::ZeroRepeat`]); a timed
 /// segment beyond a limit ([`PlanError::LimitExceeded`],
 /// [`PlanError::TooSoon`]) unless [`OnLimit::Stretch`] is set.
-pub fn plan(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOptions) -> Result<Trajectory, PlanError> {
+pub fn plan(
+    limits: &[JointLimits],
+    keyframes: &[Keyframe],
+    options: &PlanOptions,
+) -> Result<Trajectory, PlanError> {
     validate(limits, keyframes, options)?;
     let entries = expand(keyframes, options);
     let nj = limits.len();
-    let mut out: Vec<Vec<Piece>> = (0..nj).map(|_| Vec::with_capacity(entries.len() * 7)).collect();
+    let mut out: Vec<Vec<Piece>> = (0..nj)
+        .map(|_| Vec::with_capacity(entries.len() * 7))
+        .collect();
     let mut arrival = vec![0.0; entries.len()];
     let mut scratch = Scratch::default();
     let mut pos: Vec<&[f64]> = Vec::with_capacity(entries.len());
@@ -252,7 +269,14 @@ pub fn plan(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
                 }
             }
             pos.extend(entries[i..=j].iter().map(|e| e.pos));
-            timed_section(limits, &entries[i..=j], &pos, &mut times, options.on_limit, &mut out)?;
+            timed_section(
+                limits,
+                &entries[i..=j],
+                &pos,
+                &mut times,
+                options.on_limit,
+                &mut out,
+            )?;
             arrival[i..=j].copy_from_slice(&times);
         } else {
             // Untimed section: up to a timed entry, a boundary or the end.
@@ -265,7 +289,14 @@ pub fn plan(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
             pos.extend(entries[i..=j].iter().map(|e| e.pos));
             let start = arrival[i];
             let first_piece: Vec<usize> = out.iter().map(Vec::len).collect();
-            untimed::section(limits, &pos, start, options.stop_at_keyframes, &mut scratch, &mut out);
+            untimed::section(
+                limits,
+                &pos,
+                start,
+                options.stop_at_keyframes,
+                &mut scratch,
+                &mut out,
+            );
             let needed: f64 = scratch.durations.iter().sum();
             let mut scale = 1.0;
             if anchored {
@@ -324,13 +355,24 @@ pub fn plan(limits: &[JointLimits], keyframes: &[Keyframe], options: &PlanOption
             end: arrival[k],
         })
         .collect();
-    Ok(Trajectory::from_joints(out, entries[last].pos, duration, segments))
+    Ok(Trajectory::from_joints(
+        out,
+        entries[last].pos,
+        duration,
+        segments,
+    ))
 }
 
 /// Worst limit ratio of a timed segment over all joints, as a time factor:
 /// velocity scales as 1/s, acceleration 1/s^2 and jerk 1/s^3 when the
 /// segment's time is stretched by s. Also returns the first violation.
-fn check_segment(limits: &[JointLimits], pieces: &[Vec<Piece>], t0: f64, t1: f64, keyframe: usize) -> (f64, Option<PlanError>) {
+fn check_segment(
+    limits: &[JointLimits],
+    pieces: &[Vec<Piece>],
+    t0: f64,
+    t1: f64,
+    keyframe: usize,
+) -> (f64, Option<PlanError>) {
     let mut factor: f64 = 1.0;
     let mut first = None;
     let tol = 1.0 + 1e-9;
@@ -361,20 +403,18 @@ fn check_segment(limits: &[JointLimits], pieces: &[Vec<Piece>], t0: f64, t1: f64
             let below = (lo < lim.min_position - slack).then_some((lo, lim.min_position));
             let above = (hi > lim.max_position + slack).then_some((hi, lim.max_position));
             if let Some((peak, limit)) = below.or(above) {
-                {
-                    // Position violations cannot be stretched away: report
-                    // them first, with no factor.
-                    return (
-                        f64::INFINITY,
-                        Some(PlanError::LimitExceeded {
-                            keyframe,
-                            joint: j,
-                            quantity: Quantity::Position,
-                            peak,
-                            limit,
-                        }),
-                    );
-                }
+                // Position violations cannot be stretched away: report
+                // them at once, with no factor.
+                return (
+                    f64::INFINITY,
+                    Some(PlanError::LimitExceeded {
+                        keyframe,
+                        joint: j,
+                        quantity: Quantity::Position,
+                        peak,
+                        limit,
+                    }),
+                );
             }
         }
     }
@@ -415,7 +455,8 @@ fn timed_section(
             let mut worst: f64 = 1.0;
             let mut first_err = None;
             for k in a..b {
-                let (f, e) = check_segment(limits, &buf, times[k], times[k + 1], entries[k + 1].index);
+                let (f, e) =
+                    check_segment(limits, &buf, times[k], times[k + 1], entries[k + 1].index);
                 if let (Some(e), true) = (e, first_err.is_none() || f.is_infinite()) {
                     if f.is_infinite() {
                         return Err(e);

@@ -161,10 +161,16 @@ impl Segment1 {
         } else if self.g(vlo, a, j).1 >= self.d {
             vlo
         } else {
-            solve(|x| {
-                let (_, g, _, dg) = self.g(x, a, j);
-                (g - self.d, dg)
-            }, vlo, vm, vm, true)
+            solve(
+                |x| {
+                    let (_, g, _, dg) = self.g(x, a, j);
+                    (g - self.d, dg)
+                },
+                vlo,
+                vm,
+                vm,
+                true,
+            )
         };
         let duration = self.time(vc, a, j).0;
         Profile { vc, duration }
@@ -182,7 +188,10 @@ impl Segment1 {
         let (a, j) = (lim.max_acceleration, lim.jerk());
         if self.d <= 0.0 {
             // Nothing to cover: only possible at rest; hold.
-            return Profile { vc: 0.0, duration: t };
+            return Profile {
+                vc: 0.0,
+                duration: t,
+            };
         }
         let mut vc = None;
         if self.v0 == 0.0 && self.v1 == 0.0 {
@@ -204,10 +213,16 @@ impl Segment1 {
             None => {
                 // time(vc) - t is decreasing, +inf at 0, <= 0 at fastest.vc.
                 let guess = (self.d / t).min(fastest.vc);
-                solve(|x| {
-                    let (tt, dt) = self.time(x, a, j);
-                    (tt - t, dt)
-                }, 0.0, fastest.vc, guess, false)
+                solve(
+                    |x| {
+                        let (tt, dt) = self.time(x, a, j);
+                        (tt - t, dt)
+                    },
+                    0.0,
+                    fastest.vc,
+                    guess,
+                    false,
+                )
             }
         };
         Profile { vc, duration: t }
@@ -231,7 +246,13 @@ impl Segment1 {
 /// `increasing` tells the sign convention (`f(lo) <= 0 <= f(hi)` when true,
 /// the reverse otherwise). Falls back to bisection whenever a Newton step
 /// leaves the bracket, so it always converges.
-fn solve(f: impl Fn(f64) -> (f64, f64), mut lo: f64, mut hi: f64, x0: f64, increasing: bool) -> f64 {
+fn solve(
+    f: impl Fn(f64) -> (f64, f64),
+    mut lo: f64,
+    mut hi: f64,
+    x0: f64,
+    increasing: bool,
+) -> f64 {
     let mut x = x0.clamp(lo, hi);
     for _ in 0..100 {
         let (fx, dfx) = f(x);
@@ -345,7 +366,10 @@ mod tests {
             let r = Ramp::new(vc, 3.0, 10.0);
             let dist = vc * r.duration();
             assert!(vc <= 2.0 + 1e-12);
-            assert!(vc == 2.0 || (dist - d).abs() < 1e-9 * d, "d={d} vc={vc} dist={dist}");
+            assert!(
+                vc == 2.0 || (dist - d).abs() < 1e-9 * d,
+                "d={d} vc={vc} dist={dist}"
+            );
         }
     }
 

@@ -53,7 +53,14 @@ pub(crate) fn run(shape: TimedShape, times: &[f64], pos: &[&[f64]], out: &mut [V
             for (j, o) in out.iter_mut().enumerate() {
                 for k in 0..times.len() - 1 {
                     let h = times[k + 1] - times[k];
-                    o.push(quintic(times[k], h, pos[k][j], pos[k + 1][j] - pos[k][j], 0.0, 0.0));
+                    o.push(quintic(
+                        times[k],
+                        h,
+                        pos[k][j],
+                        pos[k + 1][j] - pos[k][j],
+                        0.0,
+                        0.0,
+                    ));
                 }
             }
         }
@@ -76,7 +83,14 @@ pub(crate) fn run(shape: TimedShape, times: &[f64], pos: &[&[f64]], out: &mut [V
                 for k in 0..m {
                     let v1 = vel(k + 1);
                     let h = times[k + 1] - times[k];
-                    o.push(quintic(times[k], h, pos[k][j], pos[k + 1][j] - pos[k][j], v0, v1));
+                    o.push(quintic(
+                        times[k],
+                        h,
+                        pos[k][j],
+                        pos[k + 1][j] - pos[k][j],
+                        v0,
+                        v1,
+                    ));
                     v0 = v1;
                 }
             }
@@ -99,7 +113,12 @@ fn cubic(times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
     let mut kf: Vec<Option<usize>> = Vec::with_capacity(times.len() + 2);
     if m_kf == 1 {
         let h = times[1] - times[0];
-        tau.extend([times[0], times[0] + h / 3.0, times[0] + 2.0 * h / 3.0, times[1]]);
+        tau.extend([
+            times[0],
+            times[0] + h / 3.0,
+            times[0] + 2.0 * h / 3.0,
+            times[1],
+        ]);
         kf.extend([Some(0), None, None, Some(1)]);
     } else {
         tau.push(times[0]);
@@ -225,16 +244,30 @@ mod tests {
         let ps = out.pop().unwrap_or_default();
         // Passes every keyframe at its time, continuous v and a, rest at ends.
         for (k, &t) in times.iter().enumerate() {
-            let p = ps.iter().find(|p| p.t0 <= t && t <= p.t1).map(|p| p.eval(t).0);
-            assert!((p.unwrap_or(f64::NAN) - pos[k][0]).abs() < 1e-9, "{shape:?} kf {k}");
+            let p = ps
+                .iter()
+                .find(|p| p.t0 <= t && t <= p.t1)
+                .map(|p| p.eval(t).0);
+            assert!(
+                (p.unwrap_or(f64::NAN) - pos[k][0]).abs() < 1e-9,
+                "{shape:?} kf {k}"
+            );
         }
         for w in ps.windows(2) {
             let (a, b) = (w[0].eval(w[0].t1), w[1].eval(w[1].t0));
-            assert!((a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9 && (a.2 - b.2).abs() < 1e-9);
+            assert!(
+                (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9 && (a.2 - b.2).abs() < 1e-9
+            );
         }
-        let (first, last) = (ps[0].eval(ps[0].t0), ps[ps.len() - 1].eval(ps[ps.len() - 1].t1));
+        let (first, last) = (
+            ps[0].eval(ps[0].t0),
+            ps[ps.len() - 1].eval(ps[ps.len() - 1].t1),
+        );
         assert!(first.1.abs() < 1e-9 && first.2.abs() < 1e-9);
-        assert!(last.1.abs() < 1e-9 && last.2.abs() < 1e-9, "{shape:?} {last:?}");
+        assert!(
+            last.1.abs() < 1e-9 && last.2.abs() < 1e-9,
+            "{shape:?} {last:?}"
+        );
         ps
     }
 
@@ -242,7 +275,11 @@ mod tests {
     fn all_shapes_interpolate_with_rest_ends() {
         let times = [0.0, 1.0, 1.5, 3.0, 3.2];
         let pos: [&[f64]; 5] = [&[0.0], &[1.0], &[2.0], &[-1.0], &[-0.5]];
-        for shape in [TimedShape::Cubic, TimedShape::Monotone, TimedShape::MinimumJerk] {
+        for shape in [
+            TimedShape::Cubic,
+            TimedShape::Monotone,
+            TimedShape::MinimumJerk,
+        ] {
             check_run(shape, &times, &pos);
             check_run(shape, &times[..2], &pos[..2]);
             check_run(shape, &times[..3], &pos[..3]);

@@ -65,6 +65,8 @@ pub struct Trajectory {
     /// `first[j]..first[j + 1]` are joint `j`'s pieces (never empty).
     pub(crate) first: Vec<usize>,
     pub(crate) segments: Vec<SegmentTiming>,
+    /// Final position per joint (held at rest from `duration` on).
+    pub(crate) end: Vec<f64>,
 }
 
 /// Remembers, per joint, the piece last sampled, so that sampling at
@@ -101,11 +103,15 @@ impl Trajectory {
             }
         }
         first.push(pieces.len());
+        let end = (0..first.len() - 1)
+            .map(|j| pieces[first[j + 1] - 1].eval(duration).0)
+            .collect();
         Trajectory {
             duration,
             pieces,
             first,
             segments,
+            end,
         }
     }
 
@@ -139,7 +145,11 @@ impl Trajectory {
     /// O(log n) per joint, no allocation. Writes `min(out.len(), joints)`
     /// entries.
     pub fn sample(&self, t: f64, out: &mut [JointState]) {
-        let t = t.clamp(0.0, self.duration);
+        if t >= self.duration {
+            self.final_state(out);
+            return;
+        }
+        let t = t.max(0.0);
         for (j, o) in out.iter_mut().enumerate().take(self.joints()) {
             let ps = self.joint_pieces(j);
             let i = ps.partition_point(|p| p.t1 < t).min(ps.len() - 1);
@@ -153,7 +163,13 @@ impl Trajectory {
     /// `min(out.len(), joints)` entries.
     #[inline]
     pub fn sample_with(&self, cursor: &mut Cursor, t: f64, out: &mut [JointState]) {
-        let t = t.clamp(0.0, self.duration);
+        if t >= self.duration {
+            // At rest at the end (a trapezoid's last piece still decelerates
+            // at its very end).
+            self.final_state(out);
+            return;
+        }
+        let t = t.max(0.0);
         let n = self.joints().min(out.len());
         if cursor.index.len() < n {
             // A cursor of another trajectory: cannot grow without
@@ -185,7 +201,9 @@ impl Trajectory {
 
     /// The state of every joint at the end (at rest at the last keyframe).
     pub fn final_state(&self, out: &mut [JointState]) {
-        self.sample(self.duration, out);
+        for (o, &p) in out.iter_mut().zip(&self.end) {
+            *o = JointState::at_rest(p);
+        }
     }
 
     /// Extremes of joint `j` over the whole trajectory (exact: from the
@@ -225,7 +243,9 @@ impl Trajectory {
 
     /// [`joint_summary`](Self::joint_summary) of every joint.
     pub fn summaries(&self) -> Vec<JointSummary> {
-        (0..self.joints()).filter_map(|j| self.joint_summary(j)).collect()
+        (0..self.joints())
+            .filter_map(|j| self.joint_summary(j))
+            .collect()
     }
 }
 

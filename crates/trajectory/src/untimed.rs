@@ -14,9 +14,9 @@
 //!    every other joint's profile is stretched to that duration by lowering
 //!    its cruise speed, so all joints reach every keyframe together.
 //! 3. Speeds at keyframes are then lowered where a stretched joint would
-//!    otherwise dip and rise again (to at most twice its average speed on
-//!    either side), and the durations are recomputed once. Both steps only
-//!    ever build profiles inside the limits.
+//!    otherwise dip and rise again (to twice its average speed on either
+//!    side), wherever that keeps both neighbouring segments within their
+//!    durations. Every step only ever builds profiles inside the limits.
 
 use crate::piece::Piece;
 use crate::profile::{rest_peak, Phases, Profile, Segment1};
@@ -86,41 +86,45 @@ pub(crate) fn section(
             }
         }
     }
-    let fill = |via: &[f64], fastest: &mut [Profile], durations: &mut [f64]| {
-        for k in 0..n {
-            let mut t: f64 = 0.0;
-            for (j, lim) in limits.iter().enumerate() {
-                let s = seg(pos[k + 1][j] - pos[k][j], via[k * nj + j], via[(k + 1) * nj + j]);
-                let f = s.fastest(lim);
-                fastest[k * nj + j] = f;
-                t = t.max(f.duration);
-            }
-            durations[k] = t;
+    for k in 0..n {
+        let mut t: f64 = 0.0;
+        for (j, lim) in limits.iter().enumerate() {
+            let s = seg(
+                pos[k + 1][j] - pos[k][j],
+                via[k * nj + j],
+                via[(k + 1) * nj + j],
+            );
+            let f = s.fastest(lim);
+            fastest[k * nj + j] = f;
+            t = t.max(f.duration);
         }
-    };
-    fill(via, fastest, durations);
+        durations[k] = t;
+    }
     if !stop && n > 1 {
         // Step 3: a joint much faster than the segment's pace would brake
         // and accelerate again inside the segment; give it a speed in line
-        // with the pace instead.
-        let mut changed = false;
+        // with the pace instead, where that does not lengthen either
+        // neighbouring segment (so the durations stay as they are).
         for k in 1..n {
-            for j in 0..nj {
+            for (j, lim) in limits.iter().enumerate() {
                 let v = via[k * nj + j];
                 if v == 0.0 {
                     continue;
                 }
-                let avg_prev = (pos[k][j] - pos[k - 1][j]).abs() / durations[k - 1];
-                let avg_next = (pos[k + 1][j] - pos[k][j]).abs() / durations[k];
-                let pace = 2.0 * avg_prev.min(avg_next);
-                if pace < v.abs() {
-                    via[k * nj + j] = v.signum() * pace;
-                    changed = true;
+                let (dp, dn) = (pos[k][j] - pos[k - 1][j], pos[k + 1][j] - pos[k][j]);
+                let pace = 2.0 * (dp.abs() / durations[k - 1]).min(dn.abs() / durations[k]);
+                if pace >= v.abs() {
+                    continue;
+                }
+                let vp = v.signum() * pace;
+                let before = seg(dp, via[(k - 1) * nj + j], vp).fastest(lim);
+                let after = seg(dn, vp, via[(k + 1) * nj + j]).fastest(lim);
+                if before.duration <= durations[k - 1] && after.duration <= durations[k] {
+                    via[k * nj + j] = vp;
+                    fastest[(k - 1) * nj + j] = before;
+                    fastest[k * nj + j] = after;
                 }
             }
-        }
-        if changed {
-            fill(via, fastest, durations);
         }
     }
     let mut phases = Phases::new();

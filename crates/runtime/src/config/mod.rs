@@ -28,10 +28,12 @@ mod locate;
 mod mapping;
 mod motion;
 mod robot;
+mod trajectory;
 mod units;
 
 pub use error::ConfigError;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{load_robot, load_robot_any_rate, BusConfig, JointConfig, Robot};
+pub use trajectory::{joint_limits, plan_input, plan_motion};
 pub use units::Units;

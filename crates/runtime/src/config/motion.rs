@@ -19,7 +19,8 @@ pub struct Motion {
     pub path: PathBuf,
     /// The robot file used (the motion's `robot:`, or the override).
     pub robot_path: PathBuf,
-    /// The unit of every angle in this motion's keyframes.
+    /// The unit of every angle in this motion's keyframes (`deg` unless the
+    /// file says otherwise, whatever the robot's unit).
     pub units: Units,
     /// The motion's own control rate, Hz, if it sets one.
     pub rate_hz: Option<f64>,
@@ -28,7 +29,10 @@ pub struct Motion {
     pub joints: Vec<String>,
     /// The keyframes of one repetition; the first is the start (t = 0).
     pub keyframes: Vec<Keyframe>,
-    /// How many times the keyframes are played (at least 1).
+    /// How many times the keyframes are played (at least 1). Between
+    /// repetitions the path moves from the last keyframe back to the first
+    /// (untimed) unless they are equal; `at` times count from the arrival at
+    /// the repetition's first keyframe.
     pub repeat: u32,
     /// What the planner does when a timed segment would exceed a limit.
     pub on_limit: OnLimit,

@@ -1,0 +1,77 @@
+//! Encoding a SYNC WRITE and streaming status packets through the decoder
+//! allocate nothing: a counting global allocator sees zero allocations
+//! between the two marks. (Its own test binary, so no other test runs in
+//! parallel on another thread while counting.)
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use servobus_protocol::{encode, Decoder, Event, StatusFlags, MAX_FRAME_LEN};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged; the counter
+// is only incremented.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as ours.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as ours.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+#[test]
+fn hot_paths_do_not_allocate() {
+    // Set-up (allowed to allocate): 18 blocks and a stream of 1000 replies.
+    let blocks: Vec<[u8; 7]> = (0..18u8).map(|i| [20, i, 0x08, 0, 0, 0xDC, 0x05]).collect();
+    let mut stream = Vec::new();
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    for i in 0..1000u32 {
+        let id = (i % 18) as u8 + 1;
+        let n = encode::status(&mut frame, id, StatusFlags(0), &[i as u8, 0x08, 0x10, 0])
+            .expect("valid status");
+        stream.extend_from_slice(&frame[..n]);
+    }
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let mut dec = Decoder::new();
+
+    let before = allocations();
+    let mut frames = 0;
+    for _ in 0..100 {
+        let items = blocks
+            .iter()
+            .enumerate()
+            .map(|(i, d)| (i as u8 + 1, &d[..]));
+        let n = encode::sync_write(&mut buf, 41, 7, items).expect("fits");
+        frames += usize::from(n == 8 + 18 * 8);
+    }
+    let mut packets = 0;
+    for chunk in stream.chunks(61) {
+        let mut input = chunk;
+        while let Some(ev) = dec.decode(&mut input) {
+            packets += usize::from(matches!(ev, Event::Packet { .. }));
+        }
+    }
+    let after = allocations();
+
+    assert_eq!(after - before, 0, "allocations on the hot path");
+    assert_eq!((frames, packets), (100, 1000));
+}

@@ -1,0 +1,291 @@
+//! Online changes from an arbitrary current state: retarget and stop.
+//!
+//! Both start at time 0 in the given state (sample the running trajectory
+//! at "now" to get it) and end at rest.
+
+use crate::error::PlanError;
+use crate::limits::validate_all;
+use crate::piece::Piece;
+use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::{JointLimits, JointState, Trajectory};
+
+/// The quickest way to rest from speed `v` and acceleration `a`: ramp the
+/// acceleration to a deceleration peak (at most `max_acceleration`), hold
+/// it, ramp it back to zero exactly as the speed reaches zero. This
+/// bang-bang jerk profile is the time-optimal one for reaching zero speed
+/// and zero acceleration.
+pub(crate) fn stop_phases(v: f64, a: f64, lim: &JointLimits, out: &mut Phases) {
+    let (am, j) = (lim.max_acceleration, lim.jerk());
+    let finite = j.is_finite();
+    // Speed reached if the acceleration were ramped to zero right away.
+    let v_flat = if finite {
+        v + a * a.abs() / (2.0 * j)
+    } else {
+        v
+    };
+    if v_flat == 0.0 {
+        if finite && a != 0.0 {
+            out.push(a.abs() / j, -a.signum() * j, 0.0);
+        }
+        return;
+    }
+    // Normalise so that the speed must decrease.
+    let dir = v_flat.signum();
+    let (mut v, mut a) = (dir * v, if finite { dir * a } else { 0.0 });
+    if a < -am {
+        // Decelerating harder than allowed (a state from outside the
+        // limits): first bring the deceleration back to the limit.
+        let dt = (-am - a) / j;
+        out.push(dt, dir * j, 0.0);
+        v += dt * (a + 0.5 * dt * j);
+        a = -am;
+    }
+    let excess = if finite { v + a * a / (2.0 * j) } else { v };
+    let (ap, hold) = if finite && j * excess <= am * am {
+        ((j * excess).sqrt(), 0.0)
+    } else {
+        (
+            am,
+            if finite {
+                (excess - am * am / j) / am
+            } else {
+                excess / am
+            },
+        )
+    };
+    if finite {
+        out.push((a + ap) / j, -dir * j, 0.0);
+    }
+    out.push(hold, 0.0, -dir * ap);
+    if finite {
+        out.push(ap / j, dir * j, 0.0);
+    }
+}
+
+fn check_states(limits: &[JointLimits], states: &[JointState]) -> Result<(), PlanError> {
+    validate_all(limits)?;
+    if states.len() != limits.len() {
+        return Err(PlanError::WrongJointCount {
+            keyframe: 0,
+            expected: limits.len(),
+            actual: states.len(),
+        });
+    }
+    for (j, s) in states.iter().enumerate() {
+        if !(s.position.is_finite() && s.velocity.is_finite() && s.acceleration.is_finite()) {
+            return Err(PlanError::NotFinite {
+                keyframe: 0,
+                joint: j,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Brings every joint to rest as fast as its limits allow, from any state
+/// (for cancel and faults). Each joint stops in its own minimal time; the
+/// trajectory lasts as long as the slowest. Positions are not limited: a
+/// joint that cannot stop before a position limit passes it.
+///
+/// # Errors
+///
+/// Invalid limits, a state count that does not match, or a state that is
+/// not finite.
+pub fn stop(limits: &[JointLimits], current: &[JointState]) -> Result<Trajectory, PlanError> {
+    check_states(limits, current)?;
+    let mut per_joint: Vec<Vec<Piece>> = Vec::with_capacity(limits.len());
+    let mut hold = Vec::with_capacity(limits.len());
+    let mut duration: f64 = 0.0;
+    for (lim, s) in limits.iter().zip(current) {
+        let mut ph = Phases::new();
+        stop_phases(s.velocity, s.acceleration, lim, &mut ph);
+        let mut pieces = Vec::with_capacity(ph.n + 1);
+        let (t, p, _, _) = ph.emit(
+            0.0,
+            s.position,
+            s.velocity,
+            s.acceleration,
+            1.0,
+            lim.max_jerk.is_some(),
+            &mut pieces,
+        );
+        duration = duration.max(t);
+        hold.push(p);
+        per_joint.push(pieces);
+    }
+    Ok(finish(per_joint, &hold, duration))
+}
+
+/// Pads every joint with a rest piece up to `duration`.
+fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64) -> Trajectory {
+    for (ps, &p) in per_joint.iter_mut().zip(hold) {
+        let end = ps.last().map_or(0.0, |l| l.t1);
+        if end < duration {
+            ps.push(Piece::hold(end, duration, p));
+        }
+    }
+    Trajectory::from_joints(per_joint, hold, duration, Vec::new())
+}
+
+/// How one joint gets from its state to the target.
+struct Plan1 {
+    /// Phases before the main segment (stop or acceleration ramp-down).
+    pre: Phases,
+    /// Duration of `pre`.
+    pre_time: f64,
+    seg: Segment1,
+    fastest: Profile,
+    /// Direction of the main segment.
+    dir: f64,
+}
+
+fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
+    let j = lim.jerk();
+    let finite = j.is_finite();
+    let mut pre = Phases::new();
+    // Option A: ramp the acceleration to zero, then move on to the target
+    // without reversing (needs the speed to point at the target and to be
+    // low enough to stop within a quarter of the distance).
+    let (ta, a) = if finite {
+        (s.acceleration.abs() / j, s.acceleration)
+    } else {
+        (0.0, 0.0)
+    };
+    let jj = -a.signum() * j;
+    let (p1, v1) = if finite {
+        (
+            s.position + ta * (s.velocity + ta * (0.5 * a + ta * jj / 6.0)),
+            s.velocity + ta * (a + 0.5 * ta * jj),
+        )
+    } else {
+        (s.position, s.velocity)
+    };
+    let d = target - p1;
+    if v1 == 0.0
+        || (v1 * d > 0.0
+            && v1.abs() <= lim.max_velocity
+            && v1.abs() <= rest_peak(0.5 * d.abs(), lim))
+    {
+        if finite && a != 0.0 {
+            pre.push(ta, jj, 0.0);
+        }
+        let seg = Segment1 {
+            d: d.abs(),
+            v0: v1.abs(),
+            v1: 0.0,
+        };
+        return Plan1 {
+            pre,
+            pre_time: ta,
+            fastest: seg.fastest(lim),
+            seg,
+            dir: if d >= 0.0 { 1.0 } else { -1.0 },
+        };
+    }
+    // Option B: stop first, then move rest to rest.
+    stop_phases(s.velocity, s.acceleration, lim, &mut pre);
+    let mut scratch = Vec::new();
+    let (t, p, _, _) = pre.emit(
+        0.0,
+        s.position,
+        s.velocity,
+        s.acceleration,
+        1.0,
+        finite,
+        &mut scratch,
+    );
+    let d = target - p;
+    let seg = Segment1 {
+        d: d.abs(),
+        v0: 0.0,
+        v1: 0.0,
+    };
+    Plan1 {
+        pre,
+        pre_time: t,
+        fastest: seg.fastest(lim),
+        seg,
+        dir: if d >= 0.0 { 1.0 } else { -1.0 },
+    }
+}
+
+/// Moves every joint from its current state to `target` (at rest), jerk
+/// limited, all joints arriving together, starting at time 0.
+///
+/// Each joint either ramps its acceleration to zero and continues to the
+/// target (when it is already heading there slowly enough to stop in
+/// time), or stops as fast as it can and then moves rest to rest. The
+/// slowest joint sets the duration; the others' final segments are
+/// stretched to match. Velocity and acceleration are continuous from the
+/// given state on. If the state is beyond a limit (say faster than
+/// `max_velocity`) the path returns inside the limits as fast as they
+/// allow.
+///
+/// # Errors
+///
+/// Invalid limits, counts that do not match, values that are not finite,
+/// or a target outside the position limits ([`PlanError::OutOfRange`],
+/// keyframe 0).
+pub fn retarget(
+    limits: &[JointLimits],
+    current: &[JointState],
+    target: &[f64],
+) -> Result<Trajectory, PlanError> {
+    check_states(limits, current)?;
+    if target.len() != limits.len() {
+        return Err(PlanError::WrongJointCount {
+            keyframe: 0,
+            expected: limits.len(),
+            actual: target.len(),
+        });
+    }
+    for (j, (&q, l)) in target.iter().zip(limits).enumerate() {
+        if !q.is_finite() {
+            return Err(PlanError::NotFinite {
+                keyframe: 0,
+                joint: j,
+            });
+        }
+        if q < l.min_position || q > l.max_position {
+            return Err(PlanError::OutOfRange {
+                keyframe: 0,
+                joint: j,
+                position: q,
+                min: l.min_position,
+                max: l.max_position,
+            });
+        }
+    }
+    let plans: Vec<Plan1> = current
+        .iter()
+        .zip(target)
+        .zip(limits)
+        .map(|((s, &q), l)| plan1(s, q, l))
+        .collect();
+    let duration = plans
+        .iter()
+        .map(|p| p.pre_time + p.fastest.duration)
+        .fold(0.0, f64::max);
+    let mut per_joint = Vec::with_capacity(limits.len());
+    for ((p, s), lim) in plans.iter().zip(current).zip(limits) {
+        let finite = lim.max_jerk.is_some();
+        let mut pieces = Vec::with_capacity(p.pre.n + 8);
+        let (t, x, v, _) = p.pre.emit(
+            0.0,
+            s.position,
+            s.velocity,
+            s.acceleration,
+            1.0,
+            finite,
+            &mut pieces,
+        );
+        let prof = p.seg.stretched(lim, p.fastest, duration - p.pre_time);
+        let mut main = Phases::new();
+        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
+            p.seg.phases(lim, prof, &mut main);
+            main.emit(t, x, v, 0.0, p.dir, finite, &mut pieces);
+        }
+        per_joint.push(pieces);
+    }
+    Ok(finish(per_joint, target, duration))
+}

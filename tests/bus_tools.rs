@@ -1,0 +1,196 @@
+//! End to end: start `servobus sim` on a pty and use `scan`, `ping`, `read`,
+//! `write` and `set-id` against it as a user would.
+//!
+//! The simulator runs in wall-clock time here, so the commands are given a
+//! generous adapter latency (`--latency-us`): on a loaded machine the
+//! simulator's process may be scheduled milliseconds late. Nothing in this
+//! test measures time.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+const BIN: &str = env!("CARGO_BIN_EXE_servobus");
+const LATENCY: &str = "10000";
+
+/// The simulator process; killed when dropped (also when a check fails).
+struct Sim {
+    child: Child,
+    link: PathBuf,
+}
+
+impl Sim {
+    fn start(dir: &Path) -> Sim {
+        let link = dir.join("bus");
+        let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml");
+        let mut child = Command::new(BIN)
+            .args(["sim", "--robot"])
+            .arg(&robot)
+            .arg("--link")
+            .arg(&link)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start servobus sim");
+        let stdout = child.stdout.take().expect("sim stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let _ = BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        let mut sim = Sim { child, link };
+        let line = rx
+            .recv_timeout(Duration::from_secs(60))
+            .unwrap_or_else(|_| {
+                let _ = sim.child.kill();
+                panic!("servobus sim did not say it was serving");
+            });
+        assert_eq!(
+            line.trim(),
+            format!("serving 6 servos on {}", sim.link.display())
+        );
+        sim
+    }
+
+    fn port(&self) -> &str {
+        self.link.to_str().expect("utf-8 path")
+    }
+
+    /// Stops the simulator as a user would (SIGTERM) and waits for it.
+    fn stop(mut self) {
+        let pid = self.child.id().to_string();
+        let sent = Command::new("kill").args(["-TERM", &pid]).status();
+        if !sent.is_ok_and(|s| s.success()) {
+            let _ = self.child.kill();
+        }
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Runs `servobus ARGS --port PORT --latency-us LATENCY`.
+fn run(sim: &Sim, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .args(["--port", sim.port(), "--latency-us", LATENCY])
+        .output()
+        .expect("run servobus")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn ok(sim: &Sim, args: &[&str]) -> String {
+    let o = run(sim, args);
+    assert!(
+        o.status.success(),
+        "servobus {args:?} failed: {}",
+        stderr(&o)
+    );
+    stdout(&o)
+}
+
+/// The command fails with exit code 1 and a one-line error containing `why`.
+fn fails(sim: &Sim, args: &[&str], why: &str) {
+    let o = run(sim, args);
+    assert_eq!(o.status.code(), Some(1), "servobus {args:?} should fail");
+    let err = stderr(&o);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err:?}");
+    assert!(
+        err.starts_with("error: ") && err.contains(why),
+        "servobus {args:?}: {err:?} should say {why:?}"
+    );
+}
+
+fn read_value(sim: &Sim, id: &str, register: &str) -> i64 {
+    let out = ok(sim, &["read", "--id", id, register, "--json"]);
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("read --json");
+    v["value"].as_i64().expect("value")
+}
+
+#[test]
+fn scan_read_write_set_id_against_the_simulator() {
+    let dir = std::env::temp_dir().join(format!("servobus-bus-tools-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let sim = Sim::start(&dir);
+
+    // scan: the six servos of the arm, identified.
+    let out = ok(&sim, &["scan", "--json"]);
+    let scan: serde_json::Value = serde_json::from_str(out.trim()).expect("scan --json");
+    let servos = scan["servos"].as_array().expect("servos");
+    let ids: Vec<i64> = servos.iter().filter_map(|s| s["id"].as_i64()).collect();
+    assert_eq!(ids, [1, 2, 3, 4, 5, 6]);
+    for s in servos {
+        assert_eq!(s["model"], "STS3215");
+        assert_eq!(s["model_number"], 777);
+        assert!(s["voltage_v"].as_f64().is_some_and(|v| v > 4.0));
+        assert!(s["position"]
+            .as_i64()
+            .is_some_and(|p| (0..4096).contains(&p)));
+    }
+    assert_eq!(scan["collisions"].as_array().map(Vec::len), Some(0));
+    // The table form names the columns.
+    let table = ok(&sim, &["scan"]);
+    assert!(table.contains("POSITION") && table.contains("found 6 servo(s)"));
+
+    // ping and read.
+    assert!(ok(&sim, &["ping", "--id", "4"]).contains("servo 4 answered"));
+    assert_eq!(read_value(&sim, "3", "model_number"), 777);
+    let pos = read_value(&sim, "3", "present_position");
+    assert!((0..4096).contains(&pos));
+    assert!(ok(&sim, &["read", "--id", "3", "Present_Voltage"]).starts_with("present_voltage = "));
+
+    // write: RAM takes effect; EEPROM says it persists and is verified.
+    ok(&sim, &["write", "--id", "3", "acceleration", "20"]);
+    assert_eq!(read_value(&sim, "3", "acceleration"), 20);
+    let out = ok(&sim, &["write", "--id", "3", "max_temperature", "65"]);
+    assert!(out.contains("persist") && out.contains("verified"), "{out}");
+    assert_eq!(read_value(&sim, "3", "max_temperature"), 65);
+    assert_eq!(read_value(&sim, "3", "lock"), 1);
+
+    // set-id: refuses a taken ID, then moves servo 3 to 9.
+    fails(&sim, &["set-id", "--id", "3", "2"], "already taken");
+    let out = ok(&sim, &["set-id", "--id", "3", "9"]);
+    assert!(out.contains("now ID 9"), "{out}");
+    assert!(ok(&sim, &["ping", "--id", "9"]).contains("servo 9 answered"));
+    fails(&sim, &["ping", "--id", "3"], "servo 3");
+    assert_eq!(read_value(&sim, "9", "id"), 9);
+
+    // One-line errors for what a user gets wrong.
+    fails(
+        &sim,
+        &["read", "--id", "1", "nonsense"],
+        "no register called",
+    );
+    fails(
+        &sim,
+        &["write", "--id", "1", "present_position", "5"],
+        "read-only",
+    );
+    fails(
+        &sim,
+        &["write", "--id", "1", "acceleration", "300"],
+        "acceleration takes",
+    );
+
+    let link = sim.link.clone();
+    sim.stop();
+    assert!(!link.exists(), "sim removes its link on exit");
+    let _ = std::fs::remove_dir_all(&dir);
+}

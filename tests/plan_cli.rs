@@ -1,0 +1,251 @@
+//! `servobus plan` on the shipped motions and on small motions whose figures
+//! are worked out by hand.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn servobus(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_servobus"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the servobus binary runs")
+}
+
+fn plan_json(args: &[&str]) -> serde_json::Value {
+    let out = servobus(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
+}
+
+fn temp(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("plan_cli")
+        .join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
+/// One joint, no jerk limit: rest-to-rest moves are trapezoids.
+const ONE_JOINT: &str = "\
+name: one
+rate: 100
+buses:
+  - name: bus
+    joints:
+      - {name: a, id: 1, model: sts3215, min: -100, max: 100, max_velocity: 90, max_acceleration: 180}
+";
+
+#[test]
+fn a_trapezoid_worked_out_by_hand() {
+    temp("trapezoid", "robot.yaml", ONE_JOINT);
+    let m = temp(
+        "trapezoid",
+        "m.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 90}\n",
+    );
+    let v = plan_json(&["plan", m.to_str().expect("utf-8"), "--json"]);
+    // 90 deg at 90 deg/s and 180 deg/s^2: 0.5 s to reach full speed
+    // (22.5 deg), 45 deg cruising (0.5 s), 0.5 s to stop: 1.5 s.
+    assert!((num(&v, "duration_s") - 1.5).abs() < 1e-9, "{v}");
+    let j = &v["joints"][0];
+    assert_eq!(j["name"], "a");
+    assert!((num(j, "peak_velocity") - 90.0).abs() < 1e-9);
+    assert!((num(j, "peak_acceleration") - 180.0).abs() < 1e-9);
+    // The acceleration steps: no finite jerk.
+    assert!(j["peak_jerk"].is_null(), "{j}");
+    assert!(num(j, "min_position").abs() < 1e-9);
+    assert!((num(j, "max_position") - 90.0).abs() < 1e-9);
+}
+
+#[test]
+fn arm_wave_respects_every_limit_and_stays_within_its_keyframes() {
+    let v = plan_json(&["plan", "configs/motions/arm-wave.yaml", "--json"]);
+    assert!(num(&v, "duration_s") > 1.0);
+    let joints = v["joints"].as_array().expect("joints");
+    let names: Vec<&str> = joints.iter().filter_map(|j| j["name"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "shoulder_pan",
+            "shoulder_lift",
+            "elbow_flex",
+            "wrist_flex",
+            "wrist_roll",
+            "gripper"
+        ]
+    );
+    // Limits of configs/robots/so101.yaml (velocity, acceleration, jerk).
+    let limits = [
+        (180.0, 900.0, 9000.0),
+        (150.0, 700.0, 7000.0),
+        (180.0, 900.0, 9000.0),
+        (240.0, 1200.0, 12000.0),
+        (270.0, 1500.0, 15000.0),
+        (240.0, 1500.0, 15000.0),
+    ];
+    // Ranges spanned by the keyframes of arm-wave.yaml.
+    let ranges = [
+        (0.0, 20.0),
+        (-90.0, -20.0),
+        (-30.0, 90.0),
+        (-40.0, 45.0),
+        (-30.0, 30.0),
+        (10.0, 40.0),
+    ];
+    for ((j, (vmax, amax, jmax)), (lo, hi)) in joints.iter().zip(limits).zip(ranges) {
+        let tol = 1e-6;
+        assert!(num(j, "peak_velocity") <= vmax * (1.0 + tol), "{j}");
+        assert!(num(j, "peak_acceleration") <= amax * (1.0 + tol), "{j}");
+        assert!(num(j, "peak_jerk") <= jmax * (1.0 + tol), "{j}");
+        // Passing through keyframes without stopping must not overshoot them.
+        assert!((num(j, "min_position") - lo).abs() < 1e-6, "{j}");
+        assert!((num(j, "max_position") - hi).abs() < 1e-6, "{j}");
+    }
+}
+
+#[test]
+fn timed_keyframes_end_exactly_on_time() {
+    let v = plan_json(&["plan", "configs/motions/arm-pick-place.yaml", "--json"]);
+    // The last keyframe is `at: 10.0`.
+    assert!((num(&v, "duration_s") - 10.0).abs() < 1e-9, "{v}");
+    let gripper = &v["joints"][5];
+    // Monotone interpolation: the gripper never closes past its 5 deg keyframe.
+    assert!(
+        (num(gripper, "min_position") - 5.0).abs() < 1e-6,
+        "{gripper}"
+    );
+}
+
+#[test]
+fn every_shipped_motion_plans() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/motions");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).expect("configs/motions") {
+        let path = entry.expect("entry").path();
+        let out = servobus(&["plan", path.to_str().expect("utf-8"), "--json"]);
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        n += 1;
+    }
+    assert!(n >= 5);
+}
+
+#[test]
+fn a_segment_beyond_a_limit_names_keyframe_joint_peak_and_limit() {
+    temp("too_fast", "robot.yaml", ONE_JOINT);
+    let m = temp(
+        "too_fast",
+        "m.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+    );
+    let out = servobus(&["plan", m.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let want = format!("{}:4:5: keyframes[1]: joint `a`: ", m.display());
+    assert!(err.contains(&want), "{err}");
+    assert!(
+        err.contains("deg/s") && err.contains("above the limit"),
+        "{err}"
+    );
+    assert!(err.contains("on_limit: stretch"), "{err}");
+
+    // With `on_limit: stretch` the same motion plans, just slower.
+    let m2 = temp(
+        "too_fast",
+        "m2.yaml",
+        "robot: robot.yaml\non_limit: stretch\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+    );
+    let v = plan_json(&["plan", m2.to_str().expect("utf-8"), "--json"]);
+    assert!(num(&v, "duration_s") > 0.5);
+    assert!(num(&v["joints"][0], "peak_velocity") <= 90.0 * (1.0 + 1e-6));
+}
+
+#[test]
+fn format_errors_have_file_line_and_column() {
+    temp("format", "robot.yaml", ONE_JOINT);
+    let m = temp(
+        "format",
+        "m.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 200}\n",
+    );
+    let out = servobus(&["plan", m.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let want = format!(
+        "{}:4:15: keyframes[1].pose.a: keyframe 1: 200 deg is outside the limits of joint `a` [-100, 100] deg",
+        m.display()
+    );
+    assert!(err.contains(&want), "{err}");
+}
+
+#[test]
+fn robot_override_and_text_output() {
+    let r = temp("override", "robot.yaml", ONE_JOINT);
+    let m = temp(
+        "override",
+        "m.yaml",
+        "robot: nowhere.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 90}\n",
+    );
+    let out = servobus(&[
+        "plan",
+        m.to_str().expect("utf-8"),
+        "--robot",
+        r.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("1.500 s at 100 Hz"), "{text}");
+    assert!(text.contains("segments"), "{text}");
+}
+
+#[test]
+fn plot_draws_titles_axes_and_a_legend() {
+    let svg = Path::new(env!("CARGO_TARGET_TMPDIR")).join("plan_cli/arm-wave.svg");
+    let _ = std::fs::remove_file(&svg);
+    let out = servobus(&[
+        "plan",
+        "configs/motions/arm-wave.yaml",
+        "--plot",
+        svg.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).expect("the SVG was written");
+    assert!(text.starts_with("<svg"), "not an SVG");
+    for needle in [
+        "arm-wave.yaml",
+        "Position of every joint",
+        "Velocity of every joint",
+        "time (s)",
+        "position (deg)",
+        "velocity (deg/s)",
+        "shoulder_pan",
+        "gripper",
+    ] {
+        assert!(text.contains(needle), "the plot lacks `{needle}`");
+    }
+}

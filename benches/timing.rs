@@ -35,6 +35,17 @@ fn pack(c: &mut Criterion) {
             });
         }
     }
+    // Reference: the protocol encoder alone writing one frame of 18 x 7, the
+    // floor under the packer's own cost.
+    group.bench_function("encoder_only/L7/18", |b| {
+        b.iter(|| {
+            let items = ids[..18]
+                .iter()
+                .copied()
+                .zip(data[..18 * 7].chunks_exact(7));
+            servobus_protocol::encode::sync_write(black_box(&mut buf), 41, 7, items)
+        })
+    });
     group.finish();
 }
 

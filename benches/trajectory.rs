@@ -1,6 +1,79 @@
-//! Benches of servobus-trajectory.
+//! Benches of servobus-trajectory: sampling 18 joints (target <= 100 ns),
+//! planning 18 joints x 100 untimed keyframes (<= 1 ms), retargeting 18
+//! joints from a moving state (<= 30 us).
 
-use criterion::Criterion;
+use criterion::{black_box, Criterion};
+use servobus_trajectory::{plan, retarget, stop, JointLimits, JointState, Keyframe, PlanOptions};
+
+const JOINTS: usize = 18;
+
+/// Hexapod-like limits (rad): 18 joints, jerk limited.
+fn limits() -> Vec<JointLimits> {
+    (0..JOINTS)
+        .map(|j| {
+            JointLimits::new(
+                4.0 + (j % 3) as f64,
+                20.0 + (j % 4) as f64 * 5.0,
+                Some(300.0),
+            )
+            .with_positions(-2.0, 2.0)
+        })
+        .collect()
+}
+
+/// A deterministic pseudo-random choreography: smooth sweeps with turns.
+fn keyframes(n: usize) -> Vec<Keyframe> {
+    (0..n)
+        .map(|k| {
+            Keyframe::new(
+                (0..JOINTS)
+                    .map(|j| 1.5 * ((k as f64) * (0.45 + 0.05 * j as f64) + j as f64).sin())
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect()
+}
 
 /// Registers the benches of this module.
-pub fn benches(_c: &mut Criterion) {}
+pub fn benches(c: &mut Criterion) {
+    let limits = limits();
+    let kfs = keyframes(100);
+    let options = PlanOptions::default();
+
+    c.bench_function("trajectory/plan_18x100", |b| {
+        b.iter(|| plan(black_box(&limits), black_box(&kfs), &options).map(|t| t.duration()))
+    });
+
+    let traj = match plan(&limits, &kfs, &options) {
+        Ok(t) => t,
+        Err(e) => panic!("bench choreography does not plan: {e}"),
+    };
+    let mut cursor = traj.cursor();
+    let mut out = [JointState::default(); JOINTS];
+    // A 1 kHz control loop: one sample per call, time moving forward and
+    // wrapping at the end.
+    let mut t = 0.0;
+    c.bench_function("trajectory/sample_18", |b| {
+        b.iter(|| {
+            traj.sample_with(&mut cursor, black_box(t), &mut out);
+            t += 0.001;
+            if t > traj.duration() {
+                t = 0.0;
+            }
+            out[0].position
+        })
+    });
+
+    // Retarget from a moving state: the middle of the choreography.
+    let mut state = [JointState::default(); JOINTS];
+    traj.sample(traj.duration() * 0.37, &mut state);
+    let target = &kfs[10].positions;
+    c.bench_function("trajectory/retarget_18", |b| {
+        b.iter(|| {
+            retarget(black_box(&limits), black_box(&state), black_box(target)).map(|t| t.duration())
+        })
+    });
+    c.bench_function("trajectory/stop_18", |b| {
+        b.iter(|| stop(black_box(&limits), black_box(&state)).map(|t| t.duration()))
+    });
+}

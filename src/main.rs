@@ -4,6 +4,8 @@
 //! the arguments and dispatches.
 
 mod cmd;
+mod record;
+mod simrobot;
 
 use clap::Parser;
 

@@ -1,14 +1,39 @@
-//! `servobus bench`.
+//! `servobus bench`: the achieved bus update rate of a robot's buses.
+//!
+//! Each bus runs free (no pacing) for a fixed time, cycle after cycle: a
+//! SYNC WRITE of every servo's goal position, then a SYNC READ of every
+//! present position (one READ per servo on SCS buses). The goals are the
+//! positions read before the run, so nothing moves. The figures are compared
+//! with what servobus-timing predicts for the same cycle: the wire-limited
+//! rate (bytes on the wire only) and the planned rate (with the adapter
+//! latency, return delays and turnarounds of the robot file).
+//!
+//! Without `--port` every bus is served by the simulator on its own
+//! pseudo-terminal, paced at the wire rate, and reached through the same
+//! serial-port code as real servos.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context};
+use serde::Serialize;
+use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
+use servobus_protocol::registers::addr;
+use servobus_runtime::config::{load_robot_any_rate, BusConfig, Robot};
+use servobus_runtime::stats::Histogram;
+use servobus_sim::PtyServer;
 
 /// Arguments of `servobus bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The robot file (default: configs/robots/so101.yaml).
     #[arg(long)]
-    pub robot: Option<std::path::PathBuf>,
-    /// Serial port of real servos (default: the simulator on a pty).
+    pub robot: Option<PathBuf>,
+    /// Serial port of real servos, for the robot's first bus (default: the
+    /// port in the robot file; without one, the simulator on a pty).
     #[arg(long)]
     pub port: Option<String>,
     /// How long to measure, in seconds.
@@ -19,7 +44,346 @@ pub struct Args {
     pub json: bool,
 }
 
+/// Three figures of a distribution, us.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+struct Quantiles {
+    p50: f64,
+    p99: f64,
+    max: f64,
+}
+
+impl Quantiles {
+    fn of(h: &Histogram) -> Self {
+        let us = |d: Duration| d.as_secs_f64() * 1e6;
+        Quantiles {
+            p50: us(h.quantile(0.5)),
+            p99: us(h.quantile(0.99)),
+            max: us(h.max()),
+        }
+    }
+}
+
+/// One servo's round trip, us.
+#[derive(Debug, Clone, Serialize)]
+struct ServoRtt {
+    id: u8,
+    joint: String,
+    replies: u64,
+    rtt_mean_us: f64,
+    rtt_max_us: f64,
+    timeouts: u64,
+}
+
+/// One bus's figures.
+#[derive(Debug, Clone, Serialize)]
+struct BusBench {
+    name: String,
+    servos: usize,
+    backend: String,
+    cycles: u64,
+    achieved_rate_hz: f64,
+    planned_rate_hz: f64,
+    wire_limited_rate_hz: f64,
+    period_us: Quantiles,
+    period_error_us: Quantiles,
+    timeouts: u64,
+    retries: u64,
+    missed_replies: u64,
+    checksum_errors: u64,
+    servo_rtt: Vec<ServoRtt>,
+}
+
+/// The whole report: the slowest bus's figures at the top level (the ones
+/// the architecture page lists), every bus in `buses`.
+#[derive(Debug, Clone, Serialize)]
+struct BenchReport {
+    robot: String,
+    seconds: f64,
+    cycles: u64,
+    achieved_rate_hz: f64,
+    planned_rate_hz: f64,
+    wire_limited_rate_hz: f64,
+    /// Achieved over wire-limited rate.
+    efficiency: f64,
+    period_error_us: Quantiles,
+    overruns: u64,
+    timeouts: u64,
+    retries: u64,
+    missed_replies: u64,
+    buses: Vec<BusBench>,
+}
+
 /// Runs `servobus bench`.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus bench is not available yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 3600.0) {
+        bail!(
+            "--seconds {}: give a duration between 0 and 3600 s",
+            args.seconds
+        );
+    }
+    let path = args
+        .robot
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("configs/robots/so101.yaml"));
+    let robot = load_robot_any_rate(&path)?;
+    let duration = Duration::from_secs_f64(args.seconds);
+    let clock = SystemClock::new();
+
+    let mut runs = Vec::new();
+    for (index, bus) in robot.buses.iter().enumerate() {
+        let port = if index == 0 {
+            args.port.clone().or_else(|| bus.port.clone())
+        } else {
+            bus.port.clone()
+        };
+        let robot = robot.clone();
+        let bus = bus.clone();
+        let clock = clock;
+        runs.push(std::thread::spawn(move || {
+            bench_bus(&robot, &bus, port, clock, duration)
+        }));
+    }
+    let mut buses = Vec::new();
+    for run in runs {
+        match run.join() {
+            Ok(result) => buses.push(result?),
+            Err(_) => bail!("a bus thread panicked"),
+        }
+    }
+    let report = summarise(&robot, args.seconds, buses);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn bench_bus(
+    robot: &Robot,
+    bus: &BusConfig,
+    port: Option<String>,
+    clock: SystemClock,
+    duration: Duration,
+) -> anyhow::Result<BusBench> {
+    let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
+    let Some(first) = bus.joints.first() else {
+        bail!("bus `{}` has no joints", bus.name);
+    };
+    let series = first.model.series;
+    let plan = bus
+        .plan(1.0)
+        .with_context(|| format!("bus `{}`: cannot plan its cycle", bus.name))?;
+
+    // The simulator (when no port is given) serves until `stop`.
+    let stop = Arc::new(AtomicBool::new(false));
+    let (path, server, backend) = match port {
+        Some(port) => (port.clone(), None, format!("serial port {port}")),
+        None => {
+            let servos = crate::simrobot::bus_servos(robot, bus)?;
+            let mut server = PtyServer::open(bus.baud, servos)
+                .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
+            let path = server.path().to_string_lossy().into_owned();
+            let flag = Arc::clone(&stop);
+            let handle = std::thread::spawn(move || server.serve(&flag));
+            (path, Some(handle), "simulator on a pty".to_string())
+        }
+    };
+    let result = measure(bus, &ids, series, &path, clock, duration, &plan);
+    stop.store(true, Ordering::SeqCst);
+    if let Some(handle) = server {
+        match handle.join() {
+            Ok(served) => served.with_context(|| format!("bus `{}`: simulator", bus.name))?,
+            Err(_) => bail!("bus `{}`: the simulator thread panicked", bus.name),
+        }
+    }
+    let mut bench = result?;
+    bench.backend = backend;
+    Ok(bench)
+}
+
+fn measure(
+    bus: &BusConfig,
+    ids: &[u8],
+    series: servobus_protocol::registers::Series,
+    path: &str,
+    clock: SystemClock,
+    duration: Duration,
+    plan: &servobus_timing::Plan,
+) -> anyhow::Result<BusBench> {
+    let transport = SerialTransport::open(path, bus.baud, clock)
+        .with_context(|| format!("bus `{}`: cannot open {path}", bus.name))?;
+    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
+        eprintln!("warning: {warning}");
+    }
+    // Timeouts allow a few milliseconds of scheduling noise on top of the
+    // robot file's latency: a loaded machine's pty, or a USB adapter.
+    let latency = bus.latency.max(Duration::from_millis(3));
+    let settings = BusSettings::new(series, bus.baud)
+        .with_latency(latency)
+        .with_return_delay(bus.return_delay);
+    let mut servo_bus = Bus::new(transport, clock, settings);
+
+    // Hold every servo where it is: the goals are the present positions.
+    let mut goals = vec![0u8; ids.len() * 2];
+    let order = series.byte_order();
+    let pos = servobus_protocol::registers::STS
+        .at(addr::PRESENT_POSITION)
+        .context("register map has no present position")?;
+    let read = servo_bus
+        .sync_read(addr::PRESENT_POSITION, 2, ids)
+        .with_context(|| format!("bus `{}`: first read", bus.name))?;
+    for (i, reply) in read.iter().enumerate() {
+        match reply {
+            Ok(r) => goals[i * 2..i * 2 + 2].copy_from_slice(r.data),
+            Err(missing) => bail!(
+                "bus `{}`: servo {} does not answer ({}); check the port and `servobus scan`",
+                bus.name,
+                missing.id,
+                missing.reason
+            ),
+        }
+    }
+    // Present and goal position share the layout, so the bytes read are
+    // valid goals as they are; decoding them checks that they are.
+    for chunk in goals.chunks_exact(2) {
+        pos.decode(chunk, order)
+            .context("a servo reported an impossible position")?;
+    }
+    servo_bus.reset_counters();
+
+    let mut periods = Histogram::new(Duration::from_millis(100));
+    let mut errors = Histogram::new(Duration::from_millis(100));
+    let mut period_list = Vec::with_capacity(1 << 16);
+    let start = clock.now();
+    let end = start + duration;
+    let mut last = start;
+    let mut cycles = 0u64;
+    let mut missed = 0u64;
+    while clock.now() < end {
+        servo_bus
+            .sync_write(addr::GOAL_POSITION, ids, &goals)
+            .with_context(|| format!("bus `{}`: SYNC WRITE", bus.name))?;
+        let read = servo_bus
+            .sync_read(addr::PRESENT_POSITION, 2, ids)
+            .with_context(|| format!("bus `{}`: SYNC READ", bus.name))?;
+        missed += read.missing() as u64;
+        let now = clock.now();
+        let period = now - last;
+        last = now;
+        cycles += 1;
+        periods.record(period);
+        period_list.push(period);
+    }
+    let elapsed = last - start;
+    let achieved = if elapsed.is_zero() {
+        0.0
+    } else {
+        cycles as f64 / elapsed.as_secs_f64()
+    };
+    // Period error: each cycle's period against the mean period.
+    let mean = if cycles == 0 {
+        Duration::ZERO
+    } else {
+        elapsed / u32::try_from(cycles).unwrap_or(u32::MAX)
+    };
+    for p in &period_list {
+        errors.record(if *p > mean { *p - mean } else { mean - *p });
+    }
+
+    let counters = *servo_bus.counters();
+    let servo_rtt = bus
+        .joints
+        .iter()
+        .map(|j| {
+            let c = servo_bus.servo_counters(j.id);
+            let us = |d: Option<Duration>| d.map_or(0.0, |d| d.as_secs_f64() * 1e6);
+            ServoRtt {
+                id: j.id,
+                joint: j.name.clone(),
+                replies: c.rtt.count,
+                rtt_mean_us: us(c.rtt.mean()),
+                rtt_max_us: us(c.rtt.max()),
+                timeouts: c.timeouts,
+            }
+        })
+        .collect();
+    Ok(BusBench {
+        name: bus.name.clone(),
+        servos: ids.len(),
+        backend: String::new(),
+        cycles,
+        achieved_rate_hz: achieved,
+        planned_rate_hz: plan.max_rate_hz(),
+        wire_limited_rate_hz: plan.wire_limited_rate_hz(),
+        period_us: Quantiles::of(&periods),
+        period_error_us: Quantiles::of(&errors),
+        timeouts: counters.timeouts,
+        retries: counters.retries,
+        missed_replies: missed,
+        checksum_errors: counters.checksum_errors,
+        servo_rtt,
+    })
+}
+
+fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
+    let slowest = buses
+        .iter()
+        .min_by(|a, b| a.achieved_rate_hz.total_cmp(&b.achieved_rate_hz));
+    let pick = |f: fn(&BusBench) -> f64| slowest.map_or(0.0, f);
+    let achieved = pick(|b| b.achieved_rate_hz);
+    let wire = pick(|b| b.wire_limited_rate_hz);
+    BenchReport {
+        robot: robot.name.clone(),
+        seconds,
+        cycles: slowest.map_or(0, |b| b.cycles),
+        achieved_rate_hz: achieved,
+        planned_rate_hz: pick(|b| b.planned_rate_hz),
+        wire_limited_rate_hz: wire,
+        efficiency: if wire > 0.0 { achieved / wire } else { 0.0 },
+        period_error_us: slowest.map_or_else(Quantiles::default, |b| b.period_error_us),
+        // A free-running loop has no deadlines to miss.
+        overruns: 0,
+        timeouts: buses.iter().map(|b| b.timeouts).sum(),
+        retries: buses.iter().map(|b| b.retries).sum(),
+        missed_replies: buses.iter().map(|b| b.missed_replies).sum(),
+        buses,
+    }
+}
+
+fn print_text(r: &BenchReport) {
+    println!("bench of {} for {:.1} s", r.robot, r.seconds);
+    for b in &r.buses {
+        println!(
+            "bus {} ({} servos, {}): {} cycles, {:.1} Hz achieved; wire-limited {:.1} Hz \
+             ({:.1} %), planned with latencies {:.1} Hz",
+            b.name,
+            b.servos,
+            b.backend,
+            b.cycles,
+            b.achieved_rate_hz,
+            b.wire_limited_rate_hz,
+            100.0 * b.achieved_rate_hz / b.wire_limited_rate_hz.max(f64::MIN_POSITIVE),
+            b.planned_rate_hz,
+        );
+        println!(
+            "  period us: p50 {:.0}  p99 {:.0}  max {:.0};  error from the mean: p50 {:.0}  p99 {:.0}  max {:.0}",
+            b.period_us.p50,
+            b.period_us.p99,
+            b.period_us.max,
+            b.period_error_us.p50,
+            b.period_error_us.p99,
+            b.period_error_us.max
+        );
+        println!(
+            "  timeouts {}  retries {}  missed replies {}  checksum errors {}",
+            b.timeouts, b.retries, b.missed_replies, b.checksum_errors
+        );
+        for s in &b.servo_rtt {
+            println!(
+                "  servo {:>3} {:<16} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
+                s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
+            );
+        }
+    }
 }

@@ -21,7 +21,7 @@ const DEFAULT_LATENCY_US: u64 = 1000;
 /// Latency assumed for a pseudo-terminal: the program behind it (the
 /// simulator) is scheduled by the OS, which costs milliseconds on a busy
 /// machine.
-const PTY_LATENCY_US: u64 = 5000;
+const PTY_LATENCY_US: u64 = 2000;
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
 const LATENCY_CEILING: Duration = Duration::from_millis(300);

@@ -1,36 +1,475 @@
-//! `servobus play`.
+//! `servobus play`: a choreography on the simulated robot or on real servos.
+//!
+//! Everything is checked before anything moves: both files, every keyframe
+//! against the joint limits, the path against the velocity, acceleration and
+//! jerk limits, and the rate against every bus's budget. Then the plan is
+//! printed in one short block, the run starts (on real servos, with a slow
+//! approach from wherever the joints are to the first keyframe), a progress
+//! line follows it, and a report closes it.
 
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context};
+use crossbeam_channel::RecvTimeoutError;
+use servobus_driver::{Bus, ManualClock, SerialTransport, SystemClock, Transport};
+use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
+use servobus_runtime::{
+    bus_settings, spawn, spawn_virtual, Command, Finish, Report, RunOptions, Runner, Telemetry,
+};
+use servobus_sim::{PtyServer, SimBus};
+use servobus_trajectory::Trajectory;
+
+use crate::record::{CsvLog, PlotData};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The motion file.
-    pub motion: std::path::PathBuf,
+    pub motion: PathBuf,
     /// Robot file (default: the one the motion file names).
     #[arg(long)]
-    pub robot: Option<std::path::PathBuf>,
-    /// Serial port of real servos (default: the built-in simulator).
+    pub robot: Option<PathBuf>,
+    /// Serial port of real servos, for the robot's first bus (default: the
+    /// robot file's ports; without any, the built-in simulator).
     #[arg(long)]
     pub port: Option<String>,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
     /// Run the simulator in virtual time, as fast as the CPU allows.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "port")]
     pub fast: bool,
-    /// Print the report as one JSON object.
+    /// Print the report as one JSON object (and no progress on stdout).
     #[arg(long)]
     pub json: bool,
     /// Write one CSV row per cycle and joint.
     #[arg(long)]
-    pub log: Option<std::path::PathBuf>,
-    /// Draw commanded vs measured positions (SVG or PNG).
+    pub log: Option<PathBuf>,
+    /// Draw commanded vs measured positions and the tracking error (SVG, or
+    /// PNG for a .png path).
     #[arg(long)]
-    pub plot: Option<std::path::PathBuf>,
+    pub plot: Option<PathBuf>,
+}
+
+/// Where the run happens.
+enum Backend {
+    /// Simulated buses in virtual time.
+    Fast,
+    /// The simulator on pseudo-terminals, in wall-clock time.
+    Simulated,
+    /// Real servos: one port per bus.
+    Hardware(Vec<String>),
 }
 
 /// Runs `servobus play`.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("servobus play is not available yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
+    let rate_hz = match args.rate {
+        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
+            bail!("--rate {rate}: give a positive rate in Hz")
+        }
+        Some(rate) => rate,
+        None => motion.rate_hz(&robot),
+    };
+    for bus in &robot.buses {
+        bus.plan(rate_hz)
+            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
+    }
+    let trajectory = plan_motion(&motion, &robot)?;
+    let backend = backend(&args, &robot)?;
+    if !args.json {
+        print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
+    }
+
+    let mut options = RunOptions::default();
+    options.rate_hz = Some(rate_hz);
+    options.units = Some(motion.units);
+    options.settle = Duration::from_millis(300);
+    // The simulated joints start at rest; real ones wherever they are. Both
+    // approach the first keyframe slowly (skipped when already there).
+    options.approach = Some(0.25);
+
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let units = motion.units;
+    let duration = trajectory.duration();
+    let mut servers = Vec::new();
+    let stop_servers = Arc::new(AtomicBool::new(false));
+    let runner = match &backend {
+        Backend::Fast => {
+            let mut buses = Vec::new();
+            for bus in &robot.buses {
+                let clock = ManualClock::new();
+                let sim = SimBus::new(clock.clone(), bus.baud)
+                    .with_servos(crate::simrobot::bus_servos(&robot, bus)?);
+                buses.push(Bus::new(sim, clock, bus_settings(bus)));
+            }
+            spawn_virtual(&robot, trajectory, buses, options)?
+        }
+        Backend::Simulated => {
+            let clock = SystemClock::new();
+            let mut buses = Vec::new();
+            for bus in &robot.buses {
+                let mut server =
+                    PtyServer::open(bus.baud, crate::simrobot::bus_servos(&robot, bus)?)
+                        .with_context(|| {
+                            format!("bus `{}`: cannot start the simulator", bus.name)
+                        })?;
+                let path = server.path().to_string_lossy().into_owned();
+                let flag = Arc::clone(&stop_servers);
+                servers.push(std::thread::spawn(move || server.serve(&flag)));
+                let transport: Box<dyn Transport + Send> = Box::new(
+                    SerialTransport::open(&path, bus.baud, clock)
+                        .with_context(|| format!("cannot open the simulator's pty {path}"))?,
+                );
+                // A pty on a busy machine wakes late now and then: allow
+                // for it in the reply deadlines.
+                let settings = bus_settings(bus).with_latency(bus.latency.max(PTY_LATENCY));
+                buses.push(Bus::new(transport, clock, settings));
+            }
+            spawn(&robot, trajectory, buses, options)?
+        }
+        Backend::Hardware(ports) => {
+            let clock = SystemClock::new();
+            let mut buses = Vec::new();
+            for (bus, port) in robot.buses.iter().zip(ports) {
+                let transport = SerialTransport::open(port, bus.baud, clock)
+                    .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
+                if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
+                    eprintln!("warning: {warning}");
+                }
+                let transport: Box<dyn Transport + Send> = Box::new(transport);
+                buses.push(Bus::new(transport, clock, bus_settings(bus)));
+            }
+            spawn(&robot, trajectory, buses, options)?
+        }
+    };
+
+    let interrupts = install_ctrl_c(&runner)?;
+    let outcome = follow(&runner, &args, &names, units, duration, &interrupts);
+    let report = runner.join();
+    stop_servers.store(true, Ordering::SeqCst);
+    join_servers(servers);
+    let (log, plot) = outcome?;
+    let report = report?;
+
+    if let Some(log) = log {
+        log.finish()?;
+    }
+    if let (Some(plot), Some(path)) = (plot, &args.plot) {
+        let title = format!(
+            "{} on {}: commanded vs measured",
+            file_name(&motion.path),
+            robot.name
+        );
+        plot.draw(path, &title, &units.to_string())?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_report(&report);
+        if let Some(path) = &args.log {
+            println!("log: {}", path.display());
+        }
+        if let Some(path) = &args.plot {
+            println!("plot: {}", path.display());
+        }
+    }
+    Ok(match report.finish {
+        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
+        _ => ExitCode::FAILURE,
+    })
+}
+
+/// Reply-deadline allowance for the simulator's pseudo-terminals.
+const PTY_LATENCY: Duration = Duration::from_millis(3);
+
+fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
+    if args.fast {
+        return Ok(Backend::Fast);
+    }
+    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
+    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
+        *first = Some(port.clone());
+    }
+    if ports.iter().all(Option::is_none) {
+        return Ok(Backend::Simulated);
+    }
+    let mut out = Vec::new();
+    for (bus, port) in robot.buses.iter().zip(ports) {
+        match port {
+            Some(p) => out.push(p),
+            None => bail!(
+                "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
+                 (--port sets only the first bus's)",
+                bus.name,
+                robot.path.display()
+            ),
+        }
+    }
+    Ok(Backend::Hardware(out))
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    )
+}
+
+fn print_plan(
+    motion: &Motion,
+    robot: &Robot,
+    trajectory: &Trajectory,
+    rate_hz: f64,
+    backend: &Backend,
+) -> anyhow::Result<()> {
+    let on = match backend {
+        Backend::Fast => "the simulator, virtual time".to_string(),
+        Backend::Simulated => "the simulator, real time".to_string(),
+        Backend::Hardware(ports) => format!("servos on {}", ports.join(", ")),
+    };
+    println!(
+        "{} on {} ({} joints, {} bus{}) via {on}",
+        file_name(&motion.path),
+        robot.name,
+        robot.joint_count(),
+        robot.buses.len(),
+        if robot.buses.len() == 1 { "" } else { "es" },
+    );
+    println!(
+        "  path {:.2} s, {} keyframes x {}, at {rate_hz} Hz",
+        trajectory.duration(),
+        motion.keyframes.len(),
+        motion.repeat
+    );
+    for bus in &robot.buses {
+        let plan = bus.plan(rate_hz)?;
+        let every = if plan.read_every() > 1 {
+            format!(", each servo read every {} cycles", plan.read_every())
+        } else {
+            String::new()
+        };
+        println!(
+            "  bus {}: {} servos at {} baud, {} B and {:.0} us per cycle, {:.1} % of the period \
+             (max {:.0} Hz){every}",
+            bus.name,
+            plan.servos(),
+            bus.baud,
+            plan.bytes_per_cycle(),
+            plan.cycle_time_us(),
+            100.0 * plan.utilisation(),
+            plan.max_rate_hz(),
+        );
+    }
+    Ok(())
+}
+
+/// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
+fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> {
+    let count = Arc::new(AtomicU32::new(0));
+    let seen = Arc::clone(&count);
+    let commands = runner.commands();
+    let installed = ctrlc::set_handler(move || {
+        let n = seen.fetch_add(1, Ordering::SeqCst);
+        let command = if n == 0 {
+            eprintln!("\nstopping (jerk-limited), then holding; Ctrl-C again turns the torque off");
+            Command::Stop
+        } else {
+            eprintln!("\ntorque off");
+            Command::TorqueOff
+        };
+        // The run may have ended already; nothing else to do then.
+        let _ = commands.try_send(command);
+    });
+    if let Err(e) = installed {
+        // Tests and embedders may have a handler already; playing still works.
+        eprintln!("warning: Ctrl-C handling unavailable ({e})");
+    }
+    Ok(count)
+}
+
+/// Reads the telemetry until the run ends: progress, log, plot series.
+fn follow(
+    runner: &Runner,
+    args: &Args,
+    names: &[String],
+    units: Units,
+    duration: f64,
+    _interrupts: &AtomicU32,
+) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
+    let mut log = match &args.log {
+        Some(path) => Some(CsvLog::create(path, names.to_vec(), &units.to_string())?),
+        None => None,
+    };
+    let mut plot = args.plot.as_ref().map(|_| PlotData::new(names.to_vec()));
+    let mut progress = Progress::new(args.json, duration, &units.to_string());
+    let telemetry = runner.telemetry();
+    loop {
+        match telemetry.recv_timeout(Duration::from_millis(100)) {
+            Ok(Telemetry::Cycle(sample)) => {
+                if let Some(log) = &mut log {
+                    log.record(&sample)?;
+                }
+                if let Some(plot) = &mut plot {
+                    plot.record(&sample);
+                }
+                progress.cycle(&sample);
+            }
+            Ok(Telemetry::Fault(fault)) => progress.message(&format!("fault: {fault}")),
+            Ok(Telemetry::Finished(_)) => {}
+            Ok(_) => {}
+            Err(RecvTimeoutError::Timeout) => {
+                if runner.is_finished() && telemetry.is_empty() {
+                    break;
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => break,
+        }
+    }
+    progress.finish();
+    Ok((log, plot))
+}
+
+/// The live progress: a bar on a terminal, a line a second otherwise.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    plain: bool,
+    units: String,
+    duration: f64,
+    worst: f64,
+    first: Option<(u64, f64)>,
+    last: (u64, f64),
+    last_line: Instant,
+}
+
+impl Progress {
+    fn new(json: bool, duration: f64, units: &str) -> Self {
+        let terminal = std::io::stdout().is_terminal();
+        let bar = (!json && terminal).then(|| {
+            let bar = indicatif::ProgressBar::new((duration * 1000.0).max(1.0) as u64);
+            let style = indicatif::ProgressStyle::with_template("{spinner} [{bar:40}] {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> ");
+            bar.set_style(style);
+            bar
+        });
+        Progress {
+            bar,
+            plain: !json && !terminal,
+            units: units.to_string(),
+            duration,
+            worst: 0.0,
+            first: None,
+            last: (0, 0.0),
+            last_line: Instant::now(),
+        }
+    }
+
+    fn cycle(&mut self, sample: &servobus_runtime::CycleSample) {
+        for j in sample.joints() {
+            if j.measured.is_some() && !j.stale {
+                self.worst = self.worst.max(j.error.abs());
+            }
+        }
+        if sample.bus != 0 {
+            return;
+        }
+        let first = *self.first.get_or_insert((sample.cycle, sample.time_s));
+        self.last = (sample.cycle, sample.time_s);
+        let span = self.last.1 - first.1;
+        let rate = if span > 0.0 {
+            (self.last.0 - first.0) as f64 / span
+        } else {
+            0.0
+        };
+        let msg = format!(
+            "{:.1} / {:.1} s  {:.1} Hz  worst error {:.2} {}",
+            sample.time_s, self.duration, rate, self.worst, self.units
+        );
+        if let Some(bar) = &self.bar {
+            bar.set_length((self.duration.max(sample.time_s) * 1000.0) as u64);
+            bar.set_position((sample.time_s * 1000.0) as u64);
+            bar.set_message(msg);
+        } else if self.plain && self.last_line.elapsed() >= Duration::from_secs(1) {
+            self.last_line = Instant::now();
+            println!("{msg}");
+        }
+    }
+
+    fn message(&self, text: &str) {
+        match &self.bar {
+            Some(bar) => bar.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn join_servers(servers: Vec<JoinHandle<Result<(), servobus_sim::PtyError>>>) {
+    for server in servers {
+        match server.join() {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => eprintln!("warning: simulator: {e}"),
+            Err(_) => eprintln!("warning: a simulator thread panicked"),
+        }
+    }
+}
+
+fn print_report(r: &Report) {
+    println!(
+        "{}: {} cycles in {:.2} s, {:.1} Hz achieved of {:.1} Hz requested",
+        match r.finish {
+            Finish::Completed => "completed",
+            Finish::Stopped => "stopped",
+            Finish::TorqueOff => "torque off",
+            Finish::Fault => "FAULT",
+            _ => "ended",
+        },
+        r.cycles,
+        r.duration_s,
+        r.achieved_rate_hz,
+        r.planned_rate_hz
+    );
+    println!(
+        "  period error us: p50 {:.0}  p99 {:.0}  max {:.0};  overruns {}  drift {:.0} us",
+        r.period_error_us.p50, r.period_error_us.p99, r.period_error_us.max, r.overruns, r.drift_us
+    );
+    println!(
+        "  bus utilisation {:.1} %;  timeouts {}  retries {}  missed replies {}  clamps {}  \
+         telemetry dropped {}",
+        100.0 * r.utilisation,
+        r.timeouts,
+        r.retries,
+        r.missed_replies,
+        r.clamps,
+        r.telemetry_dropped
+    );
+    println!("  lag compensation lead {:.1} ms", r.lead_ms);
+    println!(
+        "  {:<16} {:>10} {:>10}   tracking error ({})",
+        "joint", "rms", "max", r.units
+    );
+    for j in &r.joints {
+        println!(
+            "  {:<16} {:>10.3} {:>10.3}",
+            j.name, j.rms_error, j.max_error
+        );
+    }
+    if let Some(fault) = &r.fault {
+        println!("  fault: {fault}");
+    }
+    for w in &r.warnings {
+        println!("  warning: {w}");
+    }
 }

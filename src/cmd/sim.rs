@@ -6,8 +6,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::{bail, Context};
-use servobus_runtime::config::{load_robot, JointMap, Robot};
-use servobus_sim::{Faults, PtyServer, SimModel, SimServo};
+use servobus_runtime::config::{load_robot, Robot};
+use servobus_sim::{Faults, PtyServer, SimServo};
 
 const FAULTS_HELP: &str = "\
 Fault injection: comma-separated items, applied to every reply independently.
@@ -108,13 +108,6 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
         bail!("{}: the robot has no bus", robot.path.display());
     };
     let baud = first.baud;
-    let Some(baud_index) = (0u8..8).find(|&i| servobus_sim::baud_of_index(i) == Some(baud)) else {
-        bail!(
-            "{}: bus `{}` runs at {baud} baud, which no Feetech servo supports",
-            robot.path.display(),
-            first.name
-        );
-    };
     let mut seen = std::collections::HashMap::new();
     let mut servos = Vec::new();
     for bus in buses {
@@ -131,25 +124,11 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
                     bus.name
                 );
             }
-            let model = SimModel::by_number(joint.model.number)
-                .or_else(|| SimModel::by_name(joint.model.name))
-                .with_context(|| {
-                    format!(
-                        "{}: joint `{}`: the simulator has no model {}",
-                        robot.path.display(),
-                        joint.name,
-                        joint.model.name
-                    )
-                })?;
-            let map = JointMap::new(joint, robot.units);
-            let rest = map.to_ticks(robot.units.to_rad(joint.rest()));
-            servos.push(
-                SimServo::new(model, joint.id)
-                    .with_return_delay(bus.return_delay)
-                    .with_byte(servobus_sim::addr::BAUD_RATE, baud_index)
-                    .with_position(rest),
-            );
         }
+        // Every servo listens at the first bus's rate: that is the pty's.
+        let mut served = bus.clone();
+        served.baud = baud;
+        servos.extend(crate::simrobot::bus_servos(robot, &served)?);
     }
     Ok((baud, servos))
 }

@@ -45,22 +45,20 @@ impl<C: Clock> SerialTransport<C> {
     /// [`TransportError::Disconnected`] when the port does not exist,
     /// [`TransportError::Io`] for any other failure to open or configure it.
     pub fn open(path: &str, baud: u32, clock: C) -> Result<Self, TransportError> {
-        let port = serialport::new(path, baud)
+        let builder = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
             .parity(Parity::None)
             .stop_bits(StopBits::One)
             .flow_control(FlowControl::None)
-            .timeout(Duration::ZERO)
-            .open()
-            .map_err(|e| match e.kind() {
-                serialport::ErrorKind::NoDevice => {
-                    TransportError::Disconnected(format!("{path}: {e}"))
-                }
-                serialport::ErrorKind::Io(kind) => {
-                    TransportError::Io(io::Error::new(kind, format!("{path}: {e}")))
-                }
-                _ => TransportError::Io(io::Error::other(format!("{path}: {e}"))),
-            })?;
+            .timeout(Duration::ZERO);
+        let opened = open_low_latency(builder);
+        let port = opened.map_err(|e| match e.kind() {
+            serialport::ErrorKind::NoDevice => TransportError::Disconnected(format!("{path}: {e}")),
+            serialport::ErrorKind::Io(kind) => {
+                TransportError::Io(io::Error::new(kind, format!("{path}: {e}")))
+            }
+            _ => TransportError::Io(io::Error::other(format!("{path}: {e}"))),
+        })?;
         let ftdi = ftdi_latency_timer(Path::new(path));
         Ok(SerialTransport {
             port,
@@ -95,6 +93,76 @@ impl<C: Clock> SerialTransport<C> {
     }
 }
 
+/// Opens the port and, on Linux, asks the driver for low-latency mode
+/// (`ASYNC_LOW_LATENCY`, what `setserial PORT low_latency` does): USB serial
+/// drivers that honour it deliver received bytes without waiting for their
+/// buffer timer. Ports that do not support it (ptys, CDC-ACM) are used as
+/// they are.
+#[cfg(target_os = "linux")]
+fn open_low_latency(
+    builder: serialport::SerialPortBuilder,
+) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    use std::os::unix::io::AsRawFd;
+
+    let port = builder.open_native()?;
+    set_low_latency(port.as_raw_fd());
+    Ok(Box::new(port))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_low_latency(
+    builder: serialport::SerialPortBuilder,
+) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    builder.open()
+}
+
+/// The kernel's `struct serial_struct` (include/uapi/linux/serial.h).
+#[cfg(target_os = "linux")]
+#[repr(C)]
+struct SerialStruct {
+    kind: libc::c_int,
+    line: libc::c_int,
+    port: libc::c_uint,
+    irq: libc::c_int,
+    flags: libc::c_int,
+    xmit_fifo_size: libc::c_int,
+    custom_divisor: libc::c_int,
+    baud_base: libc::c_int,
+    close_delay: libc::c_ushort,
+    io_type: libc::c_char,
+    reserved_char: libc::c_char,
+    hub6: libc::c_int,
+    closing_wait: libc::c_ushort,
+    closing_wait2: libc::c_ushort,
+    iomem_base: *mut libc::c_uchar,
+    iomem_reg_shift: libc::c_ushort,
+    port_high: libc::c_uint,
+    iomap_base: libc::c_ulong,
+}
+
+/// Sets `ASYNC_LOW_LATENCY` on `fd`, best effort.
+#[cfg(target_os = "linux")]
+fn set_low_latency(fd: std::os::unix::io::RawFd) {
+    const ASYNC_LOW_LATENCY: libc::c_int = 1 << 13;
+    let mut ss = std::mem::MaybeUninit::<SerialStruct>::zeroed();
+    // SAFETY: TIOCGSERIAL writes one `serial_struct` (whose layout
+    // `SerialStruct` mirrors) into the buffer we own; `fd` is an open
+    // descriptor owned by the port for the duration of the call.
+    let got = unsafe { libc::ioctl(fd, libc::TIOCGSERIAL, ss.as_mut_ptr()) };
+    if got != 0 {
+        return;
+    }
+    // SAFETY: zero-initialised, then filled by a successful TIOCGSERIAL.
+    let mut ss = unsafe { ss.assume_init() };
+    if ss.flags & ASYNC_LOW_LATENCY != 0 {
+        return;
+    }
+    ss.flags |= ASYNC_LOW_LATENCY;
+    // SAFETY: TIOCSSERIAL reads one `serial_struct` from memory we own.
+    // Failure (no permission, unsupported) leaves the port as it was.
+    let _ = unsafe { libc::ioctl(fd, libc::TIOCSSERIAL, &ss as *const SerialStruct) };
+}
+
 fn serial_error(e: serialport::Error) -> TransportError {
     match e.kind() {
         serialport::ErrorKind::NoDevice => TransportError::Disconnected(e.to_string()),
@@ -122,8 +190,9 @@ fn io_error(e: io::Error) -> TransportError {
 
 impl<C: Clock> Transport for SerialTransport<C> {
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        // Writes are bounded by the wire time of the bytes; give the OS a
-        // generous bound derived from nothing but "the port is alive".
+        // Not a reply deadline: a liveness bound for a port that stopped
+        // draining (a frame takes at most 27 ms on the wire even at 9600
+        // baud), so that a wedged adapter is an error rather than a hang.
         self.port
             .set_timeout(Duration::from_secs(1))
             .map_err(serial_error)?;

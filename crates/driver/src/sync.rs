@@ -114,17 +114,24 @@ impl SyncStore {
         self.address = address;
         self.len = len;
         for (i, &id) in ids.iter().enumerate() {
-            if id > servobus_protocol::MAX_ID {
-                self.ids.clear();
-                return Err(BusError::InvalidRequest("SYNC READ of an ID above 253"));
-            }
-            if self.index[usize::from(id)] != NO_SLOT {
-                for &id in ids {
+            let problem = if id > servobus_protocol::MAX_ID {
+                Some("SYNC READ of an ID above 253")
+            } else if self.index[usize::from(id)] != NO_SLOT {
+                Some("an ID appears twice in a SYNC READ")
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                // Leave the store empty and its index clean.
+                for &id in &self.ids {
                     self.index[usize::from(id)] = NO_SLOT;
                 }
-                return Err(BusError::InvalidRequest(
-                    "an ID appears twice in a SYNC READ",
-                ));
+                self.ids.clear();
+                self.slots.clear();
+                self.attempts.clear();
+                self.data.clear();
+                self.pending.clear();
+                return Err(BusError::InvalidRequest(problem));
             }
             // `i < 254` because the IDs are distinct and at most 253.
             self.index[usize::from(id)] = i as u8;

@@ -206,6 +206,12 @@ fn sync_read_keeps_answers_and_names_the_missing() {
     assert_eq!(v[2].map(|r| (r.id, r.data[0])).ok(), Some((3, 3)));
     assert_eq!(bus.servo_counters(2).timeouts, 1);
     assert!(bus.sync_read(56, 2, &[1, 1]).is_err());
+    assert!(bus.sync_read(56, 2, &[3, 254]).is_err());
+    // A refused request leaves the storage clean for the next one.
+    let again = bus
+        .sync_read(56, 2, &[3, 1])
+        .map(|r| (r.len(), r.answered()));
+    assert_eq!(again.ok(), Some((2, 2)));
 }
 
 #[test]

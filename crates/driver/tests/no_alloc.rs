@@ -52,7 +52,8 @@ struct FixedServos {
 
 impl Transport for FixedServos {
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        self.clock.advance(Duration::from_micros(10) * bytes.len() as u32);
+        self.clock
+            .advance(Duration::from_micros(10) * bytes.len() as u32);
         let Ok((p, _)) = parse_frame(bytes) else {
             return Ok(());
         };

@@ -10,3 +10,23 @@ pub mod config;
 pub mod pacer;
 pub mod rt;
 pub mod stats;
+
+// The scheduler: runs a robot + trajectory on its buses, tracks, reacts to
+// faults. See `run` for the two entry points.
+mod busloop;
+mod command;
+mod error;
+mod fault;
+mod options;
+mod report;
+mod run;
+mod telemetry;
+mod timeline;
+
+pub use command::Command;
+pub use error::RunError;
+pub use fault::{Fault, FaultKind};
+pub use options::{FaultPolicy, Lead, Reaction, RunOptions};
+pub use report::{BusReport, JointReport, Quantiles, Report};
+pub use run::{bus_settings, spawn, spawn_virtual, Runner, VirtualRun};
+pub use telemetry::{CycleSample, Finish, JointSample, Telemetry, SAMPLE_JOINTS};

@@ -35,9 +35,9 @@ pub fn apply(options: RtOptions) -> RtReport {
             Some(_) => report
                 .warnings
                 .push(format!("could not pin the control thread to core {core}")),
-            None => report
-                .warnings
-                .push(format!("core {core} does not exist; the control thread is not pinned")),
+            None => report.warnings.push(format!(
+                "core {core} does not exist; the control thread is not pinned"
+            )),
         }
     }
     if let Some(priority) = options.fifo_priority {

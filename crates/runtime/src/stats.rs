@@ -20,7 +20,9 @@ impl Histogram {
     /// counted and their maximum kept exactly, but percentiles falling among
     /// them report `bound`).
     pub fn new(bound: Duration) -> Self {
-        let n = usize::try_from(bound.as_micros()).unwrap_or(usize::MAX).clamp(1, 10_000_000);
+        let n = usize::try_from(bound.as_micros())
+            .unwrap_or(usize::MAX)
+            .clamp(1, 10_000_000);
         Histogram {
             buckets: vec![0; n].into_boxed_slice(),
             overflow: 0,
@@ -60,7 +62,9 @@ impl Histogram {
         if self.count == 0 {
             return Duration::ZERO;
         }
-        Duration::from_nanos(u64::try_from(self.sum_nanos / u128::from(self.count)).unwrap_or(u64::MAX))
+        Duration::from_nanos(
+            u64::try_from(self.sum_nanos / u128::from(self.count)).unwrap_or(u64::MAX),
+        )
     }
 
     /// The `q` quantile (0.0..=1.0) to the microsecond: the smallest bucket
@@ -79,6 +83,24 @@ impl Histogram {
             }
         }
         self.max
+    }
+
+    /// Adds every value of `other` (same bound) into this histogram.
+    pub fn merge(&mut self, other: &Histogram) {
+        for (a, &b) in self.buckets.iter_mut().zip(other.buckets.iter()) {
+            *a = a.saturating_add(b);
+        }
+        // Buckets `other` has beyond this one's bound count as overflow.
+        let beyond: u64 = other
+            .buckets
+            .iter()
+            .skip(self.buckets.len())
+            .map(|&n| u64::from(n))
+            .sum();
+        self.overflow += other.overflow + beyond;
+        self.count += other.count;
+        self.sum_nanos += other.sum_nanos;
+        self.max = self.max.max(other.max);
     }
 
     /// Forgets every value.

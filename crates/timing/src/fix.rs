@@ -47,14 +47,20 @@ impl fmt::Display for Change {
         match *self {
             Change::ReturnDelayZero { cycle_time } => write!(
                 f,
-                "set the servos' return delay to 0 (the cycle then takes {} us)",
+                "set the servos' return delay (register 7) to 0 (the cycle then takes {} us)",
                 cycle_time.as_micros()
             ),
-            Change::LowerLatency { latency } => write!(
-                f,
-                "use an adapter latency of at most {} us per transaction (e.g. an FTDI latency timer of 1 ms)",
-                latency.as_micros()
-            ),
+            Change::LowerLatency { latency } => {
+                write!(
+                    f,
+                    "use an adapter latency of at most {} us per transaction",
+                    latency.as_micros()
+                )?;
+                if latency >= Duration::from_millis(1) {
+                    f.write_str(" (an FTDI's latency timer can be set to 1 ms)")?;
+                }
+                Ok(())
+            }
             Change::HigherBaud { baud } => write!(f, "raise the baud rate to {baud}"),
             Change::FewerReadBytes { len } => {
                 write!(f, "read at most {len} bytes back from each servo")

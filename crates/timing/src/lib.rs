@@ -60,6 +60,7 @@ mod baud;
 mod block;
 mod cost;
 mod deadline;
+mod error;
 mod fix;
 mod link;
 mod pack;

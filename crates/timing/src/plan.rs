@@ -2,11 +2,11 @@
 //! what runs instead.
 
 use core::ops::Range;
-use core::time::Duration;
 
 use servobus_protocol::MAX_ID;
 
 use crate::cost::{CycleCost, CycleSpec, Servo};
+pub use crate::error::PlanError;
 use crate::fix::{Change, Fixes};
 use crate::{servos_per_frame, Block, Link};
 
@@ -16,59 +16,6 @@ pub const MAX_SERVOS: usize = MAX_ID as usize + 1;
 /// The longest block a servo can send back in one reply (its length byte is
 /// L + 2 <= 255).
 pub const MAX_READ_LEN: u8 = 253;
-
-/// Why [`plan`] found no plan.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum PlanError {
-    /// The bus has no servos.
-    #[error("the bus has no servos")]
-    NoServos,
-    /// More servos than there are IDs.
-    #[error("{count} servos on one bus: at most 254 (IDs 0..=253)")]
-    TooManyServos {
-        /// Servos given.
-        count: usize,
-    },
-    /// A servo's ID is outside 0..=253.
-    #[error("servo ID {id} is not valid (0..=253)")]
-    InvalidId {
-        /// The ID.
-        id: u8,
-    },
-    /// Two servos share an ID.
-    #[error("servo ID {id} appears twice on the bus")]
-    DuplicateId {
-        /// The ID.
-        id: u8,
-    },
-    /// The rate is not a positive finite number of hertz.
-    #[error("invalid rate {rate_hz} Hz: it must be positive and finite")]
-    InvalidRate {
-        /// The rate given.
-        rate_hz: f64,
-    },
-    /// A block is empty, runs past address 255, or is longer than a frame
-    /// can carry (250 bytes written, 253 read).
-    #[error("invalid block of {} bytes at address {}", .block.len, .block.address)]
-    InvalidBlock {
-        /// The block.
-        block: Block,
-    },
-    /// Not even a cycle reading one servo fits the rate.
-    #[error(
-        "{rate_hz} Hz cannot be met: even reading one servo per cycle takes {} us; {fix}",
-        .min_cycle_time.as_micros()
-    )]
-    Infeasible {
-        /// The rate asked for.
-        rate_hz: f64,
-        /// The shortest cycle possible (all servos written, one read).
-        min_cycle_time: Duration,
-        /// The cheapest change that makes the full cycle fit.
-        fix: Change,
-    },
-}
 
 /// How feedback is spread over cycles: every cycle reads the servos of one
 /// group, groups taking turns, so each servo is read every `every` cycles.
@@ -168,7 +115,7 @@ impl Plan {
     }
     /// Whether the full cycle fits the rate (every servo read every cycle).
     pub fn is_feasible(&self) -> bool {
-        self.fixes.is_empty()
+        self.full.fits(self.rate_hz)
     }
 
     /// How feedback is spread over cycles (`every == 1` when the full cycle
@@ -223,6 +170,13 @@ impl Plan {
 /// the servos each cycle (the fewest groups that fit, see [`RoundRobin`]) and
 /// lists the changes that would make the full cycle fit ([`Plan::fixes`]).
 /// Nothing allocates.
+///
+/// For a bus of a robot file, build the link as
+/// `Link::new(bus.baud).with_latency(bus.latency)` and one
+/// `Servo::new(joint.id, bus.return_delay, series.has_sync_read())` per
+/// joint, in the order of the file; `servobus budget` plans
+/// `Some(Block::GOAL_POSITION)` and `Some(Block::PRESENT_POSITION)` at the
+/// robot's rate.
 ///
 /// ```
 /// use core::time::Duration;

@@ -41,12 +41,23 @@ impl Piece {
     }
 
     /// Position, velocity and acceleration at local time `x` (not clamped).
+    /// Estrin's scheme: short dependency chains, so the evaluations of
+    /// several joints overlap in the CPU.
     #[inline(always)]
     pub fn eval_local(&self, x: f64) -> (f64, f64, f64) {
         let c = &self.c;
-        let p = c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * (c[4] + x * c[5]))));
-        let v = c[1] + x * (2.0 * c[2] + x * (3.0 * c[3] + x * (4.0 * c[4] + x * 5.0 * c[5])));
-        let a = 2.0 * c[2] + x * (6.0 * c[3] + x * (12.0 * c[4] + x * 20.0 * c[5]));
+        if c[4] == 0.0 && c[5] == 0.0 {
+            // Constant-jerk phases and cubic splines: most pieces.
+            let p = c[0] + x * (c[1] + x * (c[2] + x * c[3]));
+            let v = c[1] + x * (2.0 * c[2] + x * (3.0 * c[3]));
+            let a = 2.0 * c[2] + x * (6.0 * c[3]);
+            return (p, v, a);
+        }
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let p = (c[0] + c[1] * x) + x2 * (c[2] + c[3] * x) + x4 * (c[4] + c[5] * x);
+        let v = (c[1] + 2.0 * c[2] * x) + x2 * (3.0 * c[3] + 4.0 * c[4] * x) + x4 * (5.0 * c[5]);
+        let a = (2.0 * c[2] + 6.0 * c[3] * x) + x2 * (12.0 * c[4] + 20.0 * c[5] * x);
         (p, v, a)
     }
 

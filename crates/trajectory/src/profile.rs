@@ -69,18 +69,42 @@ impl Ramp {
     }
 }
 
+/// Acceleration and jerk bounds with the reciprocals the solvers need,
+/// computed once per call instead of dividing in every iteration.
+#[derive(Debug, Clone, Copy)]
+struct Acc {
+    inv_a: f64,
+    j: f64,
+    /// `a / j`: duration of a full jerk phase (0 without a jerk limit).
+    k: f64,
+    /// `a^2 / j`: the speed change above which a ramp has a constant
+    /// acceleration phase.
+    regime: f64,
+}
+
+impl Acc {
+    fn new(a: f64, j: f64) -> Self {
+        Acc {
+            inv_a: 1.0 / a,
+            j,
+            k: a / j,
+            regime: a * a / j,
+        }
+    }
+}
+
 /// Duration and distance of the ramp from `u` to `w` and their derivatives
 /// with respect to `w`. Distance is `(u + w) / 2 * duration` because an
 /// S-curve ramp is point-symmetric about its midpoint.
-#[inline]
-fn leg(u: f64, w: f64, a: f64, j: f64) -> (f64, f64, f64, f64) {
+#[inline(always)]
+fn leg(u: f64, w: f64, c: &Acc) -> (f64, f64, f64, f64) {
     let dv = (w - u).abs();
     let sgn = if w >= u { 1.0 } else { -1.0 };
-    let (dur, ddur) = if dv * j >= a * a {
-        (dv / a + a / j, 1.0 / a)
+    let (dur, ddur) = if dv >= c.regime {
+        (dv * c.inv_a + c.k, c.inv_a)
     } else if dv > 0.0 {
-        let r = (dv / j).sqrt();
-        (2.0 * r, 1.0 / (dv * j).sqrt())
+        let r = (dv / c.j).sqrt();
+        (2.0 * r, r / dv)
     } else {
         (0.0, f64::INFINITY)
     };
@@ -128,25 +152,27 @@ pub(crate) fn rest_peak(dist: f64, lim: &JointLimits) -> f64 {
 
 impl Segment1 {
     /// Total ramp distance and its derivative at cruise speed `vc`.
-    #[inline]
-    fn g(&self, vc: f64, a: f64, j: f64) -> (f64, f64, f64, f64) {
-        let (ta, da, dta, dda) = leg(self.v0, vc, a, j);
-        let (tb, db, dtb, ddb) = leg(self.v1, vc, a, j);
+    #[inline(always)]
+    fn g(&self, vc: f64, c: &Acc) -> (f64, f64, f64, f64) {
+        let (ta, da, dta, dda) = leg(self.v0, vc, c);
+        let (tb, db, dtb, ddb) = leg(self.v1, vc, c);
         (ta + tb, da + db, dta + dtb, dda + ddb)
     }
 
     /// Duration at cruise speed `vc > 0` and its derivative.
-    #[inline]
-    fn time(&self, vc: f64, a: f64, j: f64) -> (f64, f64) {
-        let (t, g, dt, dg) = self.g(vc, a, j);
+    #[inline(always)]
+    fn time(&self, vc: f64, c: &Acc) -> (f64, f64) {
+        let (t, g, dt, dg) = self.g(vc, c);
         let rest = self.d - g;
-        (t + rest / vc, dt - dg / vc - rest / (vc * vc))
+        let inv = 1.0 / vc;
+        (t + rest * inv, dt - (dg + rest * inv) * inv)
     }
 
     /// The time-optimal profile. Precondition: the ramps alone fit, i.e.
     /// `g(max(v0, v1)) <= d` (the planner caps via speeds to ensure it).
     pub fn fastest(&self, lim: &JointLimits) -> Profile {
         let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+        let acc = Acc::new(a, j);
         let vlo = self.v0.max(self.v1).min(vm);
         if self.d <= 0.0 && vlo <= 0.0 {
             return Profile {
@@ -154,25 +180,29 @@ impl Segment1 {
                 duration: 0.0,
             };
         }
-        let vc = if self.g(vm, a, j).1 <= self.d {
+        let vc = if self.g(vm, &acc).1 <= self.d {
             vm
         } else if self.v0 == 0.0 && self.v1 == 0.0 {
             rest_peak(self.d, lim)
-        } else if self.g(vlo, a, j).1 >= self.d {
+        } else if self.g(vlo, &acc).1 >= self.d {
             vlo
         } else {
-            solve(
-                |x| {
-                    let (_, g, _, dg) = self.g(x, a, j);
-                    (g - self.d, dg)
-                },
-                vlo,
-                vm,
-                vm,
-                true,
-            )
+            match self.fastest_long(a, j, vlo, vm) {
+                Ok(vc) => vc,
+                // The long-ramp root (outside its regime) is a good start.
+                Err(guess) => solve(
+                    |x| {
+                        let (_, g, _, dg) = self.g(x, &acc);
+                        (g - self.d, dg)
+                    },
+                    vlo,
+                    vm,
+                    guess,
+                    true,
+                ),
+            }
         };
-        let duration = self.time(vc, a, j).0;
+        let duration = self.time(vc, &acc).0;
         Profile { vc, duration }
     }
 
@@ -186,6 +216,7 @@ impl Segment1 {
             };
         }
         let (a, j) = (lim.max_acceleration, lim.jerk());
+        let acc = Acc::new(a, j);
         if self.d <= 0.0 {
             // Nothing to cover: only possible at rest; hold.
             return Profile {
@@ -208,24 +239,93 @@ impl Segment1 {
                 }
             }
         }
-        let vc = match vc {
+        let vc = match vc.or_else(|| self.stretched_long(a, j, t, fastest.vc)) {
             Some(x) => x,
             None => {
-                // time(vc) - t is decreasing, +inf at 0, <= 0 at fastest.vc.
-                let guess = (self.d / t).min(fastest.vc);
-                solve(
-                    |x| {
-                        let (tt, dt) = self.time(x, a, j);
-                        (tt - t, dt)
-                    },
-                    0.0,
-                    fastest.vc,
-                    guess,
-                    false,
-                )
+                // Solve in u = 1 / vc: the duration is then nearly linear
+                // (cruise time = distance * u), so Newton needs few steps.
+                // f(u) = time(1 / u) - t is increasing, <= 0 at 1 / fastest.vc.
+                let f = |u: f64| {
+                    let vc = 1.0 / u;
+                    let (tt, dt) = self.time(vc, &acc);
+                    (tt - t, -dt * vc * vc)
+                };
+                let lo = 1.0 / fastest.vc;
+                // The trapezoidal (jerk-free) answer is a close first guess.
+                let guess = self
+                    .stretched_long(a, f64::INFINITY, t, fastest.vc)
+                    .map_or(t / self.d, |vc| 1.0 / vc)
+                    .max(lo);
+                let mut hi = guess.max(t / self.d);
+                while f(hi).0 < 0.0 && hi < 1e300 {
+                    hi *= 2.0;
+                }
+                1.0 / solve(f, lo, hi, guess, true)
             }
         };
         Profile { vc, duration: t }
+    }
+
+    /// Closed form of [`fastest`](Self::fastest) when both ramps reach the
+    /// acceleration limit (always the case without a jerk limit): the ramp
+    /// distance is then quadratic in `vc`,
+    /// `g = vc^2 / a - (v0^2 + v1^2) / 2a + (v0 + v1 + 2 vc) a / 2j`.
+    /// `Err` carries the root anyway (clamped), as a starting guess.
+    fn fastest_long(&self, a: f64, j: f64, vlo: f64, vm: f64) -> Result<f64, f64> {
+        let k = a / j;
+        let c = -(self.v0 * self.v0 + self.v1 * self.v1) / (2.0 * a)
+            + (self.v0 + self.v1) * k * 0.5
+            - self.d;
+        // vc^2 / a + k vc + c = 0, c < 0 here: one positive root.
+        let disc = (k * k - 4.0 * c / a).max(0.0);
+        let vc = 0.5 * a * (disc.sqrt() - k);
+        let regime = a * k;
+        if vc >= vlo && vc <= vm && vc - self.v0 >= regime && vc - self.v1 >= regime {
+            Ok(vc)
+        } else {
+            Err(vc.clamp(vlo, vm))
+        }
+    }
+
+    /// Closed form of [`stretched`](Self::stretched) when both ramps reach
+    /// the acceleration limit. With `s_i = sign(vc - v_i)` the duration
+    /// equation `t vc = sum(dur_i) vc + d - sum(dist_i)` is the quadratic
+    /// `A vc^2 + B vc + C = 0`, `A = (s0 + s1) / 2a`,
+    /// `B = a / j - t - (s0 v0 + s1 v1) / a`,
+    /// `C = d + (s0 v0^2 + s1 v1^2) / 2a - (v0 + v1) a / 2j`. The duration
+    /// being monotone in `vc`, at most one root is consistent with its
+    /// signs and regimes.
+    fn stretched_long(&self, a: f64, j: f64, t: f64, hi: f64) -> Option<f64> {
+        let k = a / j;
+        let regime = a * k;
+        let (v0, v1, d) = (self.v0, self.v1, self.d);
+        for (s0, s1) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+            let qa = (s0 + s1) / (2.0 * a);
+            let qb = k - t - (s0 * v0 + s1 * v1) / a;
+            let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) / (2.0 * a) - (v0 + v1) * k * 0.5;
+            let mut roots = [f64::NAN; 2];
+            if qa == 0.0 {
+                roots[0] = -qc / qb;
+            } else {
+                let disc = qb * qb - 4.0 * qa * qc;
+                if disc < 0.0 {
+                    continue;
+                }
+                let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+                roots = [q / qa, qc / q];
+            }
+            for vc in roots {
+                let ok = vc > 0.0
+                    && vc <= hi * (1.0 + 1e-12)
+                    && s0 * (vc - v0) >= regime
+                    && s1 * (vc - v1) >= regime
+                    && d - self.g(vc, &Acc::new(a, j)).1 >= -1e-12 * d;
+                if ok {
+                    return Some(vc.min(hi));
+                }
+            }
+        }
+        None
     }
 
     /// The phases (duration, jerk) of the profile, for a positive direction.
@@ -268,7 +368,7 @@ fn solve(
         if !(nx > lo && nx < hi) {
             nx = 0.5 * (lo + hi);
         }
-        if (nx - x).abs() <= 1e-15 * nx.abs() || hi - lo <= 1e-15 * hi.abs() {
+        if (nx - x).abs() <= 1e-13 * nx.abs() || hi - lo <= 1e-13 * hi.abs() {
             return nx;
         }
         x = nx;

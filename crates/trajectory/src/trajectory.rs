@@ -1,6 +1,7 @@
 //! The planned path: sampling, cursor, and the figures `servobus plan` prints.
 
 use crate::piece::Piece;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Position, velocity and acceleration of one joint.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -58,8 +59,11 @@ pub struct JointSummary {
 /// starting at time 0 and ending at [`duration`](Self::duration). Before 0
 /// it holds the start state and after the end it holds the final position
 /// at rest.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Trajectory {
+    /// Identifies the piece layout for cursors (clones share it: same
+    /// layout).
+    pub(crate) id: u64,
     pub(crate) duration: f64,
     pub(crate) pieces: Vec<Piece>,
     /// `first[j]..first[j + 1]` are joint `j`'s pieces (never empty).
@@ -75,8 +79,15 @@ pub struct Trajectory {
 /// binary search when its memory does not fit).
 #[derive(Debug, Clone, Default)]
 pub struct Cursor {
+    /// The trajectory `index` refers to.
+    id: u64,
+    /// Per joint, an index into the trajectory's `pieces`.
     index: Vec<usize>,
 }
+
+/// Source of trajectory ids (0 is never used, so a default cursor matches
+/// nothing).
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
 impl Trajectory {
     /// Builds from per-joint pieces covering `[0, end]` (gaps are not
@@ -107,6 +118,7 @@ impl Trajectory {
             .map(|j| pieces[first[j + 1] - 1].eval(duration).0)
             .collect();
         Trajectory {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             duration,
             pieces,
             first,
@@ -133,6 +145,7 @@ impl Trajectory {
     /// A cursor for [`sample_with`](Self::sample_with). Allocates once.
     pub fn cursor(&self) -> Cursor {
         Cursor {
+            id: self.id,
             index: self.first[..self.joints()].to_vec(),
         }
     }
@@ -171,32 +184,57 @@ impl Trajectory {
         }
         let t = t.max(0.0);
         let n = self.joints().min(out.len());
-        if cursor.index.len() < n {
-            // A cursor of another trajectory: cannot grow without
-            // allocating, so search.
-            self.sample(t, out);
-            return;
-        }
-        for j in 0..n {
-            let (lo, hi) = (self.first[j], self.first[j + 1]);
-            let mut i = cursor.index[j];
-            if i < lo || i >= hi {
-                i = lo;
+        if cursor.id != self.id {
+            if cursor.index.len() < n {
+                // A cursor of another trajectory with fewer joints: cannot
+                // grow without allocating, so search.
+                self.sample(t, out);
+                return;
             }
-            let p = &self.pieces[i];
-            if t > p.t1 {
-                // Usually the next piece; otherwise search forward.
+            cursor.index[..n].copy_from_slice(&self.first[..n]);
+            cursor.id = self.id;
+        }
+        // Invariant from here: `first[j] <= index[j] < first[j + 1]`.
+        for (j, (idx, o)) in cursor
+            .index
+            .iter_mut()
+            .zip(out.iter_mut())
+            .take(n)
+            .enumerate()
+        {
+            let p = &self.pieces[*idx];
+            if t <= p.t1 && t >= p.t0 {
+                *o = state(p, t);
+                continue;
+            }
+            *o = self.seek(j, idx, t);
+        }
+    }
+
+    /// Slow path of `sample_with`: moves joint `j`'s cursor to the piece
+    /// holding `t`.
+    #[cold]
+    fn seek(&self, j: usize, idx: &mut usize, t: f64) -> JointState {
+        let (lo, hi) = (self.first[j], self.first[j + 1]);
+        let joint = &self.pieces[lo..hi];
+        let mut i = *idx - lo;
+        if t > joint[i].t1 {
+            // Usually one of the next few pieces (short jerk phases may
+            // be skipped in one control period); otherwise search.
+            let mut steps = 0;
+            while i + 1 < joint.len() && t > joint[i].t1 && steps < 4 {
                 i += 1;
-                if i >= hi || t > self.pieces[i].t1 {
-                    i = lo + self.pieces[lo..hi].partition_point(|p| p.t1 < t);
-                }
-            } else if t < p.t0 {
-                i = lo + self.pieces[lo..hi].partition_point(|p| p.t1 < t);
+                steps += 1;
             }
-            let i = i.min(hi - 1);
-            cursor.index[j] = i;
-            out[j] = state(&self.pieces[i], t);
+            if t > joint[i].t1 {
+                i = joint.partition_point(|p| p.t1 < t);
+            }
+        } else {
+            i = joint.partition_point(|p| p.t1 < t);
         }
+        let i = i.min(joint.len() - 1);
+        *idx = lo + i;
+        state(&joint[i], t)
     }
 
     /// The state of every joint at the end (at rest at the last keyframe).

@@ -113,13 +113,17 @@ pub(crate) fn section(
                 }
                 let (dp, dn) = (pos[k][j] - pos[k - 1][j], pos[k + 1][j] - pos[k][j]);
                 let pace = 2.0 * (dp.abs() / durations[k - 1]).min(dn.abs() / durations[k]);
-                if pace >= v.abs() {
+                // Only worth it for a marked dip.
+                if pace >= 0.8 * v.abs() {
                     continue;
                 }
                 let vp = v.signum() * pace;
                 let before = seg(dp, via[(k - 1) * nj + j], vp).fastest(lim);
+                if before.duration > durations[k - 1] {
+                    continue;
+                }
                 let after = seg(dn, vp, via[(k + 1) * nj + j]).fastest(lim);
-                if before.duration <= durations[k - 1] && after.duration <= durations[k] {
+                if after.duration <= durations[k] {
                     via[k * nj + j] = vp;
                     fastest[(k - 1) * nj + j] = before;
                     fastest[k * nj + j] = after;

@@ -4,10 +4,16 @@
 mod common;
 
 use proptest::prelude::*;
-use servobus_trajectory::{plan, retarget, stop, JointLimits, JointState, Keyframe, OnLimit, PlanOptions, TimedShape};
+use servobus_trajectory::{
+    plan, retarget, stop, JointLimits, JointState, Keyframe, OnLimit, PlanOptions, TimedShape,
+};
 
 fn limits_strategy() -> impl Strategy<Value = JointLimits> {
-    (0.2f64..5.0, 0.5f64..40.0, prop::option::weighted(0.8, 5.0f64..500.0))
+    (
+        0.2f64..5.0,
+        0.5f64..40.0,
+        prop::option::weighted(0.8, 5.0f64..500.0),
+    )
         .prop_map(|(v, a, j)| JointLimits::new(v, a, j).with_positions(-2.0, 2.0))
 }
 
@@ -17,13 +23,20 @@ fn case() -> impl Strategy<Value = (Vec<JointLimits>, Vec<Vec<f64>>)> {
     (1usize..5, 2usize..8).prop_flat_map(|(nj, nk)| {
         (
             prop::collection::vec(limits_strategy(), nj),
-            prop::collection::vec(prop::collection::vec(prop_oneof![3 => -2.0f64..2.0, 1 => Just(0.5)], nj), nk),
+            prop::collection::vec(
+                prop::collection::vec(prop_oneof![3 => -2.0f64..2.0, 1 => Just(0.5)], nj),
+                nk,
+            ),
         )
     })
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    // 64 cases by default (PROPTEST_CASES=N for a longer run).
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(64),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn untimed_within_limits((limits, kfs) in case(), stop_each in any::<bool>()) {

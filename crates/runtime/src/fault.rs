@@ -1,0 +1,126 @@
+//! Faults: what was detected, where, when, and the reaction.
+
+use std::fmt;
+
+use serde::Serialize;
+
+use crate::options::Reaction;
+
+/// A fault the loop detected. Angles are in the report's units
+/// ([`Report::units`](crate::Report::units)).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
+pub struct Fault {
+    /// What happened, with the values that raised it.
+    #[serde(flatten)]
+    pub kind: FaultKind,
+    /// The bus it happened on.
+    pub bus: String,
+    /// The joint concerned, if one is.
+    pub joint: Option<String>,
+    /// Its servo's ID.
+    pub servo_id: Option<u8>,
+    /// When it was detected: time since the start of the run, s.
+    pub time_s: f64,
+    /// The cycle of detection.
+    pub cycle: u64,
+    /// The reaction started in that cycle.
+    pub reaction: Reaction,
+    /// The angle unit of the values in `kind`.
+    pub units: &'static str,
+}
+
+/// The kinds of fault, with their values.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum FaultKind {
+    /// The tracking error stayed beyond the tolerance.
+    FollowingError {
+        /// The last error (planned minus measured).
+        error: f64,
+        /// The tolerance.
+        tolerance: f64,
+        /// Consecutive readings beyond it.
+        cycles: u32,
+    },
+    /// The joint does not follow a moving path.
+    Stall {
+        /// The last error.
+        error: f64,
+        /// The path's speed, units/s.
+        planned_velocity: f64,
+        /// The joint's measured speed, units/s.
+        measured_velocity: f64,
+        /// Consecutive stalled readings.
+        cycles: u32,
+    },
+    /// The servo did not answer.
+    Missing {
+        /// Consecutive reads without a reply.
+        cycles: u32,
+        /// Why the last read failed.
+        reason: String,
+    },
+    /// The servo reported error flags.
+    Status {
+        /// The status byte.
+        flags: u8,
+        /// The flags' names.
+        names: String,
+    },
+    /// The serial port failed (unplugged adapter, closed pty).
+    PortGone {
+        /// The transport's message.
+        message: String,
+    },
+}
+
+impl fmt::Display for FaultKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FaultKind::FollowingError {
+                error,
+                tolerance,
+                cycles,
+            } => write!(
+                f,
+                "following error {error:.3} beyond {tolerance:.3} for {cycles} cycles"
+            ),
+            FaultKind::Stall {
+                error,
+                planned_velocity,
+                measured_velocity,
+                cycles,
+            } => write!(
+                f,
+                "stalled: error {error:.3}, moving at {measured_velocity:.2}/s while the path \
+                 asks {planned_velocity:.2}/s, for {cycles} cycles"
+            ),
+            FaultKind::Missing { cycles, reason } => {
+                write!(f, "no reply for {cycles} reads ({reason})")
+            }
+            FaultKind::Status { flags, names } => {
+                write!(f, "status flags {names} (0x{flags:02X})")
+            }
+            FaultKind::PortGone { message } => write!(f, "port gone: {message}"),
+        }
+    }
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "bus `{}`", self.bus)?;
+        if let Some(joint) = &self.joint {
+            write!(f, ", joint `{joint}`")?;
+        }
+        if let Some(id) = self.servo_id {
+            write!(f, " (ID {id})")?;
+        }
+        write!(
+            f,
+            ": {} [{}] at {:.3} s (cycle {}); reaction: {:?}",
+            self.kind, self.units, self.time_s, self.cycle, self.reaction
+        )
+    }
+}

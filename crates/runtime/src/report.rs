@@ -1,0 +1,119 @@
+//! The summary of a run, printed by `servobus play` (and as JSON with
+//! `--json`).
+
+use serde::Serialize;
+
+use crate::fault::Fault;
+use crate::telemetry::Finish;
+
+/// Three figures of a distribution of period errors, us.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Quantiles {
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// One joint's tracking error over the run, in the report's units.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JointReport {
+    /// The joint's name.
+    pub name: String,
+    /// Root mean square of `planned - measured` over every fresh reading.
+    pub rms_error: f64,
+    /// Largest absolute error.
+    pub max_error: f64,
+    /// Fresh readings counted.
+    pub readings: u64,
+    /// Goals clamped to the joint's limits.
+    pub clamps: u64,
+}
+
+/// One bus's figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BusReport {
+    /// The bus's name.
+    pub name: String,
+    /// Cycles run.
+    pub cycles: u64,
+    /// Deadlines skipped because a cycle overran.
+    pub overruns: u64,
+    /// Mean fraction of the period the bus work took (measured).
+    pub utilisation: f64,
+    /// Largest fraction of the period one cycle took.
+    pub peak_utilisation: f64,
+    /// The fraction servobus-timing predicted for the full cycle.
+    pub planned_utilisation: f64,
+    /// Each servo is read once every this many cycles (round robin).
+    pub read_every: usize,
+    /// Replies that did not arrive in time (each attempt).
+    pub timeouts: u64,
+    /// Requests asked again.
+    pub retries: u64,
+    /// Servo readings missing after every retry.
+    pub missed_replies: u64,
+}
+
+/// The summary of a run. The first fields are those of
+/// `servobus bench --json`; `joints` holds the tracking error per joint.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
+pub struct Report {
+    /// Control cycles run (of the first bus; the buses run in step).
+    pub cycles: u64,
+    /// Cycles per second achieved: cycles after the first over the time
+    /// between the first and the last cycle's start.
+    pub achieved_rate_hz: f64,
+    /// The requested rate.
+    pub planned_rate_hz: f64,
+    /// Deviation of each cycle's start interval from the period, us (every
+    /// bus).
+    pub period_error_us: Quantiles,
+    /// Deadlines skipped because a cycle overran (every bus).
+    pub overruns: u64,
+    /// Replies that timed out (every attempt, every bus).
+    pub timeouts: u64,
+    /// Requests asked again (every bus).
+    pub retries: u64,
+    /// Servo readings missing after every retry (every bus).
+    pub missed_replies: u64,
+    /// Goals clamped to the joint limits (a clamp means the plan was wrong).
+    pub clamps: u64,
+    /// Telemetry messages dropped because the consumer was slow.
+    pub telemetry_dropped: u64,
+    /// Mean measured bus utilisation of the busiest bus.
+    pub utilisation: f64,
+    /// Time from the first to the last cycle, s.
+    pub duration_s: f64,
+    /// Start of the last cycle minus its deadline: drift of the loop, us.
+    pub drift_us: f64,
+    /// The lead in use at the end, ms.
+    pub lead_ms: f64,
+    /// The angle unit of every joint figure.
+    pub units: &'static str,
+    /// Tracking error per joint, in the robot's joint order.
+    pub joints: Vec<JointReport>,
+    /// Per-bus figures.
+    pub buses: Vec<BusReport>,
+    /// Why the run ended.
+    pub finish: Finish,
+    /// The fault that ended it, if one did.
+    pub fault: Option<Fault>,
+    /// What the real-time set-up could not do (core pinning, SCHED_FIFO).
+    pub warnings: Vec<String>,
+}
+
+impl Report {
+    /// The largest RMS tracking error over the joints.
+    pub fn worst_rms_error(&self) -> f64 {
+        self.joints.iter().map(|j| j.rms_error).fold(0.0, f64::max)
+    }
+
+    /// The largest tracking error of any joint.
+    pub fn worst_max_error(&self) -> f64 {
+        self.joints.iter().map(|j| j.max_error).fold(0.0, f64::max)
+    }
+}

@@ -1,0 +1,134 @@
+//! What the loop publishes every cycle.
+//!
+//! Messages are plain `Copy` data of fixed size, sent with `try_send` on a
+//! bounded channel: publishing never allocates and never blocks; when the
+//! consumer is slow the sample is dropped and counted
+//! ([`Report::telemetry_dropped`](crate::Report::telemetry_dropped)).
+
+use std::time::Duration;
+
+use serde::Serialize;
+
+use crate::fault::Fault;
+
+/// Most joints one [`CycleSample`] carries; a bus with more joints sends
+/// several samples per cycle, each with the next joints.
+pub const SAMPLE_JOINTS: usize = 24;
+
+/// One joint in one cycle. Angles are in the report's units
+/// ([`RunOptions::units`](crate::RunOptions::units)).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct JointSample {
+    /// Index of the joint in the robot's joint order.
+    pub joint: usize,
+    /// The goal sent this cycle (the path at `t + lead`, clamped).
+    pub commanded: f64,
+    /// The path at the time of the reading (what the joint should be at).
+    pub planned: f64,
+    /// The last reading, if any.
+    pub measured: Option<f64>,
+    /// `planned - measured` at the last fresh reading (0 when none).
+    pub error: f64,
+    /// Measured velocity, units/s.
+    pub velocity: f64,
+    /// Time since the last reading of this joint.
+    pub feedback_age: Duration,
+    /// Whether the reading is older than two of its read periods.
+    pub stale: bool,
+    /// Whether the goal was clamped to the joint's limits this cycle.
+    pub clamped: bool,
+}
+
+/// One bus's cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleSample {
+    /// Index of the bus in the robot's bus order.
+    pub bus: usize,
+    /// Cycle number (cycle `k` is due at `k` periods after the start).
+    pub cycle: u64,
+    /// The cycle's deadline: time since the start of the run, s.
+    pub time_s: f64,
+    /// How late the cycle started after its deadline.
+    pub lateness: Duration,
+    /// How long the cycle's bus work took (write, read, tracking).
+    pub busy: Duration,
+    /// Deadlines skipped before this cycle because the previous overran.
+    pub skipped: u64,
+    /// The current lead (lag compensation).
+    pub lead: Duration,
+    len: usize,
+    joints: [JointSample; SAMPLE_JOINTS],
+}
+
+impl CycleSample {
+    pub(crate) fn new(bus: usize, cycle: u64, time_s: f64) -> Self {
+        CycleSample {
+            bus,
+            cycle,
+            time_s,
+            lateness: Duration::ZERO,
+            busy: Duration::ZERO,
+            skipped: 0,
+            lead: Duration::ZERO,
+            len: 0,
+            joints: [JointSample::default(); SAMPLE_JOINTS],
+        }
+    }
+
+    /// Adds a joint; false when full.
+    pub(crate) fn push(&mut self, joint: JointSample) -> bool {
+        match self.joints.get_mut(self.len) {
+            Some(slot) => {
+                *slot = joint;
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub(crate) fn clear_joints(&mut self) {
+        self.len = 0;
+    }
+
+    /// The joints in this sample.
+    pub fn joints(&self) -> &[JointSample] {
+        &self.joints[..self.len]
+    }
+}
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Finish {
+    /// The path (and the settling time) played to its end.
+    Completed,
+    /// A [`Command::Stop`](crate::Command::Stop) stopped it.
+    Stopped,
+    /// A [`Command::TorqueOff`](crate::Command::TorqueOff) ended it.
+    TorqueOff,
+    /// A fault ended it after its reaction.
+    Fault,
+    /// Every command sender was dropped while the run waited for
+    /// [`Command::Play`](crate::Command::Play).
+    Abandoned,
+}
+
+/// A telemetry message.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Telemetry {
+    /// One bus's cycle (or part of it, for buses of more than
+    /// [`SAMPLE_JOINTS`] joints).
+    Cycle(CycleSample),
+    /// A fault was detected; its reaction has started.
+    Fault(Fault),
+    /// A command could not be carried out (a replacement path with the
+    /// wrong joints, say); the run goes on as before.
+    Rejected(String),
+    /// The run ended; the report follows from
+    /// [`Runner::join`](crate::Runner::join) or
+    /// [`VirtualRun::finish`](crate::VirtualRun::finish).
+    Finished(Finish),
+}

@@ -1,0 +1,467 @@
+//! The robot-wide commanded path as a function of time: the main path with
+//! its time scale (pause/resume), the approach to its start, transitions,
+//! stops and holds, joined end to end so that position and velocity are
+//! continuous across every change.
+//!
+//! Time `x` is seconds since the start of the run, on the cycle timeline:
+//! goals are sampled at `x = t + lead`, the reference the joints are judged
+//! against at `x` = the time of the reading. Every change starts at the
+//! *horizon*, the latest time already commanded, so that no bus ever
+//! steps back along a path it has already been sent.
+//!
+//! Steady-state sampling allocates nothing; each change (a command, a
+//! fault reaction) plans a short path once, which allocates.
+
+use std::sync::Arc;
+
+use servobus_trajectory::{self as traj, Cursor, JointLimits, JointState, Trajectory};
+
+use crate::error::RunError;
+
+/// Smooth time scale of the main path: `s` ramps from `s0` to `s1` over
+/// `dur` seconds from `r0` with a quintic smoothstep (continuous `s`, `s'`
+/// and `s''`), and path time `tau` is its integral.
+#[derive(Debug, Clone, Copy)]
+struct Scale {
+    r0: f64,
+    tau0: f64,
+    s0: f64,
+    s1: f64,
+    dur: f64,
+}
+
+impl Scale {
+    fn constant(r0: f64) -> Self {
+        Scale {
+            r0,
+            tau0: 0.0,
+            s0: 1.0,
+            s1: 1.0,
+            dur: 1.0,
+        }
+    }
+
+    /// `(tau, s, ds/dx)` at time `x`.
+    fn at(&self, x: f64) -> (f64, f64, f64) {
+        let dx = x - self.r0;
+        if dx <= 0.0 {
+            // Before the ramp (the reference lags the commands by the lead):
+            // extrapolate at the starting speed.
+            return (self.tau0 + self.s0 * dx, self.s0, 0.0);
+        }
+        let u = dx / self.dur;
+        let d = self.s1 - self.s0;
+        if u >= 1.0 {
+            let tau = self.tau0 + self.s0 * dx + d * (0.5 * self.dur + (dx - self.dur));
+            return (tau, self.s1, 0.0);
+        }
+        let h = u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+        let dh = 30.0 * u * u * (1.0 - u) * (1.0 - u);
+        let big_h = u * u * u * u * (2.5 + u * (-3.0 + u));
+        (
+            self.tau0 + self.s0 * dx + d * self.dur * big_h,
+            self.s0 + d * h,
+            d * dh / self.dur,
+        )
+    }
+
+    /// A ramp from the scale at `x` to `target` over `dur`.
+    fn ramp_to(&self, x: f64, target: f64, dur: f64) -> Scale {
+        let (tau, s, _) = self.at(x);
+        Scale {
+            r0: x,
+            tau0: tau,
+            s0: s,
+            s1: target,
+            dur: dur.max(1e-3),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Kind {
+    Approach,
+    Main,
+    Transition,
+    Stop,
+    /// Waiting for `Play` (not final) or a fault reaction (final).
+    Hold {
+        last: bool,
+    },
+}
+
+#[derive(Debug, Clone)]
+enum Path {
+    /// Sampled at `x - start`.
+    Plain(Arc<Trajectory>),
+    /// Sampled at `tau(x)`.
+    Scaled(Arc<Trajectory>, Scale),
+    Fixed(Vec<f64>),
+}
+
+#[derive(Debug, Clone)]
+struct Segment {
+    start: f64,
+    kind: Kind,
+    path: Path,
+    cmd: Cursor,
+    reference: Cursor,
+}
+
+impl Segment {
+    fn new(start: f64, kind: Kind, path: Path) -> Self {
+        let (cmd, reference) = match &path {
+            Path::Plain(t) | Path::Scaled(t, _) => (t.cursor(), t.cursor()),
+            Path::Fixed(_) => (Cursor::default(), Cursor::default()),
+        };
+        Segment {
+            start,
+            kind,
+            path,
+            cmd,
+            reference,
+        }
+    }
+
+    fn sample(&mut self, x: f64, which: Which, out: &mut [JointState]) {
+        let cursor = match which {
+            Which::Cmd => &mut self.cmd,
+            Which::Ref => &mut self.reference,
+        };
+        match &self.path {
+            Path::Plain(t) => t.sample_with(cursor, x - self.start, out),
+            Path::Scaled(t, scale) => {
+                let (tau, s, ds) = scale.at(x);
+                t.sample_with(cursor, tau, out);
+                for o in out.iter_mut() {
+                    o.acceleration = o.acceleration * s * s + o.velocity * ds;
+                    o.velocity *= s;
+                }
+            }
+            Path::Fixed(p) => {
+                for (o, &p) in out.iter_mut().zip(p) {
+                    *o = JointState::at_rest(p);
+                }
+            }
+        }
+    }
+
+    /// Whether the segment's path is over at `x` (a final hold is over once
+    /// it has begun).
+    fn over(&self, x: f64) -> bool {
+        match (&self.path, self.kind) {
+            (Path::Plain(t), _) => x - self.start >= t.duration(),
+            (Path::Scaled(t, scale), _) => scale.at(x).0 >= t.duration(),
+            (Path::Fixed(_), Kind::Hold { last }) => last && x >= self.start,
+            (Path::Fixed(_), _) => false,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Which {
+    Cmd,
+    Ref,
+}
+
+/// See the module documentation.
+#[derive(Debug, Clone)]
+pub(crate) struct Timeline {
+    limits: Vec<JointLimits>,
+    segments: Vec<Segment>,
+    /// The main path waiting for `Play`.
+    pending: Option<Arc<Trajectory>>,
+    /// Latest time sampled for commands.
+    horizon: f64,
+    /// Length of a pause or resume ramp, s.
+    ramp: f64,
+    /// Scratch state for planning changes.
+    scratch: Vec<JointState>,
+    /// When the last segment was found over (for the settling time).
+    over_since: Option<f64>,
+}
+
+/// Limits scaled by `f` (positions unchanged).
+fn scaled(limits: &[JointLimits], f: f64) -> Vec<JointLimits> {
+    limits
+        .iter()
+        .map(|l| {
+            JointLimits::new(
+                l.max_velocity * f,
+                l.max_acceleration * f,
+                l.max_jerk.map(|j| j * f),
+            )
+            .with_positions(l.min_position, l.max_position)
+        })
+        .collect()
+}
+
+impl Timeline {
+    /// The timeline of a run: from `present` (rad, at rest) to the start of
+    /// `main` (an approach at `approach` of the limits, when given and the
+    /// joints are more than `tolerance` rad away), then `main` at once or,
+    /// without `autoplay`, once [`Timeline::play`] is called.
+    pub fn new(
+        limits: Vec<JointLimits>,
+        main: Arc<Trajectory>,
+        present: &[f64],
+        approach: Option<f64>,
+        autoplay: bool,
+        tolerance: f64,
+    ) -> Result<Self, RunError> {
+        let n = limits.len();
+        // The longest pause ramp the limits allow without asking more than
+        // about half of a joint's acceleration for the slow-down itself
+        // (the quintic ramp's peak slope is 1.875 / duration).
+        let ramp = limits
+            .iter()
+            .map(|l| 3.75 * l.max_velocity / l.max_acceleration)
+            .fold(0.05, f64::max)
+            .min(3.0);
+        let mut tl = Timeline {
+            limits,
+            segments: Vec::with_capacity(8),
+            pending: None,
+            horizon: 0.0,
+            ramp,
+            scratch: vec![JointState::default(); n],
+            over_since: None,
+        };
+        let mut start = vec![JointState::default(); n];
+        main.sample(0.0, &mut start);
+        let target: Vec<f64> = start.iter().map(|s| s.position).collect();
+        let far = present
+            .iter()
+            .zip(&target)
+            .any(|(p, q)| (p - q).abs() > tolerance);
+        let mut t0 = 0.0;
+        match approach {
+            Some(f) if far => {
+                let from: Vec<JointState> =
+                    present.iter().map(|&p| JointState::at_rest(p)).collect();
+                let lim = scaled(&tl.limits, f.clamp(0.01, 1.0));
+                let path = traj::retarget(&lim, &from, &target).map_err(|source| {
+                    RunError::Trajectory {
+                        what: "approach to the start",
+                        source,
+                    }
+                })?;
+                t0 = path.duration();
+                tl.segments.push(Segment::new(
+                    0.0,
+                    Kind::Approach,
+                    Path::Plain(Arc::new(path)),
+                ));
+            }
+            _ => {}
+        }
+        if autoplay {
+            tl.segments.push(Segment::new(
+                t0,
+                Kind::Main,
+                Path::Scaled(main, Scale::constant(t0)),
+            ));
+        } else {
+            tl.segments.push(Segment::new(
+                t0,
+                Kind::Hold { last: false },
+                Path::Fixed(target),
+            ));
+            tl.pending = Some(main);
+        }
+        Ok(tl)
+    }
+
+    fn active(&mut self, x: f64) -> Option<&mut Segment> {
+        let i = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= x)
+            .unwrap_or(0);
+        self.segments.get_mut(i)
+    }
+
+    /// The commanded state at `x` (advances the horizon).
+    pub fn sample_cmd(&mut self, x: f64, out: &mut [JointState]) {
+        self.horizon = self.horizon.max(x);
+        if let Some(s) = self.active(x) {
+            s.sample(x, Which::Cmd, out);
+        }
+    }
+
+    /// The reference (where the joints should be) at `x`.
+    pub fn sample_ref(&mut self, x: f64, out: &mut [JointState]) {
+        if let Some(s) = self.active(x) {
+            s.sample(x, Which::Ref, out);
+        }
+    }
+
+    /// Forgets segments no longer needed by references at or after `x`.
+    pub fn prune(&mut self, x: f64) {
+        while self.segments.len() >= 2 && self.segments[1].start <= x {
+            self.segments.remove(0);
+        }
+    }
+
+    /// Whether the run's path is over at reference time `x`, with the
+    /// final position held for `settle` s when the main path completed.
+    pub fn finished(&mut self, x: f64, settle: f64) -> bool {
+        let Some(last) = self.segments.last() else {
+            return true;
+        };
+        if last.start > x || !last.over(x) {
+            self.over_since = None;
+            return false;
+        }
+        let since = *self.over_since.get_or_insert(x);
+        match last.kind {
+            Kind::Main => x - since >= settle,
+            _ => true,
+        }
+    }
+
+    /// The kind of the last segment (what the run is heading for).
+    pub fn last_kind(&self) -> Option<Kind> {
+        self.segments.last().map(|s| s.kind)
+    }
+
+    /// The kind of segment active at `x`.
+    pub fn kind_at(&self, x: f64) -> Option<Kind> {
+        let i = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= x)
+            .unwrap_or(0);
+        self.segments.get(i).map(|s| s.kind)
+    }
+
+    /// The latest commanded time.
+    pub fn horizon(&self) -> f64 {
+        self.horizon
+    }
+
+    fn push(&mut self, seg: Segment) {
+        // A change replaces everything planned after its start.
+        while self.segments.last().is_some_and(|s| s.start > seg.start) {
+            self.segments.pop();
+        }
+        self.over_since = None;
+        self.segments.push(seg);
+    }
+
+    fn state_at_horizon(&mut self) -> Vec<JointState> {
+        let x = self.horizon;
+        let mut st = std::mem::take(&mut self.scratch);
+        if let Some(s) = self.active(x) {
+            s.sample(x, Which::Cmd, &mut st);
+        }
+        let out = st.clone();
+        self.scratch = st;
+        out
+    }
+
+    /// Starts the pending main path (no-op when none waits; resumes when
+    /// paused).
+    pub fn play(&mut self) {
+        match self.pending.take() {
+            Some(main) => {
+                let x = self.horizon;
+                self.push(Segment::new(
+                    x,
+                    Kind::Main,
+                    Path::Scaled(main, Scale::constant(x)),
+                ));
+            }
+            None => self.set_speed(1.0),
+        }
+    }
+
+    /// Ramps the main path's time scale to `target` (0: pause, 1: resume).
+    pub fn set_speed(&mut self, target: f64) {
+        let x = self.horizon;
+        let ramp = self.ramp;
+        if let Some(seg) = self.segments.last_mut() {
+            if let Path::Scaled(_, scale) = &mut seg.path {
+                *scale = scale.ramp_to(x.max(seg.start), target, ramp);
+            }
+        }
+        self.over_since = None;
+    }
+
+    /// Stops along a jerk-limited path from the commanded state, then holds.
+    pub fn stop(&mut self) -> Result<(), RunError> {
+        let st = self.state_at_horizon();
+        let path = traj::stop(&self.limits, &st).map_err(|source| RunError::Trajectory {
+            what: "stop",
+            source,
+        })?;
+        let x = self.horizon;
+        self.pending = None;
+        self.push(Segment::new(x, Kind::Stop, Path::Plain(Arc::new(path))));
+        Ok(())
+    }
+
+    /// Holds `positions` (rad) from the horizon on; the run ends there.
+    pub fn hold(&mut self, positions: Vec<f64>) {
+        let x = self.horizon;
+        self.pending = None;
+        self.push(Segment::new(
+            x,
+            Kind::Hold { last: true },
+            Path::Fixed(positions),
+        ));
+    }
+
+    /// Replaces the path: a jerk-limited transition from the commanded
+    /// state to `main`'s start, then `main`.
+    pub fn replace(&mut self, main: Arc<Trajectory>) -> Result<(), RunError> {
+        let n = self.limits.len();
+        if main.joints() != n {
+            return Err(RunError::Invalid(format!(
+                "the new path has {} joints, the robot {n}",
+                main.joints()
+            )));
+        }
+        let st = self.state_at_horizon();
+        let mut start = vec![JointState::default(); n];
+        main.sample(0.0, &mut start);
+        let target: Vec<f64> = start.iter().map(|s| s.position).collect();
+        let path =
+            traj::retarget(&self.limits, &st, &target).map_err(|source| RunError::Trajectory {
+                what: "transition to the new path",
+                source,
+            })?;
+        let x = self.horizon;
+        let x1 = x + path.duration();
+        self.pending = None;
+        self.push(Segment::new(
+            x,
+            Kind::Transition,
+            Path::Plain(Arc::new(path)),
+        ));
+        self.push(Segment::new(
+            x1,
+            Kind::Main,
+            Path::Scaled(main, Scale::constant(x1)),
+        ));
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_scale_integrates_its_ramp() {
+        let s = Scale::constant(1.0).ramp_to(2.0, 0.0, 0.5);
+        assert_eq!(s.at(2.0), (1.0, 1.0, 0.0));
+        let (tau, v, dv) = s.at(2.25);
+        assert!((v - 0.5).abs() < 1e-12 && dv < 0.0);
+        // Midway through a symmetric ramp the integral is 0.25 * (1 + 0.5) - ...
+        assert!(tau > 1.125 && tau < 1.25, "{tau}");
+        let (tau_end, v_end, _) = s.at(3.0);
+        assert_eq!(v_end, 0.0);
+        assert!((tau_end - 1.25).abs() < 1e-12, "{tau_end}");
+    }
+}

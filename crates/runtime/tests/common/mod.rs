@@ -1,0 +1,147 @@
+//! Shared helpers of the runtime's tests: robots and simulated buses.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use servobus_driver::{Bus, ManualClock};
+use servobus_runtime::bus_settings;
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot};
+use servobus_sim::{SimBus, SimModel, SimServo};
+use servobus_trajectory::Trajectory;
+
+/// A file under the workspace's `configs/`.
+pub fn config(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs")
+        .join(rel)
+}
+
+/// A robot file under `configs/robots/`.
+pub fn robot(name: &str) -> Robot {
+    load_robot(&config(&format!("robots/{name}"))).expect("robot file loads")
+}
+
+/// A motion under `configs/motions/`, planned, with its robot.
+pub fn motion(name: &str) -> (Trajectory, Robot) {
+    let (m, r) = load_motion(&config(&format!("motions/{name}")), None).expect("motion loads");
+    let t = plan_motion(&m, &r).expect("motion plans");
+    (t, r)
+}
+
+/// One simulated bus per robot bus, each with its own clock, servos at
+/// their return delay from the robot file, at tick `start` (middle when None).
+pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+    let mut buses = Vec::new();
+    let mut sims = Vec::new();
+    for b in &robot.buses {
+        let clock = ManualClock::new();
+        let sim = SimBus::new(clock.clone(), b.baud).with_servos(b.joints.iter().map(|j| {
+            let model = SimModel::by_name(j.model.name).expect("the simulator knows the model");
+            SimServo::new(model, j.id).with_return_delay(b.return_delay)
+        }));
+        sims.push(sim.clone());
+        buses.push(Bus::new(sim, clock, bus_settings(b)));
+    }
+    (buses, sims)
+}
+
+/// Seconds as a Duration.
+pub fn secs(s: f64) -> Duration {
+    Duration::from_secs_f64(s)
+}
+
+/// Like [`sim_buses`], with every servo already at the path's start.
+pub fn sim_buses_at(
+    robot: &Robot,
+    path: &Trajectory,
+) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+    use servobus_runtime::config::JointMap;
+    use servobus_trajectory::JointState;
+    let (buses, sims) = sim_buses(robot);
+    let mut start = vec![JointState::default(); robot.joint_count()];
+    path.sample(0.0, &mut start);
+    let mut i = 0;
+    for (b, sim) in robot.buses.iter().zip(&sims) {
+        for j in &b.joints {
+            let tick = JointMap::new(j, robot.units).to_ticks(start[i].position);
+            sim.servo(j.id, |s| s.move_joint(tick));
+            i += 1;
+        }
+    }
+    (buses, sims)
+}
+
+/// Every telemetry cycle sample of a run, collected by stepping it.
+pub struct Recorded {
+    /// `(cycle, joint, commanded, error, measured)` in report units.
+    pub rows: Vec<(u64, usize, f64, f64, Option<f64>)>,
+    /// Faults published.
+    pub faults: Vec<servobus_runtime::Fault>,
+}
+
+/// Steps `run` until it ends or `max` cycles pass, calling `each(cycle)`
+/// before every step, and records the telemetry.
+pub fn record<T: servobus_driver::Transport>(
+    run: &mut servobus_runtime::VirtualRun<T>,
+    max: u64,
+    mut each: impl FnMut(u64),
+) -> Recorded {
+    use servobus_runtime::Telemetry;
+    let rx = run.telemetry();
+    let mut rec = Recorded {
+        rows: Vec::new(),
+        faults: Vec::new(),
+    };
+    let drain = |rec: &mut Recorded| {
+        while let Ok(m) = rx.try_recv() {
+            match m {
+                Telemetry::Cycle(c) => {
+                    for j in c.joints() {
+                        rec.rows
+                            .push((c.cycle, j.joint, j.commanded, j.error, j.measured));
+                    }
+                }
+                Telemetry::Fault(f) => rec.faults.push(f),
+                _ => {}
+            }
+        }
+    };
+    for _ in 0..max {
+        each(run.cycle());
+        let going = run.step();
+        drain(&mut rec);
+        if !going {
+            break;
+        }
+    }
+    rec
+}
+
+impl Recorded {
+    /// The commanded positions of `joint`, one per cycle.
+    pub fn commanded(&self, joint: usize) -> Vec<f64> {
+        self.rows
+            .iter()
+            .filter(|r| r.1 == joint)
+            .map(|r| r.2)
+            .collect()
+    }
+
+    /// Largest |first, second, third difference| / period^n of `joint`'s
+    /// commands from cycle `from` on: velocity, acceleration, jerk.
+    pub fn peaks(&self, joint: usize, from: u64, period: f64) -> (f64, f64, f64) {
+        let c: Vec<f64> = self
+            .rows
+            .iter()
+            .filter(|r| r.1 == joint && r.0 >= from)
+            .map(|r| r.2)
+            .collect();
+        let d = |v: &[f64]| v.windows(2).map(|w| w[1] - w[0]).collect::<Vec<_>>();
+        let d1 = d(&c);
+        let d2 = d(&d1);
+        let d3 = d(&d2);
+        let m = |v: &[f64], p: i32| v.iter().fold(0.0f64, |a, x| a.max(x.abs())) / period.powi(p);
+        (m(&d1, 1), m(&d2, 2), m(&d3, 3))
+    }
+}

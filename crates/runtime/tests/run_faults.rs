@@ -1,0 +1,242 @@
+//! Each fault, injected in the simulated arm, is detected within 3 cycles
+//! and leads to its reaction, reported with the joint, values and time.
+
+mod common;
+
+use servobus_protocol::StatusFlags;
+use servobus_runtime::{
+    Fault, FaultKind, FaultPolicy, Finish, Lead, Reaction, RunOptions, VirtualRun,
+};
+use servobus_sim::SimBus;
+use servobus_trajectory::{JointState, Trajectory};
+
+const PERIOD: f64 = 0.005;
+const WRIST_FLEX: usize = 3;
+const WRIST_FLEX_ID: u8 = 4;
+
+/// The cycle at which joint `j` of `path` moves fastest.
+fn fastest_cycle(path: &Trajectory, j: usize) -> u64 {
+    let mut s = vec![JointState::default(); path.joints()];
+    let mut best = (0.0, 0u64);
+    let mut k = 0u64;
+    while (k as f64) * PERIOD < path.duration() {
+        path.sample(k as f64 * PERIOD, &mut s);
+        if s[j].velocity.abs() > best.0 {
+            best = (s[j].velocity.abs(), k);
+        }
+        k += 1;
+    }
+    best.1
+}
+
+fn arm(policy: FaultPolicy, lead: Lead) -> (VirtualRun<SimBus>, Vec<SimBus>, Trajectory) {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, sims) = common::sim_buses_at(&robot, &path);
+    let options = RunOptions {
+        faults: policy,
+        lead,
+        telemetry_capacity: 256,
+        ..RunOptions::default()
+    };
+    let run = VirtualRun::new(&robot, path.clone(), buses, options).expect("starts");
+    (run, sims, path)
+}
+
+fn the_fault(run: &VirtualRun<SimBus>, rec: &common::Recorded) -> Fault {
+    let f = run.fault().expect("a fault was detected").clone();
+    assert_eq!(rec.faults.first(), Some(&f), "and published");
+    assert_eq!(run.finished(), Some(Finish::Fault));
+    println!("{f}");
+    f
+}
+
+/// The stop after a fault is jerk-limited: commands stay within the arm's
+/// limits (wrist_flex: 240 deg/s, 1200 deg/s^2, 12000 deg/s^3), with 5 %
+/// for the finite differences.
+fn assert_smooth_from(rec: &common::Recorded, from: u64) {
+    let (v, a, j) = rec.peaks(WRIST_FLEX, from, PERIOD);
+    println!("wrist_flex after cycle {from}: {v:.1} deg/s, {a:.0} deg/s^2, {j:.0} deg/s^3");
+    assert!(v <= 240.0 * 1.05 && a <= 1200.0 * 1.05 && j <= 12_000.0 * 1.05);
+}
+
+#[test]
+fn a_vanished_servo_is_detected_within_3_cycles_and_the_arm_stops_smoothly() {
+    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
+    let at = fastest_cycle(&path, WRIST_FLEX);
+    let rec = common::record(&mut run, 5_000, |k| {
+        if k == at {
+            sims[0].servo(WRIST_FLEX_ID, |s| s.set_offline(true));
+        }
+    });
+    let f = the_fault(&run, &rec);
+    assert!(
+        matches!(f.kind, FaultKind::Missing { cycles: 3, .. }),
+        "{f:?}"
+    );
+    assert_eq!(f.joint.as_deref(), Some("wrist_flex"));
+    assert_eq!(f.servo_id, Some(WRIST_FLEX_ID));
+    assert!(
+        f.cycle >= at && f.cycle - at < 3,
+        "cycle {} vs injection {at}",
+        f.cycle
+    );
+    assert_eq!(f.reaction, Reaction::Stop);
+    assert!((f.time_s - f.cycle as f64 * PERIOD).abs() < 1e-9);
+    assert_smooth_from(&rec, at.saturating_sub(5));
+}
+
+#[test]
+fn a_status_flag_is_detected_at_the_next_reading() {
+    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
+    let at = fastest_cycle(&path, WRIST_FLEX);
+    let rec = common::record(&mut run, 5_000, |k| {
+        if k == at {
+            sims[0].servo(2, |s| s.inject_status(StatusFlags::OVERHEAT));
+        }
+    });
+    let f = the_fault(&run, &rec);
+    assert_eq!(
+        f.kind,
+        FaultKind::Status {
+            flags: StatusFlags::OVERHEAT,
+            names: "overheat".into()
+        }
+    );
+    assert_eq!(f.joint.as_deref(), Some("shoulder_lift"));
+    assert_eq!(f.cycle, at);
+    assert_smooth_from(&rec, at.saturating_sub(5));
+}
+
+#[test]
+fn a_blocked_joint_is_found_stalled_within_3_cycles_and_held() {
+    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
+    let at = fastest_cycle(&path, WRIST_FLEX) - 10;
+    let rec = common::record(&mut run, 5_000, |k| {
+        if k == at {
+            sims[0].servo(WRIST_FLEX_ID, |s| s.set_blocked(true));
+        }
+    });
+    let f = the_fault(&run, &rec);
+    let FaultKind::Stall {
+        error,
+        planned_velocity,
+        measured_velocity,
+        cycles,
+    } = f.kind
+    else {
+        panic!("not a stall: {f:?}");
+    };
+    assert_eq!(cycles, 3);
+    assert!(error.abs() > 2.0 && measured_velocity.abs() < 0.25 * planned_velocity.abs());
+    // The condition (error beyond 2 deg while the joint does not follow)
+    // first showed in telemetry at `onset`; detection is on its 3rd cycle.
+    let onset = rec
+        .rows
+        .iter()
+        .find(|r| r.1 == WRIST_FLEX && r.0 > at && r.3.abs() > 2.0)
+        .map(|r| r.0)
+        .expect("the error grew");
+    assert!(f.cycle - onset <= 2, "onset {onset}, detected {}", f.cycle);
+    assert_eq!(f.reaction, Reaction::Hold);
+    // Hold: the blocked joint is now commanded where it stands.
+    let held = sims[0].servo(WRIST_FLEX_ID, |s| {
+        (s.goal_position() - s.present_position()).abs()
+    });
+    assert!(held.is_some_and(|d| d <= 1), "{held:?}");
+}
+
+#[test]
+fn a_following_error_is_detected_on_its_third_cycle_and_torque_goes_off() {
+    // Without lead the arm trails its path by up to 3.6 deg: a tolerance of
+    // 1.5 deg is exceeded.
+    let policy = FaultPolicy {
+        following_error: 1.5f64.to_radians(),
+        on_following_error: Reaction::TorqueOff,
+        stall_error: f64::INFINITY,
+        ..FaultPolicy::default()
+    };
+    let (mut run, sims, _) = arm(policy, Lead::None);
+    let rec = common::record(&mut run, 5_000, |_| {});
+    let f = the_fault(&run, &rec);
+    let FaultKind::FollowingError {
+        error,
+        tolerance,
+        cycles,
+    } = f.kind
+    else {
+        panic!("not a following error: {f:?}");
+    };
+    assert_eq!(cycles, 3);
+    assert!(error.abs() > tolerance && (tolerance - 1.5).abs() < 1e-9);
+    let joint = run
+        .fault()
+        .and_then(|f| f.joint.clone())
+        .unwrap_or_default();
+    let index = [
+        "shoulder_pan",
+        "shoulder_lift",
+        "elbow_flex",
+        "wrist_flex",
+        "wrist_roll",
+        "gripper",
+    ]
+    .iter()
+    .position(|n| *n == joint)
+    .expect("a joint of the arm");
+    let onset = rec
+        .rows
+        .iter()
+        .find(|r| r.1 == index && r.3.abs() > 1.5)
+        .map(|r| r.0)
+        .expect("the error grew");
+    assert_eq!(f.cycle, onset + 2);
+    for id in 1..=6 {
+        assert_eq!(
+            sims[0].servo(id, |s| s.torque_enabled()),
+            Some(false),
+            "servo {id}"
+        );
+    }
+}
+
+#[test]
+fn a_lost_port_stops_the_other_bus_of_the_hexapod() {
+    let (path, robot) = {
+        let (m, r) = servobus_runtime::config::load_motion(
+            &common::config("motions/hexapod-tripod.yaml"),
+            Some(&common::config("robots/hexapod-2bus.yaml")),
+        )
+        .expect("loads");
+        (
+            servobus_runtime::config::plan_motion(&m, &r).expect("plans"),
+            r,
+        )
+    };
+    let (buses, sims) = common::sim_buses_at(&robot, &path);
+    let options = RunOptions {
+        telemetry_capacity: 256,
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let at = 150;
+    let rec = common::record(&mut run, 5_000, |k| {
+        if k == at {
+            sims[1].set_disconnected(true);
+        }
+    });
+    let f = run.fault().expect("a fault").clone();
+    println!("{f}");
+    assert!(matches!(f.kind, FaultKind::PortGone { .. }));
+    assert_eq!((f.bus.as_str(), f.cycle), ("right", at));
+    assert_eq!(f.reaction, Reaction::Stop);
+    assert_eq!(run.finished(), Some(Finish::Fault));
+    // The left bus stopped along its jerk-limited path (period 10 ms at
+    // 100 Hz; hexapod legs: at most 240 deg/s, 1500 deg/s^2, 15000 deg/s^3).
+    for j in 0..9 {
+        let (v, a, jerk) = rec.peaks(j, at - 5, 0.01);
+        assert!(
+            v <= 240.0 * 1.05 && a <= 1500.0 * 1.05 && jerk <= 15_000.0 * 1.05,
+            "{j}: {v} {a} {jerk}"
+        );
+    }
+}

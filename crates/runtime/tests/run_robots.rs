@@ -1,0 +1,198 @@
+//! End to end in virtual time: the arm within a stated tracking bound, the
+//! 18-servo hexapod on one bus and on two buses in step, the SCS robot, and
+//! stop / replace / pause commands mid-motion.
+
+mod common;
+
+use servobus_runtime::config::{load_motion, plan_motion};
+use servobus_runtime::{Command, Finish, Report, RunOptions, VirtualRun};
+
+fn quiet() -> RunOptions {
+    RunOptions {
+        telemetry_capacity: 0,
+        ..RunOptions::default()
+    }
+}
+
+fn show(r: &Report) {
+    println!(
+        "{} cycles at {} Hz (planned {}), worst RMS {:.3} {}, worst max {:.3}, utilisation {:.3}, lead {:.1} ms",
+        r.cycles,
+        r.achieved_rate_hz,
+        r.planned_rate_hz,
+        r.worst_rms_error(),
+        r.units,
+        r.worst_max_error(),
+        r.utilisation,
+        r.lead_ms
+    );
+}
+
+#[test]
+fn the_arm_plays_pick_and_place_within_half_a_degree_rms() {
+    let (path, robot) = common::motion("arm-pick-place.yaml");
+    let (buses, _) = common::sim_buses(&robot);
+    let r = VirtualRun::new(&robot, path, buses, quiet())
+        .expect("starts")
+        .run();
+    show(&r);
+    assert_eq!(r.finish, Finish::Completed);
+    assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
+    assert_eq!(
+        (r.overruns, r.clamps, r.missed_replies, r.timeouts),
+        (0, 0, 0, 0)
+    );
+    // Stated bound: every joint within 0.5 deg RMS and 2 deg at worst.
+    assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
+}
+
+#[test]
+fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
+    let play = |robot_file: &str| {
+        let (m, robot) = load_motion(
+            &common::config("motions/hexapod-tripod.yaml"),
+            Some(&common::config(robot_file)),
+        )
+        .expect("loads");
+        let path = plan_motion(&m, &robot).expect("plans");
+        let (buses, _) = common::sim_buses(&robot);
+        let r = VirtualRun::new(&robot, path, buses, quiet())
+            .expect("starts")
+            .run();
+        show(&r);
+        assert_eq!(r.finish, Finish::Completed);
+        assert_eq!(r.achieved_rate_hz, 100.0);
+        assert_eq!((r.overruns, r.clamps, r.missed_replies), (0, 0, 0));
+        assert_eq!(r.joints.len(), 18);
+        assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
+        r
+    };
+    let one = play("robots/hexapod.yaml");
+    let two = play("robots/hexapod-2bus.yaml");
+    // In step: both buses ran every cycle, and the same number as one bus.
+    assert_eq!(two.buses.len(), 2);
+    assert!(two.buses.iter().all(|b| b.cycles == two.cycles));
+    assert_eq!(one.cycles, two.cycles);
+    // Two wires in parallel: each bus is about half as busy.
+    assert!(
+        two.utilisation < 0.6 * one.utilisation,
+        "{} vs {}",
+        two.utilisation,
+        one.utilisation
+    );
+}
+
+#[test]
+fn the_scs_robot_reads_servo_by_servo() {
+    let (path, robot) = common::motion("scs-mini-nod.yaml");
+    let (buses, _) = common::sim_buses(&robot);
+    let r = VirtualRun::new(&robot, path, buses, quiet())
+        .expect("starts")
+        .run();
+    show(&r);
+    assert_eq!(r.finish, Finish::Completed);
+    assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
+    assert_eq!((r.overruns, r.missed_replies), (0, 0));
+    // The SCS0009's ticks are 0.29 deg: a coarser bound.
+    for j in &r.joints {
+        println!("{}: rms {:.3} max {:.3}", j.name, j.rms_error, j.max_error);
+    }
+    assert!(r.worst_rms_error() < 1.0, "{}", r.worst_rms_error());
+}
+
+/// Plays arm-wave from its start, sends `command` at cycle `at`, and checks
+/// the commands of every joint stay within the arm's limits (5 % for the
+/// finite differences) around it.
+fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report, common::Recorded) {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _) = common::sim_buses_at(&robot, &path);
+    let options = RunOptions {
+        telemetry_capacity: 256,
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let tx = run.commands();
+    let mut command = Some(command);
+    let rec = common::record(&mut run, 20_000, |k| {
+        if k == at {
+            if let Some(c) = command.take() {
+                tx.try_send(c).expect("room for a command");
+            }
+        }
+    });
+    let limits: Vec<(f64, f64, f64)> = robot
+        .joints()
+        .map(|j| {
+            (
+                j.max_velocity,
+                j.max_acceleration,
+                j.max_jerk.unwrap_or(f64::INFINITY),
+            )
+        })
+        .collect();
+    for (i, (v_max, a_max, j_max)) in limits.into_iter().enumerate() {
+        let (v, a, j) = rec.peaks(i, at - 20, 0.005);
+        println!("joint {i}: {v:.1} deg/s, {a:.0} deg/s^2, {j:.0} deg/s^3");
+        assert!(v <= v_max * 1.05 && a <= a_max * 1.5, "joint {i}");
+        if jerk_limited {
+            assert!(j <= j_max * 1.05, "joint {i}");
+        }
+    }
+    (run.report(), rec)
+}
+
+#[test]
+fn a_stop_mid_motion_is_jerk_limited_and_ends_the_run() {
+    let (r, rec) = command_mid_motion(Command::Stop, 300, true);
+    assert_eq!(r.finish, Finish::Stopped);
+    assert!(r.fault.is_none());
+    // It stopped early (arm-wave lasts about 1600 cycles).
+    let last = rec.rows.last().map_or(0, |r| r.0);
+    assert!((300..600).contains(&last), "{last}");
+}
+
+#[test]
+fn a_replacement_mid_motion_is_continuous() {
+    let (m, robot) =
+        load_motion(&common::config("motions/arm-pick-place.yaml"), None).expect("loads");
+    let other = plan_motion(&m, &robot).expect("plans");
+    let duration = other.duration();
+    let (r, rec) = command_mid_motion(Command::replace(other), 300, true);
+    assert_eq!(r.finish, Finish::Completed);
+    // The run went on for the transition and the whole new path.
+    let last = rec.rows.last().map_or(0, |r| r.0) as f64 * 0.005;
+    assert!(last > 1.5 + duration, "{last}");
+}
+
+#[test]
+fn pause_holds_on_the_path_and_resume_continues() {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _) = common::sim_buses_at(&robot, &path);
+    let options = RunOptions {
+        telemetry_capacity: 256,
+        ..RunOptions::default()
+    };
+    let plain = (path.duration() / 0.005) as u64;
+    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let tx = run.commands();
+    let rec = common::record(&mut run, 20_000, |k| {
+        if k == 300 {
+            let _ = tx.try_send(Command::Pause);
+        }
+        if k == 900 {
+            let _ = tx.try_send(Command::Resume);
+        }
+    });
+    let r = run.report();
+    assert_eq!(r.finish, Finish::Completed);
+    // Paused: between the end of the ramp and the resume nothing moves.
+    for j in 0..6 {
+        let c = rec.commanded(j);
+        assert!((c[800] - c[700]).abs() < 1e-9, "joint {j}");
+        let (v, a, _) = rec.peaks(j, 0, 0.005);
+        assert!(v < 300.0 && a < 2000.0, "joint {j}: {v} {a}");
+    }
+    // It played the whole path, about 600 cycles late (the ramps take back
+    // a little).
+    assert!(r.cycles > plain + 450, "{} vs {plain}", r.cycles);
+}

@@ -1,0 +1,138 @@
+//! The bare control loop on the real clock: how evenly does it tick?
+//!
+//! Runs an empty cycle at a fixed rate for a fixed time with the runtime's
+//! [`Pacer`] (absolute deadlines, sleep then spin) and prints the period
+//! error (how far each interval between cycle starts is from the period),
+//! the wake-up lateness, overruns and the total drift.
+//!
+//! ```text
+//! cargo run --release --example loop_jitter -- --rate 1000 --seconds 60
+//! cargo run --release --example loop_jitter -- --rate 1000 --seconds 60 --core 1 --fifo 80
+//! ```
+
+use std::time::Duration;
+
+use clap::Parser;
+use servobus_driver::{Clock, SystemClock};
+use servobus_runtime::pacer::Pacer;
+use servobus_runtime::rt::{self, RtOptions};
+use servobus_runtime::stats::Histogram;
+
+/// Measure the period error of the bare control loop.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Loop rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    rate: f64,
+    /// How long to run, s.
+    #[arg(long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Spin for this long before each deadline instead of sleeping, us.
+    #[arg(long, default_value_t = 200)]
+    spin_us: u64,
+    /// Pin the loop thread to this core.
+    #[arg(long)]
+    core: Option<usize>,
+    /// Run the loop thread under SCHED_FIFO at this priority.
+    #[arg(long)]
+    fifo: Option<i32>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+fn us(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e6
+}
+
+fn main() {
+    let args = Args::parse();
+    if !(args.rate.is_finite() && args.rate > 0.0 && args.seconds > 0.0) {
+        eprintln!("error: --rate and --seconds must be positive");
+        std::process::exit(2);
+    }
+    let rt_report = rt::apply(RtOptions {
+        core: args.core,
+        fifo_priority: args.fifo,
+    });
+    for w in &rt_report.warnings {
+        eprintln!("warning: {w}");
+    }
+    let period = Duration::from_nanos((1e9 / args.rate).round() as u64);
+    let cycles = (args.seconds * args.rate).round() as u64;
+    let clock = SystemClock::new();
+    let start = clock.now() + Duration::from_millis(10);
+    let mut pacer = Pacer::new(clock, start, period).with_spin(Duration::from_micros(args.spin_us));
+    let mut period_error = Histogram::new(Duration::from_millis(100));
+    let mut lateness = Histogram::new(Duration::from_millis(100));
+    let first = pacer.wait();
+    let mut last = first;
+    let mut ran = 1u64;
+    while last.index + 1 < cycles {
+        let tick = pacer.wait();
+        let expected = period * u32::try_from(tick.index - last.index).unwrap_or(u32::MAX);
+        let interval = tick.woke - last.woke;
+        period_error.record(if interval > expected {
+            interval - expected
+        } else {
+            expected - interval
+        });
+        lateness.record(tick.lateness());
+        last = tick;
+        ran += 1;
+    }
+    // Drift: how far the last cycle's start is from where an ideal clock
+    // ticking at the rate from the first start would put it.
+    let ideal = period * u32::try_from(last.index - first.index).unwrap_or(u32::MAX);
+    let span = last.woke - first.woke;
+    let drift_us = span.as_secs_f64() * 1e6 - ideal.as_secs_f64() * 1e6;
+    let scheduling = if rt_report.fifo_priority.is_some() || rt_report.pinned.is_some() {
+        format!(
+            "real-time (core {:?}, SCHED_FIFO {:?})",
+            rt_report.pinned, rt_report.fifo_priority
+        )
+    } else {
+        "normal".to_owned()
+    };
+    if args.json {
+        println!(
+            "{{\"rate_hz\":{},\"seconds\":{},\"scheduling\":\"{}\",\"cycles\":{},\"overruns\":{},\
+             \"period_error_us\":{{\"p50\":{},\"p99\":{},\"max\":{}}},\
+             \"lateness_us\":{{\"p50\":{},\"p99\":{},\"max\":{}}},\"drift_us\":{:.3}}}",
+            args.rate,
+            args.seconds,
+            scheduling,
+            ran,
+            pacer.overruns(),
+            us(period_error.quantile(0.5)),
+            us(period_error.quantile(0.99)),
+            us(period_error.max()),
+            us(lateness.quantile(0.5)),
+            us(lateness.quantile(0.99)),
+            us(lateness.max()),
+            drift_us
+        );
+    } else {
+        println!(
+            "{} Hz for {} s, {scheduling} scheduling, spin {} us",
+            args.rate, args.seconds, args.spin_us
+        );
+        println!("cycles        {ran} ({} overruns)", pacer.overruns());
+        println!(
+            "period error  p50 {:.0} us  p99 {:.0} us  max {:.0} us",
+            us(period_error.quantile(0.5)),
+            us(period_error.quantile(0.99)),
+            us(period_error.max())
+        );
+        println!(
+            "lateness      p50 {:.0} us  p99 {:.0} us  max {:.0} us",
+            us(lateness.quantile(0.5)),
+            us(lateness.quantile(0.99)),
+            us(lateness.max())
+        );
+        println!(
+            "total drift   {drift_us:.3} us over {:.3} s",
+            span.as_secs_f64()
+        );
+    }
+}

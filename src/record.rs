@@ -1,0 +1,260 @@
+//! What `servobus play` keeps of the telemetry: a CSV log (one row per
+//! cycle and joint) and the series of the plot (commanded and measured
+//! position and tracking error per joint).
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+use anyhow::Context;
+use servobus_runtime::CycleSample;
+
+/// The CSV log of a run.
+pub struct CsvLog {
+    writer: csv::Writer<BufWriter<File>>,
+    names: Vec<String>,
+}
+
+impl CsvLog {
+    /// Creates `path` and writes the header; angles are in `units`.
+    pub fn create(path: &Path, names: Vec<String>, units: &str) -> anyhow::Result<Self> {
+        let file = File::create(path)
+            .with_context(|| format!("cannot create the log {}", path.display()))?;
+        let mut writer = csv::Writer::from_writer(BufWriter::new(file));
+        writer.write_record([
+            "time_s".to_string(),
+            "bus".into(),
+            "cycle".into(),
+            "joint".into(),
+            format!("commanded_{units}"),
+            format!("planned_{units}"),
+            format!("measured_{units}"),
+            format!("error_{units}"),
+            format!("velocity_{units}_s"),
+            "feedback_age_ms".into(),
+            "stale".into(),
+            "clamped".into(),
+            "lateness_us".into(),
+            "busy_us".into(),
+            "skipped".into(),
+        ])?;
+        Ok(CsvLog { writer, names })
+    }
+
+    /// Writes one row per joint of `sample`.
+    pub fn record(&mut self, sample: &CycleSample) -> anyhow::Result<()> {
+        for j in sample.joints() {
+            let name = self.names.get(j.joint).map_or("?", String::as_str);
+            self.writer.write_record([
+                format!("{:.6}", sample.time_s),
+                sample.bus.to_string(),
+                sample.cycle.to_string(),
+                name.to_string(),
+                format!("{:.4}", j.commanded),
+                format!("{:.4}", j.planned),
+                j.measured.map_or_else(String::new, |m| format!("{m:.4}")),
+                format!("{:.4}", j.error),
+                format!("{:.4}", j.velocity),
+                format!("{:.3}", j.feedback_age.as_secs_f64() * 1e3),
+                u8::from(j.stale).to_string(),
+                u8::from(j.clamped).to_string(),
+                format!("{:.1}", sample.lateness.as_secs_f64() * 1e6),
+                format!("{:.1}", sample.busy.as_secs_f64() * 1e6),
+                sample.skipped.to_string(),
+            ])?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the file.
+    pub fn finish(mut self) -> anyhow::Result<()> {
+        self.writer.flush()?;
+        Ok(())
+    }
+}
+
+/// One joint's series for the plot.
+#[derive(Default)]
+struct Series {
+    commanded: Vec<(f64, f64)>,
+    measured: Vec<(f64, f64)>,
+    error: Vec<(f64, f64)>,
+}
+
+/// Commanded and measured positions and tracking errors over time.
+pub struct PlotData {
+    names: Vec<String>,
+    joints: Vec<Series>,
+}
+
+impl PlotData {
+    /// Empty series for the joints `names`.
+    pub fn new(names: Vec<String>) -> Self {
+        let joints = names.iter().map(|_| Series::default()).collect();
+        PlotData { names, joints }
+    }
+
+    /// Adds the joints of `sample`.
+    pub fn record(&mut self, sample: &CycleSample) {
+        let t = sample.time_s;
+        for j in sample.joints() {
+            let Some(s) = self.joints.get_mut(j.joint) else {
+                continue;
+            };
+            s.commanded.push((t, j.commanded));
+            if let Some(m) = j.measured {
+                if !j.stale {
+                    s.measured.push((t, m));
+                    s.error.push((t, j.error));
+                }
+            }
+        }
+    }
+
+    /// Draws one chart per joint (commanded and measured position) and one
+    /// of every joint's tracking error, as SVG or (for a `.png` path) PNG.
+    pub fn draw(&self, path: &Path, title: &str, units: &str) -> anyhow::Result<()> {
+        let png = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let n = self.joints.len().max(1);
+        let cols = if n <= 4 { 2 } else { 3 };
+        let rows = n.div_ceil(cols);
+        let width = 520 * cols as u32;
+        let height = 60 + 300 * rows as u32 + 340;
+        if png {
+            let root = plotters::prelude::BitMapBackend::new(path, (width, height));
+            self.draw_on(root, title, units, rows, cols)
+        } else {
+            let root = plotters::prelude::SVGBackend::new(path, (width, height));
+            self.draw_on(root, title, units, rows, cols)
+        }
+        .with_context(|| format!("cannot draw {}", path.display()))
+    }
+
+    fn draw_on<DB>(
+        &self,
+        backend: DB,
+        title: &str,
+        units: &str,
+        rows: usize,
+        cols: usize,
+    ) -> anyhow::Result<()>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+
+        let root = backend.into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let root = root.titled(title, ("sans-serif", 26)).map_err(plot_err)?;
+        let (_, h) = root.dim_in_pixel();
+        let (grid, bottom) = root.split_vertically(h.saturating_sub(340));
+        let cells = grid.split_evenly((rows, cols));
+        let t_end = self
+            .joints
+            .iter()
+            .flat_map(|s| s.commanded.last())
+            .map(|p| p.0)
+            .fold(1e-3, f64::max);
+
+        for (j, (series, area)) in self.joints.iter().zip(cells.iter()).enumerate() {
+            let name = self.names.get(j).map_or("?", String::as_str);
+            let range = span(series.commanded.iter().chain(&series.measured));
+            let mut chart = ChartBuilder::on(area)
+                .caption(name, ("sans-serif", 18))
+                .margin(8)
+                .x_label_area_size(32)
+                .y_label_area_size(56)
+                .build_cartesian_2d(0.0..t_end, range)
+                .map_err(plot_err)?;
+            chart
+                .configure_mesh()
+                .x_desc("time (s)")
+                .y_desc(format!("position ({units})"))
+                .max_light_lines(2)
+                .draw()
+                .map_err(plot_err)?;
+            chart
+                .draw_series(LineSeries::new(
+                    series.commanded.iter().copied(),
+                    BLUE.stroke_width(2),
+                ))
+                .map_err(plot_err)?
+                .label("commanded")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLUE.stroke_width(2)));
+            chart
+                .draw_series(LineSeries::new(
+                    series.measured.iter().copied(),
+                    RED.stroke_width(1),
+                ))
+                .map_err(plot_err)?
+                .label("measured")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RED.stroke_width(1)));
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(plot_err)?;
+        }
+
+        let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
+        let mut chart = ChartBuilder::on(&bottom)
+            .caption(
+                "tracking error (planned minus measured)",
+                ("sans-serif", 18),
+            )
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..t_end, range)
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(format!("error ({units})"))
+            .draw()
+            .map_err(plot_err)?;
+        for (j, series) in self.joints.iter().enumerate() {
+            let color = Palette99::pick(j).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    series.error.iter().copied(),
+                    color.stroke_width(1),
+                ))
+                .map_err(plot_err)?
+                .label(self.names.get(j).cloned().unwrap_or_default())
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(plot_err)?;
+        root.present().map_err(plot_err)?;
+        Ok(())
+    }
+}
+
+fn plot_err<E: std::error::Error + Send + Sync + 'static>(e: E) -> anyhow::Error {
+    anyhow::Error::new(e)
+}
+
+/// The y range of some points, padded by 5 % (at least a little).
+fn span<'a>(points: impl Iterator<Item = &'a (f64, f64)>) -> std::ops::Range<f64> {
+    let (lo, hi) = points.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, y)| {
+        (lo.min(y), hi.max(y))
+    });
+    if !lo.is_finite() || !hi.is_finite() {
+        return -1.0..1.0;
+    }
+    let pad = ((hi - lo) * 0.05).max(0.05);
+    (lo - pad)..(hi + pad)
+}

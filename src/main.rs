@@ -5,7 +5,6 @@
 
 mod cmd;
 mod record;
-mod simrobot;
 
 use clap::Parser;
 

@@ -6,78 +6,13 @@
 //! simulator's process may be scheduled milliseconds late. Nothing in this
 //! test measures time.
 
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
-use std::time::Duration;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_servobus");
+use std::process::{Command, Output};
+
+use common::{Sim, BIN};
+
 const LATENCY: &str = "10000";
-
-/// The simulator process; killed when dropped (also when a check fails).
-struct Sim {
-    child: Child,
-    link: PathBuf,
-}
-
-impl Sim {
-    fn start(dir: &Path) -> Sim {
-        let link = dir.join("bus");
-        let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml");
-        let mut child = Command::new(BIN)
-            .args(["sim", "--robot"])
-            .arg(&robot)
-            .arg("--link")
-            .arg(&link)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start servobus sim");
-        let stdout = child.stdout.take().expect("sim stdout");
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut line = String::new();
-            let _ = BufReader::new(stdout).read_line(&mut line);
-            let _ = tx.send(line);
-        });
-        let mut sim = Sim { child, link };
-        let line = rx
-            .recv_timeout(Duration::from_secs(60))
-            .unwrap_or_else(|_| {
-                let _ = sim.child.kill();
-                panic!("servobus sim did not say it was serving");
-            });
-        assert_eq!(
-            line.trim(),
-            format!("serving 6 servos on {}", sim.link.display())
-        );
-        sim
-    }
-
-    fn port(&self) -> &str {
-        self.link.to_str().expect("utf-8 path")
-    }
-
-    /// Stops the simulator as a user would (SIGTERM) and waits for it.
-    fn stop(mut self) {
-        let pid = self.child.id().to_string();
-        let sent = Command::new("kill").args(["-TERM", &pid]).status();
-        if !sent.is_ok_and(|s| s.success()) {
-            let _ = self.child.kill();
-        }
-        let _ = self.child.wait();
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
-}
 
 /// Runs `servobus ARGS --port PORT --latency-us LATENCY`.
 fn run(sim: &Sim, args: &[&str]) -> Output {
@@ -126,8 +61,7 @@ fn read_value(sim: &Sim, id: &str, register: &str) -> i64 {
 
 #[test]
 fn scan_read_write_set_id_against_the_simulator() {
-    let dir = std::env::temp_dir().join(format!("servobus-bus-tools-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::scratch("bus-tools");
     let sim = Sim::start(&dir);
 
     // scan: the six servos of the arm, identified.

@@ -17,12 +17,12 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 use crossbeam_channel::RecvTimeoutError;
-use servobus_driver::{Bus, ManualClock, SerialTransport, SystemClock, Transport};
+use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
 use servobus_runtime::{
     bus_settings, spawn, spawn_virtual, Command, Finish, Report, RunOptions, Runner, Telemetry,
 };
-use servobus_sim::{PtyServer, SimBus};
+use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
 
 use crate::record::{CsvLog, PlotData};
@@ -102,13 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
         Backend::Fast => {
-            let mut buses = Vec::new();
-            for bus in &robot.buses {
-                let clock = ManualClock::new();
-                let sim = SimBus::new(clock.clone(), bus.baud)
-                    .with_servos(crate::simrobot::bus_servos(&robot, bus)?);
-                buses.push(Bus::new(sim, clock, bus_settings(bus)));
-            }
+            let buses = servobus::simrobot::virtual_buses(&robot)?;
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
@@ -116,7 +110,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let mut buses = Vec::new();
             for bus in &robot.buses {
                 let mut server =
-                    PtyServer::open(bus.baud, crate::simrobot::bus_servos(&robot, bus)?)
+                    PtyServer::open(bus.baud, servobus::simrobot::bus_servos(&robot, bus)?)
                         .with_context(|| {
                             format!("bus `{}`: cannot start the simulator", bus.name)
                         })?;

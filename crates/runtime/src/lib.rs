@@ -3,6 +3,11 @@
 //!
 //! - [`config`] loads robot and motion files, validates them completely
 //!   before anything moves, and maps joint angles to servo ticks.
+//! - [`VirtualRun`] (simulated buses, virtual time, deterministic) and
+//!   [`spawn`] (any buses, real clock, one thread per bus in step) play a
+//!   trajectory: goals at `t + lead` clamped to the limits, SYNC WRITE,
+//!   feedback, tracking, faults with their [`Reaction`], [`Command`]s in and
+//!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
 #![warn(missing_docs)]
 
 pub mod config;

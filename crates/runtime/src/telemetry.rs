@@ -116,6 +116,9 @@ pub enum Finish {
 }
 
 /// A telemetry message.
+// The cycle sample is the message sent every cycle and is kept inline on
+// purpose: boxing it would allocate in the loop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum Telemetry {

@@ -179,8 +179,7 @@ fn roots_in(c: &[f64; 6], len: f64, out: &mut [f64; 5]) -> usize {
             crit[..nc].sort_by(f64::total_cmp);
             let mut n = 0;
             let mut a = 0.0;
-            for k in 0..=nc {
-                let b = if k < nc { crit[k] } else { len };
+            for b in crit[..nc].iter().copied().chain(core::iter::once(len)) {
                 n = bisect_root(c, a, b, len, out, n);
                 a = b;
             }

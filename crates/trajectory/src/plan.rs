@@ -246,7 +246,7 @@ pub fn plan(
         if entries[i + 1].at.is_some() {
             // Timed section: consecutive timed entries.
             let mut k = i + 1;
-            while k + 1 <= last && entries[k + 1].at.is_some() {
+            while k < last && entries[k + 1].at.is_some() {
                 k += 1;
             }
             j = k;

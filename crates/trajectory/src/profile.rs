@@ -421,6 +421,7 @@ impl Phases {
     /// whole profile mirrored by `dir` (+1 or -1). Returns the end time and
     /// state. With a finite jerk the acceleration is integrated (continuous);
     /// with an infinite one it is taken from `acc`.
+    #[allow(clippy::too_many_arguments)] // a state (t, p, v, a) plus options
     pub fn emit(
         &self,
         mut t: f64,

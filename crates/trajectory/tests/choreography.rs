@@ -39,7 +39,7 @@ fn untimed_pass_through_beats_stopping() {
 fn no_overshoot_beyond_keyframe_range() {
     let (limits, keyframes) = common::choreography();
     let traj = plan(&limits, &keyframes, &PlanOptions::default()).expect("plan");
-    for j in 0..limits.len() {
+    for (j, l) in limits.iter().enumerate() {
         let s = traj.joint_summary(j).expect("joint");
         let lo = keyframes
             .iter()
@@ -53,8 +53,8 @@ fn no_overshoot_beyond_keyframe_range() {
             s.min_position >= lo - 1e-9 && s.max_position <= hi + 1e-9,
             "joint {j}: {s:?} vs [{lo}, {hi}]"
         );
-        assert!(s.peak_velocity <= limits[j].max_velocity * (1.0 + 1e-9));
-        assert!(s.peak_acceleration <= limits[j].max_acceleration * (1.0 + 1e-9));
-        assert!(s.peak_jerk <= limits[j].max_jerk.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
+        assert!(s.peak_velocity <= l.max_velocity * (1.0 + 1e-9));
+        assert!(s.peak_acceleration <= l.max_acceleration * (1.0 + 1e-9));
+        assert!(s.peak_jerk <= l.max_jerk.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
     }
 }

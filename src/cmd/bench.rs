@@ -138,7 +138,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         };
         let robot = robot.clone();
         let bus = bus.clone();
-        let clock = clock;
         runs.push(std::thread::spawn(move || {
             bench_bus(&robot, &bus, port, clock, duration)
         }));

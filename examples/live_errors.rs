@@ -22,8 +22,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let trajectory = plan_motion(&motion, &robot)?;
 
     let buses = servobus::simrobot::virtual_buses(&robot)?;
-    let mut options = RunOptions::default();
-    options.units = Some(motion.units);
+    let options = RunOptions {
+        units: Some(motion.units),
+        ..RunOptions::default()
+    };
     let runner = spawn_virtual(&robot, trajectory, buses, options)?;
 
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();

@@ -35,9 +35,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // in step.
     let buses = servobus::simrobot::virtual_buses(&robot)?;
 
-    let mut options = RunOptions::default();
-    options.units = Some(motion.units);
-    options.rate_hz = Some(motion.rate_hz(&robot));
+    let options = RunOptions {
+        units: Some(motion.units),
+        rate_hz: Some(motion.rate_hz(&robot)),
+        ..RunOptions::default()
+    };
     let report = VirtualRun::new(&robot, path_plan, buses, options)?.run();
 
     println!(

@@ -50,8 +50,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let bus = Bus::new(sim.clone(), clock, bus_settings(&robot.buses[0]));
 
-    let mut options = RunOptions::default();
-    options.rate_hz = Some(250.0);
+    let options = RunOptions {
+        rate_hz: Some(250.0),
+        ..RunOptions::default()
+    };
     let report = VirtualRun::new(&robot, path, vec![bus], options)?.run();
     println!(
         "{} cycles at {:.0} Hz, worst RMS tracking error {:.3} {}",

@@ -20,7 +20,8 @@ use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
 use servobus_runtime::{
-    bus_settings, spawn, spawn_virtual, Command, Finish, Report, RunOptions, Runner, Telemetry,
+    bus_settings, spawn, spawn_virtual, Command, Finish, Lead, Report, RunOptions, Runner,
+    Telemetry,
 };
 use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
@@ -87,13 +88,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
     }
 
-    let mut options = RunOptions::default();
-    options.rate_hz = Some(rate_hz);
-    options.units = Some(motion.units);
-    options.settle = Duration::from_millis(300);
-    // The simulated joints start at rest; real ones wherever they are. Both
-    // approach the first keyframe slowly (skipped when already there).
-    options.approach = Some(0.25);
+    let options = RunOptions {
+        rate_hz: Some(rate_hz),
+        units: Some(motion.units),
+        settle: Duration::from_millis(300),
+        // The simulated joints start at rest; real ones wherever they are.
+        // Both approach the first keyframe slowly (skipped when already
+        // there).
+        approach: Some(0.25),
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        ..RunOptions::default()
+    };
 
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = motion.units;

@@ -343,3 +343,25 @@ fn a_repeat_of_zero() {
     );
     expect(&e, &p, 4, 9, "repeat", "at least 1");
 }
+
+#[test]
+fn the_lag_compensation_lead_is_read_and_checked() {
+    let r = load_robot(&write("no_lead", "robot.yaml", ROBOT)).expect("valid");
+    assert_eq!(r.lead, None, "absent: identified at run time");
+    let p = write(
+        "lead",
+        "robot.yaml",
+        &ROBOT.replacen("rate: 100", "rate: 100\nlead_ms: 12.5", 1),
+    );
+    let r = load_robot(&p).expect("valid");
+    assert_eq!(r.lead, Some(std::time::Duration::from_micros(12_500)));
+    let (p, e) = robot_error("bad_lead", "rate: 100", "rate: 100\nlead_ms: -3");
+    expect(
+        &e,
+        &p,
+        4,
+        10,
+        "lead_ms",
+        "must be between 0 and 500 ms, got -3",
+    );
+}

@@ -21,6 +21,9 @@ pub struct Robot {
     pub units: Units,
     /// Default control rate in Hz (a motion may override it).
     pub rate_hz: f64,
+    /// Lag compensation: command the path this far ahead (`lead_ms` in the
+    /// file). `None`: identify it from the first cycles of motion.
+    pub lead: Option<Duration>,
     /// The serial buses, each with its joints.
     pub buses: Vec<BusConfig>,
     /// The file it was loaded from (empty for robots built in code).
@@ -117,6 +120,8 @@ struct RawRobot {
     units: Units,
     #[serde(default = "default_rate")]
     rate: f64,
+    #[serde(default)]
+    lead_ms: Option<f64>,
     buses: Vec<RawBus>,
 }
 
@@ -162,6 +167,9 @@ struct RawJoint {
     #[serde(default)]
     home: Option<f64>,
 }
+
+/// The largest lag-compensation lead a robot file may set, ms.
+const MAX_LEAD_MS: f64 = 500.0;
 
 /// The largest return delay register 7 can hold (255 x 2 us).
 const MAX_RETURN_DELAY_US: u64 = 510;
@@ -239,6 +247,18 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
             format!("must be a positive rate in Hz, got {}", raw.rate),
         ));
     }
+    let lead = match raw.lead_ms {
+        None => None,
+        Some(ms) if ms.is_finite() && (0.0..=MAX_LEAD_MS).contains(&ms) => {
+            Some(Duration::from_secs_f64(ms / 1e3))
+        }
+        Some(ms) => {
+            return Err(src.error(
+                &root.key("lead_ms"),
+                format!("must be between 0 and {MAX_LEAD_MS} ms, got {ms}"),
+            ))
+        }
+    };
     if raw.buses.is_empty() {
         return Err(src.error(&root.key("buses"), "a robot needs at least one bus"));
     }
@@ -304,6 +324,7 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
         name: raw.name,
         units: raw.units,
         rate_hz: raw.rate,
+        lead,
         buses,
         path: src.path.clone(),
     })

@@ -121,13 +121,16 @@ fn factory_return_delay_and_what_would_fit() {
     assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 550.0);
     assert_eq!(b["feasible"], false);
     let first_fix = b["fixes"][0].as_str().expect("a fix");
-    assert!(first_fix.contains("return delay to 0"), "{first_fix}");
+    assert!(
+        first_fix.contains("return delay (register 7) to 0"),
+        "{first_fix}"
+    );
 
     let text = servobus(&["budget", "--robot", path, "--rate", "300"]);
     let stdout = String::from_utf8_lossy(&text.stdout);
     assert!(stdout.contains("88 bytes"), "{stdout}");
     assert!(
-        stdout.contains("set the servos' return delay to 0"),
+        stdout.contains("set the servos' return delay (register 7) to 0"),
         "{stdout}"
     );
 }

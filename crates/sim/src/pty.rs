@@ -44,6 +44,11 @@ pub enum PtyError {
     Io(#[source] io::Error),
 }
 
+/// Waits for a reply shorter than this are timed precisely (sleep, then spin).
+const SHORT_WAIT: Duration = Duration::from_millis(2);
+/// The spinning part of a precise wait.
+const SPIN: Duration = Duration::from_micros(150);
+
 /// A simulated bus served on a pseudo-terminal in wall-clock time.
 ///
 /// The link (if any) is removed when the server is dropped.
@@ -165,18 +170,23 @@ impl PtyServer {
             let now = self.clock.now();
             self.deliver(now)?;
             // Sleep until the next reply byte is due or input arrives.
+            let now = self.clock.now();
             let wait = match self.engine.next_ready() {
                 Some(_) if !self.pacing => Duration::ZERO,
-                Some(t) => t.saturating_sub(self.clock.now()),
+                // A contiguous burst (a reply, or the replies of a SYNC READ
+                // back to back) is handed over once its last byte is due, as
+                // an adapter does when the line goes idle: one write, one
+                // wake-up of the client.
+                Some(_) => self
+                    .engine
+                    .burst_end(now, Duration::MAX, usize::MAX)
+                    .saturating_sub(now),
                 None => Duration::from_millis(50),
             };
-            if wait > Duration::ZERO
-                && wait < Duration::from_millis(2)
-                && self.engine.next_ready().is_some()
-            {
+            if wait > Duration::ZERO && wait < SHORT_WAIT && self.engine.next_ready().is_some() {
                 // Short waits: the client is waiting for this reply and sends
-                // nothing meanwhile (half duplex); sleep precisely.
-                std::thread::sleep(wait);
+                // nothing meanwhile (half duplex); wait precisely.
+                self.wait_precisely(now + wait);
                 continue;
             }
             if !self.poll_input(wait.min(Duration::from_millis(50)))? {
@@ -201,6 +211,18 @@ impl PtyServer {
             self.engine.transmit(&buf[..n], now);
         }
         Ok(())
+    }
+
+    /// Sleeps until shortly before `due`, then spins: a sleep alone wakes
+    /// tens of microseconds late, which would stretch every reply.
+    fn wait_precisely(&self, due: Duration) {
+        let now = self.clock.now();
+        if due > now + SPIN {
+            std::thread::sleep(due - now - SPIN);
+        }
+        while self.clock.now() < due {
+            std::hint::spin_loop();
+        }
     }
 
     /// Writes every reply byte due at `now` (all of them without pacing).

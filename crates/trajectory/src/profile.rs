@@ -75,6 +75,8 @@ impl Ramp {
 struct Acc {
     inv_a: f64,
     j: f64,
+    /// `1 / j` (0 without a jerk limit).
+    inv_j: f64,
     /// `a / j`: duration of a full jerk phase (0 without a jerk limit).
     k: f64,
     /// `a^2 / j`: the speed change above which a ramp has a constant
@@ -87,6 +89,7 @@ impl Acc {
         Acc {
             inv_a: 1.0 / a,
             j,
+            inv_j: 1.0 / j,
             k: a / j,
             regime: a * a / j,
         }
@@ -103,8 +106,10 @@ fn leg(u: f64, w: f64, c: &Acc) -> (f64, f64, f64, f64) {
     let (dur, ddur) = if dv >= c.regime {
         (dv * c.inv_a + c.k, c.inv_a)
     } else if dv > 0.0 {
-        let r = (dv / c.j).sqrt();
-        (2.0 * r, r / dv)
+        // `s = sqrt(dv j)`: jerk phases of `s / j` each, and
+        // `d(2 sqrt(dv / j)) / d dv = 1 / s`.
+        let s = (dv * c.j).sqrt();
+        (2.0 * s * c.inv_j, 1.0 / s)
     } else {
         (0.0, f64::INFINITY)
     };
@@ -120,6 +125,17 @@ pub(crate) struct Segment1 {
     pub d: f64,
     pub v0: f64,
     pub v1: f64,
+}
+
+/// What [`Segment1::fastest_bounds`] knows without root finding.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Bounds {
+    /// At most the time-optimal duration.
+    pub lower: f64,
+    /// A feasible profile at least as long as the time-optimal one.
+    pub upper: Profile,
+    /// `upper` is the time-optimal profile itself.
+    pub exact: bool,
 }
 
 /// The chosen profile of a segment: its cruise speed and duration.
@@ -168,42 +184,192 @@ impl Segment1 {
         (t + rest * inv, dt - (dg + rest * inv) * inv)
     }
 
+    /// Duration at cruise speed `vc = 1 / u` and its derivative with
+    /// respect to `u`, for the stretching search. Written as
+    /// `T vc = d + sum((vc - v_i) dur_i / 2)` (the cruise covers what the
+    /// ramps, point-symmetric, do not), whose derivative
+    /// `dT/dvc = (sum(H_i') - T) / vc` with `H_i' = dur_i / 2 + |vc - v_i|
+    /// dur_i' / 2` stays accurate where a ramp vanishes (`vc` near `v_i`,
+    /// where `dur_i'` is unbounded but `|vc - v_i| dur_i'` is not).
+    #[inline(always)]
+    fn time_of_inv(&self, u: f64, c: &Acc) -> (f64, f64) {
+        let vc = 1.0 / u;
+        let mut h = self.d;
+        let mut dh = 0.0;
+        for v in [self.v0, self.v1] {
+            let e = vc - v;
+            let dv = e.abs();
+            // `dur` and `dv * d dur / d dv`.
+            let (dur, ddv) = if dv >= c.regime {
+                (dv * c.inv_a + c.k, dv * c.inv_a)
+            } else {
+                let r = 2.0 * (dv * c.j).sqrt() * c.inv_j;
+                (r, 0.5 * r)
+            };
+            h += 0.5 * e * dur;
+            dh += 0.5 * (dur + ddv);
+        }
+        let t = h * u;
+        // dT/du = -vc^2 dT/dvc = (T - sum(H_i')) vc.
+        (t, (t - dh) * vc)
+    }
+
     /// The time-optimal profile. Precondition: the ramps alone fit, i.e.
     /// `g(max(v0, v1)) <= d` (the planner caps via speeds to ensure it).
     pub fn fastest(&self, lim: &JointLimits) -> Profile {
         let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
         let acc = Acc::new(a, j);
-        let vlo = self.v0.max(self.v1).min(vm);
-        if self.d <= 0.0 && vlo <= 0.0 {
+        let vc = match self.fastest_closed(lim, &acc) {
+            Ok(vc) => vc,
+            // The long-ramp root (outside its regime) is a good start.
+            Err(guess) => self.fastest_root(&acc, self.v0.max(self.v1).min(vm), vm, guess),
+        };
+        if vc <= 0.0 {
             return Profile {
                 vc: 0.0,
                 duration: 0.0,
             };
         }
-        let vc = if self.g(vm, &acc).1 <= self.d {
-            vm
-        } else if self.v0 == 0.0 && self.v1 == 0.0 {
-            rest_peak(self.d, lim)
-        } else if self.g(vlo, &acc).1 >= self.d {
-            vlo
-        } else {
-            match self.fastest_long(a, j, vlo, vm) {
-                Ok(vc) => vc,
-                // The long-ramp root (outside its regime) is a good start.
-                Err(guess) => solve(
-                    |x| {
-                        let (_, g, _, dg) = self.g(x, &acc);
-                        (g - self.d, dg)
-                    },
-                    vlo,
-                    vm,
-                    guess,
-                    true,
-                ),
-            }
-        };
         let duration = self.time(vc, &acc).0;
         Profile { vc, duration }
+    }
+
+    /// Bounds on [`fastest`](Self::fastest) that cost no root finding:
+    /// the exact profile where it has a closed form; otherwise a lower
+    /// bound on its duration (the same family without a jerk limit, which
+    /// can only be faster) and a feasible slower profile (the long-ramp
+    /// root: long ramps cover at least the distance of short ones, so it
+    /// is a cruise speed at or below the optimal one). The planner solves
+    /// exactly only for joints that may set a segment's duration.
+    pub fn fastest_bounds(&self, lim: &JointLimits) -> Bounds {
+        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+        let acc = Acc::new(a, j);
+        match self.fastest_closed(lim, &acc) {
+            Ok(vc) => {
+                let upper = if vc <= 0.0 {
+                    Profile {
+                        vc: 0.0,
+                        duration: 0.0,
+                    }
+                } else {
+                    Profile {
+                        vc,
+                        duration: self.time(vc, &acc).0,
+                    }
+                };
+                Bounds {
+                    lower: upper.duration,
+                    upper,
+                    exact: true,
+                }
+            }
+            Err(guess) => {
+                let upper = Profile {
+                    vc: guess,
+                    duration: self.time(guess, &acc).0,
+                };
+                let (v0, v1) = (self.v0, self.v1);
+                // Jerk-free: ramp distance (2 vc^2 - v0^2 - v1^2) / 2a.
+                let vt = ((2.0 * a * self.d + v0 * v0 + v1 * v1) * 0.5)
+                    .sqrt()
+                    .clamp(guess, vm);
+                let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) / (2.0 * a);
+                let trap = (2.0 * vt - v0 - v1) / a + (self.d - ramps) / vt;
+                // Margin for rounding: a bound too high could skip the
+                // joint that sets the duration.
+                let lower = (trap * (1.0 - 1e-9)).min(upper.duration);
+                Bounds {
+                    lower,
+                    upper,
+                    exact: false,
+                }
+            }
+        }
+    }
+
+    /// The cruise speed of [`fastest`](Self::fastest) where it has a closed
+    /// form (`Ok`, 0 for a joint that does not move), else `Err` with the
+    /// long-ramp root clamped to `[max(v0, v1), vm]`.
+    fn fastest_closed(&self, lim: &JointLimits, acc: &Acc) -> Result<f64, f64> {
+        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+        let vlo = self.v0.max(self.v1).min(vm);
+        if self.d <= 0.0 && vlo <= 0.0 {
+            return Ok(0.0);
+        }
+        if self.g(vm, acc).1 <= self.d {
+            Ok(vm)
+        } else if self.v0 == 0.0 && self.v1 == 0.0 {
+            Ok(rest_peak(self.d, lim))
+        } else if self.g(vlo, acc).1 >= self.d {
+            Ok(vlo)
+        } else {
+            self.fastest_long(a, j, vlo, vm)
+        }
+    }
+
+    /// The root of `g(vc) = d` in `(vlo, vm)`, where `vlo = max(v0, v1) <
+    /// vm`, `g(vlo) < d < g(vm)`, by Newton's method in `y = sqrt(vc -
+    /// vlo)`. In `y` the ramp distance is convex and increasing: each leg's
+    /// speed change is `y^2` plus a constant, its duration (`2 sqrt(dv / j)`
+    /// or `dv / a + a / j`, joined with a continuous slope) is convex in
+    /// `y`, and so is its product with the mean speed. Newton's iterates on
+    /// a convex increasing function lie right of the root after the first
+    /// step and then decrease monotonically to it, quadratically: no
+    /// bracket, no bisection, a few steps. `guess` (the long-ramp root) lies
+    /// left of the root, as long ramps cover at least the distance of short
+    /// ones, so it yields a first step close to the root.
+    fn fastest_root(&self, acc: &Acc, vlo: f64, vm: f64, guess: f64) -> f64 {
+        // `G(y) = g(vlo + y^2) - d` and `dG/dy`, leg by leg: with
+        // `dv = base + y^2`, `dist = (u + vc) / 2 * dur` and
+        // `d dist / dy = y dur + (u + vc) / 2 * d dur / dy`.
+        let f = |y: f64| {
+            let vc = vlo + y * y;
+            let mut g = -self.d;
+            let mut dg = 0.0;
+            for u in [self.v0, self.v1] {
+                let dv = vc - u;
+                let (dur, ddur) = if dv >= acc.regime {
+                    (dv * acc.inv_a + acc.k, 2.0 * y * acc.inv_a)
+                } else {
+                    // `s = sqrt(dv j)`: duration `2 s / j`, its `y`
+                    // derivative `2 y / s`, finite at `y -> 0` because `s
+                    // >= y sqrt(j)`.
+                    let s = (dv * acc.j).sqrt();
+                    (2.0 * s / acc.j, if s > 0.0 { 2.0 * y / s } else { 0.0 })
+                };
+                let mean = 0.5 * (u + vc);
+                g += mean * dur;
+                dg += y * dur + mean * ddur;
+            }
+            (g, dg)
+        };
+        let ym = (vm - vlo).sqrt();
+        let y0 = (guess - vlo).max(0.0).sqrt();
+        // First step from the left of the root (or the top of the range).
+        let mut y = ym;
+        if y0 > 0.0 {
+            let (g, dg) = f(y0);
+            if g >= 0.0 {
+                y = y0;
+            } else if dg > 0.0 {
+                y = (y0 - g / dg).min(ym);
+            }
+        }
+        for _ in 0..60 {
+            let (g, dg) = f(y);
+            // Rounding has reached the root (or crossed it): done.
+            if g <= 0.0 || dg <= 0.0 {
+                break;
+            }
+            let step = g / dg;
+            y -= step;
+            // Quadratic convergence: the error left is about the square
+            // of this step, far below rounding.
+            if step <= 1e-13 * y {
+                break;
+            }
+        }
+        vlo + y * y
     }
 
     /// The profile of duration exactly `t >= fastest.duration`, stretched by
@@ -239,28 +405,31 @@ impl Segment1 {
                 }
             }
         }
-        let vc = match vc.or_else(|| self.stretched_long(a, j, t, fastest.vc)) {
+        // The trapezoidal (jerk-free) answer: a close first guess, and a
+        // cheap test of whether both ramps of the jerk-limited answer may
+        // reach the acceleration limit (then it has a closed form too; if
+        // the test misleads, the search below finds the same root).
+        let trap = self.trapezoid_root(a, t, fastest.vc);
+        let long =
+            |vc: f64| (vc - self.v0).abs() >= acc.regime && (vc - self.v1).abs() >= acc.regime;
+        if vc.is_none() && trap.is_some_and(long) {
+            vc = self.stretched_long(a, j, t, fastest.vc);
+        }
+        let vc = match vc {
             Some(x) => x,
             None => {
                 // Solve in u = 1 / vc: the duration is then nearly linear
                 // (cruise time = distance * u), so Newton needs few steps.
                 // f(u) = time(1 / u) - t is increasing, <= 0 at 1 / fastest.vc.
                 let f = |u: f64| {
-                    let vc = 1.0 / u;
-                    let (tt, dt) = self.time(vc, &acc);
-                    (tt - t, -dt * vc * vc)
+                    let (tt, dt) = self.time_of_inv(u, &acc);
+                    (tt - t, dt)
                 };
                 let lo = 1.0 / fastest.vc;
-                // The trapezoidal (jerk-free) answer is a close first guess.
-                let guess = self
-                    .stretched_long(a, f64::INFINITY, t, fastest.vc)
-                    .map_or(t / self.d, |vc| 1.0 / vc)
-                    .max(lo);
-                let mut hi = guess.max(t / self.d);
-                while f(hi).0 < 0.0 && hi < 1e300 {
-                    hi *= 2.0;
-                }
-                1.0 / solve(f, lo, hi, guess, true)
+                let guess = trap.map_or(t / self.d, |vc| 1.0 / vc).max(lo);
+                // No upper end known: the search finds one (f grows
+                // without bound as u does, the cruise taking ever longer).
+                1.0 / solve(f, lo, f64::INFINITY, guess, true)
             }
         };
         Profile { vc, duration: t }
@@ -285,6 +454,48 @@ impl Segment1 {
         } else {
             Err(vc.clamp(vlo, vm))
         }
+    }
+
+    /// The cruise speed in `(0, hi]` of duration `t` without a jerk limit
+    /// (ramps of constant acceleration `a`), if there is one. With `s_i =
+    /// sign(vc - v_i)` the duration equation is the quadratic of
+    /// [`stretched_long`](Self::stretched_long) with `j` infinite; as the
+    /// duration decreases with `vc`, the signs follow from comparing it
+    /// with `t` at `vc = v_i`, so only one quadratic is solved.
+    fn trapezoid_root(&self, a: f64, t: f64, hi: f64) -> Option<f64> {
+        let (v0, v1, d) = (self.v0, self.v1, self.d);
+        // `vc * (duration(vc) - t)`: positive below the root.
+        let excess = |vc: f64| {
+            let (e0, e1) = (vc - v0, vc - v1);
+            d + (e0 * e0.abs() + e1 * e1.abs()) / (2.0 * a) - t * vc
+        };
+        let side = |v: f64| {
+            if v <= 0.0 || (v < hi && excess(v) > 0.0) {
+                1.0
+            } else {
+                -1.0
+            }
+        };
+        let (s0, s1) = (side(v0), side(v1));
+        let qa = (s0 + s1) / (2.0 * a);
+        let qb = -t - (s0 * v0 + s1 * v1) / a;
+        let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) / (2.0 * a);
+        let ok = |vc: f64| {
+            vc > 0.0
+                && vc <= hi * (1.0 + 1e-12)
+                && s0 * (vc - v0) >= -1e-12 * hi
+                && s1 * (vc - v1) >= -1e-12 * hi
+        };
+        let pick = |vc: f64| ok(vc).then(|| vc.min(hi));
+        if qa == 0.0 {
+            return pick(-qc / qb);
+        }
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc < 0.0 {
+            return None;
+        }
+        let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+        pick(q / qa).or_else(|| pick(qc / q))
     }
 
     /// Closed form of [`stretched`](Self::stretched) when both ramps reach
@@ -345,7 +556,11 @@ impl Segment1 {
 /// Safeguarded Newton iteration on a monotone function with a bracket:
 /// `increasing` tells the sign convention (`f(lo) <= 0 <= f(hi)` when true,
 /// the reverse otherwise). Falls back to bisection whenever a Newton step
-/// leaves the bracket, so it always converges.
+/// leaves the bracket, so it always converges; `hi` may be infinite (then
+/// an outgoing step doubles `x` until an upper end is found, `x > 0`).
+/// Stops after a Newton step smaller than `1e-9` relative: convergence is
+/// quadratic by then, so the step left is about its square, below the
+/// rounding of the result.
 fn solve(
     f: impl Fn(f64) -> (f64, f64),
     mut lo: f64,
@@ -353,8 +568,12 @@ fn solve(
     x0: f64,
     increasing: bool,
 ) -> f64 {
-    let mut x = x0.clamp(lo, hi);
-    for _ in 0..100 {
+    let mut x = if hi.is_finite() {
+        x0.clamp(lo, hi)
+    } else {
+        x0.max(lo)
+    };
+    for _ in 0..200 {
         let (fx, dfx) = f(x);
         if fx == 0.0 {
             return x;
@@ -365,10 +584,20 @@ fn solve(
             hi = x;
         }
         let mut nx = x - fx / dfx;
+        let mut newton = true;
         if !(nx > lo && nx < hi) {
-            nx = 0.5 * (lo + hi);
+            newton = false;
+            nx = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                2.0 * x
+            };
         }
-        if (nx - x).abs() <= 1e-13 * nx.abs() || hi - lo <= 1e-13 * hi.abs() {
+        let step = (nx - x).abs();
+        if (newton && step <= 1e-9 * nx.abs())
+            || step <= 1e-13 * nx.abs()
+            || (hi.is_finite() && hi - lo <= 1e-13 * hi.abs())
+        {
             return nx;
         }
         x = nx;

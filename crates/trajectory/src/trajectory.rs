@@ -71,6 +71,10 @@ pub struct Trajectory {
     pub(crate) segments: Vec<SegmentTiming>,
     /// Final position per joint (held at rest from `duration` on).
     pub(crate) end: Vec<f64>,
+    /// Every piece is of degree <= 3 (constant-jerk phases and cubic
+    /// splines: every untimed or cubic plan), so sampling can skip the
+    /// quintic terms without testing each piece.
+    pub(crate) cubic: bool,
 }
 
 /// Remembers, per joint, the piece last sampled, so that sampling at
@@ -83,6 +87,10 @@ pub struct Cursor {
     id: u64,
     /// Per joint, an index into the trajectory's `pieces`.
     index: Vec<usize>,
+    /// Per joint, a copy of `pieces[index[j]]`: while `t` stays inside the
+    /// current pieces, sampling reads only this one contiguous array (no
+    /// indirection, no bounds check per joint). Same length as `index`.
+    hot: Vec<Piece>,
 }
 
 /// Source of trajectory ids (0 is never used, so a default cursor matches
@@ -117,6 +125,7 @@ impl Trajectory {
         let end = (0..first.len() - 1)
             .map(|j| pieces[first[j + 1] - 1].eval(duration).0)
             .collect();
+        let cubic = pieces.iter().all(|p| p.c[4] == 0.0 && p.c[5] == 0.0);
         Trajectory {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             duration,
@@ -124,6 +133,7 @@ impl Trajectory {
             first,
             segments,
             end,
+            cubic,
         }
     }
 
@@ -144,9 +154,12 @@ impl Trajectory {
 
     /// A cursor for [`sample_with`](Self::sample_with). Allocates once.
     pub fn cursor(&self) -> Cursor {
+        let index = self.first[..self.joints()].to_vec();
+        let hot = index.iter().map(|&i| self.pieces[i]).collect();
         Cursor {
             id: self.id,
-            index: self.first[..self.joints()].to_vec(),
+            index,
+            hot,
         }
     }
 
@@ -185,36 +198,84 @@ impl Trajectory {
         let t = t.max(0.0);
         let n = self.joints().min(out.len());
         if cursor.id != self.id {
-            if cursor.index.len() < n {
-                // A cursor of another trajectory with fewer joints: cannot
-                // grow without allocating, so search.
+            if cursor.index.len() < self.joints() || cursor.hot.len() != cursor.index.len() {
+                // A cursor of another trajectory with fewer joints (or a
+                // default one): cannot grow without allocating, so search.
                 self.sample(t, out);
                 return;
             }
-            cursor.index[..n].copy_from_slice(&self.first[..n]);
-            cursor.id = self.id;
+            self.reset(cursor);
         }
-        // Invariant from here: `first[j] <= index[j] < first[j + 1]`.
-        for (j, (idx, o)) in cursor
-            .index
-            .iter_mut()
-            .zip(out.iter_mut())
-            .take(n)
-            .enumerate()
-        {
-            let p = &self.pieces[*idx];
-            if t <= p.t1 && t >= p.t0 {
-                *o = state(p, t);
-                continue;
-            }
-            *o = self.seek(j, idx, t);
+        // Invariant from here: for every joint `j < joints`,
+        // `first[j] <= index[j] < first[j + 1]` and `hot[j] ==
+        // pieces[index[j]]`.
+        let hot = &mut cursor.hot[..n];
+        let index = &mut cursor.index[..n];
+        let out = &mut out[..n];
+        if self.cubic {
+            self.sample_hot::<true>(hot, index, t, out);
+        } else {
+            self.sample_hot::<false>(hot, index, t, out);
         }
     }
 
-    /// Slow path of `sample_with`: moves joint `j`'s cursor to the piece
-    /// holding `t`.
+    /// The loop of `sample_with` over joints; `CUBIC`: every piece is of
+    /// degree <= 3. The three slices have the same length.
+    ///
+    /// Every joint is evaluated in its current piece first, with no branch
+    /// and no call in the loop (so `t` and the constants stay in registers
+    /// and the evaluations of consecutive joints overlap); the rare joints
+    /// whose piece did not hold `t` are then moved on and sampled again.
+    #[inline(always)]
+    fn sample_hot<const CUBIC: bool>(
+        &self,
+        hot: &mut [Piece],
+        index: &mut [usize],
+        t: f64,
+        out: &mut [JointState],
+    ) {
+        let n = out.len().min(hot.len()).min(index.len());
+        let (hot, index, out) = (&mut hot[..n], &mut index[..n], &mut out[..n]);
+        let mut miss = false;
+        for (h, o) in hot.iter().zip(out.iter_mut()) {
+            // Inside the piece `t - t0` is within `[0, t1 - t0]` (float
+            // subtraction is monotone), so no clamp is needed; outside it
+            // the value is overwritten below.
+            miss |= (t < h.t0) | (t > h.t1);
+            *o = if CUBIC {
+                cubic_state(h, t - h.t0)
+            } else {
+                local_state(h, t - h.t0)
+            };
+        }
+        if miss {
+            for j in 0..n {
+                let h = &mut hot[j];
+                if t < h.t0 || t > h.t1 {
+                    out[j] = self.seek(j, &mut index[j], h, t);
+                }
+            }
+        }
+    }
+
+    /// Points `cursor` at the first piece of every joint of this trajectory.
+    /// Precondition: the cursor has at least `joints` entries.
     #[cold]
-    fn seek(&self, j: usize, idx: &mut usize, t: f64) -> JointState {
+    fn reset(&self, cursor: &mut Cursor) {
+        let n = self.joints();
+        cursor.index[..n].copy_from_slice(&self.first[..n]);
+        for (h, &i) in cursor.hot.iter_mut().zip(&self.first[..n]) {
+            *h = self.pieces[i];
+        }
+        cursor.id = self.id;
+    }
+
+    /// Slow path of `sample_with`: moves joint `j`'s cursor to the piece
+    /// holding `t` and samples it there (clamped to the piece, which only
+    /// matters if rounding left a gap between pieces).
+    #[cold]
+    #[inline(never)]
+    fn seek(&self, j: usize, idx: &mut usize, hot: &mut Piece, t: f64) -> JointState {
         let (lo, hi) = (self.first[j], self.first[j + 1]);
         let joint = &self.pieces[lo..hi];
         let mut i = *idx - lo;
@@ -234,7 +295,8 @@ impl Trajectory {
         }
         let i = i.min(joint.len() - 1);
         *idx = lo + i;
-        state(&joint[i], t)
+        *hot = joint[i];
+        state(hot, t)
     }
 
     /// The state of every joint at the end (at rest at the last keyframe).
@@ -284,6 +346,28 @@ impl Trajectory {
         (0..self.joints())
             .filter_map(|j| self.joint_summary(j))
             .collect()
+    }
+}
+
+/// [`Piece::eval_local`] of a piece known to be of degree <= 3: the same
+/// arithmetic as its cubic branch, without testing the quintic terms.
+#[inline(always)]
+fn cubic_state(p: &Piece, x: f64) -> JointState {
+    let c = &p.c;
+    JointState {
+        position: c[0] + x * (c[1] + x * (c[2] + x * c[3])),
+        velocity: c[1] + x * (2.0 * c[2] + x * (3.0 * c[3])),
+        acceleration: 2.0 * c[2] + x * (6.0 * c[3]),
+    }
+}
+
+#[inline(always)]
+fn local_state(p: &Piece, x: f64) -> JointState {
+    let (position, velocity, acceleration) = p.eval_local(x);
+    JointState {
+        position,
+        velocity,
+        acceleration,
     }
 }
 

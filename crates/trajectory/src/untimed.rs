@@ -31,6 +31,9 @@ pub(crate) struct Scratch {
     fastest: Vec<Profile>,
     /// Duration per segment.
     pub durations: Vec<f64>,
+    /// Per joint of the current segment: `fastest` holds the time-optimal
+    /// profile, not only a bound.
+    exact: Vec<bool>,
 }
 
 fn seg(d: f64, vin: f64, vout: f64) -> Segment1 {
@@ -61,6 +64,7 @@ pub(crate) fn section(
         via,
         fastest,
         durations,
+        exact,
     } = scratch;
     via.clear();
     via.resize((n + 1) * nj, 0.0);
@@ -86,17 +90,39 @@ pub(crate) fn section(
             }
         }
     }
+    exact.clear();
+    exact.resize(nj, false);
     for k in 0..n {
-        let mut t: f64 = 0.0;
-        for (j, lim) in limits.iter().enumerate() {
-            let s = seg(
+        // Only the slowest joint's time-optimal duration matters, and the
+        // stretched profiles only need a feasible profile no faster than
+        // the time-optimal one: solve exactly only the joints whose bounds
+        // say they may be the slowest.
+        let s = |j: usize| {
+            seg(
                 pos[k + 1][j] - pos[k][j],
                 via[k * nj + j],
                 via[(k + 1) * nj + j],
-            );
-            let f = s.fastest(lim);
-            fastest[k * nj + j] = f;
-            t = t.max(f.duration);
+            )
+        };
+        let mut floor: f64 = 0.0;
+        for (j, lim) in limits.iter().enumerate() {
+            let b = s(j).fastest_bounds(lim);
+            fastest[k * nj + j] = b.upper;
+            exact[j] = b.exact;
+            floor = floor.max(b.lower);
+        }
+        // Every joint left out has a time-optimal duration at most its
+        // bound, at most `floor`, at most the slowest one's: `t` is exact.
+        let mut t: f64 = 0.0;
+        for (j, lim) in limits.iter().enumerate() {
+            let f = &mut fastest[k * nj + j];
+            if !exact[j] && f.duration > floor {
+                *f = s(j).fastest(lim);
+                exact[j] = true;
+            }
+            if exact[j] {
+                t = t.max(f.duration);
+            }
         }
         durations[k] = t;
     }

@@ -131,6 +131,41 @@ fn prepare<T: Transport, C: Clock>(
     Ok((loops, timeline))
 }
 
+/// One bus's share of cycle `timing.index` at path time `t`: command the
+/// path at `t + lead`, read the feedback back, and track it against the
+/// path at the time of the reading. Returns the lead used and the fault this
+/// cycle raised: a lost port, or what tracking found.
+fn bus_cycle<T: Transport, C: Clock>(
+    l: &mut BusLoop<T, C>,
+    timeline: &mut Timeline,
+    cmd: &mut [JointState],
+    reference: &mut [JointState],
+    timing: CycleTiming,
+    t: f64,
+) -> (f64, Option<Fault>) {
+    l.begin(timing);
+    let lead = l.lead_at(t);
+    timeline.sample_cmd(t + lead, cmd);
+    let mut gone = l.write(cmd).err();
+    let x = match l.read() {
+        Ok(x) => x,
+        Err(msg) => {
+            gone.get_or_insert(msg);
+            t
+        }
+    };
+    timeline.sample_ref(x, reference);
+    let main = matches!(timeline.kind_at(x), Some(Kind::Main | Kind::Approach));
+    let found = match gone {
+        Some(message) => {
+            let reaction = l.policy_port_gone();
+            Some(l.fault(FaultKind::PortGone { message }, None, reaction, 0))
+        }
+        None => l.track(reference, TrackInput { main, t }),
+    };
+    (lead, found)
+}
+
 /// What a command asks of the loops beyond the timeline.
 fn apply(timeline: &mut Timeline, command: Command) -> Result<Option<Finish>, String> {
     match command {
@@ -471,31 +506,20 @@ impl<T: Transport> VirtualRun<T> {
             clock.advance_to(deadline);
             let woke = clock.now();
             let l = &mut self.loops[b];
-            l.begin(CycleTiming {
+            let timing = CycleTiming {
                 index: k,
                 deadline,
                 woke,
                 skipped: 0,
-            });
-            let lead = l.lead_at(t);
-            self.timeline.sample_cmd(t + lead, &mut self.cmd);
-            let mut gone = l.write(&self.cmd).err();
-            let x = match l.read() {
-                Ok(x) => x,
-                Err(msg) => {
-                    gone.get_or_insert(msg);
-                    t
-                }
             };
-            self.timeline.sample_ref(x, &mut self.reference);
-            let main = matches!(self.timeline.kind_at(x), Some(Kind::Main | Kind::Approach));
-            let found = match gone {
-                Some(message) => {
-                    let reaction = l.policy_port_gone();
-                    Some(l.fault(FaultKind::PortGone { message }, None, reaction, 0))
-                }
-                None => l.track(&self.reference, TrackInput { main, t }),
-            };
+            let (lead, found) = bus_cycle(
+                l,
+                &mut self.timeline,
+                &mut self.cmd,
+                &mut self.reference,
+                timing,
+                t,
+            );
             if let Some(f) = found {
                 self.react(f, b);
             }
@@ -877,31 +901,20 @@ impl Worker {
                 }
             }
         }
-        l.begin(CycleTiming {
+        let timing = CycleTiming {
             index: k,
             deadline,
             woke,
             skipped: 0,
-        });
-        let lead = l.lead_at(t);
-        self.timeline.sample_cmd(t + lead, &mut self.cmd);
-        let mut gone = l.write(&self.cmd).err();
-        let x = match l.read() {
-            Ok(x) => x,
-            Err(msg) => {
-                gone.get_or_insert(msg);
-                t
-            }
         };
-        self.timeline.sample_ref(x, &mut self.reference);
-        let main = matches!(self.timeline.kind_at(x), Some(Kind::Main | Kind::Approach));
-        let found = match gone {
-            Some(message) => {
-                let reaction = l.policy_port_gone();
-                Some(l.fault(FaultKind::PortGone { message }, None, reaction, 0))
-            }
-            None => l.track(&self.reference, TrackInput { main, t }),
-        };
+        let (lead, found) = bus_cycle(
+            l,
+            &mut self.timeline,
+            &mut self.cmd,
+            &mut self.reference,
+            timing,
+            t,
+        );
         let mut end = None;
         if let Some(f) = found {
             if self.fault.is_none() && self.shared.raise(&f) {

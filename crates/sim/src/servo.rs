@@ -8,81 +8,9 @@ use servobus_protocol::{encode, Instruction, Packet, StatusFlags, BROADCAST_ID};
 use crate::dynamics::{Drive, Joint, MAX_STEP_S};
 use crate::model::{from_sign_magnitude, sign_magnitude, Area, Endian, SimModel};
 
-/// Addresses shared by every model's layout.
-pub mod addr {
-    /// Firmware major version.
-    pub const FIRMWARE_MAJOR: u8 = 0;
-    /// Model number (two bytes).
-    pub const MODEL_NUMBER: u8 = 3;
-    /// ID.
-    pub const ID: u8 = 5;
-    /// Baud rate index.
-    pub const BAUD_RATE: u8 = 6;
-    /// Return delay, 2 us units.
-    pub const RETURN_DELAY: u8 = 7;
-    /// Response status level.
-    pub const STATUS_LEVEL: u8 = 8;
-    /// Minimum angle limit.
-    pub const MIN_ANGLE_LIMIT: u8 = 9;
-    /// Maximum angle limit.
-    pub const MAX_ANGLE_LIMIT: u8 = 11;
-    /// Maximum temperature, C.
-    pub const MAX_TEMPERATURE: u8 = 13;
-    /// Maximum input voltage, 0.1 V.
-    pub const MAX_VOLTAGE: u8 = 14;
-    /// Minimum input voltage, 0.1 V.
-    pub const MIN_VOLTAGE: u8 = 15;
-    /// Maximum torque, 0.1 %.
-    pub const MAX_TORQUE: u8 = 16;
-    /// Unloading condition (which status bits release the torque).
-    pub const UNLOADING_CONDITION: u8 = 19;
-    /// Position P gain.
-    pub const P_GAIN: u8 = 21;
-    /// Clockwise dead zone, ticks.
-    pub const CW_DEAD_ZONE: u8 = 26;
-    /// Counter-clockwise dead zone, ticks.
-    pub const CCW_DEAD_ZONE: u8 = 27;
-    /// Homing offset (STS only), sign-magnitude bit 11.
-    pub const OFFSET: u8 = 31;
-    /// Operating mode (STS only).
-    pub const MODE: u8 = 33;
-    /// Protection time (STS), 10 ms units.
-    pub const PROTECTION_TIME: u8 = 35;
-    /// Torque enable.
-    pub const TORQUE_ENABLE: u8 = 40;
-    /// Acceleration, 100 ticks/s^2 units.
-    pub const ACCELERATION: u8 = 41;
-    /// Goal position.
-    pub const GOAL_POSITION: u8 = 42;
-    /// Goal time, ms.
-    pub const GOAL_TIME: u8 = 44;
-    /// Goal speed, ticks/s.
-    pub const GOAL_SPEED: u8 = 46;
-    /// Torque limit (STS), 0.1 %.
-    pub const TORQUE_LIMIT: u8 = 48;
-    /// EEPROM lock on STS/SMS.
-    pub const LOCK: u8 = 55;
-    /// EEPROM lock on SCS.
-    pub const SCS_LOCK: u8 = 48;
-    /// Present position.
-    pub const PRESENT_POSITION: u8 = 56;
-    /// Present speed.
-    pub const PRESENT_SPEED: u8 = 58;
-    /// Present load.
-    pub const PRESENT_LOAD: u8 = 60;
-    /// Present voltage, 0.1 V.
-    pub const PRESENT_VOLTAGE: u8 = 62;
-    /// Present temperature, C.
-    pub const PRESENT_TEMPERATURE: u8 = 63;
-    /// Set while a REG WRITE waits for ACTION.
-    pub const ASYNC_FLAG: u8 = 64;
-    /// Status flags.
-    pub const STATUS: u8 = 65;
-    /// Moving flag.
-    pub const MOVING: u8 = 66;
-    /// Present current (STS).
-    pub const PRESENT_CURRENT: u8 = 69;
-}
+/// Addresses shared by every model's layout (those of the protocol crate's
+/// register maps).
+pub use servobus_protocol::registers::addr;
 
 /// A simulated Feetech servo.
 ///

@@ -65,9 +65,10 @@ pub struct Trajectory {
     /// layout).
     pub(crate) id: u64,
     pub(crate) duration: f64,
-    pub(crate) pieces: Vec<Piece>,
-    /// `first[j]..first[j + 1]` are joint `j`'s pieces (never empty).
-    pub(crate) first: Vec<usize>,
+    /// Per joint, its pieces in time order (never empty). Kept as the
+    /// planner built them (no copy into one array: sampling reads the
+    /// cursor's copies, not these).
+    pub(crate) pieces: Vec<Vec<Piece>>,
     pub(crate) segments: Vec<SegmentTiming>,
     /// Final position per joint (held at rest from `duration` on).
     pub(crate) end: Vec<f64>,
@@ -85,9 +86,9 @@ pub struct Trajectory {
 pub struct Cursor {
     /// The trajectory `index` refers to.
     id: u64,
-    /// Per joint, an index into the trajectory's `pieces`.
+    /// Per joint, an index into the trajectory's pieces of that joint.
     index: Vec<usize>,
-    /// Per joint, a copy of `pieces[index[j]]`: while `t` stays inside the
+    /// Per joint, a copy of `pieces[j][index[j]]`: while `t` stays inside the
     /// current pieces, sampling reads only this one contiguous array (no
     /// indirection, no bounds check per joint). Same length as `index`.
     hot: Vec<Piece>,
@@ -106,31 +107,29 @@ impl Trajectory {
         duration: f64,
         segments: Vec<SegmentTiming>,
     ) -> Self {
-        let total: usize = per_joint.iter().map(|p| p.len().max(1)).sum();
-        let mut pieces = Vec::with_capacity(total + per_joint.len());
-        let mut first = Vec::with_capacity(per_joint.len() + 1);
-        for (j, joint) in per_joint.into_iter().enumerate() {
-            first.push(pieces.len());
-            let n = pieces.len();
-            pieces.extend(joint.into_iter().filter(|p| p.duration() > 0.0));
-            if pieces.len() == n {
-                pieces.push(Piece::hold(0.0, duration, hold[j]));
-            } else if let Some(last) = pieces.last_mut() {
+        let mut pieces = per_joint;
+        for (joint, &h) in pieces.iter_mut().zip(hold) {
+            joint.retain(|p| p.duration() > 0.0);
+            if let Some(last) = joint.last_mut() {
                 // Rounding in accumulated phase times may leave the last
                 // piece a few ulps short of (or past) the end: snap it.
                 last.t1 = duration.max(last.t0);
+            } else {
+                joint.push(Piece::hold(0.0, duration, h));
             }
         }
-        first.push(pieces.len());
-        let end = (0..first.len() - 1)
-            .map(|j| pieces[first[j + 1] - 1].eval(duration).0)
+        let end = pieces
+            .iter()
+            .map(|joint| joint.last().map_or(0.0, |p| p.eval(duration).0))
             .collect();
-        let cubic = pieces.iter().all(|p| p.c[4] == 0.0 && p.c[5] == 0.0);
+        let cubic = pieces
+            .iter()
+            .flatten()
+            .all(|p| p.c[4] == 0.0 && p.c[5] == 0.0);
         Trajectory {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             duration,
             pieces,
-            first,
             segments,
             end,
             cubic,
@@ -139,7 +138,7 @@ impl Trajectory {
 
     /// Number of joints.
     pub fn joints(&self) -> usize {
-        self.first.len() - 1
+        self.pieces.len()
     }
 
     /// Total duration, s.
@@ -154,8 +153,8 @@ impl Trajectory {
 
     /// A cursor for [`sample_with`](Self::sample_with). Allocates once.
     pub fn cursor(&self) -> Cursor {
-        let index = self.first[..self.joints()].to_vec();
-        let hot = index.iter().map(|&i| self.pieces[i]).collect();
+        let index = vec![0; self.joints()];
+        let hot = self.pieces.iter().map(|joint| joint[0]).collect();
         Cursor {
             id: self.id,
             index,
@@ -164,7 +163,7 @@ impl Trajectory {
     }
 
     fn joint_pieces(&self, j: usize) -> &[Piece] {
-        &self.pieces[self.first[j]..self.first[j + 1]]
+        &self.pieces[j]
     }
 
     /// Samples every joint at time `t` (s) into `out` by binary search;
@@ -207,8 +206,7 @@ impl Trajectory {
             self.reset(cursor);
         }
         // Invariant from here: for every joint `j < joints`,
-        // `first[j] <= index[j] < first[j + 1]` and `hot[j] ==
-        // pieces[index[j]]`.
+        // `index[j] < pieces[j].len()` and `hot[j] == pieces[j][index[j]]`.
         let hot = &mut cursor.hot[..n];
         let index = &mut cursor.index[..n];
         let out = &mut out[..n];
@@ -263,9 +261,9 @@ impl Trajectory {
     #[cold]
     fn reset(&self, cursor: &mut Cursor) {
         let n = self.joints();
-        cursor.index[..n].copy_from_slice(&self.first[..n]);
-        for (h, &i) in cursor.hot.iter_mut().zip(&self.first[..n]) {
-            *h = self.pieces[i];
+        cursor.index[..n].fill(0);
+        for (h, joint) in cursor.hot.iter_mut().zip(&self.pieces) {
+            *h = joint[0];
         }
         cursor.id = self.id;
     }
@@ -276,9 +274,8 @@ impl Trajectory {
     #[cold]
     #[inline(never)]
     fn seek(&self, j: usize, idx: &mut usize, hot: &mut Piece, t: f64) -> JointState {
-        let (lo, hi) = (self.first[j], self.first[j + 1]);
-        let joint = &self.pieces[lo..hi];
-        let mut i = *idx - lo;
+        let joint = &self.pieces[j];
+        let mut i = *idx;
         if t > joint[i].t1 {
             // Usually one of the next few pieces (short jerk phases may
             // be skipped in one control period); otherwise search.
@@ -294,7 +291,7 @@ impl Trajectory {
             i = joint.partition_point(|p| p.t1 < t);
         }
         let i = i.min(joint.len() - 1);
-        *idx = lo + i;
+        *idx = i;
         *hot = joint[i];
         state(hot, t)
     }

@@ -84,7 +84,9 @@ pub(crate) fn section(
             for (j, lim) in limits.iter().enumerate() {
                 let (dp, dn) = (pos[k][j] - pos[k - 1][j], pos[k + 1][j] - pos[k][j]);
                 if dp * dn > 0.0 {
-                    let cap = rest_peak(0.5 * dp.abs(), lim).min(rest_peak(0.5 * dn.abs(), lim));
+                    // `rest_peak` increases with the distance: the smaller
+                    // neighbour sets the cap (one evaluation, same value).
+                    let cap = rest_peak(0.5 * dp.abs().min(dn.abs()), lim);
                     via[k * nj + j] = dp.signum() * cap.min(lim.max_velocity);
                 }
             }

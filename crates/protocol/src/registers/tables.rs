@@ -67,6 +67,24 @@ pub mod addr {
     pub const MOVING: u8 = 66;
     /// Present current, 2 bytes, sign bit 15.
     pub const PRESENT_CURRENT: u8 = 69;
+    /// Maximum temperature limit, degrees C (EEPROM).
+    pub const MAX_TEMPERATURE: u8 = 13;
+    /// Maximum input voltage, 0.1 V (EEPROM).
+    pub const MAX_VOLTAGE: u8 = 14;
+    /// Minimum input voltage, 0.1 V (EEPROM).
+    pub const MIN_VOLTAGE: u8 = 15;
+    /// Maximum torque, 0.1 % (EEPROM).
+    pub const MAX_TORQUE: u8 = 16;
+    /// Unloading condition: which status bits release the torque (EEPROM).
+    pub const UNLOADING_CONDITION: u8 = 19;
+    /// Position loop P gain (EEPROM).
+    pub const P_GAIN: u8 = 21;
+    /// Clockwise dead zone, ticks (EEPROM).
+    pub const CW_DEAD_ZONE: u8 = 26;
+    /// Counter-clockwise dead zone, ticks (EEPROM).
+    pub const CCW_DEAD_ZONE: u8 = 27;
+    /// Protection time, 10 ms units (STS, EEPROM).
+    pub const PROTECTION_TIME: u8 = 35;
 }
 
 use Access::{Eeprom as E, Ram as W, ReadOnly as R};

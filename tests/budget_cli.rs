@@ -6,32 +6,11 @@
 //! also waits the servo's return delay plus the link's default turnaround
 //! (50 us).
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn servobus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the servobus binary runs")
-}
-
-fn budget_json(args: &[&str]) -> serde_json::Value {
-    let out = servobus(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
-
-fn num(v: &serde_json::Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
-}
+use common::{num, servobus, servobus_json as budget_json};
 
 #[test]
 fn so101_at_1mbps_with_return_delay_zero() {

@@ -1,32 +1,11 @@
 //! `servobus plan` on the shipped motions and on small motions whose figures
 //! are worked out by hand.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn servobus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the servobus binary runs")
-}
-
-fn plan_json(args: &[&str]) -> serde_json::Value {
-    let out = servobus(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
-
-fn num(v: &serde_json::Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
-}
+use common::{num, servobus, servobus_json as plan_json};
 
 fn temp(dir: &str, name: &str, text: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR"))

@@ -4,7 +4,7 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -14,6 +14,33 @@ pub const BIN: &str = env!("CARGO_BIN_EXE_servobus");
 /// A file of the repository, by its path from the root.
 pub fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// Runs `servobus ARGS` from the repository's root.
+pub fn servobus(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the servobus binary runs")
+}
+
+/// Runs `servobus ARGS`, which must succeed, and parses its one JSON object.
+pub fn servobus_json(args: &[&str]) -> serde_json::Value {
+    let out = servobus(args);
+    assert!(
+        out.status.success(),
+        "servobus {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+/// The number `v[key]`.
+pub fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
 }
 
 /// A fresh scratch directory for one test.

@@ -235,7 +235,8 @@ impl Segment1 {
     }
 
     /// Bounds on [`fastest`](Self::fastest) that cost no root finding:
-    /// the exact profile where it has a closed form; otherwise a lower
+    /// the exact profile where a closed form needs no evaluation of the
+    /// ramp distance (rest to rest, both ramps long); otherwise a lower
     /// bound on its duration (the same family without a jerk limit, which
     /// can only be faster) and a feasible slower profile (the long-ramp
     /// root: long ramps cover at least the distance of short ones, so it
@@ -244,7 +245,18 @@ impl Segment1 {
     pub fn fastest_bounds(&self, lim: &JointLimits) -> Bounds {
         let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
         let acc = Acc::new(a, j);
-        match self.fastest_closed(lim, &acc) {
+        // Only the closed forms that need no evaluation of `g` (the
+        // long-ramp root is feasible in every case, `vm` or `max(v0, v1)`
+        // included, so the others are left to `fastest`).
+        let vlo = self.v0.max(self.v1).min(vm);
+        let closed = if self.d <= 0.0 && vlo <= 0.0 {
+            Ok(0.0)
+        } else if self.v0 == 0.0 && self.v1 == 0.0 {
+            Ok(rest_peak(self.d, lim))
+        } else {
+            self.fastest_long(a, j, vlo, vm)
+        };
+        match closed {
             Ok(vc) => {
                 let upper = if vc <= 0.0 {
                     Profile {
@@ -270,9 +282,12 @@ impl Segment1 {
                 };
                 let (v0, v1) = (self.v0, self.v1);
                 // Jerk-free: ramp distance (2 vc^2 - v0^2 - v1^2) / 2a.
+                // At or above `guess >= max(v0, v1)` (both ramps speed up;
+                // rounding aside it is so anyway), at most `vm`.
                 let vt = ((2.0 * a * self.d + v0 * v0 + v1 * v1) * 0.5)
                     .sqrt()
-                    .clamp(guess, vm);
+                    .max(guess)
+                    .min(vm);
                 let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) / (2.0 * a);
                 let trap = (2.0 * vt - v0 - v1) / a + (self.d - ramps) / vt;
                 // Margin for rounding: a bound too high could skip the
@@ -335,7 +350,7 @@ impl Segment1 {
                     // derivative `2 y / s`, finite at `y -> 0` because `s
                     // >= y sqrt(j)`.
                     let s = (dv * acc.j).sqrt();
-                    (2.0 * s / acc.j, if s > 0.0 { 2.0 * y / s } else { 0.0 })
+                    (2.0 * s * acc.inv_j, if s > 0.0 { 2.0 * y / s } else { 0.0 })
                 };
                 let mean = 0.5 * (u + vc);
                 g += mean * dur;
@@ -373,7 +388,10 @@ impl Segment1 {
     }
 
     /// The profile of duration exactly `t >= fastest.duration`, stretched by
-    /// lowering the cruise speed.
+    /// lowering the cruise speed. `fastest` is the time-optimal profile or
+    /// any feasible one with a lower cruise speed (the upper bound of
+    /// [`fastest_bounds`](Self::fastest_bounds)): the search only needs a
+    /// cruise speed whose duration is at most `t`.
     pub fn stretched(&self, lim: &JointLimits, fastest: Profile, t: f64) -> Profile {
         if t <= fastest.duration * (1.0 + 1e-12) || fastest.vc <= 0.0 {
             return Profile {
@@ -405,15 +423,20 @@ impl Segment1 {
                 }
             }
         }
-        // The trapezoidal (jerk-free) answer: a close first guess, and a
-        // cheap test of whether both ramps of the jerk-limited answer may
-        // reach the acceleration limit (then it has a closed form too; if
-        // the test misleads, the search below finds the same root).
-        let trap = self.trapezoid_root(a, t, fastest.vc);
-        let long =
-            |vc: f64| (vc - self.v0).abs() >= acc.regime && (vc - self.v1).abs() >= acc.regime;
-        if vc.is_none() && trap.is_some_and(long) {
-            vc = self.stretched_long(a, j, t, fastest.vc);
+        // Every ramp reaching the acceleration limit (always so without a
+        // jerk limit) makes the duration equation a quadratic: its root,
+        // where the ramps are indeed long, is the answer. Elsewhere it is
+        // still a close first guess (long-formula ramps are slower than
+        // short ones, jerk-free ones faster: the answer lies between).
+        let model = self
+            .model_root(acc.inv_a, acc.k, t, fastest.vc)
+            .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc));
+        if vc.is_none() {
+            vc = model.filter(|&x| {
+                (x - self.v0).abs() >= acc.regime
+                    && (x - self.v1).abs() >= acc.regime
+                    && self.d - self.g(x, &acc).1 >= -1e-12 * self.d
+            });
         }
         let vc = match vc {
             Some(x) => x,
@@ -426,7 +449,7 @@ impl Segment1 {
                     (tt - t, dt)
                 };
                 let lo = 1.0 / fastest.vc;
-                let guess = trap.map_or(t / self.d, |vc| 1.0 / vc).max(lo);
+                let guess = model.map_or(t / self.d, |vc| 1.0 / vc).max(lo);
                 // No upper end known: the search finds one (f grows
                 // without bound as u does, the cruise taking ever longer).
                 1.0 / solve(f, lo, f64::INFINITY, guess, true)
@@ -456,18 +479,23 @@ impl Segment1 {
         }
     }
 
-    /// The cruise speed in `(0, hi]` of duration `t` without a jerk limit
-    /// (ramps of constant acceleration `a`), if there is one. With `s_i =
-    /// sign(vc - v_i)` the duration equation is the quadratic of
-    /// [`stretched_long`](Self::stretched_long) with `j` infinite; as the
-    /// duration decreases with `vc`, the signs follow from comparing it
-    /// with `t` at `vc = v_i`, so only one quadratic is solved.
-    fn trapezoid_root(&self, a: f64, t: f64, hi: f64) -> Option<f64> {
+    /// The cruise speed in `(0, hi]` of duration `t` if every ramp took
+    /// `|w - u| / a + k` (`a = 1 / inv_a`; `k = a / j`: the exact duration
+    /// of a ramp reaching the acceleration limit; `k = 0`: jerk-free), if
+    /// there is one. With `s_i = sign(vc - v_i)` the duration equation
+    /// `t vc = d + sum((vc - v_i) dur_i / 2)` is the quadratic
+    /// `A vc^2 + B vc + C = 0`, `A = (s0 + s1) / 2a`,
+    /// `B = k - t - (s0 v0 + s1 v1) / a`,
+    /// `C = d + (s0 v0^2 + s1 v1^2) / 2a - (v0 + v1) k / 2`. The duration
+    /// decreasing with `vc`, the signs follow from comparing it with `t` at
+    /// `vc = v_i`, so only one quadratic is solved.
+    fn model_root(&self, inv_a: f64, k: f64, t: f64, hi: f64) -> Option<f64> {
         let (v0, v1, d) = (self.v0, self.v1, self.d);
+        let h = 0.5 * inv_a;
         // `vc * (duration(vc) - t)`: positive below the root.
         let excess = |vc: f64| {
             let (e0, e1) = (vc - v0, vc - v1);
-            d + (e0 * e0.abs() + e1 * e1.abs()) / (2.0 * a) - t * vc
+            d + (e0 * e0.abs() + e1 * e1.abs()) * h + 0.5 * k * (e0 + e1) - t * vc
         };
         let side = |v: f64| {
             if v <= 0.0 || (v < hi && excess(v) > 0.0) {
@@ -477,9 +505,9 @@ impl Segment1 {
             }
         };
         let (s0, s1) = (side(v0), side(v1));
-        let qa = (s0 + s1) / (2.0 * a);
-        let qb = -t - (s0 * v0 + s1 * v1) / a;
-        let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) / (2.0 * a);
+        let qa = (s0 + s1) * h;
+        let qb = k - t - (s0 * v0 + s1 * v1) * inv_a;
+        let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) * h - 0.5 * k * (v0 + v1);
         let ok = |vc: f64| {
             vc > 0.0
                 && vc <= hi * (1.0 + 1e-12)
@@ -496,47 +524,6 @@ impl Segment1 {
         }
         let q = -0.5 * (qb + qb.signum() * disc.sqrt());
         pick(q / qa).or_else(|| pick(qc / q))
-    }
-
-    /// Closed form of [`stretched`](Self::stretched) when both ramps reach
-    /// the acceleration limit. With `s_i = sign(vc - v_i)` the duration
-    /// equation `t vc = sum(dur_i) vc + d - sum(dist_i)` is the quadratic
-    /// `A vc^2 + B vc + C = 0`, `A = (s0 + s1) / 2a`,
-    /// `B = a / j - t - (s0 v0 + s1 v1) / a`,
-    /// `C = d + (s0 v0^2 + s1 v1^2) / 2a - (v0 + v1) a / 2j`. The duration
-    /// being monotone in `vc`, at most one root is consistent with its
-    /// signs and regimes.
-    fn stretched_long(&self, a: f64, j: f64, t: f64, hi: f64) -> Option<f64> {
-        let k = a / j;
-        let regime = a * k;
-        let (v0, v1, d) = (self.v0, self.v1, self.d);
-        for (s0, s1) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
-            let qa = (s0 + s1) / (2.0 * a);
-            let qb = k - t - (s0 * v0 + s1 * v1) / a;
-            let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) / (2.0 * a) - (v0 + v1) * k * 0.5;
-            let mut roots = [f64::NAN; 2];
-            if qa == 0.0 {
-                roots[0] = -qc / qb;
-            } else {
-                let disc = qb * qb - 4.0 * qa * qc;
-                if disc < 0.0 {
-                    continue;
-                }
-                let q = -0.5 * (qb + qb.signum() * disc.sqrt());
-                roots = [q / qa, qc / q];
-            }
-            for vc in roots {
-                let ok = vc > 0.0
-                    && vc <= hi * (1.0 + 1e-12)
-                    && s0 * (vc - v0) >= regime
-                    && s1 * (vc - v1) >= regime
-                    && d - self.g(vc, &Acc::new(a, j)).1 >= -1e-12 * d;
-                if ok {
-                    return Some(vc.min(hi));
-                }
-            }
-        }
-        None
     }
 
     /// The phases (duration, jerk) of the profile, for a positive direction.

@@ -88,10 +88,36 @@ pub struct Cursor {
     id: u64,
     /// Per joint, an index into the trajectory's pieces of that joint.
     index: Vec<usize>,
-    /// Per joint, a copy of `pieces[j][index[j]]`: while `t` stays inside the
-    /// current pieces, sampling reads only this one contiguous array (no
+    /// Per joint, a copy of `pieces[j][index[j]]`: while `t` stays inside
+    /// the current pieces, sampling reads only these contiguous arrays (no
     /// indirection, no bounds check per joint). Same length as `index`.
-    hot: Vec<Piece>,
+    hot: Hot,
+}
+
+/// The cursor's copies of the current pieces, one array per field (struct
+/// of arrays): the loop over joints reads every field contiguously and can
+/// evaluate two joints per vector instruction.
+#[derive(Debug, Clone, Default)]
+struct Hot {
+    t0: Vec<f64>,
+    t1: Vec<f64>,
+    /// `c[k][j]`: coefficient `k` of joint `j`'s piece.
+    c: [Vec<f64>; 6],
+}
+
+impl Hot {
+    fn len(&self) -> usize {
+        self.t0.len()
+    }
+
+    /// Joint `j`'s piece becomes `p`.
+    fn set(&mut self, j: usize, p: &Piece) {
+        self.t0[j] = p.t0;
+        self.t1[j] = p.t1;
+        for (c, &v) in self.c.iter_mut().zip(&p.c) {
+            c[j] = v;
+        }
+    }
 }
 
 /// Source of trajectory ids (0 is never used, so a default cursor matches
@@ -110,6 +136,9 @@ impl Trajectory {
         let mut pieces = per_joint;
         for (joint, &h) in pieces.iter_mut().zip(hold) {
             joint.retain(|p| p.duration() > 0.0);
+            // The planner reserves for the worst case; keep only what is
+            // used (shrinking in place, as allocators usually do).
+            joint.shrink_to_fit();
             if let Some(last) = joint.last_mut() {
                 // Rounding in accumulated phase times may leave the last
                 // piece a few ulps short of (or past) the end: snap it.
@@ -153,8 +182,16 @@ impl Trajectory {
 
     /// A cursor for [`sample_with`](Self::sample_with). Allocates once.
     pub fn cursor(&self) -> Cursor {
-        let index = vec![0; self.joints()];
-        let hot = self.pieces.iter().map(|joint| joint[0]).collect();
+        let n = self.joints();
+        let index = vec![0; n];
+        let mut hot = Hot {
+            t0: vec![0.0; n],
+            t1: vec![0.0; n],
+            c: core::array::from_fn(|_| vec![0.0; n]),
+        };
+        for (j, joint) in self.pieces.iter().enumerate() {
+            hot.set(j, &joint[0]);
+        }
         Cursor {
             id: self.id,
             index,
@@ -197,7 +234,7 @@ impl Trajectory {
         let t = t.max(0.0);
         let n = self.joints().min(out.len());
         if cursor.id != self.id {
-            if cursor.index.len() < self.joints() || cursor.hot.len() != cursor.index.len() {
+            if cursor.index.len() < self.joints() || cursor.hot.len() < self.joints() {
                 // A cursor of another trajectory with fewer joints (or a
                 // default one): cannot grow without allocating, so search.
                 self.sample(t, out);
@@ -206,19 +243,19 @@ impl Trajectory {
             self.reset(cursor);
         }
         // Invariant from here: for every joint `j < joints`,
-        // `index[j] < pieces[j].len()` and `hot[j] == pieces[j][index[j]]`.
-        let hot = &mut cursor.hot[..n];
-        let index = &mut cursor.index[..n];
-        let out = &mut out[..n];
+        // `index[j] < pieces[j].len()` and the `hot` entries of joint `j`
+        // are those of `pieces[j][index[j]]`.
+        let (hot, index) = (&mut cursor.hot, &mut cursor.index);
         if self.cubic {
-            self.sample_hot::<true>(hot, index, t, out);
+            self.sample_hot::<true>(hot, index, t, &mut out[..n]);
         } else {
-            self.sample_hot::<false>(hot, index, t, out);
+            self.sample_hot::<false>(hot, index, t, &mut out[..n]);
         }
     }
 
-    /// The loop of `sample_with` over joints; `CUBIC`: every piece is of
-    /// degree <= 3. The three slices have the same length.
+    /// The loop of `sample_with` over the joints of `out`; `CUBIC`: every
+    /// piece is of degree <= 3. `hot` and `index` have at least as many
+    /// entries as `out`.
     ///
     /// Every joint is evaluated in its current piece first, with no branch
     /// and no call in the loop (so `t` and the constants stay in registers
@@ -227,30 +264,46 @@ impl Trajectory {
     #[inline(always)]
     fn sample_hot<const CUBIC: bool>(
         &self,
-        hot: &mut [Piece],
+        hot: &mut Hot,
         index: &mut [usize],
         t: f64,
         out: &mut [JointState],
     ) {
         let n = out.len().min(hot.len()).min(index.len());
-        let (hot, index, out) = (&mut hot[..n], &mut index[..n], &mut out[..n]);
+        let out = &mut out[..n];
+        let (t0, t1) = (&hot.t0[..n], &hot.t1[..n]);
+        let [c0, c1, c2, c3, c4, c5] = &hot.c;
+        let (c0, c1, c2, c3) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n]);
+        let (c4, c5) = (&c4[..n], &c5[..n]);
         let mut miss = false;
-        for (h, o) in hot.iter().zip(out.iter_mut()) {
+        for j in 0..n {
             // Inside the piece `t - t0` is within `[0, t1 - t0]` (float
             // subtraction is monotone), so no clamp is needed; outside it
             // the value is overwritten below.
-            miss |= (t < h.t0) | (t > h.t1);
-            *o = if CUBIC {
-                cubic_state(h, t - h.t0)
+            miss |= (t < t0[j]) | (t > t1[j]);
+            let x = t - t0[j];
+            out[j] = if CUBIC {
+                // `Piece::eval_local`'s arithmetic for degree <= 3.
+                JointState {
+                    position: c0[j] + x * (c1[j] + x * (c2[j] + x * c3[j])),
+                    velocity: c1[j] + x * (2.0 * c2[j] + x * (3.0 * c3[j])),
+                    acceleration: 2.0 * c2[j] + x * (6.0 * c3[j]),
+                }
             } else {
-                local_state(h, t - h.t0)
+                let p = Piece {
+                    t0: t0[j],
+                    t1: t1[j],
+                    c: [c0[j], c1[j], c2[j], c3[j], c4[j], c5[j]],
+                };
+                local_state(&p, x)
             };
         }
         if miss {
-            for j in 0..n {
-                let h = &mut hot[j];
-                if t < h.t0 || t > h.t1 {
-                    out[j] = self.seek(j, &mut index[j], h, t);
+            for (j, o) in out.iter_mut().enumerate() {
+                if t < hot.t0[j] || t > hot.t1[j] {
+                    let p = self.seek(j, &mut index[j], t);
+                    hot.set(j, p);
+                    *o = state(p, t);
                 }
             }
         }
@@ -262,18 +315,18 @@ impl Trajectory {
     fn reset(&self, cursor: &mut Cursor) {
         let n = self.joints();
         cursor.index[..n].fill(0);
-        for (h, joint) in cursor.hot.iter_mut().zip(&self.pieces) {
-            *h = joint[0];
+        for (j, joint) in self.pieces.iter().enumerate() {
+            cursor.hot.set(j, &joint[0]);
         }
         cursor.id = self.id;
     }
 
     /// Slow path of `sample_with`: moves joint `j`'s cursor to the piece
-    /// holding `t` and samples it there (clamped to the piece, which only
-    /// matters if rounding left a gap between pieces).
+    /// holding `t` (or the nearest one, which only matters if rounding left
+    /// a gap between pieces: sampling clamps to it).
     #[cold]
     #[inline(never)]
-    fn seek(&self, j: usize, idx: &mut usize, hot: &mut Piece, t: f64) -> JointState {
+    fn seek(&self, j: usize, idx: &mut usize, t: f64) -> &Piece {
         let joint = &self.pieces[j];
         let mut i = *idx;
         if t > joint[i].t1 {
@@ -292,8 +345,7 @@ impl Trajectory {
         }
         let i = i.min(joint.len() - 1);
         *idx = i;
-        *hot = joint[i];
-        state(hot, t)
+        &joint[i]
     }
 
     /// The state of every joint at the end (at rest at the last keyframe).
@@ -343,18 +395,6 @@ impl Trajectory {
         (0..self.joints())
             .filter_map(|j| self.joint_summary(j))
             .collect()
-    }
-}
-
-/// [`Piece::eval_local`] of a piece known to be of degree <= 3: the same
-/// arithmetic as its cubic branch, without testing the quintic terms.
-#[inline(always)]
-fn cubic_state(p: &Piece, x: f64) -> JointState {
-    let c = &p.c;
-    JointState {
-        position: c[0] + x * (c[1] + x * (c[2] + x * c[3])),
-        velocity: c[1] + x * (2.0 * c[2] + x * (3.0 * c[3])),
-        acceleration: 2.0 * c[2] + x * (6.0 * c[3]),
     }
 }
 

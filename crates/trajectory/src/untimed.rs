@@ -46,6 +46,19 @@ fn seg(d: f64, vin: f64, vout: f64) -> Segment1 {
     }
 }
 
+/// A feasible profile of `s` no longer than `limit`, if the time-optimal
+/// one is no longer: from the bounds when they decide, else solved.
+fn fits(s: Segment1, lim: &JointLimits, limit: f64) -> Option<Profile> {
+    let b = s.fastest_bounds(lim);
+    if b.upper.duration <= limit {
+        Some(b.upper)
+    } else if b.exact || b.lower > limit {
+        None
+    } else {
+        Some(s.fastest(lim)).filter(|f| f.duration <= limit)
+    }
+}
+
 /// Plans an untimed section through `pos[0..=n]` starting at `t0` at rest.
 /// Appends pieces to `out[j]`; segment durations are left in
 /// `scratch.durations`. With `stop` every keyframe is a stop (the
@@ -146,12 +159,11 @@ pub(crate) fn section(
                     continue;
                 }
                 let vp = v.signum() * pace;
-                let before = seg(dp, via[(k - 1) * nj + j], vp).fastest(lim);
-                if before.duration > durations[k - 1] {
+                let Some(before) = fits(seg(dp, via[(k - 1) * nj + j], vp), lim, durations[k - 1])
+                else {
                     continue;
-                }
-                let after = seg(dn, vp, via[(k + 1) * nj + j]).fastest(lim);
-                if after.duration <= durations[k] {
+                };
+                if let Some(after) = fits(seg(dn, vp, via[(k + 1) * nj + j]), lim, durations[k]) {
                     via[k * nj + j] = vp;
                     fastest[(k - 1) * nj + j] = before;
                     fastest[k * nj + j] = after;

@@ -45,6 +45,18 @@ fn us(d: Duration) -> f64 {
     d.as_secs_f64() * 1e6
 }
 
+/// CPU time the hypervisor gave to other guests ("steal", summed over all
+/// cores), in milliseconds, where the kernel reports it. On a shared virtual
+/// machine this is time in which no scheduling policy inside the guest can
+/// run the loop.
+fn steal_ms() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let cpu = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let ticks: f64 = cpu.split_whitespace().nth(8)?.parse().ok()?;
+    // USER_HZ is 100 on every Linux architecture's user-space ABI.
+    Some(ticks * 10.0)
+}
+
 fn main() {
     let args = Args::parse();
     if !(args.rate.is_finite() && args.rate > 0.0 && args.seconds > 0.0) {
@@ -65,6 +77,7 @@ fn main() {
     let mut pacer = Pacer::new(clock, start, period).with_spin(Duration::from_micros(args.spin_us));
     let mut period_error = Histogram::new(Duration::from_millis(100));
     let mut lateness = Histogram::new(Duration::from_millis(100));
+    let steal_before = steal_ms();
     let first = pacer.wait();
     let mut last = first;
     let mut ran = 1u64;
@@ -81,11 +94,16 @@ fn main() {
         last = tick;
         ran += 1;
     }
+    let steal = match (steal_before, steal_ms()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
     // Drift: how far the last cycle's start is from where an ideal clock
-    // ticking at the rate from the first start would put it.
+    // ticking at the rate from the first deadline would put it.
     let ideal = period * u32::try_from(last.index - first.index).unwrap_or(u32::MAX);
-    let span = last.woke - first.woke;
+    let span = last.woke - first.deadline;
     let drift_us = span.as_secs_f64() * 1e6 - ideal.as_secs_f64() * 1e6;
+    let steal_json = steal.map_or("null".to_owned(), |ms| format!("{ms:.0}"));
     let scheduling = if rt_report.fifo_priority.is_some() || rt_report.pinned.is_some() {
         format!(
             "real-time (core {:?}, SCHED_FIFO {:?})",
@@ -98,7 +116,7 @@ fn main() {
         println!(
             "{{\"rate_hz\":{},\"seconds\":{},\"scheduling\":\"{}\",\"cycles\":{},\"overruns\":{},\
              \"period_error_us\":{{\"p50\":{},\"p99\":{},\"max\":{}}},\
-             \"lateness_us\":{{\"p50\":{},\"p99\":{},\"max\":{}}},\"drift_us\":{:.3}}}",
+             \"lateness_us\":{{\"p50\":{},\"p99\":{},\"max\":{}}},\"drift_us\":{:.3},\"steal_ms\":{}}}",
             args.rate,
             args.seconds,
             scheduling,
@@ -110,7 +128,8 @@ fn main() {
             us(lateness.quantile(0.5)),
             us(lateness.quantile(0.99)),
             us(lateness.max()),
-            drift_us
+            drift_us,
+            steal_json
         );
     } else {
         println!(
@@ -134,5 +153,8 @@ fn main() {
             "total drift   {drift_us:.3} us over {:.3} s",
             span.as_secs_f64()
         );
+        if let Some(ms) = steal {
+            println!("cpu steal     {ms:.0} ms (time the hypervisor ran other guests)");
+        }
     }
 }

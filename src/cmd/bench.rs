@@ -42,6 +42,10 @@ pub struct Args {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Wait for replies by polling the port without blocking, on every bus
+    /// (as `busy_poll: true` in the robot file).
+    #[arg(long)]
+    pub busy_poll: bool,
 }
 
 /// Three figures of a distribution, us.
@@ -80,6 +84,7 @@ struct BusBench {
     name: String,
     servos: usize,
     backend: String,
+    busy_poll: bool,
     cycles: u64,
     achieved_rate_hz: f64,
     planned_rate_hz: f64,
@@ -137,7 +142,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             bus.port.clone()
         };
         let robot = robot.clone();
-        let bus = bus.clone();
+        let mut bus = bus.clone();
+        bus.busy_poll |= args.busy_poll;
         runs.push(std::thread::spawn(move || {
             bench_bus(&robot, &bus, port, clock, duration)
         }));
@@ -210,8 +216,9 @@ fn measure(
     duration: Duration,
     plan: &servobus_timing::Plan,
 ) -> anyhow::Result<BusBench> {
-    let transport = SerialTransport::open(path, bus.baud, clock)
+    let mut transport = SerialTransport::open(path, bus.baud, clock)
         .with_context(|| format!("bus `{}`: cannot open {path}", bus.name))?;
+    transport.set_busy_poll(bus.busy_poll);
     if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
@@ -311,6 +318,7 @@ fn measure(
         name: bus.name.clone(),
         servos: ids.len(),
         backend: String::new(),
+        busy_poll: bus.busy_poll,
         cycles,
         achieved_rate_hz: achieved,
         planned_rate_hz: plan.max_rate_hz(),
@@ -354,11 +362,12 @@ fn print_text(r: &BenchReport) {
     println!("bench of {} for {:.1} s", r.robot, r.seconds);
     for b in &r.buses {
         println!(
-            "bus {} ({} servos, {}): {} cycles, {:.1} Hz achieved; wire-limited {:.1} Hz \
+            "bus {} ({} servos, {}{}): {} cycles, {:.1} Hz achieved; wire-limited {:.1} Hz \
              ({:.1} %), planned with latencies {:.1} Hz",
             b.name,
             b.servos,
             b.backend,
+            if b.busy_poll { ", busy polling" } else { "" },
             b.cycles,
             b.achieved_rate_hz,
             b.wire_limited_rate_hz,

@@ -19,9 +19,10 @@ use anyhow::{bail, Context};
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
+use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
-    bus_settings, spawn, spawn_virtual, Command, Finish, Lead, Report, RunOptions, Runner,
-    Telemetry,
+    bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
+    Runner, Telemetry,
 };
 use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
@@ -56,6 +57,19 @@ pub struct Args {
     /// PNG for a .png path).
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Wait for replies by polling the port without blocking, on every bus
+    /// (as `busy_poll: true` in the robot file): saves the kernel's wake-up
+    /// latency on each reply at the cost of a busy core per bus.
+    #[arg(long, conflicts_with = "fast")]
+    pub busy_poll: bool,
+    /// Pin the control thread of the first bus to this core (the next bus
+    /// to the next core, and so on).
+    #[arg(long)]
+    pub core: Option<usize>,
+    /// Run the control threads under SCHED_FIFO at this priority (1..=99);
+    /// where not permitted, a warning and normal scheduling.
+    #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
+    pub fifo: Option<i32>,
 }
 
 /// Where the run happens.
@@ -97,6 +111,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         // there).
         approach: Some(0.25),
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        rt: RtOptions {
+            core: args.core,
+            fifo_priority: args.fifo,
+        },
+        faults: fault_policy(&backend, rate_hz),
         ..RunOptions::default()
     };
 
@@ -122,10 +141,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let path = server.path().to_string_lossy().into_owned();
                 let flag = Arc::clone(&stop_servers);
                 servers.push(std::thread::spawn(move || server.serve(&flag)));
-                let transport: Box<dyn Transport + Send> = Box::new(
-                    SerialTransport::open(&path, bus.baud, clock)
-                        .with_context(|| format!("cannot open the simulator's pty {path}"))?,
-                );
+                let mut transport = SerialTransport::open(&path, bus.baud, clock)
+                    .with_context(|| format!("cannot open the simulator's pty {path}"))?;
+                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
+                let transport: Box<dyn Transport + Send> = Box::new(transport);
                 // A pty on a busy machine wakes late now and then: allow
                 // for it in the reply deadlines.
                 let settings = bus_settings(bus).with_latency(bus.latency.max(PTY_LATENCY));
@@ -137,8 +156,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let clock = SystemClock::new();
             let mut buses = Vec::new();
             for (bus, port) in robot.buses.iter().zip(ports) {
-                let transport = SerialTransport::open(port, bus.baud, clock)
+                let mut transport = SerialTransport::open(port, bus.baud, clock)
                     .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
+                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
                 if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
                     eprintln!("warning: {warning}");
                 }
@@ -187,6 +207,29 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 /// Reply-deadline allowance for the simulator's pseudo-terminals.
 const PTY_LATENCY: Duration = Duration::from_millis(3);
+
+/// How long the simulator on a pty may stay silent before a servo counts as
+/// missing. Its replies come from a thread of this process: when the host
+/// takes the CPU away for a few milliseconds (shared and virtual machines
+/// do), several replies in a row arrive late although no servo is gone.
+const PTY_SILENCE: Duration = Duration::from_millis(60);
+
+/// The fault policy of a run: the defaults (a servo silent for 3 reads is
+/// missing), except on the simulator in wall-clock time, where a silence
+/// must also last [`PTY_SILENCE`].
+fn fault_policy(backend: &Backend, rate_hz: f64) -> FaultPolicy {
+    let defaults = FaultPolicy::default();
+    match backend {
+        Backend::Simulated => {
+            let cycles = (PTY_SILENCE.as_secs_f64() * rate_hz).ceil() as u32;
+            FaultPolicy {
+                missing_cycles: defaults.missing_cycles.max(cycles),
+                ..defaults
+            }
+        }
+        Backend::Fast | Backend::Hardware(_) => defaults,
+    }
+}
 
 fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     if args.fast {
@@ -470,5 +513,19 @@ fn print_report(r: &Report) {
     }
     for w in &r.warnings {
         println!("  warning: {w}");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_wall_clock_simulator_tolerates_a_longer_silence() {
+        assert_eq!(fault_policy(&Backend::Fast, 200.0), FaultPolicy::default());
+        let hw = Backend::Hardware(vec!["/dev/ttyACM0".into()]);
+        assert_eq!(fault_policy(&hw, 200.0), FaultPolicy::default());
+        assert_eq!(fault_policy(&Backend::Simulated, 200.0).missing_cycles, 12);
+        assert_eq!(fault_policy(&Backend::Simulated, 20.0).missing_cycles, 3);
     }
 }

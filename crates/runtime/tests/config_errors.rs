@@ -365,3 +365,16 @@ fn the_lag_compensation_lead_is_read_and_checked() {
         "must be between 0 and 500 ms, got -3",
     );
 }
+
+#[test]
+fn busy_polling_is_off_unless_the_robot_file_asks() {
+    let r = load_robot(&write("no_busy", "robot.yaml", ROBOT)).expect("valid");
+    assert!(r.buses.iter().all(|b| !b.busy_poll));
+    let p = write(
+        "busy",
+        "robot.yaml",
+        &ROBOT.replacen("baud: 1000000", "baud: 1000000\n    busy_poll: true", 1),
+    );
+    let r = load_robot(&p).expect("valid");
+    assert!(r.buses[0].busy_poll);
+}

@@ -43,6 +43,10 @@ pub struct BusConfig {
     pub latency: Duration,
     /// The servos' return delay (register 7).
     pub return_delay: Duration,
+    /// Wait for replies by polling the port without blocking (`busy_poll`
+    /// in the robot file; default false): the control thread keeps its core
+    /// and sees each reply without the kernel's wake-up latency.
+    pub busy_poll: bool,
     /// The joints, in the order they are written and read each cycle.
     pub joints: Vec<JointConfig>,
 }
@@ -145,6 +149,8 @@ struct RawBus {
     latency_us: u64,
     #[serde(default)]
     return_delay_us: u64,
+    #[serde(default)]
+    busy_poll: bool,
     joints: Vec<RawJoint>,
 }
 
@@ -317,6 +323,7 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
             baud: rb.baud,
             latency: Duration::from_micros(rb.latency_us),
             return_delay: Duration::from_micros(rb.return_delay_us),
+            busy_poll: rb.busy_poll,
             joints,
         });
     }

@@ -1,0 +1,78 @@
+//! `servobus bench` on the simulator: the JSON report of the architecture
+//! page, figures that respect the wire, every bus of a robot, busy polling.
+//!
+//! Rates depend on the machine, so these tests check what must hold on any
+//! machine: the simulator never beats the wire, every cycle is counted, the
+//! distributions are ordered. The 95 % target is measured by running
+//! `servobus bench` itself (see the README).
+
+mod common;
+
+use common::{num, servobus, servobus_json};
+
+fn check_bus_figures(b: &serde_json::Value) {
+    let cycles = num(b, "cycles");
+    let achieved = num(b, "achieved_rate_hz");
+    let wire = num(b, "wire_limited_rate_hz");
+    let planned = num(b, "planned_rate_hz");
+    assert!(cycles >= 1.0, "no cycle ran: {b}");
+    assert!(achieved > 0.0, "{b}");
+    // The simulator delivers each reply when its last byte would arrive on
+    // the wire: no bus can run faster than the wire allows.
+    assert!(achieved <= wire * 1.01, "faster than the wire: {b}");
+    assert!(planned <= wire, "{b}");
+    let e = &b["period_error_us"];
+    assert!(
+        num(e, "p50") <= num(e, "p99") && num(e, "p99") <= num(e, "max"),
+        "{b}"
+    );
+    for key in ["timeouts", "retries", "missed_replies"] {
+        assert!(num(b, key) >= 0.0, "{key}: {b}");
+    }
+}
+
+#[test]
+fn bench_reports_the_arm_against_its_wire_limit() {
+    let v = servobus_json(&["bench", "--seconds", "0.4", "--json"]);
+    assert_eq!(v["robot"], "so101");
+    // 6 servos at 1 Mbps: 26 + 14 + 6 x 8 = 88 bytes, 880 us a cycle.
+    assert!((num(&v, "wire_limited_rate_hz") - 1_000_000.0 / 880.0).abs() < 0.01);
+    check_bus_figures(&v);
+    assert!(num(&v, "overruns") >= 0.0);
+    let buses = v["buses"].as_array().expect("a list of buses");
+    assert_eq!(buses.len(), 1);
+    assert_eq!(buses[0]["busy_poll"], false);
+    assert_eq!(buses[0]["servos"], 6);
+    let servos = buses[0]["servo_rtt"]
+        .as_array()
+        .expect("per-servo round trips");
+    assert_eq!(servos.len(), 6);
+}
+
+#[test]
+fn bench_with_busy_polling_and_two_buses() {
+    let v = servobus_json(&[
+        "bench",
+        "--robot",
+        "configs/robots/hexapod-2bus.yaml",
+        "--seconds",
+        "0.4",
+        "--busy-poll",
+        "--json",
+    ]);
+    let buses = v["buses"].as_array().expect("a list of buses");
+    assert_eq!(buses.len(), 2);
+    for b in buses {
+        assert_eq!(b["busy_poll"], true, "{b}");
+        assert_eq!(b["servos"], 9, "{b}");
+        check_bus_figures(b);
+    }
+}
+
+#[test]
+fn bench_refuses_a_senseless_duration() {
+    let out = servobus(&["bench", "--seconds", "0"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--seconds"), "{err}");
+}

@@ -3,6 +3,8 @@
 //! - `protocol/sync_write_18x7`: encode one SYNC WRITE of a 7-byte block
 //!   (acceleration, goal position, goal time, goal speed) to 18 servos into a
 //!   reused buffer. Target: at most 100 ns.
+//! - `protocol/sync_write_flat_18x7`: the same frame from flat slices of IDs
+//!   and data (`encode::sync_write_flat`, what the driver and the packer use).
 //! - `protocol/decode_status_stream`: the streaming decoder over a long
 //!   stream of status packets, fed in 4 KiB reads. Target: at least 300 MB/s.
 //!
@@ -54,6 +56,19 @@ pub fn benches(c: &mut Criterion) {
                 .enumerate()
                 .map(|(i, d)| (i as u8 + 1, &d[..]));
             black_box(encode::sync_write(&mut buf, 41, 7, items))
+        })
+    });
+    let ids: [u8; 18] = core::array::from_fn(|i| i as u8 + 1);
+    let flat: Vec<u8> = data.iter().flatten().copied().collect();
+    g.bench_function("sync_write_flat_18x7", |b| {
+        b.iter(|| {
+            black_box(encode::sync_write_flat(
+                &mut buf,
+                41,
+                7,
+                black_box(&ids),
+                black_box(&flat),
+            ))
         })
     });
 

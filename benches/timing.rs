@@ -39,11 +39,13 @@ fn pack(c: &mut Criterion) {
     // floor under the packer's own cost.
     group.bench_function("encoder_only/L7/18", |b| {
         b.iter(|| {
-            let items = ids[..18]
-                .iter()
-                .copied()
-                .zip(data[..18 * 7].chunks_exact(7));
-            servobus_protocol::encode::sync_write(black_box(&mut buf), 41, 7, items)
+            servobus_protocol::encode::sync_write_flat(
+                black_box(&mut buf),
+                41,
+                7,
+                black_box(&ids[..18]),
+                black_box(&data[..18 * 7]),
+            )
         })
     });
     group.finish();

@@ -343,8 +343,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         let len_byte = len as u8;
         for (chunk_ids, chunk_data) in ids.chunks(per_frame).zip(data.chunks(per_frame * len)) {
             self.io.begin();
-            let items = chunk_ids.iter().copied().zip(chunk_data.chunks_exact(len));
-            self.io.tx_len = encode::sync_write(&mut self.io.tx, address, len_byte, items)?;
+            self.io.tx_len =
+                encode::sync_write_flat(&mut self.io.tx, address, len_byte, chunk_ids, chunk_data)?;
             self.counters.transactions += 1;
             for &id in chunk_ids {
                 self.servos[usize::from(id)].transactions += 1;

@@ -490,3 +490,32 @@ fn an_echo_that_differs_is_a_packet() {
     let events = run(&mut dec, &req, &[64]);
     assert_eq!(packets(&events), vec![req]);
 }
+
+proptest! {
+    /// The flat SYNC WRITE encoder builds exactly the frame of the iterator
+    /// form, for any servos and block length that fit one frame.
+    #[test]
+    fn flat_sync_write_matches_the_iterator_form(
+        address in any::<u8>(),
+        len in 1u8..=20,
+        blocks in proptest::collection::vec((servo_id(), proptest::collection::vec(any::<u8>(), 20)), 1..12),
+    ) {
+        let l = usize::from(len);
+        let ids: Vec<u8> = blocks.iter().map(|(id, _)| *id).collect();
+        let data: Vec<u8> = blocks.iter().flat_map(|(_, d)| d[..l].iter().copied()).collect();
+        let mut a = [0u8; MAX_FRAME_LEN];
+        let mut b = [0u8; MAX_FRAME_LEN];
+        let flat = encode::sync_write_flat(&mut a, address, len, &ids, &data);
+        let iter = encode::sync_write(
+            &mut b,
+            address,
+            len,
+            ids.iter().copied().zip(data.chunks_exact(l)),
+        );
+        match (flat, iter) {
+            (Ok(n), Ok(m)) => prop_assert_eq!(&a[..n], &b[..m]),
+            (Err(_), Err(_)) => {}
+            (x, y) => prop_assert!(false, "flat {:?} vs iterator {:?}", x, y),
+        }
+    }
+}

@@ -319,6 +319,9 @@ fn write_fd(fd: &OwnedFd, buf: &[u8]) -> io::Result<usize> {
 }
 
 const SPEEDS: &[(libc::speed_t, u32)] = &[
+    (libc::B1200, 1_200),
+    (libc::B2400, 2_400),
+    (libc::B4800, 4_800),
     (libc::B9600, 9_600),
     (libc::B19200, 19_200),
     (libc::B38400, 38_400),
@@ -339,6 +342,23 @@ fn speed_of(baud: u32) -> Option<libc::speed_t> {
     SPEEDS.iter().find(|s| s.1 == baud).map(|s| s.0)
 }
 
+/// The output rate the client set on the terminal, in bits per second.
+///
+/// On Linux the kernel's own figure (`TCGETS2`), which also names the
+/// non-standard rates that a client sets with `BOTHER` (pyserial does, for
+/// 14400 or 250000 baud); elsewhere the standard rates of [`SPEEDS`].
+#[cfg(target_os = "linux")]
+fn termios_baud(fd: &OwnedFd) -> Option<u32> {
+    // SAFETY: termios2 is plain data.
+    let mut t: libc::termios2 = unsafe { std::mem::zeroed() };
+    // SAFETY: `fd` is an open terminal; TCGETS2 fills the termios2 it is given.
+    if unsafe { libc::ioctl(fd.as_raw_fd(), libc::TCGETS2, &mut t) } != 0 {
+        return None;
+    }
+    Some(t.c_ospeed)
+}
+
+#[cfg(not(target_os = "linux"))]
 fn termios_baud(fd: &OwnedFd) -> Option<u32> {
     // SAFETY: termios is plain data; tcgetattr fills it for a valid fd.
     let mut t: libc::termios = unsafe { std::mem::zeroed() };

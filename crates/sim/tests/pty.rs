@@ -119,3 +119,113 @@ fn feetech_python_sdk_works_unchanged() {
         assert!(stdout.starts_with("OK 6 servos"), "{stdout}");
     });
 }
+
+/// LeRobot's `FeetechMotorsBus` against the simulator, unchanged. Runs when
+/// `SERVOBUS_LEROBOT_PYTHON` names a Python that has LeRobot (the virtualenv
+/// `scripts/lerobot_check.sh` creates: `/tmp/lerobot-venv/bin/python`);
+/// skipped otherwise, since LeRobot needs Python 3.12 and a download.
+#[test]
+fn lerobot_motors_bus_works_unchanged() {
+    let Some(python) = std::env::var_os("SERVOBUS_LEROBOT_PYTHON") else {
+        eprintln!("skipped: set SERVOBUS_LEROBOT_PYTHON (see scripts/lerobot_check.sh)");
+        return;
+    };
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/lerobot_check.py");
+    let servos = (1..=6)
+        .map(|id| SimServo::sts3215(id).with_return_delay(Duration::ZERO))
+        .collect();
+    with_server(servos, true, |path| {
+        let out = Command::new(&python)
+            .arg(&script)
+            .arg(path)
+            .output()
+            .expect("run the LeRobot check");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.contains("OK 6 motors"), "{stdout}");
+    });
+}
+
+/// Sets the terminal's rate as a serial library does: a standard rate by
+/// its constant, any other with `BOTHER` and the rate itself (pyserial's way
+/// for 14400 or 250000 baud).
+#[cfg(target_os = "linux")]
+fn set_baud(port: &std::fs::File, baud: u32) {
+    use std::os::fd::AsRawFd;
+    let fd = port.as_raw_fd();
+    let standard = match baud {
+        4_800 => Some(libc::B4800),
+        1_000_000 => Some(libc::B1000000),
+        _ => None,
+    };
+    // SAFETY: termios and termios2 are plain data, filled by the kernel for
+    // an open terminal and passed back to it unchanged but for the speed.
+    unsafe {
+        if let Some(speed) = standard {
+            let mut t: libc::termios = std::mem::zeroed();
+            assert_eq!(libc::tcgetattr(fd, &mut t), 0);
+            assert_eq!(libc::cfsetspeed(&mut t, speed), 0);
+            assert_eq!(libc::tcsetattr(fd, libc::TCSANOW, &t), 0);
+        } else {
+            let mut t: libc::termios2 = std::mem::zeroed();
+            assert_eq!(libc::ioctl(fd, libc::TCGETS2, &mut t), 0);
+            t.c_cflag &= !libc::CBAUD;
+            t.c_cflag |= libc::BOTHER;
+            t.c_ispeed = baud;
+            t.c_ospeed = baud;
+            assert_eq!(libc::ioctl(fd, libc::TCSETS2, &t), 0);
+        }
+    }
+}
+
+/// Whether input arrives within `timeout`.
+#[cfg(target_os = "linux")]
+fn readable_within(port: &std::fs::File, timeout: Duration) -> bool {
+    use std::os::fd::AsRawFd;
+    let mut pfd = libc::pollfd {
+        fd: port.as_raw_fd(),
+        events: libc::POLLIN,
+        revents: 0,
+    };
+    // SAFETY: one valid pollfd.
+    let rc = unsafe { libc::poll(&mut pfd, 1, timeout.as_millis() as libc::c_int) };
+    rc > 0 && pfd.revents & libc::POLLIN != 0
+}
+
+/// A scan over baud rates (LeRobot's `scan_port`, `servobus scan
+/// --all-bauds`) must find the servos at their own rate only, also when the
+/// client sets a rate that has no termios constant.
+#[cfg(target_os = "linux")]
+#[test]
+fn servos_answer_only_at_their_own_baud_rate() {
+    let servos = vec![SimServo::sts3215(1).with_return_delay(Duration::ZERO)];
+    with_server(servos, false, |path| {
+        let mut port = open_raw(path);
+        let mut frame = [0u8; 16];
+        let n = encode::ping(&mut frame, 1).unwrap();
+        for (baud, answers) in [
+            (4_800, false),
+            (14_400, false),
+            (250_000, false),
+            (1_000_000, true),
+        ] {
+            set_baud(&port, baud);
+            port.write_all(&frame[..n]).unwrap();
+            if answers {
+                let mut want = [0u8; 16];
+                let m = encode::status(&mut want, 1, StatusFlags(0), &[]).unwrap();
+                assert_eq!(read_frame(&mut port), &want[..m], "at {baud} baud");
+            } else {
+                // Pacing is off: a reply would come at once.
+                assert!(
+                    !readable_within(&port, Duration::from_millis(300)),
+                    "a servo at 1 Mbps answered at {baud} baud"
+                );
+            }
+        }
+    });
+}

@@ -61,12 +61,22 @@ pub enum PackError {
 /// The largest number of servos one SYNC WRITE frame can carry with `len`-byte
 /// blocks (0 for `len == 0` or `len > 250`).
 pub const fn servos_per_frame(len: u8) -> usize {
-    if len == 0 {
-        return 0;
-    }
-    // Length byte = n(L + 1) + 4 <= 255.
-    (MAX_LENGTH_BYTE - 4) / (len as usize + 1)
+    // A table lookup: a division costs tens of cycles, and the packer asks
+    // every control cycle.
+    SERVOS_PER_FRAME[len as usize] as usize
 }
+
+/// [`servos_per_frame`] for every block length.
+const SERVOS_PER_FRAME: [u8; 256] = {
+    let mut table = [0u8; 256];
+    let mut len = 1;
+    while len < 256 {
+        // Length byte = n(L + 1) + 4 <= 255.
+        table[len] = ((MAX_LENGTH_BYTE - 4) / (len + 1)) as u8;
+        len += 1;
+    }
+    table
+};
 
 /// The fewest SYNC WRITE frames that carry `servos` servos with `len`-byte
 /// blocks (0 when nothing can be packed).
@@ -175,8 +185,25 @@ pub fn pack_sync_write(
         });
     }
     // The same figures as `sync_write_frames` / `sync_write_bytes`, without
-    // their repeated divisions: this runs every control cycle.
+    // their divisions: this runs every control cycle.
     let stride = len + 1;
+    let full_frame_len = frame_len(2) + per * stride;
+    if ids.len() <= per {
+        // One frame: the usual case (up to 35 servos with 6-byte blocks).
+        let needed = frame_len(2) + ids.len() * stride;
+        if buf.len() < needed {
+            return Err(PackError::BufferTooSmall {
+                needed,
+                available: buf.len(),
+            });
+        }
+        let at = encode::sync_write_flat(buf, block.address, block.len, ids, data)?;
+        return Ok(Packed {
+            len: at,
+            frames: 1,
+            full_frame_len,
+        });
+    }
     let frames = ids.len().div_ceil(per);
     let needed = frames * frame_len(2) + ids.len() * stride;
     if buf.len() < needed {
@@ -187,16 +214,13 @@ pub fn pack_sync_write(
     }
     let mut at = 0;
     for (ids, data) in ids.chunks(per).zip(data.chunks(per * len)) {
-        let items = ids.iter().copied().zip(data.chunks_exact(len));
-        // Exactly the frame's size, so the encoder cannot run past it.
-        let size = frame_len(2) + ids.len() * stride;
-        at += encode::sync_write(&mut buf[at..at + size], block.address, block.len, items)?;
+        at += encode::sync_write_flat(&mut buf[at..], block.address, block.len, ids, data)?;
     }
     debug_assert_eq!(at, needed);
     Ok(Packed {
         len: at,
         frames,
-        full_frame_len: frame_len(2) + per * stride,
+        full_frame_len,
     })
 }
 

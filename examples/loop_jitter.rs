@@ -3,7 +3,8 @@
 //! Runs an empty cycle at a fixed rate for a fixed time with the runtime's
 //! [`Pacer`] (absolute deadlines, sleep then spin) and prints the period
 //! error (how far each interval between cycle starts is from the period),
-//! the wake-up lateness, overruns and the total drift.
+//! the wake-up lateness, overruns and the total drift (median lateness of
+//! the last tenth of the run against the first).
 //!
 //! ```text
 //! cargo run --release --example loop_jitter -- --rate 1000 --seconds 60
@@ -77,6 +78,11 @@ fn main() {
     let mut pacer = Pacer::new(clock, start, period).with_spin(Duration::from_micros(args.spin_us));
     let mut period_error = Histogram::new(Duration::from_millis(100));
     let mut lateness = Histogram::new(Duration::from_millis(100));
+    // Lateness over the first and the last tenth of the run: their medians
+    // show whether cycle starts move away from the deadlines over time.
+    let tenth = (cycles / 10).max(1);
+    let mut early = Histogram::new(Duration::from_millis(100));
+    let mut late = Histogram::new(Duration::from_millis(100));
     let steal_before = steal_ms();
     let first = pacer.wait();
     let mut last = first;
@@ -91,6 +97,11 @@ fn main() {
             expected - interval
         });
         lateness.record(tick.lateness());
+        if tick.index < tenth {
+            early.record(tick.lateness());
+        } else if tick.index >= cycles.saturating_sub(tenth) {
+            late.record(tick.lateness());
+        }
         last = tick;
         ran += 1;
     }
@@ -98,11 +109,12 @@ fn main() {
         (Some(a), Some(b)) => Some(b - a),
         _ => None,
     };
-    // Drift: how far the last cycle's start is from where an ideal clock
-    // ticking at the rate from the first deadline would put it.
-    let ideal = period * u32::try_from(last.index - first.index).unwrap_or(u32::MAX);
+    // Drift: how much later (or earlier) than their deadlines the cycles of
+    // the last tenth started than those of the first tenth, median against
+    // median so that one late wake-up does not count as drift. Deadlines are
+    // absolute (start + k x period), so the loop's own clock cannot drift.
     let span = last.woke - first.deadline;
-    let drift_us = span.as_secs_f64() * 1e6 - ideal.as_secs_f64() * 1e6;
+    let drift_us = us(late.quantile(0.5)) - us(early.quantile(0.5));
     let steal_json = steal.map_or("null".to_owned(), |ms| format!("{ms:.0}"));
     let scheduling = if rt_report.fifo_priority.is_some() || rt_report.pinned.is_some() {
         format!(

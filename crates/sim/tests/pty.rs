@@ -87,6 +87,31 @@ fn the_link_points_at_the_pty_and_is_removed_on_drop() {
     assert!(std::fs::symlink_metadata(&dir).is_err());
 }
 
+/// Runs a Python check script (from `tests/python/`) with `python` against
+/// six STS3215 servos on a paced pty; it must succeed and print `ok`.
+fn python_check(python: &std::ffi::OsStr, script: &str, ok: &str) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/python")
+        .join(script);
+    let servos = (1..=6)
+        .map(|id| SimServo::sts3215(id).with_return_delay(Duration::ZERO))
+        .collect();
+    with_server(servos, true, |path| {
+        let out = Command::new(python)
+            .arg(&script)
+            .arg(path)
+            .output()
+            .expect("run the Python check");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.contains(ok), "{stdout}");
+    });
+}
+
 /// Feetech's Python SDK against the simulator (skipped without python3 and
 /// `pip install feetech-servo-sdk`).
 #[test]
@@ -100,24 +125,7 @@ fn feetech_python_sdk_works_unchanged() {
         );
         return;
     }
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/scservo_check.py");
-    let servos = (1..=6)
-        .map(|id| SimServo::sts3215(id).with_return_delay(Duration::ZERO))
-        .collect();
-    with_server(servos, true, |path| {
-        let out = Command::new("python3")
-            .arg(&script)
-            .arg(path)
-            .output()
-            .expect("run python3");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{stdout}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(stdout.starts_with("OK 6 servos"), "{stdout}");
-    });
+    python_check("python3".as_ref(), "scservo_check.py", "OK 6 servos");
 }
 
 /// LeRobot's `FeetechMotorsBus` against the simulator, unchanged. Runs when
@@ -130,24 +138,7 @@ fn lerobot_motors_bus_works_unchanged() {
         eprintln!("skipped: set SERVOBUS_LEROBOT_PYTHON (see scripts/lerobot_check.sh)");
         return;
     };
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/lerobot_check.py");
-    let servos = (1..=6)
-        .map(|id| SimServo::sts3215(id).with_return_delay(Duration::ZERO))
-        .collect();
-    with_server(servos, true, |path| {
-        let out = Command::new(&python)
-            .arg(&script)
-            .arg(path)
-            .output()
-            .expect("run the LeRobot check");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{stdout}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(stdout.contains("OK 6 motors"), "{stdout}");
-    });
+    python_check(&python, "lerobot_check.py", "OK 6 motors");
 }
 
 /// Sets the terminal's rate as a serial library does: a standard rate by

@@ -19,6 +19,8 @@ use crate::report::{BusReport, JointReport};
 use crate::stats::{Histogram, RunningError};
 use crate::telemetry::{CycleSample, JointSample, Telemetry, SAMPLE_JOINTS};
 
+/// Added to every reply timeout while the start positions are read.
+pub const STARTUP_PATIENCE: Duration = Duration::from_millis(100);
 /// How long the lead takes to ramp in once identified, s.
 const LEAD_RAMP_S: f64 = 2.0;
 /// Readings of moving joints needed before the lag is identified.
@@ -320,9 +322,20 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         self.policy.on_port_gone
     }
 
-    /// Reads every servo's position (asking up to three times), sets the
-    /// goals there (clamped into the limits) and enables torque.
+    /// Reads every servo's position (asking up to three times, each with
+    /// [`STARTUP_PATIENCE`] added to the reply timeout: start-up is not
+    /// timed, and a loaded host or a slow adapter must not fail it), sets
+    /// the goals there (clamped into the limits) and enables torque.
     pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
+        let latency = self.bus.settings().link.latency;
+        self.bus.set_latency(latency + STARTUP_PATIENCE);
+        let found = self.read_start_positions();
+        self.bus.set_latency(latency);
+        found?;
+        self.hold_and_enable(enable_torque)
+    }
+
+    fn read_start_positions(&mut self) -> Result<(), RunError> {
         let startup_err = |what, source| RunError::Startup {
             bus: self.name.clone(),
             what,
@@ -357,6 +370,11 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 reason: last_reason,
             });
         }
+        Ok(())
+    }
+
+    /// Sets every goal to the measured start position and enables torque.
+    fn hold_and_enable(&mut self, enable_torque: bool) -> Result<(), RunError> {
         for j in &mut self.joints {
             let p = j.measured.unwrap_or(0.0);
             j.set_goal(p);

@@ -240,3 +240,28 @@ fn a_lost_port_stops_the_other_bus_of_the_hexapod() {
         );
     }
 }
+
+#[test]
+fn start_up_waits_for_slow_replies_but_names_a_servo_that_never_answers() {
+    use servobus_runtime::RunError;
+    use servobus_sim::Faults;
+    use std::time::Duration;
+
+    // Every reply 20 ms late: far beyond a cycle's timeout at 1 Mbps, well
+    // within the patience of start-up, which is not timed.
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, sims) = common::sim_buses_at(&robot, &path);
+    sims[0].set_faults(Faults::seeded(1).delay(1.0, Duration::from_millis(20)));
+    let run = VirtualRun::new(&robot, path.clone(), buses, RunOptions::default());
+    assert!(run.is_ok(), "{:?}", run.err());
+
+    // A servo that is not there at all is named, with its joint.
+    let (buses, sims) = common::sim_buses_at(&robot, &path);
+    sims[0].set_faults(Faults::none().vanish(WRIST_FLEX_ID));
+    match VirtualRun::new(&robot, path, buses, RunOptions::default()) {
+        Err(RunError::NoServo { id, joint, .. }) => {
+            assert_eq!((id, joint.as_str()), (WRIST_FLEX_ID, "wrist_flex"));
+        }
+        other => panic!("expected a missing servo, got {:?}", other.err()),
+    }
+}

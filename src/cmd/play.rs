@@ -191,7 +191,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_report(&report);
+        print_report(&report, robot.lead.is_none());
         if let Some(path) = &args.log {
             println!("log: {}", path.display());
         }
@@ -468,7 +468,9 @@ fn join_servers(servers: Vec<JoinHandle<Result<(), servobus_sim::PtyError>>>) {
     }
 }
 
-fn print_report(r: &Report) {
+/// Prints the end-of-run report; `identified`: the lead was found while
+/// playing rather than set in the robot file.
+fn print_report(r: &Report, identified: bool) {
     println!(
         "{}: {} cycles in {:.2} s, {:.1} Hz achieved of {:.1} Hz requested",
         match r.finish {
@@ -497,7 +499,15 @@ fn print_report(r: &Report) {
         r.clamps,
         r.telemetry_dropped
     );
-    println!("  lag compensation lead {:.1} ms", r.lead_ms);
+    if identified && r.lead_ms > 0.0 {
+        println!(
+            "  lag compensation lead {:.1} ms, identified while moving \
+             (`lead_ms: {:.0}` in the robot file applies it from the first cycle)",
+            r.lead_ms, r.lead_ms
+        );
+    } else {
+        println!("  lag compensation lead {:.1} ms", r.lead_ms);
+    }
     println!(
         "  {:<16} {:>10} {:>10}   tracking error ({})",
         "joint", "rms", "max", r.units

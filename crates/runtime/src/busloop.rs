@@ -22,9 +22,11 @@ use crate::telemetry::{CycleSample, JointSample, Telemetry, SAMPLE_JOINTS};
 /// Added to every reply timeout while the start positions are read.
 pub const STARTUP_PATIENCE: Duration = Duration::from_millis(100);
 /// How long the lead takes to ramp in once identified, s.
-const LEAD_RAMP_S: f64 = 2.0;
+const LEAD_RAMP_S: f64 = 0.5;
 /// Readings of moving joints needed before the lag is identified.
 const IDENTIFY_READINGS: u32 = 60;
+/// Smallest change of the identified lag that moves the lead, s.
+const LEAD_STEP: f64 = 0.000_5;
 /// Slowest path speed that counts for identification, rad/s.
 const IDENTIFY_MIN_SPEED: f64 = 0.05;
 
@@ -145,28 +147,46 @@ impl JointTrack {
 #[derive(Debug, Clone, Copy)]
 enum LeadState {
     Fixed(f64),
-    Identify {
+    /// The lead is identified while the path plays, and refined: every
+    /// [`IDENTIFY_READINGS`] readings the estimate is updated and, when it
+    /// moved, the lead ramps to it.
+    Auto {
         max: f64,
+        /// Sum of (error + lead x velocity) x velocity over the readings:
+        /// the error against the path is velocity x (lag - lead), so this
+        /// estimates the lag whatever lead was in force.
         sev: f64,
         svv: f64,
+        /// Readings since the estimate was last updated.
         n: u32,
+        ramp: Ramp,
     },
-    Ramp {
-        from: f64,
-        to: f64,
-        x0: f64,
-    },
+}
+
+/// A smooth change of the lead from `from` to `to`, starting at `x0`.
+#[derive(Debug, Clone, Copy)]
+struct Ramp {
+    from: f64,
+    to: f64,
+    x0: f64,
+}
+
+impl Ramp {
+    fn at(&self, x: f64) -> f64 {
+        let u = ((x - self.x0) / LEAD_RAMP_S).clamp(0.0, 1.0);
+        self.from + (self.to - self.from) * u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+    }
+
+    fn done(&self, x: f64) -> bool {
+        x >= self.x0 + LEAD_RAMP_S
+    }
 }
 
 impl LeadState {
     fn at(&self, x: f64) -> f64 {
-        match *self {
-            LeadState::Fixed(l) => l,
-            LeadState::Identify { .. } => 0.0,
-            LeadState::Ramp { from, to, x0 } => {
-                let u = ((x - x0) / LEAD_RAMP_S).clamp(0.0, 1.0);
-                from + (to - from) * u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
-            }
+        match self {
+            LeadState::Fixed(l) => *l,
+            LeadState::Auto { ramp, .. } => ramp.at(x),
         }
     }
 }
@@ -270,11 +290,17 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         let lead = match lead {
             Lead::None => LeadState::Fixed(0.0),
             Lead::Fixed(d) => LeadState::Fixed(d.as_secs_f64()),
-            Lead::Auto { max } => LeadState::Identify {
+            Lead::Auto { max } => LeadState::Auto {
                 max: max.as_secs_f64(),
                 sev: 0.0,
                 svv: 0.0,
                 n: 0,
+                // No lead until the first estimate (a finished ramp to 0).
+                ramp: Ramp {
+                    from: 0.0,
+                    to: 0.0,
+                    x0: f64::NEG_INFINITY,
+                },
             },
         };
         let timing = CycleTiming {
@@ -592,6 +618,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         let mut sev = 0.0;
         let mut svv = 0.0;
         let mut n = 0u32;
+        let lead = self.lead.at(input.t);
         for (i, j) in self.joints.iter_mut().enumerate() {
             let r = reference.get(j.robot_index).copied().unwrap_or_default();
             j.planned = r.position;
@@ -615,7 +642,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             j.error = e;
             j.err.record(e);
             if input.main && r.velocity.abs() > IDENTIFY_MIN_SPEED {
-                sev += e * r.velocity;
+                sev += (e + lead * r.velocity) * r.velocity;
                 svv += r.velocity * r.velocity;
                 n += 1;
             }
@@ -667,23 +694,29 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 ));
             }
         }
-        if let LeadState::Identify {
+        if let LeadState::Auto {
             max,
             sev: s_ev,
             svv: s_vv,
             n: count,
+            ramp,
         } = &mut self.lead
         {
             *s_ev += sev;
             *s_vv += svv;
             *count += n;
-            if *count >= IDENTIFY_READINGS && *s_vv > 0.0 {
+            // A new estimate once enough readings came in and the last
+            // change has finished; small changes are not worth a ramp.
+            if *count >= IDENTIFY_READINGS && *s_vv > 0.0 && ramp.done(input.t) {
+                *count = 0;
                 let lag = (*s_ev / *s_vv).clamp(0.0, *max);
-                self.lead = LeadState::Ramp {
-                    from: 0.0,
-                    to: lag,
-                    x0: input.t,
-                };
+                if (lag - ramp.to).abs() > LEAD_STEP {
+                    *ramp = Ramp {
+                        from: ramp.to,
+                        to: lag,
+                        x0: input.t,
+                    };
+                }
             }
         }
         found.map(|(i, kind, reaction)| {

@@ -20,10 +20,13 @@ pub enum Lead {
     None,
     /// A fixed lead.
     Fixed(Duration),
-    /// Identified from the first cycles of motion: the loop runs without
-    /// lead until the joints have moved enough to measure the lag (a least
-    /// squares fit of tracking error against planned velocity), then ramps
-    /// the lead in smoothly. Bounded by `max`.
+    /// Identified while the joints move: the loop runs without lead until
+    /// they have moved enough to measure the lag (a least-squares fit of the
+    /// tracking error against the planned velocity, corrected for the lead
+    /// in force), then ramps the lead in smoothly (0.5 s), and keeps
+    /// refining it: every few cycles of motion the estimate is updated from
+    /// all readings so far and, when it moved by more than 0.5 ms, the lead
+    /// ramps to it. Bounded by `max`.
     Auto {
         /// The largest lead it may choose.
         max: Duration,

@@ -132,6 +132,6 @@ pub enum Telemetry {
     Rejected(String),
     /// The run ended; the report follows from
     /// [`Runner::join`](crate::Runner::join) or
-    /// [`VirtualRun::finish`](crate::VirtualRun::finish).
+    /// [`VirtualRun::report`](crate::VirtualRun::report).
     Finished(Finish),
 }

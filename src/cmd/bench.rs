@@ -164,11 +164,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Extra wait for replies while the bench looks for its servos.
-const STARTUP_LATENCY: Duration = Duration::from_millis(100);
-/// Tries of the first read before a servo is declared absent.
-const STARTUP_TRIES: u32 = 3;
-
 fn bench_bus(
     robot: &Robot,
     bus: &BusConfig,
@@ -243,36 +238,22 @@ fn measure(
         .context("register map has no present position")?;
     // The first read is not timed: a loaded machine or a slow adapter gets
     // a patient timeout and a few tries before a servo counts as absent.
-    servo_bus.set_latency(STARTUP_LATENCY);
-    let mut answered = vec![false; ids.len()];
-    for attempt in 1..=STARTUP_TRIES {
-        let read = servo_bus
-            .sync_read(addr::PRESENT_POSITION, 2, ids)
-            .with_context(|| format!("bus `{}`: first read", bus.name))?;
-        let mut absent = None;
-        for (i, reply) in read.iter().enumerate() {
-            match reply {
-                Ok(r) => {
-                    goals[i * 2..i * 2 + 2].copy_from_slice(r.data);
-                    answered[i] = true;
-                }
-                Err(missing) if !answered[i] => {
-                    absent.get_or_insert((missing.id, missing.reason.to_string()));
-                }
-                Err(_) => {}
-            }
-        }
-        match absent {
-            None => break,
-            Some((id, reason)) if attempt == STARTUP_TRIES => bail!(
-                "bus `{}`: servo {id} does not answer ({reason}) after {STARTUP_TRIES} tries; \
+    let read = servo_bus
+        .sync_read_patiently(addr::PRESENT_POSITION, 2, ids)
+        .with_context(|| format!("bus `{}`: first read", bus.name))?;
+    for (i, reply) in read.iter().enumerate() {
+        match reply {
+            Ok(r) => goals[i * 2..i * 2 + 2].copy_from_slice(r.data),
+            Err(missing) => bail!(
+                "bus `{}`: servo {} does not answer ({}) after {} tries; \
                  check the port and `servobus scan`",
                 bus.name,
+                missing.id,
+                missing.reason,
+                servobus_driver::PATIENT_TRIES
             ),
-            Some(_) => {}
         }
     }
-    servo_bus.set_latency(latency);
     // Present and goal position share the layout, so the bytes read are
     // valid goals as they are; decoding them checks that they are.
     for chunk in goals.chunks_exact(2) {

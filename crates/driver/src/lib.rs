@@ -104,5 +104,5 @@ pub use error::BusError;
 pub use serial::{ftdi_latency_timer, FtdiLatency, SerialTransport};
 pub use settings::{BusSettings, ReplyLevel};
 pub use stats::{Counters, RttStats};
-pub use sync::{Missing, MissingReason, SyncRead, SyncReply};
+pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};
 pub use transport::{Transport, TransportError};

@@ -19,6 +19,12 @@ use crate::{Bus, BusError, Clock, Transport};
 
 const NO_SLOT: u8 = u8::MAX;
 
+/// Added to every reply timeout by [`Bus::sync_read_patiently`].
+pub const PATIENCE: Duration = Duration::from_millis(100);
+/// Rounds [`Bus::sync_read_patiently`] makes before a servo counts as
+/// missing.
+pub const PATIENT_TRIES: u8 = 3;
+
 /// Why a servo is missing from a SYNC READ result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
@@ -411,6 +417,32 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         self.sync_read_rounds(address, len, ids, Some(budget))
     }
 
+    /// As [`Bus::sync_read_within`], for reads that are not timed (finding
+    /// the servos before a run): every reply timeout is
+    /// [`PATIENCE`] longer than the settings make it, and the servos
+    /// still missing are asked again until [`PATIENT_TRIES`] rounds
+    /// have been made, so that a loaded host or a slow adapter does not
+    /// make a present servo look absent. The settings are unchanged after.
+    ///
+    /// # Errors
+    /// As [`Bus::sync_read`].
+    pub fn sync_read_patiently(
+        &mut self,
+        address: u8,
+        len: u8,
+        ids: &[u8],
+    ) -> Result<SyncRead<'_>, BusError> {
+        let saved = self.settings;
+        self.settings.link.latency += PATIENCE;
+        self.settings.retries = PATIENT_TRIES - 1;
+        let done = self
+            .sync_read_rounds(address, len, ids, Some(Duration::MAX))
+            .map(|_| ());
+        self.settings = saved;
+        done?;
+        Ok(self.last_sync_read())
+    }
+
     /// The results of the last SYNC READ.
     pub fn last_sync_read(&self) -> SyncRead<'_> {
         SyncRead { store: &self.sync }
@@ -444,7 +476,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 break;
             }
             let next = self.round_timeout(self.sync.pending.len());
-            if self.io.clock.now() + next > began + budget {
+            if self.io.clock.now() + next > began.saturating_add(budget) {
                 break;
             }
             round += 1;

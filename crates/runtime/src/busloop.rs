@@ -19,8 +19,6 @@ use crate::report::{BusReport, JointReport};
 use crate::stats::{Histogram, RunningError};
 use crate::telemetry::{CycleSample, JointSample, Telemetry, SAMPLE_JOINTS};
 
-/// Added to every reply timeout while the start positions are read.
-pub const STARTUP_PATIENCE: Duration = Duration::from_millis(100);
 /// How long the lead takes to ramp in once identified, s.
 const LEAD_RAMP_S: f64 = 0.5;
 /// Readings of moving joints needed before the lag is identified.
@@ -348,52 +346,40 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         self.policy.on_port_gone
     }
 
-    /// Reads every servo's position (asking up to three times, each with
-    /// [`STARTUP_PATIENCE`] added to the reply timeout: start-up is not
-    /// timed, and a loaded host or a slow adapter must not fail it), sets
-    /// the goals there (clamped into the limits) and enables torque.
+    /// Reads every servo's position patiently (start-up is not timed; see
+    /// [`Bus::sync_read_patiently`]), sets the goals there (clamped into the
+    /// limits) and enables torque.
     pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
-        let latency = self.bus.settings().link.latency;
-        self.bus.set_latency(latency + STARTUP_PATIENCE);
-        let found = self.read_start_positions();
-        self.bus.set_latency(latency);
-        found?;
+        self.read_start_positions()?;
         self.hold_and_enable(enable_torque)
     }
 
     fn read_start_positions(&mut self) -> Result<(), RunError> {
-        let startup_err = |what, source| RunError::Startup {
-            bus: self.name.clone(),
-            what,
-            source,
-        };
-        let mut last_reason = String::new();
-        for _ in 0..3 {
-            let read = self
-                .bus
-                .sync_read(self.pos_reg.address, self.pos_reg.size, &self.ids)
-                .map_err(|e| startup_err("reading the start positions", e))?;
-            let now = self.clock.now();
-            for (j, r) in self.joints.iter_mut().zip(read.iter()) {
-                match r {
-                    Ok(reply) => {
-                        if let Ok(t) = self.pos_reg.decode(reply.data, self.order) {
-                            j.observe(t, now);
-                        }
+        let read = self
+            .bus
+            .sync_read_patiently(self.pos_reg.address, self.pos_reg.size, &self.ids)
+            .map_err(|source| RunError::Startup {
+                bus: self.name.clone(),
+                what: "reading the start positions",
+                source,
+            })?;
+        let now = self.clock.now();
+        for (j, r) in self.joints.iter_mut().zip(read.iter()) {
+            let reason = match r {
+                Ok(reply) => match self.pos_reg.decode(reply.data, self.order) {
+                    Ok(t) => {
+                        j.observe(t, now);
+                        continue;
                     }
-                    Err(m) => last_reason = m.reason.to_string(),
-                }
-            }
-            if self.joints.iter().all(|j| j.measured.is_some()) {
-                break;
-            }
-        }
-        if let Some(j) = self.joints.iter().find(|j| j.measured.is_none()) {
+                    Err(_) => "it reported an impossible position".to_owned(),
+                },
+                Err(m) => m.reason.to_string(),
+            };
             return Err(RunError::NoServo {
                 bus: self.name.clone(),
                 id: j.id,
                 joint: j.name.clone(),
-                reason: last_reason,
+                reason,
             });
         }
         Ok(())

@@ -157,6 +157,39 @@ fn sync_read_reask_recovers_dropped_replies_within_budget() -> Result<(), BusErr
 }
 
 #[test]
+fn a_patient_read_waits_for_late_replies_and_leaves_the_settings_alone() -> Result<(), BusError> {
+    let ids = [1, 2, 3];
+    let (mut bus, sim) = setup(&ids);
+    let settings = *bus.settings();
+    // Replies 20 ms late: far beyond a cycle's timeout, within the patience.
+    sim.set_faults(Faults::seeded(1).delay(1.0, Duration::from_millis(20)));
+    assert_eq!(
+        bus.sync_read(addr::PRESENT_POSITION, 2, &ids)?.answered(),
+        0
+    );
+    // Let the late replies of that read pass before asking again.
+    let later = bus.clock().now() + Duration::from_millis(50);
+    bus.clock().sleep_until(later);
+    bus.transport_mut()
+        .discard_input()
+        .map_err(BusError::Transport)?;
+    let r = bus.sync_read_patiently(addr::PRESENT_POSITION, 2, &ids)?;
+    assert!(r.is_complete());
+    assert_eq!(*bus.settings(), settings);
+
+    // A servo that never answers is asked PATIENT_TRIES times in all.
+    sim.set_faults(Faults::none().vanish(2));
+    let r = bus.sync_read_patiently(addr::PRESENT_POSITION, 2, &ids)?;
+    assert_eq!(
+        r.by_id(2).and_then(Result::err).map(|m| m.attempts),
+        Some(servobus_driver::PATIENT_TRIES)
+    );
+    assert_eq!(r.answered(), 2);
+    assert_eq!(*bus.settings(), settings);
+    Ok(())
+}
+
+#[test]
 fn retries_are_bounded_and_counted() -> Result<(), BusError> {
     let (mut bus, sim) = setup(&[1]);
     sim.set_faults(Faults::seeded(3).drop(0.5));

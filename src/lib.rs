@@ -3,4 +3,5 @@
 //! the end-to-end tests share.
 #![warn(missing_docs)]
 
+pub mod builtin;
 pub mod simrobot;

@@ -1,7 +1,8 @@
 //! `servobus`: the command line of the servobus runtime.
 //!
 //! Each subcommand lives in its own module under `cmd/`; this file only parses
-//! the arguments and dispatches.
+//! the arguments, dispatches, and turns an error into a message and an exit
+//! code (`cmd::exit`).
 
 mod cmd;
 mod record;
@@ -13,10 +14,7 @@ fn main() -> std::process::ExitCode {
     let cli = cmd::Cli::parse();
     match cmd::run(cli) {
         Ok(code) => code,
-        Err(err) => {
-            eprintln!("error: {err:#}");
-            std::process::ExitCode::FAILURE
-        }
+        Err(err) => cmd::exit::report(&err),
     }
 }
 

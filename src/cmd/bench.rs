@@ -29,8 +29,8 @@ use servobus_sim::PtyServer;
 /// Arguments of `servobus bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file (default: configs/robots/so101.yaml).
-    #[arg(long)]
+    /// The robot: a file, or a built-in name (default: the built-in so101).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Serial port of real servos, for the robot's first bus (default: the
     /// port in the robot file; without one, the simulator on a pty).
@@ -129,7 +129,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let path = args
         .robot
         .clone()
-        .unwrap_or_else(|| PathBuf::from("configs/robots/so101.yaml"));
+        .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
     let robot = load_robot_any_rate(&path)?;
     let duration = Duration::from_secs_f64(args.seconds);
     let clock = SystemClock::new();

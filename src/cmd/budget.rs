@@ -11,8 +11,8 @@ use servobus_timing::{Change, Plan};
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file.
-    #[arg(long)]
+    /// The robot: a file, or a built-in name (`servobus list`).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Control rate in Hz (default: the robot's).
     #[arg(long)]

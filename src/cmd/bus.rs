@@ -9,6 +9,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+
+use super::exit::input;
 use servobus_driver::{Bus, BusError, BusSettings, SerialTransport, SystemClock};
 use servobus_protocol::registers::{self, addr, Access, Model, Register, Series};
 use servobus_protocol::MAX_ID;
@@ -163,7 +165,7 @@ fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
 
 fn check_id(id: u8) -> anyhow::Result<()> {
     if id > MAX_ID {
-        bail!("ID {id} is not a servo ID (0..={MAX_ID})");
+        return Err(input(format!("ID {id} is not a servo ID (0..={MAX_ID})")));
     }
     Ok(())
 }
@@ -367,7 +369,16 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         );
     }
     if found.is_empty() && collisions.is_empty() {
-        bail!("no servo answered on {}", args.port.port);
+        let hint = if args.all_bauds {
+            "check the power and the wiring (data, ground)"
+        } else {
+            "check the power and the wiring, or try every baud rate with --all-bauds"
+        };
+        bail!(
+            "no servo answered on {} at {}; {hint}",
+            args.port.port,
+            baud_list(&bauds)
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -447,10 +458,10 @@ fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
     let by_address = name.parse::<u8>().ok().and_then(|a| map.at(a));
     match by_address.or_else(|| map.get(name)) {
         Some(r) => Ok(r),
-        None => bail!(
+        None => Err(input(format!(
             "no register called {name:?} on {} servos (e.g. present_position, goal_position, id)",
             series.name().to_uppercase()
-        ),
+        ))),
     }
 }
 
@@ -461,7 +472,13 @@ fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, 
     if port.latency_us.is_none() {
         adapt_latency(&mut bus, id).with_context(|| format!("servo {id}"))?;
     }
-    let found = identify(&mut bus, id).with_context(|| format!("servo {id}"))?;
+    let found = identify(&mut bus, id).with_context(|| {
+        format!(
+            "servo {id} at {baud} baud (to find the servos and their rates: \
+             servobus scan --port {} --all-bauds)",
+            port.port
+        )
+    })?;
     Ok((bus, found))
 }
 
@@ -483,12 +500,7 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
         });
         println!("{out}");
     } else {
-        let unit = if reg.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {}", reg.unit)
-        };
-        println!("{} = {value}{unit}", reg.name);
+        println!("{} = {}", reg.name, human_value(value, reg.unit));
     }
     if !flags.is_ok() {
         eprintln!("warning: servo {} reports {flags}", args.id);
@@ -516,12 +528,18 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
     let value = i32::try_from(args.value)
         .ok()
         .filter(|v| (lo..=hi).contains(v))
-        .with_context(|| format!("{} takes {lo}..={hi}, not {}", reg.name, args.value))?;
+        .ok_or_else(|| {
+            input(format!(
+                "{} takes {lo}..={hi}, not {}",
+                reg.name, args.value
+            ))
+        })?;
     match reg.access {
-        Access::ReadOnly => bail!("{} is read-only", reg.name),
+        Access::ReadOnly => return Err(input(format!("{} is read-only", reg.name))),
         Access::Ram => {
             bus.write_register(args.id, reg, value)?;
             println!("{} = {value} (RAM: lost at power-off)", reg.name);
+            warn_if_torque_off(&mut bus, args.id, reg, &args.port.port);
         }
         Access::Eeprom => {
             if reg.address == addr::ID {
@@ -549,6 +567,50 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// A register value in its unit: a unit with a scale (`0.1 V`) is applied
+/// (`120` reads `12.0 V (raw 120)`); a plain unit is appended.
+fn human_value(value: i32, unit: &str) -> String {
+    let scaled = unit
+        .split_once(' ')
+        .and_then(|(factor, rest)| Some((factor.parse::<f64>().ok()?, rest)));
+    match scaled {
+        Some((factor, rest)) => {
+            // As many decimals as the scale has (0.1 -> 1, 100 -> 0).
+            let decimals = (-factor.log10()).ceil().max(0.0) as usize;
+            let v = f64::from(value) * factor;
+            format!("{v:.decimals$} {rest} (raw {value})")
+        }
+        None if unit.is_empty() => value.to_string(),
+        None => format!("{value} {unit}"),
+    }
+}
+
+/// After a write to a goal register: warns when the servo's torque is off,
+/// since it then holds no position and the goal has no visible effect.
+fn warn_if_torque_off(bus: &mut SerialBus, id: u8, reg: &Register, port: &str) {
+    let goals = [addr::GOAL_POSITION, addr::GOAL_SPEED, addr::GOAL_TIME];
+    if !goals.contains(&reg.address) {
+        return;
+    }
+    let Some(torque) = bus.settings().series.map().at(addr::TORQUE_ENABLE) else {
+        return;
+    };
+    if let Ok((0, _)) = bus.read_register(id, torque) {
+        eprintln!(
+            "warning: torque is off on servo {id}, so it will not move to this goal; \
+             turn it on with: servobus write --port {port} --id {id} torque_enable 1"
+        );
+    }
+}
+
+/// Baud rates for a message: `1000000 baud` or `8 baud rates`.
+fn baud_list(bauds: &[u32]) -> String {
+    match bauds {
+        [one] => format!("{one} baud"),
+        many => format!("{} baud rates", many.len()),
+    }
+}
+
 /// Runs `servobus set-id`.
 pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
     check_id(args.new_id)?;
@@ -563,4 +625,18 @@ pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
     println!("servo {} is now ID {} (persisted)", args.id, w.id);
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn scaled_units_read_as_people_write_them() {
+        assert_eq!(super::human_value(120, "0.1 V"), "12.0 V (raw 120)");
+        assert_eq!(
+            super::human_value(50, "100 steps/s^2"),
+            "5000 steps/s^2 (raw 50)"
+        );
+        assert_eq!(super::human_value(-30, "steps"), "-30 steps");
+        assert_eq!(super::human_value(7, ""), "7");
+    }
 }

@@ -1,5 +1,11 @@
 //! Subcommands of the `servobus` binary, one module each.
+//!
+//! Adding a subcommand: a module with `Args` and `run`, a variant in
+//! [`Command`] and a line in [`run`]. A robot or motion argument takes
+//! `value_parser = super::robot_arg` (or `motion_arg`) to accept built-in
+//! names as well as files.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -8,13 +14,32 @@ mod bench;
 mod budget;
 mod bus;
 mod decode;
+mod docs;
+pub mod exit;
+mod init;
+mod list;
 mod plan;
 mod play;
 mod sim;
 
+const AFTER_HELP: &str = "\
+A ROBOT or MOTION argument is a file path or the name of a built-in robot or
+motion (`servobus list`); when a file of that name exists, the file wins.
+
+Exit status:
+  0  ok
+  1  a problem was found (a servo missing or failing, a fault, a bad frame)
+  2  usage or input error (command line, robot or motion file, port)";
+
 /// Smooth, on-time motion for Feetech serial-bus servos.
 #[derive(Debug, Parser)]
-#[command(name = "servobus", version, about, propagate_version = true)]
+#[command(
+    name = "servobus",
+    version,
+    about,
+    propagate_version = true,
+    after_help = AFTER_HELP
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -44,6 +69,14 @@ enum Command {
     SetId(bus::SetIdArgs),
     /// Decode frames written in hex.
     Decode(decode::Args),
+    /// List the built-in robots and motions.
+    List(list::Args),
+    /// Write a starter robot file and motion to edit.
+    Init(init::Args),
+    /// Print a shell completion script (bash, zsh, fish, ...).
+    Completions(docs::CompletionsArgs),
+    /// Print the manual page (roff): `servobus man | man -l -`.
+    Man(docs::ManArgs),
 }
 
 /// Runs the parsed command line and returns the process exit code.
@@ -60,5 +93,19 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Write(args) => bus::write(args),
         Command::SetId(args) => bus::set_id(args),
         Command::Decode(args) => decode::run(args),
+        Command::List(args) => list::run(args),
+        Command::Init(args) => init::run(args),
+        Command::Completions(args) => docs::completions(args),
+        Command::Man(args) => docs::man(args),
     }
+}
+
+/// Parses a robot argument: a file, or a built-in robot's name.
+pub(crate) fn robot_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    Ok(servobus::builtin::robot_path_or_name(arg.as_ref()))
+}
+
+/// Parses a motion argument: a file, or a built-in motion's name.
+pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
 }

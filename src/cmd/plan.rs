@@ -12,10 +12,11 @@ use servobus_trajectory::{JointState, Trajectory};
 /// Arguments of `servobus plan`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file.
+    /// The motion: a file, or a built-in name (`servobus list`).
+    #[arg(value_parser = super::motion_arg)]
     pub motion: std::path::PathBuf,
-    /// Robot file (default: the one the motion file names).
-    #[arg(long)]
+    /// Robot file or built-in name (default: the one the motion file names).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<std::path::PathBuf>,
     /// Print one JSON object.
     #[arg(long)]

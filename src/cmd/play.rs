@@ -32,10 +32,11 @@ use crate::record::{CsvLog, PlotData};
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file.
+    /// The motion: a file, or a built-in name (`servobus list`).
+    #[arg(value_parser = super::motion_arg)]
     pub motion: PathBuf,
-    /// Robot file (default: the one the motion file names).
-    #[arg(long)]
+    /// Robot file or built-in name (default: the one the motion file names).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Serial port of real servos, for the robot's first bus (default: the
     /// robot file's ports; without any, the built-in simulator).

@@ -25,8 +25,8 @@ Example: --faults drop=0.01,corrupt=0.01,seed=7";
 /// Arguments of `servobus sim`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file whose servos to serve.
-    #[arg(long)]
+    /// The robot whose servos to serve: a file, or a built-in name.
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Make this path a symbolic link to the pty (removed on exit).
     #[arg(long)]

@@ -101,7 +101,7 @@ pub use clock::{Clock, ManualClock, SystemClock};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]
-pub use serial::{ftdi_latency_timer, FtdiLatency, SerialTransport};
+pub use serial::{ftdi_latency_timer, FtdiLatency, OpenError, OpenProblem, SerialTransport};
 pub use settings::{BusSettings, ReplyLevel};
 pub use stats::{Counters, RttStats};
 pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};

@@ -15,7 +15,7 @@ use servobus_sim::{SimBus, SimServo};
 use servobus_trajectory::{plan, Keyframe, PlanOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let robot = load_robot("configs/robots/so101.yaml".as_ref())?;
+    let robot = load_robot(&servobus::builtin::robot_path_or_name("so101".as_ref()))?;
     let deg = |d: f64| d.to_radians();
 
     // shoulder_pan, shoulder_lift, elbow_flex, wrist_flex, wrist_roll, gripper
@@ -63,9 +63,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.units
     );
     // The servos really moved: the wrist is back where it started.
-    println!(
-        "wrist_roll servo (ID 5) ends at tick {:?}",
-        sim.present_position(5)
-    );
+    match sim.present_position(5) {
+        Some(tick) => println!("wrist_roll servo (ID 5) ends at tick {tick}"),
+        None => println!("wrist_roll servo (ID 5) is not on the bus"),
+    }
     Ok(())
 }

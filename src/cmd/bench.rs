@@ -391,9 +391,14 @@ fn print_text(r: &BenchReport) {
             "  timeouts {}  retries {}  missed replies {}  checksum errors {}",
             b.timeouts, b.retries, b.missed_replies, b.checksum_errors
         );
+        let w = b
+            .servo_rtt
+            .iter()
+            .map(|s| s.joint.len())
+            .fold(16, usize::max);
         for s in &b.servo_rtt {
             println!(
-                "  servo {:>3} {:<16} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
+                "  servo {:>3} {:<w$} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
                 s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
             );
         }

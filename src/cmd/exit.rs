@@ -7,7 +7,7 @@
 use std::process::ExitCode;
 
 use servobus_driver::OpenError;
-use servobus_runtime::config::ConfigError;
+use servobus_runtime::config::{is_builtin_path, ConfigError};
 
 /// Exit code: a problem was found.
 pub const PROBLEM: u8 = 1;
@@ -62,7 +62,15 @@ pub fn message(err: &anyhow::Error) -> String {
         }
         parts.push(text);
     }
-    parts.join(": ")
+    let mut text = parts.join(": ");
+    if let Some(ConfigError::Read { path, error }) = err.downcast_ref::<ConfigError>() {
+        if error.kind() == std::io::ErrorKind::NotFound && !is_builtin_path(path) {
+            text.push_str(
+                "; give a file path or the name of a built-in robot or motion (`servobus list`)",
+            );
+        }
+    }
+    text
 }
 
 #[cfg(test)]

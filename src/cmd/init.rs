@@ -50,7 +50,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .map_err(|e| input(format!("cannot write {}: {e}", path.display())))?;
         println!("wrote {}", path.display());
     }
-    let motion = files[1].0.display();
+    // `./motion.yaml` reads better as `motion.yaml`.
+    let motion = if args.dir == Path::new(".") {
+        PathBuf::from("motion.yaml")
+    } else {
+        files[1].0.clone()
+    };
+    let motion = motion.display();
     println!(
         "Next: set each joint's id and limits in robot.yaml (and `port:` for real servos), then\n  \
          servobus plan {motion}\n  servobus play {motion}"

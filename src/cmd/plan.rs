@@ -190,7 +190,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
     for j in &r.joints {
         let jerk = j
             .peak_jerk
-            .map_or("steps".to_owned(), |x| format!("{x:.0}"));
+            .map_or("no limit".to_owned(), |x| format!("{x:.0}"));
         println!(
             "{:w$}  {:>9.3}  {:>19}  {:>12.1}  {:>14.1}  {:>14}",
             j.name,
@@ -202,6 +202,11 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         );
     }
     println!("\nsegments (arriving at keyframe):");
+    let pw = motion
+        .keyframes
+        .iter()
+        .filter_map(|k| k.pose.as_ref().map(String::len))
+        .fold("inline pose".len(), usize::max);
     for s in &r.segments {
         let kf = motion.keyframes.get(s.keyframe);
         let what = kf
@@ -218,7 +223,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             None => String::new(),
         };
         println!(
-            "  {:>3} {:<14} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
+            "  {:>3} {:<pw$} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
             s.keyframe,
             what,
             line,

@@ -509,13 +509,15 @@ fn print_report(r: &Report, identified: bool) {
     } else {
         println!("  lag compensation lead {:.1} ms", r.lead_ms);
     }
+    // The name column fits the longest joint name.
+    let w = r.joints.iter().map(|j| j.name.len()).fold(16, usize::max);
     println!(
-        "  {:<16} {:>10} {:>10}   tracking error ({})",
+        "  {:<w$} {:>10} {:>10}   tracking error ({})",
         "joint", "rms", "max", r.units
     );
     for j in &r.joints {
         println!(
-            "  {:<16} {:>10.3} {:>10.3}",
+            "  {:<w$} {:>10.3} {:>10.3}",
             j.name, j.rms_error, j.max_error
         );
     }

@@ -118,15 +118,15 @@ impl fmt::Display for OpenError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "cannot open {}: ", self.path)?;
         match &self.problem {
-            OpenProblem::PermissionDenied { group } => {
-                let group = group.as_deref().unwrap_or("dialout");
-                write!(
-                    f,
-                    "permission denied. Add your user to the `{group}` group \
-                     (`sudo usermod -aG {group} $USER`; `uucp` instead of `dialout` on Arch), \
-                     then log out and back in"
-                )
-            }
+            OpenProblem::PermissionDenied { group: Some(group) } => write!(
+                f,
+                "permission denied. Add your user to the `{group}` group, which owns the port \
+                 (`sudo usermod -aG {group} $USER`), then log out and back in"
+            ),
+            OpenProblem::PermissionDenied { group: None } => f.write_str(
+                "permission denied. Add your user to the group of serial ports, `dialout` \
+                 (`uucp` on Arch): `sudo usermod -aG dialout $USER`, then log out and back in",
+            ),
             OpenProblem::NotFound { present } if present.is_empty() => f.write_str(
                 "no such port, and no serial ports are present (is the adapter plugged in?)",
             ),

@@ -2,9 +2,12 @@
 //! directory: the shipped robots and motions are built in, and the starter
 //! files of `servobus init` play.
 //!
-//! Slow (a release build): one test. It shares the workspace's target
-//! directory (`--target-dir`), so the build reuses what `cargo build
-//! --release` already compiled, and `--offline` keeps it off the network.
+//! The install shares the workspace's target directory (`--target-dir`) and
+//! stays offline. By default it installs the dev profile (`--debug`), which
+//! reuses what `cargo test` has just compiled: seconds instead of the minutes
+//! of a release build of every dependency on a fresh clone. With
+//! `SERVOBUS_INSTALL_RELEASE=1` it installs the release profile, as a user
+//! would, and checks that the binary carries no debug info (its size).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -47,6 +50,7 @@ fn json(out: &Output) -> serde_json::Value {
 
 #[test]
 fn installed_binary_works_from_an_empty_directory() {
+    let release = std::env::var_os("SERVOBUS_INSTALL_RELEASE").is_some_and(|v| v == "1");
     let root = scratch("install-root");
     let started = Instant::now();
     let install = Command::new(env!("CARGO"))
@@ -57,6 +61,7 @@ fn installed_binary_works_from_an_empty_directory() {
             "--offline",
             "--locked",
         ])
+        .args(if release { &[][..] } else { &["--debug"][..] })
         .arg("--root")
         .arg(&root)
         .arg("--target-dir")
@@ -74,10 +79,13 @@ fn installed_binary_works_from_an_empty_directory() {
     );
     let bin = root.join("bin").join("servobus");
     let size = std::fs::metadata(&bin).expect("installed binary").len();
-    assert!(
-        size < 15_000_000,
-        "installed binary is {size} bytes: debug info left in?"
-    );
+    eprintln!("installed binary: {size} bytes");
+    if release {
+        assert!(
+            size < 15_000_000,
+            "installed binary is {size} bytes: debug info left in?"
+        );
+    }
 
     let empty = scratch("install-empty");
     let play = json(&run(

@@ -316,3 +316,22 @@ fn completions_load_in_bash_and_the_man_page_renders() {
         eprintln!("man is not installed: rendering not checked");
     }
 }
+
+#[test]
+fn every_command_uses_the_same_exit_codes() {
+    for (args, code) in [
+        (&["play", "arm-wave", "--fast", "--json"][..], 0),
+        (&["budget", "--robot", "so101", "--rate", "5000"], 1),
+        (&["decode", "01 02"], 1),
+        (&["budget", "--robot", "so101", "--rate", "0"], 2),
+        (&["bench", "--seconds", "0"], 2),
+        (&["play", "arm-wave", "--rate", "-1"], 2),
+        (&["plan", "nothere"], 2),
+        (&["decode", "ZZ"], 2),
+        (&["init", "--robot", "nothere"], 2),
+        (&["completions", "tcsh"], 2),
+    ] {
+        let out = servobus(args);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {}", stderr(&out));
+    }
+}

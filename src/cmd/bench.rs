@@ -121,10 +121,10 @@ struct BenchReport {
 /// Runs `servobus bench`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 3600.0) {
-        bail!(
+        return Err(super::exit::input(format!(
             "--seconds {}: give a duration between 0 and 3600 s",
             args.seconds
-        );
+        )));
     }
     let path = args
         .robot

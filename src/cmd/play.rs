@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
@@ -88,7 +88,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
     let rate_hz = match args.rate {
         Some(rate) if !(rate.is_finite() && rate > 0.0) => {
-            bail!("--rate {rate}: give a positive rate in Hz")
+            return Err(super::exit::input(format!(
+                "--rate {rate}: give a positive rate in Hz"
+            )))
         }
         Some(rate) => rate,
         None => motion.rate_hz(&robot),
@@ -247,12 +249,14 @@ fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     for (bus, port) in robot.buses.iter().zip(ports) {
         match port {
             Some(p) => out.push(p),
-            None => bail!(
-                "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
+            None => {
+                return Err(super::exit::input(format!(
+                    "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
                  (--port sets only the first bus's)",
-                bus.name,
-                robot.path.display()
-            ),
+                    bus.name,
+                    robot.path.display()
+                )))
+            }
         }
     }
     Ok(Backend::Hardware(out))

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use servobus_runtime::config::{load_robot, Robot};
 use servobus_sim::{Faults, PtyServer, SimServo};
 
@@ -94,18 +94,21 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
         Some(name) => {
             let Some(bus) = robot.buses.iter().find(|b| b.name == name) else {
                 let names: Vec<&str> = robot.buses.iter().map(|b| b.name.as_str()).collect();
-                bail!(
+                return Err(super::exit::input(format!(
                     "{}: no bus named `{name}` (buses: {})",
                     robot.path.display(),
                     names.join(", ")
-                );
+                )));
             };
             vec![bus]
         }
         None => robot.buses.iter().collect(),
     };
     let Some(first) = buses.first() else {
-        bail!("{}: the robot has no bus", robot.path.display());
+        return Err(super::exit::input(format!(
+            "{}: the robot has no bus",
+            robot.path.display()
+        )));
     };
     let baud = first.baud;
     let mut seen = std::collections::HashMap::new();
@@ -113,7 +116,7 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
     for bus in buses {
         for joint in &bus.joints {
             if let Some(other) = seen.insert(joint.id, (&bus.name, &joint.name)) {
-                bail!(
+                return Err(super::exit::input(format!(
                     "{}: ID {} is used by `{}` on bus `{}` and by `{}` on bus `{}`; \
                      serve one bus at a time with --bus",
                     robot.path.display(),
@@ -122,7 +125,7 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
                     other.0,
                     joint.name,
                     bus.name
-                );
+                )));
             }
         }
         // Every servo listens at the first bus's rate: that is the pty's.

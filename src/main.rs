@@ -7,11 +7,9 @@
 mod cmd;
 mod record;
 
-use clap::Parser;
-
 fn main() -> std::process::ExitCode {
     restore_sigpipe();
-    let cli = cmd::Cli::parse();
+    let cli = cmd::parse();
     match cmd::run(cli) {
         Ok(code) => code,
         Err(err) => cmd::exit::report(&err),

@@ -335,3 +335,24 @@ fn every_command_uses_the_same_exit_codes() {
         assert_eq!(out.status.code(), Some(code), "{args:?}: {}", stderr(&out));
     }
 }
+
+#[test]
+fn every_subcommand_help_documents_the_exit_codes() {
+    let help = stdout(&servobus(&["--help"]));
+    let commands: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() >= 15, "{commands:?}");
+    for c in commands {
+        let sub = stdout(&servobus(&[c, "--help"]));
+        assert!(
+            sub.contains("Exit status:\n  0  ok\n  1  a problem"),
+            "{c}: {sub}"
+        );
+    }
+}

@@ -4,10 +4,9 @@
 use std::io::Write;
 use std::process::ExitCode;
 
-use clap::CommandFactory;
 use clap_complete::Shell;
 
-use super::Cli;
+use super::command;
 
 /// Arguments of `servobus completions`.
 #[derive(Debug, clap::Args)]
@@ -24,7 +23,7 @@ pub struct ManArgs {}
 
 /// Runs `servobus completions`.
 pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
-    let mut cmd = Cli::command();
+    let mut cmd = command();
     clap_complete::generate(args.shell, &mut cmd, "servobus", &mut std::io::stdout());
     Ok(ExitCode::SUCCESS)
 }
@@ -32,7 +31,7 @@ pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
 /// Runs `servobus man`: the top-level page (clap_mangen), then each
 /// subcommand's full help as a section of its own, so one page covers all.
 pub fn man(_args: ManArgs) -> anyhow::Result<ExitCode> {
-    let mut cmd = Cli::command();
+    let mut cmd = command();
     let mut out = Vec::new();
     clap_mangen::Man::new(cmd.clone()).render(&mut out)?;
     cmd.build();

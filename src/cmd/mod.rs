@@ -22,24 +22,19 @@ mod plan;
 mod play;
 mod sim;
 
-const AFTER_HELP: &str = "\
-A ROBOT or MOTION argument is a file path or the name of a built-in robot or
-motion (`servobus list`); when a file of that name exists, the file wins.
-
+const EXIT_STATUS: &str = "\
 Exit status:
   0  ok
   1  a problem was found (a servo missing or failing, a fault, a bad frame)
   2  usage or input error (command line, robot or motion file, port)";
 
+const AFTER_HELP: &str = "\
+A ROBOT or MOTION argument is a file path or the name of a built-in robot or
+motion (`servobus list`); when a file of that name exists, the file wins.";
+
 /// Smooth, on-time motion for Feetech serial-bus servos.
 #[derive(Debug, Parser)]
-#[command(
-    name = "servobus",
-    version,
-    about,
-    propagate_version = true,
-    after_help = AFTER_HELP
-)]
+#[command(name = "servobus", version, about, propagate_version = true)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -77,6 +72,31 @@ enum Command {
     Completions(docs::CompletionsArgs),
     /// Print the manual page (roff): `servobus man | man -l -`.
     Man(docs::ManArgs),
+}
+
+/// The command line's definition, with the exit codes and the note on
+/// built-in names added to every command's `--help` (the man page and the
+/// completions are generated from it too).
+pub fn command() -> clap::Command {
+    use clap::CommandFactory;
+    let with_exit = |help: Option<String>| match help {
+        Some(h) => format!("{h}\n\n{EXIT_STATUS}"),
+        None => EXIT_STATUS.to_owned(),
+    };
+    let top = Cli::command();
+    let top_help = with_exit(Some(AFTER_HELP.to_owned()));
+    top.after_help(top_help).mut_subcommands(|sub| {
+        let own = sub.get_after_help().map(|h| h.to_string());
+        let help = with_exit(own);
+        sub.after_help(help)
+    })
+}
+
+/// Parses the process's arguments (exits 2 on a usage error, 0 for `--help`).
+pub fn parse() -> Cli {
+    use clap::FromArgMatches;
+    let matches = command().get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
 /// Runs the parsed command line and returns the process exit code.

@@ -27,6 +27,9 @@
 //!   keyframe, joint, peak and limit ([`PlanError::LimitExceeded`],
 //!   [`PlanError::TooSoon`]) unless [`OnLimit::Stretch`] is set.
 //! - Mixed timed and untimed keyframes, and repeats ([`PlanOptions`]).
+//! - **Recorded paths** ([`track`]): a dense recording filtered to the
+//!   limits by time-optimal tracking, forwards and backwards, so that the
+//!   result is not late.
 //! - **Online changes** from any state: [`retarget`] (to a new target,
 //!   synchronised, jerk limited) and [`stop`] (to rest in minimal time).
 //!
@@ -96,6 +99,7 @@ mod plan;
 mod profile;
 mod spline;
 mod timed;
+mod track;
 mod trajectory;
 mod untimed;
 
@@ -104,4 +108,5 @@ pub use limits::JointLimits;
 pub use online::{retarget, stop};
 pub use plan::{plan, Keyframe, OnLimit, PlanOptions};
 pub use spline::TimedShape;
+pub use track::{track, Tracked};
 pub use trajectory::{Cursor, JointState, JointSummary, SegmentTiming, Trajectory};

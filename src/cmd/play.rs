@@ -27,7 +27,7 @@ use servobus_runtime::{
 use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
 
-use crate::record::{CsvLog, PlotData};
+use crate::record::{read_recording, CsvLog, PlotData};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
@@ -84,23 +84,21 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
-    let rate_hz = match args.rate {
-        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
-            bail!("--rate {rate}: give a positive rate in Hz")
-        }
-        Some(rate) => rate,
-        None => motion.rate_hz(&robot),
-    };
-    for bus in &robot.buses {
-        bus.plan(rate_hz)
-            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
-    }
-    let trajectory = plan_motion(&motion, &robot)?;
+    check_outputs(&args)?;
+    let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
     let backend = backend(&args, &robot)?;
     if !args.json {
         print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
     }
+    // Outputs are created before anything moves: a path that cannot be
+    // written fails now, not after the run.
+    let log = match &args.log {
+        Some(path) => Some(CsvLog::create(path, names_of(&robot), &motion.units.to_string())?),
+        None => None,
+    };
 
     let options = RunOptions {
         rate_hz: Some(rate_hz),
@@ -170,7 +168,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
 
     let interrupts = install_ctrl_c(&runner)?;
-    let outcome = follow(&runner, &args, &names, units, duration, &interrupts);
+    let outcome = follow(&runner, &args, log, &names, units, duration, &interrupts);
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);
     join_servers(servers);
@@ -189,9 +187,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         plot.draw(path, &title, &units.to_string())?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
+            obj.insert("recording".into(), r.json(motion.units));
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         print_report(&report, robot.lead.is_none());
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
         if let Some(path) = &args.log {
             println!("log: {}", path.display());
         }
@@ -203,6 +208,168 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
         _ => ExitCode::FAILURE,
     })
+}
+
+fn names_of(robot: &Robot) -> Vec<String> {
+    robot.joints().map(|j| j.name.clone()).collect()
+}
+
+/// Plot formats `--plot` writes, by file extension.
+const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
+
+/// Fails at once on an output that could not be written after the run: a
+/// plot format not supported, or a directory that does not exist.
+fn check_outputs(args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.plot {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if !PLOT_FORMATS.contains(&ext.as_str()) {
+            bail!(
+                "--plot {}: plots are written as SVG (.svg) or PNG (.png); give one of those",
+                path.display()
+            );
+        }
+    }
+    for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
+        let Some(path) = path else { continue };
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        if let Some(dir) = dir {
+            if !dir.is_dir() {
+                bail!(
+                    "{flag} {}: the directory {} does not exist; nothing was moved",
+                    path.display(),
+                    dir.display()
+                );
+            }
+        }
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .with_context(|| format!("{flag} {}: cannot write there; nothing was moved", path.display()))?;
+    }
+    Ok(())
+}
+
+/// A recording played back: what the filter did to it.
+struct RecordingInfo {
+    samples: usize,
+    span_s: f64,
+    names: Vec<String>,
+    max_rad: Vec<f64>,
+    rms_rad: Vec<f64>,
+    missing: Vec<String>,
+}
+
+impl RecordingInfo {
+    /// The worst joint's departure, in one line.
+    fn describe(&self, u: Units) -> String {
+        let worst = (0..self.max_rad.len())
+            .max_by(|&a, &b| self.max_rad[a].total_cmp(&self.max_rad[b]))
+            .unwrap_or(0);
+        let mut text = format!(
+            "recording: {} samples over {:.2} s, filtered to the limits; departs from it by at \
+             most {:.2} {u} ({}), rms {:.2} {u}",
+            self.samples,
+            self.span_s,
+            u.from_rad(self.max_rad.get(worst).copied().unwrap_or(0.0)),
+            self.names.get(worst).map_or("?", String::as_str),
+            u.from_rad(self.rms_rad.get(worst).copied().unwrap_or(0.0)),
+        );
+        if !self.missing.is_empty() {
+            text += &format!("; not recorded, held at rest: {}", self.missing.join(", "));
+        }
+        text
+    }
+
+    fn json(&self, u: Units) -> serde_json::Value {
+        let joints: Vec<serde_json::Value> = self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(j, name)| {
+                serde_json::json!({
+                    "name": name,
+                    "max_departure": u.from_rad(self.max_rad[j]),
+                    "rms_departure": u.from_rad(self.rms_rad[j]),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "samples": self.samples,
+            "span_s": self.span_s,
+            "joints": joints,
+        })
+    }
+}
+
+type Loaded = (Motion, Robot, Trajectory, Option<RecordingInfo>, f64);
+
+/// The motion file planned, or the recording (`.csv`) filtered, with the
+/// control rate; every limit and the buses' budgets checked.
+fn load(args: &Args) -> anyhow::Result<Loaded> {
+    let recorded = args
+        .motion
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let (motion, robot) = if recorded {
+        let Some(robot_path) = &args.robot else {
+            bail!(
+                "{}: a recorded path names no robot; give --robot FILE",
+                args.motion.display()
+            );
+        };
+        let robot = servobus_runtime::config::load_robot(robot_path)?;
+        (recording_motion(&args.motion, &robot), robot)
+    } else {
+        load_motion(&args.motion, args.robot.as_deref())?
+    };
+    let rate_hz = match args.rate {
+        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
+            bail!("--rate {rate}: give a positive rate in Hz")
+        }
+        Some(rate) => rate,
+        None => motion.rate_hz(&robot),
+    };
+    for bus in &robot.buses {
+        bus.plan(rate_hz)
+            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
+    }
+    if !recorded {
+        let trajectory = plan_motion(&motion, &robot)?;
+        return Ok((motion, robot, trajectory, None, rate_hz));
+    }
+    let rec = read_recording(&args.motion, &robot)?;
+    let limits = servobus_runtime::config::joint_limits(&robot);
+    let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
+        .map_err(|e| anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display()))?;
+    let info = RecordingInfo {
+        samples: rec.times.len(),
+        span_s: rec.times[rec.times.len() - 1] - rec.times[0],
+        names: names_of(&robot),
+        max_rad: tracked.max_deviation,
+        rms_rad: tracked.rms_deviation,
+        missing: rec.missing,
+    };
+    Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
+}
+
+/// A stand-in motion for a recording (its name, the robot's joints), so the
+/// plan and report read the same as for a motion file.
+fn recording_motion(path: &Path, robot: &Robot) -> Motion {
+    Motion {
+        path: path.to_owned(),
+        robot_path: robot.path.clone(),
+        units: Units::Deg,
+        rate_hz: None,
+        joints: names_of(robot),
+        keyframes: Vec::new(),
+        repeat: 1,
+        on_limit: Default::default(),
+        interpolation: Default::default(),
+    }
 }
 
 /// Reply-deadline allowance for the simulator's pseudo-terminals.
@@ -337,18 +504,16 @@ fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> {
 }
 
 /// Reads the telemetry until the run ends: progress, log, plot series.
+#[allow(clippy::too_many_arguments)] // the run, its outputs and what they show
 fn follow(
     runner: &Runner,
     args: &Args,
+    mut log: Option<CsvLog>,
     names: &[String],
     units: Units,
     duration: f64,
     _interrupts: &AtomicU32,
 ) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
-    let mut log = match &args.log {
-        Some(path) => Some(CsvLog::create(path, names.to_vec(), &units.to_string())?),
-        None => None,
-    };
     let mut plot = args.plot.as_ref().map(|_| PlotData::new(names.to_vec()));
     let mut progress = Progress::new(args.json, duration, &units.to_string());
     let telemetry = runner.telemetry();

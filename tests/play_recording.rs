@@ -34,7 +34,11 @@ fn write_recording(path: &std::path::Path, noisy: bool) {
         let t = i as f64 * 0.01;
         let (a, b) = if noisy {
             // Steps of 60 deg every 1.5 s and a fast swing, with noise.
-            let step = if (t / 1.5) as u32 % 2 == 0 { -30.0 } else { 30.0 };
+            let step = if (t / 1.5) as u32 % 2 == 0 {
+                -30.0
+            } else {
+                30.0
+            };
             (step + 2.0 * noise(), 40.0 * (4.0 * t).sin() + noise())
         } else {
             // Out and back twice from rest, well within the limits.
@@ -65,17 +69,26 @@ fn check_limits(series: &[(f64, f64)], (vm, am, jm): (f64, f64, f64)) {
     let p: Vec<f64> = series.iter().map(|s| s.1).collect();
     let q = 1e-4; // the log's rounding
     for i in 0..p.len() - 1 {
-        assert!((p[i + 1] - p[i]).abs() / dt <= vm * 1.001 + q / dt, "velocity at {i}");
+        assert!(
+            (p[i + 1] - p[i]).abs() / dt <= vm * 1.001 + q / dt,
+            "velocity at {i}"
+        );
     }
     for i in 1..p.len() - 1 {
         let a = (p[i + 1] - 2.0 * p[i] + p[i - 1]) / (dt * dt);
-        assert!(a.abs() <= am * 1.001 + 4.0 * q / (dt * dt), "acceleration at {i}: {a}");
+        assert!(
+            a.abs() <= am * 1.001 + 4.0 * q / (dt * dt),
+            "acceleration at {i}: {a}"
+        );
     }
     let h = 4;
     let hd = h as f64 * dt;
     for i in 0..p.len().saturating_sub(3 * h) {
         let j = (p[i + 3 * h] - 3.0 * p[i + 2 * h] + 3.0 * p[i + h] - p[i]) / (hd * hd * hd);
-        assert!(j.abs() <= jm * 1.001 + 8.0 * q / (hd * hd * hd), "jerk at {i}: {j}");
+        assert!(
+            j.abs() <= jm * 1.001 + 8.0 * q / (hd * hd * hd),
+            "jerk at {i}: {j}"
+        );
     }
 }
 
@@ -119,7 +132,10 @@ fn a_noisy_recording_with_steps_is_played_within_every_limit() {
     ]);
     assert_eq!(again["finish"], "completed", "{again}");
     // It rides the limits in the steps, where the filter rounds a little.
-    assert!(num(&again["recording"]["joints"][0], "max_departure") < 6.0, "{again}");
+    assert!(
+        num(&again["recording"]["joints"][0], "max_departure") < 6.0,
+        "{again}"
+    );
 }
 
 #[test]
@@ -136,7 +152,12 @@ fn a_smooth_recording_is_reproduced_closely() {
         "--fast",
         "--json",
     ]);
-    for j in v["recording"]["joints"].as_array().expect("joints").iter().take(2) {
+    for j in v["recording"]["joints"]
+        .as_array()
+        .expect("joints")
+        .iter()
+        .take(2)
+    {
         assert!(num(j, "max_departure") < 0.5, "{j}");
         assert!(num(j, "rms_departure") < 0.25, "{j}");
     }
@@ -149,7 +170,13 @@ fn outputs_are_checked_before_anything_moves() {
         ("--plot", "x.pdf", "SVG (.svg) or PNG (.png)"),
         ("--log", "/nonexistent/x.csv", "does not exist"),
     ] {
-        let out = servobus(&["play", "configs/motions/arm-wave.yaml", "--fast", flag, path]);
+        let out = servobus(&[
+            "play",
+            "configs/motions/arm-wave.yaml",
+            "--fast",
+            flag,
+            path,
+        ]);
         assert!(!out.status.success(), "{flag} {path}");
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);

@@ -32,7 +32,8 @@ use crate::record::{read_recording, CsvLog, PlotData};
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file.
+    /// The motion file, or a recorded path (.csv: a `play --log` file or
+    /// `time_s,<joint>...` in degrees; needs --robot).
     pub motion: PathBuf,
     /// Robot file (default: the one the motion file names).
     #[arg(long)]
@@ -53,8 +54,8 @@ pub struct Args {
     /// Write one CSV row per cycle and joint.
     #[arg(long)]
     pub log: Option<PathBuf>,
-    /// Draw commanded vs measured positions and the tracking error (SVG, or
-    /// PNG for a .png path).
+    /// Draw planned vs measured positions and the tracking error: SVG
+    /// (.svg) or PNG (.png); any other extension is refused before moving.
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Wait for replies by polling the port without blocking, on every bus
@@ -96,18 +97,22 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Outputs are created before anything moves: a path that cannot be
     // written fails now, not after the run.
     let log = match &args.log {
-        Some(path) => Some(CsvLog::create(path, names_of(&robot), &motion.units.to_string())?),
+        Some(path) => Some(CsvLog::create(
+            path,
+            names_of(&robot),
+            &motion.units.to_string(),
+        )?),
         None => None,
     };
 
     let options = RunOptions {
         rate_hz: Some(rate_hz),
         units: Some(motion.units),
-        settle: Duration::from_millis(300),
+        settle: SETTLE,
         // The simulated joints start at rest; real ones wherever they are.
         // Both approach the first keyframe slowly (skipped when already
         // there).
-        approach: Some(0.25),
+        approach: Some(APPROACH),
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
         rt: RtOptions {
             core: args.core,
@@ -120,6 +125,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = motion.units;
     let duration = trajectory.duration();
+    let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
+    let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
+    trajectory.sample(0.0, &mut start);
+    let start: Vec<f64> = start.iter().map(|s| s.position).collect();
     let mut servers = Vec::new();
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
@@ -168,7 +177,20 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
 
     let interrupts = install_ctrl_c(&runner)?;
-    let outcome = follow(&runner, &args, log, &names, units, duration, &interrupts);
+    let shown = Shown {
+        names: names.clone(),
+        bus_of: robot
+            .buses
+            .iter()
+            .enumerate()
+            .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
+            .collect(),
+        keyframes: keyframe_times,
+        start,
+        limits: servobus_runtime::config::joint_limits(&robot),
+        settle: SETTLE.as_secs_f64(),
+    };
+    let outcome = follow(&runner, &args, log, &shown, units, duration, &interrupts);
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);
     join_servers(servers);
@@ -180,7 +202,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     if let (Some(plot), Some(path)) = (plot, &args.plot) {
         let title = format!(
-            "{} on {}: commanded vs measured",
+            "{} on {}: planned vs measured",
             file_name(&motion.path),
             robot.name
         );
@@ -248,7 +270,12 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
             .create(true)
             .append(true)
             .open(path)
-            .with_context(|| format!("{flag} {}: cannot write there; nothing was moved", path.display()))?;
+            .with_context(|| {
+                format!(
+                    "{flag} {}: cannot write there; nothing was moved",
+                    path.display()
+                )
+            })?;
     }
     Ok(())
 }
@@ -344,7 +371,9 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
     let rec = read_recording(&args.motion, &robot)?;
     let limits = servobus_runtime::config::joint_limits(&robot);
     let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
-        .map_err(|e| anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display()))?;
+        .map_err(|e| {
+            anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
+        })?;
     let info = RecordingInfo {
         samples: rec.times.len(),
         span_s: rec.times[rec.times.len() - 1] - rec.times[0],
@@ -369,6 +398,58 @@ fn recording_motion(path: &Path, robot: &Robot) -> Motion {
         repeat: 1,
         on_limit: Default::default(),
         interpolation: Default::default(),
+    }
+}
+
+/// How long the final position is held (and tracked) after the path.
+const SETTLE: Duration = Duration::from_millis(300);
+
+/// The fraction of the limits the runtime's approach moves at (its
+/// `RunOptions::approach`), and the distance under which it is skipped
+/// (half a degree, as the runtime's).
+const APPROACH: f64 = 0.25;
+const APPROACH_SKIP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// What the live view and the plot show besides the telemetry.
+struct Shown {
+    names: Vec<String>,
+    bus_of: Vec<usize>,
+    /// Path times of the keyframes.
+    keyframes: Vec<f64>,
+    /// The path's first position per joint, rad.
+    start: Vec<f64>,
+    limits: Vec<servobus_trajectory::JointLimits>,
+    settle: f64,
+}
+
+impl Shown {
+    /// How long the approach from `present` (rad) to the path's start
+    /// takes: the same jerk-limited move at the same fraction of the
+    /// limits as the runtime plans, or 0 when it is skipped.
+    fn approach_s(&self, present: &[f64]) -> f64 {
+        let far = present
+            .iter()
+            .zip(&self.start)
+            .any(|(p, q)| (p - q).abs() > APPROACH_SKIP_RAD);
+        if !far {
+            return 0.0;
+        }
+        let lim: Vec<_> = self
+            .limits
+            .iter()
+            .map(|l| {
+                servobus_trajectory::JointLimits::new(
+                    l.max_velocity * APPROACH,
+                    l.max_acceleration * APPROACH,
+                    l.max_jerk.map(|j| j * APPROACH),
+                )
+            })
+            .collect();
+        let from: Vec<_> = present
+            .iter()
+            .map(|&p| servobus_trajectory::JointState::at_rest(p))
+            .collect();
+        servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
     }
 }
 
@@ -509,17 +590,44 @@ fn follow(
     runner: &Runner,
     args: &Args,
     mut log: Option<CsvLog>,
-    names: &[String],
+    shown: &Shown,
     units: Units,
     duration: f64,
     _interrupts: &AtomicU32,
 ) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
-    let mut plot = args.plot.as_ref().map(|_| PlotData::new(names.to_vec()));
+    let mut plot = args
+        .plot
+        .as_ref()
+        .map(|_| PlotData::new(shown.names.clone(), shown.bus_of.clone()));
+    // The joints' positions at the first cycle (rad), until all are known:
+    // they give the approach's duration.
+    let mut present: Vec<Option<f64>> = vec![None; shown.names.len()];
+    let mut announced = false;
     let mut progress = Progress::new(args.json, duration, &units.to_string());
     let telemetry = runner.telemetry();
     loop {
         match telemetry.recv_timeout(Duration::from_millis(100)) {
             Ok(Telemetry::Cycle(sample)) => {
+                if !announced {
+                    for j in sample.joints() {
+                        if let Some(slot) = present.get_mut(j.joint) {
+                            slot.get_or_insert(units.to_rad(j.measured.unwrap_or(j.planned)));
+                        }
+                    }
+                    if present.iter().all(Option::is_some) {
+                        announced = true;
+                        let now: Vec<f64> = present.iter().map(|p| p.unwrap_or(0.0)).collect();
+                        let approach = shown.approach_s(&now);
+                        if approach > 0.0 {
+                            progress
+                                .message(&format!("moving to the first keyframe, {approach:.1} s"));
+                        }
+                        progress.set_total(approach + duration + shown.settle);
+                        if let Some(plot) = &mut plot {
+                            plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
+                        }
+                    }
+                }
                 if let Some(log) = &mut log {
                     log.record(&sample)?;
                 }
@@ -607,6 +715,11 @@ impl Progress {
             self.last_line = Instant::now();
             println!("{msg}");
         }
+    }
+
+    /// The run's whole length: approach, path and settling.
+    fn set_total(&mut self, total_s: f64) {
+        self.duration = total_s;
     }
 
     fn message(&self, text: &str) {

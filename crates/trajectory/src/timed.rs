@@ -59,11 +59,7 @@ pub(crate) fn rest_to_rest(limits: &[JointLimits], pos: &[&[f64]], k: usize) -> 
 }
 
 /// The first segment of the run too short for a rest-to-rest move, if any.
-pub(crate) fn check(
-    limits: &[JointLimits],
-    times: &[f64],
-    pos: &[&[f64]],
-) -> Option<TooShort> {
+pub(crate) fn check(limits: &[JointLimits], times: &[f64], pos: &[&[f64]]) -> Option<TooShort> {
     (0..times.len() - 1).find_map(|k| {
         let needed = rest_to_rest(limits, pos, k);
         let h = times[k + 1] - times[k];
@@ -128,7 +124,11 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
                 for e in [k, k + 1] {
                     if via[e] != 0.0 {
                         cuts[e] += 1;
-                        via[e] = if cuts[e] > HALVINGS { 0.0 } else { 0.5 * via[e] };
+                        via[e] = if cuts[e] > HALVINGS {
+                            0.0
+                        } else {
+                            0.5 * via[e]
+                        };
                         changed = true;
                     }
                 }

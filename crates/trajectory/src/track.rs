@@ -156,7 +156,10 @@ fn validate(limits: &[JointLimits], times: &[f64], samples: &[Vec<f64>]) -> Resu
         }
         for (j, (&p, l)) in s.iter().zip(limits).enumerate() {
             if !p.is_finite() {
-                return Err(PlanError::NotFinite { keyframe: i, joint: j });
+                return Err(PlanError::NotFinite {
+                    keyframe: i,
+                    joint: j,
+                });
             }
             if p < l.min_position || p > l.max_position {
                 return Err(PlanError::OutOfRange {
@@ -230,8 +233,16 @@ fn stop_position(lim: &JointLimits, x: JointState, scratch: &mut Vec<Piece>) -> 
     stop_phases(x.velocity, x.acceleration, lim, &mut ph);
     scratch.clear();
     let finite = lim.max_jerk.is_some();
-    ph.emit(0.0, x.position, x.velocity, x.acceleration, 1.0, finite, scratch)
-        .1
+    ph.emit(
+        0.0,
+        x.position,
+        x.velocity,
+        x.acceleration,
+        1.0,
+        finite,
+        scratch,
+    )
+    .1
 }
 
 /// One step of the pursuit from `x` at time `t`; appends its pieces and
@@ -289,7 +300,15 @@ fn pursue(
     stop_phases(x.velocity, x.acceleration, lim, &mut ph);
     scratch.clear();
     let finite = lim.max_jerk.is_some();
-    ph.emit(t, x.position, x.velocity, x.acceleration, 1.0, finite, scratch);
+    ph.emit(
+        t,
+        x.position,
+        x.velocity,
+        x.acceleration,
+        1.0,
+        finite,
+        scratch,
+    );
     let mut end = JointState::at_rest(x.position);
     let mut covered = t;
     for p in scratch.iter() {
@@ -382,8 +401,10 @@ fn check_positions(limits: &[JointLimits], t: &Trajectory) -> Result<(), PlanErr
             continue;
         };
         let slack = 1e-9 * (1.0 + l.max_position.abs().max(l.min_position.abs()).min(1e12));
-        let below = (s.min_position < l.min_position - slack).then_some((s.min_position, l.min_position));
-        let above = (s.max_position > l.max_position + slack).then_some((s.max_position, l.max_position));
+        let below =
+            (s.min_position < l.min_position - slack).then_some((s.min_position, l.min_position));
+        let above =
+            (s.max_position > l.max_position + slack).then_some((s.max_position, l.max_position));
         if let Some((peak, limit)) = below.or(above) {
             return Err(PlanError::LimitExceeded {
                 keyframe: 0,
@@ -424,4 +445,3 @@ fn deviation(
     let rms = sum.iter().map(|s| (s / count as f64).sqrt()).collect();
     (max, rms)
 }
-

@@ -217,7 +217,10 @@ fn timed_segment_beyond_a_limit_is_named_or_stretched() {
             keyframe: 2,
             needed,
             available,
-        }) => assert!((needed - 1.65).abs() < 1e-9 && close(available, 0.5), "{needed}"),
+        }) => assert!(
+            (needed - 1.65).abs() < 1e-9 && close(available, 0.5),
+            "{needed}"
+        ),
         other => panic!("unexpected {other:?}"),
     }
     let options = PlanOptions {

@@ -203,7 +203,10 @@ fn seeded_set_of_twenty_timed_motions() {
         match plan(&limits, &keyframes, &spline) {
             Ok(_) => {}
             Err(servobus_trajectory::PlanError::LimitExceeded {
-                quantity, peak, joint, ..
+                quantity,
+                peak,
+                joint,
+                ..
             }) => {
                 spline_refused += 1;
                 if quantity == servobus_trajectory::Quantity::Position {
@@ -228,5 +231,8 @@ fn seeded_set_of_twenty_timed_motions() {
          ({over_range} past a position limit, up to {worst_beyond:.1} deg beyond the keyframes' \
          range; {over_other} over a velocity/acceleration/jerk limit); shape-preserving refused 0"
     );
-    assert!(spline_refused > 0, "the set no longer shows the spline's problem");
+    assert!(
+        spline_refused > 0,
+        "the set no longer shows the spline's problem"
+    );
 }

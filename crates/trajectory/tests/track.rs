@@ -60,14 +60,22 @@ fn noisy_recording_with_steps_is_played_within_every_limit() {
         let t = 2.0 * level as f64 + 1.0;
         let want = if level % 2 == 0 { -0.5 } else { 0.5 };
         traj.sample(lead + t, &mut s);
-        assert!((s[0].position - want).abs() < 0.06, "level {level}: {:?}", s[0]);
+        assert!(
+            (s[0].position - want).abs() < 0.06,
+            "level {level}: {:?}",
+            s[0]
+        );
     }
     println!(
         "noisy recording with steps: max deviation {:?}, rms {:?}",
         tracked.max_deviation, tracked.rms_deviation
     );
     // Joint 1 swings at up to 2.4 rad/s against a 2 rad/s limit: cut to it.
-    assert!(tracked.max_deviation[1] < 0.15, "{:?}", tracked.max_deviation);
+    assert!(
+        tracked.max_deviation[1] < 0.15,
+        "{:?}",
+        tracked.max_deviation
+    );
 }
 
 #[test]
@@ -80,7 +88,10 @@ fn smooth_recording_is_reproduced_closely_and_on_time() {
     let n = (4.0 * std::f64::consts::PI / w / 0.01).round() as usize;
     for i in 0..=n {
         let t = i as f64 * 0.01;
-        samples.push(vec![0.5 * (1.0 - (w * t).cos()), -0.3 * (1.0 - (w * t).cos())]);
+        samples.push(vec![
+            0.5 * (1.0 - (w * t).cos()),
+            -0.3 * (1.0 - (w * t).cos()),
+        ]);
         times.push(t);
     }
     let tracked = track(&lim, &times, &samples, 0.005).expect("filtered");
@@ -90,7 +101,15 @@ fn smooth_recording_is_reproduced_closely_and_on_time() {
         tracked.max_deviation, tracked.rms_deviation
     );
     for j in 0..2 {
-        assert!(tracked.max_deviation[j] < 0.005, "{:?}", tracked.max_deviation);
-        assert!(tracked.rms_deviation[j] < 0.003, "{:?}", tracked.rms_deviation);
+        assert!(
+            tracked.max_deviation[j] < 0.005,
+            "{:?}",
+            tracked.max_deviation
+        );
+        assert!(
+            tracked.rms_deviation[j] < 0.003,
+            "{:?}",
+            tracked.rms_deviation
+        );
     }
 }

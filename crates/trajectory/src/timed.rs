@@ -103,13 +103,13 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
         let h = |k: usize| times[k + 1] - times[k];
         via.fill(0.0);
         cuts.fill(0);
-        for k in 1..m {
+        for (k, v) in via.iter_mut().enumerate().take(m).skip(1) {
             let (dp, dn) = (d(k - 1), d(k));
             if dp * dn > 0.0 {
                 let (a, b) = ((dp / h(k - 1)).abs(), (dn / h(k)).abs());
                 let pace = 2.0 * a * b / (a + b);
                 let cap = rest_peak(0.5 * dp.abs().min(dn.abs()), lim).min(lim.max_velocity);
-                via[k] = dp.signum() * pace.min(cap);
+                *v = dp.signum() * pace.min(cap);
             }
         }
         // Lower the speeds at the ends of infeasible segments until every

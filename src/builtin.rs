@@ -61,13 +61,31 @@ impl Builtin {
         builtin_path(self.rel)
     }
 
-    /// The first line of its leading comment: what it is.
-    pub fn summary(&self) -> &'static str {
-        self.text
+    /// The first sentence of its leading comment (what it is), at most
+    /// about 70 characters, cut at a word.
+    pub fn summary(&self) -> String {
+        let comment: Vec<&str> = self
+            .text
             .lines()
-            .next()
-            .and_then(|l| l.strip_prefix('#'))
-            .map_or("", str::trim)
+            .map_while(|l| l.strip_prefix('#'))
+            .map(str::trim)
+            .take_while(|l| !l.is_empty())
+            .collect();
+        let text = comment.join(" ");
+        // Up to the first full stop or colon: the name of the thing.
+        let end = [text.find(". "), text.find(": ")]
+            .into_iter()
+            .flatten()
+            .min();
+        let sentence = match end {
+            Some(i) => &text[..i],
+            None => text.trim_end_matches(['.', ':']),
+        };
+        if sentence.len() <= 72 {
+            return sentence.to_owned();
+        }
+        let cut = sentence[..72].rfind(' ').unwrap_or(72);
+        format!("{}...", &sentence[..cut])
     }
 }
 
@@ -165,6 +183,18 @@ mod tests {
             "{:?}",
             motion.robot_path
         );
+    }
+
+    #[test]
+    fn summaries_are_one_short_sentence() {
+        for b in all() {
+            let s = b.summary();
+            assert!(!s.is_empty() && s.len() <= 75, "{}: {s:?}", b.name);
+            let full_stop = s.ends_with('.') && !s.ends_with("...");
+            assert!(!full_stop && !s.contains(". "), "{}: {s:?}", b.name);
+        }
+        let arm = find(Kind::Robot, "so101").expect("so101");
+        assert_eq!(arm.summary(), "SO-101-style 6-joint arm");
     }
 
     #[test]

@@ -93,7 +93,10 @@ fn factory_return_delay_and_what_would_fit() {
     assert_ne!(factory, so101);
     let p = temp_robot("factory.yaml", &factory);
     let path = p.to_str().expect("utf-8 path");
-    let v = budget_json(&["budget", "--robot", path, "--json", "--rate", "300"]);
+    let out = servobus(&["budget", "--robot", path, "--json", "--rate", "300"]);
+    // The rate does not fit: a problem found, and still the full figures.
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     let b = &v["buses"][0];
     // Same 88 bytes, but each of the 6 replies waits 500 + 50 us.
     assert_eq!(b["bytes_per_cycle"], 88);
@@ -106,6 +109,7 @@ fn factory_return_delay_and_what_would_fit() {
     );
 
     let text = servobus(&["budget", "--robot", path, "--rate", "300"]);
+    assert_eq!(text.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&text.stdout);
     assert!(stdout.contains("88 bytes"), "{stdout}");
     assert!(

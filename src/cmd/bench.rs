@@ -22,7 +22,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig, Robot};
+use servobus_runtime::config::{load_robot_any_rate, BusConfig, RateRemedy, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
 
@@ -46,6 +46,10 @@ pub struct Args {
     /// (as `busy_poll: true` in the robot file).
     #[arg(long)]
     pub busy_poll: bool,
+    /// Accept a robot whose rate is above its buses' maximum (servos read
+    /// round-robin when it plays), as `round_robin: true` on every bus.
+    #[arg(long)]
+    pub round_robin: bool,
 }
 
 /// Three figures of a distribution, us.
@@ -130,7 +134,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let robot = load_robot_any_rate(&path)?;
+    let mut robot = load_robot_any_rate(&path)?;
+    // The robot's rate must fit as it would for `play`: bench measures the
+    // cycle that rate would run.
+    for bus in &mut robot.buses {
+        bus.round_robin |= args.round_robin;
+        if let Err(why) = bus.check_rate(robot.rate_hz) {
+            let why = why.with_remedy(RateRemedy::Flag);
+            return Err(super::exit::input(format!(
+                "robot `{}`, bus `{}`: its rate {}",
+                robot.name, bus.name, why
+            )));
+        }
+    }
     let duration = Duration::from_secs_f64(args.seconds);
     let clock = SystemClock::new();
 

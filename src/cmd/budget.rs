@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde::Serialize;
 use servobus_runtime::config::{load_robot_any_rate, BusConfig};
-use servobus_timing::{Change, Plan};
+use servobus_timing::{floor_rate_hz, Change, Plan};
 
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
@@ -40,6 +40,8 @@ struct BusBudget {
     read_every: usize,
     /// The changes that would make the full cycle fit, cheapest first.
     fixes: Vec<String>,
+    /// The bus allows reading servos round-robin (`round_robin: true`).
+    round_robin: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -58,7 +60,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let mut out = Budget { buses: Vec::new() };
     let mut text = String::new();
-    let mut all_run = true;
+    // The rate fits when every bus reads every servo each cycle, or runs a
+    // round-robin cycle its robot file explicitly allows.
+    let mut all_fit = true;
     text.push_str(&format!(
         "robot `{}` ({}) at {} Hz: each cycle writes goal positions and reads present positions\n",
         robot.name,
@@ -67,7 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     ));
     for bus in &robot.buses {
         let (budget, lines) = bus_budget(bus, rate)?;
-        all_run &= budget.read_every > 0;
+        all_fit &= budget.feasible || (bus.round_robin && budget.read_every > 0);
         text.push_str(&lines);
         out.buses.push(budget);
     }
@@ -76,12 +80,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         print!("{text}");
     }
-    Ok(if all_run {
+    Ok(if all_fit {
         ExitCode::SUCCESS
     } else {
         if !args.json {
             eprintln!(
-                "error: {} Hz cannot run on every bus of `{}`",
+                "error: {} Hz does not fit every bus of `{}` (see the fixes above)",
                 fmt_hz(rate),
                 robot.name
             );
@@ -116,6 +120,7 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         feasible,
         read_every,
         fixes: fixes.iter().map(ToString::to_string).collect(),
+        round_robin: bus.round_robin,
     };
 
     let mut s = String::new();
@@ -148,7 +153,7 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
     ));
     s.push_str(&format!(
         "  maximum rate {} Hz (the wire alone: {} Hz)\n",
-        fmt_hz(full.max_rate_hz()),
+        fmt_hz(full.fastest_rate_hz()),
         fmt_hz(full.wire_limited_rate_hz())
     ));
     s.push_str(&format!(
@@ -159,11 +164,19 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
     match (&at_rate, reason) {
         (Ok(_), _) if feasible => s.push_str(", fits\n"),
         (Ok(p), _) => {
-            s.push_str(&format!(
-                "; the full cycle does not fit: reads {} servo(s) per cycle, each every {} cycles\n",
-                p.schedule().per_cycle,
-                p.read_every()
-            ));
+            let (per, every) = (p.schedule().per_cycle, p.read_every());
+            s.push_str(&if bus.round_robin {
+                format!(
+                    "; the full cycle does not fit: round_robin reads {per} servo(s) per cycle, \
+                     each every {every} cycles\n"
+                )
+            } else {
+                format!(
+                    "; does not fit (reading {per} servo(s) per cycle, each every {every} \
+                     cycles, would: allow it with `round_robin: true` on the bus or \
+                     `play --round-robin`)\n"
+                )
+            });
             push_fixes(&mut s, &fixes);
         }
         (Err(_), Some(why)) => s.push_str(&format!("; cannot run: {why}\n")),
@@ -186,12 +199,13 @@ fn push_fixes(s: &mut String, fixes: &[Change]) {
     }
 }
 
-/// A rate for people: whole hertz above 10 Hz, one decimal below.
+/// A rate for people: whole hertz above 10 Hz (floored, as every maximum
+/// is), one decimal below.
 fn fmt_hz(hz: f64) -> String {
     if hz.is_infinite() {
         "unlimited".to_owned()
     } else if hz >= 10.0 {
-        format!("{:.0}", hz.floor())
+        format!("{:.0}", floor_rate_hz(hz))
     } else {
         format!("{hz:.1}")
     }

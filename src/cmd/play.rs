@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
-use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
+use servobus_runtime::config::{load_motion, plan_motion, Motion, RateRemedy, Robot, Units};
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
     bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
@@ -47,6 +47,10 @@ pub struct Args {
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
+    /// Allow a rate above the maximum by reading servos round-robin (a
+    /// subset each cycle), as `round_robin: true` on every bus.
+    #[arg(long)]
+    pub round_robin: bool,
     /// Run the simulator in virtual time, as fast as the CPU allows.
     #[arg(long, conflicts_with = "port")]
     pub fast: bool,
@@ -343,7 +347,7 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
         .motion
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    let (motion, robot) = if recorded {
+    let (motion, mut robot) = if recorded {
         let Some(robot_path) = &args.robot else {
             return Err(super::exit::input(format!(
                 "{}: a recorded path names no robot; give --robot FILE",
@@ -364,9 +368,12 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
         Some(rate) => rate,
         None => motion.rate_hz(&robot),
     };
-    for bus in &robot.buses {
-        bus.plan(rate_hz)
-            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
+    for bus in &mut robot.buses {
+        bus.round_robin |= args.round_robin;
+        if let Err(why) = bus.check_rate(rate_hz) {
+            let why = why.with_remedy(RateRemedy::Flag);
+            return Err(super::exit::input(format!("bus `{}`: {why}", bus.name)));
+        }
     }
     if !recorded {
         let trajectory = plan_motion(&motion, &robot)?;
@@ -560,7 +567,7 @@ fn print_plan(
             plan.bytes_per_cycle(),
             plan.cycle_time_us(),
             100.0 * plan.utilisation(),
-            plan.max_rate_hz(),
+            plan.fastest_rate_hz(),
         );
     }
     Ok(())

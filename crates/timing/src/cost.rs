@@ -87,6 +87,13 @@ impl CycleCost {
         rate_of(self.cycle_time)
     }
 
+    /// The fastest rate to offer people: [`max_rate_hz`](Self::max_rate_hz)
+    /// floored by [`floor_rate_hz`]. Every command that names a maximum
+    /// rate names this one, so they all agree.
+    pub fn fastest_rate_hz(&self) -> f64 {
+        floor_rate_hz(self.max_rate_hz())
+    }
+
     /// The highest rate the wire alone allows, with no return delay, turnaround
     /// or latency: 1 / wire time.
     pub fn wire_limited_rate_hz(&self) -> f64 {
@@ -107,6 +114,23 @@ impl CycleCost {
 
 fn micros(d: Duration) -> f64 {
     d.as_nanos() as f64 / 1_000.0
+}
+
+/// A maximum rate rounded the one way that keeps it a maximum: down to a
+/// whole hertz (the exact figure below 1 Hz, where flooring would give 0).
+/// Infinite and NaN rates come back unchanged.
+///
+/// ```
+/// use servobus_timing::floor_rate_hz;
+/// assert_eq!(floor_rate_hz(598.9), 598.0);
+/// assert_eq!(floor_rate_hz(0.25), 0.25);
+/// ```
+pub fn floor_rate_hz(max_hz: f64) -> f64 {
+    if max_hz.is_finite() && max_hz >= 1.0 {
+        max_hz.floor()
+    } else {
+        max_hz
+    }
 }
 
 fn rate_of(d: Duration) -> f64 {

@@ -181,9 +181,9 @@ impl Fixes {
             }
         }
 
-        let max = full.max_rate_hz();
-        let rate_hz = if max >= 1.0 { max.floor() } else { max };
-        items[4] = Some(Change::LowerRate { rate_hz });
+        items[4] = Some(Change::LowerRate {
+            rate_hz: full.fastest_rate_hz(),
+        });
 
         Fixes { items }
     }

@@ -71,7 +71,7 @@ pub use baud::{
     FACTORY_RETURN_DELAY, MAX_SERVO_BAUD, RETURN_DELAY_UNIT,
 };
 pub use block::Block;
-pub use cost::{CycleCost, Servo, MAX_SYNC_READ_SERVOS};
+pub use cost::{floor_rate_hz, CycleCost, Servo, MAX_SYNC_READ_SERVOS};
 pub use deadline::{StatusLevel, Transaction};
 pub use fix::{Change, Fixes};
 pub use link::{Link, BITS_PER_BYTE};

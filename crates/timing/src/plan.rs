@@ -104,6 +104,11 @@ impl Plan {
     pub fn max_rate_hz(&self) -> f64 {
         self.full.max_rate_hz()
     }
+    /// The fastest rate to offer people: the maximum floored to a whole
+    /// hertz ([`floor_rate_hz`](crate::floor_rate_hz)), Hz.
+    pub fn fastest_rate_hz(&self) -> f64 {
+        self.full.fastest_rate_hz()
+    }
     /// The highest rate the wire alone would allow, Hz.
     pub fn wire_limited_rate_hz(&self) -> f64 {
         self.full.wire_limited_rate_hz()
@@ -270,7 +275,7 @@ pub fn plan(
                     full.cycle_time
                 };
                 let fix = fixes.cheapest().unwrap_or(Change::LowerRate {
-                    rate_hz: full.max_rate_hz(),
+                    rate_hz: full.fastest_rate_hz(),
                 });
                 return Err(PlanError::Infeasible {
                     rate_hz,

@@ -1,6 +1,8 @@
 //! Whether a control rate fits a bus, from servobus-timing's cycle plan.
 
-use servobus_timing::{plan, Block, Plan, PlanError, Servo};
+use core::fmt;
+
+use servobus_timing::{plan, Block, Change, Plan, PlanError, Servo};
 
 use super::BusConfig;
 
@@ -32,11 +34,125 @@ impl BusConfig {
             rate_hz,
         )
     }
+
+    /// The fastest whole rate at which every servo is read every cycle, Hz
+    /// (the one figure `budget`, `play` and `bench` all print), or `None`
+    /// when the bus cannot be planned at all.
+    pub fn fastest_rate_hz(&self) -> Option<f64> {
+        // The full cycle's cost does not depend on the rate.
+        self.plan(f64::MIN_POSITIVE)
+            .ok()
+            .map(|p| p.fastest_rate_hz())
+    }
+
+    /// The plan at `rate_hz` if it may run on this bus: the full cycle fits,
+    /// or it does not but the bus allows reading servos round-robin
+    /// ([`round_robin`](BusConfig::round_robin)) and a round-robin cycle fits.
+    ///
+    /// # Errors
+    ///
+    /// [`RateError`], which names the fastest rate that fits.
+    pub fn check_rate(&self, rate_hz: f64) -> Result<Plan, RateError> {
+        let fastest_hz = self.fastest_rate_hz();
+        match self.plan(rate_hz) {
+            Ok(p) if p.read_every() == 1 || self.round_robin => Ok(p),
+            Ok(p) => Err(RateError::AboveMaximum {
+                rate_hz,
+                fastest_hz: p.fastest_rate_hz(),
+                read_every: p.read_every(),
+            }),
+            Err(source) => Err(RateError::Unplannable { source, fastest_hz }),
+        }
+    }
 }
 
-/// `Ok` when `rate_hz` can run on `bus` (reading every servo each cycle, or
-/// a round-robin subset the plan chose); else the planner's reason, which
-/// names the cheapest change that would fit.
-pub(crate) fn check_bus(bus: &BusConfig, rate_hz: f64) -> Result<(), PlanError> {
-    bus.plan(rate_hz).map(|_| ())
+/// Why a control rate may not run on a bus.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RateError {
+    /// The full cycle (every servo read every cycle) does not fit, and the
+    /// bus does not allow reading servos round-robin.
+    #[error(
+        "{rate_hz} Hz is above the maximum rate of {fastest_hz} Hz: the full cycle does not fit \
+         (it would read each servo only every {read_every} cycles)"
+    )]
+    AboveMaximum {
+        /// The rate asked for.
+        rate_hz: f64,
+        /// The fastest whole rate at which the full cycle fits.
+        fastest_hz: f64,
+        /// How often each servo would be read at `rate_hz`.
+        read_every: usize,
+    },
+    /// Not even a round-robin cycle fits (or the bus cannot be planned).
+    #[error("{source}")]
+    Unplannable {
+        /// The planner's reason.
+        source: PlanError,
+        /// The fastest whole rate at which the full cycle fits, if any.
+        fastest_hz: Option<f64>,
+    },
+}
+
+/// Where the user can allow a round-robin read, for the error's advice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RateRemedy {
+    /// The rate came from a file: name the robot file's bus field.
+    File,
+    /// The rate came from the command line: name the flag, then the field.
+    Flag,
+}
+
+impl RateError {
+    /// The fastest whole rate that fits the full cycle, if the bus has one.
+    pub fn fastest_hz(&self) -> Option<f64> {
+        match *self {
+            RateError::AboveMaximum { fastest_hz, .. } => Some(fastest_hz),
+            RateError::Unplannable { fastest_hz, .. } => fastest_hz,
+        }
+    }
+
+    /// The error with its advice: the fastest rate that fits, and how to
+    /// allow reading servos round-robin.
+    pub fn with_remedy(&self, remedy: RateRemedy) -> impl fmt::Display + '_ {
+        Advised(self, remedy)
+    }
+}
+
+struct Advised<'a>(&'a RateError, RateRemedy);
+
+impl fmt::Display for Advised<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Advised(error, remedy) = *self;
+        write!(f, "{error}")?;
+        let Some(fastest) = error.fastest_hz() else {
+            return Ok(());
+        };
+        if let RateError::Unplannable {
+            source:
+                PlanError::Infeasible {
+                    fix: Change::LowerRate { .. },
+                    ..
+                },
+            ..
+        } = error
+        {
+            // The planner's advice already is that rate.
+            return Ok(());
+        }
+        write!(f, "; the fastest rate that fits is {fastest} Hz")?;
+        if matches!(error, RateError::AboveMaximum { .. }) {
+            match remedy {
+                RateRemedy::File => f.write_str(
+                    ", or set `round_robin: true` on the bus in the robot file to read servos \
+                     round-robin",
+                )?,
+                RateRemedy::Flag => f.write_str(
+                    ", or give --round-robin (or `round_robin: true` on the bus in the robot \
+                     file) to read servos round-robin",
+                )?,
+            }
+        }
+        Ok(())
+    }
 }

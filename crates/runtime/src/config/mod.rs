@@ -33,6 +33,7 @@ mod syntax;
 mod trajectory;
 mod units;
 
+pub use budget::{RateError, RateRemedy};
 pub use error::ConfigError;
 pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
 pub use mapping::{Clamped, JointMap};

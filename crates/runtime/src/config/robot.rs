@@ -8,6 +8,7 @@ use serde::Deserialize;
 use servobus_protocol::registers::{self, model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
+use super::budget::RateRemedy;
 use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
 use super::Units;
@@ -47,6 +48,10 @@ pub struct BusConfig {
     /// in the robot file; default false): the control thread keeps its core
     /// and sees each reply without the kernel's wake-up latency.
     pub busy_poll: bool,
+    /// Allow reading servos round-robin (`round_robin` in the robot file;
+    /// default false): at a rate the full cycle does not fit, each cycle
+    /// reads a subset of the servos. Without it such a rate is refused.
+    pub round_robin: bool,
     /// The joints, in the order they are written and read each cycle.
     pub joints: Vec<JointConfig>,
 }
@@ -151,6 +156,8 @@ struct RawBus {
     return_delay_us: u64,
     #[serde(default)]
     busy_poll: bool,
+    #[serde(default)]
+    round_robin: bool,
     joints: Vec<RawJoint>,
 }
 
@@ -231,8 +238,11 @@ pub(crate) fn check_rate(
         return Err(source.error(field, format!("rate must be positive, got {rate_hz}")));
     }
     for bus in &robot.buses {
-        if let Err(why) = super::budget::check_bus(bus, rate_hz) {
-            return Err(source.error(field, format!("bus `{}`: {why}", bus.name)));
+        if let Err(why) = bus.check_rate(rate_hz) {
+            return Err(source.error(
+                field,
+                format!("bus `{}`: {}", bus.name, why.with_remedy(RateRemedy::File)),
+            ));
         }
     }
     Ok(())
@@ -335,6 +345,7 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
             latency: Duration::from_micros(rb.latency_us),
             return_delay: Duration::from_micros(rb.return_delay_us),
             busy_poll: rb.busy_poll,
+            round_robin: rb.round_robin,
             joints,
         });
     }

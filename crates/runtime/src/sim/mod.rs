@@ -218,7 +218,9 @@ impl SimRobotBuilder<'_> {
         self
     }
 
-    /// Records every joint's physical angle into `truth` (see [`new_truth`]).
+    /// Records every joint's physical angle into `truth` (see [`new_truth`]),
+    /// into the column of the joint's name (joints it has no column for are
+    /// not recorded).
     #[must_use]
     pub fn truth(mut self, truth: &Truth) -> Self {
         self.truth = Some(truth.clone());
@@ -329,7 +331,11 @@ impl SimRobotBuilder<'_> {
             servo = servo.with_hand(h);
         }
         if let Some(t) = &self.truth {
-            servo = servo.with_truth(t, i);
+            // Columns are matched by name: a recorder may hold a subset.
+            let name = self.robot.joints().nth(i).map(|j| j.name.as_str());
+            if let Some(col) = t.names().iter().position(|n| Some(n.as_str()) == name) {
+                servo = servo.with_truth(t, col);
+            }
         }
         servo
     }

@@ -11,6 +11,7 @@ mod decode;
 mod plan;
 mod play;
 mod sim;
+mod teach;
 
 /// Smooth, on-time motion for Feetech serial-bus servos.
 #[derive(Debug, Parser)]
@@ -44,6 +45,8 @@ enum Command {
     SetId(bus::SetIdArgs),
     /// Decode frames written in hex.
     Decode(decode::Args),
+    /// Pose the robot by hand (torque off) and write a motion file.
+    Teach(teach::Args),
 }
 
 /// Runs the parsed command line and returns the process exit code.
@@ -60,5 +63,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Write(args) => bus::write(args),
         Command::SetId(args) => bus::set_id(args),
         Command::Decode(args) => decode::run(args),
+        Command::Teach(args) => teach::run(args),
     }
 }

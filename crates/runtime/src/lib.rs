@@ -18,6 +18,7 @@ pub mod pacer;
 pub mod rt;
 pub mod sim;
 pub mod stats;
+pub mod teach;
 
 // The scheduler: runs a robot + trajectory on its buses, tracks, reacts to
 // faults. See `run` for the two entry points.

@@ -14,6 +14,10 @@
 //!   [`servobus_driver::Transport`] in virtual time on a shared
 //!   [`ManualClock`](servobus_driver::ManualClock): deterministic and as fast
 //!   as the CPU allows. Faults ([`Faults`]) are drawn from a seeded source.
+//! - [`body`] gives a servo a joint to drive: a [`Mount`] (raw tick at the
+//!   joint's zero, direction, end stops; ranges may cross the 4095/0 seam),
+//!   a [`HandPath`] that moves it while its torque is off, and a [`Truth`]
+//!   recorder of the physical angles.
 //! - [`PtyServer`] serves a bus on a pseudo-terminal in wall-clock time, so
 //!   that any program that opens a serial port (Feetech's Python SDK,
 //!   LeRobot, the `servobus` commands) can talk to it (`servobus sim`).
@@ -94,6 +98,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod body;
 mod bus;
 mod dynamics;
 mod engine;
@@ -102,6 +107,7 @@ pub mod model;
 pub mod pty;
 mod servo;
 
+pub use body::{HandPath, Mount, Truth, TruthRow};
 pub use bus::SimBus;
 pub use engine::{baud_of_index, SimStats};
 pub use faults::{FaultSpecError, Faults};

@@ -83,7 +83,6 @@
 #![warn(missing_docs)]
 
 mod bus;
-mod clock;
 mod eeprom;
 mod error;
 mod io;
@@ -94,15 +93,14 @@ mod stats;
 mod sync;
 #[cfg(test)]
 mod testing;
-mod transport;
 
 pub use bus::{Bus, LatencyMeasurement};
-pub use clock::{Clock, ManualClock, SystemClock};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]
 pub use serial::{ftdi_latency_timer, FtdiLatency, SerialTransport};
-pub use settings::{BusSettings, ReplyLevel};
+pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError};
+pub use servobus_timing::StatusLevel;
+pub use settings::BusSettings;
 pub use stats::{Counters, RttStats};
 pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};
-pub use transport::{Transport, TransportError};

@@ -11,8 +11,8 @@
 //!   big-endian), the instructions it obeys, and a joint with a motion
 //!   profile, lag, dead zone, load, heat and protection flags.
 //! - [`SimBus`] puts many servos on one bus and implements
-//!   [`servobus_driver::Transport`] in virtual time on a shared
-//!   [`ManualClock`](servobus_driver::ManualClock): deterministic and as fast
+//!   [`servobus_io::Transport`] in virtual time on a shared
+//!   [`ManualClock`](servobus_io::ManualClock): deterministic and as fast
 //!   as the CPU allows. Faults ([`Faults`]) are drawn from a seeded source.
 //! - [`PtyServer`] serves a bus on a pseudo-terminal in wall-clock time, so
 //!   that any program that opens a serial port (Feetech's Python SDK,
@@ -61,7 +61,7 @@
 //!
 //! ```
 //! use std::time::Duration;
-//! use servobus_driver::{Clock, ManualClock, Transport};
+//! use servobus_io::{Clock, ManualClock, Transport};
 //! use servobus_protocol::{encode, parse_frame};
 //! use servobus_sim::{addr, Faults, SimBus, SimServo};
 //!
@@ -103,8 +103,11 @@ pub mod pty;
 mod servo;
 
 pub use bus::SimBus;
-pub use engine::{baud_of_index, SimStats};
+pub use engine::SimStats;
 pub use faults::{FaultSpecError, Faults};
 pub use model::{Area, Endian, SimModel};
 pub use pty::{PtyError, PtyServer};
 pub use servo::{addr, SimServo};
+/// The baud rate of a baud-rate register index: the protocol crate's table
+/// (kept under this name for the code that builds simulated robots).
+pub use servobus_protocol::registers::baud_rate as baud_of_index;

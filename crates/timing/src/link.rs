@@ -34,6 +34,17 @@ impl Link {
     pub const DEFAULT_TURNAROUND: Duration = servobus_protocol::registers::REPLY_TURNAROUND;
     /// Default safety margin.
     pub const DEFAULT_MARGIN: Duration = Duration::from_micros(200);
+    /// Latency of a USB serial adapter that is not an FTDI one: USB CDC and
+    /// CH34x adapters deliver received bytes in 1 ms USB frames.
+    pub const USB_LATENCY: Duration = Duration::from_millis(1);
+    /// Latency allowed for a pseudo-terminal (the simulator behind
+    /// `servobus sim`, or `play`'s simulated buses). The program at the other
+    /// end is scheduled by the operating system, and on a loaded machine it
+    /// now and then wakes milliseconds late; 3 ms is what simulated runs on a
+    /// busy two-core machine have needed without spurious timeouts. It is an
+    /// allowance for the simulator only: a real port uses
+    /// [`Link::USB_LATENCY`] or its adapter's measured figure.
+    pub const PTY_LATENCY: Duration = Duration::from_millis(3);
 
     /// A link at `baud` with no adapter latency and the default turnaround and
     /// margin. A baud of 0 is treated as 1 so that nothing divides by zero.

@@ -278,10 +278,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, id, data.len());
-        self.transact(expect)
+        self.write_either(id, id, address, data)
     }
 
     /// WRITE accepting the reply from `id` or from `alt` (the new ID, when

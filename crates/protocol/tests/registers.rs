@@ -248,6 +248,8 @@ fn baud_table() {
     assert_eq!(baud_rate(5), Some(76_800));
     assert_eq!(baud_rate(7), Some(38_400));
     assert_eq!(baud_rate(8), None);
+    assert_eq!(baud_rate(255), None);
+    assert_eq!(baud_rate(4), Some(115_200));
     for i in 0..8 {
         assert_eq!(baud_index(baud_rate(i).unwrap()), Some(i));
     }

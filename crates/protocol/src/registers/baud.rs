@@ -75,19 +75,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn table_round_trips() {
-        for (i, &b) in BAUD_RATES.iter().enumerate() {
-            assert_eq!(baud_rate(i as u8), Some(b));
-            assert_eq!(baud_index(b), Some(i as u8));
-        }
-        assert_eq!(baud_rate(8), None);
-        assert_eq!(baud_rate(255), None);
-        assert_eq!(baud_index(9600), None);
-        assert_eq!(baud_rate(7), Some(38_400));
-        assert_eq!(baud_rate(5), Some(76_800));
-    }
-
-    #[test]
     fn next_baud() {
         assert_eq!(next_baud_above(38_400), Some(57_600));
         assert_eq!(next_baud_above(100_000), Some(115_200));

@@ -17,27 +17,43 @@
 use super::{ByteOrder, RegisterMap, Series};
 
 /// Declares one series' registers as typed constants and lists them, in
-/// address order, as `REGISTERS`. A row reads
-/// `CONST: type = address access sign factory "name" "unit" "description";`
-/// where `sign` is the sign bit of a sign-magnitude register or `-`.
+/// address order, as `REGISTERS`. A row reads either
+/// `CONST: type = (address access sign factory "name" "unit" "description");`
+/// where `sign` is the sign bit of a sign-magnitude register or `-`, or
+/// `CONST: type = (sts factory);` for a register laid out exactly as the
+/// STS/SMS one of the same name, with its own factory value.
 macro_rules! table {
-    ($($konst:ident: $ty:ty = $addr:literal $access:ident $sign:tt $factory:literal
-        $name:literal $unit:literal $desc:literal;)*) => {
+    ($($konst:ident: $ty:ty = ($($row:tt)*);)*) => {
         $(
-            #[doc = concat!("`", $name, "` (", stringify!($addr), "): ", $desc, ".")]
-            pub const $konst: Reg<$ty> = Reg::new(Register {
-                name: $name,
-                address: $addr,
-                size: <$ty as RegisterValue>::SIZE,
-                access: $access,
-                sign_bit: table!(@sign $sign),
-                factory: $factory,
-                unit: $unit,
-                description: $desc,
-            });
+            #[doc = table!(@doc $konst $($row)*)]
+            pub const $konst: Reg<$ty> = Reg::new(table!(@register $konst $ty; $($row)*));
         )*
         /// Every register of the series, in address order.
         pub(crate) const REGISTERS: &[Register] = &[$($konst.register),*];
+    };
+    (@register $konst:ident $ty:ty; sts $factory:literal) => {
+        Register { factory: $factory, ..super::sts::$konst.register }
+    };
+    (@register $konst:ident $ty:ty;
+        $addr:literal $access:ident $sign:tt $factory:literal $name:literal $unit:literal $desc:literal) => {
+        Register {
+            name: $name,
+            address: $addr,
+            size: <$ty as RegisterValue>::SIZE,
+            access: $access,
+            sign_bit: table!(@sign $sign),
+            factory: $factory,
+            unit: $unit,
+            description: $desc,
+        }
+    };
+    (@doc $konst:ident sts $factory:literal) => {
+        concat!("As [`sts::", stringify!($konst), "`](super::sts::", stringify!($konst),
+            "), factory value ", stringify!($factory), ".")
+    };
+    (@doc $konst:ident $addr:literal $access:ident $sign:tt $factory:literal
+        $name:literal $unit:literal $desc:literal) => {
+        concat!("`", $name, "` (", stringify!($addr), "): ", $desc, ".")
     };
     (@sign -) => { None };
     (@sign $bit:literal) => { Some($bit) };
@@ -51,62 +67,62 @@ pub mod sts {
     };
 
     table! {
-        FIRMWARE_MAJOR: u8 = 0 R - 3 "firmware_major" "" "firmware major version";
-        FIRMWARE_MINOR: u8 = 1 R - 10 "firmware_minor" "" "firmware minor version";
-        MODEL_NUMBER: u16 = 3 R - 777 "model_number" "" "model number (STS3215 = 777)";
-        ID: u8 = 5 E - 1 "id" "" "servo ID, 0..=253";
-        BAUD_RATE: u8 = 6 E - 0 "baud_rate" "index" "baud-rate index, 0 = 1 Mbps";
-        RETURN_DELAY: u8 = 7 E - 250 "return_delay" "2 us" "delay before a reply";
-        STATUS_LEVEL: u8 = 8 E - 1 "status_level" "" "0: reply to PING/READ only; 1: all";
-        MIN_ANGLE_LIMIT: u16 = 9 E - 0 "min_angle_limit" "steps" "lowest goal accepted";
-        MAX_ANGLE_LIMIT: u16 = 11 E - 4095 "max_angle_limit" "steps" "highest goal accepted";
-        MAX_TEMPERATURE: u8 = 13 E - 70 "max_temperature" "degC" "overheat threshold";
-        MAX_VOLTAGE: u8 = 14 E - 140 "max_voltage" "0.1 V" "over-voltage threshold";
-        MIN_VOLTAGE: u8 = 15 E - 40 "min_voltage" "0.1 V" "under-voltage threshold";
-        MAX_TORQUE: u16 = 16 E - 1000 "max_torque" "0.1 %" "torque ceiling, 0..=1000";
-        PHASE: u8 = 18 E - 12 "phase" "" "phase bits; bit 4 angle feedback mode";
-        UNLOADING_CONDITION: u8 = 19 E - 44 "unloading_condition" "" "protection mask";
-        LED_ALARM_CONDITION: u8 = 20 E - 47 "led_alarm_condition" "" "LED alarm mask";
-        P_COEFFICIENT: u8 = 21 E - 32 "p_coefficient" "" "position loop P";
-        D_COEFFICIENT: u8 = 22 E - 32 "d_coefficient" "" "position loop D";
-        I_COEFFICIENT: u8 = 23 E - 0 "i_coefficient" "" "position loop I";
-        MIN_STARTUP_FORCE: u16 = 24 E - 16 "min_startup_force" "0.1 %" "minimum output";
-        CW_DEAD_ZONE: u8 = 26 E - 1 "cw_dead_zone" "steps" "clockwise dead zone";
-        CCW_DEAD_ZONE: u8 = 27 E - 1 "ccw_dead_zone" "steps" "counter-clockwise dead zone";
-        PROTECTION_CURRENT: u16 = 28 E - 500 "protection_current" "6.5 mA" "current limit";
-        ANGULAR_RESOLUTION: u8 = 30 E - 1 "angular_resolution" "" "angular resolution factor";
-        OFFSET: i16 = 31 E 11 0 "offset" "steps" "homing offset: present = actual - offset";
-        MODE: u8 = 33 E - 0 "mode" "" "0 position, 1 speed, 2 PWM, 3 step";
-        PROTECTIVE_TORQUE: u8 = 34 E - 20 "protective_torque" "%" "torque after overload";
-        PROTECTION_TIME: u8 = 35 E - 200 "protection_time" "10 ms" "overload time before protection";
-        OVERLOAD_TORQUE: u8 = 36 E - 80 "overload_torque" "%" "overload threshold";
-        SPEED_P_COEFFICIENT: u8 = 37 E - 10 "speed_p_coefficient" "" "speed loop P";
-        OVERCURRENT_TIME: u8 = 38 E - 200 "overcurrent_time" "10 ms" "over-current time before protection";
-        SPEED_I_COEFFICIENT: u8 = 39 E - 200 "speed_i_coefficient" "" "speed loop I";
-        TORQUE_ENABLE: u8 = 40 W - 0 "torque_enable" "" "0 off, 1 on, 128 sets midpoint";
-        ACCELERATION: u8 = 41 W - 0 "acceleration" "100 steps/s^2" "0 = no limit";
-        GOAL_POSITION: i16 = 42 W 15 0 "goal_position" "steps" "target position";
-        GOAL_TIME: u16 = 44 W - 0 "goal_time" "ms" "move time (PWM in mode 2)";
-        GOAL_SPEED: i16 = 46 W 15 0 "goal_speed" "steps/s" "speed limit; 0 = maximum";
-        TORQUE_LIMIT: u16 = 48 W - 1000 "torque_limit" "0.1 %" "torque ceiling now";
-        LOCK: u8 = 55 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked";
-        PRESENT_POSITION: i16 = 56 R 15 0 "present_position" "steps" "measured position";
-        PRESENT_SPEED: i16 = 58 R 15 0 "present_speed" "steps/s" "measured speed";
-        PRESENT_LOAD: i16 = 60 R 10 0 "present_load" "0.1 %" "output PWM duty";
-        PRESENT_VOLTAGE: u8 = 62 R - 120 "present_voltage" "0.1 V" "input voltage";
-        PRESENT_TEMPERATURE: u8 = 63 R - 25 "present_temperature" "degC" "internal temperature";
-        ASYNC_FLAG: u8 = 64 R - 0 "async_flag" "" "1 while a REG WRITE waits";
-        STATUS: u8 = 65 R - 0 "status" "" "error bits, as the status byte";
-        MOVING: u8 = 66 R - 0 "moving" "" "1 while moving";
-        PRESENT_CURRENT: i16 = 69 R 15 0 "present_current" "6.5 mA" "motor current";
-        GOAL_POSITION_2: u16 = 71 R - 0 "goal_position_2" "steps" "firmware's copy of the goal (undocumented)";
-        MOVING_THRESHOLD: u8 = 80 E - 1 "moving_threshold" "" "speed below which moving reads 0";
-        DTS: u8 = 81 E - 32 "dts" "ms" "factory tuning byte (undocumented)";
-        SPEED_UNIT_FACTOR: u8 = 82 E - 1 "speed_unit_factor" "" "factory tuning byte (undocumented)";
-        HTS: u8 = 83 E - 20 "hts" "" "factory tuning byte (undocumented)";
-        MAX_SPEED_LIMIT: u8 = 84 E - 254 "max_speed_limit" "" "factory speed ceiling";
-        MAX_ACCELERATION: u8 = 85 E - 150 "max_acceleration" "100 steps/s^2" "factory acceleration ceiling";
-        ACCELERATION_MULTIPLIER: u8 = 86 E - 50 "acceleration_multiplier" "" "factory tuning byte (undocumented)";
+        FIRMWARE_MAJOR: u8 = (0 R - 3 "firmware_major" "" "firmware major version");
+        FIRMWARE_MINOR: u8 = (1 R - 10 "firmware_minor" "" "firmware minor version");
+        MODEL_NUMBER: u16 = (3 R - 777 "model_number" "" "model number (STS3215 = 777)");
+        ID: u8 = (5 E - 1 "id" "" "servo ID, 0..=253");
+        BAUD_RATE: u8 = (6 E - 0 "baud_rate" "index" "baud-rate index, 0 = 1 Mbps");
+        RETURN_DELAY: u8 = (7 E - 250 "return_delay" "2 us" "delay before a reply");
+        STATUS_LEVEL: u8 = (8 E - 1 "status_level" "" "0: reply to PING/READ only; 1: all");
+        MIN_ANGLE_LIMIT: u16 = (9 E - 0 "min_angle_limit" "steps" "lowest goal accepted");
+        MAX_ANGLE_LIMIT: u16 = (11 E - 4095 "max_angle_limit" "steps" "highest goal accepted");
+        MAX_TEMPERATURE: u8 = (13 E - 70 "max_temperature" "degC" "overheat threshold");
+        MAX_VOLTAGE: u8 = (14 E - 140 "max_voltage" "0.1 V" "over-voltage threshold");
+        MIN_VOLTAGE: u8 = (15 E - 40 "min_voltage" "0.1 V" "under-voltage threshold");
+        MAX_TORQUE: u16 = (16 E - 1000 "max_torque" "0.1 %" "torque ceiling, 0..=1000");
+        PHASE: u8 = (18 E - 12 "phase" "" "phase bits; bit 4 angle feedback mode");
+        UNLOADING_CONDITION: u8 = (19 E - 44 "unloading_condition" "" "protection mask");
+        LED_ALARM_CONDITION: u8 = (20 E - 47 "led_alarm_condition" "" "LED alarm mask");
+        P_COEFFICIENT: u8 = (21 E - 32 "p_coefficient" "" "position loop P");
+        D_COEFFICIENT: u8 = (22 E - 32 "d_coefficient" "" "position loop D");
+        I_COEFFICIENT: u8 = (23 E - 0 "i_coefficient" "" "position loop I");
+        MIN_STARTUP_FORCE: u16 = (24 E - 16 "min_startup_force" "0.1 %" "minimum output");
+        CW_DEAD_ZONE: u8 = (26 E - 1 "cw_dead_zone" "steps" "clockwise dead zone");
+        CCW_DEAD_ZONE: u8 = (27 E - 1 "ccw_dead_zone" "steps" "counter-clockwise dead zone");
+        PROTECTION_CURRENT: u16 = (28 E - 500 "protection_current" "6.5 mA" "current limit");
+        ANGULAR_RESOLUTION: u8 = (30 E - 1 "angular_resolution" "" "angular resolution factor");
+        OFFSET: i16 = (31 E 11 0 "offset" "steps" "homing offset: present = actual - offset");
+        MODE: u8 = (33 E - 0 "mode" "" "0 position, 1 speed, 2 PWM, 3 step");
+        PROTECTIVE_TORQUE: u8 = (34 E - 20 "protective_torque" "%" "torque after overload");
+        PROTECTION_TIME: u8 = (35 E - 200 "protection_time" "10 ms" "overload time before protection");
+        OVERLOAD_TORQUE: u8 = (36 E - 80 "overload_torque" "%" "overload threshold");
+        SPEED_P_COEFFICIENT: u8 = (37 E - 10 "speed_p_coefficient" "" "speed loop P");
+        OVERCURRENT_TIME: u8 = (38 E - 200 "overcurrent_time" "10 ms" "over-current time before protection");
+        SPEED_I_COEFFICIENT: u8 = (39 E - 200 "speed_i_coefficient" "" "speed loop I");
+        TORQUE_ENABLE: u8 = (40 W - 0 "torque_enable" "" "0 off, 1 on, 128 sets midpoint");
+        ACCELERATION: u8 = (41 W - 0 "acceleration" "100 steps/s^2" "0 = no limit");
+        GOAL_POSITION: i16 = (42 W 15 0 "goal_position" "steps" "target position");
+        GOAL_TIME: u16 = (44 W - 0 "goal_time" "ms" "move time (PWM in mode 2)");
+        GOAL_SPEED: i16 = (46 W 15 0 "goal_speed" "steps/s" "speed limit; 0 = maximum");
+        TORQUE_LIMIT: u16 = (48 W - 1000 "torque_limit" "0.1 %" "torque ceiling now");
+        LOCK: u8 = (55 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked");
+        PRESENT_POSITION: i16 = (56 R 15 0 "present_position" "steps" "measured position");
+        PRESENT_SPEED: i16 = (58 R 15 0 "present_speed" "steps/s" "measured speed");
+        PRESENT_LOAD: i16 = (60 R 10 0 "present_load" "0.1 %" "output PWM duty");
+        PRESENT_VOLTAGE: u8 = (62 R - 120 "present_voltage" "0.1 V" "input voltage");
+        PRESENT_TEMPERATURE: u8 = (63 R - 25 "present_temperature" "degC" "internal temperature");
+        ASYNC_FLAG: u8 = (64 R - 0 "async_flag" "" "1 while a REG WRITE waits");
+        STATUS: u8 = (65 R - 0 "status" "" "error bits, as the status byte");
+        MOVING: u8 = (66 R - 0 "moving" "" "1 while moving");
+        PRESENT_CURRENT: i16 = (69 R 15 0 "present_current" "6.5 mA" "motor current");
+        GOAL_POSITION_2: u16 = (71 R - 0 "goal_position_2" "steps" "firmware's copy of the goal (undocumented)");
+        MOVING_THRESHOLD: u8 = (80 E - 1 "moving_threshold" "" "speed below which moving reads 0");
+        DTS: u8 = (81 E - 32 "dts" "ms" "factory tuning byte (undocumented)");
+        SPEED_UNIT_FACTOR: u8 = (82 E - 1 "speed_unit_factor" "" "factory tuning byte (undocumented)");
+        HTS: u8 = (83 E - 20 "hts" "" "factory tuning byte (undocumented)");
+        MAX_SPEED_LIMIT: u8 = (84 E - 254 "max_speed_limit" "" "factory speed ceiling");
+        MAX_ACCELERATION: u8 = (85 E - 150 "max_acceleration" "100 steps/s^2" "factory acceleration ceiling");
+        ACCELERATION_MULTIPLIER: u8 = (86 E - 50 "acceleration_multiplier" "" "factory tuning byte (undocumented)");
     }
 }
 
@@ -119,51 +135,51 @@ pub mod scs {
     };
 
     table! {
-        FIRMWARE_MAJOR: u8 = 0 R - 2 "firmware_major" "" "firmware major version";
-        FIRMWARE_MINOR: u8 = 1 R - 9 "firmware_minor" "" "firmware minor version";
-        MODEL_NUMBER: u16 = 3 R - 1284 "model_number" "" "model number (SCS0009 = 1284)";
-        ID: u8 = 5 E - 1 "id" "" "servo ID, 0..=253";
-        BAUD_RATE: u8 = 6 E - 0 "baud_rate" "index" "baud-rate index, 0 = 1 Mbps";
-        RETURN_DELAY: u8 = 7 E - 0 "return_delay" "2 us" "delay before a reply";
-        STATUS_LEVEL: u8 = 8 E - 2 "status_level" "" "0 PING only, 1 READ, 2 all";
-        MIN_ANGLE_LIMIT: u16 = 9 E - 0 "min_angle_limit" "steps" "lowest goal accepted";
-        MAX_ANGLE_LIMIT: u16 = 11 E - 1023 "max_angle_limit" "steps" "highest goal accepted";
-        MAX_TEMPERATURE: u8 = 13 E - 70 "max_temperature" "degC" "overheat threshold";
-        MAX_VOLTAGE: u8 = 14 E - 80 "max_voltage" "0.1 V" "over-voltage threshold";
-        MIN_VOLTAGE: u8 = 15 E - 40 "min_voltage" "0.1 V" "under-voltage threshold";
-        MAX_TORQUE: u16 = 16 E - 1000 "max_torque" "0.1 %" "torque ceiling, 0..=1000";
-        PHASE: u8 = 18 E - 0 "phase" "" "phase bits";
-        UNLOADING_CONDITION: u8 = 19 E - 37 "unloading_condition" "" "protection mask";
-        LED_ALARM_CONDITION: u8 = 20 E - 37 "led_alarm_condition" "" "LED alarm mask";
-        P_COEFFICIENT: u8 = 21 E - 15 "p_coefficient" "" "position loop P";
-        D_COEFFICIENT: u8 = 22 E - 0 "d_coefficient" "" "position loop D";
-        I_COEFFICIENT: u8 = 23 E - 0 "i_coefficient" "" "position loop I";
-        MIN_STARTUP_FORCE: u16 = 24 E - 0 "min_startup_force" "0.1 %" "minimum output";
-        CW_DEAD_ZONE: u8 = 26 E - 1 "cw_dead_zone" "steps" "clockwise dead zone";
-        CCW_DEAD_ZONE: u8 = 27 E - 1 "ccw_dead_zone" "steps" "counter-clockwise dead zone";
-        PROTECTIVE_TORQUE: u8 = 37 E - 20 "protective_torque" "%" "torque after overload";
-        PROTECTION_TIME: u8 = 38 E - 200 "protection_time" "10 ms" "overload time before protection";
-        TORQUE_ENABLE: u8 = 40 W - 0 "torque_enable" "" "0 off, 1 on";
-        ACCELERATION: u8 = 41 W - 0 "acceleration" "" "acceleration";
-        GOAL_POSITION: u16 = 42 W - 0 "goal_position" "steps" "target position, 0..=1023";
-        GOAL_TIME: u16 = 44 W - 0 "goal_time" "ms" "move time (PWM in PWM mode)";
-        GOAL_SPEED: u16 = 46 W - 0 "goal_speed" "steps/s" "speed limit; 0 = maximum";
-        LOCK: u8 = 48 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked";
-        PRESENT_POSITION: u16 = 56 R - 0 "present_position" "steps" "measured position";
-        PRESENT_SPEED: i16 = 58 R 15 0 "present_speed" "steps/s" "measured speed";
-        PRESENT_LOAD: i16 = 60 R 10 0 "present_load" "0.1 %" "output PWM duty";
-        PRESENT_VOLTAGE: u8 = 62 R - 60 "present_voltage" "0.1 V" "input voltage";
-        PRESENT_TEMPERATURE: u8 = 63 R - 25 "present_temperature" "degC" "internal temperature";
-        ASYNC_FLAG: u8 = 64 R - 0 "async_flag" "" "1 while a REG WRITE waits";
-        STATUS: u8 = 65 R - 0 "status" "" "error bits, as the status byte";
-        MOVING: u8 = 66 R - 0 "moving" "" "1 while moving";
-        PRESENT_CURRENT: u16 = 69 R - 0 "present_current" "" "motor current";
-        PWM_MAX_STEP: u8 = 78 E - 50 "pwm_max_step" "" "factory tuning byte (undocumented)";
-        MOVING_THRESHOLD: u8 = 79 E - 1 "moving_threshold" "" "speed below which moving reads 0";
-        DTS: u8 = 80 E - 32 "dts" "ms" "factory tuning byte (undocumented)";
-        MIN_SPEED_LIMIT: u8 = 81 E - 1 "min_speed_limit" "" "factory speed floor";
-        MAX_SPEED_LIMIT: u8 = 82 E - 30 "max_speed_limit" "" "factory speed ceiling";
-        ACCELERATION_2: u8 = 83 E - 0 "acceleration_2" "" "factory tuning byte (undocumented)";
+        FIRMWARE_MAJOR: u8 = (sts 2);
+        FIRMWARE_MINOR: u8 = (sts 9);
+        MODEL_NUMBER: u16 = (3 R - 1284 "model_number" "" "model number (SCS0009 = 1284)");
+        ID: u8 = (sts 1);
+        BAUD_RATE: u8 = (sts 0);
+        RETURN_DELAY: u8 = (sts 0);
+        STATUS_LEVEL: u8 = (8 E - 2 "status_level" "" "0 PING only, 1 READ, 2 all");
+        MIN_ANGLE_LIMIT: u16 = (sts 0);
+        MAX_ANGLE_LIMIT: u16 = (sts 1023);
+        MAX_TEMPERATURE: u8 = (sts 70);
+        MAX_VOLTAGE: u8 = (sts 80);
+        MIN_VOLTAGE: u8 = (sts 40);
+        MAX_TORQUE: u16 = (sts 1000);
+        PHASE: u8 = (18 E - 0 "phase" "" "phase bits");
+        UNLOADING_CONDITION: u8 = (sts 37);
+        LED_ALARM_CONDITION: u8 = (sts 37);
+        P_COEFFICIENT: u8 = (sts 15);
+        D_COEFFICIENT: u8 = (sts 0);
+        I_COEFFICIENT: u8 = (sts 0);
+        MIN_STARTUP_FORCE: u16 = (sts 0);
+        CW_DEAD_ZONE: u8 = (sts 1);
+        CCW_DEAD_ZONE: u8 = (sts 1);
+        PROTECTIVE_TORQUE: u8 = (37 E - 20 "protective_torque" "%" "torque after overload");
+        PROTECTION_TIME: u8 = (38 E - 200 "protection_time" "10 ms" "overload time before protection");
+        TORQUE_ENABLE: u8 = (40 W - 0 "torque_enable" "" "0 off, 1 on");
+        ACCELERATION: u8 = (41 W - 0 "acceleration" "" "acceleration");
+        GOAL_POSITION: u16 = (42 W - 0 "goal_position" "steps" "target position, 0..=1023");
+        GOAL_TIME: u16 = (44 W - 0 "goal_time" "ms" "move time (PWM in PWM mode)");
+        GOAL_SPEED: u16 = (46 W - 0 "goal_speed" "steps/s" "speed limit; 0 = maximum");
+        LOCK: u8 = (48 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked");
+        PRESENT_POSITION: u16 = (56 R - 0 "present_position" "steps" "measured position");
+        PRESENT_SPEED: i16 = (sts 0);
+        PRESENT_LOAD: i16 = (sts 0);
+        PRESENT_VOLTAGE: u8 = (sts 60);
+        PRESENT_TEMPERATURE: u8 = (sts 25);
+        ASYNC_FLAG: u8 = (sts 0);
+        STATUS: u8 = (sts 0);
+        MOVING: u8 = (sts 0);
+        PRESENT_CURRENT: u16 = (69 R - 0 "present_current" "" "motor current");
+        PWM_MAX_STEP: u8 = (78 E - 50 "pwm_max_step" "" "factory tuning byte (undocumented)");
+        MOVING_THRESHOLD: u8 = (79 E - 1 "moving_threshold" "" "speed below which moving reads 0");
+        DTS: u8 = (80 E - 32 "dts" "ms" "factory tuning byte (undocumented)");
+        MIN_SPEED_LIMIT: u8 = (81 E - 1 "min_speed_limit" "" "factory speed floor");
+        MAX_SPEED_LIMIT: u8 = (82 E - 30 "max_speed_limit" "" "factory speed ceiling");
+        ACCELERATION_2: u8 = (83 E - 0 "acceleration_2" "" "factory tuning byte (undocumented)");
     }
 }
 
@@ -175,80 +191,27 @@ pub mod scs {
 pub mod addr {
     use super::{scs, sts};
 
-    /// Firmware major version (read-only).
-    pub const FIRMWARE_MAJOR: u8 = sts::FIRMWARE_MAJOR.register.address;
-    /// Firmware minor version (read-only).
-    pub const FIRMWARE_MINOR: u8 = sts::FIRMWARE_MINOR.register.address;
-    /// Model number, 2 bytes (read-only).
-    pub const MODEL_NUMBER: u8 = sts::MODEL_NUMBER.register.address;
-    /// Servo ID.
-    pub const ID: u8 = sts::ID.register.address;
-    /// Baud-rate index (see [`baud_rate`](crate::registers::baud_rate)).
-    pub const BAUD_RATE: u8 = sts::BAUD_RATE.register.address;
-    /// Return delay, in 2 us units.
-    pub const RETURN_DELAY: u8 = sts::RETURN_DELAY.register.address;
-    /// Response status level: 0 answers PING and READ only, 1 answers all.
-    pub const STATUS_LEVEL: u8 = sts::STATUS_LEVEL.register.address;
-    /// Minimum angle limit, 2 bytes.
-    pub const MIN_ANGLE_LIMIT: u8 = sts::MIN_ANGLE_LIMIT.register.address;
-    /// Maximum angle limit, 2 bytes.
-    pub const MAX_ANGLE_LIMIT: u8 = sts::MAX_ANGLE_LIMIT.register.address;
-    /// Maximum temperature limit, degrees C (EEPROM).
-    pub const MAX_TEMPERATURE: u8 = sts::MAX_TEMPERATURE.register.address;
-    /// Maximum input voltage, 0.1 V (EEPROM).
-    pub const MAX_VOLTAGE: u8 = sts::MAX_VOLTAGE.register.address;
-    /// Minimum input voltage, 0.1 V (EEPROM).
-    pub const MIN_VOLTAGE: u8 = sts::MIN_VOLTAGE.register.address;
-    /// Maximum torque, 0.1 % (EEPROM).
-    pub const MAX_TORQUE: u8 = sts::MAX_TORQUE.register.address;
-    /// Unloading condition: which status bits release the torque (EEPROM).
-    pub const UNLOADING_CONDITION: u8 = sts::UNLOADING_CONDITION.register.address;
-    /// Position loop P gain (EEPROM).
+    /// `pub const NAME: u8` for each STS register `NAME`, its address.
+    macro_rules! addresses {
+        ($($konst:ident)*) => {$(
+            #[doc = concat!("Address of [`sts::", stringify!($konst), "`].")]
+            pub const $konst: u8 = sts::$konst.register.address;
+        )*};
+    }
+
+    addresses! {
+        FIRMWARE_MAJOR FIRMWARE_MINOR MODEL_NUMBER ID BAUD_RATE RETURN_DELAY STATUS_LEVEL
+        MIN_ANGLE_LIMIT MAX_ANGLE_LIMIT MAX_TEMPERATURE MAX_VOLTAGE MIN_VOLTAGE MAX_TORQUE
+        UNLOADING_CONDITION CW_DEAD_ZONE CCW_DEAD_ZONE OFFSET MODE PROTECTION_TIME
+        TORQUE_ENABLE ACCELERATION GOAL_POSITION GOAL_TIME GOAL_SPEED TORQUE_LIMIT LOCK
+        PRESENT_POSITION PRESENT_SPEED PRESENT_LOAD PRESENT_VOLTAGE PRESENT_TEMPERATURE
+        ASYNC_FLAG STATUS MOVING PRESENT_CURRENT
+    }
+
+    /// Address of [`sts::P_COEFFICIENT`], the position loop's P gain.
     pub const P_GAIN: u8 = sts::P_COEFFICIENT.register.address;
-    /// Clockwise dead zone, ticks (EEPROM).
-    pub const CW_DEAD_ZONE: u8 = sts::CW_DEAD_ZONE.register.address;
-    /// Counter-clockwise dead zone, ticks (EEPROM).
-    pub const CCW_DEAD_ZONE: u8 = sts::CCW_DEAD_ZONE.register.address;
-    /// Position offset (homing), 2 bytes, sign bit 11.
-    pub const OFFSET: u8 = sts::OFFSET.register.address;
-    /// Operating mode: 0 position, 1 constant speed, 2 PWM, 3 step.
-    pub const MODE: u8 = sts::MODE.register.address;
-    /// Protection time, 10 ms units (STS, EEPROM).
-    pub const PROTECTION_TIME: u8 = sts::PROTECTION_TIME.register.address;
-    /// Torque enable.
-    pub const TORQUE_ENABLE: u8 = sts::TORQUE_ENABLE.register.address;
-    /// Acceleration, in 100 steps/s^2.
-    pub const ACCELERATION: u8 = sts::ACCELERATION.register.address;
-    /// Goal position, 2 bytes, sign bit 15.
-    pub const GOAL_POSITION: u8 = sts::GOAL_POSITION.register.address;
-    /// Goal time, 2 bytes, ms.
-    pub const GOAL_TIME: u8 = sts::GOAL_TIME.register.address;
-    /// Goal speed, 2 bytes, steps/s, sign bit 15.
-    pub const GOAL_SPEED: u8 = sts::GOAL_SPEED.register.address;
-    /// Torque limit, 2 bytes.
-    pub const TORQUE_LIMIT: u8 = sts::TORQUE_LIMIT.register.address;
-    /// EEPROM lock of the STS/SMS series.
-    pub const LOCK: u8 = sts::LOCK.register.address;
-    /// EEPROM lock of the SCS series.
+    /// Address of [`scs::LOCK`], the EEPROM lock of the SCS series.
     pub const SCS_LOCK: u8 = scs::LOCK.register.address;
-    /// Present position, 2 bytes, sign bit 15.
-    pub const PRESENT_POSITION: u8 = sts::PRESENT_POSITION.register.address;
-    /// Present speed, 2 bytes, sign bit 15.
-    pub const PRESENT_SPEED: u8 = sts::PRESENT_SPEED.register.address;
-    /// Present load, 2 bytes, sign bit 10.
-    pub const PRESENT_LOAD: u8 = sts::PRESENT_LOAD.register.address;
-    /// Present voltage, 0.1 V.
-    pub const PRESENT_VOLTAGE: u8 = sts::PRESENT_VOLTAGE.register.address;
-    /// Present temperature, degrees C.
-    pub const PRESENT_TEMPERATURE: u8 = sts::PRESENT_TEMPERATURE.register.address;
-    /// Set while a REG WRITE waits for ACTION.
-    pub const ASYNC_FLAG: u8 = sts::ASYNC_FLAG.register.address;
-    /// Servo status: the status byte's bits.
-    pub const STATUS: u8 = sts::STATUS.register.address;
-    /// 1 while moving.
-    pub const MOVING: u8 = sts::MOVING.register.address;
-    /// Present current, 2 bytes, sign bit 15.
-    pub const PRESENT_CURRENT: u8 = sts::PRESENT_CURRENT.register.address;
 }
 
 /// Names used by other tools (LeRobot, Feetech's SDKs) for servobus's

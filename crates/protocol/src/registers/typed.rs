@@ -32,37 +32,26 @@ pub trait RegisterValue:
     fn from_i32(value: i32) -> Self;
 }
 
-impl RegisterValue for u8 {
-    const SIZE: u8 = 1;
-    const SIGNED: bool = false;
-    fn to_i32(self) -> i32 {
-        i32::from(self)
-    }
-    fn from_i32(value: i32) -> Self {
-        value as u8
-    }
+/// Implements [`RegisterValue`] for an integer type of `$size` bytes.
+macro_rules! register_value {
+    ($($ty:ty: $size:literal, $signed:literal;)*) => {$(
+        impl RegisterValue for $ty {
+            const SIZE: u8 = $size;
+            const SIGNED: bool = $signed;
+            fn to_i32(self) -> i32 {
+                i32::from(self)
+            }
+            fn from_i32(value: i32) -> Self {
+                value as $ty
+            }
+        }
+    )*};
 }
 
-impl RegisterValue for u16 {
-    const SIZE: u8 = 2;
-    const SIGNED: bool = false;
-    fn to_i32(self) -> i32 {
-        i32::from(self)
-    }
-    fn from_i32(value: i32) -> Self {
-        value as u16
-    }
-}
-
-impl RegisterValue for i16 {
-    const SIZE: u8 = 2;
-    const SIGNED: bool = true;
-    fn to_i32(self) -> i32 {
-        i32::from(self)
-    }
-    fn from_i32(value: i32) -> Self {
-        value as i16
-    }
+register_value! {
+    u8: 1, false;
+    u16: 2, false;
+    i16: 2, true;
 }
 
 /// A register whose value is a `T`: one of the constants of

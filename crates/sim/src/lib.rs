@@ -108,6 +108,3 @@ pub use faults::{FaultSpecError, Faults};
 pub use model::{Area, Endian, SimModel};
 pub use pty::{PtyError, PtyServer};
 pub use servo::{addr, SimServo};
-/// The baud rate of a baud-rate register index: the protocol crate's table
-/// (kept under this name for the code that builds simulated robots).
-pub use servobus_protocol::registers::baud_rate as baud_of_index;

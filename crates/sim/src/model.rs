@@ -166,6 +166,22 @@ impl SimModel {
     }
 }
 
+/// The sign bit of a sign-magnitude STS register (SCS servos share the
+/// bits of present speed and load; their goal speed never reaches bit 15).
+const fn sign_bit_of(reg: &Register) -> u8 {
+    match reg.sign_bit {
+        Some(bit) => bit,
+        None => panic!("an unsigned register has no sign bit"),
+    }
+}
+
+/// Sign bit of present speed and goal speed.
+pub(crate) const SPEED_BIT: u8 = sign_bit_of(sts::PRESENT_SPEED.register());
+/// Sign bit of present load.
+pub(crate) const LOAD_BIT: u8 = sign_bit_of(sts::PRESENT_LOAD.register());
+/// Sign bit of present current.
+pub(crate) const CURRENT_BIT: u8 = sign_bit_of(sts::PRESENT_CURRENT.register());
+
 /// The raw 16-bit content holding `value` in sign-magnitude form with the
 /// sign at `sign_bit`; magnitudes beyond the field saturate
 /// ([`registers::to_sign_magnitude`] for the simulator's 16-bit registers).

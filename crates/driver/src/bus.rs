@@ -290,14 +290,24 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, alt, data.len());
-        self.transact(expect)
+        self.send_write(id, alt, data.len(), |tx| {
+            encode::write(tx, id, address, data)
+        })
     }
 
-    fn write_expect(&self, id: u8, alt: u8, len: usize) -> Expect {
-        self.expect(id, alt, 0, Transaction::Write { len })
+    /// Sends the WRITE-like request `encode` writes (answered as a WRITE of
+    /// `len` data bytes, by `id` or `alt`).
+    fn send_write(
+        &mut self,
+        id: u8,
+        alt: u8,
+        len: usize,
+        encode: impl FnOnce(&mut [u8]) -> Result<usize, servobus_protocol::EncodeError>,
+    ) -> Result<Option<StatusFlags>, BusError> {
+        self.io.begin();
+        self.io.tx_len = encode(&mut self.io.tx)?;
+        let expect = self.expect(id, alt, 0, Transaction::Write { len });
+        self.transact(expect)
     }
 
     /// REG WRITE `data` at `address` of servo `id`: held by the servo until
@@ -311,10 +321,9 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::reg_write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, id, data.len());
-        self.transact(expect)
+        self.send_write(id, id, data.len(), |tx| {
+            encode::reg_write(tx, id, address, data)
+        })
     }
 
     /// ACTION: servos holding REG WRITE data apply it. Usually broadcast

@@ -69,24 +69,3 @@ pub const FACTORY_RETURN_DELAY: Duration =
 pub const fn return_delay_from_register(value: u8) -> Duration {
     Duration::from_micros(2 * value as u64)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn next_baud() {
-        assert_eq!(next_baud_above(38_400), Some(57_600));
-        assert_eq!(next_baud_above(100_000), Some(115_200));
-        assert_eq!(next_baud_above(500_000), Some(1_000_000));
-        assert_eq!(next_baud_above(1_000_000), None);
-        assert_eq!(next_baud_above(0), Some(38_400));
-    }
-
-    #[test]
-    fn return_delay_register() {
-        assert_eq!(FACTORY_RETURN_DELAY, Duration::from_micros(500));
-        assert_eq!(return_delay_from_register(0), Duration::ZERO);
-        assert_eq!(return_delay_from_register(255), Duration::from_micros(510));
-    }
-}

@@ -145,14 +145,7 @@ fn decode(bytes: &[u8], from: Sender, map: &RegisterMap) -> Vec<Item> {
     // A checksum failure is followed by the discard of the bad frame's bytes;
     // both are reported as one problem.
     let mut bad_checksum: Option<(u8, u8, u8)> = None;
-    loop {
-        let ev = match dec.decode(&mut input) {
-            Some(ev) => ev,
-            None => match dec.finish() {
-                Some(ev) => ev,
-                None => break,
-            },
-        };
+    while let Some(ev) = dec.decode_to_end(&mut input) {
         match ev {
             Event::Packet { packet, start } => items.push(packet_item(&packet, start, from, map)),
             Event::Echo { .. } => {}

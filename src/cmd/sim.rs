@@ -158,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Ok(result) => {
                 result.with_context(|| format!("{}: cannot write the truth", path.display()))?
             }
-            Err(_) => bail!("{}: the truth writer failed", path.display()),
+            Err(_) => anyhow::bail!("{}: the truth writer failed", path.display()),
         }
     }
     served?;

@@ -104,6 +104,8 @@ pub(crate) enum Inbox {
         forwards: Vec<Sender<Stamped>>,
         /// Whether a user sender may still exist.
         open: bool,
+        /// The latest stamp given: the end of the senders comes after it.
+        latest: u64,
     },
     /// The other lanes: what the first forwards.
     Follower(Receiver<Stamped>),
@@ -131,21 +133,26 @@ impl Mailbox {
                 user,
                 forwards,
                 open,
+                latest,
             } => loop {
+                let soonest = k + COMMAND_DELAY_CYCLES;
                 let op = match user.try_recv() {
                     Ok(order) => Stamped {
-                        cycle: order.at.unwrap_or(0).max(k + COMMAND_DELAY_CYCLES),
+                        cycle: order.at.unwrap_or(0).max(soonest),
                         op: Op::Command(order.command),
                     },
+                    // Only once every command sent has taken effect can the
+                    // run know it will never play.
                     Err(TryRecvError::Disconnected) if *open => {
                         *open = false;
                         Stamped {
-                            cycle: k + COMMAND_DELAY_CYCLES,
+                            cycle: soonest.max(*latest),
                             op: Op::Abandon,
                         }
                     }
                     Err(_) => break,
                 };
+                *latest = (*latest).max(op.cycle);
                 for f in forwards.iter() {
                     // A follower that stopped reading has ended its run.
                     let _ = f.try_send(op.clone());

@@ -155,6 +155,7 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         user: user_rx,
         forwards,
         open: true,
+        latest: 0,
     };
     let lanes = loops
         .into_iter()

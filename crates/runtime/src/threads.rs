@@ -206,5 +206,5 @@ fn drive<T: Transport, C: Clock>(
             break f;
         }
     };
-    (lane.bus.outcome(f64::INFINITY), finish, warnings)
+    (lane.bus.outcome(), finish, warnings)
 }

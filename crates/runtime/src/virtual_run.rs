@@ -200,7 +200,6 @@ impl<T: Transport> VirtualRun<T> {
 
     /// The report so far.
     pub fn report(&self) -> Report {
-        let t = self.next as f64 * self.period.as_secs_f64();
         let ending = Ending {
             rate_hz: self.rate_hz,
             units: self.units,
@@ -208,10 +207,7 @@ impl<T: Transport> VirtualRun<T> {
             fault: self.fault.clone(),
             warnings: Vec::new(),
         };
-        assemble(
-            self.lanes.iter().map(|l| l.bus.outcome(t)).collect(),
-            ending,
-        )
+        assemble(self.lanes.iter().map(|l| l.bus.outcome()).collect(), ending)
     }
 
     /// Steps to the end of the run, publishes

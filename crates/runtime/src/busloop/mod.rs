@@ -308,9 +308,9 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
 
 /// What the report needs of a bus once its run is over.
 impl<T: Transport, C: Clock> BusLoop<T, C> {
-    /// The bus's share of the report; `t` is the path time whose lead is
-    /// reported.
-    pub fn outcome(&self, t: f64) -> Outcome {
+    /// The bus's share of the report, with the lead of its last cycle.
+    pub fn outcome(&self) -> Outcome {
+        let t = self.timing.index as f64 * self.period.as_secs_f64();
         Outcome {
             index: self.index,
             bus: self.bus_report(),

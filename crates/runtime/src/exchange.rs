@@ -10,7 +10,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
-use crossbeam_channel::{Receiver, SendError, Sender, TryRecvError, TrySendError};
+use crossbeam_channel::{bounded, Receiver, SendError, Sender, TryRecvError, TrySendError};
 
 use crate::command::Command;
 use crate::fault::Fault;
@@ -109,6 +109,30 @@ pub(crate) enum Inbox {
     },
     /// The other lanes: what the first forwards.
     Follower(Receiver<Stamped>),
+}
+
+/// The user's sender of commands, and the inboxes of `lanes` lanes (the
+/// first one the leader), holding `capacity` commands each.
+pub(crate) fn inboxes(lanes: usize, capacity: usize) -> (CommandSender, Vec<Inbox>) {
+    let capacity = capacity.max(1);
+    let (user_tx, user) = bounded(capacity);
+    let mut forwards = Vec::new();
+    let mut followers = Vec::new();
+    for _ in 1..lanes {
+        // Twice the user's channel: a follower reading every cycle always has
+        // room for what the leader forwards (sent without waiting).
+        let (tx, rx) = bounded(capacity * 2);
+        forwards.push(tx);
+        followers.push(Inbox::Follower(rx));
+    }
+    let leader = Inbox::Leader {
+        user,
+        forwards,
+        open: true,
+        latest: 0,
+    };
+    let all = std::iter::once(leader).chain(followers).collect();
+    (CommandSender::new(user_tx), all)
 }
 
 /// One lane's operations, received and waiting for their cycle.

@@ -17,7 +17,7 @@ use servobus_trajectory::Trajectory;
 use crate::busloop::{BusLoop, LoopConfig, Outcome};
 use crate::config::{joint_limits, BusConfig, Robot, Units};
 use crate::error::RunError;
-use crate::exchange::{CommandSender, FaultBoard, Inbox, Mailbox};
+use crate::exchange::{inboxes, CommandSender, FaultBoard, Mailbox};
 use crate::fault::Fault;
 use crate::lane::Lane;
 use crate::options::RunOptions;
@@ -107,26 +107,12 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
     let units = o.units.unwrap_or(robot.units);
     let (telemetry_tx, telemetry) = bounded(o.telemetry_capacity);
     let telemetry_tx = (o.telemetry_capacity > 0).then_some(telemetry_tx);
-    let mut loops = Vec::with_capacity(buses.len());
-    let mut first_joint = 0;
-    for (index, (bus, config)) in buses.into_iter().zip(&robot.buses).enumerate() {
-        let c = LoopConfig {
-            index,
-            bus: config,
-            first_joint,
-            units: robot.units,
-            report_units: units,
-            rate_hz,
-            period,
-            policy: o.faults,
-            lead: o.lead,
-            telemetry: telemetry_tx.clone(),
-        };
-        let mut l = BusLoop::new(c, bus)?;
-        first_joint += config.joints.len();
-        l.startup(o.enable_torque)?;
-        loops.push(l);
-    }
+    let figures = Figures {
+        rate_hz,
+        period,
+        units,
+    };
+    let loops = start_buses(robot, buses, o, figures, &telemetry_tx)?;
     let mut present = vec![0.0; robot.joint_count()];
     for l in &loops {
         l.present(&mut present);
@@ -142,24 +128,11 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();
     let start = last.unwrap_or_default() + (period * 5).max(START_GAP);
-    let (user_tx, user_rx) = bounded(o.command_capacity.max(1));
+    let (commands, inboxes) = inboxes(loops.len(), o.command_capacity);
     let board = Arc::new(FaultBoard::default());
-    let mut forwards = Vec::new();
-    let mut inboxes = Vec::new();
-    for _ in 1..loops.len() {
-        let (tx, rx) = bounded(o.command_capacity.max(1) * 2);
-        forwards.push(tx);
-        inboxes.push(Inbox::Follower(rx));
-    }
-    let leader = Inbox::Leader {
-        user: user_rx,
-        forwards,
-        open: true,
-        latest: 0,
-    };
     let lanes = loops
         .into_iter()
-        .zip(std::iter::once(leader).chain(inboxes))
+        .zip(inboxes)
         .map(|(mut l, inbox)| {
             l.start = start;
             let mail = Mailbox::new(inbox);
@@ -175,10 +148,50 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         rate_hz,
         units,
         board,
-        commands: CommandSender::new(user_tx),
+        commands,
         telemetry,
         telemetry_tx,
     })
+}
+
+/// The run's figures every bus loop is built with.
+#[derive(Clone, Copy)]
+struct Figures {
+    rate_hz: f64,
+    period: Duration,
+    /// The report's units.
+    units: Units,
+}
+
+/// Builds every bus's loop and runs its start-up.
+fn start_buses<T: Transport, C: Clock>(
+    robot: &Robot,
+    buses: Vec<Bus<T, C>>,
+    o: &RunOptions,
+    f: Figures,
+    telemetry: &Option<Sender<Telemetry>>,
+) -> Result<Vec<BusLoop<T, C>>, RunError> {
+    let mut loops = Vec::with_capacity(buses.len());
+    let mut first_joint = 0;
+    for (index, (bus, config)) in buses.into_iter().zip(&robot.buses).enumerate() {
+        let c = LoopConfig {
+            index,
+            bus: config,
+            first_joint,
+            units: robot.units,
+            report_units: f.units,
+            rate_hz: f.rate_hz,
+            period: f.period,
+            policy: o.faults,
+            lead: o.lead,
+            telemetry: telemetry.clone(),
+        };
+        let mut l = BusLoop::new(c, bus)?;
+        first_joint += config.joints.len();
+        l.startup(o.enable_torque)?;
+        loops.push(l);
+    }
+    Ok(loops)
 }
 
 /// What a finished run adds to its lanes' outcomes.

@@ -2,17 +2,18 @@
 //! the same lane cycle as [`VirtualRun`] behind a [`Pacer`], in step from a
 //! shared epoch; or a whole [`VirtualRun`] on a thread of its own.
 
+use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use crossbeam_channel::Receiver;
+use crossbeam_channel::{Receiver, Sender};
 use servobus_driver::{Bus, Clock, ManualClock, Transport};
 use servobus_trajectory::Trajectory;
 
 use crate::busloop::Outcome;
 use crate::command::Command;
-use crate::config::Robot;
+use crate::config::{Robot, Units};
 use crate::error::RunError;
-use crate::exchange::CommandSender;
+use crate::exchange::{CommandSender, FaultBoard};
 use crate::lane::{overall, Lane};
 use crate::options::RunOptions;
 use crate::pacer::Pacer;
@@ -156,41 +157,58 @@ where
             .map_err(|e| RunError::Thread(e.to_string()))?;
         threads.push(handle);
     }
-    let board = p.board;
-    let (rate_hz, units, telemetry_tx) = (p.rate_hz, p.units, p.telemetry_tx);
+    let end = RunEnd {
+        board: p.board,
+        rate_hz: p.rate_hz,
+        units: p.units,
+        telemetry: p.telemetry_tx,
+    };
     let supervisor = std::thread::Builder::new()
         .name("servobus-run".into())
-        .spawn(move || {
-            let ends = threads
-                .into_iter()
-                .map(|t| t.join())
-                .collect::<Result<Vec<LaneEnd>, _>>()
-                .map_err(|_| RunError::Thread("a bus thread panicked".into()))?;
-            let finish = overall(ends.iter().map(|e| e.1));
-            if let Some(tx) = telemetry_tx {
-                let _ = tx.try_send(Telemetry::Finished(finish));
-            }
-            let mut outcomes = Vec::with_capacity(ends.len());
-            let mut warnings = Vec::new();
-            for (o, _, w) in ends {
-                outcomes.push(o);
-                warnings.extend(w);
-            }
-            let ending = Ending {
-                rate_hz,
-                units,
-                finish,
-                fault: board.first(),
-                warnings,
-            };
-            Ok(assemble(outcomes, ending))
-        })
+        .spawn(move || end.supervise(threads))
         .map_err(|e| RunError::Thread(e.to_string()))?;
     Ok(Runner {
         commands: p.commands,
         telemetry: p.telemetry,
         handle: supervisor,
     })
+}
+
+/// What the supervising thread needs to end a threaded run.
+struct RunEnd {
+    board: Arc<FaultBoard>,
+    rate_hz: f64,
+    units: Units,
+    telemetry: Option<Sender<Telemetry>>,
+}
+
+impl RunEnd {
+    /// Waits for every bus thread, says why the run ended, and reports.
+    fn supervise(self, threads: Vec<JoinHandle<LaneEnd>>) -> Result<Report, RunError> {
+        let ends = threads
+            .into_iter()
+            .map(|t| t.join())
+            .collect::<Result<Vec<LaneEnd>, _>>()
+            .map_err(|_| RunError::Thread("a bus thread panicked".into()))?;
+        let finish = overall(ends.iter().map(|e| e.1));
+        if let Some(tx) = &self.telemetry {
+            let _ = tx.try_send(Telemetry::Finished(finish));
+        }
+        let mut outcomes = Vec::with_capacity(ends.len());
+        let mut warnings = Vec::new();
+        for (o, _, w) in ends {
+            outcomes.push(o);
+            warnings.extend(w);
+        }
+        let ending = Ending {
+            rate_hz: self.rate_hz,
+            units: self.units,
+            finish,
+            fault: self.board.first(),
+            warnings,
+        };
+        Ok(assemble(outcomes, ending))
+    }
 }
 
 /// A bus thread: its real-time set-up, then the lane's cycles as the pacer

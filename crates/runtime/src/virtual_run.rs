@@ -49,23 +49,6 @@ use crate::telemetry::{Finish, Telemetry};
 /// println!("{} cycles at {} Hz", report.cycles, report.achieved_rate_hz);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-/// use std::path::Path;
-/// use servobus_driver::{Bus, ManualClock};
-/// use servobus_runtime::{bus_settings, config, RunOptions, VirtualRun};
-/// use servobus_sim::{SimBus, SimServo};
-///
-/// let (motion, robot) = config::load_motion(Path::new("configs/motions/arm-wave.yaml"), None)?;
-/// let path = config::plan_motion(&motion, &robot)?;
-/// let buses = robot.buses.iter().map(|b| {
-///     let clock = ManualClock::new();
-///     let sim = SimBus::new(clock.clone(), b.baud)
-///         .with_servos(b.joints.iter().map(|j| SimServo::sts3215(j.id)));
-///     Bus::new(sim, clock, bus_settings(b))
-/// }).collect();
-/// let report = VirtualRun::new(&robot, path, buses, RunOptions::default())?.run();
-/// println!("{} cycles at {} Hz", report.cycles, report.achieved_rate_hz);
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
 pub struct VirtualRun<T: Transport> {
     lanes: Vec<Lane<T, ManualClock>>,
     pacers: Vec<Pacer<ManualClock>>,

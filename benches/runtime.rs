@@ -7,8 +7,9 @@ use std::path::Path;
 use criterion::Criterion;
 use servobus_driver::{Bus, ManualClock};
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
-use servobus_runtime::{bus_settings, Finish, RunOptions, VirtualRun};
-use servobus_sim::{SimBus, SimModel, SimServo};
+use servobus_runtime::sim::SimRobot;
+use servobus_runtime::{Finish, RunOptions, VirtualRun};
+use servobus_sim::SimBus;
 use servobus_trajectory::Trajectory;
 
 fn motion(motion: &str, robot: Option<&str>) -> (Trajectory, Robot) {
@@ -24,23 +25,12 @@ fn motion(motion: &str, robot: Option<&str>) -> (Trajectory, Robot) {
     }
 }
 
-/// One simulated bus per robot bus, servos answering after the robot
-/// file's return delay.
+/// The robot's simulator (servos at rest), one bus per robot bus.
 fn buses(robot: &Robot) -> Vec<Bus<SimBus, ManualClock>> {
-    robot
-        .buses
-        .iter()
-        .map(|b| {
-            let clock = ManualClock::new();
-            let sim = SimBus::new(clock.clone(), b.baud).with_servos(b.joints.iter().map(|j| {
-                let Some(model) = SimModel::by_name(j.model.name) else {
-                    panic!("the simulator does not know the {}", j.model.name);
-                };
-                SimServo::new(model, j.id).with_return_delay(b.return_delay)
-            }));
-            Bus::new(sim, clock, bus_settings(b))
-        })
-        .collect()
+    match SimRobot::builder(robot).build() {
+        Ok(sim) => sim.driver_buses(),
+        Err(e) => panic!("bench robot does not simulate: {e}"),
+    }
 }
 
 /// A whole run; it must complete, or the figure would time a fault.

@@ -10,12 +10,15 @@
 //!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
 //!   Both run one cycle function per bus; they differ only in the clock and
 //!   the pacing, so a test in virtual time runs the code of a real run.
+//! - [`sim`] builds a robot file's servos on the simulator (the glue the
+//!   command line, the examples and the tests share).
 #![warn(missing_docs)]
 
 pub mod config;
 
 pub mod pacer;
 pub mod rt;
+pub mod sim;
 pub mod stats;
 
 // The scheduler: runs a robot + trajectory on its buses, tracks, reacts to

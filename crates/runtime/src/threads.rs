@@ -122,8 +122,10 @@ type LaneEnd = (Outcome, Finish, Vec<String>);
 /// cycle `k` of every bus is due at `start + k * period`.
 ///
 /// The buses' clocks must share their time base (clones of one
-/// [`SystemClock`](servobus_driver::SystemClock), or one
-/// [`ManualClock`] each for a run in virtual time). Start-up (reading
+/// [`SystemClock`](servobus_driver::SystemClock)). Tests may give each bus
+/// its own [`ManualClock`]: each thread then runs through virtual time as
+/// fast as it can, commands still take effect at their stamped cycle, and
+/// a fault on one bus reaches the others at their next cycle. Start-up (reading
 /// positions, enabling torque, planning the approach) happens before this
 /// returns; the first cycle is due 50 ms (at least 5 periods) later. Each
 /// thread keeps its own copy of the robot-wide path, and commands take

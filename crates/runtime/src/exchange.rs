@@ -246,3 +246,68 @@ impl FaultBoard {
         self.first.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(mail: &mut Mailbox, k: u64) -> Vec<&'static str> {
+        std::iter::from_fn(|| mail.next_due(k))
+            .map(|op| match op {
+                Op::Command(Command::Play) => "play",
+                Op::Command(Command::Stop) => "stop",
+                Op::Command(_) => "other",
+                Op::Abandon => "abandon",
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_lane_gets_each_command_at_its_stamp_and_the_end_after_the_last() {
+        let (tx, inboxes) = inboxes(2, 4);
+        let mut lanes: Vec<Mailbox> = inboxes.into_iter().map(Mailbox::new).collect();
+        tx.send_at(50, Command::Stop).expect("room");
+        tx.send_at(10, Command::Play).expect("room");
+        tx.send(Command::Pause).expect("room");
+        drop(tx);
+        // The leader receives at cycle 5: Pause is due at 5 + 2, and the
+        // end of the senders only after the Stop at 50.
+        lanes[0].collect(5);
+        lanes[1].collect(6);
+        for mail in &mut lanes {
+            assert_eq!(names(mail, 6), Vec::<&str>::new());
+            assert_eq!(names(mail, 7), ["other"]);
+            assert_eq!(names(mail, 49), ["play"]);
+            assert_eq!(names(mail, 50), ["stop", "abandon"]);
+        }
+    }
+
+    #[test]
+    fn the_first_fault_wins_and_reaches_the_others_from_the_next_cycle() {
+        let board = FaultBoard::default();
+        let fault = |cycle, reaction| Fault {
+            kind: crate::FaultKind::PortGone {
+                message: "gone".into(),
+            },
+            bus: "b".into(),
+            joint: None,
+            servo_id: None,
+            time_s: 0.0,
+            cycle,
+            reaction,
+            units: "deg",
+        };
+        assert_eq!(board.before(100), None);
+        assert_eq!(
+            board.raise(&fault(7, Reaction::Hold)),
+            (true, Reaction::Hold)
+        );
+        assert_eq!(
+            board.raise(&fault(7, Reaction::Stop)),
+            (false, Reaction::Hold)
+        );
+        assert_eq!(board.before(7), None);
+        assert_eq!(board.before(8), Some(Reaction::Hold));
+        assert_eq!(board.first().map(|f| f.reaction), Some(Reaction::Hold));
+    }
+}

@@ -21,6 +21,7 @@ mod list;
 mod plan;
 mod play;
 mod sim;
+mod teach;
 
 const EXIT_STATUS: &str = "\
 Exit status:
@@ -72,6 +73,8 @@ enum Command {
     Completions(docs::CompletionsArgs),
     /// Print the manual page (roff): `servobus man | man -l -`.
     Man(docs::ManArgs),
+    /// Pose the robot by hand (torque off) and write a motion file.
+    Teach(teach::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -117,6 +120,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Init(args) => init::run(args),
         Command::Completions(args) => docs::completions(args),
         Command::Man(args) => docs::man(args),
+        Command::Teach(args) => teach::run(args),
     }
 }
 

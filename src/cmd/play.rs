@@ -160,7 +160,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
                 // A pty on a busy machine wakes late now and then: allow
                 // for it in the reply deadlines.
-                let settings = bus_settings(bus).with_latency(bus.latency.max(PTY_LATENCY));
+                let settings = bus_settings(bus)
+                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
                 buses.push(Bus::new(transport, clock, settings));
             }
             spawn(&robot, trajectory, buses, options)?
@@ -463,9 +464,6 @@ impl Shown {
         servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
     }
 }
-
-/// Reply-deadline allowance for the simulator's pseudo-terminals.
-const PTY_LATENCY: Duration = Duration::from_millis(3);
 
 /// How long the simulator on a pty may stay silent before a servo counts as
 /// missing. Its replies come from a thread of this process: when the host

@@ -29,6 +29,17 @@ fn check_bus_figures(b: &serde_json::Value) {
     for key in ["timeouts", "retries", "missed_replies"] {
         assert!(num(b, key) >= 0.0, "{key}: {b}");
     }
+    // Overruns are cycles, so never more than ran.
+    assert!(num(b, "overruns") <= cycles, "{b}");
+    // The pty's own floor, measured in the same run on the same bytes: it
+    // cannot beat the wire either, and the ratio is the two mean rates'.
+    let floor = num(b, "floor_rate_hz");
+    assert!(floor > 0.0, "no floor measured on the simulator: {b}");
+    assert!(floor <= wire * 1.01, "floor faster than the wire: {b}");
+    assert!(
+        (num(b, "floor_ratio") - achieved / floor).abs() < 1e-9,
+        "{b}"
+    );
 }
 
 #[test]
@@ -38,7 +49,7 @@ fn bench_reports_the_arm_against_its_wire_limit() {
     // 6 servos at 1 Mbps: 26 + 14 + 6 x 8 = 88 bytes, 880 us a cycle.
     assert!((num(&v, "wire_limited_rate_hz") - 1_000_000.0 / 880.0).abs() < 0.01);
     check_bus_figures(&v);
-    assert!(num(&v, "overruns") >= 0.0);
+    assert_eq!(num(&v, "overruns"), num(&v["buses"][0], "overruns"));
     let buses = v["buses"].as_array().expect("a list of buses");
     assert_eq!(buses.len(), 1);
     assert_eq!(buses[0]["busy_poll"], false);

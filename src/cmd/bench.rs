@@ -10,7 +10,13 @@
 //!
 //! Without `--port` every bus is served by the simulator on its own
 //! pseudo-terminal, paced at the wire rate, and reached through the same
-//! serial-port code as real servos.
+//! serial-port code as real servos. There, once the bench is done, the
+//! pseudo-terminal's own request/reply floor for the same bytes is measured
+//! too (`floor_rate_hz`, [`servobus_sim::pty_floor`]), and `floor_ratio` is
+//! achieved / floor: both are mean rates, cycles per second.
+//!
+//! `overruns` counts the cycles whose period exceeded the planned full cycle
+//! time (`budget`'s `cycle_time_us`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,6 +31,8 @@ use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot_any_rate, BusConfig, RateRemedy, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
+
+mod floor;
 
 /// Arguments of `servobus bench`.
 #[derive(Debug, clap::Args)]
@@ -95,6 +103,13 @@ struct BusBench {
     wire_limited_rate_hz: f64,
     period_us: Quantiles,
     period_error_us: Quantiles,
+    /// Cycles whose period exceeded the planned cycle time.
+    overruns: u64,
+    /// The pty's own request/reply floor for this cycle, mean rate (on the
+    /// simulator only; 0 on a serial port).
+    floor_rate_hz: f64,
+    /// Achieved over floor rate (0 without a floor).
+    floor_ratio: f64,
     timeouts: u64,
     retries: u64,
     missed_replies: u64,
@@ -114,7 +129,12 @@ struct BenchReport {
     wire_limited_rate_hz: f64,
     /// Achieved over wire-limited rate.
     efficiency: f64,
+    /// The slowest bus's pty floor, mean rate, Hz (0 on serial ports).
+    floor_rate_hz: f64,
+    /// The slowest bus's achieved over floor rate (0 without a floor).
+    floor_ratio: f64,
     period_error_us: Quantiles,
+    /// Cycles, over every bus, whose period exceeded the planned cycle time.
     overruns: u64,
     timeouts: u64,
     retries: u64,
@@ -210,6 +230,7 @@ fn bench_bus(
             (path, Some(handle), "simulator on a pty".to_string())
         }
     };
+    let server_ran = server.is_some();
     let result = measure(bus, &ids, series, &path, clock, duration, &plan);
     stop.store(true, Ordering::SeqCst);
     if let Some(handle) = server {
@@ -220,6 +241,12 @@ fn bench_bus(
     }
     let mut bench = result?;
     bench.backend = backend;
+    if server_ran {
+        // Measured after the bench, not beside it: the two would share the
+        // machine's cores and slow each other down.
+        bench.floor_rate_hz = floor::floor_rate_hz(bus, duration)?;
+        bench.floor_ratio = bench.achieved_rate_hz / bench.floor_rate_hz.max(f64::MIN_POSITIVE);
+    }
     Ok(bench)
 }
 
@@ -319,6 +346,9 @@ fn measure(
     for p in &period_list {
         errors.record(if *p > mean { *p - mean } else { mean - *p });
     }
+    // An overrun: a cycle that took longer than the plan says a full cycle
+    // takes (the period it would have at the maximum rate).
+    let overruns = overruns(&period_list, plan.full_cycle().cycle_time);
 
     let counters = *servo_bus.counters();
     let servo_rtt = bus
@@ -348,12 +378,20 @@ fn measure(
         wire_limited_rate_hz: plan.wire_limited_rate_hz(),
         period_us: Quantiles::of(&periods),
         period_error_us: Quantiles::of(&errors),
+        overruns,
+        floor_rate_hz: 0.0,
+        floor_ratio: 0.0,
         timeouts: counters.timeouts,
         retries: counters.retries,
         missed_replies: missed,
         checksum_errors: counters.checksum_errors,
         servo_rtt,
     })
+}
+
+/// Cycles whose period exceeded `planned`, the planned full cycle time.
+fn overruns(periods: &[Duration], planned: Duration) -> u64 {
+    periods.iter().filter(|p| **p > planned).count() as u64
 }
 
 fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
@@ -371,9 +409,10 @@ fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
         planned_rate_hz: pick(|b| b.planned_rate_hz),
         wire_limited_rate_hz: wire,
         efficiency: if wire > 0.0 { achieved / wire } else { 0.0 },
+        floor_rate_hz: pick(|b| b.floor_rate_hz),
+        floor_ratio: pick(|b| b.floor_ratio),
         period_error_us: slowest.map_or_else(Quantiles::default, |b| b.period_error_us),
-        // A free-running loop has no deadlines to miss.
-        overruns: 0,
+        overruns: buses.iter().map(|b| b.overruns).sum(),
         timeouts: buses.iter().map(|b| b.timeouts).sum(),
         retries: buses.iter().map(|b| b.retries).sum(),
         missed_replies: buses.iter().map(|b| b.missed_replies).sum(),
@@ -406,9 +445,21 @@ fn print_text(r: &BenchReport) {
             b.period_error_us.p99,
             b.period_error_us.max
         );
+        if b.floor_rate_hz > 0.0 {
+            println!(
+                "  the pty's own floor for this cycle: {:.1} Hz (mean); achieved / floor {:.3}",
+                b.floor_rate_hz, b.floor_ratio
+            );
+        }
         println!(
-            "  timeouts {}  retries {}  missed replies {}  checksum errors {}",
-            b.timeouts, b.retries, b.missed_replies, b.checksum_errors
+            "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  retries {}  \
+             missed replies {}  checksum errors {}",
+            b.overruns,
+            1e6 / b.planned_rate_hz.max(f64::MIN_POSITIVE),
+            b.timeouts,
+            b.retries,
+            b.missed_replies,
+            b.checksum_errors
         );
         let w = b
             .servo_rtt
@@ -421,5 +472,19 @@ fn print_text(r: &BenchReport) {
                 s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_overrun_is_a_period_longer_than_the_planned_cycle() {
+        let us = Duration::from_micros;
+        let periods = [us(900), us(1180), us(1181), us(5000)];
+        assert_eq!(overruns(&periods, us(1180)), 2);
+        assert_eq!(overruns(&periods, us(5000)), 0);
+        assert_eq!(overruns(&[], us(1)), 0);
     }
 }

@@ -322,7 +322,7 @@ impl Drop for PtyServer {
     }
 }
 
-fn read_fd(fd: &OwnedFd, buf: &mut [u8]) -> io::Result<usize> {
+pub(crate) fn read_fd(fd: &OwnedFd, buf: &mut [u8]) -> io::Result<usize> {
     // SAFETY: `buf` is valid for `buf.len()` writable bytes.
     let n = unsafe { libc::read(fd.as_raw_fd(), buf.as_mut_ptr().cast(), buf.len()) };
     if n < 0 {
@@ -332,7 +332,7 @@ fn read_fd(fd: &OwnedFd, buf: &mut [u8]) -> io::Result<usize> {
     }
 }
 
-fn write_fd(fd: &OwnedFd, buf: &[u8]) -> io::Result<usize> {
+pub(crate) fn write_fd(fd: &OwnedFd, buf: &[u8]) -> io::Result<usize> {
     // SAFETY: `buf` is valid for `buf.len()` readable bytes.
     let n = unsafe { libc::write(fd.as_raw_fd(), buf.as_ptr().cast(), buf.len()) };
     if n < 0 {
@@ -397,7 +397,7 @@ fn termios_baud(fd: &OwnedFd) -> Option<u32> {
 
 /// Opens a pseudo-terminal pair: master (non-blocking), slave (raw, at
 /// `baud`), and the slave's path.
-fn open_pty(baud: u32) -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
+pub(crate) fn open_pty(baud: u32) -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
     // SAFETY: posix_openpt has no memory preconditions.
     let m = check(unsafe { libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY) })?;
     // SAFETY: `m` is a fresh descriptor nobody else owns.

@@ -38,7 +38,8 @@ use crate::{Faults, SimServo};
 /// let mut reply = [0u8; 16];
 /// let got = bus.read(&mut reply, Duration::from_millis(1)).unwrap();
 /// assert_eq!(&reply[..got], &[0xFF, 0xFF, 0x01, 0x02, 0x00, 0xFC]);
-/// assert_eq!(clock.now(), Duration::from_micros(120));
+/// // 50 us of the servo's turnaround, then 6 bytes.
+/// assert_eq!(clock.now(), Duration::from_micros(170));
 /// ```
 #[derive(Debug, Clone)]
 pub struct SimBus {
@@ -93,10 +94,11 @@ impl SimBus {
     }
 
     /// The bus with a processing time `turnaround` added before every
-    /// servo's return delay (default 0).
+    /// servo's return delay, instead of its model's turnaround (the figure
+    /// the budget charges).
     #[must_use]
     pub fn with_turnaround(self, turnaround: Duration) -> SimBus {
-        self.engine().turnaround = turnaround;
+        self.engine().turnaround = Some(turnaround);
         self
     }
 

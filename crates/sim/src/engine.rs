@@ -60,8 +60,11 @@ pub(crate) struct Engine {
     inbuf: Vec<u8>,
     /// When the last byte of `inbuf` arrived.
     in_last: Duration,
-    /// Extra time a servo takes before its return delay starts.
-    pub turnaround: Duration,
+    /// Time a servo takes before its return delay starts: `None` (the
+    /// default) is each servo's model figure, the one `servobus budget`
+    /// charges ([`servobus_protocol::registers::REPLY_TURNAROUND`], a
+    /// guess); `Some` overrides it for every servo.
+    pub turnaround: Option<Duration>,
     /// The host adapter's latency: added to every byte's readiness.
     pub latency: Duration,
     pub stats: SimStats,
@@ -79,7 +82,7 @@ impl Engine {
             host_free: Duration::ZERO,
             inbuf: Vec::new(),
             in_last: Duration::ZERO,
-            turnaround: Duration::ZERO,
+            turnaround: None,
             latency: Duration::ZERO,
             stats: SimStats::default(),
             disconnected: false,
@@ -196,7 +199,10 @@ impl Engine {
             }
             let s = &mut self.servos[i];
             let id = s.id();
-            let delay = s.return_delay();
+            // The reply waits the firmware's turnaround and the return delay,
+            // as the budget's cycle cost charges them.
+            let turnaround = self.turnaround.unwrap_or(s.model().model.turnaround);
+            let delay = s.return_delay() + turnaround;
             if let Some(reply) = s.handle(&packet, t) {
                 replies.push((id, delay, reply));
             }
@@ -235,7 +241,7 @@ impl Engine {
             };
             let mut next = cursor;
             for (_, delay, reply) in replies[k..slot_end].iter_mut() {
-                let mut start = cursor + self.turnaround + *delay;
+                let mut start = cursor + *delay;
                 let mut bytes = std::mem::take(reply);
                 if !self.fault(&mut bytes, &mut start) {
                     continue;

@@ -11,6 +11,17 @@ use servobus_sim::{addr, Faults, SimBus, SimServo};
 
 const US: Duration = Duration::from_micros(1);
 
+/// The STS3215's turnaround before each reply, in us: the figure the budget
+/// charges (a guess, see `REPLY_TURNAROUND`).
+const T: u32 = 50;
+
+#[test]
+fn the_simulator_charges_the_budgets_turnaround() {
+    let model = servobus_protocol::registers::model_by_name("STS3215").unwrap();
+    assert_eq!(model.turnaround, T * US);
+    assert_eq!(servobus_timing::Link::DEFAULT_TURNAROUND, T * US);
+}
+
 #[test]
 fn a_request_costs_its_wire_time_and_the_reply_its_return_delay() {
     let clock = ManualClock::new();
@@ -19,11 +30,11 @@ fn a_request_costs_its_wire_time_and_the_reply_its_return_delay() {
     // READ is 8 bytes: 80 us on the wire.
     bus.write_all(&read(1, addr::PRESENT_POSITION, 2)).unwrap();
     assert_eq!(now(&bus), 80 * US);
-    // The 8-byte reply starts 100 us later and is read as one burst.
+    // The 8-byte reply starts a turnaround and 100 us later, read as one burst.
     let mut buf = [0u8; 64];
     let n = bus.read(&mut buf, Duration::from_secs(1)).unwrap();
     assert_eq!(n, 8);
-    assert_eq!(now(&bus), (80 + 100 + 80) * US);
+    assert_eq!(now(&bus), (80 + T + 100 + 80) * US);
     // Nothing else comes: the read waits to the deadline.
     let deadline = now(&bus) + 500 * US;
     assert!(matches!(
@@ -38,15 +49,15 @@ fn a_deadline_inside_a_reply_returns_what_arrived_by_then() {
     let mut bus = bus_with(&[1]);
     bus.write_all(&read(1, addr::PRESENT_POSITION, 2)).unwrap();
     let mut buf = [0u8; 64];
-    // The reply's bytes arrive at 90, 100, ... 160 us.
+    // The reply's bytes arrive at 90, 100, ... 160 us after the turnaround.
     assert!(matches!(
-        bus.read(&mut buf, 85 * US),
+        bus.read(&mut buf, (85 + T) * US),
         Err(TransportError::TimedOut)
     ));
-    let n = bus.read(&mut buf, 125 * US).unwrap();
-    assert_eq!((n, now(&bus)), (4, 120 * US));
+    let n = bus.read(&mut buf, (125 + T) * US).unwrap();
+    assert_eq!((n, now(&bus)), (4, (120 + T) * US));
     let n = bus.read(&mut buf, Duration::from_secs(1)).unwrap();
-    assert_eq!((n, now(&bus)), (4, 160 * US));
+    assert_eq!((n, now(&bus)), (4, (160 + T) * US));
 }
 
 #[test]
@@ -56,15 +67,15 @@ fn sync_read_replies_follow_each_other_with_each_return_delay() {
         SimServo::sts3215(1).with_return_delay(Duration::from_micros(20)),
         SimServo::sts3215(2).with_return_delay(Duration::from_micros(40)),
     ]);
-    // Request: 8 + 2 = 10 bytes = 100 us. Replies of 8 bytes: servo 1 from
-    // 120 to 200 us, servo 2 from 240 to 320 us.
+    // Request: 8 + 2 = 10 bytes = 100 us. Replies of 8 bytes, each after a
+    // turnaround of T: servo 1 from 170 to 250 us, servo 2 from 340 to 420 us.
     bus.write_all(&sync_read(addr::PRESENT_POSITION, 2, &[1, 2]))
         .unwrap();
     let mut buf = [0u8; 64];
     assert_eq!(bus.read(&mut buf, Duration::from_secs(1)).unwrap(), 8);
-    assert_eq!(now(&bus), 200 * US);
+    assert_eq!(now(&bus), (100 + T + 20 + 80) * US);
     assert_eq!(bus.read(&mut buf, Duration::from_secs(1)).unwrap(), 8);
-    assert_eq!(now(&bus), 320 * US);
+    assert_eq!(now(&bus), (100 + 2 * (T + 80) + 20 + 40) * US);
 }
 
 #[test]
@@ -84,8 +95,22 @@ fn the_six_servo_cycle_costs_what_the_budget_says() {
     );
     assert_eq!(frames(&got).len(), 6);
     assert_eq!(bus.stats().replies, 6);
-    // The exchange waited 1 ms past the request's end; the last byte came at 880 us.
+    // The exchange waited 1 ms past the request's end.
     assert_eq!(now(&bus), (260 + 140) * US + MS);
+
+    // The whole cycle again, read as it arrives: 880 us of wire and six
+    // turnarounds, 1180 us, the budget's cycle time for this bus.
+    let start = now(&bus);
+    bus.write_all(&sync_write(addr::GOAL_POSITION, &items))
+        .unwrap();
+    bus.write_all(&sync_read(addr::PRESENT_POSITION, 2, &[1, 2, 3, 4, 5, 6]))
+        .unwrap();
+    let mut got = 0;
+    let mut buf = [0u8; 64];
+    while got < 48 {
+        got += bus.read(&mut buf, start + Duration::from_secs(1)).unwrap();
+    }
+    assert_eq!(now(&bus) - start, 1180 * US);
 }
 
 #[test]
@@ -197,5 +222,5 @@ fn adapter_latency_delays_every_byte() {
     bus.write_all(&ping(1)).unwrap();
     let mut buf = [0u8; 16];
     assert_eq!(bus.read(&mut buf, Duration::from_secs(1)).unwrap(), 6);
-    assert_eq!(now(&bus), 120 * US + MS);
+    assert_eq!(now(&bus), (120 + T) * US + MS);
 }

@@ -25,6 +25,10 @@ fn so101_at_1mbps_with_return_delay_zero() {
     assert_eq!(num(b, "wire_time_us"), 880.0);
     // + 6 turnarounds of 50 us, no return delay, no adapter latency.
     assert_eq!(num(b, "cycle_time_us"), 1180.0);
+    // Where they go: 880 on the wire, 6 x 50 of turnaround, nothing else.
+    assert_eq!(num(b, "turnaround_time_us"), 300.0);
+    assert_eq!(num(b, "return_delay_time_us"), 0.0);
+    assert_eq!(num(b, "latency_time_us"), 0.0);
     assert!((num(b, "max_rate_hz") - 1e6 / 1180.0).abs() < 1e-9);
     // The robot's default rate, 200 Hz: 1180 us of every 5000 us.
     assert_eq!(num(b, "rate_hz"), 200.0);
@@ -101,6 +105,8 @@ fn factory_return_delay_and_what_would_fit() {
     // Same 88 bytes, but each of the 6 replies waits 500 + 50 us.
     assert_eq!(b["bytes_per_cycle"], 88);
     assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 550.0);
+    assert_eq!(num(b, "return_delay_time_us"), 6.0 * 500.0);
+    assert_eq!(num(b, "turnaround_time_us"), 6.0 * 50.0);
     assert_eq!(b["feasible"], false);
     let first_fix = b["fixes"][0].as_str().expect("a fix");
     assert!(
@@ -112,6 +118,13 @@ fn factory_return_delay_and_what_would_fit() {
     assert_eq!(text.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&text.stdout);
     assert!(stdout.contains("88 bytes"), "{stdout}");
+    assert!(
+        stdout.contains(
+            "where the 4180 us go: wire 880; turnaround 6 x 50 = 300 (a guess per reply); \
+             return delay 6 x 500 = 3000; adapter latency 1 x 0 = 0"
+        ),
+        "{stdout}"
+    );
     assert!(
         stdout.contains("set the servos' return delay (register 7) to 0"),
         "{stdout}"

@@ -29,6 +29,12 @@ struct BusBudget {
     servos: usize,
     bytes_per_cycle: usize,
     wire_time_us: f64,
+    /// The servos' turnarounds of the full cycle (one per reply), us.
+    turnaround_time_us: f64,
+    /// The servos' return delays of the full cycle (one per reply), us.
+    return_delay_time_us: f64,
+    /// The adapter's latency of the full cycle (one per round trip), us.
+    latency_time_us: f64,
     cycle_time_us: f64,
     max_rate_hz: f64,
     rate_hz: f64,
@@ -108,11 +114,16 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         Err(e) => (0, Vec::new(), Some(e.to_string())),
     };
     let feasible = read_every == 1;
+    let link = bus.link();
+    let us = |d: std::time::Duration| d.as_secs_f64() * 1e6;
     let budget = BusBudget {
         name: bus.name.clone(),
         servos: bus.joints.len(),
         bytes_per_cycle: full.bytes,
         wire_time_us: full.wire_time_us(),
+        turnaround_time_us: us(link.turnaround) * full.servos_read as f64,
+        return_delay_time_us: us(bus.return_delay) * full.servos_read as f64,
+        latency_time_us: us(link.latency) * full.round_trips as f64,
         cycle_time_us: full.cycle_time_us(),
         max_rate_hz: full.max_rate_hz(),
         rate_hz: rate,
@@ -150,6 +161,21 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         "  wire time {:.0} us; cycle time {:.0} us with return delays, turnarounds and latency\n",
         full.wire_time_us(),
         full.cycle_time_us()
+    ));
+    s.push_str(&format!(
+        "  where the {:.0} us go: wire {:.0}; turnaround {} x {:.0} = {:.0} (a guess per reply); \
+         return delay {} x {:.0} = {:.0}; adapter latency {} x {:.0} = {:.0}\n",
+        full.cycle_time_us(),
+        full.wire_time_us(),
+        full.servos_read,
+        us(link.turnaround),
+        budget.turnaround_time_us,
+        full.servos_read,
+        us(bus.return_delay),
+        budget.return_delay_time_us,
+        full.round_trips,
+        us(link.latency),
+        budget.latency_time_us,
     ));
     s.push_str(&format!(
         "  maximum rate {} Hz (the wire alone: {} Hz)\n",

@@ -141,11 +141,15 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         .filter(|j| j.model.series.has_sync_read())
         .count();
     s.push_str(&format!(
-        "\nbus `{}`: {} servos at {} baud, adapter latency {} us, return delay {} us\n",
+        "\nbus `{}`: {} servos at {} baud, adapter latency {}, return delay {} us\n",
         bus.name,
         bus.joints.len(),
         bus.baud,
-        bus.latency.as_micros(),
+        if bus.latency_auto {
+            "auto (measured when the robot runs; 0 here)".to_owned()
+        } else {
+            format!("{} us", bus.latency.as_micros())
+        },
         bus.return_delay.as_micros()
     ));
     let feedback = match (sync, bus.joints.len() - sync) {

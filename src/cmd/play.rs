@@ -788,6 +788,20 @@ fn print_report(r: &Report, identified: bool) {
         r.clamps,
         r.telemetry_dropped
     );
+    for b in &r.buses {
+        let how = if b.latency_learned {
+            format!(
+                "learned (auto; {} PINGs in {:.1} ms at start-up)",
+                b.startup_probes, b.startup_probe_ms
+            )
+        } else {
+            "as the robot file gives it".to_owned()
+        };
+        println!(
+            "  bus {} link: latency mean {:.0} us, p99 {:.0} us, {how}; reply deadline {:.0} us",
+            b.name, b.latency_us, b.latency_p99_us, b.reply_deadline_us
+        );
+    }
     if identified && r.lead_ms > 0.0 {
         println!(
             "  lag compensation lead {:.1} ms, identified while moving \

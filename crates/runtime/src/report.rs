@@ -55,6 +55,19 @@ pub struct BusReport {
     pub retries: u64,
     /// Servo readings missing after every retry.
     pub missed_replies: u64,
+    /// The adapter latency was learned (`latency_us: auto`), not given.
+    pub latency_learned: bool,
+    /// Requests sent at start-up to measure the adapter (0: not measured).
+    pub startup_probes: u32,
+    /// How long that measurement took, ms.
+    pub startup_probe_ms: f64,
+    /// Mean lateness of the replies beyond the link model: the adapter's
+    /// latency as measured, us.
+    pub latency_us: f64,
+    /// Its 99th percentile over the last reads, us.
+    pub latency_p99_us: f64,
+    /// The reply deadline in force at the end for a read of every servo, us.
+    pub reply_deadline_us: f64,
 }
 
 /// The summary of a run. The first fields are those of

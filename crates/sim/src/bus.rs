@@ -110,6 +110,12 @@ impl SimBus {
         self
     }
 
+    /// Changes the host adapter's latency from now on (a link that slows
+    /// down or speeds up mid-run).
+    pub fn set_latency(&self, latency: Duration) {
+        self.engine().latency = latency;
+    }
+
     /// Adds a servo and returns its index (servos are numbered in the order
     /// they were added).
     pub fn add_servo(&self, servo: SimServo) -> usize {

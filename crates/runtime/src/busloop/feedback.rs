@@ -24,6 +24,16 @@ impl Feedback {
         Feedback { reg, order, ids }
     }
 
+    /// The servos' IDs, in bus order.
+    pub fn ids(&self) -> &[u8] {
+        &self.ids
+    }
+
+    /// Bytes of the position register.
+    pub fn size(&self) -> usize {
+        usize::from(self.reg.size)
+    }
+
     /// Reads every servo's position patiently (start-up is not timed; see
     /// [`Bus::sync_read_patiently`]) into `track`.
     ///
@@ -70,8 +80,8 @@ impl Feedback {
     }
 
     /// Reads the servos `range` (indices in the bus) within `budget` into
-    /// `track`. Only a lost port is an error: a silent servo is tracking's
-    /// business.
+    /// `track`; true when every servo answered in time. Only a lost port is
+    /// an error: a silent servo is tracking's business.
     pub fn read<T: Transport, C: Clock>(
         &self,
         bus: &mut Bus<T, C>,
@@ -79,15 +89,16 @@ impl Feedback {
         range: Range<usize>,
         budget: Duration,
         track: &mut Tracker,
-    ) -> Result<(), PortGone> {
+    ) -> Result<bool, PortGone> {
         let Some(ids) = self.ids.get(range.clone()) else {
-            return Ok(());
+            return Ok(true);
         };
         let Some(read) =
             PortGone::check(bus.sync_read_within(self.reg.address, self.reg.size, ids, budget))?
         else {
-            return Ok(());
+            return Ok(false);
         };
+        let mut all = true;
         let at = clock.now();
         for (i, r) in read.iter().enumerate() {
             let joint = range.start + i;
@@ -103,9 +114,12 @@ impl Feedback {
                     ),
                     Err(_) => track.miss(joint, None),
                 },
-                Err(m) => track.miss(joint, Some(m.reason)),
+                Err(m) => {
+                    all = false;
+                    track.miss(joint, Some(m.reason));
+                }
             }
         }
-        Ok(())
+        Ok(all)
     }
 }

@@ -8,6 +8,7 @@ mod counters;
 mod feedback;
 mod goals;
 mod lead;
+mod link;
 mod publish;
 mod tracking;
 
@@ -25,6 +26,7 @@ use counters::Counters;
 use feedback::Feedback;
 use goals::GoalWriter;
 use lead::LeadEstimator;
+use link::{LinkLearner, Probe};
 use publish::{Publisher, SampleTiming};
 use tracking::Tracker;
 
@@ -73,6 +75,10 @@ pub(crate) struct BusLoop<T: Transport, C: Clock> {
     counters: Counters,
     out: Publisher,
     timing: CycleTiming,
+    /// The adapter latency in force, learned from the replies.
+    link: LinkLearner,
+    /// The start-up measurement of the adapter (`latency_us: auto`).
+    probe: Probe,
     /// The port failed: nothing more is sent on this bus.
     gone: bool,
 }
@@ -109,6 +115,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         let every = u32::try_from(plan.read_every()).unwrap_or(u32::MAX);
         let stale_after = c.period * every.saturating_mul(2);
         let ids = config.joints.iter().map(|j| j.id).collect();
+        let bus_latency = bus.settings().link.latency;
         Ok(BusLoop {
             index: c.index,
             name: config.name.clone(),
@@ -138,6 +145,8 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 woke: Duration::ZERO,
                 skipped: 0,
             },
+            link: LinkLearner::new(bus_latency, !config.latency_auto),
+            probe: Probe::default(),
             gone: false,
         })
     }
@@ -150,6 +159,10 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     /// As [`Feedback::startup`]; [`RunError::Startup`] when the goals or
     /// the torque cannot be written.
     pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
+        if self.link.learns() {
+            self.probe = link::probe(&mut self.bus, &self.clock, &mut self.link, &self.feedback);
+        }
+        self.bus.set_latency(self.link.in_force());
         self.feedback
             .startup(&mut self.bus, &self.clock, &self.name, &mut self.track)?;
         for (i, j) in self.track.joints.iter().enumerate() {
@@ -222,11 +235,20 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             let budget = (self.timing.deadline + self.period)
                 .saturating_sub(self.clock.now())
                 .saturating_sub(self.period / 8);
+            let servos = range.len();
+            let began = self.clock.now();
             let read =
                 self.feedback
                     .read(&mut self.bus, &self.clock, range, budget, &mut self.track);
             self.gone = read.is_err();
-            read?;
+            if read? {
+                let took = self.clock.now().saturating_sub(began);
+                let model = link::modelled(self.bus.settings(), servos, self.feedback.size());
+                self.link.on_time(took.saturating_sub(model));
+            } else {
+                self.link.timed_out();
+            }
+            self.bus.set_latency(self.link.in_force());
         }
         Ok(self.clock.now().saturating_sub(self.start).as_secs_f64())
     }
@@ -342,6 +364,18 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             timeouts: c.timeouts,
             retries: c.retries,
             missed_replies: self.track.missed,
+            latency_learned: self.link.learns(),
+            startup_probes: self.probe.requests,
+            startup_probe_ms: self.probe.took.as_secs_f64() * 1e3,
+            latency_us: self.link.mean().as_secs_f64() * 1e6,
+            latency_p99_us: self.link.p99().as_secs_f64() * 1e6,
+            reply_deadline_us: link::deadline(
+                self.bus.settings(),
+                self.feedback.ids().len(),
+                self.feedback.size(),
+            )
+            .as_secs_f64()
+                * 1e6,
         }
     }
 

@@ -40,8 +40,13 @@ pub struct BusConfig {
     pub port: Option<String>,
     /// Baud rate, bits per second.
     pub baud: u32,
-    /// The adapter's latency per transaction.
+    /// The adapter's latency per transaction (0 with `latency_us: auto`
+    /// until the run measures it).
     pub latency: Duration,
+    /// `latency_us: auto` (the default): the run measures the adapter at
+    /// start-up and keeps its reply deadlines just above what the link
+    /// does. A number in the robot file wins.
+    pub latency_auto: bool,
     /// The servos' return delay (register 7).
     pub return_delay: Duration,
     /// Wait for replies by polling the port without blocking (`busy_poll`
@@ -138,6 +143,17 @@ fn default_rate() -> f64 {
     100.0
 }
 
+/// `latency_us`: a number of microseconds, or `auto`.
+#[derive(Deserialize, Default)]
+#[serde(untagged)]
+enum LatencySpec {
+    Micros(u64),
+    #[default]
+    #[serde(skip)]
+    Auto,
+    Word(String),
+}
+
 fn default_baud() -> u32 {
     1_000_000
 }
@@ -151,7 +167,7 @@ struct RawBus {
     #[serde(default = "default_baud")]
     baud: u32,
     #[serde(default)]
-    latency_us: u64,
+    latency_us: LatencySpec,
     #[serde(default)]
     return_delay_us: u64,
     #[serde(default)]
@@ -338,11 +354,23 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
             }
             joints.push(joint);
         }
+        let (latency, latency_auto) = match rb.latency_us {
+            LatencySpec::Micros(us) => (Duration::from_micros(us), false),
+            LatencySpec::Auto => (Duration::ZERO, true),
+            LatencySpec::Word(w) if w == "auto" => (Duration::ZERO, true),
+            LatencySpec::Word(w) => {
+                return Err(src.error(
+                    &bp.key("latency_us"),
+                    format!("must be a number of microseconds or `auto`, got `{w}`"),
+                ))
+            }
+        };
         buses.push(BusConfig {
             name: rb.name,
             port: rb.port,
             baud: rb.baud,
-            latency: Duration::from_micros(rb.latency_us),
+            latency,
+            latency_auto,
             return_delay: Duration::from_micros(rb.return_delay_us),
             busy_poll: rb.busy_poll,
             round_robin: rb.round_robin,

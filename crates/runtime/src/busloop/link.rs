@@ -1,0 +1,280 @@
+//! Deadlines that learn the link: how late replies really are, and the
+//! adapter latency allowed for in every reply deadline.
+//!
+//! Each cycle's read reports its lateness: how long it took beyond what the
+//! link model accounts for (wire time, return delays, turnarounds), that is
+//! the adapter's latency as this bus sees it. With `x` the larger of the p99
+//! over the last [`WINDOW`] reads and the largest of the last [`RECENT`],
+//! the allowance in force is `x + x / 4 + HEADROOM`, bounded by [`CEILING`]. A read that times out sets the allowance to the ceiling at
+//! once, so one late reply costs one miss, not three; the window then
+//! brings it down to what the link really does.
+//!
+//! The ceiling keeps a silent servo from hiding behind a growing deadline:
+//! every read of it times out within `CEILING` plus the wire time and margin
+//! (under 4 ms for the SO-101 arm at 1 Mbps), so it is still declared
+//! missing on the fault policy's count of cycles.
+
+use std::time::Duration;
+
+use servobus_driver::{Bus, BusSettings, Clock, Transport};
+use servobus_timing::Transaction;
+
+use super::feedback::Feedback;
+
+/// Reads the allowance is learned over.
+pub(crate) const WINDOW: usize = 256;
+
+/// The largest adapter latency ever allowed for: 3 ms, beyond every USB
+/// adapter with a 1 ms latency timer, and the allowance a pseudo-terminal
+/// on a busy machine has needed ([`servobus_timing::Link::PTY_LATENCY`]).
+pub(crate) const CEILING: Duration = Duration::from_millis(3);
+
+/// The latest reads always count in full, whatever the percentile says:
+/// a link that just slowed down shows in them before it shows in the p99.
+pub(crate) const RECENT: usize = 16;
+
+/// Added to the learned figure: room for scheduling noise.
+pub(crate) const HEADROOM: Duration = Duration::from_micros(100);
+
+/// PINGs and READs sent at start-up to measure the adapter (`latency_us:
+/// auto`), before anything moves.
+pub(crate) const PROBES: u32 = 32;
+
+/// The learned latency of one bus.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkLearner {
+    /// The robot file gave a number: it wins, nothing is learned.
+    fixed: bool,
+    window: Vec<Duration>,
+    next: usize,
+    /// The allowance in force.
+    in_force: Duration,
+    /// Every lateness seen, for the mean.
+    total: Duration,
+    count: u64,
+}
+
+impl LinkLearner {
+    /// A learner starting at `latency`; `fixed` keeps it there.
+    pub fn new(latency: Duration, fixed: bool) -> Self {
+        LinkLearner {
+            fixed,
+            window: Vec::with_capacity(WINDOW),
+            next: 0,
+            in_force: latency.min(if fixed { Duration::MAX } else { CEILING }),
+            total: Duration::ZERO,
+            count: 0,
+        }
+    }
+
+    /// The adapter latency to use in deadlines now.
+    pub fn in_force(&self) -> Duration {
+        self.in_force
+    }
+
+    /// Whether the allowance follows the link (`latency_us: auto`).
+    pub fn learns(&self) -> bool {
+        !self.fixed
+    }
+
+    /// A read whose replies all came, `lateness` beyond the link model.
+    pub fn on_time(&mut self, lateness: Duration) {
+        if self.window.len() < WINDOW {
+            self.window.push(lateness);
+        } else {
+            self.window[self.next] = lateness;
+        }
+        self.next = (self.next + 1) % WINDOW;
+        self.total += lateness;
+        self.count += 1;
+        if !self.fixed {
+            let x = self.p99().max(self.recent_max());
+            self.in_force = (x + x / 4 + HEADROOM).min(CEILING);
+        }
+    }
+
+    /// A read that timed out: allow the most at once.
+    pub fn timed_out(&mut self) {
+        if !self.fixed {
+            self.in_force = CEILING;
+        }
+    }
+
+    /// The 99th percentile of the window's lateness (0 before any read).
+    pub fn p99(&self) -> Duration {
+        if self.window.is_empty() {
+            return Duration::ZERO;
+        }
+        let mut sorted = self.window.clone();
+        sorted.sort_unstable();
+        let i = (sorted.len() - 1) * 99 / 100;
+        sorted[i]
+    }
+
+    /// The largest lateness of the last [`RECENT`] reads.
+    fn recent_max(&self) -> Duration {
+        let n = self.window.len();
+        (1..=RECENT.min(n))
+            .map(|back| self.window[(self.next + WINDOW - back) % WINDOW % n.max(1)])
+            .max()
+            .unwrap_or(Duration::ZERO)
+    }
+
+    /// The mean of every lateness seen.
+    pub fn mean(&self) -> Duration {
+        if self.count == 0 {
+            Duration::ZERO
+        } else {
+            self.total / u32::try_from(self.count).unwrap_or(u32::MAX)
+        }
+    }
+}
+
+/// What the start-up measurement of the adapter did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Probe {
+    /// Requests answered.
+    pub requests: u32,
+    /// How long the measurement took.
+    pub took: Duration,
+}
+
+/// The position read's transaction on a bus of `settings` for `servos`
+/// servos, and how many of it a cycle sends (one SYNC READ, or one READ per
+/// servo).
+fn read_of(settings: &BusSettings, servos: usize, len: usize) -> (Transaction, u32) {
+    if settings.series.has_sync_read() {
+        (Transaction::SyncRead { servos, len }, 1)
+    } else {
+        (
+            Transaction::Read { len },
+            u32::try_from(servos).unwrap_or(u32::MAX),
+        )
+    }
+}
+
+/// What the link model says reading `servos` positions takes, without the
+/// adapter's latency and the margin: the time a perfect adapter would need.
+pub(crate) fn modelled(settings: &BusSettings, servos: usize, len: usize) -> Duration {
+    let link = settings.link;
+    let (tx, n) = read_of(settings, servos, len);
+    link.deadline(tx, settings.return_delay, settings.replies)
+        .map_or(Duration::ZERO, |d| {
+            d.saturating_sub(link.latency).saturating_sub(link.margin)
+        })
+        .saturating_mul(n)
+}
+
+/// The reply deadline in force for reading `servos` positions (the sum of
+/// the READs' on a bus without SYNC READ).
+pub(crate) fn deadline(settings: &BusSettings, servos: usize, len: usize) -> Duration {
+    let (tx, n) = read_of(settings, servos, len);
+    settings
+        .link
+        .deadline(tx, settings.return_delay, settings.replies)
+        .unwrap_or(Duration::ZERO)
+        .saturating_mul(n)
+}
+
+/// Measures the adapter before anything moves: [`PROBES`] PINGs, taking
+/// the servos in turn, each waiting up to [`CEILING`] of latency. Every
+/// answer teaches `learner` its lateness; a servo that does not answer is
+/// left to the start-up read, which names it.
+pub(crate) fn probe<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    clock: &C,
+    learner: &mut LinkLearner,
+    feedback: &Feedback,
+) -> Probe {
+    let ids = feedback.ids();
+    let began = clock.now();
+    let mut answered = 0;
+    bus.set_latency(CEILING);
+    let settings = *bus.settings();
+    let ping = settings
+        .link
+        .deadline(Transaction::Ping, settings.return_delay, settings.replies)
+        .map_or(Duration::ZERO, |d| {
+            d.saturating_sub(CEILING + settings.link.margin)
+        });
+    for i in 0..PROBES as usize {
+        let Some(&id) = ids.get(i % ids.len().max(1)) else {
+            break;
+        };
+        if bus.ping(id).is_ok() {
+            learner.on_time(bus.last_rtt().saturating_sub(ping));
+            answered += 1;
+        }
+    }
+    Probe {
+        requests: answered,
+        took: clock.now().saturating_sub(began),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const US: Duration = Duration::from_micros(1);
+
+    #[test]
+    fn a_jump_from_0_to_1_ms_costs_one_miss_and_ends_with_a_deadline_that_fits() {
+        let mut l = LinkLearner::new(Duration::ZERO, false);
+        for _ in 0..500 {
+            l.on_time(Duration::ZERO);
+        }
+        assert_eq!(l.in_force(), HEADROOM);
+        // The link slows down: the first read at the old allowance times out.
+        l.timed_out();
+        assert_eq!(l.in_force(), CEILING);
+        // Every following read fits the ceiling; the allowance settles just
+        // above the new latency.
+        for _ in 0..WINDOW {
+            l.on_time(1000 * US);
+            assert!(l.in_force() > 1000 * US);
+        }
+        assert_eq!(l.in_force(), (1250 + 100) * US);
+        assert_eq!(l.p99(), 1000 * US);
+        // And back down once the link is fast again, past the recent reads
+        // and the p99's share of the window.
+        for _ in 0..WINDOW {
+            l.on_time(Duration::ZERO);
+        }
+        assert_eq!(l.in_force(), HEADROOM);
+    }
+
+    #[test]
+    fn the_allowance_never_exceeds_the_ceiling() {
+        let mut l = LinkLearner::new(Duration::from_secs(1), false);
+        assert_eq!(l.in_force(), CEILING);
+        for _ in 0..10 {
+            l.on_time(Duration::from_millis(50));
+            l.timed_out();
+        }
+        assert_eq!(l.in_force(), CEILING);
+    }
+
+    #[test]
+    fn a_number_in_the_robot_file_wins() {
+        let mut l = LinkLearner::new(5000 * US, true);
+        l.on_time(10 * US);
+        l.timed_out();
+        assert_eq!(l.in_force(), 5000 * US);
+        assert_eq!(l.mean(), 10 * US);
+    }
+
+    #[test]
+    fn the_p99_ignores_one_outlier_in_a_hundred() {
+        let mut l = LinkLearner::new(Duration::ZERO, false);
+        for i in 0..200u32 {
+            l.on_time(if i % 100 == 0 { 1500 * US } else { 100 * US });
+        }
+        // Past the recent reads too.
+        for _ in 0..RECENT {
+            l.on_time(100 * US);
+        }
+        assert_eq!(l.p99(), 100 * US);
+        assert_eq!(l.in_force(), (125 + 100) * US);
+    }
+}

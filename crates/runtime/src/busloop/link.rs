@@ -46,6 +46,8 @@ pub(crate) struct LinkLearner {
     /// The robot file gave a number: it wins, nothing is learned.
     fixed: bool,
     window: Vec<Duration>,
+    /// Room to find the percentile in, so that a cycle allocates nothing.
+    scratch: Vec<Duration>,
     next: usize,
     /// The allowance in force.
     in_force: Duration,
@@ -60,6 +62,7 @@ impl LinkLearner {
         LinkLearner {
             fixed,
             window: Vec::with_capacity(WINDOW),
+            scratch: Vec::with_capacity(WINDOW),
             next: 0,
             in_force: latency.min(if fixed { Duration::MAX } else { CEILING }),
             total: Duration::ZERO,
@@ -88,7 +91,7 @@ impl LinkLearner {
         self.total += lateness;
         self.count += 1;
         if !self.fixed {
-            let x = self.p99().max(self.recent_max());
+            let x = self.p99_now().max(self.recent_max());
             self.in_force = (x + x / 4 + HEADROOM).min(CEILING);
         }
     }
@@ -102,13 +105,15 @@ impl LinkLearner {
 
     /// The 99th percentile of the window's lateness (0 before any read).
     pub fn p99(&self) -> Duration {
-        if self.window.is_empty() {
-            return Duration::ZERO;
-        }
-        let mut sorted = self.window.clone();
-        sorted.sort_unstable();
-        let i = (sorted.len() - 1) * 99 / 100;
-        sorted[i]
+        let mut copy = self.window.clone();
+        percentile_99(&mut copy)
+    }
+
+    /// As [`p99`](Self::p99), in the learner's own scratch space.
+    fn p99_now(&mut self) -> Duration {
+        self.scratch.clear();
+        self.scratch.extend_from_slice(&self.window);
+        percentile_99(&mut self.scratch)
     }
 
     /// The largest lateness of the last [`RECENT`] reads.
@@ -128,6 +133,15 @@ impl LinkLearner {
             self.total / u32::try_from(self.count).unwrap_or(u32::MAX)
         }
     }
+}
+
+/// The 99th percentile of `values` (reordered; 0 when empty).
+fn percentile_99(values: &mut [Duration]) -> Duration {
+    if values.is_empty() {
+        return Duration::ZERO;
+    }
+    let i = (values.len() - 1) * 99 / 100;
+    *values.select_nth_unstable(i).1
 }
 
 /// What the start-up measurement of the adapter did.

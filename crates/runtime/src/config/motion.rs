@@ -201,6 +201,19 @@ pub fn load_motion(
     path: &Path,
     robot_override: Option<&Path>,
 ) -> Result<(Motion, Robot), ConfigError> {
+    load_motion_calibrated(path, robot_override, None)
+}
+
+/// Like [`load_motion`], with the calibration file `calibration` instead of
+/// the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_motion`] and [`load_robot_calibrated`](super::load_robot_calibrated).
+pub fn load_motion_calibrated(
+    path: &Path,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
     let src = Source::read(path)?;
     let raw: RawMotion = src.parse()?;
     let root = FieldPath::root();
@@ -214,7 +227,7 @@ pub fn load_motion(
             ))
         }
     };
-    let (robot, robot_src) = robot::load(&robot_path)?;
+    let (robot, robot_src) = robot::load_calibrated(&robot_path, calibration)?;
     match raw.rate {
         Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,

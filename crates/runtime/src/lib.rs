@@ -10,6 +10,7 @@
 //!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
 #![warn(missing_docs)]
 
+pub mod calibrate;
 pub mod config;
 
 pub mod pacer;

@@ -203,7 +203,9 @@ fn validate(cal: &Calibration, src: &Source) -> Result<(), ConfigError> {
         let [lo, hi] = j.range;
         let top = i64::from(model.max_position());
         let ok = match turn_ticks(model) {
-            Some(turn) => (0..i64::from(turn)).contains(&lo) && lo < hi && hi - lo < i64::from(turn),
+            Some(turn) => {
+                (0..i64::from(turn)).contains(&lo) && lo < hi && hi - lo < i64::from(turn)
+            }
             None => 0 <= lo && lo < hi && hi <= top,
         };
         if !ok {

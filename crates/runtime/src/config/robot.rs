@@ -8,8 +8,8 @@ use serde::Deserialize;
 use servobus_protocol::registers::{model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
-use super::error::{ConfigError, Source};
 use super::calibration::{Calibration, JointCalibration};
+use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
 use super::Units;
 

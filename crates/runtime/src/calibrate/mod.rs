@@ -28,12 +28,15 @@ use servobus_driver::BusError;
 
 use crate::config::{BusConfig, JointConfig};
 
+mod lerobot;
 mod procedure;
 mod servos;
 
+pub use lerobot::{from_lerobot, lerobot_value, to_lerobot, LeRobotError, LeRobotMotor, NormMode};
 pub use procedure::{calibrate, LiveJoint, ProcedureOptions, MIN_RANGE_DEG};
 pub use servos::{
-    identify, prepare_servos, present, torque_off, write_homing, FoundServo, FAR_OUTSIDE_DEG,
+    identify, prepare_bus, prepare_servos, present, torque_off, write_homing, FoundServo,
+    FAR_OUTSIDE_DEG,
 };
 
 /// A step of the procedure, announced to the [`Operator`] as it begins.

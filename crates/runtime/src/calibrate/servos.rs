@@ -141,11 +141,30 @@ pub fn prepare_servos<T: Transport, C: Clock>(
         RobotCalibration::Missing(path) => return Err(Refusal::Missing { path: path.clone() }),
         RobotCalibration::Applied { .. } => {}
     }
-    for (bus, config) in buses.iter_mut().zip(&robot.buses) {
-        for joint in &config.joints {
-            if let Some(cal) = &joint.calibration {
-                prepare_joint(bus, config, joint, cal, robot)?;
-            }
+    for (index, bus) in buses.iter_mut().enumerate() {
+        prepare_bus(robot, index, bus)?;
+    }
+    Ok(())
+}
+
+/// [`prepare_servos`] for the robot's bus `index` alone, on `bus`.
+///
+/// # Errors
+/// As [`prepare_servos`].
+pub fn prepare_bus<T: Transport, C: Clock>(
+    robot: &Robot,
+    index: usize,
+    bus: &mut Bus<T, C>,
+) -> Result<(), Refusal> {
+    if let RobotCalibration::Missing(path) = &robot.calibration {
+        return Err(Refusal::Missing { path: path.clone() });
+    }
+    let Some(config) = robot.buses.get(index) else {
+        return Ok(());
+    };
+    for joint in &config.joints {
+        if let Some(cal) = &joint.calibration {
+            prepare_joint(bus, config, joint, cal, robot)?;
         }
     }
     Ok(())

@@ -42,8 +42,8 @@ pub use error::ConfigError;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{
-    load_robot, load_robot_any_rate, load_robot_calibrated, BusConfig, JointConfig, Robot,
-    RobotCalibration,
+    load_robot, load_robot_any_rate, load_robot_any_rate_calibrated, load_robot_calibrated,
+    load_robot_design, BusConfig, JointConfig, Robot, RobotCalibration,
 };
 pub use trajectory::{joint_limits, plan_input, plan_motion};
 pub use units::Units;

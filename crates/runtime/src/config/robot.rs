@@ -260,6 +260,29 @@ pub fn load_robot_any_rate(path: &Path) -> Result<Robot, ConfigError> {
     load(path).map(|(robot, _)| robot)
 }
 
+/// [`load_robot_any_rate`] with the calibration file `calibration` instead
+/// of the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_robot_calibrated`], less the rate check.
+pub fn load_robot_any_rate_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    load_calibrated(path, calibration).map(|(robot, _)| robot)
+}
+
+/// The robot as designed, without any calibration applied (what
+/// `servobus calibrate` starts from), and the calibration file the robot
+/// file names, if it names one.
+///
+/// # Errors
+/// As [`load_robot_any_rate`].
+pub fn load_robot_design(path: &Path) -> Result<(Robot, Option<PathBuf>), ConfigError> {
+    let (robot, _, named) = load_design(path)?;
+    Ok((robot, named))
+}
+
 pub(crate) fn load(path: &Path) -> Result<(Robot, Source), ConfigError> {
     load_calibrated(path, None)
 }
@@ -270,14 +293,7 @@ pub(crate) fn load_calibrated(
     path: &Path,
     calibration: Option<&Path>,
 ) -> Result<(Robot, Source), ConfigError> {
-    let source = Source::read(path)?;
-    let raw: RawRobot = source.parse()?;
-    let named = raw
-        .calibration
-        .as_ref()
-        .map(|rel| path.parent().unwrap_or(Path::new("")).join(rel));
-    let robot = validate(raw, &source)?;
-    check_servo_range(&robot, &source)?;
+    let (robot, source, named) = load_design(path)?;
     let robot = match calibration.map(Path::to_owned).or(named) {
         Some(file) if calibration.is_some() || file.exists() => {
             super::calibrated::apply(robot, &file)?
@@ -289,6 +305,18 @@ pub(crate) fn load_calibrated(
         None => robot,
     };
     Ok((robot, source))
+}
+
+fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
+    let source = Source::read(path)?;
+    let raw: RawRobot = source.parse()?;
+    let named = raw
+        .calibration
+        .as_ref()
+        .map(|rel| path.parent().unwrap_or(Path::new("")).join(rel));
+    let robot = validate(raw, &source)?;
+    check_servo_range(&robot, &source)?;
+    Ok((robot, source, named))
 }
 
 /// Checks that `rate_hz` fits every bus of `robot`; the error points at `field`.

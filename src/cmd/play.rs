@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context};
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
-use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
+use servobus_runtime::config::{load_motion_calibrated, plan_motion, Motion, Robot, Units};
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
     bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
@@ -41,6 +41,10 @@ pub struct Args {
     /// robot file's ports; without any, the built-in simulator).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
@@ -84,7 +88,11 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
+    let (motion, robot) = load_motion_calibrated(
+        &args.motion,
+        args.robot.as_deref(),
+        args.calibration.as_deref(),
+    )?;
     let rate_hz = match args.rate {
         Some(rate) if !(rate.is_finite() && rate > 0.0) => {
             bail!("--rate {rate}: give a positive rate in Hz")
@@ -165,6 +173,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
                 buses.push(Bus::new(transport, clock, bus_settings(bus)));
             }
+            super::calibrate::check_buses(&robot, &mut buses, ports)?;
             spawn(&robot, trajectory, buses, options)?
         }
     };

@@ -16,11 +16,11 @@ use std::time::Duration;
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::sign_magnitude;
 use servobus_runtime::calibrate::{
-    calibrate, prepare_servos, LiveJoint, Operator, ProcedureOptions, Step,
+    calibrate, prepare_servos, write_homing, LiveJoint, Operator, ProcedureOptions, Step,
 };
 use servobus_runtime::config::{
     load_motion_calibrated, load_robot, load_robot_calibrated, plan_motion, save_calibration,
-    JointMap, Robot,
+    Calibration, JointMap, Robot,
 };
 use servobus_runtime::{bus_settings, Finish, RunOptions, Telemetry, VirtualRun};
 use servobus_sim::{addr, SimBus, SimServo};
@@ -95,8 +95,11 @@ trait TapOffset {
 }
 
 impl TapOffset for SimServo {
+    /// The offset stored in EEPROM, as set-up software leaves it.
     fn tap_offset(mut self, raw: u16) -> Self {
-        self.poke(addr::OFFSET, &raw.to_le_bytes());
+        self.write(addr::LOCK, &[0]);
+        self.write(addr::OFFSET, &raw.to_le_bytes());
+        self.write(addr::LOCK, &[1]);
         self
     }
 }
@@ -184,6 +187,18 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn calibrated_arm() -> (Robot, Vec<Bus<SimBus, ManualClock>>, SimBus, PathBuf) {
+    let (robot, buses, sim, path, _) = measured_arm();
+    (robot, buses, sim, path)
+}
+
+/// The arm calibrated by the hand, and the calibration as measured.
+fn measured_arm() -> (
+    Robot,
+    Vec<Bus<SimBus, ManualClock>>,
+    SimBus,
+    PathBuf,
+    Calibration,
+) {
     let design = load_robot(&common::config("robots/so101.yaml")).expect("so101");
     let (mut buses, sim) = arm(&design);
     let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
@@ -217,7 +232,7 @@ fn calibrated_arm() -> (Robot, Vec<Bus<SimBus, ManualClock>>, SimBus, PathBuf) {
     save_calibration(&cal, &path).expect("saves");
     let robot = load_robot_calibrated(&common::config("robots/so101.yaml"), Some(&path))
         .expect("calibration applies");
-    (robot, buses, sim, path)
+    (robot, buses, sim, path, cal)
 }
 
 #[test]
@@ -267,6 +282,24 @@ fn the_hand_calibrates_a_badly_fitted_arm_and_angles_become_physical() {
         }
         place(&sim, j.id, m, 0.0f64.clamp(j.min, j.max));
     }
+    // The crossing joints were given their centred offset for the session
+    // (with the lock closed), the others kept theirs; a power cycle brings
+    // back what the EEPROM holds.
+    let held: Vec<i32> = joints
+        .iter()
+        .map(|j| sim.servo(j.id, |s| offset_of(s)).expect("servo"))
+        .collect();
+    let fitted: Vec<i32> = mounts().iter().map(|m| m.offset).collect();
+    for (i, (h, f)) in held.iter().zip(&fitted).enumerate() {
+        assert_eq!(h != f, crossing[i], "joint {i}: offset {h}, fitted {f}");
+        assert_eq!(sim.register(joints[i].id, addr::LOCK), Some(1));
+    }
+    sim.power_cycle();
+    let after: Vec<i32> = joints
+        .iter()
+        .map(|j| sim.servo(j.id, |s| offset_of(s)).expect("servo"))
+        .collect();
+    assert_eq!(after, fitted, "nothing persisted without --write-servos");
 }
 
 /// What playing arm-wave did to the body.
@@ -387,4 +420,93 @@ fn the_calibrated_arm_plays_where_it_is_told_and_the_uncalibrated_one_misses() {
         "uncalibrated arm played within {:.1} deg",
         played.worst
     );
+}
+
+#[test]
+fn write_servos_stores_centring_offsets_and_plays_the_same() {
+    let (robot, mut buses, sim, _, mut cal) = measured_arm();
+    for (joint, jc) in robot.joints().zip(cal.joints.iter_mut()) {
+        *jc = write_homing(&mut buses[0], joint, jc).expect("EEPROM written");
+    }
+    for (joint, m) in robot.joints().zip(mounts()) {
+        // The offset that brings the middle of the stops to tick 2048:
+        // present = sensor - offset, so offset = sensor middle - 2048,
+        // taken round the turn into -2047..=2047.
+        let sensor = |deg: f64| (m.zero + m.dir * deg / DEG_PER_TICK).round();
+        let middle = 0.5 * (sensor(m.stops.0) + sensor(m.stops.1));
+        let mut expect = (middle - 2048.0).rem_euclid(4096.0);
+        if expect > 2048.0 {
+            expect -= 4096.0;
+        }
+        let raw = sim
+            .servo(joint.id, |s| {
+                u16::from_le_bytes([s.register(addr::OFFSET), s.register(addr::OFFSET + 1)])
+            })
+            .expect("servo");
+        // Sign-magnitude: bit 11 is the sign, the 11 bits below the size.
+        let magnitude = f64::from(raw & 0x7ff);
+        let value = if raw & 0x800 != 0 {
+            -magnitude
+        } else {
+            magnitude
+        };
+        assert_eq!(
+            raw & !0xfff,
+            0,
+            "{}: nothing above bit 11 in {raw:#x}",
+            joint.name
+        );
+        assert!(
+            (value - expect).abs() <= 1.0,
+            "{}: offset {value}, expected {expect}",
+            joint.name
+        );
+        // Present_Position reads through it, as a real servo does.
+        place(&sim, joint.id, m, 0.0f64.clamp(m.stops.0, m.stops.1));
+        let sensor_now = sim
+            .servo(joint.id, |s| s.shaft_position() + f64::from(offset_of(s)))
+            .expect("servo");
+        let present = sim.present_position(joint.id).expect("servo");
+        assert_eq!(
+            f64::from(present),
+            (sensor_now - value).rem_euclid(4096.0).round(),
+            "{}",
+            joint.name
+        );
+        // The lock is closed again, and the offset survives a power cycle.
+        assert_eq!(
+            sim.register(joint.id, addr::LOCK),
+            Some(1),
+            "{}",
+            joint.name
+        );
+    }
+    sim.power_cycle();
+    for joint in robot.joints() {
+        let cal_offset = cal
+            .joints
+            .iter()
+            .find(|c| c.name == joint.name)
+            .expect("joint")
+            .homing_offset;
+        let kept = sim.servo(joint.id, |s| offset_of(s)).expect("servo");
+        assert_eq!(kept, cal_offset, "{}: offset kept in EEPROM", joint.name);
+    }
+    // No range crosses the seam any more; nothing is written before playing.
+    assert!(cal.joints.iter().all(|c| !c.crosses_seam()));
+    let path = temp("so101-written.calibration.yaml");
+    save_calibration(&cal, &path).expect("saves");
+    let robot =
+        load_robot_calibrated(&common::config("robots/so101.yaml"), Some(&path)).expect("applies");
+    prepare_servos(&robot, &mut buses).expect("servos match");
+    for joint in robot.joints() {
+        assert_eq!(sim.register(joint.id, addr::LOCK), Some(1));
+    }
+    let played = play_wave(&robot, Some(&path), buses, &sim);
+    println!(
+        "written offsets: worst miss at a keyframe {:.3} deg",
+        played.worst
+    );
+    assert_eq!(played.finish, Some(Finish::Completed));
+    assert!(played.worst < 1.0, "misses by {:.2} deg", played.worst);
 }

@@ -1,6 +1,3 @@
-//! The `servobus` package: the command line, and the glue between a robot
-//! file and the built-in simulator that the command line, the examples and
-//! the end-to-end tests share.
+//! The `servobus` package: the command line. The glue between a robot file
+//! and the built-in simulator lives in [`servobus_runtime::sim`].
 #![warn(missing_docs)]
-
-pub mod simrobot;

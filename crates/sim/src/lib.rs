@@ -94,6 +94,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod body;
 mod bus;
 mod dynamics;
 mod engine;
@@ -102,6 +103,7 @@ pub mod model;
 pub mod pty;
 mod servo;
 
+pub use body::{HandPath, Mount, Truth, TruthRow};
 pub use bus::SimBus;
 pub use engine::{baud_of_index, SimStats};
 pub use faults::{FaultSpecError, Faults};

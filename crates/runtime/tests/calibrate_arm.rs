@@ -8,21 +8,22 @@
 //! hold a homing offset that puts their joint's range across the 4095 -> 0
 //! seam of the present position.
 
+mod calib_play;
 mod common;
 
 use std::path::PathBuf;
 use std::time::Duration;
 
+use calib_play::Played;
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::sign_magnitude;
 use servobus_runtime::calibrate::{
     calibrate, prepare_servos, write_homing, LiveJoint, Operator, ProcedureOptions, Step,
 };
 use servobus_runtime::config::{
-    load_motion_calibrated, load_robot, load_robot_calibrated, plan_motion, save_calibration,
-    Calibration, JointMap, Robot,
+    load_robot, load_robot_calibrated, save_calibration, Calibration, JointMap, Robot,
 };
-use servobus_runtime::{bus_settings, Finish, RunOptions, Telemetry, VirtualRun};
+use servobus_runtime::{bus_settings, Finish};
 use servobus_sim::{addr, SimBus, SimServo};
 
 /// How a servo is fitted: its sensor tick at the joint's zero, whether
@@ -302,72 +303,27 @@ fn the_hand_calibrates_a_badly_fitted_arm_and_angles_become_physical() {
     assert_eq!(after, fitted, "nothing persisted without --write-servos");
 }
 
-/// What playing arm-wave did to the body.
-struct Played {
-    finish: Option<Finish>,
-    /// Keyframes the path reached.
-    reached: usize,
-    /// The largest miss, degrees, between the body's physical angles and
-    /// the keyframe, at every cycle where the path is at a keyframe.
-    worst: f64,
-}
-
-/// Plays arm-wave on the arm.
+/// Plays arm-wave on the arm; the truth from the servos' sensors.
 fn play_wave(
     robot: &Robot,
     cal: Option<&PathBuf>,
     buses: Vec<Bus<SimBus, ManualClock>>,
     sim: &SimBus,
 ) -> Played {
-    let motion_path = common::config("motions/arm-wave.yaml");
-    let robot_path = common::config("robots/so101.yaml");
-    let (motion, robot2) =
-        load_motion_calibrated(&motion_path, Some(&robot_path), cal.map(|p| p.as_path()))
-            .expect("motion loads");
-    assert_eq!(robot2.calibration, robot.calibration);
-    let traj = plan_motion(&motion, &robot2).expect("plans");
-    let options = RunOptions {
-        units: Some(motion.units),
-        ..RunOptions::default()
-    };
-    let mut run = VirtualRun::new(&robot2, traj, buses, options).expect("starts");
-    let rx = run.telemetry();
-    let ids: Vec<u8> = robot2.joints().map(|j| j.id).collect();
-    let mut worst: f64 = 0.0;
-    let mut hits = vec![0usize; motion.keyframes.len()];
-    for _ in 0..200_000 {
-        let going = run.step();
-        let body: Vec<f64> = ids
-            .iter()
-            .zip(mounts())
-            .map(|(&id, m)| truth(sim, id, m))
-            .collect();
-        while let Ok(msg) = rx.try_recv() {
-            let Telemetry::Cycle(c) = msg else { continue };
-            let planned: Vec<f64> = c.joints().iter().map(|j| j.planned).collect();
-            for (k, kf) in motion.keyframes.iter().enumerate() {
-                let at_kf = planned
-                    .iter()
-                    .zip(&kf.positions)
-                    .all(|(p, q)| (p - q).abs() < 0.2);
-                if at_kf {
-                    hits[k] += 1;
-                    for (b, q) in body.iter().zip(&kf.positions) {
-                        worst = worst.max((b - q).abs());
-                    }
-                }
-            }
-        }
-        if !going {
-            break;
-        }
-    }
-    println!("{:?} {:?} keyframes {hits:?}", run.finished(), run.fault());
-    Played {
-        finish: run.finished(),
-        reached: hits.iter().filter(|&&h| h > 0).count(),
-        worst,
-    }
+    let ids: Vec<u8> = robot.joints().map(|j| j.id).collect();
+    calib_play::play(
+        &common::config("motions/arm-wave.yaml"),
+        &common::config("robots/so101.yaml"),
+        robot,
+        cal.map(|p| p.as_path()),
+        buses,
+        || {
+            ids.iter()
+                .zip(mounts())
+                .map(|(&id, m)| truth(sim, id, m))
+                .collect()
+        },
+    )
 }
 
 #[test]

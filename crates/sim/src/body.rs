@@ -413,7 +413,10 @@ mod tests {
         assert_eq!(h.angle_at(0.5), None);
         assert_eq!(h.angle_at(1.0), Some(0.0));
         assert_eq!(h.angle_at(1.5), Some(45.0));
-        assert!(h.angle_at(1.1).is_some_and(|a| a < 9.0 * 0.2), "eased start");
+        assert!(
+            h.angle_at(1.1).is_some_and(|a| a < 9.0 * 0.2),
+            "eased start"
+        );
         assert_eq!(h.angle_at(2.0), Some(90.0));
         assert_eq!(h.angle_at(2.01), None);
     }

@@ -50,8 +50,14 @@ fn mounting_reads_raw_ticks_across_the_seam() {
     for step in 0..=20 {
         let t = Duration::from_millis(100 * step);
         bus.clock().advance_to(t);
-        let angle = bus.servo(1, |s| s.joint_angle()).flatten().expect("mounted");
-        assert!(angle >= last_angle - 1e-9, "the angle is continuous: {angle}");
+        let angle = bus
+            .servo(1, |s| s.joint_angle())
+            .flatten()
+            .expect("mounted");
+        assert!(
+            angle >= last_angle - 1e-9,
+            "the angle is continuous: {angle}"
+        );
         last_angle = angle;
         let raw = read_position(&mut bus, 1);
         let want = expected_raw(4000.0, 1.0, angle);
@@ -89,7 +95,12 @@ fn stops_hold_the_joint_and_load_the_servo() {
     let mut bus = bus_of([mounted(1, mount, 0.0)]);
     exchange(&mut bus, &write(1, addr::TORQUE_ENABLE, &[1]), MS);
     // Goal at +60 deg, beyond the stop at +30.
-    write_u16(&mut bus, 1, addr::GOAL_POSITION, (2048.0 + 60.0 * TPD) as u16);
+    write_u16(
+        &mut bus,
+        1,
+        addr::GOAL_POSITION,
+        (2048.0 + 60.0 * TPD) as u16,
+    );
     wait(&bus, Duration::from_millis(300));
     let (angle, load) = bus
         .servo(1, |s| (s.joint_angle(), s.present_load()))
@@ -127,7 +138,10 @@ fn the_hand_moves_torque_off_joints_and_a_torque_on_joint_resists() {
         let t = ms as f64 / 1000.0;
         let want = path.angle_at(t).unwrap();
         let a1 = bus.servo(1, |s| s.joint_angle()).flatten().unwrap();
-        assert!((a1 - want).abs() < 0.01, "torque-off follows: {a1} vs {want}");
+        assert!(
+            (a1 - want).abs() < 0.01,
+            "torque-off follows: {a1} vs {want}"
+        );
         let a2 = bus.servo(2, |s| s.joint_angle()).flatten().unwrap();
         assert!(a2.abs() < 2.5, "torque-on resists: {a2} at {t}");
         let a3 = bus.servo(3, |s| s.joint_angle()).flatten().unwrap();
@@ -200,5 +214,8 @@ fn homing_offset_moves_the_seam_for_present_and_goal() {
     write_u16(&mut bus, 1, addr::GOAL_POSITION, 4050);
     wait(&bus, Duration::from_secs(3));
     let angle = bus.servo(1, |s| s.joint_angle()).flatten().unwrap();
-    assert!((angle - 90.0).abs() < 1e-6, "ends on the upper stop: {angle}");
+    assert!(
+        (angle - 90.0).abs() < 1e-6,
+        "ends on the upper stop: {angle}"
+    );
 }

@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{repo, scratch, servobus, Sim, BIN};
+use common::{repo, scratch, Sim, BIN};
 
 const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
 
@@ -29,18 +29,10 @@ fn robot_naming(dir: &Path, calibration: &str) -> PathBuf {
 
 /// A servo register read through `servobus read`.
 fn read(port: &str, id: &str, register: &str) -> i64 {
-    let out = servobus(&["read", "--port", port, "--id", id, register]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    text.split(|c: char| !(c.is_ascii_digit() || c == '-'))
-        .filter(|w| !w.is_empty() && *w != "-")
-        .filter_map(|w| w.parse().ok())
-        .last()
-        .unwrap_or_else(|| panic!("a value in {text:?}"))
+    let v = common::servobus_json(&["read", "--port", port, "--id", id, register, "--json"]);
+    v["value"]
+        .as_i64()
+        .unwrap_or_else(|| panic!("a value in {v}"))
 }
 
 fn assert_refused(out: &Output, why: &str) {

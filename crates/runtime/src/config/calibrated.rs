@@ -57,7 +57,8 @@ pub(crate) fn apply(mut robot: Robot, path: &Path) -> Result<Robot, ConfigError>
             let (lo_deg, hi_deg) = jc.limits_deg(joint.model);
             let lo = joint.min.max(super::Units::Deg.convert(lo_deg, units));
             let hi = joint.max.min(super::Units::Deg.convert(hi_deg, units));
-            if !(lo < hi) {
+            // Also refuses NaN limits.
+            if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
                 return Err(src.error(
                     &jp.key("range"),
                     format!(

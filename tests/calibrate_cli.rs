@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{repo, scratch, Sim, BIN};
+use common::{repo, scratch, servobus, Sim, BIN};
 
 const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
 
@@ -200,5 +200,132 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     );
     assert_refused(&out, "far outside its calibrated range");
     assert_eq!(read(&port, "1", "torque_enable"), 0);
+    sim.stop();
+}
+
+/// The Python with LeRobot (SERVOBUS_LEROBOT_PYTHON, as prepared by
+/// `scripts/python_clients.sh`); the test is skipped loudly without it,
+/// and fails under CI=true.
+fn lerobot_python() -> Option<std::ffi::OsString> {
+    if let Some(python) = std::env::var_os("SERVOBUS_LEROBOT_PYTHON") {
+        return Some(python);
+    }
+    let why = "no Python with LeRobot: run `eval \"$(scripts/python_clients.sh)\"`";
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{why} (required under CI=true)");
+    }
+    eprintln!("\n*** SKIPPED: {why} ***\n");
+    None
+}
+
+/// A LeRobot calibration imported and written to the servos, exported
+/// again: LeRobot's own bus accepts it as calibrated, and its DEGREES,
+/// RANGE_M100_100 and RANGE_0_100 readings of the servos are what servobus
+/// says they are.
+#[test]
+fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
+    use servobus_runtime::calibrate::{lerobot_value, NormMode};
+    use servobus_runtime::config::{load_robot_calibrated, JointMap};
+    let Some(python) = lerobot_python() else {
+        return;
+    };
+    let dir = scratch("calib-lerobot-check");
+    let sim = Sim::start(&dir);
+    let port = sim.port().to_owned();
+    let cal = dir.join("arm.calibration.yaml");
+    let json = dir.join("arm.json");
+    let out = run(
+        &[
+            "calibrate",
+            "--robot",
+            "configs/robots/so101.yaml",
+            "--port",
+            &port,
+        ],
+        &[
+            Path::new("--from-lerobot"),
+            &repo(LEROBOT),
+            Path::new("--write-servos"),
+            Path::new("-o"),
+            &cal,
+            Path::new("--to-lerobot"),
+            &json,
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        text.matches("(unlocked, written, verified, locked)")
+            .count(),
+        6,
+        "{text}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&json).expect("exported"),
+        std::fs::read_to_string(repo(LEROBOT)).expect("fixture")
+    );
+    // Each joint to a pose inside its calibrated range (the simulated
+    // servos start wherever the robot file's rest puts them).
+    let fixture: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(repo(LEROBOT)).expect("fixture"))
+            .expect("json");
+    for (i, (_, m)) in fixture.as_object().expect("motors").iter().enumerate() {
+        let (lo, hi) = (m["range_min"].as_f64(), m["range_max"].as_f64());
+        let (lo, hi) = (lo.expect("min"), hi.expect("max"));
+        let goal = (lo + (hi - lo) * (0.2 + 0.12 * i as f64))
+            .round()
+            .to_string();
+        let id = m["id"].to_string();
+        for (register, value) in [("torque_enable", "1"), ("goal_position", goal.as_str())] {
+            let out = servobus(&["write", "--port", &port, "--id", &id, register, value]);
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let check = Command::new(&python)
+        .arg(repo("tests/python/lerobot_calibration_check.py"))
+        .arg(&port)
+        .arg(&json)
+        .output()
+        .expect("python runs");
+    let said = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success() && said.contains("OK calibrated"),
+        "{said}{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let robot = load_robot_calibrated(&repo("configs/robots/so101.yaml"), Some(&cal))
+        .expect("calibration applies");
+    let lines: Vec<&str> = said.lines().filter(|l| !l.starts_with("OK")).collect();
+    assert_eq!(lines.len(), 6, "one line per motor: {said}");
+    for line in lines {
+        let v: Vec<&str> = line.split_whitespace().collect();
+        let joint = robot.joint(v[0]).expect("a joint");
+        let jc = joint.calibration.as_ref().expect("calibrated");
+        let raw: i32 = v[1].parse().expect("raw");
+        let deg = JointMap::new(joint, robot.units)
+            .from_ticks(raw)
+            .to_degrees();
+        for (mode, theirs) in [
+            (NormMode::Degrees, v[2]),
+            (NormMode::RangeM100To100, v[3]),
+            (NormMode::Range0To100, v[4]),
+        ] {
+            let theirs: f64 = theirs.parse().expect("a number");
+            let ours = lerobot_value(jc, deg, mode).expect("known model");
+            assert!(
+                (ours - theirs).abs() < 1e-6,
+                "{line}: {mode:?} servobus {ours}"
+            );
+        }
+    }
     sim.stop();
 }

@@ -18,8 +18,8 @@ use anyhow::{bail, Context};
 use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
 use servobus_runtime::bus_settings;
 use servobus_runtime::calibrate::{
-    calibrate, from_lerobot, prepare_bus, to_lerobot, write_homing, LiveJoint, Operator,
-    ProcedureOptions, Refusal, Step,
+    calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
+    Operator, ProcedureOptions, Refusal, Step,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot_calibrated, load_robot_design, save_calibration, utc_now,
@@ -72,8 +72,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let cal = if let Some(json) = &args.from_lerobot {
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("cannot read {}", json.display()))?;
-        from_lerobot(&design, &text, &format!("imported from {}", json.display()))
-            .with_context(|| json.display().to_string())?
+        let cal = from_lerobot(&design, &text, &format!("imported from {}", json.display()))
+            .with_context(|| json.display().to_string())?;
+        match (&ports, args.write_servos) {
+            (Some(ports), true) => write_imported(&design, ports, cal)?,
+            (None, true) => bail!("--write-servos needs the servos' --port"),
+            _ => cal,
+        }
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
     } else if let Some(out) = &args.to_lerobot {
@@ -129,9 +134,11 @@ fn ports(args: &Args, robot: &Robot) -> Option<Vec<String>> {
     ports.into_iter().collect()
 }
 
-/// Reply deadlines allowance: calibrating is not timed, so a slow adapter
-/// or a loaded host must not make a servo look absent.
-const PATIENCE: Duration = Duration::from_millis(5);
+/// Reply deadline allowance: calibrating and the checks before a run are
+/// not timed, so a slow adapter or a loaded host (a pty served by a process
+/// that waits for the CPU) must not make a present servo look absent. A
+/// servo that is really missing costs this much per try, once.
+const PATIENCE: Duration = Duration::from_millis(50);
 
 type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
 
@@ -177,6 +184,29 @@ fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calib
                 );
                 i += 1;
             }
+        }
+    }
+    Ok(cal)
+}
+
+/// Stores an imported calibration in the servos as LeRobot does: each
+/// servo's homing offset and position limits, in the frame it is played in.
+fn write_imported(
+    robot: &Robot,
+    ports: &[String],
+    mut cal: Calibration,
+) -> anyhow::Result<Calibration> {
+    let mut buses = open(robot, ports)?;
+    let mut joints = cal.joints.iter_mut();
+    for (bus, config) in buses.iter_mut().zip(&robot.buses) {
+        for joint in &config.joints {
+            let Some(jc) = joints.next() else { break };
+            *jc = write_frame(bus, joint, jc, jc.play_frame())
+                .with_context(|| format!("joint `{}`: writing the EEPROM", joint.name))?;
+            println!(
+                "servo {} ({}): Homing_Offset {}, limits {}..{} (unlocked, written, verified, locked)",
+                joint.id, joint.name, jc.homing_offset, jc.range[0], jc.range[1]
+            );
         }
     }
     Ok(cal)

@@ -105,17 +105,49 @@ pub fn write_homing<T: Transport, C: Clock>(
     let Some(turn) = turn_ticks(joint.model) else {
         return Ok(cal.clone());
     };
+    let (homing_offset, shift) = centring_offset(cal.range, cal.homing_offset, turn);
+    write_frame(
+        bus,
+        joint,
+        cal,
+        crate::config::PlayFrame {
+            homing_offset,
+            shift,
+        },
+    )
+}
+
+/// Writes to `joint`'s servo's EEPROM the homing offset of `frame` and
+/// position limits at the calibrated range in that frame (what LeRobot
+/// checks to call a servo calibrated); returns the calibration in `frame`.
+/// A model without the offset register keeps its calibration.
+///
+/// # Errors
+/// The failed step's bus error; [`BusError::InvalidRequest`] when the range
+/// does not fit the position registers in that frame.
+pub fn write_frame<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+    cal: &JointCalibration,
+    frame: crate::config::PlayFrame,
+) -> Result<JointCalibration, BusError> {
     let Some(offset_reg) = joint.model.map().get("offset") else {
         return Ok(cal.clone());
     };
-    let (homing_offset, shift) = centring_offset(cal.range, cal.homing_offset, turn);
-    let moved = cal.in_frame(crate::config::PlayFrame {
-        homing_offset,
-        shift,
-    });
-    bus.write_register(joint.id, offset_reg, homing_offset)?;
-    let lo = i32::try_from(moved.range[0]).unwrap_or(0);
-    let hi = i32::try_from(moved.range[1]).unwrap_or(turn - 1);
+    if turn_ticks(joint.model).is_none() {
+        return Ok(cal.clone());
+    }
+    let moved = cal.in_frame(frame);
+    let limit = |v: i64| {
+        i32::try_from(v)
+            .ok()
+            .filter(|v| (0..=joint.model.max_position() as i32).contains(v))
+            .ok_or(BusError::InvalidRequest(
+                "range outside the position registers",
+            ))
+    };
+    let (lo, hi) = (limit(moved.range[0])?, limit(moved.range[1])?);
+    bus.write_register(joint.id, offset_reg, frame.homing_offset)?;
     bus.write_register(joint.id, register(joint.model, "min_angle_limit")?, lo)?;
     bus.write_register(joint.id, register(joint.model, "max_angle_limit")?, hi)?;
     Ok(moved)

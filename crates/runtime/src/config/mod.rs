@@ -39,6 +39,9 @@ pub use calibration::{
     RANGE_MARGIN_DEG,
 };
 pub use error::ConfigError;
+// For the simulator's body files, which report errors the same way.
+pub(crate) use error::Source;
+pub(crate) use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{

@@ -194,7 +194,11 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     // for the CPU).
     let robot_file = dir.join("so101.yaml");
     let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    std::fs::write(&robot_file, text.replace("latency_us: 0 ", "latency_us: 3000 ")).expect("robot");
+    std::fs::write(
+        &robot_file,
+        text.replace("latency_us: 0 ", "latency_us: 3000 "),
+    )
+    .expect("robot");
     let robot = load_robot(&robot_file).expect("so101");
     // The shipped badly fitted arm: the lift's range crosses the seam, the
     // elbow and wrist are reversed. The hand sweeps to the stops (the roll

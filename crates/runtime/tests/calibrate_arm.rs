@@ -121,6 +121,9 @@ struct Hand {
     ids: Vec<u8>,
     keys: Vec<(f64, Vec<f64>)>,
     steps: Vec<Step>,
+    /// Times at which the person presses Enter (none: never).
+    enter_at: Vec<f64>,
+    now: f64,
 }
 
 impl Hand {
@@ -147,13 +150,20 @@ impl Operator for Hand {
         self.steps.push(step);
     }
     fn watch(&mut self, at: Duration, _joints: &[LiveJoint]) {
-        let pose = self.pose_at(at.as_secs_f64());
+        self.now = at.as_secs_f64();
+        let pose = self.pose_at(self.now);
         for ((&id, m), deg) in self.ids.iter().zip(mounts()).zip(pose) {
             place(&self.sim, id, m, deg);
         }
     }
     fn confirmed(&mut self) -> bool {
-        false
+        match self.enter_at.first() {
+            Some(&t) if self.now >= t => {
+                self.enter_at.remove(0);
+                true
+            }
+            _ => false,
+        }
     }
 }
 
@@ -211,6 +221,8 @@ fn measured_arm() -> (
         ids,
         keys: script(),
         steps: Vec::new(),
+        enter_at: Vec::new(),
+        now: 0.0,
     };
     let options = ProcedureOptions {
         auto: true,
@@ -465,4 +477,36 @@ fn write_servos_stores_centring_offsets_and_plays_the_same() {
     );
     assert_eq!(played.finish, Some(Finish::Completed));
     assert!(played.worst < 1.0, "misses by {:.2} deg", played.worst);
+}
+
+#[test]
+fn a_person_pressing_enter_ends_each_step_instead_of_stillness() {
+    let design = load_robot(&common::config("robots/so101.yaml")).expect("so101");
+    let (mut buses, sim) = arm(&design);
+    let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
+    let last = script().last().expect("keys").0;
+    let mut hand = Hand {
+        sim: sim.clone(),
+        ids,
+        keys: script(),
+        steps: Vec::new(),
+        // Enter once the pose is held (the hand holds it from 1 s to 4 s),
+        // and again 10 s after the sweep is over.
+        enter_at: vec![3.0, last + 10.0],
+        now: 0.0,
+    };
+    for (&id, m) in hand.ids.iter().zip(mounts()) {
+        place(&sim, id, m, 30.0f64.clamp(m.stops.0, m.stops.1));
+    }
+    let options = ProcedureOptions {
+        auto: false,
+        taken: "test".into(),
+        ..ProcedureOptions::default()
+    };
+    let cal = calibrate(&design, &mut buses, &mut hand, &options).expect("calibrates");
+    // Without Enter, stillness would have ended the sweep 2 s after the hand.
+    let end = buses[0].clock().now().as_secs_f64();
+    assert!((end - (last + 10.0)).abs() < 0.1, "ended at {end} s");
+    let dirs: Vec<i8> = cal.joints.iter().map(|c| c.direction).collect();
+    assert_eq!(dirs, [1, -1, 1, -1, 1, -1]);
 }

@@ -116,7 +116,7 @@ pub enum CalibrateError {
 }
 
 impl CalibrateError {
-    pub(crate) fn bus(_config: &BusConfig, joint: &JointConfig, source: BusError) -> Self {
+    pub(crate) fn bus(joint: &JointConfig, source: BusError) -> Self {
         CalibrateError::Bus {
             joint: joint.name.clone(),
             id: joint.id,

@@ -134,7 +134,7 @@ fn find_servos<'a, T: Transport, C: Clock>(
     let mut joints = Vec::new();
     for (b, (bus, config)) in buses.iter_mut().zip(&robot.buses).enumerate() {
         for joint in &config.joints {
-            let found = identify(bus, joint).map_err(|e| CalibrateError::bus(config, joint, e))?;
+            let found = identify(bus, joint).map_err(|e| CalibrateError::bus(joint, e))?;
             if found.model.number != joint.model.number {
                 return Err(CalibrateError::Model {
                     joint: joint.name.clone(),
@@ -143,8 +143,7 @@ fn find_servos<'a, T: Transport, C: Clock>(
                     expected: joint.model.name,
                 });
             }
-            let now =
-                i64::from(present(bus, joint).map_err(|e| CalibrateError::bus(config, joint, e))?);
+            let now = i64::from(present(bus, joint).map_err(|e| CalibrateError::bus(joint, e))?);
             joints.push(Joint {
                 bus: b,
                 config: joint,

@@ -85,7 +85,7 @@ pub fn torque_off<T: Transport, C: Clock>(
 ) -> Result<(), CalibrateError> {
     for joint in &config.joints {
         bus.write(joint.id, addr::TORQUE_ENABLE, &[0])
-            .map_err(|e| CalibrateError::bus(config, joint, e))?;
+            .map_err(|e| CalibrateError::bus(joint, e))?;
     }
     Ok(())
 }

@@ -186,11 +186,7 @@ fn wait_step<T: Transport, C: Clock>(
         }
         for j in joints.iter_mut() {
             let bus = &mut buses[j.bus];
-            let tick = present(bus, j.config).map_err(|e| CalibrateError::Bus {
-                joint: j.config.name.clone(),
-                id: j.config.id,
-                source: e,
-            })?;
+            let tick = present(bus, j.config).map_err(|e| CalibrateError::bus(j.config, e))?;
             j.live.now = if sweeping {
                 j.unwrap.push(tick)
             } else {

@@ -281,7 +281,12 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
             .to_string();
         let id = m["id"].to_string();
         for (register, value) in [("torque_enable", "1"), ("goal_position", goal.as_str())] {
-            let out = servobus(&["write", "--port", &port, "--id", &id, register, value]);
+            // A loaded host may make a reply late; the write is idempotent.
+            let args = ["write", "--port", &port, "--id", &id, register, value];
+            let out = (0..3)
+                .map(|_| servobus(&args))
+                .find(|o| o.status.success())
+                .unwrap_or_else(|| servobus(&args));
             assert!(
                 out.status.success(),
                 "{}",
@@ -290,12 +295,20 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
         }
     }
     std::thread::sleep(std::time::Duration::from_millis(1500));
-    let check = Command::new(&python)
-        .arg(repo("tests/python/lerobot_calibration_check.py"))
-        .arg(&port)
-        .arg(&json)
-        .output()
-        .expect("python runs");
+    // LeRobot's reads give up on one late reply, which a loaded host can
+    // cause: up to three tries, the first clean one counts.
+    let lerobot_check = || {
+        Command::new(&python)
+            .arg(repo("tests/python/lerobot_calibration_check.py"))
+            .arg(&port)
+            .arg(&json)
+            .output()
+            .expect("python runs")
+    };
+    let check = (0..2)
+        .map(|_| lerobot_check())
+        .find(|o| o.status.success())
+        .unwrap_or_else(lerobot_check);
     let said = String::from_utf8_lossy(&check.stdout);
     assert!(
         check.status.success() && said.contains("OK calibrated"),

@@ -146,7 +146,7 @@ fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Resu
 }
 
 /// Whether `path` is (a link to) a pseudo-terminal.
-fn is_pty(path: &str) -> bool {
+pub(crate) fn is_pty(path: &str) -> bool {
     std::fs::canonicalize(path).is_ok_and(|p| p.starts_with("/dev/pts"))
 }
 

@@ -174,7 +174,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     eprintln!("warning: {warning}");
                 }
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
-                buses.push(Bus::new(transport, clock, bus_settings(bus)));
+                let mut settings = bus_settings(bus);
+                if super::bus::is_pty(port) {
+                    settings = settings.with_latency(bus.latency.max(PTY_LATENCY));
+                }
+                buses.push(Bus::new(transport, clock, settings));
             }
             super::calibrate::check_buses(&robot, &mut buses, ports)?;
             spawn(&robot, trajectory, buses, options)?
@@ -486,6 +490,12 @@ fn fault_policy(backend: &Backend, rate_hz: f64) -> FaultPolicy {
                 missing_cycles: defaults.missing_cycles.max(cycles),
                 ..defaults
             }
+        }
+        // A simulator served on a pty (`servobus sim`) answers from a
+        // process that can wait for the CPU like the built-in one: the
+        // same allowance.
+        Backend::Hardware(ports) if ports.iter().all(|p| super::bus::is_pty(p)) => {
+            fault_policy(&Backend::Simulated, rate_hz)
         }
         Backend::Fast | Backend::Hardware(_) => defaults,
     }

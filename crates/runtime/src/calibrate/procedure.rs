@@ -50,6 +50,11 @@ impl Default for ProcedureOptions {
 /// person did not move it.
 pub const MIN_RANGE_DEG: f64 = 10.0;
 
+/// How long a servo may stay silent while the procedure watches: a hand
+/// turns a joint well under half a turn in this time, so the unwrapping
+/// still holds when it answers again.
+const MAX_SILENCE: Duration = Duration::from_millis(1000);
+
 /// A joint is first moved towards positive angles; it has left the pose
 /// once this far from it, degrees.
 const DEPARTURE_DEG: f64 = 4.0;
@@ -78,6 +83,8 @@ struct Joint<'a> {
     live: LiveJoint,
     pose_tick: i64,
     departure: Option<i64>,
+    /// When the servo last answered.
+    heard: Duration,
 }
 
 /// Runs the calibration of `robot` on `buses` (in the robot's bus order)
@@ -156,6 +163,7 @@ fn find_servos<'a, T: Transport, C: Clock>(
                 },
                 pose_tick: now,
                 departure: None,
+                heard: bus.clock().now(),
                 found,
             });
         }
@@ -186,7 +194,17 @@ fn wait_step<T: Transport, C: Clock>(
         }
         for j in joints.iter_mut() {
             let bus = &mut buses[j.bus];
-            let tick = present(bus, j.config).map_err(|e| CalibrateError::bus(j.config, e))?;
+            let tick = match present(bus, j.config) {
+                Ok(tick) => {
+                    j.heard = next;
+                    tick
+                }
+                // A lost reply costs one reading; a servo silent for long
+                // ends the calibration (the joint may have turned too far
+                // to unwrap its next reading).
+                Err(_) if next.saturating_sub(j.heard) < MAX_SILENCE => continue,
+                Err(e) => return Err(CalibrateError::bus(j.config, e)),
+            };
             j.live.now = if sweeping {
                 j.unwrap.push(tick)
             } else {

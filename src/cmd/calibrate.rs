@@ -29,8 +29,8 @@ use servobus_runtime::config::{
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file.
-    #[arg(long)]
+    /// The robot file, or a built-in robot's name.
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: PathBuf,
     /// Serial port of the servos, for the robot's first bus (default: the
     /// robot file's ports).
@@ -95,7 +95,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
              or --from-lerobot FILE to import a LeRobot calibration"
         );
     };
-    save_calibration(&cal, &output)?;
+    save_calibration(&cal, &output)
+        .with_context(|| format!("cannot write {}", output.display()))?;
     // Applying it now shows at once a calibration the robot cannot use.
     let robot = load_robot_calibrated(&args.robot, Some(&output))?;
     print_summary(&robot, &output);

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use servobus_runtime::config::{load_robot, Robot};
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
@@ -26,8 +26,8 @@ Example: --faults drop=0.01,corrupt=0.01,seed=7";
 /// Arguments of `servobus sim`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file whose servos to serve.
-    #[arg(long)]
+    /// The robot whose servos to serve: a file, or a built-in name.
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Make this path a symbolic link to the pty (removed on exit).
     #[arg(long)]
@@ -158,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Ok(result) => {
                 result.with_context(|| format!("{}: cannot write the truth", path.display()))?
             }
-            Err(_) => bail!("{}: the truth writer failed", path.display()),
+            Err(_) => anyhow::bail!("{}: the truth writer failed", path.display()),
         }
     }
     served?;
@@ -209,18 +209,21 @@ fn servos_of(
         Some(name) => {
             let Some(bus) = robot.buses.iter().find(|b| b.name == name) else {
                 let names: Vec<&str> = robot.buses.iter().map(|b| b.name.as_str()).collect();
-                bail!(
+                return Err(super::exit::input(format!(
                     "{}: no bus named `{name}` (buses: {})",
                     robot.path.display(),
                     names.join(", ")
-                );
+                )));
             };
             vec![bus]
         }
         None => robot.buses.iter().collect(),
     };
     let Some(first) = buses.first() else {
-        bail!("{}: the robot has no bus", robot.path.display());
+        return Err(super::exit::input(format!(
+            "{}: the robot has no bus",
+            robot.path.display()
+        )));
     };
     let baud = first.baud;
     let mut seen = std::collections::HashMap::new();
@@ -228,7 +231,7 @@ fn servos_of(
     for bus in buses {
         for joint in &bus.joints {
             if let Some(other) = seen.insert(joint.id, (&bus.name, &joint.name)) {
-                bail!(
+                return Err(super::exit::input(format!(
                     "{}: ID {} is used by `{}` on bus `{}` and by `{}` on bus `{}`; \
                      serve one bus at a time with --bus",
                     robot.path.display(),
@@ -237,7 +240,7 @@ fn servos_of(
                     other.0,
                     joint.name,
                     bus.name
-                );
+                )));
             }
         }
         // Every servo listens at the first bus's rate: that is the pty's.

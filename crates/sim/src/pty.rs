@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use servobus_driver::{Clock, SystemClock};
+use servobus_io::{Clock, SystemClock};
 use servobus_timing::Link;
 
 use crate::engine::{Engine, SimStats};

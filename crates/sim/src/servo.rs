@@ -8,6 +8,7 @@ use servobus_protocol::{encode, Instruction, Packet, StatusFlags, BROADCAST_ID};
 use crate::body::{Body, HandPath, Mount, Truth};
 use crate::dynamics::{Drive, Joint, MAX_STEP_S};
 use crate::model::{from_sign_magnitude, sign_magnitude, Area, Endian, SimModel};
+use crate::model::{CURRENT_BIT, LOAD_BIT, SPEED_BIT};
 
 /// Addresses shared by every model's layout (those of the protocol crate's
 /// register maps).
@@ -269,12 +270,12 @@ impl SimServo {
 
     /// Present speed (register 58) in ticks/s, signed.
     pub fn present_speed(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_SPEED), 15)
+        from_sign_magnitude(self.read_u16(addr::PRESENT_SPEED), SPEED_BIT)
     }
 
     /// Present load (register 60) in 0.1 % of the maximum torque, signed.
     pub fn present_load(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_LOAD), 10)
+        from_sign_magnitude(self.read_u16(addr::PRESENT_LOAD), LOAD_BIT)
     }
 
     /// The status flags the servo reports (register 65 and every reply).
@@ -774,7 +775,7 @@ impl SimServo {
         } else {
             0
         };
-        let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), 15);
+        let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), SPEED_BIT);
         let max_speed = if goal_speed != 0 {
             f64::from(goal_speed.unsigned_abs()).min(m.max_speed)
         } else if let Some(v) = self.timed_speed {
@@ -873,9 +874,9 @@ impl SimServo {
             self.write_u16_raw(addr::GOAL_POSITION, raw, false);
         }
         let speed = self.joint.vel.round().clamp(-32767.0, 32767.0) as i32;
-        self.write_u16_raw(addr::PRESENT_SPEED, sign_magnitude(speed, 15), false);
+        self.write_u16_raw(addr::PRESENT_SPEED, sign_magnitude(speed, SPEED_BIT), false);
         let load = (self.joint.effort * 1000.0).round() as i32;
-        self.write_u16_raw(addr::PRESENT_LOAD, sign_magnitude(load, 10), false);
+        self.write_u16_raw(addr::PRESENT_LOAD, sign_magnitude(load, LOAD_BIT), false);
         self.table[usize::from(addr::PRESENT_VOLTAGE)] = self.voltage_dv();
         self.table[usize::from(addr::PRESENT_TEMPERATURE)] =
             self.joint.temp_c.round().clamp(0.0, 255.0) as u8;
@@ -885,7 +886,11 @@ impl SimServo {
             let idle = if self.torque_enabled() { 2.0 } else { 0.0 };
             let current =
                 (self.joint.effort.abs() * self.model.stall_current + idle).round() as i32;
-            self.write_u16_raw(addr::PRESENT_CURRENT, sign_magnitude(current, 15), false);
+            self.write_u16_raw(
+                addr::PRESENT_CURRENT,
+                sign_magnitude(current, CURRENT_BIT),
+                false,
+            );
         }
     }
 }

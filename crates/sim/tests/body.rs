@@ -6,7 +6,7 @@ mod common;
 use std::time::Duration;
 
 use common::*;
-use servobus_driver::ManualClock;
+use servobus_io::ManualClock;
 use servobus_protocol::{parse_frame, StatusFlags};
 use servobus_sim::{addr, HandPath, Mount, SimBus, SimServo, Truth};
 

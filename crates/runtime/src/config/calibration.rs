@@ -169,8 +169,8 @@ pub(crate) fn load_source(path: &Path) -> Result<(Calibration, Source), ConfigEr
 /// Writes `cal` to `path` as YAML, with a header saying what it is.
 ///
 /// # Errors
-/// [`ConfigError::Read`] (with the writing error) when the file cannot be written.
-pub fn save_calibration(cal: &Calibration, path: &Path) -> Result<(), ConfigError> {
+/// The operating system's error when the file cannot be written.
+pub fn save_calibration(cal: &Calibration, path: &Path) -> std::io::Result<()> {
     let body = serde_yaml::to_string(cal).unwrap_or_default();
     let text = format!(
         "# servobus calibration of one physical `{}` robot: ticks of the calibration\n\
@@ -178,10 +178,7 @@ pub fn save_calibration(cal: &Calibration, path: &Path) -> Result<(), ConfigErro
          # robot's files mean physical angles through this file.\n{body}",
         cal.robot
     );
-    std::fs::write(path, text).map_err(|source| ConfigError::Read {
-        path: path.to_owned(),
-        source,
-    })
+    std::fs::write(path, text)
 }
 
 fn validate(cal: &Calibration, src: &Source) -> Result<(), ConfigError> {

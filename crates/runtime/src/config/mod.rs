@@ -26,11 +26,13 @@ mod budget;
 mod calibrated;
 mod calibration;
 mod error;
+mod files;
 mod locate;
 mod mapping;
 mod motion;
 mod robot;
 pub mod seam;
+mod syntax;
 mod trajectory;
 mod units;
 
@@ -39,6 +41,7 @@ pub use calibration::{
     RANGE_MARGIN_DEG,
 };
 pub use error::ConfigError;
+pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
 // For the simulator's body files, which report errors the same way.
 pub(crate) use error::Source;
 pub(crate) use locate::FieldPath;

@@ -250,7 +250,7 @@ pub fn load_motion_calibrated(
     let root = FieldPath::root();
     let robot_path = match (robot_override, &raw.robot) {
         (Some(p), _) => p.to_owned(),
-        (None, Some(rel)) => path.parent().unwrap_or(Path::new("")).join(rel),
+        (None, Some(rel)) => super::files::tidy(path.parent().unwrap_or(Path::new("")).join(rel)),
         (None, None) => {
             return Err(src.error(
                 &root,
@@ -258,7 +258,18 @@ pub fn load_motion_calibrated(
             ))
         }
     };
-    let (robot, robot_src) = robot::load_calibrated(&robot_path, calibration)?;
+    let (robot, robot_src) =
+        robot::load_calibrated(&robot_path, calibration).map_err(|e| {
+            match (e, robot_override) {
+        // A robot the motion names but that cannot be read: point at the
+        // `robot:` line, which is what to fix.
+        (e @ ConfigError::Read { .. }, None) => src.error(
+            &root.key("robot"),
+            format!("{e}; fix this `robot:` (it is relative to this motion file) or pass --robot"),
+        ),
+        (e, _) => e,
+    }
+        })?;
     match raw.rate {
         Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,

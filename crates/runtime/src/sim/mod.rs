@@ -86,13 +86,11 @@ pub enum SimRobotError {
 /// # Errors
 /// [`SimRobotError::Baud`] for a rate outside the servo baud table.
 pub fn baud_index(robot: &Robot, bus: &BusConfig) -> Result<u8, SimRobotError> {
-    (0u8..8)
-        .find(|&i| servobus_sim::baud_of_index(i) == Some(bus.baud))
-        .ok_or_else(|| SimRobotError::Baud {
-            file: robot.path.clone(),
-            bus: bus.name.clone(),
-            baud: bus.baud,
-        })
+    servobus_protocol::registers::baud_index(bus.baud).ok_or_else(|| SimRobotError::Baud {
+        file: robot.path.clone(),
+        bus: bus.name.clone(),
+        baud: bus.baud,
+    })
 }
 
 /// The simulated servos of `bus`: each joint's servo with its ID, model, the

@@ -28,7 +28,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig, RateRemedy, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, RateRemedy, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
 
@@ -44,6 +44,10 @@ pub struct Args {
     /// port in the robot file; without one, the simulator on a pty).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`); with --port it must match the servos.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// How long to measure, in seconds.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
@@ -154,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let mut robot = load_robot_any_rate(&path)?;
+    let mut robot = load_robot_any_rate_calibrated(&path, args.calibration.as_deref())?;
     // The robot's rate must fit as it would for `play`: bench measures the
     // cycle that rate would run.
     for bus in &mut robot.buses {
@@ -181,7 +185,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let mut bus = bus.clone();
         bus.busy_poll |= args.busy_poll;
         runs.push(std::thread::spawn(move || {
-            bench_bus(&robot, &bus, port, clock, duration)
+            bench_bus(&robot, index, &bus, port, clock, duration)
         }));
     }
     let mut buses = Vec::new();
@@ -202,6 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn bench_bus(
     robot: &Robot,
+    index: usize,
     bus: &BusConfig,
     port: Option<String>,
     clock: SystemClock,
@@ -219,7 +224,10 @@ fn bench_bus(
     // The simulator (when no port is given) serves until `stop`.
     let stop = Arc::new(AtomicBool::new(false));
     let (path, server, backend) = match port {
-        Some(port) => (port.clone(), None, format!("serial port {port}")),
+        Some(port) => {
+            super::calibrate::check_port(robot, index, &port)?;
+            (port.clone(), None, format!("serial port {port}"))
+        }
         None => {
             let servos = servobus_runtime::sim::bus_servos(robot, bus)?;
             let mut server = PtyServer::open(bus.baud, servos)

@@ -170,3 +170,20 @@ fn bench_refuses_a_robot_rate_above_the_maximum() {
     ]);
     assert_eq!(ok.status.code(), Some(0), "{:?}", text(&ok));
 }
+
+#[test]
+fn latency_us_is_a_number_or_auto() {
+    let src = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
+    assert!(src.contains("latency_us: auto"), "so101 ships `auto`");
+    let (text_auto, _) = text(&servobus(&["budget", "--robot", "so101"]));
+    assert!(text_auto.contains("adapter latency auto"), "{text_auto}");
+
+    let bad = src.replacen("latency_us: auto", "latency_us: fast", 1);
+    let path = scratch("latency-word").join("arm.yaml");
+    std::fs::write(&path, bad).expect("write robot");
+    let out = servobus(&["budget", "--robot", path.to_str().expect("utf-8")]);
+    assert_eq!(out.status.code(), Some(2), "{:?}", text(&out));
+    let (_, err) = text(&out);
+    assert!(err.contains("latency_us"), "{err}");
+    assert!(err.contains("`auto`"), "{err}");
+}

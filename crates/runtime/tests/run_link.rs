@@ -93,3 +93,22 @@ fn a_servo_that_stops_answering_is_still_found_within_3_cycles() {
     // Its reads time out at the bounded allowance, not later.
     assert!(in_force(&run) <= 3 * MS);
 }
+
+#[test]
+fn a_number_in_the_robot_file_wins() {
+    let (path, mut robot) = common::motion("arm-wave.yaml");
+    robot.buses[0].latency = MS;
+    robot.buses[0].latency_auto = false;
+    let (buses, _sims) = common::sim_buses_at(&robot, &path);
+    let mut run = VirtualRun::new(&robot, path, buses, RunOptions::default()).expect("starts");
+    while run.step() {}
+    assert_eq!(run.finished(), Some(Finish::Completed));
+    // Nothing measured at start-up, nothing learned: 1 ms stays in force
+    // although the simulated link adds no latency at all.
+    assert_eq!(in_force(&run), MS);
+    let report = run.report();
+    let b = &report.buses[0];
+    assert!(!b.latency_learned);
+    assert_eq!(b.startup_probes, 0);
+    assert!(b.latency_us < 1.0, "{b:?}");
+}

@@ -103,6 +103,18 @@ impl Sim {
         self.link.to_str().expect("utf-8 path")
     }
 
+    /// Runs `servobus ARGS --port PORT --latency-us 10000` against this
+    /// simulator. The latency is generous because the simulator runs in
+    /// wall-clock time and its process may be scheduled milliseconds late
+    /// on a loaded machine; nothing here measures time.
+    pub fn run(&self, args: &[&str]) -> Output {
+        Command::new(BIN)
+            .args(args)
+            .args(["--port", self.port(), "--latency-us", "10000"])
+            .output()
+            .expect("run servobus")
+    }
+
     /// Stops the simulator as a user would (SIGTERM) and waits for it.
     pub fn stop(mut self) {
         let pid = self.child.id().to_string();

@@ -43,6 +43,16 @@ pub fn num(v: &serde_json::Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
 }
 
+/// Writes `text` to the file `name` in `dir` (a folder of its own under
+/// Cargo's temporary directory for tests, made if missing).
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
 /// A fresh scratch directory for one test.
 pub fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("servobus-{name}-{}", std::process::id()));

@@ -1,18 +1,14 @@
 //! Bad robot and motion files are refused with `file:line:column: field: reason`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use servobus_runtime::config::{load_motion, load_robot, ConfigError};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("config_errors")
-        .join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+    common::temp_file(&format!("config_errors/{dir}"), name, text)
 }
 
 /// A valid two-joint robot; tests break one line of it.

@@ -18,6 +18,16 @@ pub fn config(rel: &str) -> PathBuf {
         .join(rel)
 }
 
+/// Writes `text` to the file `name` in `dir` (a folder of its own under
+/// Cargo's temporary directory for tests, made if missing).
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
 /// A robot file under `configs/robots/`.
 pub fn robot(name: &str) -> Robot {
     load_robot(&config(&format!("robots/{name}"))).expect("robot file loads")

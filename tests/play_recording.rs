@@ -65,6 +65,16 @@ fn write_recording(path: &Path, noisy: bool) {
     std::fs::write(path, text).expect("recording");
 }
 
+/// A scratch folder `name` holding the robot and a recording
+/// (`take.csv`, noisy or smooth): the folder, the robot and the recording.
+fn take(name: &str, noisy: bool) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = scratch(name);
+    let robot = robot(&dir);
+    let rec = dir.join("take.csv");
+    write_recording(&rec, noisy);
+    (dir, robot, rec)
+}
+
 /// Commanded positions per joint from a `play --log` file.
 fn commanded(log: &Path, joint: &str) -> Vec<(f64, f64)> {
     let text = std::fs::read_to_string(log).expect("log");
@@ -109,10 +119,7 @@ fn check_limits(series: &[(f64, f64)], (vm, am, jm): (f64, f64, f64)) {
 
 #[test]
 fn a_noisy_recording_with_steps_is_played_within_every_limit() {
-    let dir = scratch("play_recording_noisy");
-    let robot = robot(&dir);
-    let rec = dir.join("take.csv");
-    write_recording(&rec, true);
+    let (dir, robot, rec) = take("play_recording_noisy", true);
     let log = dir.join("log.csv");
     let v = play_json(&rec, &robot, &["--log", log.to_str().expect("utf-8")]);
     assert_eq!(v["finish"], "completed", "{v}");
@@ -138,10 +145,7 @@ fn a_noisy_recording_with_steps_is_played_within_every_limit() {
 
 #[test]
 fn a_smooth_recording_is_reproduced_closely() {
-    let dir = scratch("play_recording_smooth");
-    let robot = robot(&dir);
-    let rec = dir.join("take.csv");
-    write_recording(&rec, false);
+    let (_, robot, rec) = take("play_recording_smooth", false);
     let v = play_json(&rec, &robot, &[]);
     for j in v["recording"]["joints"]
         .as_array()

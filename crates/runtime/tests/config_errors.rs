@@ -68,7 +68,7 @@ fn the_valid_robot_loads() {
 
 #[test]
 fn robot_errors_name_the_file_line_column_and_field() {
-    let cases: [(&str, &str, &str, (usize, usize), &str, &str); 8] = [
+    let cases = [
         // duplicate id points at the second id
         (
             "dup_id",
@@ -198,7 +198,7 @@ fn motion_error(test: &str, motion: &str) -> (PathBuf, ConfigError) {
 
 #[test]
 fn motion_errors_name_the_file_line_column_and_field() {
-    let cases: [(&str, &str, (usize, usize), &str, &str); 7] = [
+    let cases = [
         // a keyframe outside a limit names the joint and limit
         (
             "kf_limit",

@@ -144,16 +144,20 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     import_lerobot(&repo(LEROBOT), &other);
     let sim = Sim::start(&dir);
     let port = sim.port().to_owned();
-    let out = run(
-        &[
-            "play",
-            "configs/motions/arm-wave.yaml",
-            "--port",
-            &port,
-            "--calibration",
-        ],
-        &[&other],
-    );
+    // `play` on the simulator's port with a calibration file.
+    let play_with = |calibration: &Path| {
+        run(
+            &[
+                "play",
+                "configs/motions/arm-wave.yaml",
+                "--port",
+                &port,
+                "--calibration",
+            ],
+            &[calibration],
+        )
+    };
+    let out = play_with(&other);
     assert_refused(
         &out,
         "holds homing offset 0, the calibration was taken with -1389",
@@ -171,16 +175,7 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     std::fs::write(&moved, v.to_string()).expect("write json");
     let far = dir.join("far.calibration.yaml");
     import_lerobot(&moved, &far);
-    let out = run(
-        &[
-            "play",
-            "configs/motions/arm-wave.yaml",
-            "--port",
-            &port,
-            "--calibration",
-        ],
-        &[&far],
-    );
+    let out = play_with(&far);
     assert_refused(&out, "far outside its calibrated range");
     assert_eq!(read(&port, "1", "torque_enable"), 0);
     sim.stop();

@@ -12,7 +12,9 @@
 use servobus_protocol::registers::{Reg, RegisterValue, ValueError};
 use servobus_protocol::StatusFlags;
 
-use crate::{Bus, BusError, BusSettings, Clock, EepromWrite, Missing, MissingReason, Transport};
+#[cfg(feature = "serial")]
+use crate::BusSettings;
+use crate::{Bus, BusError, Clock, EepromWrite, Missing, MissingReason, Transport};
 
 /// A bus of servos, read and written through typed registers.
 ///

@@ -3,4 +3,6 @@
 //! the end-to-end tests share.
 #![warn(missing_docs)]
 
+pub mod doctor;
+pub mod monitor;
 pub mod simrobot;

@@ -8,6 +8,8 @@ mod bench;
 mod budget;
 mod bus;
 mod decode;
+mod doctor;
+mod monitor;
 mod plan;
 mod play;
 mod sim;
@@ -44,6 +46,10 @@ enum Command {
     SetId(bus::SetIdArgs),
     /// Decode frames written in hex.
     Decode(decode::Args),
+    /// Check a bus against the robot file and the usual set-up mistakes.
+    Doctor(doctor::Args),
+    /// Watch every servo live: position, load, voltage, temperature, flags.
+    Monitor(monitor::Args),
 }
 
 /// Runs the parsed command line and returns the process exit code.
@@ -60,5 +66,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Write(args) => bus::write(args),
         Command::SetId(args) => bus::set_id(args),
         Command::Decode(args) => decode::run(args),
+        Command::Doctor(args) => doctor::run(args),
+        Command::Monitor(args) => monitor::run(args),
     }
 }

@@ -70,6 +70,10 @@ pub struct Args {
     /// where not permitted, a warning and normal scheduling.
     #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
     pub fifo: Option<i32>,
+    /// Show the live servo view of `servobus monitor` while playing, from
+    /// the run's telemetry (no extra bus traffic).
+    #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
+    pub monitor: bool,
 }
 
 /// Where the run happens.
@@ -170,7 +174,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
 
     let interrupts = install_ctrl_c(&runner)?;
-    let outcome = follow(&runner, &args, &names, units, duration, &interrupts);
+    let outcome = if args.monitor {
+        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
+    } else {
+        follow(&runner, &args, &names, units, duration, &interrupts)
+    };
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);
     join_servers(servers);

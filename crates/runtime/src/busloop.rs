@@ -763,6 +763,8 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                     feedback_age: age,
                     stale: age > stale_after,
                     clamped: j.clamped,
+                    flags: j.flags,
+                    missing_reads: j.missing,
                 });
             }
             if tx.try_send(Telemetry::Cycle(sample)).is_err() {

@@ -17,8 +17,9 @@ use servobus_runtime::config::{load_robot_any_rate, Robot, Units};
 use servobus_runtime::{bus_settings, Command, Runner, Telemetry};
 
 /// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
-/// process the OS schedules, which costs milliseconds on a busy machine.
-const PTY_LATENCY: Duration = Duration::from_millis(3);
+/// process the OS schedules, which costs milliseconds on a busy machine. A
+/// refresh every 50 ms can afford to wait this long.
+const PTY_LATENCY: Duration = Duration::from_millis(10);
 /// Latency assumed for a port of unknown kind without a robot file (USB
 /// CDC and CH34x adapters deliver in 1 ms USB frames).
 const DEFAULT_LATENCY: Duration = Duration::from_millis(1);

@@ -90,6 +90,8 @@ pub struct Row {
     pub replies: u64,
     /// Reads it did not answer.
     pub timeouts: u64,
+    /// Reads in a row it has not answered (0 when it answered the last).
+    pub missed_in_row: u32,
     /// 99th percentile of its reply latency (request sent to reply
     /// received), microseconds.
     pub p99_latency_us: Option<f64>,
@@ -115,6 +117,7 @@ impl Row {
             flags: Vec::new(),
             replies: 0,
             timeouts: 0,
+            missed_in_row: 0,
             p99_latency_us: None,
         }
     }
@@ -259,9 +262,16 @@ impl Poller {
     /// Only for the read as a whole (the transport failed); missing servos
     /// are shown as missing.
     pub fn poll<T: Transport, C: Clock>(&mut self, bus: &mut Bus<T, C>) -> Result<(), BusError> {
-        let start = bus.clock().now();
-        self.started.get_or_insert(start);
-        let read = bus.sync_read(BLOCK_START, BLOCK_LEN, &self.ids)?;
+        let first = self.started.is_none();
+        self.started.get_or_insert(bus.clock().now());
+        // The first read is patient (longer deadlines, the missing asked
+        // again): a port just opened, or a simulator just started, may be
+        // slow to answer, and a present servo must not look absent.
+        let read = if first {
+            bus.sync_read_patiently(BLOCK_START, BLOCK_LEN, &self.ids)?
+        } else {
+            bus.sync_read(BLOCK_START, BLOCK_LEN, &self.ids)?
+        };
         let map = self.series.map();
         let order = self.series.byte_order();
         let value = |data: &[u8], name: &str| -> Option<i32> {
@@ -294,15 +304,17 @@ impl Poller {
                     row.torque = value(d, "torque_enable").map(|v| v != 0);
                     row.flags = flag_names(reply.flags);
                     row.replies += 1;
+                    row.missed_in_row = 0;
                 }
                 Err(m) => {
                     row.present = false;
                     row.missing = Some(m.reason.to_string());
                     row.timeouts += 1;
+                    row.missed_in_row += 1;
                 }
             }
         }
-        self.record_latencies(bus);
+        self.record_latencies(bus, !first);
         let now = bus.clock().now();
         let link = bus.settings().link;
         let (request, reply) = (8 + self.ids.len(), 6 + usize::from(BLOCK_LEN));
@@ -325,12 +337,14 @@ impl Poller {
     /// Takes each servo's new reply latencies from the driver's counters
     /// (their count and mean give the sum; the difference since the last
     /// refresh is the new replies' total).
-    fn record_latencies<T: Transport, C: Clock>(&mut self, bus: &Bus<T, C>) {
+    /// `keep`: false for the patient first read, whose waits are not the
+    /// bus's usual latency.
+    fn record_latencies<T: Transport, C: Clock>(&mut self, bus: &Bus<T, C>, keep: bool) {
         for (i, &id) in self.ids.iter().enumerate() {
             let rtt = &bus.servo_counters(id).rtt;
             let total = rtt.mean().map_or(0.0, |m| m.as_secs_f64() * 1e6) * rtt.count as f64;
             let (count0, total0) = self.seen[i];
-            if rtt.count > count0 {
+            if keep && rtt.count > count0 {
                 let n = rtt.count - count0;
                 let each = (total - total0) / n as f64;
                 let ring = &mut self.latencies[i];

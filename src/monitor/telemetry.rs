@@ -74,6 +74,11 @@ impl TelemetryRows {
             }
             row.flags = flag_names(j.flags);
             row.present = j.missing_reads == 0 && j.measured.is_some();
+            row.missed_in_row = if j.measured.is_some() {
+                j.missing_reads
+            } else {
+                j.missing_reads.max(1)
+            };
             row.missing = (!row.present).then(|| "no reply".to_string());
             let age = j.feedback_age.as_secs_f64();
             if row.present && age < self.ages[j.joint] {

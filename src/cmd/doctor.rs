@@ -50,7 +50,11 @@ struct BusOutcome {
 impl BusOutcome {
     /// The findings that stand: after the fixes when there were any.
     fn standing(&self) -> &[Finding] {
-        self.after.as_ref().unwrap_or(&self.first).findings.as_slice()
+        self.after
+            .as_ref()
+            .unwrap_or(&self.first)
+            .findings
+            .as_slice()
     }
 }
 
@@ -69,7 +73,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 port: None,
                 baud: cfg.baud,
             };
-            outcomes.push(check(&mut bus, &robot, cfg, target, &PortKind::Simulator, args.fix)?);
+            outcomes.push(check(
+                &mut bus,
+                &robot,
+                cfg,
+                target,
+                &PortKind::Simulator,
+                args.fix,
+            )?);
         }
     } else {
         for (cfg, port) in robot.buses.iter().zip(&ports) {

@@ -71,7 +71,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
-    let port = args.port.clone().or_else(|| cfg.and_then(|c| c.port.clone()));
+    let port = args
+        .port
+        .clone()
+        .or_else(|| cfg.and_then(|c| c.port.clone()));
     match (port, robot.as_ref(), cfg) {
         (Some(port), _, _) => {
             let baud = cfg.map_or(SCAN_BAUD, |c| c.baud);

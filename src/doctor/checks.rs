@@ -88,7 +88,9 @@ pub fn rated_voltage_dv(model: &str) -> Option<(u8, u8)> {
 /// Joints whose name says they grip (and so stall against what they hold).
 pub(crate) fn is_gripper(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
-    ["grip", "claw", "jaw", "pinch"].iter().any(|w| n.contains(w))
+    ["grip", "claw", "jaw", "pinch"]
+        .iter()
+        .any(|w| n.contains(w))
 }
 
 /// Protection settings a gripper needs so that holding an object does not
@@ -127,7 +129,9 @@ impl Ctx<'_> {
     fn write_fix(&self, severity: Severity, s: &ServoState, name: &str, value: i32) -> Finding {
         let reg = s.register(name);
         let mut f = self.finding(severity, s.id, reg.map(|r| r.name));
-        f.fix = self.target.write_command(s.id, reg.map_or(name, |r| r.name), value);
+        f.fix = self
+            .target
+            .write_command(s.id, reg.map_or(name, |r| r.name), value);
         let silent = s.value("status_level") == Some(0);
         f.action = reg.map(|register| Action::Write {
             id: s.id,
@@ -141,7 +145,11 @@ impl Ctx<'_> {
 
     /// Every finding about servo `s`, whose joint in the robot file is
     /// `joint` (none for a servo the file does not name).
-    pub(crate) fn servo_findings(&self, s: &ServoState, joint: Option<&JointConfig>) -> Vec<Finding> {
+    pub(crate) fn servo_findings(
+        &self,
+        s: &ServoState,
+        joint: Option<&JointConfig>,
+    ) -> Vec<Finding> {
         let mut out = Vec::new();
         if let Some(joint) = joint {
             if s.model_number() != joint.model.number {
@@ -227,7 +235,11 @@ impl Ctx<'_> {
         {
             let hot = s.flags.contains(StatusFlags::OVERHEAT) || t >= limit;
             if hot || t >= limit - WARM_MARGIN_C {
-                let sev = if hot { Severity::Error } else { Severity::Warning };
+                let sev = if hot {
+                    Severity::Error
+                } else {
+                    Severity::Warning
+                };
                 let mut f = self.finding(sev, s.id, Some("present_temperature"));
                 f.problem = format!(
                     "temperature {t} C, limit {limit} C{}",
@@ -261,7 +273,9 @@ impl Ctx<'_> {
             );
             f.fix = supply_fix(model, rated);
             out.push(f);
-        } else if let Some((rlo, rhi)) = rated.filter(|&(a, b)| v < i32::from(a) || v > i32::from(b)) {
+        } else if let Some((rlo, rhi)) =
+            rated.filter(|&(a, b)| v < i32::from(a) || v > i32::from(b))
+        {
             let mut f = self.finding(Severity::Warning, s.id, Some("present_voltage"));
             f.problem = format!(
                 "supply {:.1} V {when} is outside the {model}'s rating {:.1}..{:.1} V",
@@ -325,7 +339,11 @@ impl Ctx<'_> {
         if let Some(mask) = s.value("unloading_condition") {
             let mask = u8::try_from(mask).unwrap_or(0);
             if mask & MUST_UNLOAD != MUST_UNLOAD {
-                let sev = if gripper { Severity::Error } else { Severity::Warning };
+                let sev = if gripper {
+                    Severity::Error
+                } else {
+                    Severity::Warning
+                };
                 let mut f =
                     self.write_fix(sev, s, "unloading_condition", i32::from(mask | MUST_UNLOAD));
                 f.problem = format!(

@@ -2,7 +2,7 @@
 //! are written with unlock-write-verify-lock; a baud-rate change is the same
 //! transaction split across the two rates.
 
-use servobus_driver::{Bus, BusError, Clock, ReplyLevel, Transport};
+use servobus_driver::{Bus, BusError, Clock, ReplyLevel, Transport, PATIENCE, PATIENT_TRIES};
 use servobus_protocol::registers::addr;
 
 use super::probe::{switch, MAX_RETURN_DELAY};
@@ -39,7 +39,13 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
     let mut out = Vec::new();
     for f in todo {
         let Some(action) = f.action else { continue };
-        bus.set_settings(saved.with_return_delay(MAX_RETURN_DELAY).with_retries(2));
+        // Patient, as the examination: a write must not fail on a slow reply.
+        bus.set_settings(
+            saved
+                .with_return_delay(MAX_RETURN_DELAY)
+                .with_latency(saved.link.latency + PATIENCE)
+                .with_retries(PATIENT_TRIES - 1),
+        );
         let (id, result) = match action {
             Action::Write {
                 id,
@@ -57,7 +63,9 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
                 bus.set_settings(s);
                 (id, bus.write_register(id, register, value).map(|_| ()))
             }
-            Action::Baud { id, baud, index } => (id, change_baud(bus, id, baud, index, saved.link.baud)),
+            Action::Baud { id, baud, index } => {
+                (id, change_baud(bus, id, baud, index, saved.link.baud))
+            }
         };
         match result {
             Err(BusError::Transport(e)) => {

@@ -5,7 +5,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
-use servobus_driver::{ftdi_latency_timer, Bus, BusError, Clock, FtdiLatency, Transport};
+use servobus_driver::{
+    ftdi_latency_timer, Bus, BusError, BusSettings, Clock, FtdiLatency, Transport, PATIENCE,
+    PATIENT_TRIES,
+};
 use servobus_protocol::registers::{self, addr, Series};
 use servobus_protocol::MAX_ID;
 use servobus_runtime::config::{BusConfig, Robot};
@@ -149,24 +152,32 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     };
     let mut findings = Vec::new();
     let base = bus.settings().with_return_delay(MAX_RETURN_DELAY);
+    // The robot's own servos are waited for patiently (a loaded host or a
+    // slow adapter must not make a present servo look absent or garbled):
+    // longer deadlines and two more tries.
+    let patient = base
+        .with_latency(base.link.latency + PATIENCE)
+        .with_retries(PATIENT_TRIES - 1);
     let expected = |id: u8| cfg.joints.iter().find(|j| j.id == id);
 
     // Who answers at the bus's rate (absent IDs are asked once: that keeps
-    // the scan short; the robot's own IDs get two more tries).
+    // the scan short).
     let mut answering = Vec::new();
     for id in 0..=MAX_ID {
-        let retries = if expected(id).is_some() { 2 } else { 0 };
-        bus.set_settings(base.with_retries(retries));
-        match bus.ping(id) {
-            Ok(_) => answering.push(id),
-            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => answering.push(id),
-            Err(e) if e.is_retryable() => {}
+        bus.set_settings(if expected(id).is_some() {
+            patient
+        } else {
+            base.with_retries(0)
+        });
+        match answers(bus, id) {
+            Ok(true) => answering.push(id),
+            Ok(false) => {}
             Err(e) => return Err(e),
         }
     }
 
-    // Read each one whole; replies that garble are two servos on one ID.
-    bus.set_settings(base.with_retries(2));
+    // Read each one whole; replies that stay garbled are two servos on one ID.
+    bus.set_settings(patient);
     let mut servos = Vec::new();
     for &id in &answering {
         match read_state(bus, id) {
@@ -215,7 +226,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         .filter(|id| !answering.contains(id))
         .collect();
     if !missing.is_empty() {
-        find_at_other_bauds(bus, &ctx, &mut missing, &mut findings)?;
+        find_at_other_bauds(bus, &ctx, base, &mut missing, &mut findings)?;
         bus.set_settings(base);
     }
     for &id in &missing {
@@ -229,7 +240,9 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
             ),
             None => format!(
                 "check its cable, power and ID: servobus scan {} --all-bauds",
-                target.port_args(cfg.baud).replace(&format!(" --baud {}", cfg.baud), "")
+                target
+                    .port_args(cfg.baud)
+                    .replace(&format!(" --baud {}", cfg.baud), "")
             ),
         };
         findings.push(f);
@@ -258,7 +271,31 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     })
 }
 
-fn finding(ctx: &Ctx<'_>, severity: Severity, id: Option<u8>, reg: Option<&'static str>) -> Finding {
+/// Whether anything answers as `id`: a READ of the model number first,
+/// because a PING's reply with status 0x01 (the voltage flag) is byte for
+/// byte the PING itself and is skipped as an echo; then a PING, which an SCS
+/// servo at status level 0 answers alone. Garbled replies count: two
+/// servos may share the ID.
+fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, BusError> {
+    let mut number = [0u8; 2];
+    let read = bus.read(id, addr::MODEL_NUMBER, &mut number);
+    let result = match read {
+        Err(e) if e.is_timeout() => bus.ping(id).map(|_| ()),
+        other => other.map(|_| ()),
+    };
+    match result {
+        Ok(()) | Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => Ok(true),
+        Err(e) if e.is_retryable() => Ok(false),
+        Err(e) => Err(e),
+    }
+}
+
+fn finding(
+    ctx: &Ctx<'_>,
+    severity: Severity,
+    id: Option<u8>,
+    reg: Option<&'static str>,
+) -> Finding {
     Finding {
         severity,
         bus: ctx.bus.name.clone(),
@@ -289,6 +326,7 @@ fn read_state<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<Ser
 fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
     bus: &mut Bus<T, C>,
     ctx: &Ctx<'_>,
+    base: BusSettings,
     missing: &mut Vec<u8>,
     findings: &mut Vec<Finding>,
 ) -> Result<(), BusError> {
@@ -296,15 +334,17 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
     let Some(index) = registers::baud_index(home) else {
         return Ok(());
     };
-    let rates = (0..8).filter_map(registers::baud_rate).filter(|&b| b != home);
+    let rates = (0..8)
+        .filter_map(registers::baud_rate)
+        .filter(|&b| b != home);
     for baud in rates {
         switch(bus, baud)?;
-        let mut s = *bus.settings();
-        s.retries = 1;
+        let mut s = base.with_retries(1);
+        s.link.baud = baud;
         bus.set_settings(s);
         let mut found = Vec::new();
         for &id in missing.iter() {
-            if bus.ping(id).is_ok() {
+            if answers(bus, id)? {
                 found.push(id);
             }
         }
@@ -312,7 +352,9 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
             missing.retain(|&m| m != id);
             let mut f = finding(ctx, Severity::Error, Some(id), Some("baud_rate"));
             f.problem = format!("servo {id} answers only at {baud} baud; the bus runs at {home}");
-            f.fix = ctx.target.write_command_at(baud, id, "baud_rate", i32::from(index));
+            f.fix = ctx
+                .target
+                .write_command_at(baud, id, "baud_rate", i32::from(index));
             f.action = Some(Action::Baud { id, baud, index });
             findings.push(f);
         }

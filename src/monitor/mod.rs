@@ -224,17 +224,16 @@ impl Poller {
         bus.set_settings(saved.with_retries(0));
         let mut found = Vec::new();
         for id in 0..=servobus_protocol::MAX_ID {
-            match bus.ping(id) {
+            // A READ, not a PING: a PING's reply carrying the voltage flag
+            // is byte for byte the PING and is skipped as its echo.
+            let mut number = [0u8; 2];
+            match bus.read(id, addr::MODEL_NUMBER, &mut number) {
                 Ok(_) => {}
                 Err(BusError::Transport(e)) => {
                     bus.set_settings(saved);
                     return Err(BusError::Transport(e));
                 }
                 Err(_) => continue,
-            }
-            let mut number = [0u8; 2];
-            if bus.read(id, addr::MODEL_NUMBER, &mut number).is_err() {
-                continue;
             }
             let model = model_by_number(u16::from_le_bytes(number))
                 .or_else(|| model_by_number(u16::from_be_bytes(number)));
@@ -277,7 +276,8 @@ impl Poller {
         let value = |data: &[u8], name: &str| -> Option<i32> {
             let reg = map.get(name)?;
             let at = usize::from(reg.address.checked_sub(BLOCK_START)?);
-            reg.decode(data.get(at..at + usize::from(reg.size))?, order).ok()
+            reg.decode(data.get(at..at + usize::from(reg.size))?, order)
+                .ok()
         };
         let mut answered = 0;
         for (i, result) in read.iter().enumerate() {
@@ -372,10 +372,15 @@ impl Poller {
         } else {
             let n = (self.recent.len() - 1) as f64;
             let wire: Duration = self.recent.iter().skip(1).map(|r| r.1).sum();
-            (n / span.as_secs_f64(), wire.as_secs_f64() / span.as_secs_f64())
+            (
+                n / span.as_secs_f64(),
+                wire.as_secs_f64() / span.as_secs_f64(),
+            )
         };
         Frame {
-            time_s: now.saturating_sub(self.started.unwrap_or(now)).as_secs_f64(),
+            time_s: now
+                .saturating_sub(self.started.unwrap_or(now))
+                .as_secs_f64(),
             source: "bus",
             read_rate_hz: rate,
             utilisation: util,

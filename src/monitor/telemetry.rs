@@ -58,7 +58,8 @@ impl TelemetryRows {
     /// Takes one cycle's sample in.
     pub fn record(&mut self, sample: &CycleSample) {
         for j in sample.joints() {
-            let (Some(row), Some(w)) = (self.rows.get_mut(j.joint), self.servos.get(j.joint)) else {
+            let (Some(row), Some(w)) = (self.rows.get_mut(j.joint), self.servos.get(j.joint))
+            else {
                 continue;
             };
             let Some(map) = &w.map else { continue };

@@ -55,7 +55,10 @@ fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
         Cell::from(r.joint.clone().unwrap_or_else(|| "-".into())),
         Cell::from(r.model.clone()),
         Cell::from(opt(r.position_deg, 1)),
-        Cell::from(r.position_ticks.map_or_else(|| "-".into(), |t| t.to_string())),
+        Cell::from(
+            r.position_ticks
+                .map_or_else(|| "-".into(), |t| t.to_string()),
+        ),
         Cell::from(opt(r.goal_deg, 1)),
         Cell::from(opt(r.speed_deg_s, 0)),
         Cell::from(opt(r.load_pct, 1)),
@@ -85,7 +88,10 @@ pub fn draw(f: &mut ratatui::Frame<'_>, frame: &Frame, title: &str) {
     ])
     .areas(f.area());
     let summary = Line::from(vec![
-        Span::styled(title.to_string(), Style::default().add_modifier(Modifier::BOLD)),
+        Span::styled(
+            title.to_string(),
+            Style::default().add_modifier(Modifier::BOLD),
+        ),
         Span::raw(format!(
             "   t {:.1} s   read rate {:.1} Hz   bus utilisation {:.1} %   ({})",
             frame.time_s,
@@ -110,7 +116,9 @@ pub fn draw(f: &mut ratatui::Frame<'_>, frame: &Frame, title: &str) {
     if let Some(note) = &frame.note {
         keys.push(Span::styled(
             format!("   [{note}]"),
-            Style::default().fg(Color::Yellow).add_modifier(Modifier::BOLD),
+            Style::default()
+                .fg(Color::Yellow)
+                .add_modifier(Modifier::BOLD),
         ));
     }
     f.render_widget(Paragraph::new(Line::from(keys)), bottom);

@@ -294,12 +294,16 @@ impl FromStr for Faults {
                         let (major, minor) = v.split_once('.')?;
                         Some((parse_id(who)?, (major.parse().ok()?, minor.parse().ok()?)))
                     });
-                    f.firmware.push(parsed.ok_or_else(|| bad("ID:MAJOR.MINOR, e.g. 3:3.9"))?);
+                    f.firmware
+                        .push(parsed.ok_or_else(|| bad("ID:MAJOR.MINOR, e.g. 3:3.9"))?);
                 }
                 "baud" => {
                     let parsed = value.split_once(':').and_then(|(who, rate)| {
                         let rate = rate.parse::<u32>().ok()?;
-                        Some((parse_id(who)?, servobus_protocol::registers::baud_index(rate)?))
+                        Some((
+                            parse_id(who)?,
+                            servobus_protocol::registers::baud_index(rate)?,
+                        ))
                     });
                     f.baud.push(parsed.ok_or_else(|| {
                         bad("ID:RATE with a rate of the servo baud table, e.g. 3:115200")

@@ -108,4 +108,33 @@ tmux send-keys -t "$session" "stty -g > $dir/stty.after; echo typed-after" Enter
 wait_for "^typed-after$" || fail "the shell does not echo typed commands after q"
 cmp -s "$dir/stty.before" "$dir/stty.after" || fail "terminal settings changed: $(cat "$dir/stty.before") -> $(cat "$dir/stty.after")"
 echo "PASS: q leaves the terminal as it was (main screen, cursor, stty settings, shell)"
+
+# A panic restores the terminal too (the panic hook).
+tmux send-keys -t "$session" "clear; RUST_BACKTRACE=0 SERVOBUS_MONITOR_TEST_PANIC=5 $bin monitor --robot $robot --port $dir/bus; echo panic-exit=\$?" Enter
+wait_for "^panic-exit=" || fail "the monitor did not end after its test panic"
+[ "$(tmux display -p -t "$session" '#{alternate_on}')" = 0 ] || fail "a panic left the alternate screen on"
+[ "$(tmux display -p -t "$session" '#{cursor_flag}')" = 1 ] || fail "a panic left the cursor hidden"
+tmux capture-pane -p -t "$session" | grep -q "asked for a panic after 5 refreshes" || fail "the panic message is not on the restored screen"
+tmux send-keys -t "$session" "stty -g > $dir/stty.panic; echo typed-after-panic" Enter
+wait_for "^typed-after-panic$" || fail "the shell does not echo after a panic"
+cmp -s "$dir/stty.before" "$dir/stty.panic" || fail "a panic changed the terminal settings"
+echo "PASS: a panic restores the terminal (main screen, cursor, stty settings) and shows its message"
+
+# play --monitor: the same view of a running motion, from its telemetry.
+tmux send-keys -t "$session" "clear; $bin play $root/configs/motions/arm-wave.yaml --monitor; echo play-exit=\$?" Enter
+wait_for "so101 (play)" || fail "play --monitor shows no view"
+wait_for "(telemetry)" || fail "play --monitor does not say its figures come from telemetry"
+sleep 1
+p1=$(tmux capture-pane -p -t "$session")
+sleep 1
+p2=$(tmux capture-pane -p -t "$session")
+a=""; b=""
+for id in 1 2 3 4 5 6; do a="$a $(field $id 4 "$p1")"; b="$b $(field $id 4 "$p2")"; done
+[ -n "${a// /}" ] && [ "$a" != "$b" ] || fail "play --monitor: no joint moves ($a then $b)"
+echo "PASS: play --monitor shows the running motion (positions$a ->$b deg)"
+tmux send-keys -t "$session" q
+wait_for "^play-exit=0" || fail "play --monitor did not end with q"
+[ "$(tmux display -p -t "$session" '#{alternate_on}')" = 0 ] || fail "play --monitor left the alternate screen on"
+tmux capture-pane -p -t "$session" | grep -q "^stopped:" || fail "play's report does not say it stopped"
+echo "PASS: q stops the motion, the report follows on the restored terminal"
 echo "all monitor checks passed"

@@ -37,7 +37,8 @@ fn sim_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, ManualClock>) 
 fn poll(poller: &mut Poller, bus: &mut Bus<SimBus, ManualClock>, n: u32) -> Frame {
     for _ in 0..n {
         let k = bus.clock().now().as_nanos().div_ceil(PERIOD.as_nanos());
-        bus.clock().advance_to(PERIOD * u32::try_from(k).expect("few periods"));
+        bus.clock()
+            .advance_to(PERIOD * u32::try_from(k).expect("few periods"));
         poller.poll(bus).expect("poll");
     }
     poller.frame(bus.clock(), None)
@@ -59,12 +60,19 @@ fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each()
     let first = poll(&mut poller, &mut bus, 1);
     let requests = sim.stats().requests;
     let frame = poll(&mut poller, &mut bus, 20);
-    assert_eq!(sim.stats().requests - requests, 20, "one SYNC READ per refresh");
+    assert_eq!(
+        sim.stats().requests - requests,
+        20,
+        "one SYNC READ per refresh"
+    );
 
     let five = row(&frame, 5);
     assert!(!five.present);
     assert_eq!(five.missing.as_deref(), Some("no reply"));
-    assert_eq!((five.replies, five.timeouts, five.missed_in_row), (0, 21, 21));
+    assert_eq!(
+        (five.replies, five.timeouts, five.missed_in_row),
+        (0, 21, 21)
+    );
     for id in [1, 2, 3, 4, 6] {
         let r = row(&frame, id);
         assert!(r.present, "servo {id}");
@@ -78,12 +86,24 @@ fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each()
     assert!(after > before, "servo 1 moved: {before:?} -> {after:?}");
     assert_eq!(row(&frame, 1).goal_ticks, Some(2548));
     assert_eq!(row(&frame, 1).torque, Some(true));
-    assert_eq!(row(&frame, 2).position_deg, Some(-90.0), "shoulder_lift at home");
+    assert_eq!(
+        row(&frame, 2).position_deg,
+        Some(-90.0),
+        "shoulder_lift at home"
+    );
 
     // 20 refreshes a second; each moves 8 + 6 request bytes and five
     // replies of 6 + 27 bytes: 179 bytes, 1.79 ms at 1 Mbps, of every 50 ms.
-    assert!((frame.read_rate_hz - 20.0).abs() < 0.5, "{}", frame.read_rate_hz);
-    assert!((frame.utilisation - 0.0358).abs() < 0.001, "{}", frame.utilisation);
+    assert!(
+        (frame.read_rate_hz - 20.0).abs() < 0.5,
+        "{}",
+        frame.read_rate_hz
+    );
+    assert!(
+        (frame.utilisation - 0.0358).abs() < 0.001,
+        "{}",
+        frame.utilisation
+    );
 }
 
 #[test]
@@ -96,7 +116,10 @@ fn scs_servos_are_read_one_by_one() {
     let frame = poll(&mut poller, &mut bus, 5);
     let n = mini.buses[0].joints.len() as u64;
     assert_eq!(sim.stats().requests - requests, 5 * n);
-    assert!(frame.servos.iter().all(|r| r.present && r.voltage_v == Some(6.0)));
+    assert!(frame
+        .servos
+        .iter()
+        .all(|r| r.present && r.voltage_v == Some(6.0)));
 }
 
 #[test]
@@ -106,11 +129,15 @@ fn torque_off_reaches_every_servo_in_one_frame() {
     let ids: Vec<u8> = arm.buses[0].joints.iter().map(|j| j.id).collect();
     bus.sync_write(addr::TORQUE_ENABLE, &ids, &vec![1; ids.len()])
         .expect("torque on");
-    assert!(ids.iter().all(|&id| sim.snapshot(id).is_some_and(|s| s.torque_enabled())));
+    assert!(ids
+        .iter()
+        .all(|&id| sim.snapshot(id).is_some_and(|s| s.torque_enabled())));
     let requests = sim.stats().requests;
     monitor::torque_off(&mut bus, &ids).expect("torque off");
     assert_eq!(sim.stats().requests - requests, 1);
-    assert!(ids.iter().all(|&id| sim.snapshot(id).is_some_and(|s| !s.torque_enabled())));
+    assert!(ids
+        .iter()
+        .all(|&id| sim.snapshot(id).is_some_and(|s| !s.torque_enabled())));
 }
 
 #[test]
@@ -146,11 +173,8 @@ fn the_view_shows_flags_missing_servos_and_keys() {
 
 #[test]
 fn play_monitor_rows_follow_the_telemetry() {
-    let (motion, arm) = load_motion(
-        &common::repo("configs/motions/arm-wave.yaml"),
-        None,
-    )
-    .expect("motion");
+    let (motion, arm) =
+        load_motion(&common::repo("configs/motions/arm-wave.yaml"), None).expect("motion");
     let trajectory = plan_motion(&motion, &arm).expect("plan");
     let (_sim, bus) = sim_bus(&arm, "overheat=3".parse().expect("faults"));
     let options = RunOptions {
@@ -174,7 +198,11 @@ fn play_monitor_rows_follow_the_telemetry() {
     for (r, joint) in frame.servos.iter().zip(arm.joints()) {
         assert!(r.replies > 0, "{}", joint.name);
         let deg = r.position_deg.expect("a position");
-        assert!(deg >= joint.min - 1.0 && deg <= joint.max + 1.0, "{}: {deg}", joint.name);
+        assert!(
+            deg >= joint.min - 1.0 && deg <= joint.max + 1.0,
+            "{}: {deg}",
+            joint.name
+        );
         assert!(r.goal_ticks.is_some());
     }
 }
@@ -189,7 +217,11 @@ fn monitor_json_prints_one_line_per_refresh_at_10_hz_or_more() {
         "--count",
         "15",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     let frames: Vec<serde_json::Value> = text
         .lines()
@@ -200,5 +232,7 @@ fn monitor_json_prints_one_line_per_refresh_at_10_hz_or_more() {
     assert!(common::num(last, "read_rate_hz") >= 10.0, "{last}");
     let servos = last["servos"].as_array().expect("servos");
     assert_eq!(servos.len(), 6);
-    assert!(servos.iter().all(|s| s["present"] == true && s["replies"] == 15));
+    assert!(servos
+        .iter()
+        .all(|s| s["present"] == true && s["replies"] == 15));
 }

@@ -29,6 +29,9 @@ fn monitor_in_tmux_shows_faults_updates_and_restores_the_terminal() {
         "PASS: servo 3 shows the overheat flag",
         "PASS: servos 1 2 3 4 6 update",
         "PASS: q leaves the terminal as it was",
+        "PASS: a panic restores the terminal",
+        "PASS: play --monitor shows the running motion",
+        "PASS: q stops the motion",
     ] {
         assert!(stdout.contains(check), "missing `{check}` in:\n{stdout}");
     }

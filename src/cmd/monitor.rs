@@ -130,8 +130,21 @@ impl Screen {
 
 impl Drop for Screen {
     fn drop(&mut self) {
-        ratatui::restore();
+        // While unwinding, ratatui's panic hook has restored the terminal
+        // already; leaving the alternate screen twice would move the cursor
+        // back over the panic message.
+        if !std::thread::panicking() {
+            ratatui::restore();
+        }
     }
+}
+
+/// Makes the monitor panic after this many refreshes: how
+/// `scripts/monitor_tmux.sh` shows that a panic restores the terminal.
+const TEST_PANIC: &str = "SERVOBUS_MONITOR_TEST_PANIC";
+
+fn test_panic_after() -> Option<u64> {
+    std::env::var(TEST_PANIC).ok()?.parse().ok()
 }
 
 /// What a key asks for.
@@ -172,10 +185,14 @@ fn watch<T: Transport, C: Clock>(
     let mut note: Option<String> = None;
     let mut refreshes = 0u64;
     let mut next = Instant::now();
+    let panic_after = test_panic_after();
     loop {
         before_poll(bus);
         poller.poll(bus).context("reading the servos")?;
         refreshes += 1;
+        if panic_after == Some(refreshes) {
+            panic!("{TEST_PANIC} asked for a panic after {refreshes} refreshes");
+        }
         let frame = poller.frame(bus.clock(), note.clone());
         match &mut screen {
             None => println!("{}", serde_json::to_string(&frame)?),

@@ -291,7 +291,7 @@ fn protection_that_does_not_release_the_torque_is_found_and_fixed() {
 #[test]
 fn every_simulator_fault_is_found() {
     // (faults, servo, register, severity, words of the problem)
-    let cases: [(&str, u8, Option<&str>, Severity, &str); 7] = [
+    let cases: [(&str, u8, Option<&str>, Severity, &str); 8] = [
         (
             "overheat=3",
             3,
@@ -320,6 +320,13 @@ fn every_simulator_fault_is_found() {
             Some("present_voltage"),
             Severity::Warning,
             "rating 6.0..12.6 V",
+        ),
+        (
+            "supply=5:11.2",
+            5,
+            Some("present_voltage"),
+            Severity::Warning,
+            "drops 0.8 V",
         ),
         (
             "firmware=2:3.9",

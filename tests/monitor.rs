@@ -107,6 +107,22 @@ fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each()
 }
 
 #[test]
+fn a_port_alone_is_scanned_for_its_servos_first() {
+    let arm = robot("so101.yaml");
+    let (_sim, mut bus) = sim_bus(&arm, "vanish=5".parse().expect("faults"));
+    let found = Poller::scan(&mut bus).expect("scan");
+    let ids: Vec<u8> = found.iter().map(|w| w.id).collect();
+    assert_eq!(ids, [1, 2, 3, 4, 6]);
+    assert!(found
+        .iter()
+        .all(|w| w.model.name == "STS3215" && w.joint.is_none()));
+    let mut poller = Poller::new(found);
+    let frame = poll(&mut poller, &mut bus, 2);
+    // Without a robot file, degrees are the servo's from its mid-travel.
+    assert_eq!(row(&frame, 2).position_deg, Some(-90.0));
+}
+
+#[test]
 fn scs_servos_are_read_one_by_one() {
     let mini = robot("scs-mini.yaml");
     let (sim, mut bus) = sim_bus(&mini, Faults::none());

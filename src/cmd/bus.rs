@@ -462,6 +462,23 @@ fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, 
         adapt_latency(&mut bus, id).with_context(|| format!("servo {id}"))?;
     }
     let found = identify(&mut bus, id).with_context(|| format!("servo {id}"))?;
+    // A servo at a status level that leaves WRITE unanswered (0 on STS,
+    // below 2 on SCS) is written without waiting for replies, so that
+    // `servobus write ... status_level 1` (doctor's fix) can reach it.
+    let mut level = [0u8; 1];
+    if bus.read(id, addr::STATUS_LEVEL, &mut level).is_ok() {
+        let full = if bus.settings().series == Series::Scs {
+            2
+        } else {
+            1
+        };
+        if level[0] < full {
+            let s = bus
+                .settings()
+                .with_replies(servobus_driver::ReplyLevel::PingAndRead);
+            bus.set_settings(s);
+        }
+    }
     Ok((bus, found))
 }
 

@@ -262,6 +262,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         findings.extend(ctx.servo_findings(s, expected(s.id)));
     }
     firmware_findings(&ctx, &servos, &mut findings);
+    supply_drop_findings(&ctx, &servos, &mut findings);
     latency_findings(bus, &ctx, kind, &servos, &mut findings)?;
     findings.sort_by(|a, b| b.severity.cmp(&a.severity).then(a.id.cmp(&b.id)));
     Ok(Examined {
@@ -397,6 +398,37 @@ fn firmware_findings(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Finding
             "update servo {} to firmware {}.{} with Feetech's FD software",
             s.id, usual.0, usual.1
         );
+        out.push(f);
+    }
+}
+
+/// How much lower one servo's supply may read than another's on the same
+/// bus before the wiring is suspect, in 0.1 V (the voltage register's
+/// resolution is 0.1 V; healthy daisy chains read within a few tenths).
+const SUPPLY_DROP_DV: i32 = 6;
+
+/// A supply that reads markedly lower at some servos than at others: the
+/// wires drop voltage, and drop more under load.
+fn supply_drop_findings(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Finding>) {
+    let readings: Vec<(u8, i32)> = servos
+        .iter()
+        .filter_map(|s| Some((s.id, s.value("present_voltage")?)))
+        .collect();
+    let Some(&(top_id, top)) = readings.iter().max_by_key(|r| r.1) else {
+        return;
+    };
+    for &(id, v) in readings.iter().filter(|r| top - r.1 >= SUPPLY_DROP_DV) {
+        let mut f = finding(ctx, Severity::Warning, Some(id), Some("present_voltage"));
+        f.problem = format!(
+            "supply reads {:.1} V here but {:.1} V at servo {top_id}: the wiring drops {:.1} V \
+             before any load, more while moving",
+            f64::from(v) / 10.0,
+            f64::from(top) / 10.0,
+            f64::from(top - v) / 10.0
+        );
+        f.fix = "use shorter, thicker supply wires, or feed the supply in at both ends of the \
+                 chain"
+            .into();
         out.push(f);
     }
 }

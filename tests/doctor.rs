@@ -113,6 +113,13 @@ fn about<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> Option<
         .find(|f| f.id == Some(id) && (register.is_none() || f.register == register))
 }
 
+/// The finding about servo `id` and `register`; the test fails naming every
+/// finding when there is none.
+fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Finding {
+    about(findings, id, register)
+        .unwrap_or_else(|| panic!("nothing about servo {id} {register:?}:\n{}", show(findings)))
+}
+
 fn show(findings: &[Finding]) -> String {
     findings
         .iter()
@@ -168,7 +175,7 @@ fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
     let mut arm = Arm::tuned(Faults::none());
     arm.write(3, "return_delay", 250);
     let findings = arm.examine();
-    let f = about(&findings, 3, Some("return_delay")).expect(&show(&findings));
+    let f = must(&findings, 3, Some("return_delay"));
     assert_eq!(f.severity, Severity::Error);
     assert!(f.problem.contains("500 us"), "{}", f.problem);
     assert_eq!(
@@ -187,7 +194,7 @@ fn an_eeprom_lock_left_open_is_found_and_closed() {
     let mut arm = Arm::tuned(Faults::none());
     arm.bus.write(2, addr::LOCK, &[0]).expect("unlock");
     let findings = arm.examine();
-    let f = about(&findings, 2, Some("lock")).expect(&show(&findings));
+    let f = must(&findings, 2, Some("lock"));
     assert_eq!(f.severity, Severity::Warning);
     assert_eq!(f.fix, "servobus write --port /dev/ttyACM0 --id 2 lock 1");
     assert_eq!(doctor::exit_status(&findings), 1);
@@ -206,7 +213,7 @@ fn narrowed_angle_limits_are_found_and_widened_to_the_robot_file() {
     let (lo, hi) = (2048 - half, 2048 + half);
     let findings = arm.examine();
     for (name, want) in [("min_angle_limit", lo), ("max_angle_limit", hi)] {
-        let f = about(&findings, 1, Some(name)).expect(&show(&findings));
+        let f = must(&findings, 1, Some(name));
         assert_eq!(f.severity, Severity::Error);
         assert_eq!(
             f.fix,
@@ -231,7 +238,7 @@ fn a_joint_outside_its_limits_is_an_error() {
     // 1400 ticks is 123 degrees: past shoulder_pan's 110.
     arm.sim.servo(1, |s| s.move_joint(2048 + 1400));
     let findings = arm.examine();
-    let f = about(&findings, 1, Some("present_position")).expect(&show(&findings));
+    let f = must(&findings, 1, Some("present_position"));
     assert_eq!(f.severity, Severity::Error);
     assert!(f.fix.contains("--id 1 torque_enable 0"), "{}", f.fix);
     assert!(!f.fixable(), "moving a joint is not for --fix");
@@ -241,7 +248,7 @@ fn a_joint_outside_its_limits_is_an_error() {
 fn a_servo_at_another_baud_is_found_and_brought_back() {
     let mut arm = Arm::tuned(Faults::none().baud(4, 4));
     let findings = arm.examine();
-    let f = about(&findings, 4, Some("baud_rate")).expect(&show(&findings));
+    let f = must(&findings, 4, Some("baud_rate"));
     assert_eq!(f.severity, Severity::Error);
     assert!(f.problem.contains("115200"), "{}", f.problem);
     assert_eq!(
@@ -262,7 +269,7 @@ fn status_level_0_is_found_and_set_back_without_waiting_for_replies() {
     let mut arm = Arm::tuned(Faults::none());
     arm.write(4, "status_level", 0);
     let findings = arm.examine();
-    let f = about(&findings, 4, Some("status_level")).expect(&show(&findings));
+    let f = must(&findings, 4, Some("status_level"));
     assert_eq!(
         f.fix,
         "servobus write --port /dev/ttyACM0 --id 4 status_level 1"
@@ -278,7 +285,7 @@ fn protection_that_does_not_release_the_torque_is_found_and_fixed() {
     let mut arm = Arm::tuned(Faults::none());
     arm.write(2, "unloading_condition", 0);
     let findings = arm.examine();
-    let f = about(&findings, 2, Some("unloading_condition")).expect(&show(&findings));
+    let f = must(&findings, 2, Some("unloading_condition"));
     // Overheat (0x04) and overload (0x20).
     assert_eq!(
         f.fix,

@@ -12,6 +12,7 @@
 //! [`Clock`](servobus_driver::Clock), so it runs on a serial port and on the
 //! simulator in virtual time alike.
 
+mod bus_checks;
 mod checks;
 mod fix;
 mod probe;

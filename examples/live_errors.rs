@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (motion, robot) = load_motion(&path, None)?;
     let trajectory = plan_motion(&motion, &robot)?;
 
-    let buses = servobus::simrobot::virtual_buses(&robot)?;
+    let buses = servobus_runtime::sim::virtual_buses(&robot)?;
     let options = RunOptions {
         units: Some(motion.units),
         ..RunOptions::default()

@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // One simulated bus per robot bus, each servo at its joint's rest
     // position. Each bus has its own virtual clock: the runtime moves them
     // in step.
-    let buses = servobus::simrobot::virtual_buses(&robot)?;
+    let buses = servobus_runtime::sim::virtual_buses(&robot)?;
 
     let options = RunOptions {
         units: Some(motion.units),

@@ -8,10 +8,9 @@
 //! cargo run --example stream_trajectory
 //! ```
 
-use servobus_driver::{Bus, ManualClock};
 use servobus_runtime::config::{joint_limits, load_robot};
-use servobus_runtime::{bus_settings, RunOptions, VirtualRun};
-use servobus_sim::{SimBus, SimServo};
+use servobus_runtime::sim::SimRobot;
+use servobus_runtime::{RunOptions, VirtualRun};
 use servobus_trajectory::{plan, Keyframe, PlanOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -36,25 +35,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = plan(&joint_limits(&robot), &keyframes, &PlanOptions::default())?;
     println!("path of {:.3} s", path.duration());
 
-    // The simulated arm, its servos at the start pose (tick 2048 is the
-    // middle of the range; 4096 ticks a turn).
-    let clock = ManualClock::new();
-    let sim = SimBus::new(clock.clone(), 1_000_000);
-    for (joint, angle) in robot.joints().zip(start) {
-        let ticks = 2048 + (angle.to_degrees() * 4096.0 / 360.0).round() as i32;
-        sim.add_servo(
-            SimServo::sts3215(joint.id)
-                .with_return_delay(robot.buses[0].return_delay)
-                .with_position(ticks),
-        );
-    }
-    let bus = Bus::new(sim.clone(), clock, bus_settings(&robot.buses[0]));
+    // The simulated arm, its servos at the start pose (the robot file's
+    // mapping turns the angles into ticks, offsets and inversions included).
+    let pose: Vec<f64> = start.iter().map(|&a| robot.units.from_rad(a)).collect();
+    let sim = SimRobot::builder(&robot).pose(&pose).build()?;
 
     let options = RunOptions {
         rate_hz: Some(250.0),
         ..RunOptions::default()
     };
-    let report = VirtualRun::new(&robot, path, vec![bus], options)?.run();
+    let report = VirtualRun::new(&robot, path, sim.driver_buses(), options)?.run();
     println!(
         "{} cycles at {:.0} Hz, worst RMS tracking error {:.3} {}",
         report.cycles,
@@ -65,7 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The servos really moved: the wrist is back where it started.
     println!(
         "wrist_roll servo (ID 5) ends at tick {:?}",
-        sim.present_position(5)
+        sim.buses()[0].present_position(5)
     );
     Ok(())
 }

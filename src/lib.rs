@@ -1,8 +1,9 @@
-//! The `servobus` package: the command line, and the glue between a robot
-//! file and the built-in simulator that the command line, the examples and
-//! the end-to-end tests share.
+//! The `servobus` package: the command line, and the bus checks of
+//! `servobus doctor` and the live view of `servobus monitor`, kept in the
+//! library so that they are tested on the simulator in virtual time. The
+//! glue between a robot file and the built-in simulator lives in
+//! [`servobus_runtime::sim`].
 #![warn(missing_docs)]
 
 pub mod doctor;
 pub mod monitor;
-pub mod simrobot;

@@ -35,7 +35,7 @@ impl Arm {
         let robot = load_robot(&common::repo("configs/robots/so101.yaml")).expect("robot");
         let cfg = &robot.buses[0];
         let clock = ManualClock::new();
-        let servos = servobus::simrobot::bus_servos(&robot, cfg).expect("servos");
+        let servos = servobus_runtime::sim::bus_servos(&robot, cfg).expect("servos");
         let sim = SimBus::new(clock.clone(), cfg.baud)
             .with_servos(servos)
             .with_faults(faults);

@@ -25,7 +25,7 @@ fn robot(file: &str) -> Robot {
 fn sim_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, ManualClock>) {
     let cfg = &robot.buses[0];
     let clock = ManualClock::new();
-    let servos = servobus::simrobot::bus_servos(robot, cfg).expect("servos");
+    let servos = servobus_runtime::sim::bus_servos(robot, cfg).expect("servos");
     let sim = SimBus::new(clock.clone(), cfg.baud)
         .with_servos(servos)
         .with_faults(faults);

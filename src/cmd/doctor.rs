@@ -67,7 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let mut outcomes = Vec::new();
     if ports.iter().all(Option::is_none) {
-        let buses = servobus::simrobot::virtual_buses(&robot)?;
+        let buses = servobus_runtime::sim::virtual_buses(&robot)?;
         for (mut bus, cfg) in buses.into_iter().zip(&robot.buses) {
             let target = Target {
                 port: None,

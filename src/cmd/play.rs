@@ -130,7 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
         Backend::Fast => {
-            let buses = servobus::simrobot::virtual_buses(&robot)?;
+            let buses = servobus_runtime::sim::virtual_buses(&robot)?;
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
@@ -138,7 +138,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let mut buses = Vec::new();
             for bus in &robot.buses {
                 let mut server =
-                    PtyServer::open(bus.baud, servobus::simrobot::bus_servos(&robot, bus)?)
+                    PtyServer::open(bus.baud, servobus_runtime::sim::bus_servos(&robot, bus)?)
                         .with_context(|| {
                             format!("bus `{}`: cannot start the simulator", bus.name)
                         })?;

@@ -132,7 +132,7 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
         // Every servo listens at the first bus's rate: that is the pty's.
         let mut served = bus.clone();
         served.baud = baud;
-        servos.extend(servobus::simrobot::bus_servos(robot, &served)?);
+        servos.extend(servobus_runtime::sim::bus_servos(robot, &served)?);
     }
     Ok((baud, servos))
 }

@@ -260,11 +260,15 @@ fn assemble(pieces: &[Piece]) -> (Vec<u8>, Vec<(u64, Vec<u8>)>) {
     (stream, frames)
 }
 
+/// PROPTEST_CASES when set; 1000 under `CI=true`, so that the gate
+/// explores enough to mean something; 300 otherwise, to keep a local debug
+/// run short on a loaded machine.
 fn cases() -> u32 {
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
     std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|c| c.parse().ok())
-        .unwrap_or(300)
+        .unwrap_or(if ci { 1000 } else { 300 })
 }
 
 fn chunks() -> impl Strategy<Value = Vec<usize>> {
@@ -272,8 +276,8 @@ fn chunks() -> impl Strategy<Value = Vec<usize>> {
 }
 
 proptest! {
-    // 300 cases keep the debug-build test run short on a loaded machine;
-    // PROPTEST_CASES=20000 (as run for the release figures) explores more.
+    // See `cases`; PROPTEST_CASES=20000 (as run for the release figures)
+    // explores more.
     #![proptest_config(ProptestConfig::with_cases(cases()))]
 
     #[test]

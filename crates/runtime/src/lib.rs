@@ -8,12 +8,15 @@
 //!   trajectory: goals at `t + lead` clamped to the limits, SYNC WRITE,
 //!   feedback, tracking, faults with their [`Reaction`], [`Command`]s in and
 //!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
+//! - [`sim`] builds a robot file's servos on the simulator (the glue the
+//!   command line, the examples and the tests share).
 #![warn(missing_docs)]
 
 pub mod config;
 
 pub mod pacer;
 pub mod rt;
+pub mod sim;
 pub mod stats;
 
 // The scheduler: runs a robot + trajectory on its buses, tracks, reacts to

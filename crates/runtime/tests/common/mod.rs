@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use servobus_driver::{Bus, ManualClock};
-use servobus_runtime::bus_settings;
-use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot};
-use servobus_sim::{SimBus, SimModel, SimServo};
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, JointMap, Robot};
+use servobus_runtime::sim::SimRobot;
+use servobus_sim::SimBus;
 use servobus_trajectory::Trajectory;
 
 /// A file under the workspace's `configs/`.
@@ -29,21 +29,28 @@ pub fn motion(name: &str) -> (Trajectory, Robot) {
     (t, r)
 }
 
-/// One simulated bus per robot bus, each with its own clock, servos at
-/// their return delay from the robot file, at tick `start` (middle when None).
+/// One simulated bus per robot bus (the runtime's simulator glue), each with
+/// its own clock, every servo at the middle of its range (tick 2048 on an
+/// STS3215).
 pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
-    let mut buses = Vec::new();
-    let mut sims = Vec::new();
-    for b in &robot.buses {
-        let clock = ManualClock::new();
-        let sim = SimBus::new(clock.clone(), b.baud).with_servos(b.joints.iter().map(|j| {
-            let model = SimModel::by_name(j.model.name).expect("the simulator knows the model");
-            SimServo::new(model, j.id).with_return_delay(b.return_delay)
-        }));
-        sims.push(sim.clone());
-        buses.push(Bus::new(sim, clock, bus_settings(b)));
-    }
-    (buses, sims)
+    let mid: Vec<f64> = robot
+        .joints()
+        .map(|j| {
+            let map = JointMap::new(j, robot.units);
+            let mid = i32::try_from(j.model.resolution / 2).expect("a small resolution");
+            robot.units.from_rad(map.from_ticks(mid))
+        })
+        .collect();
+    split(
+        SimRobot::builder(robot)
+            .pose(&mid)
+            .build()
+            .expect("the robot simulates"),
+    )
+}
+
+fn split(sim: SimRobot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+    (sim.driver_buses(), sim.buses().to_vec())
 }
 
 /// Seconds as a Duration.
@@ -56,20 +63,19 @@ pub fn sim_buses_at(
     robot: &Robot,
     path: &Trajectory,
 ) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
-    use servobus_runtime::config::JointMap;
     use servobus_trajectory::JointState;
-    let (buses, sims) = sim_buses(robot);
     let mut start = vec![JointState::default(); robot.joint_count()];
     path.sample(0.0, &mut start);
-    let mut i = 0;
-    for (b, sim) in robot.buses.iter().zip(&sims) {
-        for j in &b.joints {
-            let tick = JointMap::new(j, robot.units).to_ticks(start[i].position);
-            sim.servo(j.id, |s| s.move_joint(tick));
-            i += 1;
-        }
-    }
-    (buses, sims)
+    let pose: Vec<f64> = start
+        .iter()
+        .map(|s| robot.units.from_rad(s.position))
+        .collect();
+    split(
+        SimRobot::builder(robot)
+            .pose(&pose)
+            .build()
+            .expect("the robot simulates"),
+    )
 }
 
 /// Every telemetry cycle sample of a run, collected by stepping it.

@@ -363,3 +363,74 @@ fn every_simulator_fault_is_found() {
         assert_eq!(doctor::exit_status(&findings), worst, "{spec}");
     }
 }
+
+#[test]
+fn a_supply_that_sags_under_load_is_found_under_load_only() {
+    // 6.1 V: inside the STS3215's rating at rest.
+    let mut arm = Arm::tuned("supply=6.1".parse().expect("faults"));
+    assert!(arm.examine().is_empty());
+    // Servo 2 holds against a heavy load (80 % of its torque): its supply
+    // sags below the rating there.
+    arm.bus
+        .write(2, addr::TORQUE_ENABLE, &[1])
+        .expect("torque on");
+    arm.sim.servo(2, |s| s.set_external_load(0.8));
+    arm.sim.clock().advance(Duration::from_millis(200));
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("present_voltage"));
+    assert_eq!(f.severity, Severity::Warning);
+    // The servo strains at its torque limit: 80 % of load plus the error.
+    assert!(f.problem.contains("% load"), "{}", f.problem);
+    assert!(!f.problem.contains("at rest"), "{}", f.problem);
+    assert!(f.problem.contains("rating 6.0..12.6 V"), "{}", f.problem);
+    assert!(
+        about(&findings, 1, Some("present_voltage")).is_none(),
+        "{}",
+        show(&findings)
+    );
+}
+
+#[test]
+fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
+    let mut arm = Arm::tuned(Faults::none());
+    // An adapter that holds every byte 2 ms, where the robot file says 0.
+    let sim = arm.sim.clone().with_latency(Duration::from_millis(2));
+    arm.sim = sim;
+    let ftdi = servobus_driver::FtdiLatency {
+        sysfs_path: "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer".into(),
+        latency: Duration::from_millis(16),
+    };
+    let cfg = arm.robot.buses[0].clone();
+    let examined = doctor::examine(
+        &mut arm.bus,
+        &arm.robot,
+        &cfg,
+        &target(),
+        &PortKind::Serial(Some(ftdi)),
+    )
+    .expect("examined");
+    let findings = examined.findings;
+    let timer = findings
+        .iter()
+        .find(|f| f.fix.contains("latency_timer"))
+        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    assert_eq!(
+        timer.fix,
+        "echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/latency_timer"
+    );
+    let measured = findings
+        .iter()
+        .find(|f| f.problem.contains("round trip"))
+        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    assert_eq!(measured.severity, Severity::Warning);
+    assert!(
+        measured.fix.contains("`latency_us: 2000` on bus `arm`"),
+        "{}",
+        measured.fix
+    );
+    assert_eq!(
+        examined.servos.len(),
+        6,
+        "every servo found despite the slow adapter"
+    );
+}

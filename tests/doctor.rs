@@ -434,3 +434,38 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
         "every servo found despite the slow adapter"
     );
 }
+
+#[test]
+fn a_model_other_than_the_robot_files_is_an_error() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.robot.buses[0].joints[1].model =
+        servobus_protocol::registers::model_by_name("sts3250").expect("model");
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("model_number"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(
+        f.problem
+            .contains("is a STS3215, the robot file says STS3250"),
+        "{}",
+        f.problem
+    );
+    assert_eq!(findings.len(), 1, "{}", show(&findings));
+}
+
+#[test]
+fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
+    let mut arm = Arm::tuned("vanish=5".parse().expect("faults"));
+    arm.sim.add_servo(servobus_sim::SimServo::sts3215(9));
+    let findings = arm.examine();
+    let extra = must(&findings, 9, Some("id"));
+    assert_eq!(extra.severity, Severity::Warning);
+    let missing = must(&findings, 5, None);
+    assert_eq!(missing.severity, Severity::Error);
+    assert!(
+        missing
+            .fix
+            .ends_with("servobus set-id --port /dev/ttyACM0 --id 9 5"),
+        "{}",
+        missing.fix
+    );
+}

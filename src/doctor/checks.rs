@@ -108,8 +108,8 @@ const MUST_UNLOAD: u8 = StatusFlags::OVERHEAT | StatusFlags::OVERLOAD;
 
 /// Temperature margin below the limit that earns a warning, C.
 const WARM_MARGIN_C: i32 = 10;
-/// How far a joint may read outside its limits before it counts, in the
-/// robot file's units per unit of radians: 1 degree.
+/// How far a joint may read outside its limits before it counts (rounding
+/// of the ticks, a joint resting against its stop): 1 degree, in radians.
 const OUTSIDE_TOLERANCE_RAD: f64 = 1.0 * std::f64::consts::PI / 180.0;
 
 impl Ctx<'_> {

@@ -1,5 +1,5 @@
 //! What `servobus play` keeps of the telemetry: a CSV log (one row per
-//! cycle and joint) and the series of the plot (commanded and measured
+//! cycle and joint) and the series of the plot (planned and measured
 //! position and tracking error per joint).
 
 use std::fs::File;
@@ -7,6 +7,7 @@ use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::Context;
+use servobus_runtime::config::Units;
 use servobus_runtime::CycleSample;
 
 /// The CSV log of a run.
@@ -76,22 +77,38 @@ impl CsvLog {
 /// One joint's series for the plot.
 #[derive(Default)]
 struct Series {
-    commanded: Vec<(f64, f64)>,
+    /// The planned path (what the joint should be at; the log's
+    /// `commanded` column is this path sent `lead` early).
+    planned: Vec<(f64, f64)>,
     measured: Vec<(f64, f64)>,
     error: Vec<(f64, f64)>,
 }
 
-/// Commanded and measured positions and tracking errors over time.
+/// Planned and measured positions and tracking errors over time.
 pub struct PlotData {
     names: Vec<String>,
     joints: Vec<Series>,
+    /// Bus of each joint (colours of the error panel are grouped by bus).
+    bus_of: Vec<usize>,
+    /// Run times at which a keyframe is reached (marked on every chart).
+    keyframes: Vec<f64>,
 }
 
 impl PlotData {
     /// Empty series for the joints `names`.
-    pub fn new(names: Vec<String>) -> Self {
+    pub fn new(names: Vec<String>, bus_of: Vec<usize>) -> Self {
         let joints = names.iter().map(|_| Series::default()).collect();
-        PlotData { names, joints }
+        PlotData {
+            names,
+            joints,
+            bus_of,
+            keyframes: Vec::new(),
+        }
+    }
+
+    /// Marks keyframes reached at these run times, s.
+    pub fn mark_keyframes(&mut self, times: impl IntoIterator<Item = f64>) {
+        self.keyframes.extend(times);
     }
 
     /// Adds the joints of `sample`.
@@ -101,7 +118,7 @@ impl PlotData {
             let Some(s) = self.joints.get_mut(j.joint) else {
                 continue;
             };
-            s.commanded.push((t, j.commanded));
+            s.planned.push((t, j.planned));
             if let Some(m) = j.measured {
                 if !j.stale {
                     s.measured.push((t, m));
@@ -111,7 +128,7 @@ impl PlotData {
         }
     }
 
-    /// Draws one chart per joint (commanded and measured position) and one
+    /// Draws one chart per joint (planned and measured position) and one
     /// of every joint's tracking error, as SVG or (for a `.png` path) PNG.
     pub fn draw(&self, path: &Path, title: &str, units: &str) -> anyhow::Result<()> {
         let png = path
@@ -155,19 +172,23 @@ impl PlotData {
         let t_end = self
             .joints
             .iter()
-            .flat_map(|s| s.commanded.last())
+            .flat_map(|s| s.planned.last())
             .map(|p| p.0)
             .fold(1e-3, f64::max);
 
         for (j, (series, area)) in self.joints.iter().zip(cells.iter()).enumerate() {
             let name = self.names.get(j).map_or("?", String::as_str);
-            let range = span(series.commanded.iter().chain(&series.measured));
+            let range = span(series.planned.iter().chain(&series.measured));
+            // The key is in the caption: a legend box would cover curves.
             let mut chart = ChartBuilder::on(area)
-                .caption(name, ("sans-serif", 18))
+                .caption(
+                    format!("{name}  (blue: planned, red: measured, grey: keyframes)"),
+                    ("sans-serif", 15),
+                )
                 .margin(8)
                 .x_label_area_size(32)
                 .y_label_area_size(56)
-                .build_cartesian_2d(0.0..t_end, range)
+                .build_cartesian_2d(0.0..t_end, range.clone())
                 .map_err(plot_err)?;
             chart
                 .configure_mesh()
@@ -176,33 +197,28 @@ impl PlotData {
                 .max_light_lines(2)
                 .draw()
                 .map_err(plot_err)?;
+            self.draw_keyframes(&mut chart, &range)?;
             chart
                 .draw_series(LineSeries::new(
-                    series.commanded.iter().copied(),
+                    series.planned.iter().copied(),
                     BLUE.stroke_width(2),
                 ))
-                .map_err(plot_err)?
-                .label("commanded")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLUE.stroke_width(2)));
+                .map_err(plot_err)?;
             chart
                 .draw_series(LineSeries::new(
                     series.measured.iter().copied(),
                     RED.stroke_width(1),
                 ))
-                .map_err(plot_err)?
-                .label("measured")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RED.stroke_width(1)));
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
                 .map_err(plot_err)?;
         }
 
+        // The error panel: chart on the left, its key beside it (never on
+        // the curves); colours in one hue family per bus, distinct shades
+        // within it, so 18 joints on 2 or 3 buses stay readable.
+        let (_, bw) = (0, bottom.dim_in_pixel().0);
+        let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
         let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
-        let mut chart = ChartBuilder::on(&bottom)
+        let mut chart = ChartBuilder::on(&left)
             .caption(
                 "tracking error (planned minus measured)",
                 ("sans-serif", 18),
@@ -210,7 +226,7 @@ impl PlotData {
             .margin(8)
             .x_label_area_size(36)
             .y_label_area_size(56)
-            .build_cartesian_2d(0.0..t_end, range)
+            .build_cartesian_2d(0.0..t_end, range.clone())
             .map_err(plot_err)?;
         chart
             .configure_mesh()
@@ -218,28 +234,98 @@ impl PlotData {
             .y_desc(format!("error ({units})"))
             .draw()
             .map_err(plot_err)?;
-        for (j, series) in self.joints.iter().enumerate() {
-            let color = Palette99::pick(j).to_rgba();
+        self.draw_keyframes(&mut chart, &range)?;
+        let colours = self.colours();
+        for (series, &color) in self.joints.iter().zip(&colours) {
             chart
                 .draw_series(LineSeries::new(
                     series.error.iter().copied(),
                     color.stroke_width(1),
                 ))
-                .map_err(plot_err)?
-                .label(self.names.get(j).cloned().unwrap_or_default())
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+                .map_err(plot_err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
+        let rows = self.names.len().max(1) as i32;
+        let (_, kh) = key.dim_in_pixel();
+        let line = ((kh as i32 - 40) / rows).clamp(10, 22);
+        let font = ("sans-serif", (line - 2).clamp(10, 15));
+        for (j, (name, &color)) in self.names.iter().zip(&colours).enumerate() {
+            let y = 30 + j as i32 * line;
+            key.draw(&PathElement::new([(4, y), (26, y)], color.stroke_width(3)))
+                .map_err(plot_err)?;
+            let bus = self.bus_of.get(j).copied().unwrap_or(0);
+            key.draw(&Text::new(
+                format!("{name} (bus {bus})"),
+                (32, y - line / 2 + 2),
+                font,
+            ))
             .map_err(plot_err)?;
+        }
         root.present().map_err(plot_err)?;
         Ok(())
+    }
+}
+
+impl PlotData {
+    /// Thin grey vertical lines at the keyframes.
+    fn draw_keyframes<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        chart: &mut plotters::prelude::ChartContext<
+            '_,
+            DB,
+            plotters::prelude::Cartesian2d<
+                plotters::coord::types::RangedCoordf64,
+                plotters::coord::types::RangedCoordf64,
+            >,
+        >,
+        range: &std::ops::Range<f64>,
+    ) -> anyhow::Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+        let grey = RGBColor(150, 150, 150).stroke_width(1);
+        chart
+            .draw_series(
+                self.keyframes
+                    .iter()
+                    .map(|&t| PathElement::new([(t, range.start), (t, range.end)], grey)),
+            )
+            .map_err(plot_err)?;
+        Ok(())
+    }
+
+    /// One colour per joint: a hue family per bus (blues, oranges, greens,
+    /// purples), shades spread within the family.
+    fn colours(&self) -> Vec<plotters::style::RGBColor> {
+        use plotters::style::RGBColor;
+        let families: [[(u8, u8, u8); 2]; 4] = [
+            [(8, 48, 107), (107, 174, 214)],
+            [(166, 54, 3), (253, 174, 107)],
+            [(0, 68, 27), (116, 196, 118)],
+            [(63, 0, 125), (188, 189, 220)],
+        ];
+        let per_bus = |b: usize| self.bus_of.iter().filter(|&&x| x == b).count().max(1);
+        let mut seen = vec![0usize; self.bus_of.iter().max().map_or(1, |m| m + 1)];
+        (0..self.names.len())
+            .map(|j| {
+                let b = self.bus_of.get(j).copied().unwrap_or(0);
+                let n = per_bus(b);
+                let k = seen.get(b).copied().unwrap_or(0);
+                if let Some(s) = seen.get_mut(b) {
+                    *s += 1;
+                }
+                // Alternate dark and light so neighbours differ most.
+                let order = if k % 2 == 0 { k / 2 } else { n - 1 - k / 2 };
+                let f = if n > 1 {
+                    order as f64 / (n - 1) as f64
+                } else {
+                    0.0
+                };
+                let [(r0, g0, b0), (r1, g1, b1)] = families[b % families.len()];
+                let mix = |a: u8, c: u8| (a as f64 + (c as f64 - a as f64) * f).round() as u8;
+                RGBColor(mix(r0, r1), mix(g0, g1), mix(b0, b1))
+            })
+            .collect()
     }
 }
 
@@ -257,4 +343,148 @@ fn span<'a>(points: impl Iterator<Item = &'a (f64, f64)>) -> std::ops::Range<f64
     }
     let pad = ((hi - lo) * 0.05).max(0.05);
     (lo - pad)..(hi + pad)
+}
+
+/// A recorded path read back for `servobus play`: sample times and every
+/// robot joint's position, in radians.
+pub struct Recording {
+    /// Sample times, s, increasing.
+    pub times: Vec<f64>,
+    /// Per sample, one position per robot joint (robot order), rad.
+    pub samples: Vec<Vec<f64>>,
+    /// Robot joints the file does not name (held at their rest position).
+    pub missing: Vec<String>,
+}
+
+/// Reads a recorded path for `robot`: either the CSV that `play --log`
+/// writes (one row per cycle and joint; the measured position where there
+/// is one, else the commanded one) or a CSV of `time_s,<joint>...` (a
+/// column per joint, in degrees, or in radians when named `<joint>_rad`).
+pub fn read_recording(
+    path: &Path,
+    robot: &servobus_runtime::config::Robot,
+) -> anyhow::Result<Recording> {
+    let mut reader = csv::Reader::from_path(path)
+        .with_context(|| format!("cannot read the recording {}", path.display()))?;
+    let header: Vec<String> = reader.headers()?.iter().map(str::to_owned).collect();
+    let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
+    let rest: Vec<f64> = robot
+        .joints()
+        .map(|j| robot.units.to_rad(j.rest()))
+        .collect();
+    // Per robot joint, its (time, rad) series.
+    let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); names.len()];
+    let col = |n: &str| header.iter().position(|h| h == n);
+    let bad = |row: usize, what: &str| anyhow::anyhow!("{}: row {row}: {what}", path.display());
+    let Some(time_col) = col("time_s") else {
+        anyhow::bail!("{}: no `time_s` column", path.display());
+    };
+    if let Some(joint_col) = col("joint") {
+        let unit_of = |prefix: &str| {
+            header.iter().enumerate().find_map(|(i, h)| {
+                let u = h.strip_prefix(prefix)?;
+                Some((i, if u == "rad" { Units::Rad } else { Units::Deg }))
+            })
+        };
+        let (Some((cmd, units)), measured) = (unit_of("commanded_"), unit_of("measured_")) else {
+            anyhow::bail!(
+                "{}: a `play --log` file needs a commanded_<unit> column",
+                path.display()
+            );
+        };
+        for (i, row) in reader.records().enumerate() {
+            let row = row?;
+            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
+            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            let Some(j) = row
+                .get(joint_col)
+                .and_then(|n| names.iter().position(|x| *x == n))
+            else {
+                continue;
+            };
+            let value = match measured.and_then(|(c, _)| num(c)) {
+                Some(v) => v?,
+                None => num(cmd).ok_or_else(|| bad(i + 2, "no position"))??,
+            };
+            series[j].push((t, units.to_rad(value)));
+        }
+    } else {
+        let cols: Vec<Option<(usize, Units)>> = names
+            .iter()
+            .map(|n| {
+                col(n)
+                    .map(|c| (c, Units::Deg))
+                    .or_else(|| col(&format!("{n}_deg")).map(|c| (c, Units::Deg)))
+                    .or_else(|| col(&format!("{n}_rad")).map(|c| (c, Units::Rad)))
+            })
+            .collect();
+        if cols.iter().all(Option::is_none) {
+            anyhow::bail!(
+                "{}: no column names a joint of {} (joints: {})",
+                path.display(),
+                robot.name,
+                names.join(", ")
+            );
+        }
+        for (i, row) in reader.records().enumerate() {
+            let row = row?;
+            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
+            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            for (j, c) in cols.iter().enumerate() {
+                if let Some((c, u)) = c {
+                    let v = num(*c).ok_or_else(|| bad(i + 2, "a position is missing"))??;
+                    series[j].push((t, u.to_rad(v)));
+                }
+            }
+        }
+    }
+    // A common time base: the series with the most samples.
+    let base = series
+        .iter()
+        .max_by_key(|s| s.len())
+        .cloned()
+        .unwrap_or_default();
+    let mut times: Vec<f64> = Vec::with_capacity(base.len());
+    for &(t, _) in &base {
+        if times.last().map_or(true, |&l| t > l) {
+            times.push(t);
+        }
+    }
+    if times.len() < 2 {
+        anyhow::bail!("{}: fewer than two samples", path.display());
+    }
+    let mut samples = vec![Vec::with_capacity(names.len()); times.len()];
+    for (j, s) in series.iter().enumerate() {
+        for (i, &t) in times.iter().enumerate() {
+            samples[i].push(if s.is_empty() { rest[j] } else { at(s, t) });
+        }
+    }
+    let missing = names
+        .iter()
+        .zip(&series)
+        .filter(|(_, s)| s.is_empty())
+        .map(|(n, _)| n.to_string())
+        .collect();
+    Ok(Recording {
+        times,
+        samples,
+        missing,
+    })
+}
+
+/// The series at `t`, linearly interpolated (held beyond its ends).
+fn at(s: &[(f64, f64)], t: f64) -> f64 {
+    let i = s.partition_point(|p| p.0 <= t);
+    match i {
+        0 => s[0].1,
+        i if i >= s.len() => s[s.len() - 1].1,
+        i => {
+            let ((ta, a), (tb, b)) = (s[i - 1], s[i]);
+            if tb > ta {
+                a + (b - a) * (t - ta) / (tb - ta)
+            } else {
+                b
+            }
+        }
+    }
 }

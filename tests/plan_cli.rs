@@ -132,15 +132,31 @@ fn a_segment_beyond_a_limit_names_keyframe_joint_peak_and_limit() {
     let m = temp(
         "too_fast",
         "m.yaml",
-        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+        "robot: robot.yaml\ninterpolation: spline\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
     );
     let out = servobus(&["plan", m.to_str().expect("utf-8")]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    let want = format!("{}:4:5: keyframes[1]: joint `a`: ", m.display());
+    let want = format!("{}:5:5: keyframes[1]: joint `a`: ", m.display());
     assert!(err.contains(&want), "{err}");
     assert!(
         err.contains("deg/s") && err.contains("above the limit"),
+        "{err}"
+    );
+    assert!(err.contains("on_limit: stretch"), "{err}");
+
+    // The default (shape-preserving) refuses it too: even stopping at the
+    // keyframe needs 1.5 s (a trapezoid at 90 deg/s and 180 deg/s^2).
+    let m3 = temp(
+        "too_fast",
+        "m3.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+    );
+    let out = servobus(&["plan", m3.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("keyframes[1].at") && err.contains("at least 1.500 s"),
         "{err}"
     );
     assert!(err.contains("on_limit: stretch"), "{err}");

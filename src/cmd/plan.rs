@@ -53,6 +53,9 @@ struct PlanJson {
     robot: String,
     units: String,
     rate_hz: f64,
+    /// Path shape: `untimed` (time-optimal pass-through), or the timed
+    /// keyframes' interpolation (`shape_preserving`, `spline`, ...).
+    interpolation: &'static str,
     duration_s: f64,
     joints: Vec<JointJson>,
     segments: Vec<SegmentJson>,
@@ -117,6 +120,7 @@ fn summarise(motion: &Motion, robot: &Robot, traj: &Trajectory) -> PlanJson {
         robot: motion.robot_path.display().to_string(),
         units: u.to_string(),
         rate_hz: rate,
+        interpolation: motion.path_shape(),
         duration_s: traj.duration(),
         joints,
         segments,
@@ -157,7 +161,7 @@ fn moving_times(traj: &Trajectory, rate_hz: f64) -> Vec<f64> {
 fn print_text(r: &PlanJson, motion: &Motion) {
     let u = &r.units;
     println!(
-        "{}: {} keyframes{} on `{}`, {:.3} s at {} Hz ({} cycles)",
+        "{}: {} keyframes{} ({}) on `{}`, {:.3} s at {} Hz ({} cycles)",
         r.motion,
         motion.keyframes.len(),
         if motion.repeat > 1 {
@@ -165,6 +169,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         } else {
             String::new()
         },
+        r.interpolation,
         r.robot,
         r.duration_s,
         r.rate_hz,

@@ -27,12 +27,13 @@ use servobus_runtime::{
 use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
 
-use crate::record::{CsvLog, PlotData};
+use crate::record::{read_recording, CsvLog, PlotData};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file.
+    /// The motion file, or a recorded path (.csv: a `play --log` file or
+    /// `time_s,<joint>...` in degrees; needs --robot).
     pub motion: PathBuf,
     /// Robot file (default: the one the motion file names).
     #[arg(long)]
@@ -53,8 +54,8 @@ pub struct Args {
     /// Write one CSV row per cycle and joint.
     #[arg(long)]
     pub log: Option<PathBuf>,
-    /// Draw commanded vs measured positions and the tracking error (SVG, or
-    /// PNG for a .png path).
+    /// Draw planned vs measured positions and the tracking error: SVG
+    /// (.svg) or PNG (.png); any other extension is refused before moving.
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Wait for replies by polling the port without blocking, on every bus
@@ -88,32 +89,34 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
-    let rate_hz = match args.rate {
-        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
-            bail!("--rate {rate}: give a positive rate in Hz")
-        }
-        Some(rate) => rate,
-        None => motion.rate_hz(&robot),
-    };
-    for bus in &robot.buses {
-        bus.plan(rate_hz)
-            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
-    }
-    let trajectory = plan_motion(&motion, &robot)?;
+    check_outputs(&args)?;
+    let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
     let backend = backend(&args, &robot)?;
     if !args.json {
         print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
     }
+    // Outputs are created before anything moves: a path that cannot be
+    // written fails now, not after the run.
+    let log = match &args.log {
+        Some(path) => Some(CsvLog::create(
+            path,
+            names_of(&robot),
+            &motion.units.to_string(),
+        )?),
+        None => None,
+    };
 
     let options = RunOptions {
         rate_hz: Some(rate_hz),
         units: Some(motion.units),
-        settle: Duration::from_millis(300),
+        settle: SETTLE,
         // The simulated joints start at rest; real ones wherever they are.
         // Both approach the first keyframe slowly (skipped when already
         // there).
-        approach: Some(0.25),
+        approach: Some(APPROACH),
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
         rt: RtOptions {
             core: args.core,
@@ -126,6 +129,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = motion.units;
     let duration = trajectory.duration();
+    let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
+    let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
+    trajectory.sample(0.0, &mut start);
+    let start: Vec<f64> = start.iter().map(|s| s.position).collect();
     let mut servers = Vec::new();
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
@@ -174,10 +181,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
 
     let interrupts = install_ctrl_c(&runner)?;
+    let shown = Shown {
+        names: names.clone(),
+        bus_of: robot
+            .buses
+            .iter()
+            .enumerate()
+            .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
+            .collect(),
+        keyframes: keyframe_times,
+        start,
+        limits: servobus_runtime::config::joint_limits(&robot),
+        settle: SETTLE.as_secs_f64(),
+    };
     let outcome = if args.monitor {
         super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
     } else {
-        follow(&runner, &args, &names, units, duration, &interrupts)
+        follow(&runner, &args, log, &shown, units, duration, &interrupts)
     };
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);
@@ -190,16 +210,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     if let (Some(plot), Some(path)) = (plot, &args.plot) {
         let title = format!(
-            "{} on {}: commanded vs measured",
+            "{} on {}: planned vs measured",
             file_name(&motion.path),
             robot.name
         );
         plot.draw(path, &title, &units.to_string())?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
+            obj.insert("recording".into(), r.json(motion.units));
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         print_report(&report, robot.lead.is_none());
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
         if let Some(path) = &args.log {
             println!("log: {}", path.display());
         }
@@ -211,6 +238,227 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
         _ => ExitCode::FAILURE,
     })
+}
+
+fn names_of(robot: &Robot) -> Vec<String> {
+    robot.joints().map(|j| j.name.clone()).collect()
+}
+
+/// Plot formats `--plot` writes, by file extension.
+const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
+
+/// Fails at once on an output that could not be written after the run: a
+/// plot format not supported, or a directory that does not exist.
+fn check_outputs(args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.plot {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if !PLOT_FORMATS.contains(&ext.as_str()) {
+            bail!(
+                "--plot {}: plots are written as SVG (.svg) or PNG (.png); give one of those",
+                path.display()
+            );
+        }
+    }
+    for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
+        let Some(path) = path else { continue };
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        if let Some(dir) = dir {
+            if !dir.is_dir() {
+                bail!(
+                    "{flag} {}: the directory {} does not exist; nothing was moved",
+                    path.display(),
+                    dir.display()
+                );
+            }
+        }
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .with_context(|| {
+                format!(
+                    "{flag} {}: cannot write there; nothing was moved",
+                    path.display()
+                )
+            })?;
+    }
+    Ok(())
+}
+
+/// A recording played back: what the filter did to it.
+struct RecordingInfo {
+    samples: usize,
+    span_s: f64,
+    names: Vec<String>,
+    max_rad: Vec<f64>,
+    rms_rad: Vec<f64>,
+    missing: Vec<String>,
+}
+
+impl RecordingInfo {
+    /// The worst joint's departure, in one line.
+    fn describe(&self, u: Units) -> String {
+        let worst = (0..self.max_rad.len())
+            .max_by(|&a, &b| self.max_rad[a].total_cmp(&self.max_rad[b]))
+            .unwrap_or(0);
+        let mut text = format!(
+            "recording: {} samples over {:.2} s, filtered to the limits; departs from it by at \
+             most {:.2} {u} ({}), rms {:.2} {u}",
+            self.samples,
+            self.span_s,
+            u.from_rad(self.max_rad.get(worst).copied().unwrap_or(0.0)),
+            self.names.get(worst).map_or("?", String::as_str),
+            u.from_rad(self.rms_rad.get(worst).copied().unwrap_or(0.0)),
+        );
+        if !self.missing.is_empty() {
+            text += &format!("; not recorded, held at rest: {}", self.missing.join(", "));
+        }
+        text
+    }
+
+    fn json(&self, u: Units) -> serde_json::Value {
+        let joints: Vec<serde_json::Value> = self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(j, name)| {
+                serde_json::json!({
+                    "name": name,
+                    "max_departure": u.from_rad(self.max_rad[j]),
+                    "rms_departure": u.from_rad(self.rms_rad[j]),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "samples": self.samples,
+            "span_s": self.span_s,
+            "joints": joints,
+        })
+    }
+}
+
+type Loaded = (Motion, Robot, Trajectory, Option<RecordingInfo>, f64);
+
+/// The motion file planned, or the recording (`.csv`) filtered, with the
+/// control rate; every limit and the buses' budgets checked.
+fn load(args: &Args) -> anyhow::Result<Loaded> {
+    let recorded = args
+        .motion
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let (motion, robot) = if recorded {
+        let Some(robot_path) = &args.robot else {
+            bail!(
+                "{}: a recorded path names no robot; give --robot FILE",
+                args.motion.display()
+            );
+        };
+        let robot = servobus_runtime::config::load_robot(robot_path)?;
+        (recording_motion(&args.motion, &robot), robot)
+    } else {
+        load_motion(&args.motion, args.robot.as_deref())?
+    };
+    let rate_hz = match args.rate {
+        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
+            bail!("--rate {rate}: give a positive rate in Hz")
+        }
+        Some(rate) => rate,
+        None => motion.rate_hz(&robot),
+    };
+    for bus in &robot.buses {
+        bus.plan(rate_hz)
+            .with_context(|| format!("bus `{}` cannot run at {rate_hz} Hz", bus.name))?;
+    }
+    if !recorded {
+        let trajectory = plan_motion(&motion, &robot)?;
+        return Ok((motion, robot, trajectory, None, rate_hz));
+    }
+    let rec = read_recording(&args.motion, &robot)?;
+    let limits = servobus_runtime::config::joint_limits(&robot);
+    let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
+        .map_err(|e| {
+            anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
+        })?;
+    let info = RecordingInfo {
+        samples: rec.times.len(),
+        span_s: rec.times[rec.times.len() - 1] - rec.times[0],
+        names: names_of(&robot),
+        max_rad: tracked.max_deviation,
+        rms_rad: tracked.rms_deviation,
+        missing: rec.missing,
+    };
+    Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
+}
+
+/// A stand-in motion for a recording (its name, the robot's joints), so the
+/// plan and report read the same as for a motion file.
+fn recording_motion(path: &Path, robot: &Robot) -> Motion {
+    Motion {
+        path: path.to_owned(),
+        robot_path: robot.path.clone(),
+        units: Units::Deg,
+        rate_hz: None,
+        joints: names_of(robot),
+        keyframes: Vec::new(),
+        repeat: 1,
+        on_limit: Default::default(),
+        interpolation: Default::default(),
+    }
+}
+
+/// How long the final position is held (and tracked) after the path.
+const SETTLE: Duration = Duration::from_millis(300);
+
+/// The fraction of the limits the runtime's approach moves at (its
+/// `RunOptions::approach`), and the distance under which it is skipped
+/// (half a degree, as the runtime's).
+const APPROACH: f64 = 0.25;
+const APPROACH_SKIP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// What the live view and the plot show besides the telemetry.
+struct Shown {
+    names: Vec<String>,
+    bus_of: Vec<usize>,
+    /// Path times of the keyframes.
+    keyframes: Vec<f64>,
+    /// The path's first position per joint, rad.
+    start: Vec<f64>,
+    limits: Vec<servobus_trajectory::JointLimits>,
+    settle: f64,
+}
+
+impl Shown {
+    /// How long the approach from `present` (rad) to the path's start
+    /// takes: the same jerk-limited move at the same fraction of the
+    /// limits as the runtime plans, or 0 when it is skipped.
+    fn approach_s(&self, present: &[f64]) -> f64 {
+        let far = present
+            .iter()
+            .zip(&self.start)
+            .any(|(p, q)| (p - q).abs() > APPROACH_SKIP_RAD);
+        if !far {
+            return 0.0;
+        }
+        let lim: Vec<_> = self
+            .limits
+            .iter()
+            .map(|l| {
+                servobus_trajectory::JointLimits::new(
+                    l.max_velocity * APPROACH,
+                    l.max_acceleration * APPROACH,
+                    l.max_jerk.map(|j| j * APPROACH),
+                )
+            })
+            .collect();
+        let from: Vec<_> = present
+            .iter()
+            .map(|&p| servobus_trajectory::JointState::at_rest(p))
+            .collect();
+        servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
+    }
 }
 
 /// Reply-deadline allowance for the simulator's pseudo-terminals.
@@ -345,24 +593,49 @@ fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> {
 }
 
 /// Reads the telemetry until the run ends: progress, log, plot series.
+#[allow(clippy::too_many_arguments)] // the run, its outputs and what they show
 fn follow(
     runner: &Runner,
     args: &Args,
-    names: &[String],
+    mut log: Option<CsvLog>,
+    shown: &Shown,
     units: Units,
     duration: f64,
     _interrupts: &AtomicU32,
 ) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
-    let mut log = match &args.log {
-        Some(path) => Some(CsvLog::create(path, names.to_vec(), &units.to_string())?),
-        None => None,
-    };
-    let mut plot = args.plot.as_ref().map(|_| PlotData::new(names.to_vec()));
+    let mut plot = args
+        .plot
+        .as_ref()
+        .map(|_| PlotData::new(shown.names.clone(), shown.bus_of.clone()));
+    // The joints' positions at the first cycle (rad), until all are known:
+    // they give the approach's duration.
+    let mut present: Vec<Option<f64>> = vec![None; shown.names.len()];
+    let mut announced = false;
     let mut progress = Progress::new(args.json, duration, &units.to_string());
     let telemetry = runner.telemetry();
     loop {
         match telemetry.recv_timeout(Duration::from_millis(100)) {
             Ok(Telemetry::Cycle(sample)) => {
+                if !announced {
+                    for j in sample.joints() {
+                        if let Some(slot) = present.get_mut(j.joint) {
+                            slot.get_or_insert(units.to_rad(j.measured.unwrap_or(j.planned)));
+                        }
+                    }
+                    if present.iter().all(Option::is_some) {
+                        announced = true;
+                        let now: Vec<f64> = present.iter().map(|p| p.unwrap_or(0.0)).collect();
+                        let approach = shown.approach_s(&now);
+                        if approach > 0.0 {
+                            progress
+                                .message(&format!("moving to the first keyframe, {approach:.1} s"));
+                        }
+                        progress.set_total(approach + duration + shown.settle);
+                        if let Some(plot) = &mut plot {
+                            plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
+                        }
+                    }
+                }
                 if let Some(log) = &mut log {
                     log.record(&sample)?;
                 }
@@ -450,6 +723,11 @@ impl Progress {
             self.last_line = Instant::now();
             println!("{msg}");
         }
+    }
+
+    /// The run's whole length: approach, path and settling.
+    fn set_total(&mut self, total_s: f64) {
+        self.duration = total_s;
     }
 
     fn message(&self, text: &str) {

@@ -17,12 +17,19 @@
 //!   moving when its motion continues, and stops only where it turns back,
 //!   so velocity and acceleration are continuous and no joint overshoots the
 //!   keyframes' positions.
-//! - **Timed keyframes** ([`Keyframe::at`]): exactly at their times, with a
-//!   C2 cubic spline (default), a monotone quintic (no overshoot) or
-//!   minimum-jerk quintic segments ([`TimedShape`]). A segment beyond a limit
-//!   is an error naming the keyframe, joint, peak and limit
-//!   ([`PlanError::LimitExceeded`]) unless [`OnLimit::Stretch`] is set.
+//! - **Timed keyframes** ([`Keyframe::at`]): exactly at their times. By
+//!   default shape-preserving: the same jerk-limited segment profiles as
+//!   untimed motion, planned per joint to the given durations, so a joint
+//!   never leaves the range of the keyframes around a segment and every
+//!   motion that could stop at each keyframe on time is accepted. Also a
+//!   C2 cubic spline, a monotone quintic or minimum-jerk quintic segments
+//!   ([`TimedShape`]). A segment beyond a limit is an error naming the
+//!   keyframe, joint, peak and limit ([`PlanError::LimitExceeded`],
+//!   [`PlanError::TooSoon`]) unless [`OnLimit::Stretch`] is set.
 //! - Mixed timed and untimed keyframes, and repeats ([`PlanOptions`]).
+//! - **Recorded paths** ([`track`]): a dense recording filtered to the
+//!   limits by time-optimal tracking, forwards and backwards, so that the
+//!   result is not late.
 //! - **Online changes** from any state: [`retarget`] (to a new target,
 //!   synchronised, jerk limited) and [`stop`] (to rest in minimal time).
 //!
@@ -91,6 +98,8 @@ mod piece;
 mod plan;
 mod profile;
 mod spline;
+mod timed;
+mod track;
 mod trajectory;
 mod untimed;
 
@@ -99,4 +108,5 @@ pub use limits::JointLimits;
 pub use online::{retarget, stop};
 pub use plan::{plan, Keyframe, OnLimit, PlanOptions};
 pub use spline::TimedShape;
+pub use track::{track, Tracked};
 pub use trajectory::{Cursor, JointState, JointSummary, SegmentTiming, Trajectory};

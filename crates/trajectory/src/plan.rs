@@ -5,6 +5,7 @@ use crate::error::{PlanError, Quantity};
 use crate::limits::validate_all;
 use crate::piece::Piece;
 use crate::spline::{self, TimedShape};
+use crate::timed;
 use crate::trajectory::SegmentTiming;
 use crate::untimed::{self, Scratch};
 use crate::{JointLimits, Trajectory};
@@ -76,7 +77,7 @@ pub struct PlanOptions {
 impl Default for PlanOptions {
     fn default() -> Self {
         PlanOptions {
-            shape: TimedShape::Cubic,
+            shape: TimedShape::ShapePreserving,
             on_limit: OnLimit::Error,
             repeat: 1,
             stop_at_keyframes: false,
@@ -443,6 +444,14 @@ fn timed_section(
         while b < m && entries[b + 1].shape == shape {
             b += 1;
         }
+        if shape == TimedShape::ShapePreserving {
+            preserving_run(limits, entries, pos, times, a, b, on_limit, &mut buf)?;
+            for (o, p) in out.iter_mut().zip(&mut buf) {
+                o.append(p);
+            }
+            a = b;
+            continue;
+        }
         // Stretching loop: local stretching of offending segments first
         // (keeps the others on time), then one uniform stretch, which is
         // exact because a uniformly stretched run has the same shape (its
@@ -492,5 +501,40 @@ fn timed_section(
         }
         a = b;
     }
+    Ok(())
+}
+
+/// A shape-preserving run `a..=b` of a timed section: every segment too
+/// short even for a rest-to-rest move is refused, or with
+/// [`OnLimit::Stretch`] lengthened to the shortest such move (every later
+/// keyframe delayed by as much); the others keep their times exactly.
+#[allow(clippy::too_many_arguments)] // one run of the section's arrays
+fn preserving_run(
+    limits: &[JointLimits],
+    entries: &[Entry<'_>],
+    pos: &[&[f64]],
+    times: &mut [f64],
+    a: usize,
+    b: usize,
+    on_limit: OnLimit,
+    buf: &mut [Vec<Piece>],
+) -> Result<(), PlanError> {
+    buf.iter_mut().for_each(Vec::clear);
+    while let Some(short) = timed::check(limits, &times[a..=b], &pos[a..=b]) {
+        let k = a + short.segment;
+        let available = times[k + 1] - times[k];
+        if on_limit == OnLimit::Error {
+            return Err(PlanError::TooSoon {
+                keyframe: entries[k + 1].index,
+                needed: short.needed,
+                available,
+            });
+        }
+        let shift = short.needed * (1.0 + 1e-9) - available;
+        for t in &mut times[k + 1..] {
+            *t += shift;
+        }
+    }
+    timed::run(limits, &times[a..=b], &pos[a..=b], buf);
     Ok(())
 }

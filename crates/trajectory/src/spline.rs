@@ -10,12 +10,19 @@ use crate::piece::Piece;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum TimedShape {
+    /// Shape-preserving jerk-limited segments (the default): each joint
+    /// stays within the range of the two keyframes around every segment,
+    /// passes a keyframe where it turns back at zero speed, and keeps
+    /// velocity and acceleration continuous. Every motion that stopping at
+    /// each keyframe at its time could do is planned, at exactly its times
+    /// and within every limit (see `timed.rs`).
+    #[default]
+    ShapePreserving,
     /// A C2 cubic spline through every keyframe (the smoothest: continuous
     /// acceleration, piecewise-constant jerk), at rest at both ends of the
     /// run. Two extra knots, in the middle of the first and last intervals,
     /// give the freedom to start and end with zero acceleration too. It may
-    /// overshoot between keyframes.
-    #[default]
+    /// overshoot between keyframes, and is refused where it breaks a limit.
     Cubic,
     /// Quintic Hermite segments that never overshoot: each segment is
     /// monotone between its keyframes. Velocity at a keyframe is zero where
@@ -47,6 +54,8 @@ fn quintic(t0: f64, h: f64, q0: f64, dq: f64, v0: f64, v1: f64) -> Piece {
 
 /// Builds the pieces of one run: `times[k]` and `pos[k]` (one position per
 /// joint) for `k = 0..=m`, times strictly increasing. Appends to `out[j]`.
+/// [`TimedShape::ShapePreserving`] is planned by `timed::run` instead
+/// (it needs the limits).
 pub(crate) fn run(shape: TimedShape, times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
     match shape {
         TimedShape::MinimumJerk => {
@@ -95,7 +104,7 @@ pub(crate) fn run(shape: TimedShape, times: &[f64], pos: &[&[f64]], out: &mut [V
                 }
             }
         }
-        TimedShape::Cubic => cubic(times, pos, out),
+        TimedShape::Cubic | TimedShape::ShapePreserving => cubic(times, pos, out),
     }
 }
 

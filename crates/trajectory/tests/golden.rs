@@ -202,8 +202,25 @@ fn timed_segment_beyond_a_limit_is_named_or_stretched() {
         }
         other => panic!("unexpected {other:?}"),
     }
-    match plan(&limits, &keyframes, &PlanOptions::default()) {
+    let spline = PlanOptions {
+        shape: TimedShape::Cubic,
+        ..PlanOptions::default()
+    };
+    match plan(&limits, &keyframes, &spline) {
         Err(PlanError::LimitExceeded { joint: 1, .. }) => {}
+        other => panic!("unexpected {other:?}"),
+    }
+    // Shape-preserving (the default): joint 1 cannot cover 1.4 in 0.5 s
+    // even from rest to rest (1.4 s at 1 per s plus 0.25 s of ramps).
+    match plan(&limits, &keyframes, &PlanOptions::default()) {
+        Err(PlanError::TooSoon {
+            keyframe: 2,
+            needed,
+            available,
+        }) => assert!(
+            (needed - 1.65).abs() < 1e-9 && close(available, 0.5),
+            "{needed}"
+        ),
         other => panic!("unexpected {other:?}"),
     }
     let options = PlanOptions {

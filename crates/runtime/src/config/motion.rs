@@ -71,8 +71,17 @@ pub enum OnLimit {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Interpolation {
-    /// Cubic spline, at rest at both ends; velocity and acceleration continuous.
+    /// Shape-preserving, jerk-limited segments (the default): every joint
+    /// stays within the range of the two keyframes around each segment and
+    /// passes a keyframe where it turns back at zero speed; a motion that
+    /// could stop at every keyframe on time is always accepted.
     #[default]
+    #[serde(alias = "shape-preserving")]
+    ShapePreserving,
+    /// C2 cubic spline (`spline` or `cubic`), at rest at both ends; the
+    /// smoothest, but it may overshoot the keyframes and is refused where
+    /// it breaks a limit.
+    #[serde(alias = "spline")]
     Cubic,
     /// Monotone cubic: never overshoots between keyframes.
     Monotone,
@@ -81,7 +90,29 @@ pub enum Interpolation {
     Quintic,
 }
 
+impl Interpolation {
+    /// The name a motion file uses for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Interpolation::ShapePreserving => "shape_preserving",
+            Interpolation::Cubic => "spline",
+            Interpolation::Monotone => "monotone",
+            Interpolation::Quintic => "quintic",
+        }
+    }
+}
+
 impl Motion {
+    /// The path shape used: the interpolation's name when a keyframe after
+    /// the first has a time, else `untimed` (time-optimal pass-through).
+    pub fn path_shape(&self) -> &'static str {
+        if self.keyframes.iter().skip(1).any(|k| k.at.is_some()) {
+            self.interpolation.name()
+        } else {
+            "untimed"
+        }
+    }
+
     /// The control rate to use: the motion's, else the robot's.
     pub fn rate_hz(&self, robot: &Robot) -> f64 {
         self.rate_hz.unwrap_or(robot.rate_hz)

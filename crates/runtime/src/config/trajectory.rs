@@ -40,6 +40,7 @@ pub fn plan_input(motion: &Motion) -> (Vec<traj::Keyframe>, PlanOptions) {
         .collect();
     let options = PlanOptions {
         shape: match motion.interpolation {
+            Interpolation::ShapePreserving => TimedShape::ShapePreserving,
             Interpolation::Cubic => TimedShape::Cubic,
             Interpolation::Monotone => TimedShape::Monotone,
             Interpolation::Quintic => TimedShape::MinimumJerk,
@@ -103,7 +104,8 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
         } => {
             let unit = quantity_unit(u, quantity);
             let hint = if quantity == Quantity::Position {
-                "; the path overshoots: add a keyframe or use `interpolation: monotone`"
+                "; the spline overshoots: add a keyframe, or leave `interpolation` out for the \
+                 default shape-preserving path"
             } else {
                 "; give the segment more time, or set `on_limit: stretch`"
             };

@@ -8,16 +8,29 @@
 //! cargo run --example live_errors -- configs/motions/arm-pick-place.yaml
 //! ```
 
-use std::path::PathBuf;
+use std::path::Path;
+use std::process::ExitCode;
 
 use servobus_runtime::config::{load_motion, plan_motion};
-use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
+use servobus_runtime::{spawn_virtual, Finish, RunOptions, Telemetry};
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = std::env::args().nth(1).map_or_else(
-        || PathBuf::from("configs/motions/arm-pick-place.yaml"),
-        PathBuf::from,
-    );
+const USAGE: &str = "usage: live_errors [MOTION]\n\
+    Plays MOTION (a motion file or a built-in name; default arm-pick-place) on\n\
+    the simulated robot and prints each joint's tracking error every 50 cycles.";
+
+fn main() -> ExitCode {
+    let arg = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "arm-pick-place".to_owned());
+    if arg == "--help" || arg == "-h" {
+        println!("{USAGE}");
+        return ExitCode::SUCCESS;
+    }
+    exit_on_error(watch(&arg))
+}
+
+fn watch(arg: &str) -> Result<(), Box<dyn std::error::Error>> {
+    let path = servobus::builtin::motion_path_or_name(Path::new(arg));
     let (motion, robot) = load_motion(&path, None)?;
     let trajectory = plan_motion(&motion, &robot)?;
 
@@ -41,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 println!("t = {:5.2} s  {}", sample.time_s, errors.join("  "));
             }
             Telemetry::Fault(fault) => println!("fault: {fault}"),
-            Telemetry::Finished(how) => println!("finished: {how:?}"),
+            Telemetry::Finished(how) => println!("{}", finished(how)),
             _ => {}
         }
     }
@@ -53,4 +66,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.telemetry_dropped
     );
     Ok(())
+}
+
+/// How the run ended, as a sentence.
+fn finished(how: Finish) -> &'static str {
+    match how {
+        Finish::Completed => "the motion played to its end",
+        Finish::Stopped => "stopped on request",
+        Finish::TorqueOff => "ended by turning the torque off",
+        Finish::Fault => "ended by a fault (see above)",
+        Finish::Abandoned => "abandoned: nobody asked it to play",
+        _ => "ended",
+    }
+}
+
+/// Prints `error: ...` in words (not the error's `Debug` form) and exits 1.
+fn exit_on_error(result: Result<(), Box<dyn std::error::Error>>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

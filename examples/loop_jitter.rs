@@ -117,10 +117,15 @@ fn main() {
     let drift_us = us(late.quantile(0.5)) - us(early.quantile(0.5));
     let steal_json = steal.map_or("null".to_owned(), |ms| format!("{ms:.0}"));
     let scheduling = if rt_report.fifo_priority.is_some() || rt_report.pinned.is_some() {
-        format!(
-            "real-time (core {:?}, SCHED_FIFO {:?})",
-            rt_report.pinned, rt_report.fifo_priority
-        )
+        let core = rt_report
+            .pinned
+            .map_or("not pinned".to_owned(), |c| format!("pinned to core {c}"));
+        let fifo = rt_report
+            .fifo_priority
+            .map_or("normal priority".to_owned(), |p| {
+                format!("SCHED_FIFO priority {p}")
+            });
+        format!("real-time ({core}, {fifo})")
     } else {
         "normal".to_owned()
     };

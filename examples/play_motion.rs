@@ -6,29 +6,38 @@
 //!
 //! ```sh
 //! cargo run --example play_motion -- configs/motions/arm-wave.yaml
+//! cargo run --example play_motion -- hexapod-dance   # a built-in name
 //! ```
 
-use std::path::PathBuf;
+use std::path::Path;
+use std::process::ExitCode;
 
 use servobus_runtime::config::{load_motion, plan_motion};
 use servobus_runtime::{RunOptions, VirtualRun};
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = std::env::args().nth(1).map_or_else(
-        || PathBuf::from("configs/motions/arm-wave.yaml"),
-        PathBuf::from,
-    );
+const USAGE: &str = "usage: play_motion [MOTION]\n\
+    Plays MOTION (a motion file or a built-in name; default arm-wave) on the\n\
+    simulated robot in virtual time and prints the tracking errors.";
+
+fn main() -> ExitCode {
+    let arg = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "arm-wave".to_owned());
+    if arg == "--help" || arg == "-h" {
+        println!("{USAGE}");
+        return ExitCode::SUCCESS;
+    }
+    exit_on_error(play(&arg))
+}
+
+fn play(arg: &str) -> Result<(), Box<dyn std::error::Error>> {
+    let path = servobus::builtin::motion_path_or_name(Path::new(arg));
 
     // Every error names the file, line and column; nothing moves before both
     // files are valid.
     let (motion, robot) = load_motion(&path, None)?;
     let path_plan = plan_motion(&motion, &robot)?;
-    println!(
-        "{} on {}: {:.2} s",
-        path.display(),
-        robot.name,
-        path_plan.duration()
-    );
+    println!("{arg} on {}: {:.2} s", robot.name, path_plan.duration());
 
     // One simulated bus per robot bus, each servo at its joint's rest
     // position. Each bus has its own virtual clock: the runtime moves them
@@ -48,9 +57,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     for joint in &report.joints {
         println!(
-            "  {:<14} rms {:.3}  max {:.3}",
-            joint.name, joint.rms_error, joint.max_error
+            "  {:<14} rms {:.3}  max {:.3} {}",
+            joint.name, joint.rms_error, joint.max_error, report.units
         );
     }
     Ok(())
+}
+
+/// Prints `error: ...` in words (not the error's `Debug` form) and exits 1.
+fn exit_on_error(result: Result<(), Box<dyn std::error::Error>>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

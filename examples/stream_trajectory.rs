@@ -13,8 +13,19 @@ use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{RunOptions, VirtualRun};
 use servobus_trajectory::{plan, Keyframe, PlanOptions};
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let robot = load_robot("configs/robots/so101.yaml".as_ref())?;
+fn main() -> std::process::ExitCode {
+    // Errors print in words (`error: ...`), not in their `Debug` form.
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let robot = load_robot(&servobus::builtin::robot_path_or_name("so101".as_ref()))?;
     let deg = |d: f64| d.to_radians();
 
     // shoulder_pan, shoulder_lift, elbow_flex, wrist_flex, wrist_roll, gripper
@@ -53,9 +64,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.units
     );
     // The servos really moved: the wrist is back where it started.
-    println!(
-        "wrist_roll servo (ID 5) ends at tick {:?}",
-        sim.buses()[0].present_position(5)
-    );
+    match sim.buses()[0].present_position(5) {
+        Some(tick) => println!("wrist_roll servo (ID 5) ends at tick {tick}"),
+        None => println!("wrist_roll servo (ID 5) is not on the bus"),
+    }
     Ok(())
 }

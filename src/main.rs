@@ -1,22 +1,18 @@
 //! `servobus`: the command line of the servobus runtime.
 //!
 //! Each subcommand lives in its own module under `cmd/`; this file only parses
-//! the arguments and dispatches.
+//! the arguments, dispatches, and turns an error into a message and an exit
+//! code (`cmd::exit`).
 
 mod cmd;
 mod record;
 
-use clap::Parser;
-
 fn main() -> std::process::ExitCode {
     restore_sigpipe();
-    let cli = cmd::Cli::parse();
+    let cli = cmd::parse();
     match cmd::run(cli) {
         Ok(code) => code,
-        Err(err) => {
-            eprintln!("error: {err:#}");
-            std::process::ExitCode::FAILURE
-        }
+        Err(err) => cmd::exit::report(&err),
     }
 }
 

@@ -53,6 +53,22 @@ fn fails(sim: &Sim, args: &[&str], why: &str) {
     );
 }
 
+/// The command is refused as a usage error: exit code 2, one line naming `why`.
+fn refused(sim: &Sim, args: &[&str], why: &str) {
+    let o = run(sim, args);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "servobus {args:?} is a usage error"
+    );
+    let err = stderr(&o);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err:?}");
+    assert!(
+        err.starts_with("error: ") && err.contains(why),
+        "{args:?}: {err:?}"
+    );
+}
+
 fn read_value(sim: &Sim, id: &str, register: &str) -> i64 {
     let out = ok(sim, &["read", "--id", id, register, "--json"]);
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("read --json");
@@ -107,17 +123,17 @@ fn scan_read_write_set_id_against_the_simulator() {
     assert_eq!(read_value(&sim, "9", "id"), 9);
 
     // One-line errors for what a user gets wrong.
-    fails(
+    refused(
         &sim,
         &["read", "--id", "1", "nonsense"],
         "no register called",
     );
-    fails(
+    refused(
         &sim,
         &["write", "--id", "1", "present_position", "5"],
         "read-only",
     );
-    fails(
+    refused(
         &sim,
         &["write", "--id", "1", "acceleration", "300"],
         "acceleration takes",

@@ -103,7 +103,11 @@ fn status_reply_flags() {
 fn problems_are_reported_and_good_packets_still_decode() {
     // Garbage, a bad checksum (BE -> BF), then a valid PING.
     let (objs, out) = json(&["00 13", "FF FF 01 04 02 38 02 BF", "FF FF 01 02 01 FB"]);
-    assert!(out.status.success(), "a clean packet means success");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "a problem was found, though a packet decoded"
+    );
     let kinds: Vec<_> = objs.iter().map(|o| o["kind"].as_str().unwrap()).collect();
     assert_eq!(kinds, ["garbage", "bad_checksum", "packet"]);
     assert_eq!(objs[0]["offset"], 0);
@@ -116,21 +120,48 @@ fn problems_are_reported_and_good_packets_still_decode() {
 #[test]
 fn misprinted_example_4_is_truncated_and_fails() {
     let (objs, out) = json(&["FF FF 01 09 03 2A 00 08 00 E8 03 D5"]);
-    assert!(!out.status.success(), "nothing decoded cleanly");
+    assert_eq!(out.status.code(), Some(1), "a problem found");
     assert_eq!(objs.len(), 1);
     assert_eq!(objs[0]["kind"], "truncated");
     assert_eq!(objs[0]["needed"], 13);
     assert_eq!(objs[0]["available"], 12);
 
     let out = servobus(&["decode", "FF FF 01 09 03 2A 00 08 00 E8 03 D5"]);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     assert!(stdout(&out).contains("truncated frame at 0"));
+}
+
+#[test]
+fn leading_garbage_and_a_bad_checksum_are_both_problems() {
+    let garbage = servobus(&["decode", "00 FF FF 01 02 01 FB"]);
+    let checksum = servobus(&["decode", "FF FF 01 02 01 FA"]);
+    let clean = servobus(&["decode", "FF FF 01 02 01 FB"]);
+    assert_eq!(garbage.status.code(), Some(1));
+    assert_eq!(checksum.status.code(), Some(1));
+    assert_eq!(clean.status.code(), Some(0));
+}
+
+#[test]
+fn a_run_of_header_bytes_is_reported_once_per_problem() {
+    let out = servobus(&["decode", "FF FF FF FF FF"]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = stdout(&out);
+    assert_eq!(text.matches("truncated").count(), 1, "{text}");
+    assert!(
+        text.contains("truncated frame at 3: input ends inside the header: FF FF"),
+        "{text}"
+    );
+    assert_eq!(text.matches("invalid header").count(), 1, "{text}");
+    assert!(
+        text.contains("5 byte(s): 0 packet(s), 2 problem(s)"),
+        "{text}"
+    );
 }
 
 #[test]
 fn only_garbage_fails() {
     let out = servobus(&["decode", "01 02 03"]);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     assert!(stdout(&out).contains("garbage at 0: 3 byte(s)"));
 }
 
@@ -142,7 +173,7 @@ fn bad_input_is_an_error_not_a_panic() {
         &["decode", "--model", "nope", "FF FF 01 02 01 FB"],
     ] {
         let out = servobus(args);
-        assert!(!out.status.success(), "{args:?}");
+        assert_eq!(out.status.code(), Some(2), "input error: {args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("error"), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");

@@ -8,7 +8,7 @@ mod common;
 use std::time::Duration;
 
 use servobus::doctor::{self, Finding, PortKind, Severity, Target};
-use servobus_driver::{Bus, ManualClock, ReplyLevel};
+use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
 use servobus_runtime::bus_settings;
 use servobus_runtime::config::{load_robot, Robot};
@@ -66,7 +66,7 @@ impl Arm {
         let saved = *self.bus.settings();
         let mut s = saved.with_return_delay(Duration::from_micros(510));
         if name == "status_level" {
-            s = s.with_replies(ReplyLevel::PingAndRead);
+            s = s.with_replies(StatusLevel::PingAndRead);
         }
         self.bus.set_settings(s);
         self.bus

@@ -175,7 +175,7 @@ fn a_bad_motion_file_names_the_place_and_moves_nothing() {
         .args(["--port", sim.port()])
         .output()
         .expect("run servobus play");
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2), "an input error");
     let err = String::from_utf8_lossy(&out.stderr);
     let place = format!("{}:5:26:", motion.display());
     assert!(err.contains(&place), "{err:?} names {place}");

@@ -29,8 +29,8 @@ use servobus_sim::PtyServer;
 /// Arguments of `servobus bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file (default: configs/robots/so101.yaml).
-    #[arg(long)]
+    /// The robot: a file, or a built-in name (default: the built-in so101).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Serial port of real servos, for the robot's first bus (default: the
     /// port in the robot file; without one, the simulator on a pty).
@@ -121,15 +121,15 @@ struct BenchReport {
 /// Runs `servobus bench`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 3600.0) {
-        bail!(
+        return Err(super::exit::input(format!(
             "--seconds {}: give a duration between 0 and 3600 s",
             args.seconds
-        );
+        )));
     }
     let path = args
         .robot
         .clone()
-        .unwrap_or_else(|| PathBuf::from("configs/robots/so101.yaml"));
+        .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
     let robot = load_robot_any_rate(&path)?;
     let duration = Duration::from_secs_f64(args.seconds);
     let clock = SystemClock::new();
@@ -222,28 +222,31 @@ fn measure(
     if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
-    // Timeouts allow a few milliseconds of scheduling noise on top of the
-    // robot file's latency: a loaded machine's pty, or a USB adapter.
-    let latency = bus.latency.max(Duration::from_millis(3));
+    // The robot file's latency, or the port's own allowance when that is
+    // longer (a pty's scheduling noise; a real adapter never gets it).
+    let latency = bus.latency.max(transport.assumed_latency());
     let settings = BusSettings::new(series, bus.baud)
         .with_latency(latency)
         .with_return_delay(bus.return_delay);
     let mut servo_bus = Bus::new(transport, clock, settings);
 
-    // Hold every servo where it is: the goals are the present positions.
-    let mut goals = vec![0u8; ids.len() * 2];
+    // Hold every servo where it is: the goals are the present positions,
+    // in the layout of this bus's series.
     let order = series.byte_order();
-    let pos = servobus_protocol::registers::STS
+    let pos = series
+        .map()
         .at(addr::PRESENT_POSITION)
         .context("register map has no present position")?;
+    let len = usize::from(pos.size);
+    let mut goals = vec![0u8; ids.len() * len];
     // The first read is not timed: a loaded machine or a slow adapter gets
     // a patient timeout and a few tries before a servo counts as absent.
     let read = servo_bus
-        .sync_read_patiently(addr::PRESENT_POSITION, 2, ids)
+        .sync_read_patiently(pos.address, pos.size, ids)
         .with_context(|| format!("bus `{}`: first read", bus.name))?;
     for (i, reply) in read.iter().enumerate() {
         match reply {
-            Ok(r) => goals[i * 2..i * 2 + 2].copy_from_slice(r.data),
+            Ok(r) => goals[i * len..(i + 1) * len].copy_from_slice(r.data),
             Err(missing) => bail!(
                 "bus `{}`: servo {} does not answer ({}) after {} tries; \
                  check the port and `servobus scan`",
@@ -256,7 +259,7 @@ fn measure(
     }
     // Present and goal position share the layout, so the bytes read are
     // valid goals as they are; decoding them checks that they are.
-    for chunk in goals.chunks_exact(2) {
+    for chunk in goals.chunks_exact(len) {
         pos.decode(chunk, order)
             .context("a servo reported an impossible position")?;
     }
@@ -275,7 +278,7 @@ fn measure(
             .sync_write(addr::GOAL_POSITION, ids, &goals)
             .with_context(|| format!("bus `{}`: SYNC WRITE", bus.name))?;
         let read = servo_bus
-            .sync_read(addr::PRESENT_POSITION, 2, ids)
+            .sync_read(pos.address, pos.size, ids)
             .with_context(|| format!("bus `{}`: SYNC READ", bus.name))?;
         missed += read.missing() as u64;
         let now = clock.now();
@@ -391,9 +394,14 @@ fn print_text(r: &BenchReport) {
             "  timeouts {}  retries {}  missed replies {}  checksum errors {}",
             b.timeouts, b.retries, b.missed_replies, b.checksum_errors
         );
+        let w = b
+            .servo_rtt
+            .iter()
+            .map(|s| s.joint.len())
+            .fold(16, usize::max);
         for s in &b.servo_rtt {
             println!(
-                "  servo {:>3} {:<16} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
+                "  servo {:>3} {:<w$} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
                 s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
             );
         }

@@ -11,8 +11,8 @@ use servobus_timing::{Change, Plan};
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file.
-    #[arg(long)]
+    /// The robot: a file, or a built-in name (`servobus list`).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Control rate in Hz (default: the robot's).
     #[arg(long)]
@@ -52,7 +52,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot_any_rate(&args.robot)?;
     let rate = args.rate.unwrap_or(robot.rate_hz);
     if !(rate.is_finite() && rate > 0.0) {
-        anyhow::bail!("--rate must be a positive number of Hz, got {rate}");
+        return Err(super::exit::input(format!(
+            "--rate must be a positive number of Hz, got {rate}"
+        )));
     }
     let mut out = Budget { buses: Vec::new() };
     let mut text = String::new();

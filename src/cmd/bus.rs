@@ -9,19 +9,17 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+
+use super::exit::input;
+
+mod regs;
+pub use regs::{read, set_id, write};
 use servobus_driver::{Bus, BusError, BusSettings, SerialTransport, SystemClock};
-use servobus_protocol::registers::{self, addr, Access, Model, Register, Series};
+use servobus_protocol::registers::{self, addr, Model, Series};
 use servobus_protocol::MAX_ID;
 
 type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
 
-/// Latency assumed for an adapter that is not an FTDI one (USB CDC and
-/// CH34x adapters deliver in 1 ms USB frames).
-const DEFAULT_LATENCY_US: u64 = 1000;
-/// Latency assumed for a pseudo-terminal: the program behind it (the
-/// simulator) is scheduled by the OS, which costs milliseconds on a busy
-/// machine.
-const PTY_LATENCY_US: u64 = 2000;
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
 const LATENCY_CEILING: Duration = Duration::from_millis(300);
@@ -128,26 +126,16 @@ fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Resu
     let clock = SystemClock::new();
     let transport = SerialTransport::open(&port.port, baud, clock)
         .with_context(|| format!("cannot open {}", port.port))?;
-    let ftdi = transport.ftdi_latency().cloned();
-    if let Some(warning) = ftdi.as_ref().and_then(|f| f.warning()) {
+    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
-    let latency = match (port.latency_us, ftdi) {
-        (Some(us), _) => Duration::from_micros(us),
-        // The FTDI chip holds bytes up to its timer; add the USB frame.
-        (None, Some(f)) => f.latency + Duration::from_micros(DEFAULT_LATENCY_US),
-        (None, None) if is_pty(&port.port) => Duration::from_micros(PTY_LATENCY_US),
-        (None, None) => Duration::from_micros(DEFAULT_LATENCY_US),
-    };
+    let latency = port
+        .latency_us
+        .map_or_else(|| transport.assumed_latency(), Duration::from_micros);
     let settings = BusSettings::new(series, baud)
         .with_latency(latency)
         .with_retries(retries);
     Ok(Bus::new(transport, clock, settings))
-}
-
-/// Whether `path` is (a link to) a pseudo-terminal.
-fn is_pty(path: &str) -> bool {
-    std::fs::canonicalize(path).is_ok_and(|p| p.starts_with("/dev/pts"))
 }
 
 /// Measures the adapter's latency with servo `id` and widens the bus's
@@ -163,7 +151,7 @@ fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
 
 fn check_id(id: u8) -> anyhow::Result<()> {
     if id > MAX_ID {
-        bail!("ID {id} is not a servo ID (0..={MAX_ID})");
+        return Err(input(format!("ID {id} is not a servo ID (0..={MAX_ID})")));
     }
     Ok(())
 }
@@ -367,7 +355,16 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         );
     }
     if found.is_empty() && collisions.is_empty() {
-        bail!("no servo answered on {}", args.port.port);
+        let hint = if args.all_bauds {
+            "check the power and the wiring (data, ground)"
+        } else {
+            "check the power and the wiring, or try every baud rate with --all-bauds"
+        };
+        bail!(
+            "no servo answered on {} at {}; {hint}",
+            args.port.port,
+            baud_list(&bauds)
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -441,19 +438,6 @@ pub fn ping(args: PingArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The register named `name` (or at the address `name`) of `series`.
-fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
-    let map = series.map();
-    let by_address = name.parse::<u8>().ok().and_then(|a| map.at(a));
-    match by_address.or_else(|| map.get(name)) {
-        Some(r) => Ok(r),
-        None => bail!(
-            "no register called {name:?} on {} servos (e.g. present_position, goal_position, id)",
-            series.name().to_uppercase()
-        ),
-    }
-}
-
 /// Opens the bus and learns the servo's series from its model number.
 fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, Found)> {
     check_id(id)?;
@@ -461,123 +445,33 @@ fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, 
     if port.latency_us.is_none() {
         adapt_latency(&mut bus, id).with_context(|| format!("servo {id}"))?;
     }
-    let found = identify(&mut bus, id).with_context(|| format!("servo {id}"))?;
+    let found = identify(&mut bus, id).with_context(|| {
+        format!(
+            "servo {id} at {baud} baud (to find the servos and their rates: \
+             servobus scan --port {} --all-bauds)",
+            port.port
+        )
+    })?;
     // A servo at a status level that leaves WRITE unanswered (0 on STS,
     // below 2 on SCS) is written without waiting for replies, so that
     // `servobus write ... status_level 1` (doctor's fix) can reach it.
     let mut level = [0u8; 1];
     if bus.read(id, addr::STATUS_LEVEL, &mut level).is_ok() {
-        let full = if bus.settings().series == Series::Scs {
-            2
-        } else {
-            1
-        };
-        if level[0] < full {
-            let s = bus
-                .settings()
-                .with_replies(servobus_driver::ReplyLevel::PingAndRead);
-            bus.set_settings(s);
-        }
+        let series = bus.settings().series;
+        let s = bus
+            .settings()
+            .with_replies(servobus_driver::StatusLevel::from_register(
+                series, level[0],
+            ));
+        bus.set_settings(s);
     }
     Ok((bus, found))
 }
 
-/// Runs `servobus read`.
-pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
-    let series = bus.settings().series;
-    let reg = register(series, &args.register)?;
-    let (value, flags) = bus.read_register(args.id, reg)?;
-    if args.json {
-        let out = serde_json::json!({
-            "id": args.id,
-            "register": reg.name,
-            "address": reg.address,
-            "size": reg.size,
-            "value": value,
-            "unit": reg.unit,
-            "status": flags.bits(),
-        });
-        println!("{out}");
-    } else {
-        let unit = if reg.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {}", reg.unit)
-        };
-        println!("{} = {value}{unit}", reg.name);
+/// Baud rates for a message: `1000000 baud` or `8 baud rates`.
+fn baud_list(bauds: &[u32]) -> String {
+    match bauds {
+        [one] => format!("{one} baud"),
+        many => format!("{} baud rates", many.len()),
     }
-    if !flags.is_ok() {
-        eprintln!("warning: servo {} reports {flags}", args.id);
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// Refuses `new_id` when a servo already answers to it.
-fn refuse_taken(bus: &mut SerialBus, new_id: u8) -> anyhow::Result<()> {
-    match bus.ping(new_id) {
-        Err(BusError::Timeout { .. }) => Ok(()),
-        Ok(_) | Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
-            bail!("ID {new_id} is already taken by a servo on this bus")
-        }
-        Err(e) => Err(e).context(format!("checking whether ID {new_id} is free")),
-    }
-}
-
-/// Runs `servobus write`.
-pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
-    let series = bus.settings().series;
-    let reg = register(series, &args.register)?;
-    let (lo, hi) = reg.range();
-    let value = i32::try_from(args.value)
-        .ok()
-        .filter(|v| (lo..=hi).contains(v))
-        .with_context(|| format!("{} takes {lo}..={hi}, not {}", reg.name, args.value))?;
-    match reg.access {
-        Access::ReadOnly => bail!("{} is read-only", reg.name),
-        Access::Ram => {
-            bus.write_register(args.id, reg, value)?;
-            println!("{} = {value} (RAM: lost at power-off)", reg.name);
-        }
-        Access::Eeprom => {
-            if reg.address == addr::ID {
-                let new_id = u8::try_from(value).unwrap_or(u8::MAX);
-                check_id(new_id)?;
-                if new_id != args.id {
-                    refuse_taken(&mut bus, new_id)?;
-                }
-            }
-            println!(
-                "{} is an EEPROM register: the new value will persist across power cycles",
-                reg.name
-            );
-            let mut buf = [0u8; 4];
-            let bytes = &mut buf[..usize::from(reg.size)];
-            reg.encode(value, series.byte_order(), bytes)
-                .with_context(|| format!("{} cannot hold {value}", reg.name))?;
-            let w = bus.write_eeprom(args.id, reg.address, bytes)?;
-            println!(
-                "{} = {value} on servo {} (unlocked, written, verified, locked)",
-                reg.name, w.id
-            );
-        }
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// Runs `servobus set-id`.
-pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
-    check_id(args.new_id)?;
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
-    if args.new_id == args.id {
-        println!("servo {} already has ID {}", args.id, args.new_id);
-        return Ok(ExitCode::SUCCESS);
-    }
-    refuse_taken(&mut bus, args.new_id)?;
-    let w = bus.write_eeprom(args.id, addr::ID, &[args.new_id])?;
-    bus.ping(w.id)
-        .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
-    println!("servo {} is now ID {} (persisted)", args.id, w.id);
-    Ok(ExitCode::SUCCESS)
 }

@@ -9,7 +9,9 @@
 use std::fmt::Write as _;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
+
+use super::exit::input;
 use serde_json::{json, Map, Value};
 use servobus_protocol::registers::{self, RegisterMap};
 use servobus_protocol::{Command, Decoder, DiscardReason, Event, Packet, FRAME_OVERHEAD};
@@ -41,7 +43,8 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Runs `servobus decode`: exits 0 when at least one packet decoded cleanly.
+/// Runs `servobus decode`: exits 0 when every byte belongs to a clean packet,
+/// 1 when a problem was found, 2 for input that is not hex.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let map = register_map(&args.model)?;
     let bytes = parse_hex(&args.hex)?;
@@ -61,10 +64,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             bytes.len()
         );
     }
-    Ok(if packets > 0 {
+    // Like every command: 0 when all is well, 1 when a problem was found
+    // (garbage, a bad checksum, a bad header, a truncated frame).
+    Ok(if packets == items.len() && packets > 0 {
         ExitCode::SUCCESS
     } else {
-        ExitCode::FAILURE
+        ExitCode::from(super::exit::PROBLEM)
     })
 }
 
@@ -78,10 +83,10 @@ fn register_map(model: &str) -> anyhow::Result<&'static RegisterMap> {
         Some(m) => Ok(m.map()),
         None => {
             let known: Vec<_> = registers::MODELS.iter().map(|m| m.name).collect();
-            bail!(
+            Err(input(format!(
                 "unknown model {model:?}; known: {}, or a series: sts, scs",
                 known.join(", ")
-            )
+            )))
         }
     }
 }
@@ -97,19 +102,19 @@ fn parse_hex(args: &[String]) -> anyhow::Result<Vec<u8>> {
                 .or_else(|| token.strip_prefix("0X"))
                 .unwrap_or(token);
             if let Some(bad) = t.chars().find(|c| !c.is_ascii_hexdigit()) {
-                bail!("{bad:?} in {token:?} is not a hex digit");
+                return Err(input(format!("{bad:?} in {token:?} is not a hex digit")));
             }
             digits.push_str(t);
         }
     }
     if digits.is_empty() {
-        bail!("no hex digits given");
+        return Err(input("no hex digits given"));
     }
     if digits.len() % 2 != 0 {
-        bail!(
+        return Err(input(format!(
             "odd number of hex digits ({}): each byte needs two",
             digits.len()
-        );
+        )));
     }
     (0..digits.len())
         .step_by(2)
@@ -145,16 +150,13 @@ fn decode(bytes: &[u8], from: Sender, map: &RegisterMap) -> Vec<Item> {
     // A checksum failure is followed by the discard of the bad frame's bytes;
     // both are reported as one problem.
     let mut bad_checksum: Option<(u8, u8, u8)> = None;
-    loop {
-        let ev = match dec.decode(&mut input) {
-            Some(ev) => ev,
-            None => match dec.finish() {
-                Some(ev) => ev,
-                None => break,
-            },
-        };
+    let mut pending: Option<Discard> = None;
+    while let Some(ev) = dec.decode_to_end(&mut input) {
         match ev {
-            Event::Packet { packet, start } => items.push(packet_item(&packet, start, from, map)),
+            Event::Packet { packet, start } => {
+                flush(&mut pending, bytes, &mut items);
+                items.push(packet_item(&packet, start, from, map));
+            }
             Event::Echo { .. } => {}
             Event::ChecksumError {
                 id,
@@ -164,17 +166,48 @@ fn decode(bytes: &[u8], from: Sender, map: &RegisterMap) -> Vec<Item> {
             } => bad_checksum = Some((id, expected, found)),
             Event::Discarded { start, len, reason } => {
                 let at = usize::try_from(start).unwrap_or(usize::MAX);
-                let span = bytes.get(at..at.saturating_add(len)).unwrap_or(&[]);
                 let checksum = if reason == DiscardReason::Checksum {
                     bad_checksum.take()
                 } else {
                     None
                 };
-                items.push(problem_item(bytes, at, span, reason, checksum));
+                // The decoder skips a run of bad bytes one at a time (each
+                // `FF` of `FF FF FF` is a header that cannot start a frame);
+                // adjacent discards for the same reason are one problem.
+                match &mut pending {
+                    Some(p) if p.reason == reason && p.at + p.len == at && checksum.is_none() => {
+                        p.len += len;
+                    }
+                    _ => {
+                        flush(&mut pending, bytes, &mut items);
+                        pending = Some(Discard {
+                            at,
+                            len,
+                            reason,
+                            checksum,
+                        });
+                    }
+                }
             }
         }
     }
+    flush(&mut pending, bytes, &mut items);
     items
+}
+
+/// Bytes the decoder discarded, not yet reported.
+struct Discard {
+    at: usize,
+    len: usize,
+    reason: DiscardReason,
+    checksum: Option<(u8, u8, u8)>,
+}
+
+fn flush(pending: &mut Option<Discard>, bytes: &[u8], items: &mut Vec<Item>) {
+    if let Some(d) = pending.take() {
+        let span = bytes.get(d.at..d.at.saturating_add(d.len)).unwrap_or(&[]);
+        items.push(problem_item(bytes, d.at, span, d.reason, d.checksum));
+    }
 }
 
 fn packet_item(packet: &Packet<'_>, start: u64, from: Sender, map: &RegisterMap) -> Item {

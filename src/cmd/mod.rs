@@ -1,5 +1,11 @@
 //! Subcommands of the `servobus` binary, one module each.
+//!
+//! Adding a subcommand: a module with `Args` and `run`, a variant in
+//! [`Command`] and a line in [`run`]. A robot or motion argument takes
+//! `value_parser = super::robot_arg` (or `motion_arg`) to accept built-in
+//! names as well as files.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -8,11 +14,26 @@ mod bench;
 mod budget;
 mod bus;
 mod decode;
+mod docs;
 mod doctor;
+pub mod exit;
+mod init;
+mod list;
 mod monitor;
 mod plan;
 mod play;
 mod sim;
+mod teach;
+
+const EXIT_STATUS: &str = "\
+Exit status:
+  0  ok
+  1  a problem was found (a servo missing or failing, a fault, a bad frame)
+  2  usage or input error (command line, robot or motion file, port)";
+
+const AFTER_HELP: &str = "\
+A ROBOT or MOTION argument is a file path or the name of a built-in robot or
+motion (`servobus list`); when a file of that name exists, the file wins.";
 
 /// Smooth, on-time motion for Feetech serial-bus servos.
 #[derive(Debug, Parser)]
@@ -46,10 +67,45 @@ enum Command {
     SetId(bus::SetIdArgs),
     /// Decode frames written in hex.
     Decode(decode::Args),
+    /// List the built-in robots and motions.
+    List(list::Args),
+    /// Write a starter robot file and motion to edit.
+    Init(init::Args),
+    /// Print a shell completion script (bash, zsh, fish, ...).
+    Completions(docs::CompletionsArgs),
+    /// Print the manual page (roff): `servobus man | man -l -`.
+    Man(docs::ManArgs),
+    /// Pose the robot by hand (torque off) and write a motion file.
+    Teach(teach::Args),
     /// Check a bus against the robot file and the usual set-up mistakes.
     Doctor(doctor::Args),
     /// Watch every servo live: position, load, voltage, temperature, flags.
     Monitor(monitor::Args),
+}
+
+/// The command line's definition, with the exit codes and the note on
+/// built-in names added to every command's `--help` (the man page and the
+/// completions are generated from it too).
+pub fn command() -> clap::Command {
+    use clap::CommandFactory;
+    let with_exit = |help: Option<String>| match help {
+        Some(h) => format!("{h}\n\n{EXIT_STATUS}"),
+        None => EXIT_STATUS.to_owned(),
+    };
+    let top = Cli::command();
+    let top_help = with_exit(Some(AFTER_HELP.to_owned()));
+    top.after_help(top_help).mut_subcommands(|sub| {
+        let own = sub.get_after_help().map(|h| h.to_string());
+        let help = with_exit(own);
+        sub.after_help(help)
+    })
+}
+
+/// Parses the process's arguments (exits 2 on a usage error, 0 for `--help`).
+pub fn parse() -> Cli {
+    use clap::FromArgMatches;
+    let matches = command().get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
 /// Runs the parsed command line and returns the process exit code.
@@ -66,7 +122,22 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Write(args) => bus::write(args),
         Command::SetId(args) => bus::set_id(args),
         Command::Decode(args) => decode::run(args),
+        Command::List(args) => list::run(args),
+        Command::Init(args) => init::run(args),
+        Command::Completions(args) => docs::completions(args),
+        Command::Man(args) => docs::man(args),
+        Command::Teach(args) => teach::run(args),
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
     }
+}
+
+/// Parses a robot argument: a file, or a built-in robot's name.
+pub(crate) fn robot_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    Ok(servobus::builtin::robot_path_or_name(arg.as_ref()))
+}
+
+/// Parses a motion argument: a file, or a built-in motion's name.
+pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
 }

@@ -12,10 +12,11 @@ use servobus_trajectory::{JointState, Trajectory};
 /// Arguments of `servobus plan`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file.
+    /// The motion: a file, or a built-in name (`servobus list`).
+    #[arg(value_parser = super::motion_arg)]
     pub motion: std::path::PathBuf,
-    /// Robot file (default: the one the motion file names).
-    #[arg(long)]
+    /// Robot file or built-in name (default: the one the motion file names).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<std::path::PathBuf>,
     /// Print one JSON object.
     #[arg(long)]
@@ -194,7 +195,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
     for j in &r.joints {
         let jerk = j
             .peak_jerk
-            .map_or("steps".to_owned(), |x| format!("{x:.0}"));
+            .map_or("no limit".to_owned(), |x| format!("{x:.0}"));
         println!(
             "{:w$}  {:>9.3}  {:>19}  {:>12.1}  {:>14.1}  {:>14}",
             j.name,
@@ -206,6 +207,11 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         );
     }
     println!("\nsegments (arriving at keyframe):");
+    let pw = motion
+        .keyframes
+        .iter()
+        .filter_map(|k| k.pose.as_ref().map(String::len))
+        .fold("inline pose".len(), usize::max);
     for s in &r.segments {
         let kf = motion.keyframes.get(s.keyframe);
         let what = kf
@@ -222,7 +228,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             None => String::new(),
         };
         println!(
-            "  {:>3} {:<14} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
+            "  {:>3} {:<pw$} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
             s.keyframe,
             what,
             line,

@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
@@ -32,11 +32,13 @@ use crate::record::{read_recording, CsvLog, PlotData};
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The motion file, or a recorded path (.csv: a `play --log` file or
-    /// `time_s,<joint>...` in degrees; needs --robot).
+    /// The motion file (or a built-in motion's name, `servobus list`), or a
+    /// recorded path (.csv: a `play --log` file or `time_s,<joint>...` in
+    /// degrees; needs --robot).
+    #[arg(value_parser = super::motion_arg)]
     pub motion: PathBuf,
-    /// Robot file (default: the one the motion file names).
-    #[arg(long)]
+    /// Robot file or built-in name (default: the one the motion file names).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Serial port of real servos, for the robot's first bus (default: the
     /// robot file's ports; without any, the built-in simulator).
@@ -158,7 +160,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
                 // A pty on a busy machine wakes late now and then: allow
                 // for it in the reply deadlines.
-                let settings = bus_settings(bus).with_latency(bus.latency.max(PTY_LATENCY));
+                let settings = bus_settings(bus)
+                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
                 buses.push(Bus::new(transport, clock, settings));
             }
             spawn(&robot, trajectory, buses, options)?
@@ -256,10 +259,10 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
         if !PLOT_FORMATS.contains(&ext.as_str()) {
-            bail!(
+            return Err(super::exit::input(format!(
                 "--plot {}: plots are written as SVG (.svg) or PNG (.png); give one of those",
                 path.display()
-            );
+            )));
         }
     }
     for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
@@ -267,11 +270,11 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         if let Some(dir) = dir {
             if !dir.is_dir() {
-                bail!(
+                return Err(super::exit::input(format!(
                     "{flag} {}: the directory {} does not exist; nothing was moved",
                     path.display(),
                     dir.display()
-                );
+                )));
             }
         }
         std::fs::OpenOptions::new()
@@ -351,10 +354,10 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (motion, robot) = if recorded {
         let Some(robot_path) = &args.robot else {
-            bail!(
+            return Err(super::exit::input(format!(
                 "{}: a recorded path names no robot; give --robot FILE",
                 args.motion.display()
-            );
+            )));
         };
         let robot = servobus_runtime::config::load_robot(robot_path)?;
         (recording_motion(&args.motion, &robot), robot)
@@ -363,7 +366,9 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
     };
     let rate_hz = match args.rate {
         Some(rate) if !(rate.is_finite() && rate > 0.0) => {
-            bail!("--rate {rate}: give a positive rate in Hz")
+            return Err(super::exit::input(format!(
+                "--rate {rate}: give a positive rate in Hz"
+            )))
         }
         Some(rate) => rate,
         None => motion.rate_hz(&robot),
@@ -461,9 +466,6 @@ impl Shown {
     }
 }
 
-/// Reply-deadline allowance for the simulator's pseudo-terminals.
-const PTY_LATENCY: Duration = Duration::from_millis(3);
-
 /// How long the simulator on a pty may stay silent before a servo counts as
 /// missing. Its replies come from a thread of this process: when the host
 /// takes the CPU away for a few milliseconds (shared and virtual machines
@@ -502,12 +504,14 @@ fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     for (bus, port) in robot.buses.iter().zip(ports) {
         match port {
             Some(p) => out.push(p),
-            None => bail!(
-                "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
+            None => {
+                return Err(super::exit::input(format!(
+                    "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
                  (--port sets only the first bus's)",
-                bus.name,
-                robot.path.display()
-            ),
+                    bus.name,
+                    robot.path.display()
+                )))
+            }
         }
     }
     Ok(Backend::Hardware(out))
@@ -794,13 +798,15 @@ fn print_report(r: &Report, identified: bool) {
     } else {
         println!("  lag compensation lead {:.1} ms", r.lead_ms);
     }
+    // The name column fits the longest joint name.
+    let w = r.joints.iter().map(|j| j.name.len()).fold(16, usize::max);
     println!(
-        "  {:<16} {:>10} {:>10}   tracking error ({})",
+        "  {:<w$} {:>10} {:>10}   tracking error ({})",
         "joint", "rms", "max", r.units
     );
     for j in &r.joints {
         println!(
-            "  {:<16} {:>10.3} {:>10.3}",
+            "  {:<w$} {:>10.3} {:>10.3}",
             j.name, j.rms_error, j.max_error
         );
     }

@@ -2,7 +2,7 @@
 //! are written with unlock-write-verify-lock; a baud-rate change is the same
 //! transaction split across the two rates.
 
-use servobus_driver::{Bus, BusError, Clock, ReplyLevel, Transport, PATIENCE, PATIENT_TRIES};
+use servobus_driver::{Bus, BusError, Clock, StatusLevel, Transport, PATIENCE, PATIENT_TRIES};
 use servobus_protocol::registers::addr;
 
 use super::probe::{switch, MAX_RETURN_DELAY};
@@ -56,7 +56,7 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
             } => {
                 let mut s = *bus.settings();
                 if silent {
-                    s.replies = ReplyLevel::PingAndRead;
+                    s.replies = StatusLevel::PingAndRead;
                 }
                 // The register's layout and the lock are the servo's series'.
                 s.series = series;

@@ -27,6 +27,14 @@ use serialport::{ClearBuffer, DataBits, FlowControl, Parity, SerialPort, StopBit
 
 use crate::{Clock, Transport, TransportError};
 
+mod open_error;
+pub use open_error::{OpenError, OpenProblem};
+
+/// The `errno` of the last failed system call (the open that just failed).
+fn last_errno() -> Option<i32> {
+    io::Error::last_os_error().raw_os_error()
+}
+
 /// A serial port (or pseudo-terminal) as a [`Transport`], with deadlines on
 /// the time base of `C`.
 pub struct SerialTransport<C: Clock> {
@@ -51,8 +59,9 @@ impl<C: Clock> SerialTransport<C> {
     /// Opens `path` at `baud`, 8N1, raw, with exclusive access.
     ///
     /// # Errors
-    /// [`TransportError::Disconnected`] when the port does not exist,
-    /// [`TransportError::Io`] for any other failure to open or configure it.
+    /// [`TransportError::Io`] carrying an [`OpenError`] (find it with
+    /// [`OpenError::find`]) that says why and what to do: permission denied
+    /// (the group to join), no such port (the ports present), busy (who has it).
     pub fn open(path: &str, baud: u32, clock: C) -> Result<Self, TransportError> {
         let builder = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
@@ -61,12 +70,14 @@ impl<C: Clock> SerialTransport<C> {
             .flow_control(FlowControl::None)
             .timeout(Duration::ZERO);
         let opened = open_low_latency(builder);
-        let port = opened.map_err(|e| match e.kind() {
-            serialport::ErrorKind::NoDevice => TransportError::Disconnected(format!("{path}: {e}")),
-            serialport::ErrorKind::Io(kind) => {
-                TransportError::Io(io::Error::new(kind, format!("{path}: {e}")))
-            }
-            _ => TransportError::Io(io::Error::other(format!("{path}: {e}"))),
+        let port = opened.map_err(|e| {
+            let kind = match e.kind() {
+                serialport::ErrorKind::Io(kind) => kind,
+                serialport::ErrorKind::NoDevice => io::ErrorKind::NotFound,
+                _ => io::ErrorKind::Other,
+            };
+            let open = OpenError::classify(path, kind, last_errno(), &e.to_string());
+            TransportError::Io(io::Error::new(open.kind(), open))
         })?;
         let ftdi = ftdi_latency_timer(Path::new(path));
         Ok(SerialTransport {
@@ -113,6 +124,28 @@ impl<C: Clock> SerialTransport<C> {
     /// The clock deadlines are measured on.
     pub fn clock(&self) -> &C {
         &self.clock
+    }
+
+    /// Whether the port is (a link to) a pseudo-terminal: a simulator such
+    /// as `servobus sim`, not a USB adapter.
+    pub fn is_pty(&self) -> bool {
+        std::fs::canonicalize(&self.path).is_ok_and(|p| p.starts_with("/dev/pts"))
+    }
+
+    /// The adapter latency to allow for on this port when none is
+    /// configured: an FTDI adapter's latency timer plus one USB frame,
+    /// [`Link::PTY_LATENCY`](servobus_timing::Link::PTY_LATENCY) for a
+    /// pseudo-terminal, [`Link::USB_LATENCY`](servobus_timing::Link::USB_LATENCY)
+    /// for any other adapter. A real port never gets the pseudo-terminal's
+    /// allowance.
+    pub fn assumed_latency(&self) -> Duration {
+        use servobus_timing::Link;
+        match &self.ftdi {
+            // The FTDI chip holds bytes up to its timer; add the USB frame.
+            Some(f) => f.latency + Link::USB_LATENCY,
+            None if self.is_pty() => Link::PTY_LATENCY,
+            None => Link::USB_LATENCY,
+        }
     }
 }
 

@@ -3,7 +3,9 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use super::files::{builtin_text, is_builtin_path};
 use super::locate::{locate_nearest, FieldPath, Part};
+use super::syntax::hint;
 
 /// Why a robot or motion file was refused.
 ///
@@ -14,14 +16,14 @@ use super::locate::{locate_nearest, FieldPath, Part};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("{}: cannot read: {source}", path.display())]
+    /// The file could not be read. The operating system's reason is part of
+    /// the message (said once, in plain words), not a separate source.
+    #[error("{}: cannot read: {}", path.display(), io_reason(error))]
     Read {
         /// The file.
         path: PathBuf,
         /// What the operating system said.
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// The file was read but its content is wrong.
     #[error("{}", InvalidDisplay::new(.file, .line, .column, .field, .reason))]
@@ -83,6 +85,24 @@ impl ConfigError {
     }
 }
 
+/// The operating system's reason in plain words, without the `(os error N)`
+/// that `std::io::Error` appends.
+fn io_reason(error: &std::io::Error) -> String {
+    use std::io::ErrorKind;
+    match error.kind() {
+        ErrorKind::NotFound => "no such file".to_owned(),
+        ErrorKind::PermissionDenied => "permission denied".to_owned(),
+        ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
+        _ => {
+            let text = error.to_string();
+            match text.find(" (os error") {
+                Some(i) => text[..i].to_owned(),
+                None => text,
+            }
+        }
+    }
+}
+
 struct InvalidDisplay<'a> {
     file: &'a Path,
     line: usize,
@@ -122,12 +142,21 @@ pub(crate) struct Source {
 }
 
 impl Source {
-    /// Reads `path`.
+    /// Reads `path`: a built-in file (see [`super::files`]) or one on disk.
     pub(crate) fn read(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = if is_builtin_path(path) {
+            builtin_text(path)
+                .map(str::to_owned)
+                .ok_or_else(|| ConfigError::Read {
+                    path: path.to_owned(),
+                    error: std::io::ErrorKind::NotFound.into(),
+                })?
+        } else {
+            std::fs::read_to_string(path).map_err(|error| ConfigError::Read {
+                path: path.to_owned(),
+                error,
+            })?
+        };
         Ok(Source {
             path: path.to_owned(),
             text,
@@ -175,6 +204,10 @@ impl Source {
                 (head.to_owned(), rest.to_owned())
             }
             _ => (String::new(), text),
+        };
+        let reason = match hint(&self.text, line) {
+            Some(h) => format!("{reason} ({h})"),
+            None => reason,
         };
         ConfigError::invalid(&self.path, line, column, field, reason)
     }

@@ -24,14 +24,20 @@
 
 mod budget;
 mod error;
+mod files;
 mod locate;
 mod mapping;
 mod motion;
 mod robot;
+mod syntax;
 mod trajectory;
 mod units;
 
 pub use error::ConfigError;
+pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
+// For the simulator's body files, which report errors the same way.
+pub(crate) use error::Source;
+pub(crate) use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{load_robot, load_robot_any_rate, BusConfig, JointConfig, Robot};

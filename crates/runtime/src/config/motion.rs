@@ -237,7 +237,7 @@ pub fn load_motion(
     let root = FieldPath::root();
     let robot_path = match (robot_override, &raw.robot) {
         (Some(p), _) => p.to_owned(),
-        (None, Some(rel)) => path.parent().unwrap_or(Path::new("")).join(rel),
+        (None, Some(rel)) => super::files::tidy(path.parent().unwrap_or(Path::new("")).join(rel)),
         (None, None) => {
             return Err(src.error(
                 &root,
@@ -245,7 +245,15 @@ pub fn load_motion(
             ))
         }
     };
-    let (robot, robot_src) = robot::load(&robot_path)?;
+    let (robot, robot_src) = robot::load(&robot_path).map_err(|e| match (e, robot_override) {
+        // A robot the motion names but that cannot be read: point at the
+        // `robot:` line, which is what to fix.
+        (e @ ConfigError::Read { .. }, None) => src.error(
+            &root.key("robot"),
+            format!("{e}; fix this `robot:` (it is relative to this motion file) or pass --robot"),
+        ),
+        (e, _) => e,
+    })?;
     match raw.rate {
         Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,

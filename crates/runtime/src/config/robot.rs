@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde::Deserialize;
-use servobus_protocol::registers::{model_by_name, Model, MODELS};
+use servobus_protocol::registers::{self, model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
 use super::error::{ConfigError, Source};
@@ -279,8 +279,19 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
                 format!("bus name `{}` is used twice", rb.name),
             ));
         }
-        if rb.baud == 0 {
-            return Err(src.error(&bp.key("baud"), "must be positive"));
+        if registers::baud_index(rb.baud).is_none() {
+            let valid: Vec<String> = (0..=u8::MAX)
+                .map_while(registers::baud_rate)
+                .map(|b| b.to_string())
+                .collect();
+            return Err(src.error(
+                &bp.key("baud"),
+                format!(
+                    "{} baud is not a rate the servos can be set to; use one of {}",
+                    rb.baud,
+                    valid.join(", ")
+                ),
+            ));
         }
         if rb.return_delay_us > MAX_RETURN_DELAY_US || rb.return_delay_us % 2 != 0 {
             return Err(src.error(

@@ -1,0 +1,130 @@
+//! `servobus init`: a starter robot file and motion to edit, written from a
+//! built-in robot.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use servobus_runtime::config::{load_robot, Robot};
+
+use super::exit::input;
+
+/// Arguments of `servobus init`.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Then: servobus plan DIR/motion.yaml; servobus play DIR/motion.yaml \
+    (simulator); add --port /dev/ttyACM0 for real servos."
+)]
+pub struct Args {
+    /// The robot to start from: a built-in name (`servobus list`) or a robot file.
+    #[arg(long, default_value = "so101", value_parser = super::robot_arg)]
+    pub robot: PathBuf,
+    /// Where to write `robot.yaml` and `motion.yaml` (created if missing).
+    #[arg(default_value = ".")]
+    pub dir: PathBuf,
+    /// Overwrite `robot.yaml` and `motion.yaml` if they exist.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `servobus init`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let robot = load_robot(&args.robot)?;
+    let robot_text = robot_text(&args.robot)?;
+    let files = [
+        (args.dir.join("robot.yaml"), robot_text),
+        (args.dir.join("motion.yaml"), starter_motion(&robot)),
+    ];
+    if !args.force {
+        if let Some((existing, _)) = files.iter().find(|(p, _)| p.exists()) {
+            return Err(input(format!(
+                "{} exists; not overwriting it (pass --force to replace it, or give another DIR)",
+                existing.display()
+            )));
+        }
+    }
+    std::fs::create_dir_all(&args.dir)
+        .map_err(|e| input(format!("cannot create {}: {e}", args.dir.display())))?;
+    for (path, text) in &files {
+        std::fs::write(path, text)
+            .map_err(|e| input(format!("cannot write {}: {e}", path.display())))?;
+        println!("wrote {}", path.display());
+    }
+    // `./motion.yaml` reads better as `motion.yaml`.
+    let motion = if args.dir == Path::new(".") {
+        PathBuf::from("motion.yaml")
+    } else {
+        files[1].0.clone()
+    };
+    let motion = motion.display();
+    println!(
+        "Next: set each joint's id and limits in robot.yaml (and `port:` for real servos), then\n  \
+         servobus plan {motion}\n  servobus play {motion}"
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The robot file's text: the built-in text, or the file as it is.
+fn robot_text(path: &Path) -> anyhow::Result<String> {
+    if let Some(b) = servobus::builtin::all().find(|b| b.path() == path) {
+        return Ok(b.text.to_owned());
+    }
+    std::fs::read_to_string(path).map_err(|e| input(format!("cannot read {}: {e}", path.display())))
+}
+
+/// Joints the starter motion moves one at a time (the rest stay still), so
+/// that it stays short for a robot with many joints.
+const MOVED_JOINTS: usize = 6;
+
+/// A motion for `robot`: from rest, each of the first joints moves a quarter
+/// of the way toward its farther limit and back, then all rest.
+fn starter_motion(robot: &Robot) -> String {
+    let units = robot.units.name();
+    let mut text = format!(
+        "# A starter motion for `{name}`: from rest, each of the first joints in turn moves\n\
+         # a quarter of the way toward a limit and back. Edit the poses and keyframes.\n\
+         # Check it:        servobus plan motion.yaml\n\
+         # Simulate it:     servobus play motion.yaml\n\
+         # On real servos:  servobus play motion.yaml --port /dev/ttyACM0\n\
+         robot: robot.yaml      # relative to this file; --robot overrides\n\
+         units: {units}             # unit of every angle below\n\
+         poses:\n  rest: {{",
+        name = robot.name
+    );
+    let rest: Vec<String> = robot
+        .joints()
+        .map(|j| format!("{}: {}", j.name, number(j.rest())))
+        .collect();
+    text.push_str(&rest.join(", "));
+    text.push_str(
+        "}\nkeyframes:\n  - pose: rest          # the first keyframe is the start, t = 0\n",
+    );
+    for (i, j) in robot.joints().take(MOVED_JOINTS).enumerate() {
+        let rest = j.rest();
+        let toward = if j.max - rest >= rest - j.min {
+            j.max
+        } else {
+            j.min
+        };
+        let goal = rest + (toward - rest) / 4.0;
+        let note = if i == 0 {
+            "    # joints not named keep their value"
+        } else {
+            ""
+        };
+        let _ = writeln!(text, "  - pose: {{{}: {}}}{note}", j.name, number(goal));
+        let _ = writeln!(text, "  - pose: rest");
+    }
+    text.push_str("repeat: 1              # play the keyframes this many times\n");
+    text
+}
+
+/// A number as a person would write it: at most one decimal.
+fn number(v: f64) -> String {
+    let r = (v * 10.0).round() / 10.0 + 0.0; // no `-0`
+    if r.fract() == 0.0 {
+        format!("{r:.0}")
+    } else {
+        format!("{r:.1}")
+    }
+}

@@ -1,0 +1,128 @@
+//! End to end on `servobus sim`: the bus commands guide the user. A register
+//! value reads in its unit, a goal written while the torque is off warns,
+//! a scan at the wrong baud rate suggests `--all-bauds`, and a port another
+//! program holds says so.
+
+mod common;
+
+use std::process::{Command, Output};
+
+use common::{Sim, BIN};
+
+/// A generous adapter latency: the simulator runs in wall-clock time.
+const LATENCY: &str = "10000";
+
+fn run(sim: &Sim, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .args(["--port", sim.port(), "--latency-us", LATENCY])
+        .output()
+        .expect("run servobus")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn bus_commands_say_what_to_do() {
+    let dir = common::scratch("bus-guidance");
+    let sim = Sim::start(&dir);
+
+    // The voltage register counts 0.1 V: shown in volts, with the raw value.
+    let out = run(&sim, &["read", "--id", "1", "present_voltage"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line = text(&out.stdout);
+    let raw: i64 = line
+        .split("(raw ")
+        .nth(1)
+        .and_then(|r| r.trim().trim_end_matches(')').parse().ok())
+        .unwrap_or_else(|| panic!("raw value in {line:?}"));
+    let volts = format!("{}.{} V", raw / 10, raw % 10);
+    assert_eq!(
+        line.trim(),
+        format!("present_voltage = {volts} (raw {raw})")
+    );
+
+    // Torque off: the goal is written, and the user is told it won't move.
+    assert!(run(&sim, &["write", "--id", "2", "torque_enable", "0"])
+        .status
+        .success());
+    let out = run(&sim, &["write", "--id", "2", "goal_position", "2100"]);
+    assert_eq!(out.status.code(), Some(0));
+    let err = text(&out.stderr);
+    assert!(err.contains("warning: torque is off on servo 2"), "{err}");
+    assert!(err.contains("torque_enable 1"), "{err}");
+    // With the torque on, no warning.
+    assert!(run(&sim, &["write", "--id", "2", "torque_enable", "1"])
+        .status
+        .success());
+    let out = run(&sim, &["write", "--id", "2", "goal_position", "2100"]);
+    assert!(
+        out.status.success() && out.stderr.is_empty(),
+        "{}",
+        text(&out.stderr)
+    );
+
+    // The arm runs at 1 Mbps: nobody answers at 500 kbps.
+    let out = run(&sim, &["scan", "--baud", "500000"]);
+    assert_eq!(out.status.code(), Some(1), "a problem found");
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("no servo answered") && err.contains("--all-bauds"),
+        "{err}"
+    );
+
+    // Another program holds the port (exclusive, as serial tools open it).
+    let held = hold_exclusively(sim.port());
+    // SAFETY: geteuid has no preconditions.
+    let root = unsafe { libc::geteuid() } == 0;
+    let out = if root {
+        // Root ignores exclusive mode: try as `nobody`, who may open the pty.
+        let pty = std::fs::canonicalize(sim.port()).expect("the link's pty");
+        let opened = Command::new("chmod").arg("666").arg(&pty).status();
+        assert!(opened.is_ok_and(|s| s.success()));
+        Command::new("setpriv")
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
+            .args(["ping", "--id", "1", "--port", sim.port()])
+            .output()
+            .ok()
+    } else {
+        Some(run(&sim, &["ping", "--id", "1"]))
+    };
+    match out {
+        Some(out) => {
+            let err = text(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{err}");
+            assert!(
+                err.contains("the port is busy") && err.contains("close it and retry"),
+                "{err}"
+            );
+            assert_eq!(err.matches("busy").count(), 1, "{err}");
+        }
+        None => eprintln!("skipped the busy port: root, and no setpriv"),
+    }
+    drop(held);
+    assert!(
+        run(&sim, &["ping", "--id", "1"]).status.success(),
+        "free again"
+    );
+
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Opens `path` and sets exclusive mode (`TIOCEXCL`): other opens then fail
+/// with "busy" until the returned file is closed.
+fn hold_exclusively(path: &str) -> std::fs::File {
+    use std::os::unix::io::AsRawFd;
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .expect("open the pty");
+    // SAFETY: TIOCEXCL takes no argument; the descriptor is open.
+    let done = unsafe { libc::ioctl(file.as_raw_fd(), libc::TIOCEXCL) };
+    assert_eq!(done, 0, "TIOCEXCL");
+    file
+}

@@ -22,8 +22,8 @@ const USB_FRAME: Duration = Duration::from_millis(1);
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The robot file to check the buses against.
-    #[arg(long)]
+    /// The robot file to check the buses against (or a built-in robot's name).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: PathBuf,
     /// Serial port of the robot's first bus (default: the robot file's
     /// ports; without any, the built-in simulator).

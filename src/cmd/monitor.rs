@@ -31,9 +31,9 @@ const PLAY_REFRESH_HZ: f64 = 20.0;
 /// Arguments of `servobus monitor`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Robot file: joint names, models and the bus (without --port, its
-    /// built-in simulator).
-    #[arg(long)]
+    /// Robot file (or a built-in robot's name): joint names, models and the
+    /// bus (without --port, its built-in simulator).
+    #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Serial port (without --robot, every servo found on it is watched).
     #[arg(long)]
@@ -55,7 +55,10 @@ pub struct Args {
 /// Runs `servobus monitor`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(args.rate.is_finite() && args.rate > 0.0) {
-        bail!("--rate {}: give a positive rate in Hz", args.rate);
+        return Err(super::exit::input(format!(
+            "--rate {}: give a positive rate in Hz",
+            args.rate
+        )));
     }
     let robot = match &args.robot {
         Some(path) => Some(load_robot_any_rate(path)?),
@@ -114,7 +117,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 b.clock().advance_to(started.elapsed());
             })
         }
-        _ => bail!("give --robot FILE, --port PATH, or both"),
+        _ => Err(super::exit::input(
+            "give --robot FILE, --port PATH, or both",
+        )),
     }
 }
 

@@ -21,6 +21,8 @@ const USB_FRAME: Duration = Duration::from_millis(1);
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Exit status of doctor: 0 nothing wrong, 1 warnings only, 2 errors \
+                        found (or a usage or input error).")]
 pub struct Args {
     /// The robot file to check the buses against (or a built-in robot's name).
     #[arg(long, value_parser = super::robot_arg)]

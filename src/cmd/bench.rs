@@ -22,7 +22,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
 
@@ -36,6 +36,10 @@ pub struct Args {
     /// port in the robot file; without one, the simulator on a pty).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`); with --port it must match the servos.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// How long to measure, in seconds.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
@@ -130,7 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let robot = load_robot_any_rate(&path)?;
+    let robot = load_robot_any_rate_calibrated(&path, args.calibration.as_deref())?;
     let duration = Duration::from_secs_f64(args.seconds);
     let clock = SystemClock::new();
 
@@ -145,7 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let mut bus = bus.clone();
         bus.busy_poll |= args.busy_poll;
         runs.push(std::thread::spawn(move || {
-            bench_bus(&robot, &bus, port, clock, duration)
+            bench_bus(&robot, index, &bus, port, clock, duration)
         }));
     }
     let mut buses = Vec::new();
@@ -166,6 +170,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn bench_bus(
     robot: &Robot,
+    index: usize,
     bus: &BusConfig,
     port: Option<String>,
     clock: SystemClock,
@@ -183,7 +188,10 @@ fn bench_bus(
     // The simulator (when no port is given) serves until `stop`.
     let stop = Arc::new(AtomicBool::new(false));
     let (path, server, backend) = match port {
-        Some(port) => (port.clone(), None, format!("serial port {port}")),
+        Some(port) => {
+            super::calibrate::check_port(robot, index, &port)?;
+            (port.clone(), None, format!("serial port {port}"))
+        }
         None => {
             let servos = servobus_runtime::sim::bus_servos(robot, bus)?;
             let mut server = PtyServer::open(bus.baud, servos)

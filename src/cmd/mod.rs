@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod budget;
 mod bus;
+mod calibrate;
 mod decode;
 mod docs;
 mod doctor;
@@ -53,6 +54,8 @@ enum Command {
     Budget(budget::Args),
     /// Measure the achieved bus update rate of a robot's buses.
     Bench(bench::Args),
+    /// Calibrate a physical robot: torque off, pose held, joints swept; writes the calibration file.
+    Calibrate(calibrate::Args),
     /// Serve a robot file's simulated servos on a pseudo-terminal.
     Sim(sim::Args),
     /// Find every servo on a port.
@@ -115,6 +118,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Plan(args) => plan::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Sim(args) => sim::run(args),
         Command::Scan(args) => bus::scan(args),
         Command::Ping(args) => bus::ping(args),

@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Context};
 use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
 use servobus_runtime::bus_settings;
-use servobus_runtime::config::{load_robot, Robot};
+use servobus_runtime::config::{load_robot_calibrated, Robot};
 use servobus_runtime::teach::{distance, motion_yaml, reduce, StillCapture, Teacher, TimedPose};
 
 /// A pseudo-terminal (the simulator) wakes late now and then on a busy
@@ -36,6 +36,10 @@ pub struct Args {
     /// A simulated robot with a hand: `servobus sim --robot F --hand H --link L`.
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`): taught angles are then physical angles.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// The motion file to write.
     #[arg(short = 'o', long = "output", value_name = "MOTION.yaml")]
     pub output: PathBuf,
@@ -62,7 +66,7 @@ pub struct Args {
 
 /// Runs `servobus teach`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot(&args.robot)?;
+    let robot = load_robot_calibrated(&args.robot, args.calibration.as_deref())?;
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(super::exit::input(
             "--tolerance must be a positive number of degrees",

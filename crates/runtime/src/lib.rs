@@ -14,6 +14,7 @@
 //!   command line, the examples and the tests share).
 #![warn(missing_docs)]
 
+pub mod calibrate;
 pub mod config;
 
 pub mod pacer;

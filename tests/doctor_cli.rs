@@ -130,3 +130,32 @@ fn doctor_finds_faults_on_a_pty_and_fix_brings_a_servo_back_to_the_bus_rate() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_calibration_the_robot_file_names_but_lacks_is_an_error() {
+    let dir = scratch("doctor-calibration");
+    let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
+    let robot = dir.join("arm.yaml");
+    std::fs::write(&robot, format!("calibration: missing.yaml\n{text}")).expect("robot");
+    let robot = robot.to_str().expect("utf-8");
+    let (code, v) = doctor_json(&["doctor", "--robot", robot, "--json"]);
+    assert_eq!(code, 2, "{v}");
+    let findings = v["buses"][0]["findings"].as_array().expect("findings");
+    let f = findings
+        .iter()
+        .find(|f| {
+            f["problem"]
+                .as_str()
+                .is_some_and(|p| p.contains("missing.yaml"))
+        })
+        .unwrap_or_else(|| panic!("{v}"));
+    assert_eq!(f["severity"], "error");
+    let fix = f["fix"].as_str().expect("fix");
+    assert!(
+        fix.starts_with(&format!(
+            "servobus calibrate --robot {robot} --port <PORT> -o "
+        )),
+        "{fix}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -11,7 +11,7 @@ use anyhow::Context;
 use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, PortKind, Target};
 use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
 use servobus_runtime::bus_settings;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 
 /// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
 /// process the OS schedules, which costs milliseconds on a busy machine.
@@ -21,8 +21,10 @@ const USB_FRAME: Duration = Duration::from_millis(1);
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Exit status of doctor: 0 nothing wrong, 1 warnings only, 2 errors \
-                        found (or a usage or input error).")]
+#[command(
+    after_help = "Exit status of doctor: 0 nothing wrong, 1 warnings only, 2 errors \
+                        found (or a usage or input error)."
+)]
 pub struct Args {
     /// The robot file to check the buses against (or a built-in robot's name).
     #[arg(long, value_parser = super::robot_arg)]
@@ -31,6 +33,10 @@ pub struct Args {
     /// ports; without any, the built-in simulator).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file to check the servos against (default: the one the
+    /// robot file names with `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -62,7 +68,7 @@ impl BusOutcome {
 
 /// Runs `servobus doctor`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_any_rate(&args.robot)?;
+    let robot = load_robot_any_rate_calibrated(&args.robot, args.calibration.as_deref())?;
     let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
     if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
         *first = Some(port.clone());
@@ -147,10 +153,14 @@ fn check<T: Transport + BaudSwitch, C: Clock>(
 
 fn print_findings(findings: &[Finding]) {
     for f in findings {
-        let servo = f.id.map_or_else(String::new, |id| format!("servo {id}"));
-        let reg = f.register.map_or_else(String::new, |r| format!(" {r}"));
+        let who = match (f.id, f.register) {
+            (Some(id), Some(r)) => format!("servo {id} {r}"),
+            (Some(id), None) => format!("servo {id}"),
+            (None, Some(r)) => r.to_string(),
+            (None, None) => format!("bus `{}`", f.bus),
+        };
         println!(
-            "{:<8} {servo}{reg}: {}",
+            "{:<8} {who}: {}",
             f.severity.to_string().to_uppercase(),
             f.problem
         );

@@ -13,7 +13,7 @@ use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock, Transport};
 use servobus_protocol::registers::Series;
-use servobus_runtime::config::{load_robot_any_rate, Robot, Units};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
 use servobus_runtime::{bus_settings, Command, Runner, Telemetry};
 
 /// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
@@ -38,6 +38,10 @@ pub struct Args {
     /// Serial port (without --robot, every servo found on it is watched).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file for the joint angles (default: the one the robot
+    /// file names with `calibration:`).
+    #[arg(long, requires = "robot")]
+    pub calibration: Option<PathBuf>,
     /// Print one JSON line per refresh instead of the live view.
     #[arg(long)]
     pub json: bool,
@@ -61,7 +65,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         )));
     }
     let robot = match &args.robot {
-        Some(path) => Some(load_robot_any_rate(path)?),
+        Some(path) => Some(load_robot_any_rate_calibrated(
+            path,
+            args.calibration.as_deref(),
+        )?),
         None => None,
     };
     let cfg = match &robot {

@@ -178,8 +178,50 @@ impl Ctx<'_> {
         if let Some(joint) = joint {
             self.limits(s, joint, &mut out);
             self.protection(s, joint, &mut out);
+            self.calibration(s, joint, &mut out);
         }
         out
+    }
+
+    /// The servo against the joint's calibration: the homing offset the
+    /// calibration plays with, and the firmware it was taken on.
+    fn calibration(&self, s: &ServoState, joint: &JointConfig, out: &mut Vec<Finding>) {
+        let Some(cal) = &joint.calibration else {
+            return;
+        };
+        let want = cal.play_frame().homing_offset;
+        if let Some(offset) = s.value("offset").filter(|&o| o != want) {
+            let mut f = self.write_fix(Severity::Error, s, "offset", want);
+            f.problem = format!(
+                "homing offset is {offset}, joint `{}`'s calibration plays with {want}: the \
+                 servo was re-homed or replaced since, so every angle is off by {} ticks",
+                joint.name,
+                offset - want
+            );
+            out.push(f);
+        }
+        let (major, minor) = s.firmware();
+        let now = format!("{major}.{minor}");
+        if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
+            let mut f = self.finding(Severity::Warning, s.id, Some("firmware_major"));
+            f.problem = format!(
+                "firmware is {now}, joint `{}` was calibrated on {then}: the servo may have been \
+                 replaced",
+                joint.name
+            );
+            f.fix = self.calibrate_command();
+            out.push(f);
+        }
+    }
+
+    /// `servobus calibrate` for this robot and port.
+    pub(crate) fn calibrate_command(&self) -> String {
+        format!(
+            "servobus calibrate --robot {} {}",
+            self.robot.path.display(),
+            // calibrate takes the baud rate from the robot file.
+            self.target.port_args(super::probe::TOOLS_DEFAULT_BAUD)
+        )
     }
 
     fn reply_settings(&self, s: &ServoState, out: &mut Vec<Finding>) {

@@ -10,7 +10,7 @@ use servobus_driver::{
 };
 use servobus_protocol::registers::{self, addr, Series};
 use servobus_protocol::MAX_ID;
-use servobus_runtime::config::{BusConfig, Robot};
+use servobus_runtime::config::{BusConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
@@ -32,10 +32,10 @@ pub struct Target {
 }
 
 /// The baud rate the bus tools assume without `--baud`.
-const TOOLS_DEFAULT_BAUD: u32 = 1_000_000;
+pub(crate) const TOOLS_DEFAULT_BAUD: u32 = 1_000_000;
 
 impl Target {
-    fn port_args(&self, baud: u32) -> String {
+    pub(crate) fn port_args(&self, baud: u32) -> String {
         let port = self.port.as_deref().unwrap_or("<PORT>");
         if baud == TOOLS_DEFAULT_BAUD {
             format!("--port {port}")
@@ -253,6 +253,9 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     for s in &servos {
         findings.extend(ctx.servo_findings(s, expected(s.id)));
     }
+    if robot.buses.first().is_some_and(|b| b.name == cfg.name) {
+        calibration_findings(&ctx, &mut findings);
+    }
     bus_checks::firmware(&ctx, &servos, &mut findings);
     bus_checks::supply_drop(&ctx, &servos, &mut findings);
     bus_checks::latency(bus, &ctx, kind, &servos, &mut findings)?;
@@ -297,6 +300,35 @@ pub(crate) fn finding(
         problem: String::new(),
         fix: String::new(),
         action: None,
+    }
+}
+
+/// Whether the robot has the calibration it names (said once, with its
+/// first bus).
+fn calibration_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
+    match &ctx.robot.calibration {
+        RobotCalibration::Missing(path) => {
+            let mut f = finding(ctx, Severity::Error, None, None);
+            f.problem = format!(
+                "the robot file names the calibration {}, which does not exist: real servos \
+                 are refused until it does",
+                path.display()
+            );
+            f.fix = format!("{} -o {}", ctx.calibrate_command(), path.display());
+            out.push(f);
+        }
+        RobotCalibration::None => {
+            let mut f = finding(ctx, Severity::Info, None, None);
+            f.problem = "no calibration: joint angles count from each servo's middle tick \
+                         with the robot file's offset and inverted"
+                .into();
+            f.fix = format!(
+                "{} -o calibration.yaml, then `calibration: calibration.yaml` in the robot file",
+                ctx.calibrate_command()
+            );
+            out.push(f);
+        }
+        _ => {}
     }
 }
 

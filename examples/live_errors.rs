@@ -11,6 +11,9 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+mod common;
+
+use common::Outcome;
 use servobus_runtime::config::{load_motion, plan_motion};
 use servobus_runtime::{spawn_virtual, Finish, RunOptions, Telemetry};
 
@@ -19,19 +22,11 @@ const USAGE: &str = "usage: live_errors [MOTION]\n\
     the simulated robot and prints each joint's tracking error every 50 cycles.";
 
 fn main() -> ExitCode {
-    let arg = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "arm-pick-place".to_owned());
-    if arg == "--help" || arg == "-h" {
-        println!("{USAGE}");
-        return ExitCode::SUCCESS;
-    }
-    exit_on_error(watch(&arg))
+    common::run_motion(USAGE, "arm-pick-place", watch)
 }
 
-fn watch(arg: &str) -> Result<(), Box<dyn std::error::Error>> {
-    let path = servobus::builtin::motion_path_or_name(Path::new(arg));
-    let (motion, robot) = load_motion(&path, None)?;
+fn watch(_arg: &str, path: &Path) -> Outcome {
+    let (motion, robot) = load_motion(path, None)?;
     let trajectory = plan_motion(&motion, &robot)?;
 
     let buses = servobus_runtime::sim::virtual_buses(&robot)?;
@@ -77,16 +72,5 @@ fn finished(how: Finish) -> &'static str {
         Finish::Fault => "ended by a fault (see above)",
         Finish::Abandoned => "abandoned: nobody asked it to play",
         _ => "ended",
-    }
-}
-
-/// Prints `error: ...` in words (not the error's `Debug` form) and exits 1.
-fn exit_on_error(result: Result<(), Box<dyn std::error::Error>>) -> ExitCode {
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
     }
 }

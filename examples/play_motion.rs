@@ -12,6 +12,9 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+mod common;
+
+use common::Outcome;
 use servobus_runtime::config::{load_motion, plan_motion};
 use servobus_runtime::{RunOptions, VirtualRun};
 
@@ -20,22 +23,13 @@ const USAGE: &str = "usage: play_motion [MOTION]\n\
     simulated robot in virtual time and prints the tracking errors.";
 
 fn main() -> ExitCode {
-    let arg = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "arm-wave".to_owned());
-    if arg == "--help" || arg == "-h" {
-        println!("{USAGE}");
-        return ExitCode::SUCCESS;
-    }
-    exit_on_error(play(&arg))
+    common::run_motion(USAGE, "arm-wave", play)
 }
 
-fn play(arg: &str) -> Result<(), Box<dyn std::error::Error>> {
-    let path = servobus::builtin::motion_path_or_name(Path::new(arg));
-
+fn play(arg: &str, path: &Path) -> Outcome {
     // Every error names the file, line and column; nothing moves before both
     // files are valid.
-    let (motion, robot) = load_motion(&path, None)?;
+    let (motion, robot) = load_motion(path, None)?;
     let path_plan = plan_motion(&motion, &robot)?;
     println!("{arg} on {}: {:.2} s", robot.name, path_plan.duration());
 
@@ -62,15 +56,4 @@ fn play(arg: &str) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     Ok(())
-}
-
-/// Prints `error: ...` in words (not the error's `Debug` form) and exits 1.
-fn exit_on_error(result: Result<(), Box<dyn std::error::Error>>) -> ExitCode {
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
 }

@@ -169,35 +169,19 @@ impl PlotData {
         let (_, h) = root.dim_in_pixel();
         let (grid, bottom) = root.split_vertically(h.saturating_sub(340));
         let cells = grid.split_evenly((rows, cols));
-        let t_end = self
-            .joints
-            .iter()
-            .flat_map(|s| s.planned.last())
-            .map(|p| p.0)
-            .fold(1e-3, f64::max);
-
         for (j, (series, area)) in self.joints.iter().zip(cells.iter()).enumerate() {
             let name = self.names.get(j).map_or("?", String::as_str);
             let range = span(series.planned.iter().chain(&series.measured));
             // The key is in the caption: a legend box would cover curves.
-            let mut chart = ChartBuilder::on(area)
-                .caption(
-                    format!("{name}  (blue: planned, red: measured, grey: keyframes)"),
-                    ("sans-serif", 15),
-                )
-                .margin(8)
-                .x_label_area_size(32)
-                .y_label_area_size(56)
-                .build_cartesian_2d(0.0..t_end, range.clone())
-                .map_err(plot_err)?;
-            chart
-                .configure_mesh()
-                .x_desc("time (s)")
-                .y_desc(format!("position ({units})"))
-                .max_light_lines(2)
-                .draw()
-                .map_err(plot_err)?;
-            self.draw_keyframes(&mut chart, &range)?;
+            let caption = format!("{name}  (blue: planned, red: measured, grey: keyframes)");
+            let mut chart = self.panel(
+                area,
+                (&caption, 15),
+                32,
+                range,
+                format!("position ({units})"),
+                2,
+            )?;
             chart
                 .draw_series(LineSeries::new(
                     series.planned.iter().copied(),
@@ -218,23 +202,14 @@ impl PlotData {
         let (_, bw) = (0, bottom.dim_in_pixel().0);
         let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
         let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
-        let mut chart = ChartBuilder::on(&left)
-            .caption(
-                "tracking error (planned minus measured)",
-                ("sans-serif", 18),
-            )
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(56)
-            .build_cartesian_2d(0.0..t_end, range.clone())
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("time (s)")
-            .y_desc(format!("error ({units})"))
-            .draw()
-            .map_err(plot_err)?;
-        self.draw_keyframes(&mut chart, &range)?;
+        let mut chart = self.panel(
+            &left,
+            ("tracking error (planned minus measured)", 18),
+            36,
+            range,
+            format!("error ({units})"),
+            10, // plotters' default
+        )?;
         let colours = self.colours();
         for (series, &color) in self.joints.iter().zip(&colours) {
             chart
@@ -265,18 +240,67 @@ impl PlotData {
     }
 }
 
+/// A panel: time across, one quantity up.
+type Chart<'a, DB> = plotters::prelude::ChartContext<
+    'a,
+    DB,
+    plotters::prelude::Cartesian2d<
+        plotters::coord::types::RangedCoordf64,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
 impl PlotData {
+    /// The end of the plots' time axis: the last planned sample (at least
+    /// 1 ms, so that an empty recording still has an axis).
+    fn t_end(&self) -> f64 {
+        self.joints
+            .iter()
+            .flat_map(|s| s.planned.last())
+            .map(|p| p.0)
+            .fold(1e-3, f64::max)
+    }
+
+    /// A panel on `area`: `caption` (text, font size) above, time from 0 to
+    /// the end across (`x_labels` pixels of labels), `range` up, named
+    /// `y_desc`, a mesh with at most `light_lines` light lines per label,
+    /// and the keyframes drawn.
+    fn panel<'a, DB>(
+        &self,
+        area: &'a plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+        (caption, size): (&str, u32),
+        x_labels: u32,
+        range: std::ops::Range<f64>,
+        y_desc: String,
+        light_lines: usize,
+    ) -> anyhow::Result<Chart<'a, DB>>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", size))
+            .margin(8)
+            .x_label_area_size(x_labels)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..self.t_end(), range.clone())
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(y_desc)
+            .max_light_lines(light_lines)
+            .draw()
+            .map_err(plot_err)?;
+        self.draw_keyframes(&mut chart, &range)?;
+        Ok(chart)
+    }
+
     /// Thin grey vertical lines at the keyframes.
     fn draw_keyframes<DB: plotters::prelude::DrawingBackend>(
         &self,
-        chart: &mut plotters::prelude::ChartContext<
-            '_,
-            DB,
-            plotters::prelude::Cartesian2d<
-                plotters::coord::types::RangedCoordf64,
-                plotters::coord::types::RangedCoordf64,
-            >,
-        >,
+        chart: &mut Chart<'_, DB>,
         range: &std::ops::Range<f64>,
     ) -> anyhow::Result<()>
     where

@@ -5,20 +5,9 @@
 
 mod common;
 
-use std::process::{Command, Output};
+use std::process::Command;
 
 use common::{Sim, BIN};
-
-/// A generous adapter latency: the simulator runs in wall-clock time.
-const LATENCY: &str = "10000";
-
-fn run(sim: &Sim, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .args(["--port", sim.port(), "--latency-us", LATENCY])
-        .output()
-        .expect("run servobus")
-}
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
@@ -30,7 +19,7 @@ fn bus_commands_say_what_to_do() {
     let sim = Sim::start(&dir);
 
     // The voltage register counts 0.1 V: shown in volts, with the raw value.
-    let out = run(&sim, &["read", "--id", "1", "present_voltage"]);
+    let out = sim.run(&["read", "--id", "1", "present_voltage"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let line = text(&out.stdout);
     let raw: i64 = line
@@ -45,19 +34,21 @@ fn bus_commands_say_what_to_do() {
     );
 
     // Torque off: the goal is written, and the user is told it won't move.
-    assert!(run(&sim, &["write", "--id", "2", "torque_enable", "0"])
+    assert!(sim
+        .run(&["write", "--id", "2", "torque_enable", "0"])
         .status
         .success());
-    let out = run(&sim, &["write", "--id", "2", "goal_position", "2100"]);
+    let out = sim.run(&["write", "--id", "2", "goal_position", "2100"]);
     assert_eq!(out.status.code(), Some(0));
     let err = text(&out.stderr);
     assert!(err.contains("warning: torque is off on servo 2"), "{err}");
     assert!(err.contains("torque_enable 1"), "{err}");
     // With the torque on, no warning.
-    assert!(run(&sim, &["write", "--id", "2", "torque_enable", "1"])
+    assert!(sim
+        .run(&["write", "--id", "2", "torque_enable", "1"])
         .status
         .success());
-    let out = run(&sim, &["write", "--id", "2", "goal_position", "2100"]);
+    let out = sim.run(&["write", "--id", "2", "goal_position", "2100"]);
     assert!(
         out.status.success() && out.stderr.is_empty(),
         "{}",
@@ -65,7 +56,7 @@ fn bus_commands_say_what_to_do() {
     );
 
     // The arm runs at 1 Mbps: nobody answers at 500 kbps.
-    let out = run(&sim, &["scan", "--baud", "500000"]);
+    let out = sim.run(&["scan", "--baud", "500000"]);
     assert_eq!(out.status.code(), Some(1), "a problem found");
     let err = text(&out.stderr);
     assert!(
@@ -88,7 +79,7 @@ fn bus_commands_say_what_to_do() {
             .output()
             .ok()
     } else {
-        Some(run(&sim, &["ping", "--id", "1"]))
+        Some(sim.run(&["ping", "--id", "1"]))
     };
     match out {
         Some(out) => {
@@ -104,7 +95,7 @@ fn bus_commands_say_what_to_do() {
     }
     drop(held);
     assert!(
-        run(&sim, &["ping", "--id", "1"]).status.success(),
+        sim.run(&["ping", "--id", "1"]).status.success(),
         "free again"
     );
 

@@ -8,20 +8,9 @@
 
 mod common;
 
-use std::process::{Command, Output};
+use std::process::Output;
 
-use common::{Sim, BIN};
-
-const LATENCY: &str = "10000";
-
-/// Runs `servobus ARGS --port PORT --latency-us LATENCY`.
-fn run(sim: &Sim, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .args(["--port", sim.port(), "--latency-us", LATENCY])
-        .output()
-        .expect("run servobus")
-}
+use common::Sim;
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -32,7 +21,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn ok(sim: &Sim, args: &[&str]) -> String {
-    let o = run(sim, args);
+    let o = sim.run(args);
     assert!(
         o.status.success(),
         "servobus {args:?} failed: {}",
@@ -43,7 +32,7 @@ fn ok(sim: &Sim, args: &[&str]) -> String {
 
 /// The command fails with exit code 1 and a one-line error containing `why`.
 fn fails(sim: &Sim, args: &[&str], why: &str) {
-    let o = run(sim, args);
+    let o = sim.run(args);
     assert_eq!(o.status.code(), Some(1), "servobus {args:?} should fail");
     let err = stderr(&o);
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err:?}");
@@ -55,7 +44,7 @@ fn fails(sim: &Sim, args: &[&str], why: &str) {
 
 /// The command is refused as a usage error: exit code 2, one line naming `why`.
 fn refused(sim: &Sim, args: &[&str], why: &str) {
-    let o = run(sim, args);
+    let o = sim.run(args);
     assert_eq!(
         o.status.code(),
         Some(2),

@@ -19,6 +19,30 @@ fn run(args: &[&str], paths: &[&Path]) -> Output {
     cmd.output().expect("servobus runs")
 }
 
+/// [`run`], which must succeed.
+fn succeeds(args: &[&str], paths: &[&Path]) -> Output {
+    let out = run(args, paths);
+    assert!(
+        out.status.success(),
+        "servobus {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// `servobus calibrate --from-lerobot FROM -o TO` for the SO-101.
+fn import_lerobot(from: &Path, to: &Path) {
+    succeeds(
+        &[
+            "calibrate",
+            "--robot",
+            "configs/robots/so101.yaml",
+            "--from-lerobot",
+        ],
+        &[from, Path::new("-o"), to],
+    );
+}
+
 /// The SO-101 robot file, copied to `dir` with `calibration: FILE` added.
 fn robot_naming(dir: &Path, calibration: &str) -> PathBuf {
     let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
@@ -27,9 +51,21 @@ fn robot_naming(dir: &Path, calibration: &str) -> PathBuf {
     path
 }
 
-/// A servo register read through `servobus read`.
+/// A servo register read through `servobus read`, with the generous
+/// adapter latency every test against the wall-clock simulator gives (a
+/// loaded machine may schedule the simulator milliseconds late).
 fn read(port: &str, id: &str, register: &str) -> i64 {
-    let v = common::servobus_json(&["read", "--port", port, "--id", id, register, "--json"]);
+    let v = common::servobus_json(&[
+        "read",
+        "--port",
+        port,
+        "--latency-us",
+        "10000",
+        "--id",
+        id,
+        register,
+        "--json",
+    ]);
     v["value"]
         .as_i64()
         .unwrap_or_else(|| panic!("a value in {v}"))
@@ -51,23 +87,8 @@ fn a_lerobot_file_goes_through_calibrate_and_comes_back_identical() {
     let dir = scratch("calib-lerobot");
     let cal = dir.join("arm.calibration.yaml");
     let json = dir.join("back.json");
-    let out = run(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--from-lerobot",
-            LEROBOT,
-            "-o",
-        ],
-        &[&cal],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = run(
+    import_lerobot(&repo(LEROBOT), &cal);
+    succeeds(
         &[
             "calibrate",
             "--robot",
@@ -75,11 +96,6 @@ fn a_lerobot_file_goes_through_calibrate_and_comes_back_identical() {
             "--to-lerobot",
         ],
         &[&json, Path::new("--calibration"), &cal],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let original = std::fs::read_to_string(repo(LEROBOT)).expect("fixture");
     assert_eq!(std::fs::read_to_string(&json).expect("exported"), original);
@@ -112,14 +128,9 @@ fn play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
     assert_eq!(read(&port, "2", "torque_enable"), 0);
     assert_eq!(read(&port, "2", "present_position"), before);
     // On the built-in simulator (no port) the same robot still plays.
-    let out = run(
+    succeeds(
         &["plan", "configs/motions/arm-wave.yaml", "--robot"],
         &[&robot],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     sim.stop();
 }
@@ -130,34 +141,23 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     // LeRobot's calibration of another arm: its servos hold homing offsets
     // that the simulated ones (offset 0) do not.
     let other = dir.join("other.calibration.yaml");
-    let out = run(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--from-lerobot",
-            LEROBOT,
-            "-o",
-        ],
-        &[&other],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    import_lerobot(&repo(LEROBOT), &other);
     let sim = Sim::start(&dir);
     let port = sim.port().to_owned();
-    let out = run(
-        &[
-            "play",
-            "configs/motions/arm-wave.yaml",
-            "--port",
-            &port,
-            "--calibration",
-        ],
-        &[&other],
-    );
+    // `play` on the simulator's port with a calibration file.
+    let play_with = |calibration: &Path| {
+        run(
+            &[
+                "play",
+                "configs/motions/arm-wave.yaml",
+                "--port",
+                &port,
+                "--calibration",
+            ],
+            &[calibration],
+        )
+    };
+    let out = play_with(&other);
     assert_refused(
         &out,
         "holds homing offset 0, the calibration was taken with -1389",
@@ -174,30 +174,8 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     let moved = dir.join("moved.json");
     std::fs::write(&moved, v.to_string()).expect("write json");
     let far = dir.join("far.calibration.yaml");
-    let out = run(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--from-lerobot",
-        ],
-        &[&moved, Path::new("-o"), &far],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = run(
-        &[
-            "play",
-            "configs/motions/arm-wave.yaml",
-            "--port",
-            &port,
-            "--calibration",
-        ],
-        &[&far],
-    );
+    import_lerobot(&moved, &far);
+    let out = play_with(&far);
     assert_refused(&out, "far outside its calibrated range");
     assert_eq!(read(&port, "1", "torque_enable"), 0);
     sim.stop();
@@ -234,7 +212,7 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     let port = sim.port().to_owned();
     let cal = dir.join("arm.calibration.yaml");
     let json = dir.join("arm.json");
-    let out = run(
+    let out = succeeds(
         &[
             "calibrate",
             "--robot",
@@ -251,11 +229,6 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
             Path::new("--to-lerobot"),
             &json,
         ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(

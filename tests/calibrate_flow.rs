@@ -6,83 +6,12 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::{mpsc, Mutex};
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::process::{Command, Output};
+use std::sync::Mutex;
 
-use common::{repo, scratch, BIN};
+use common::{repo, scratch, Sim, BIN};
 use servobus_runtime::config::{load_motion, load_robot, Robot};
-
-/// `servobus sim` serving a robot on a linked pty; killed when dropped.
-struct Sim {
-    child: Child,
-    link: PathBuf,
-    /// When it said it was serving: the hand's time 0, near enough.
-    started: Instant,
-}
-
-impl Sim {
-    fn start(dir: &Path, robot: &Path, servos: usize, extra: &[&str]) -> Sim {
-        let link = dir.join("bus");
-        let mut child = Command::new(BIN)
-            .args(["sim", "--robot"])
-            .arg(robot)
-            .arg("--link")
-            .arg(&link)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start servobus sim");
-        let stdout = child.stdout.take().expect("sim stdout");
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut line = String::new();
-            let _ = BufReader::new(stdout).read_line(&mut line);
-            let _ = tx.send(line);
-        });
-        let line = rx.recv_timeout(Duration::from_secs(60));
-        let started = Instant::now();
-        let sim = Sim {
-            child,
-            link,
-            started,
-        };
-        let line = line.expect("servobus sim says it is serving");
-        assert_eq!(
-            line.trim(),
-            format!("serving {servos} servos on {}", sim.link.display())
-        );
-        sim
-    }
-
-    fn port(&self) -> &str {
-        self.link.to_str().expect("utf-8 path")
-    }
-
-    /// Waits until the simulator has run `s` seconds.
-    fn wait_until(&self, s: f64) {
-        let at = self.started + Duration::from_secs_f64(s);
-        std::thread::sleep(at.saturating_duration_since(Instant::now()));
-    }
-
-    fn stop(mut self) {
-        let pid = self.child.id().to_string();
-        let _ = Command::new("kill").args(["-TERM", &pid]).status();
-        let _ = self.child.wait();
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
-}
 
 /// The two flows run one after the other: each is a simulator and a client
 /// in wall-clock time, and two at once on a small machine starve both.
@@ -224,7 +153,7 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     std::fs::write(&hand_file, text).expect("hand file");
     let truth_file = dir.join("truth.csv");
     let mounting = repo("configs/sim/so101-mounting.yaml");
-    let sim = Sim::start(
+    let sim = Sim::start_robot(
         &dir,
         &robot_file,
         6,
@@ -336,7 +265,7 @@ fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
     let hand_file = dir.join("hand.yaml");
     std::fs::write(&hand_file, text).expect("hand file");
     let truth_file = dir.join("truth.csv");
-    let sim = Sim::start(
+    let sim = Sim::start_robot(
         &dir,
         &robot_file,
         18,

@@ -5,16 +5,12 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use common::{num, servobus, servobus_json};
 
 fn temp(name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("interpolation_cli");
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+    common::temp_file("interpolation_cli", name, text)
 }
 
 const ROBOT: &str = "\

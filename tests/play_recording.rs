@@ -6,22 +6,37 @@
 
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use common::{num, scratch, servobus, servobus_json};
 
 /// so101 with a fixed lead, so that what is sent is the path itself.
-fn robot(dir: &std::path::Path) -> PathBuf {
+fn robot(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(common::repo("configs/robots/so101.yaml")).expect("so101");
     let p = dir.join("so101.yaml");
     std::fs::write(&p, format!("lead_ms: 10\n{text}")).expect("robot");
     p
 }
 
+/// `servobus play RECORDING --robot ROBOT --fast --json EXTRA...`, which
+/// must succeed: its JSON report.
+fn play_json(recording: &Path, robot: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "play",
+        recording.to_str().expect("utf-8"),
+        "--robot",
+        robot.to_str().expect("utf-8"),
+        "--fast",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    servobus_json(&args)
+}
+
 /// Limits of so101's shoulder_pan and elbow_flex (deg, deg/s, ...).
 const LIMITS: [(f64, f64, f64); 2] = [(180.0, 900.0, 9000.0), (180.0, 900.0, 9000.0)];
 
-fn write_recording(path: &std::path::Path, noisy: bool) {
+fn write_recording(path: &Path, noisy: bool) {
     let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
     let mut noise = move || {
         seed ^= seed << 13;
@@ -50,8 +65,18 @@ fn write_recording(path: &std::path::Path, noisy: bool) {
     std::fs::write(path, text).expect("recording");
 }
 
+/// A scratch folder `name` holding the robot and a recording
+/// (`take.csv`, noisy or smooth): the folder, the robot and the recording.
+fn take(name: &str, noisy: bool) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = scratch(name);
+    let robot = robot(&dir);
+    let rec = dir.join("take.csv");
+    write_recording(&rec, noisy);
+    (dir, robot, rec)
+}
+
 /// Commanded positions per joint from a `play --log` file.
-fn commanded(log: &std::path::Path, joint: &str) -> Vec<(f64, f64)> {
+fn commanded(log: &Path, joint: &str) -> Vec<(f64, f64)> {
     let text = std::fs::read_to_string(log).expect("log");
     text.lines()
         .skip(1)
@@ -94,22 +119,9 @@ fn check_limits(series: &[(f64, f64)], (vm, am, jm): (f64, f64, f64)) {
 
 #[test]
 fn a_noisy_recording_with_steps_is_played_within_every_limit() {
-    let dir = scratch("play_recording_noisy");
-    let robot = robot(&dir);
-    let rec = dir.join("take.csv");
-    write_recording(&rec, true);
+    let (dir, robot, rec) = take("play_recording_noisy", true);
     let log = dir.join("log.csv");
-    let args = [
-        "play",
-        rec.to_str().expect("utf-8"),
-        "--robot",
-        robot.to_str().expect("utf-8"),
-        "--fast",
-        "--json",
-        "--log",
-        log.to_str().expect("utf-8"),
-    ];
-    let v = servobus_json(&args);
+    let v = play_json(&rec, &robot, &["--log", log.to_str().expect("utf-8")]);
     assert_eq!(v["finish"], "completed", "{v}");
     for (name, lim) in ["shoulder_pan", "elbow_flex"].into_iter().zip(LIMITS) {
         let sent = commanded(&log, name);
@@ -122,14 +134,7 @@ fn a_noisy_recording_with_steps_is_played_within_every_limit() {
     assert!(num(&r["joints"][0], "max_departure") > 10.0, "{r}");
 
     // The log it wrote plays back too (its measured positions).
-    let again = servobus_json(&[
-        "play",
-        log.to_str().expect("utf-8"),
-        "--robot",
-        robot.to_str().expect("utf-8"),
-        "--fast",
-        "--json",
-    ]);
+    let again = play_json(&log, &robot, &[]);
     assert_eq!(again["finish"], "completed", "{again}");
     // It rides the limits in the steps, where the filter rounds a little.
     assert!(
@@ -140,18 +145,8 @@ fn a_noisy_recording_with_steps_is_played_within_every_limit() {
 
 #[test]
 fn a_smooth_recording_is_reproduced_closely() {
-    let dir = scratch("play_recording_smooth");
-    let robot = robot(&dir);
-    let rec = dir.join("take.csv");
-    write_recording(&rec, false);
-    let v = servobus_json(&[
-        "play",
-        rec.to_str().expect("utf-8"),
-        "--robot",
-        robot.to_str().expect("utf-8"),
-        "--fast",
-        "--json",
-    ]);
+    let (_, robot, rec) = take("play_recording_smooth", false);
+    let v = play_json(&rec, &robot, &[]);
     for j in v["recording"]["joints"]
         .as_array()
         .expect("joints")

@@ -13,11 +13,7 @@ const TPD: f64 = 4096.0 / 360.0;
 
 /// Present position of servo `id` as `servobus read` gets it.
 fn read_position(sim: &Sim, id: &str) -> i64 {
-    let out = Command::new(BIN)
-        .args(["read", "--id", id, "present_position", "--json"])
-        .args(["--port", sim.port(), "--latency-us", "10000"])
-        .output()
-        .expect("run servobus read");
+    let out = sim.run(&["read", "--id", id, "present_position", "--json"]);
     assert!(
         out.status.success(),
         "read failed: {}",

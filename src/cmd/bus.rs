@@ -53,32 +53,34 @@ pub struct ScanArgs {
     pub json: bool,
 }
 
-/// Arguments of `servobus ping`.
+/// Port, baud rate and servo: what every single-servo tool needs.
 #[derive(Debug, clap::Args)]
-pub struct PingArgs {
+pub struct ServoArgs {
     /// Port and latency.
     #[command(flatten)]
     pub port: PortArgs,
     /// Baud rate.
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
-    /// Servo ID.
+    /// Servo ID (for set-id: the servo's current ID).
     #[arg(long)]
     pub id: u8,
+}
+
+/// Arguments of `servobus ping`.
+#[derive(Debug, clap::Args)]
+pub struct PingArgs {
+    /// Port, baud rate and servo.
+    #[command(flatten)]
+    pub servo: ServoArgs,
 }
 
 /// Arguments of `servobus read`.
 #[derive(Debug, clap::Args)]
 pub struct ReadArgs {
-    /// Port and latency.
+    /// Port, baud rate and servo.
     #[command(flatten)]
-    pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub baud: u32,
-    /// Servo ID.
-    #[arg(long)]
-    pub id: u8,
+    pub servo: ServoArgs,
     /// Register name, e.g. present_position (or its address).
     pub register: String,
     /// Print JSON.
@@ -89,15 +91,9 @@ pub struct ReadArgs {
 /// Arguments of `servobus write`.
 #[derive(Debug, clap::Args)]
 pub struct WriteArgs {
-    /// Port and latency.
+    /// Port, baud rate and servo.
     #[command(flatten)]
-    pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub baud: u32,
-    /// Servo ID.
-    #[arg(long)]
-    pub id: u8,
+    pub servo: ServoArgs,
     /// Register name, e.g. goal_position (or its address).
     pub register: String,
     /// Value to write.
@@ -108,15 +104,9 @@ pub struct WriteArgs {
 /// Arguments of `servobus set-id`.
 #[derive(Debug, clap::Args)]
 pub struct SetIdArgs {
-    /// Port and latency.
+    /// Port, baud rate and servo.
     #[command(flatten)]
-    pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub baud: u32,
-    /// The servo's current ID.
-    #[arg(long)]
-    pub id: u8,
+    pub servo: ServoArgs,
     /// The new ID.
     pub new_id: u8,
 }
@@ -246,14 +236,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     let mut collisions: Vec<(u8, u32)> = Vec::new();
     let started = std::time::Instant::now();
     for &baud in &bauds {
-        if baud != bus.settings().link.baud {
-            bus.transport_mut()
-                .set_baud(baud)
-                .with_context(|| format!("cannot set {} to {baud} baud", args.port.port))?;
-            let mut s = *bus.settings();
-            s.link.baud = baud;
-            bus.set_settings(s);
-        }
+        switch_baud(&mut bus, baud, &args.port.port)?;
         for id in 0..=MAX_ID {
             let mut s = *bus.settings();
             s.series = Series::Sts;
@@ -271,15 +254,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
                 },
                 Err(e) => Err(e),
             };
-            match result {
-                Ok(f) => found.push(f),
-                // Two servos answering at once garble each other's replies.
-                Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
-                    collisions.push((id, baud))
-                }
-                Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
-                Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
-            }
+            sort_answer(result, (id, baud), &mut found, &mut collisions)?;
         }
     }
     // If the adapter turned out slower than assumed, servos may have been
@@ -369,6 +344,40 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Files what asking servo `id` at `baud` gave: a servo found, a collision,
+/// or silence; any other error ends the scan.
+fn sort_answer(
+    result: Result<Found, BusError>,
+    (id, baud): (u8, u32),
+    found: &mut Vec<Found>,
+    collisions: &mut Vec<(u8, u32)>,
+) -> anyhow::Result<()> {
+    match result {
+        Ok(f) => found.push(f),
+        // Two servos answering at once garble each other's replies.
+        Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
+            collisions.push((id, baud))
+        }
+        Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
+        Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
+    }
+    Ok(())
+}
+
+/// Moves the port and the bus's deadlines to `baud` (nothing when already
+/// there).
+fn switch_baud(bus: &mut SerialBus, baud: u32, port: &str) -> anyhow::Result<()> {
+    if bus.settings().link.baud != baud {
+        bus.transport_mut()
+            .set_baud(baud)
+            .with_context(|| format!("cannot set {port} to {baud} baud"))?;
+        let mut s = *bus.settings();
+        s.link.baud = baud;
+        bus.set_settings(s);
+    }
+    Ok(())
+}
+
 /// Measures the latency on servo `first` and, when it exceeds the one the
 /// scan assumed, asks every silent ID again at that baud rate.
 fn rescan_if_slow(
@@ -378,12 +387,7 @@ fn rescan_if_slow(
     collisions: &mut Vec<(u8, u32)>,
 ) -> anyhow::Result<()> {
     let assumed = bus.settings().link.latency;
-    if bus.settings().link.baud != baud {
-        bus.transport_mut().set_baud(baud)?;
-        let mut s = *bus.settings();
-        s.link.baud = baud;
-        bus.set_settings(s);
-    }
+    switch_baud(bus, baud, "the port")?;
     let Ok(m) = bus.measure_latency(first, 3, LATENCY_CEILING) else {
         return Ok(());
     };
@@ -409,14 +413,8 @@ fn rescan_if_slow(
         s.series = Series::Sts;
         s.retries = 1;
         bus.set_settings(s);
-        match bus.ping(id).and_then(|_| identify(bus, id)) {
-            Ok(f) => found.push(f),
-            Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
-                collisions.push((id, baud))
-            }
-            Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
-            Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
-        }
+        let result = bus.ping(id).and_then(|_| identify(bus, id));
+        sort_answer(result, (id, baud), found, collisions)?;
     }
     found.sort_by_key(|f| (f.baud, f.id));
     Ok(())
@@ -424,22 +422,24 @@ fn rescan_if_slow(
 
 /// Runs `servobus ping`.
 pub fn ping(args: PingArgs) -> anyhow::Result<ExitCode> {
-    check_id(args.id)?;
-    let mut bus = open(&args.port, args.baud, Series::Sts, 2)?;
-    if args.port.latency_us.is_none() {
-        adapt_latency(&mut bus, args.id)?;
+    let ServoArgs { port, baud, id } = &args.servo;
+    check_id(*id)?;
+    let mut bus = open(port, *baud, Series::Sts, 2)?;
+    if port.latency_us.is_none() {
+        adapt_latency(&mut bus, *id)?;
     }
-    let flags = bus.ping(args.id)?;
+    let flags = bus.ping(*id)?;
     println!(
-        "servo {} answered in {} us, status {flags}",
-        args.id,
+        "servo {id} answered in {} us, status {flags}",
         bus.last_rtt().as_micros()
     );
     Ok(ExitCode::SUCCESS)
 }
 
 /// Opens the bus and learns the servo's series from its model number.
-fn open_servo(port: &PortArgs, baud: u32, id: u8) -> anyhow::Result<(SerialBus, Found)> {
+fn open_servo(servo: &ServoArgs) -> anyhow::Result<(SerialBus, Found)> {
+    let ServoArgs { port, baud, id } = servo;
+    let (baud, id) = (*baud, *id);
     check_id(id)?;
     let mut bus = open(port, baud, Series::Sts, 2)?;
     if port.latency_us.is_none() {

@@ -6,7 +6,7 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// The `servobus` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_servobus");
@@ -43,6 +43,16 @@ pub fn num(v: &serde_json::Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
 }
 
+/// Writes `text` to the file `name` in `dir` (a folder of its own under
+/// Cargo's temporary directory for tests, made if missing).
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
+}
+
 /// A fresh scratch directory for one test.
 pub fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("servobus-{name}-{}", std::process::id()));
@@ -55,6 +65,8 @@ pub struct Sim {
     child: Child,
     /// The symbolic link to the pty.
     pub link: PathBuf,
+    /// When it said it was serving: the time 0 of its hand, near enough.
+    pub started: Instant,
 }
 
 impl Sim {
@@ -65,11 +77,16 @@ impl Sim {
 
     /// Like [`Sim::start`], with more arguments for `servobus sim`.
     pub fn start_with(dir: &Path, extra: &[&str]) -> Sim {
+        Sim::start_robot(dir, &repo("configs/robots/so101.yaml"), 6, extra)
+    }
+
+    /// Starts `servobus sim` for `robot` (a file with `servos` servos) with
+    /// a link in `dir` and more arguments `extra`.
+    pub fn start_robot(dir: &Path, robot: &Path, servos: usize, extra: &[&str]) -> Sim {
         let link = dir.join("bus");
-        let robot = repo("configs/robots/so101.yaml");
         let mut child = Command::new(BIN)
             .args(["sim", "--robot"])
-            .arg(&robot)
+            .arg(robot)
             .arg("--link")
             .arg(&link)
             .args(extra)
@@ -84,23 +101,44 @@ impl Sim {
             let _ = BufReader::new(stdout).read_line(&mut line);
             let _ = tx.send(line);
         });
-        let mut sim = Sim { child, link };
-        let line = rx
-            .recv_timeout(Duration::from_secs(60))
-            .unwrap_or_else(|_| {
-                let _ = sim.child.kill();
-                panic!("servobus sim did not say it was serving");
-            });
+        let line = rx.recv_timeout(Duration::from_secs(60));
+        let mut sim = Sim {
+            child,
+            link,
+            started: Instant::now(),
+        };
+        let line = line.unwrap_or_else(|_| {
+            let _ = sim.child.kill();
+            panic!("servobus sim did not say it was serving");
+        });
         assert_eq!(
             line.trim(),
-            format!("serving 6 servos on {}", sim.link.display())
+            format!("serving {servos} servos on {}", sim.link.display())
         );
         sim
+    }
+
+    /// Waits until the simulator has run `s` seconds.
+    pub fn wait_until(&self, s: f64) {
+        let at = self.started + Duration::from_secs_f64(s);
+        std::thread::sleep(at.saturating_duration_since(Instant::now()));
     }
 
     /// The path to open.
     pub fn port(&self) -> &str {
         self.link.to_str().expect("utf-8 path")
+    }
+
+    /// Runs `servobus ARGS --port PORT --latency-us 10000` against this
+    /// simulator. The latency is generous because the simulator runs in
+    /// wall-clock time and its process may be scheduled milliseconds late
+    /// on a loaded machine; nothing here measures time.
+    pub fn run(&self, args: &[&str]) -> Output {
+        Command::new(BIN)
+            .args(args)
+            .args(["--port", self.port(), "--latency-us", "10000"])
+            .output()
+            .expect("run servobus")
     }
 
     /// Stops the simulator as a user would (SIGTERM) and waits for it.

@@ -50,26 +50,22 @@ pub trait Transport {
     fn discard_input(&mut self) -> Result<(), TransportError>;
 }
 
-impl<T: Transport + ?Sized> Transport for &mut T {
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        (**self).write_all(bytes)
-    }
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
-        (**self).read(buf, deadline)
-    }
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        (**self).discard_input()
-    }
+/// A borrowed or boxed transport is a transport: the same three calls,
+/// forwarded (so `&mut port` and `Box<dyn Transport>` can drive a bus).
+macro_rules! forward_transport {
+    ($($wrapper:ty),*) => {$(
+        impl<T: Transport + ?Sized> Transport for $wrapper {
+            fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+                (**self).write_all(bytes)
+            }
+            fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+                (**self).read(buf, deadline)
+            }
+            fn discard_input(&mut self) -> Result<(), TransportError> {
+                (**self).discard_input()
+            }
+        }
+    )*};
 }
 
-impl<T: Transport + ?Sized> Transport for Box<T> {
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        (**self).write_all(bytes)
-    }
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
-        (**self).read(buf, deadline)
-    }
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        (**self).discard_input()
-    }
-}
+forward_transport!(&mut T, Box<T>);

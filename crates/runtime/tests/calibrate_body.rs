@@ -8,7 +8,7 @@
 mod calib_play;
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use servobus_driver::{Bus, Clock, ManualClock};
@@ -165,6 +165,35 @@ fn calibrate_body(
     (cal, buses, sim)
 }
 
+/// Saves `cal` as the file `name`, applies it to the robot of `robot_file`,
+/// prepares and checks the servos, and plays `motion` (under `configs/`)
+/// on them.
+fn play_calibrated(
+    robot_file: &Path,
+    cal: &Calibration,
+    name: &str,
+    mounts: &[Mount],
+    mut buses: Vec<Bus<SimBus, ManualClock>>,
+    sim: &SimBus,
+    motion: &str,
+) -> calib_play::Played {
+    let path = temp(name);
+    save_calibration(cal, &path).expect("saves");
+    let robot = load_robot_calibrated(robot_file, Some(&path)).expect("applies");
+    // Before moving, the servos are checked and those across the seam get
+    // their session offset; from then on readings are physical angles.
+    prepare_servos(&robot, &mut buses).expect("the servos are the calibrated ones");
+    check_calibration(&robot, mounts, sim);
+    calib_play::play(
+        &common::config(motion),
+        robot_file,
+        &robot,
+        Some(&path),
+        buses,
+        || truth(&robot, sim),
+    )
+}
+
 /// Every joint's measured range is its stops, and its reading maps to its
 /// physical angle.
 fn check_calibration(robot: &Robot, mounts: &[Mount], sim: &SimBus) {
@@ -198,7 +227,7 @@ fn a_randomly_fitted_arm_is_calibrated_by_hand_then_plays_within_a_degree() {
     let robot_file = common::config("robots/so101.yaml");
     let design = load_robot(&robot_file).expect("so101");
     let mounts = random_mounts(&design, 7);
-    let (cal, mut buses, sim) = calibrate_body(&design, &mounts, &arm_start());
+    let (cal, buses, sim) = calibrate_body(&design, &mounts, &arm_start());
     let crossing: Vec<&str> = cal
         .joints
         .iter()
@@ -207,20 +236,14 @@ fn a_randomly_fitted_arm_is_calibrated_by_hand_then_plays_within_a_degree() {
         .collect();
     println!("mounts {mounts:?}\nacross the seam: {crossing:?}");
     assert!(!crossing.is_empty(), "a range measured across the seam");
-    let path = temp("so101.calibration.yaml");
-    save_calibration(&cal, &path).expect("saves");
-    let robot = load_robot_calibrated(&robot_file, Some(&path)).expect("applies");
-    // Before moving, the servos are checked and those across the seam get
-    // their session offset; from then on readings are physical angles.
-    prepare_servos(&robot, &mut buses).expect("the servos are the calibrated ones");
-    check_calibration(&robot, &mounts, &sim);
-    let played = calib_play::play(
-        &common::config("motions/arm-wave.yaml"),
+    let played = play_calibrated(
         &robot_file,
-        &robot,
-        Some(&path),
+        &cal,
+        "so101.calibration.yaml",
+        &mounts,
         buses,
-        || truth(&robot, &sim),
+        &sim,
+        "motions/arm-wave.yaml",
     );
     println!(
         "calibrated: {:?}, worst miss at a keyframe {:.3} deg",
@@ -280,20 +303,16 @@ fn a_randomly_fitted_hexapod_calibrates_and_plays() {
         .enumerate()
         .map(|(i, j)| j.min + (j.max - j.min) * ((i * 7 % 11) as f64 / 11.0))
         .collect();
-    let (cal, mut buses, sim) = calibrate_body(&design, &mounts, &start);
+    let (cal, buses, sim) = calibrate_body(&design, &mounts, &start);
     assert!(cal.joints.iter().any(|c| c.crosses_seam()));
-    let path = temp("hexapod.calibration.yaml");
-    save_calibration(&cal, &path).expect("saves");
-    let robot = load_robot_calibrated(&robot_file, Some(&path)).expect("applies");
-    prepare_servos(&robot, &mut buses).expect("the servos are the calibrated ones");
-    check_calibration(&robot, &mounts, &sim);
-    let played = calib_play::play(
-        &common::config("motions/hexapod-tripod.yaml"),
+    let played = play_calibrated(
         &robot_file,
-        &robot,
-        Some(&path),
+        &cal,
+        "hexapod.calibration.yaml",
+        &mounts,
         buses,
-        || truth(&robot, &sim),
+        &sim,
+        "motions/hexapod-tripod.yaml",
     );
     println!(
         "hexapod: {:?}, worst miss at a keyframe {:.3} deg",

@@ -1,18 +1,14 @@
 //! Bad robot and motion files are refused with `file:line:column: field: reason`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use servobus_runtime::config::{load_motion, load_robot, ConfigError};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("config_errors")
-        .join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+    common::temp_file(&format!("config_errors/{dir}"), name, text)
 }
 
 /// A valid two-joint robot; tests break one line of it.
@@ -71,29 +67,85 @@ fn the_valid_robot_loads() {
 }
 
 #[test]
-fn duplicate_id_points_at_the_second_id() {
-    let (p, e) = robot_error("dup_id", "id: 2", "id: 1");
-    expect(
-        &e,
-        &p,
-        16,
-        13,
-        "buses[0].joints[1].id",
-        "ID 1 is already used on bus `bus`",
-    );
-}
-
-#[test]
-fn id_out_of_range() {
-    let (p, e) = robot_error("big_id", "id: 2", "id: 254");
-    expect(
-        &e,
-        &p,
-        16,
-        13,
-        "buses[0].joints[1].id",
-        "from 0 to 253, got 254",
-    );
+fn robot_errors_name_the_file_line_column_and_field() {
+    let cases = [
+        // duplicate id points at the second id
+        (
+            "dup_id",
+            "id: 2",
+            "id: 1",
+            (16, 13),
+            "buses[0].joints[1].id",
+            "ID 1 is already used on bus `bus`",
+        ),
+        // id out of range
+        (
+            "big_id",
+            "id: 2",
+            "id: 254",
+            (16, 13),
+            "buses[0].joints[1].id",
+            "from 0 to 253, got 254",
+        ),
+        // min not below max
+        (
+            "minmax",
+            "max: 45",
+            "max: -50",
+            (19, 14),
+            "buses[0].joints[1].max",
+            "must be greater than min",
+        ),
+        // limits must be positive
+        (
+            "vel",
+            "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+            "max_velocity: 0\n        max_acceleration: 900\n      - name: b",
+            (13, 23),
+            "buses[0].joints[0].max_velocity",
+            "must be positive",
+        ),
+        // limit beyond the servo range
+        (
+            "range",
+            "min: -90",
+            "min: -200",
+            (11, 14),
+            "buses[0].joints[0].min",
+            "beyond what the STS3215 can reach",
+        ),
+        // duplicate joint name
+        (
+            "name",
+            "- name: b\n",
+            "- name: a\n",
+            (15, 15),
+            "buses[0].joints[1].name",
+            "joint name `a` is already used",
+        ),
+        // type errors come from serde yaml with their position
+        (
+            "type",
+            "baud: 1000000",
+            "baud: fast",
+            (6, 11),
+            "buses[0].baud",
+            "invalid type",
+        ),
+        // unknown fields are refused
+        (
+            "unknown",
+            "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+            "max_velocity: 180\n        max_accel: 900\n      - name: b",
+            (14, 9),
+            "buses[0].joints[0]",
+            "unknown field `max_accel`",
+        ),
+    ];
+    for (test, from, to, (line, column), field, reason) in cases {
+        let (p, e) = robot_error(test, from, to);
+        expect(&e, &p, line, column, field, reason);
+    }
 }
 
 #[test]
@@ -112,85 +164,6 @@ fn unknown_model_lists_the_known_ones() {
         "unknown model `xl430`",
     );
     assert!(e.to_string().contains("STS3215"));
-}
-
-#[test]
-fn min_not_below_max() {
-    let (p, e) = robot_error("minmax", "max: 45", "max: -50");
-    expect(
-        &e,
-        &p,
-        19,
-        14,
-        "buses[0].joints[1].max",
-        "must be greater than min",
-    );
-}
-
-#[test]
-fn limits_must_be_positive() {
-    let (p, e) = robot_error(
-        "vel",
-        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
-        "max_velocity: 0\n        max_acceleration: 900\n      - name: b",
-    );
-    expect(
-        &e,
-        &p,
-        13,
-        23,
-        "buses[0].joints[0].max_velocity",
-        "must be positive",
-    );
-}
-
-#[test]
-fn limit_beyond_the_servo_range() {
-    let (p, e) = robot_error("range", "min: -90", "min: -200");
-    expect(
-        &e,
-        &p,
-        11,
-        14,
-        "buses[0].joints[0].min",
-        "beyond what the STS3215 can reach",
-    );
-}
-
-#[test]
-fn duplicate_joint_name() {
-    let (p, e) = robot_error("name", "- name: b\n", "- name: a\n");
-    expect(
-        &e,
-        &p,
-        15,
-        15,
-        "buses[0].joints[1].name",
-        "joint name `a` is already used",
-    );
-}
-
-#[test]
-fn type_errors_come_from_serde_yaml_with_their_position() {
-    let (p, e) = robot_error("type", "baud: 1000000", "baud: fast");
-    expect(&e, &p, 6, 11, "buses[0].baud", "invalid type");
-}
-
-#[test]
-fn unknown_fields_are_refused() {
-    let (p, e) = robot_error(
-        "unknown",
-        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
-        "max_velocity: 180\n        max_accel: 900\n      - name: b",
-    );
-    expect(
-        &e,
-        &p,
-        14,
-        9,
-        "buses[0].joints[0]",
-        "unknown field `max_accel`",
-    );
 }
 
 #[test]
@@ -224,92 +197,69 @@ fn motion_error(test: &str, motion: &str) -> (PathBuf, ConfigError) {
 }
 
 #[test]
-fn a_keyframe_outside_a_limit_names_the_joint_and_limit() {
-    let (p, e) = motion_error(
-        "kf_limit",
-        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10, b: 50}\n",
-    );
-    expect(
-        &e,
-        &p,
-        4,
-        22,
-        "keyframes[1].pose.b",
-        "keyframe 1: 50 deg is outside the limits of joint `b` [-45, 45]",
-    );
-}
-
-#[test]
-fn a_joint_the_robot_lacks_points_at_its_name() {
-    let (p, e) = motion_error(
-        "kf_joint",
-        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose:\n      a: 10\n      elbow: 5\n",
-    );
-    expect(
-        &e,
-        &p,
-        6,
-        7,
-        "keyframes[1].pose.elbow",
-        "has no joint `elbow` (joints: a, b)",
-    );
-}
-
-#[test]
-fn an_unknown_pose_name() {
-    let (p, e) = motion_error(
-        "kf_pose",
-        "robot: robot.yaml\nposes:\n  home: {a: 0}\nkeyframes:\n  - pose: home\n  - pose: hoem\n",
-    );
-    expect(
-        &e,
-        &p,
-        6,
-        11,
-        "keyframes[1].pose",
-        "unknown pose `hoem` (poses: home)",
-    );
-}
-
-#[test]
-fn a_named_pose_outside_a_limit() {
-    let (p, e) = motion_error(
-        "pose_limit",
-        "robot: robot.yaml\nposes:\n  wide: {a: 0, b: -1}\n  bad: {b: 1.0}\nunits: rad\nkeyframes:\n  - pose: wide\n",
-    );
-    expect(
-        &e,
-        &p,
-        3,
-        19,
-        "poses.wide.b",
-        "-1 rad is outside the limits of joint `b`",
-    );
-}
-
-#[test]
-fn times_must_increase() {
-    let (p, e) = motion_error(
-        "kf_time",
-        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 2, pose: {a: 5}}\n  - {at: 1.5, pose: {a: 0}}\n",
-    );
-    expect(
-        &e,
-        &p,
-        5,
-        10,
-        "keyframes[2].at",
-        "1.5 s is not after keyframe 1 at 2 s",
-    );
-}
-
-#[test]
-fn the_motion_rate_is_checked_against_the_bus() {
-    let (p, e) = motion_error(
-        "m_rate",
-        "robot: robot.yaml\nrate: 9000\nkeyframes:\n  - pose: {a: 0}\n",
-    );
-    expect(&e, &p, 2, 7, "rate", "bus `bus`: 9000 Hz cannot be met");
+fn motion_errors_name_the_file_line_column_and_field() {
+    let cases = [
+        // a keyframe outside a limit names the joint and limit
+        (
+            "kf_limit",
+            "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10, b: 50}\n",
+            (4, 22),
+            "keyframes[1].pose.b",
+            "keyframe 1: 50 deg is outside the limits of joint `b` [-45, 45]",
+        ),
+        // a joint the robot lacks points at its name
+        (
+            "kf_joint",
+            "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose:\n      a: 10\n      elbow: 5\n",
+            (6, 7),
+            "keyframes[1].pose.elbow",
+            "has no joint `elbow` (joints: a, b)",
+        ),
+        // an unknown pose name
+        (
+            "kf_pose",
+            "robot: robot.yaml\nposes:\n  home: {a: 0}\nkeyframes:\n  - pose: home\n  - pose: hoem\n",
+            (6, 11),
+            "keyframes[1].pose",
+            "unknown pose `hoem` (poses: home)",
+        ),
+        // a named pose outside a limit
+        (
+            "pose_limit",
+            "robot: robot.yaml\nposes:\n  wide: {a: 0, b: -1}\n  bad: {b: 1.0}\nunits: rad\nkeyframes:\n  - pose: wide\n",
+            (3, 19),
+            "poses.wide.b",
+            "-1 rad is outside the limits of joint `b`",
+        ),
+        // times must increase
+        (
+            "kf_time",
+            "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 2, pose: {a: 5}}\n  - {at: 1.5, pose: {a: 0}}\n",
+            (5, 10),
+            "keyframes[2].at",
+            "1.5 s is not after keyframe 1 at 2 s",
+        ),
+        // the motion rate is checked against the bus
+        (
+            "m_rate",
+            "robot: robot.yaml\nrate: 9000\nkeyframes:\n  - pose: {a: 0}\n",
+            (2, 7),
+            "rate",
+            "bus `bus`: 9000 Hz cannot be met",
+        ),
+        // a repeat of zero
+        (
+            "repeat",
+            "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\nrepeat: 0\n",
+            (4, 9),
+            "repeat",
+            "at least 1",
+        ),
+    ];
+    for (test, motion, (line, column), field, reason) in cases {
+        let (p, e) = motion_error(test, motion);
+        expect(&e, &p, line, column, field, reason);
+    }
 }
 
 #[test]
@@ -333,15 +283,6 @@ fn a_motion_without_robot_asks_for_one() {
         "{e}"
     );
     assert!(e.to_string().contains("--robot"));
-}
-
-#[test]
-fn a_repeat_of_zero() {
-    let (p, e) = motion_error(
-        "repeat",
-        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\nrepeat: 0\n",
-    );
-    expect(&e, &p, 4, 9, "repeat", "at least 1");
 }
 
 #[test]

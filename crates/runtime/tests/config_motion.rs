@@ -1,18 +1,14 @@
 //! Motion files resolve against their robot: named and partial poses,
 //! inherited values, options, relative robot paths and overrides.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::PathBuf;
 
 use servobus_runtime::config::{load_motion, Interpolation, OnLimit, Units};
 
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("config_motion")
-        .join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+    common::temp_file(&format!("config_motion/{dir}"), name, text)
 }
 
 const ROBOT: &str = "\

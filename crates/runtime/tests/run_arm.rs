@@ -2,17 +2,13 @@
 
 mod common;
 
-use servobus_runtime::{Finish, RunOptions, VirtualRun};
+use servobus_runtime::{Finish, VirtualRun};
 
 #[test]
 fn arm_wave_plays_end_to_end_at_exactly_the_requested_rate() {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _sims) = common::sim_buses(&robot);
-    let options = RunOptions {
-        telemetry_capacity: 0,
-        ..RunOptions::default()
-    };
-    let report = VirtualRun::new(&robot, path, buses, options)
+    let report = VirtualRun::new(&robot, path, buses, common::quiet())
         .expect("starts")
         .run();
     println!("{}", serde_json::to_string_pretty(&report).unwrap());

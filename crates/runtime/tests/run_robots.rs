@@ -4,12 +4,25 @@
 
 mod common;
 
-use servobus_runtime::config::{load_motion, plan_motion};
+use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::{Command, Finish, Report, RunOptions, VirtualRun};
+use servobus_trajectory::Trajectory;
 
-fn quiet() -> RunOptions {
+/// Plays `path` to its end on `robot`'s simulated buses (every servo at
+/// mid-range) and prints the report.
+fn play(robot: &Robot, path: Trajectory) -> Report {
+    let (buses, _) = common::sim_buses(robot);
+    let r = VirtualRun::new(robot, path, buses, common::quiet())
+        .expect("starts")
+        .run();
+    show(&r);
+    r
+}
+
+/// Options that keep the telemetry of a run driven by [`common::record`].
+fn recorded() -> RunOptions {
     RunOptions {
-        telemetry_capacity: 0,
+        telemetry_capacity: 256,
         ..RunOptions::default()
     }
 }
@@ -31,11 +44,7 @@ fn show(r: &Report) {
 #[test]
 fn the_arm_plays_pick_and_place_within_half_a_degree_rms() {
     let (path, robot) = common::motion("arm-pick-place.yaml");
-    let (buses, _) = common::sim_buses(&robot);
-    let r = VirtualRun::new(&robot, path, buses, quiet())
-        .expect("starts")
-        .run();
-    show(&r);
+    let r = play(&robot, path);
     assert_eq!(r.finish, Finish::Completed);
     assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
     assert_eq!(
@@ -48,18 +57,14 @@ fn the_arm_plays_pick_and_place_within_half_a_degree_rms() {
 
 #[test]
 fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
-    let play = |robot_file: &str| {
+    let play_on = |robot_file: &str| {
         let (m, robot) = load_motion(
             &common::config("motions/hexapod-tripod.yaml"),
             Some(&common::config(robot_file)),
         )
         .expect("loads");
         let path = plan_motion(&m, &robot).expect("plans");
-        let (buses, _) = common::sim_buses(&robot);
-        let r = VirtualRun::new(&robot, path, buses, quiet())
-            .expect("starts")
-            .run();
-        show(&r);
+        let r = play(&robot, path);
         assert_eq!(r.finish, Finish::Completed);
         assert_eq!(r.achieved_rate_hz, 100.0);
         assert_eq!((r.overruns, r.clamps, r.missed_replies), (0, 0, 0));
@@ -67,8 +72,8 @@ fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
         assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
         r
     };
-    let one = play("robots/hexapod.yaml");
-    let two = play("robots/hexapod-2bus.yaml");
+    let one = play_on("robots/hexapod.yaml");
+    let two = play_on("robots/hexapod-2bus.yaml");
     // In step: both buses ran every cycle, and the same number as one bus.
     assert_eq!(two.buses.len(), 2);
     assert!(two.buses.iter().all(|b| b.cycles == two.cycles));
@@ -85,11 +90,7 @@ fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
 #[test]
 fn the_scs_robot_reads_servo_by_servo() {
     let (path, robot) = common::motion("scs-mini-nod.yaml");
-    let (buses, _) = common::sim_buses(&robot);
-    let r = VirtualRun::new(&robot, path, buses, quiet())
-        .expect("starts")
-        .run();
-    show(&r);
+    let r = play(&robot, path);
     assert_eq!(r.finish, Finish::Completed);
     assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
     assert_eq!((r.overruns, r.missed_replies), (0, 0));
@@ -108,11 +109,7 @@ fn the_scs_robot_reads_servo_by_servo() {
 fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report, common::Recorded) {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _) = common::sim_buses_at(&robot, &path);
-    let options = RunOptions {
-        telemetry_capacity: 256,
-        ..RunOptions::default()
-    };
-    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let mut run = VirtualRun::new(&robot, path, buses, recorded()).expect("starts");
     let tx = run.commands();
     let mut command = Some(command);
     let rec = common::record(&mut run, 20_000, |k| {
@@ -170,12 +167,8 @@ fn a_replacement_mid_motion_is_continuous() {
 fn pause_holds_on_the_path_and_resume_continues() {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _) = common::sim_buses_at(&robot, &path);
-    let options = RunOptions {
-        telemetry_capacity: 256,
-        ..RunOptions::default()
-    };
     let plain = (path.duration() / 0.005) as u64;
-    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let mut run = VirtualRun::new(&robot, path, buses, recorded()).expect("starts");
     let tx = run.commands();
     let rec = common::record(&mut run, 20_000, |k| {
         if k == 300 {
@@ -207,8 +200,7 @@ fn play_during_the_approach_starts_the_path_where_the_approach_ends() {
     let (buses, _) = common::sim_buses(&robot);
     let options = RunOptions {
         autoplay: false,
-        telemetry_capacity: 256,
-        ..RunOptions::default()
+        ..recorded()
     };
     let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
     let tx = run.commands();

@@ -5,7 +5,19 @@
 
 mod common;
 
-use servobus_runtime::{spawn, Command, Finish, RunOptions, Telemetry};
+use servobus_runtime::{spawn, Command, Finish, RunOptions, Runner, Telemetry};
+
+/// arm-wave on the threaded runner, waiting for Play so that nothing ends
+/// before a test's commands are in.
+fn arm_wave_waiting_for_play() -> Runner {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _) = common::sim_buses(&robot);
+    let options = RunOptions {
+        autoplay: false,
+        ..common::quiet()
+    };
+    spawn(&robot, path, buses, options).expect("starts")
+}
 
 #[test]
 fn the_threaded_runner_plays_the_two_bus_hexapod_and_reports() {
@@ -43,15 +55,7 @@ fn the_threaded_runner_plays_the_two_bus_hexapod_and_reports() {
 
 #[test]
 fn a_stop_command_reaches_the_threaded_runner() {
-    let (path, robot) = common::motion("arm-wave.yaml");
-    let (buses, _) = common::sim_buses(&robot);
-    let options = RunOptions {
-        telemetry_capacity: 0,
-        // Wait for Play, so that nothing ends before the commands are in.
-        autoplay: false,
-        ..RunOptions::default()
-    };
-    let runner = spawn(&robot, path, buses, options).expect("starts");
+    let runner = arm_wave_waiting_for_play();
     // The bus thread runs at CPU speed on its manual clock. The Stop goes
     // first, stamped to a cycle: Play can only arrive after it, so the Stop
     // is pending by the time the path starts and takes effect at its cycle
@@ -66,14 +70,7 @@ fn a_stop_command_reaches_the_threaded_runner() {
 
 #[test]
 fn a_threaded_run_waiting_for_play_is_abandoned_when_no_sender_is_left() {
-    let (path, robot) = common::motion("arm-wave.yaml");
-    let (buses, _) = common::sim_buses(&robot);
-    let options = RunOptions {
-        telemetry_capacity: 0,
-        autoplay: false,
-        ..RunOptions::default()
-    };
-    let runner = spawn(&robot, path, buses, options).expect("starts");
+    let runner = arm_wave_waiting_for_play();
     // join drops the last sender: the run can never start, and ends.
     let report = runner.join().expect("joins");
     assert_eq!(report.finish, Finish::Abandoned);

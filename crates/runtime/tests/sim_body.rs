@@ -8,7 +8,7 @@ use std::time::Duration;
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::ConfigError;
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
-use servobus_runtime::{RunOptions, VirtualRun};
+use servobus_runtime::VirtualRun;
 use servobus_trajectory::JointState;
 
 /// Ticks per degree of an STS3215.
@@ -89,22 +89,12 @@ fn without_a_mounting_the_truth_is_the_robot_files_frame() {
     // keyframe says, in the truth's physical angles.
     let (path, robot) = common::motion("arm-wave.yaml");
     let truth = new_truth(&robot);
-    let mut start = vec![JointState::default(); robot.joint_count()];
-    path.sample(0.0, &mut start);
-    let pose: Vec<f64> = start
-        .iter()
-        .map(|s| robot.units.from_rad(s.position))
-        .collect();
     let sim = SimRobot::builder(&robot)
-        .pose(&pose)
+        .pose(&common::start_pose(&robot, &path))
         .truth(&truth)
         .build()
         .expect("simulates");
-    let options = RunOptions {
-        telemetry_capacity: 0,
-        ..RunOptions::default()
-    };
-    let report = VirtualRun::new(&robot, path.clone(), sim.driver_buses(), options)
+    let report = VirtualRun::new(&robot, path.clone(), sim.driver_buses(), common::quiet())
         .expect("starts")
         .run();
     assert!(report.cycles > 100);

@@ -10,7 +10,7 @@ use servobus_driver::ManualClock;
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::sim::{new_truth, Hand, SimRobot};
 use servobus_runtime::teach::{motion_yaml, reduce, StillCapture, Teacher, TimedPose};
-use servobus_runtime::{RunOptions, VirtualRun};
+use servobus_runtime::VirtualRun;
 use servobus_sim::{SimBus, Truth};
 
 /// The SO-101's rest pose, deg.
@@ -29,10 +29,19 @@ fn pose_keys(t: f64, p: &[f64]) -> (f64, Vec<(usize, f64)>) {
     (t, p.iter().copied().enumerate().collect())
 }
 
-fn teacher(sim: &SimRobot, robot: &Robot) -> Teacher<SimBus, ManualClock> {
+/// The arm moved by a hand through `keys`, and a teacher on it with the
+/// torque off (the simulator is returned to keep it alive with the teacher).
+fn hand_guided(
+    robot: &Robot,
+    keys: &[(f64, Vec<(usize, f64)>)],
+) -> (SimRobot, Teacher<SimBus, ManualClock>) {
+    let sim = SimRobot::builder(robot)
+        .hand(Hand::from_keyframes(robot, keys))
+        .build()
+        .expect("simulates");
     let mut t = Teacher::new(robot, sim.driver_buses(), &[]).expect("a teacher");
     t.release().expect("torque off");
-    t
+    (sim, t)
 }
 
 /// Plays `yaml` (a taught motion) on a fresh arm at `start`, returning the
@@ -51,11 +60,7 @@ fn play(robot: &Robot, yaml: &str, start: &[f64], name: &str) -> (Truth, Duratio
         .truth(&truth)
         .build()
         .expect("simulates");
-    let options = RunOptions {
-        telemetry_capacity: 0,
-        ..RunOptions::default()
-    };
-    let run = VirtualRun::new(robot, path, sim.driver_buses(), options).expect("starts");
+    let run = VirtualRun::new(robot, path, sim.driver_buses(), common::quiet()).expect("starts");
     let start_time = run.start();
     run.run();
     sim.buses()[0].clock().advance(Duration::from_millis(500));
@@ -79,12 +84,7 @@ fn pose_and_pause_with_the_hand_then_play_passes_every_keyframe() {
         keys.push(pose_keys(t + 1.0, p));
         keys.push(pose_keys(t + 2.5, p));
     }
-    let hand = Hand::from_keyframes(&robot, &keys);
-    let sim = SimRobot::builder(&robot)
-        .hand(hand)
-        .build()
-        .expect("simulates");
-    let mut teacher = teacher(&sim, &robot);
+    let (_sim, mut teacher) = hand_guided(&robot, &keys);
     let start = teacher.pose().expect("reads");
     let mut capture = StillCapture::new(&start, robot.units);
     let mut taught: Vec<TimedPose> = Vec::new();
@@ -123,12 +123,7 @@ fn continuous_take_reduces_to_few_keyframes_and_plays_back_within_a_degree() {
     for (k, p) in POSES.iter().enumerate() {
         keys.push(pose_keys(2.0 * (k + 1) as f64, p));
     }
-    let hand = Hand::from_keyframes(&robot, &keys);
-    let sim = SimRobot::builder(&robot)
-        .hand(hand)
-        .build()
-        .expect("simulates");
-    let mut teacher = teacher(&sim, &robot);
+    let (_sim, mut teacher) = hand_guided(&robot, &keys);
     let period = Duration::from_secs_f64(1.0 / robot.rate_hz);
     let mut samples: Vec<TimedPose> = Vec::new();
     let mut t = Duration::ZERO;

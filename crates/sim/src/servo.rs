@@ -403,13 +403,20 @@ impl SimServo {
                 _ => factory[a],
             };
         }
+        self.joint.stalled_s = 0.0;
+        self.restart();
+    }
+
+    /// What a power cycle and a RESET both do once the table is set: forget
+    /// the held REG WRITE, the goal, a timed move and latched errors, hold
+    /// where the shaft is, and show the new table.
+    fn restart(&mut self) {
         self.pending = None;
         self.goal_given = false;
         self.timed_speed = None;
         self.latched = 0;
         self.joint.ref_pos = self.joint.pos;
         self.joint.ref_vel = 0.0;
-        self.joint.stalled_s = 0.0;
         self.update_flags();
         self.sync_outputs();
     }
@@ -592,14 +599,7 @@ impl SimServo {
         self.table = self.model.factory_table();
         self.table[usize::from(addr::ID)] = id;
         self.saved = self.table.clone();
-        self.pending = None;
-        self.goal_given = false;
-        self.timed_speed = None;
-        self.latched = 0;
-        self.joint.ref_pos = self.joint.pos;
-        self.joint.ref_vel = 0.0;
-        self.update_flags();
-        self.sync_outputs();
+        self.restart();
     }
 
     fn lock_open(&self) -> bool {

@@ -82,3 +82,27 @@ pub(crate) fn validate_all(limits: &[JointLimits]) -> Result<(), PlanError> {
         .enumerate()
         .try_for_each(|(j, l)| l.validate(j))
 }
+
+/// Checks keyframe `keyframe`'s positions, one per joint: finite and within
+/// each joint's position limits.
+pub(crate) fn check_keyframe(
+    keyframe: usize,
+    positions: &[f64],
+    limits: &[JointLimits],
+) -> Result<(), PlanError> {
+    for (joint, (&p, l)) in positions.iter().zip(limits).enumerate() {
+        if !p.is_finite() {
+            return Err(PlanError::NotFinite { keyframe, joint });
+        }
+        if p < l.min_position || p > l.max_position {
+            return Err(PlanError::OutOfRange {
+                keyframe,
+                joint,
+                position: p,
+                min: l.min_position,
+                max: l.max_position,
+            });
+        }
+    }
+    Ok(())
+}

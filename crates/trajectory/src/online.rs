@@ -100,15 +100,7 @@ pub fn stop(limits: &[JointLimits], current: &[JointState]) -> Result<Trajectory
         let mut ph = Phases::new();
         stop_phases(s.velocity, s.acceleration, lim, &mut ph);
         let mut pieces = Vec::with_capacity(ph.n + 1);
-        let (t, p, _, _) = ph.emit(
-            0.0,
-            s.position,
-            s.velocity,
-            s.acceleration,
-            1.0,
-            lim.max_jerk.is_some(),
-            &mut pieces,
-        );
+        let (t, p, _, _) = ph.emit_from(0.0, s, lim, &mut pieces);
         duration = duration.max(t);
         hold.push(p);
         per_joint.push(pieces);
@@ -185,15 +177,7 @@ fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
     // Option B: stop first, then move rest to rest.
     stop_phases(s.velocity, s.acceleration, lim, &mut pre);
     let mut scratch = Vec::new();
-    let (t, p, _, _) = pre.emit(
-        0.0,
-        s.position,
-        s.velocity,
-        s.acceleration,
-        1.0,
-        finite,
-        &mut scratch,
-    );
+    let (t, p, _, _) = pre.emit_from(0.0, s, lim, &mut scratch);
     let d = target - p;
     let seg = Segment1 {
         d: d.abs(),
@@ -270,15 +254,7 @@ pub fn retarget(
     for ((p, s), lim) in plans.iter().zip(current).zip(limits) {
         let finite = lim.max_jerk.is_some();
         let mut pieces = Vec::with_capacity(p.pre.n + 8);
-        let (t, x, v, _) = p.pre.emit(
-            0.0,
-            s.position,
-            s.velocity,
-            s.acceleration,
-            1.0,
-            finite,
-            &mut pieces,
-        );
+        let (t, x, v, _) = p.pre.emit_from(0.0, s, lim, &mut pieces);
         let prof = p.seg.stretched(lim, p.fastest, duration - p.pre_time);
         let mut main = Phases::new();
         if p.seg.d > 0.0 || p.seg.v0 > 0.0 {

@@ -2,7 +2,7 @@
 //! untimed sections and joins them at rest.
 
 use crate::error::{PlanError, Quantity};
-use crate::limits::validate_all;
+use crate::limits::{check_keyframe, validate_all};
 use crate::piece::Piece;
 use crate::spline::{self, TimedShape};
 use crate::timed;
@@ -119,23 +119,7 @@ fn validate(
                 actual: kf.positions.len(),
             });
         }
-        for (j, (&p, l)) in kf.positions.iter().zip(limits).enumerate() {
-            if !p.is_finite() {
-                return Err(PlanError::NotFinite {
-                    keyframe: k,
-                    joint: j,
-                });
-            }
-            if p < l.min_position || p > l.max_position {
-                return Err(PlanError::OutOfRange {
-                    keyframe: k,
-                    joint: j,
-                    position: p,
-                    min: l.min_position,
-                    max: l.max_position,
-                });
-            }
-        }
+        check_keyframe(k, &kf.positions, limits)?;
         if let Some(at) = kf.at {
             if !at.is_finite() {
                 return Err(PlanError::NotFinite {

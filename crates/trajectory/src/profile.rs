@@ -25,7 +25,7 @@
 //! Velocity never changes sign inside a segment, so a joint never overshoots
 //! the segment's end positions.
 
-use crate::JointLimits;
+use crate::{JointLimits, JointState};
 
 /// A velocity ramp of size `dv >= 0`: jerk phases of `tj`, a constant
 /// acceleration phase of `ta`, reaching acceleration `peak`.
@@ -631,6 +631,19 @@ impl Phases {
         self.push(r.tj, jj, 0.0);
         self.push(r.ta, 0.0, s * r.peak);
         self.push(r.tj, -jj, s * r.peak);
+    }
+
+    /// [`emit`](Self::emit) from state `x` at time `t`, not mirrored, with a
+    /// finite jerk exactly when `lim` has one.
+    pub fn emit_from(
+        &self,
+        t: f64,
+        x: &JointState,
+        lim: &JointLimits,
+        out: &mut Vec<crate::piece::Piece>,
+    ) -> (f64, f64, f64, f64) {
+        let finite = lim.max_jerk.is_some();
+        self.emit(t, x.position, x.velocity, x.acceleration, 1.0, finite, out)
     }
 
     /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the

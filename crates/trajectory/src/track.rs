@@ -24,7 +24,7 @@
 //! only steps and noise beyond them are rounded off.
 
 use crate::error::{PlanError, Quantity};
-use crate::limits::validate_all;
+use crate::limits::{check_keyframe, validate_all};
 use crate::online::stop_phases;
 use crate::piece::Piece;
 use crate::profile::Phases;
@@ -154,23 +154,7 @@ fn validate(limits: &[JointLimits], times: &[f64], samples: &[Vec<f64>]) -> Resu
                 previous: times[i - 1],
             });
         }
-        for (j, (&p, l)) in s.iter().zip(limits).enumerate() {
-            if !p.is_finite() {
-                return Err(PlanError::NotFinite {
-                    keyframe: i,
-                    joint: j,
-                });
-            }
-            if p < l.min_position || p > l.max_position {
-                return Err(PlanError::OutOfRange {
-                    keyframe: i,
-                    joint: j,
-                    position: p,
-                    min: l.min_position,
-                    max: l.max_position,
-                });
-            }
-        }
+        check_keyframe(i, s, limits)?;
     }
     Ok(())
 }
@@ -229,20 +213,16 @@ fn follow(
 
 /// Where the quickest stop from `x` ends.
 fn stop_position(lim: &JointLimits, x: JointState, scratch: &mut Vec<Piece>) -> f64 {
+    quickest_stop(lim, x, 0.0, scratch)
+}
+
+/// Replaces `scratch` with the pieces of the quickest stop from `x`, starting
+/// at time `t`; returns where it ends.
+fn quickest_stop(lim: &JointLimits, x: JointState, t: f64, scratch: &mut Vec<Piece>) -> f64 {
     let mut ph = Phases::new();
     stop_phases(x.velocity, x.acceleration, lim, &mut ph);
     scratch.clear();
-    let finite = lim.max_jerk.is_some();
-    ph.emit(
-        0.0,
-        x.position,
-        x.velocity,
-        x.acceleration,
-        1.0,
-        finite,
-        scratch,
-    )
-    .1
+    ph.emit_from(t, &x, lim, scratch).1
 }
 
 /// One step of the pursuit from `x` at time `t`; appends its pieces and
@@ -296,19 +276,8 @@ fn pursue(
         }
     }
     // Brake along the quickest stop (first `dt` of it), then hold.
-    let mut ph = Phases::new();
-    stop_phases(x.velocity, x.acceleration, lim, &mut ph);
-    scratch.clear();
+    quickest_stop(lim, x, t, scratch);
     let finite = lim.max_jerk.is_some();
-    ph.emit(
-        t,
-        x.position,
-        x.velocity,
-        x.acceleration,
-        1.0,
-        finite,
-        scratch,
-    );
     let mut end = JointState::at_rest(x.position);
     let mut covered = t;
     for p in scratch.iter() {

@@ -400,17 +400,16 @@ impl Trajectory {
 
 #[inline(always)]
 fn local_state(p: &Piece, x: f64) -> JointState {
-    let (position, velocity, acceleration) = p.eval_local(x);
-    JointState {
-        position,
-        velocity,
-        acceleration,
-    }
+    joint_state(p.eval_local(x))
 }
 
 #[inline(always)]
 fn state(p: &Piece, t: f64) -> JointState {
-    let (position, velocity, acceleration) = p.eval(t);
+    joint_state(p.eval(t))
+}
+
+#[inline(always)]
+fn joint_state((position, velocity, acceleration): (f64, f64, f64)) -> JointState {
     JointState {
         position,
         velocity,

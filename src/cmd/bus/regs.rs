@@ -26,13 +26,13 @@ fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
 
 /// Runs `servobus read`.
 pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
+    let (mut bus, _) = open_servo(&args.servo)?;
     let series = bus.settings().series;
     let reg = register(series, &args.register)?;
-    let (value, flags) = bus.read_register(args.id, reg)?;
+    let (value, flags) = bus.read_register(args.servo.id, reg)?;
     if args.json {
         let out = serde_json::json!({
-            "id": args.id,
+            "id": args.servo.id,
             "register": reg.name,
             "address": reg.address,
             "size": reg.size,
@@ -45,7 +45,7 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
         println!("{} = {}", reg.name, human_value(value, reg.unit));
     }
     if !flags.is_ok() {
-        eprintln!("warning: servo {} reports {flags}", args.id);
+        eprintln!("warning: servo {} reports {flags}", args.servo.id);
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -63,7 +63,7 @@ fn refuse_taken(bus: &mut SerialBus, new_id: u8) -> anyhow::Result<()> {
 
 /// Runs `servobus write`.
 pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
+    let (mut bus, _) = open_servo(&args.servo)?;
     let series = bus.settings().series;
     let reg = register(series, &args.register)?;
     let (lo, hi) = reg.range();
@@ -79,15 +79,15 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
     match reg.access {
         Access::ReadOnly => return Err(input(format!("{} is read-only", reg.name))),
         Access::Ram => {
-            bus.write_register(args.id, reg, value)?;
+            bus.write_register(args.servo.id, reg, value)?;
             println!("{} = {value} (RAM: lost at power-off)", reg.name);
-            warn_if_torque_off(&mut bus, args.id, reg, &args.port.port);
+            warn_if_torque_off(&mut bus, args.servo.id, reg, &args.servo.port.port);
         }
         Access::Eeprom => {
             if reg.address == addr::ID {
                 let new_id = u8::try_from(value).unwrap_or(u8::MAX);
                 check_id(new_id)?;
-                if new_id != args.id {
+                if new_id != args.servo.id {
                     refuse_taken(&mut bus, new_id)?;
                 }
             }
@@ -99,7 +99,7 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
             let bytes = &mut buf[..usize::from(reg.size)];
             reg.encode(value, series.byte_order(), bytes)
                 .with_context(|| format!("{} cannot hold {value}", reg.name))?;
-            let w = bus.write_eeprom(args.id, reg.address, bytes)?;
+            let w = bus.write_eeprom(args.servo.id, reg.address, bytes)?;
             println!(
                 "{} = {value} on servo {} (unlocked, written, verified, locked)",
                 reg.name, w.id
@@ -148,16 +148,16 @@ fn warn_if_torque_off(bus: &mut SerialBus, id: u8, reg: &Register, port: &str) {
 /// Runs `servobus set-id`.
 pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
     check_id(args.new_id)?;
-    let (mut bus, _) = open_servo(&args.port, args.baud, args.id)?;
-    if args.new_id == args.id {
-        println!("servo {} already has ID {}", args.id, args.new_id);
+    let (mut bus, _) = open_servo(&args.servo)?;
+    if args.new_id == args.servo.id {
+        println!("servo {} already has ID {}", args.servo.id, args.new_id);
         return Ok(ExitCode::SUCCESS);
     }
     refuse_taken(&mut bus, args.new_id)?;
-    let w = bus.write_eeprom(args.id, addr::ID, &[args.new_id])?;
+    let w = bus.write_eeprom(args.servo.id, addr::ID, &[args.new_id])?;
     bus.ping(w.id)
         .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
-    println!("servo {} is now ID {} (persisted)", args.id, w.id);
+    println!("servo {} is now ID {} (persisted)", args.servo.id, w.id);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -7,14 +7,25 @@ use std::time::Duration;
 use servobus_driver::{Bus, ManualClock};
 use servobus_runtime::config::{load_motion, load_robot, plan_motion, JointMap, Robot};
 use servobus_runtime::sim::SimRobot;
+use servobus_runtime::RunOptions;
 use servobus_sim::SimBus;
-use servobus_trajectory::Trajectory;
+use servobus_trajectory::{JointState, Trajectory};
 
 /// A file under the workspace's `configs/`.
 pub fn config(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../configs")
         .join(rel)
+}
+
+/// Writes `text` to the file `name` in `dir` (a folder of its own under
+/// Cargo's temporary directory for tests, made if missing).
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join(name);
+    std::fs::write(&p, text).expect("temp file");
+    p
 }
 
 /// A robot file under `configs/robots/`.
@@ -63,19 +74,30 @@ pub fn sim_buses_at(
     robot: &Robot,
     path: &Trajectory,
 ) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
-    use servobus_trajectory::JointState;
-    let mut start = vec![JointState::default(); robot.joint_count()];
-    path.sample(0.0, &mut start);
-    let pose: Vec<f64> = start
-        .iter()
-        .map(|s| robot.units.from_rad(s.position))
-        .collect();
     split(
         SimRobot::builder(robot)
-            .pose(&pose)
+            .pose(&start_pose(robot, path))
             .build()
             .expect("the robot simulates"),
     )
+}
+
+/// Where `path` starts, per joint in the robot's units.
+pub fn start_pose(robot: &Robot, path: &Trajectory) -> Vec<f64> {
+    let mut start = vec![JointState::default(); robot.joint_count()];
+    path.sample(0.0, &mut start);
+    start
+        .iter()
+        .map(|s| robot.units.from_rad(s.position))
+        .collect()
+}
+
+/// Run options without telemetry, for tests that read only the report.
+pub fn quiet() -> RunOptions {
+    RunOptions {
+        telemetry_capacity: 0,
+        ..RunOptions::default()
+    }
 }
 
 /// Every telemetry cycle sample of a run, collected by stepping it.

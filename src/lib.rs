@@ -1,6 +1,10 @@
-//! The `servobus` package: the command line, and the robots and motions
-//! built into it ([`builtin`]). The glue between a robot file
+//! The `servobus` package: the command line, the robots and motions built
+//! into it ([`builtin`]), and the bus checks of `servobus doctor` and the
+//! live view of `servobus monitor`, kept in the library so that they are
+//! tested on the simulator in virtual time. The glue between a robot file
 //! and the built-in simulator lives in [`servobus_runtime::sim`].
 #![warn(missing_docs)]
 
 pub mod builtin;
+pub mod doctor;
+pub mod monitor;

@@ -452,6 +452,19 @@ fn open_servo(servo: &ServoArgs) -> anyhow::Result<(SerialBus, Found)> {
             port.port
         )
     })?;
+    // A servo at a status level that leaves WRITE unanswered (0 on STS,
+    // below 2 on SCS) is written without waiting for replies, so that
+    // `servobus write ... status_level 1` (doctor's fix) can reach it.
+    let mut level = [0u8; 1];
+    if bus.read(id, addr::STATUS_LEVEL, &mut level).is_ok() {
+        let series = bus.settings().series;
+        let s = bus
+            .settings()
+            .with_replies(servobus_driver::StatusLevel::from_register(
+                series, level[0],
+            ));
+        bus.set_settings(s);
+    }
     Ok((bus, found))
 }
 

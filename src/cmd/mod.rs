@@ -16,9 +16,11 @@ mod bus;
 mod calibrate;
 mod decode;
 mod docs;
+mod doctor;
 pub mod exit;
 mod init;
 mod list;
+mod monitor;
 mod plan;
 mod play;
 mod sim;
@@ -78,6 +80,10 @@ enum Command {
     Man(docs::ManArgs),
     /// Pose the robot by hand (torque off) and write a motion file.
     Teach(teach::Args),
+    /// Check a bus against the robot file and the usual set-up mistakes.
+    Doctor(doctor::Args),
+    /// Watch every servo live: position, load, voltage, temperature, flags.
+    Monitor(monitor::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -125,6 +131,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Completions(args) => docs::completions(args),
         Command::Man(args) => docs::man(args),
         Command::Teach(args) => teach::run(args),
+        Command::Doctor(args) => doctor::run(args),
+        Command::Monitor(args) => monitor::run(args),
     }
 }
 

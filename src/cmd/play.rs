@@ -83,6 +83,10 @@ pub struct Args {
     /// where not permitted, a warning and normal scheduling.
     #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
     pub fifo: Option<i32>,
+    /// Show the live servo view of `servobus monitor` while playing, from
+    /// the run's telemetry (no extra bus traffic).
+    #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
+    pub monitor: bool,
 }
 
 /// Where the run happens.
@@ -219,7 +223,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         limits: servobus_runtime::config::joint_limits(&robot),
         settle: SETTLE.as_secs_f64(),
     };
-    let outcome = follow(&runner, &args, log, &shown, units, duration, &interrupts);
+    let outcome = if args.monitor {
+        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
+    } else {
+        follow(&runner, &args, log, &shown, units, duration, &interrupts)
+    };
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);
     join_servers(servers);

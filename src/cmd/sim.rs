@@ -21,6 +21,10 @@ Fault injection: comma-separated items, applied to every reply independently.
   vanish=ID     servo ID is disconnected (repeatable)
   block=ID      servo ID's shaft is blocked: overload after the protection time (repeatable)
   overheat=ID   servo ID starts at its temperature limit (repeatable)
+  supply=V      every servo's supply at V volts; supply=ID:V for one servo
+  firmware=ID:MAJOR.MINOR   servo ID reports another firmware version
+  baud=ID:RATE  servo ID listens at another baud rate (e.g. 3:115200)
+  duplicate=FROM:TO         servo FROM answers as ID TO (two servos share TO)
 Example: --faults drop=0.01,corrupt=0.01,seed=7";
 
 /// Arguments of `servobus sim`.

@@ -8,6 +8,7 @@
 use std::time::Duration;
 
 use serde::Serialize;
+use servobus_protocol::StatusFlags;
 
 use crate::fault::Fault;
 
@@ -37,6 +38,10 @@ pub struct JointSample {
     pub stale: bool,
     /// Whether the goal was clamped to the joint's limits this cycle.
     pub clamped: bool,
+    /// The status flags of the servo's last reply.
+    pub flags: StatusFlags,
+    /// Reads in a row the servo has not answered (0 once it answers).
+    pub missing_reads: u32,
 }
 
 /// One bus's cycle.

@@ -109,18 +109,7 @@ impl Engine {
     }
 
     fn apply_static_faults(&mut self, i: usize) {
-        let s = &mut self.servos[i];
-        let id = s.id();
-        if self.faults.vanish.contains(&id) {
-            s.set_offline(true);
-        }
-        if self.faults.block.contains(&id) {
-            s.set_blocked(true);
-        }
-        if self.faults.overheat.contains(&id) {
-            let limit = f64::from(s.register(crate::addr::MAX_TEMPERATURE));
-            s.set_temperature(limit, limit);
-        }
+        self.faults.apply_to(&mut self.servos[i]);
     }
 
     /// Whether servo `s` hears the bus: connected and at the bus's baud rate

@@ -4,6 +4,8 @@
 use std::str::FromStr;
 use std::time::Duration;
 
+use crate::{addr, SimServo};
+
 /// The faults a [`SimBus`](crate::SimBus) (or the pty server) injects.
 ///
 /// Probabilities apply to each reply a servo sends, independently. Build it
@@ -38,6 +40,17 @@ pub struct Faults {
     pub block: Vec<u8>,
     /// IDs of servos that start at their temperature limit (overheat).
     pub overheat: Vec<u8>,
+    /// Supply voltages in 0.1 V: for one servo (`Some(id)`) or for every
+    /// servo (`None`, applied first so that a servo's own entry wins).
+    pub supply: Vec<(Option<u8>, u8)>,
+    /// Servos reporting another firmware version: `(id, (major, minor))`.
+    pub firmware: Vec<(u8, (u8, u8))>,
+    /// Servos whose baud-rate register (6) holds another index:
+    /// `(id, index)`; they hear the bus only at that rate.
+    pub baud: Vec<(u8, u8)>,
+    /// Servos given another servo's ID: `(from, to)` makes servo `from`
+    /// answer as `to`, so two servos share ID `to` (applied last).
+    pub duplicate: Vec<(u8, u8)>,
 }
 
 impl Default for Faults {
@@ -63,6 +76,10 @@ impl Faults {
             vanish: Vec::new(),
             block: Vec::new(),
             overheat: Vec::new(),
+            supply: Vec::new(),
+            firmware: Vec::new(),
+            baud: Vec::new(),
+            duplicate: Vec::new(),
         }
     }
 
@@ -124,6 +141,67 @@ impl Faults {
         self
     }
 
+    /// The same faults with servo `id`'s supply (or every servo's, for
+    /// `None`) at `decivolts` (0.1 V units).
+    #[must_use]
+    pub fn supply(mut self, id: Option<u8>, decivolts: u8) -> Faults {
+        self.supply.push((id, decivolts));
+        self
+    }
+
+    /// The same faults with servo `id` reporting firmware `major.minor`.
+    #[must_use]
+    pub fn firmware(mut self, id: u8, major: u8, minor: u8) -> Faults {
+        self.firmware.push((id, (major, minor)));
+        self
+    }
+
+    /// The same faults with servo `id` listening at baud-rate index `index`
+    /// (see [`baud_of_index`](crate::baud_of_index)).
+    #[must_use]
+    pub fn baud(mut self, id: u8, index: u8) -> Faults {
+        self.baud.push((id, index));
+        self
+    }
+
+    /// The same faults with servo `from` answering as ID `to`.
+    #[must_use]
+    pub fn duplicate(mut self, from: u8, to: u8) -> Faults {
+        self.duplicate.push((from, to));
+        self
+    }
+
+    /// Puts the faults that are states of a servo rather than of a reply
+    /// (disconnected, blocked, hot, supply, firmware, baud rate, ID) into
+    /// `servo`. Saved registers (baud rate, ID) are written to its EEPROM,
+    /// as a set-up tool would have left them.
+    pub(crate) fn apply_to(&self, servo: &mut SimServo) {
+        let id = servo.id();
+        if self.vanish.contains(&id) {
+            servo.set_offline(true);
+        }
+        if self.block.contains(&id) {
+            servo.set_blocked(true);
+        }
+        if self.overheat.contains(&id) {
+            let limit = f64::from(servo.register(addr::MAX_TEMPERATURE));
+            servo.set_temperature(limit, limit);
+        }
+        let supply = self.supply.iter().filter(|s| s.0.is_none());
+        for (_, dv) in supply.chain(self.supply.iter().filter(|s| s.0 == Some(id))) {
+            servo.set_supply_voltage(Some(*dv));
+        }
+        for (_, (major, minor)) in self.firmware.iter().filter(|f| f.0 == id) {
+            servo.poke(addr::FIRMWARE_MAJOR, &[*major, *minor]);
+        }
+        for (_, index) in self.baud.iter().filter(|b| b.0 == id) {
+            *servo = servo.clone().with_byte(addr::BAUD_RATE, *index);
+        }
+        for (_, to) in self.duplicate.iter().filter(|d| d.0 == id) {
+            *servo = servo.clone().with_byte(addr::ID, *to);
+        }
+    }
+
     /// Whether any reply can be altered (so the random source is used).
     pub fn any_random(&self) -> bool {
         self.drop > 0.0 || self.corrupt > 0.0 || self.delay > 0.0
@@ -135,7 +213,7 @@ impl Faults {
 #[non_exhaustive]
 pub enum FaultSpecError {
     /// A key the syntax does not have.
-    #[error("unknown fault `{key}` (known: drop, corrupt, delay, delay_us, seed, echo, vanish, block, overheat)")]
+    #[error("unknown fault `{key}` (known: drop, corrupt, delay, delay_us, seed, echo, vanish, block, overheat, supply, firmware, baud, duplicate)")]
     UnknownKey {
         /// The key as written.
         key: String,
@@ -158,7 +236,10 @@ impl FromStr for Faults {
     /// Parses `key=value` items separated by commas:
     /// `drop=P`, `corrupt=P`, `delay=P` (probabilities 0..=1), `delay_us=N`,
     /// `seed=N`, `echo` (or `echo=true`), and `vanish=ID`, `block=ID`,
-    /// `overheat=ID` (repeatable). An empty string means no faults.
+    /// `overheat=ID` (repeatable); `supply=V` (every servo) or
+    /// `supply=ID:V` (volts), `firmware=ID:MAJOR.MINOR`, `baud=ID:RATE`
+    /// (a rate of the servo baud table) and `duplicate=FROM:TO`
+    /// (repeatable). An empty string means no faults.
     fn from_str(spec: &str) -> Result<Faults, FaultSpecError> {
         let mut f = Faults::none();
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -200,6 +281,41 @@ impl FromStr for Faults {
                 "vanish" => f.vanish.push(id()?),
                 "block" => f.block.push(id()?),
                 "overheat" => f.overheat.push(id()?),
+                "supply" => {
+                    let (who, volts) = match value.split_once(':') {
+                        Some((who, v)) => (Some(parse_id(who).ok_or_else(|| bad(SUPPLY))?), v),
+                        None => (None, value),
+                    };
+                    let dv = parse_decivolts(volts).ok_or_else(|| bad(SUPPLY))?;
+                    f.supply.push((who, dv));
+                }
+                "firmware" => {
+                    let parsed = value.split_once(':').and_then(|(who, v)| {
+                        let (major, minor) = v.split_once('.')?;
+                        Some((parse_id(who)?, (major.parse().ok()?, minor.parse().ok()?)))
+                    });
+                    f.firmware
+                        .push(parsed.ok_or_else(|| bad("ID:MAJOR.MINOR, e.g. 3:3.9"))?);
+                }
+                "baud" => {
+                    let parsed = value.split_once(':').and_then(|(who, rate)| {
+                        let rate = rate.parse::<u32>().ok()?;
+                        Some((
+                            parse_id(who)?,
+                            servobus_protocol::registers::baud_index(rate)?,
+                        ))
+                    });
+                    f.baud.push(parsed.ok_or_else(|| {
+                        bad("ID:RATE with a rate of the servo baud table, e.g. 3:115200")
+                    })?);
+                }
+                "duplicate" => {
+                    let parsed = value
+                        .split_once(':')
+                        .and_then(|(from, to)| Some((parse_id(from)?, parse_id(to)?)));
+                    f.duplicate
+                        .push(parsed.ok_or_else(|| bad("FROM:TO servo IDs, e.g. 6:5"))?);
+                }
                 _ => {
                     return Err(FaultSpecError::UnknownKey {
                         key: key.to_owned(),
@@ -209,6 +325,21 @@ impl FromStr for Faults {
         }
         Ok(f)
     }
+}
+
+const SUPPLY: &str = "volts (0..25.5), or ID:volts";
+
+fn parse_id(text: &str) -> Option<u8> {
+    text.trim()
+        .parse::<u8>()
+        .ok()
+        .filter(|&id| id <= servobus_protocol::MAX_ID)
+}
+
+/// Volts as written to 0.1 V units, as the servo's voltage register holds them.
+fn parse_decivolts(text: &str) -> Option<u8> {
+    let v = text.trim().parse::<f64>().ok()?;
+    (0.0..=25.5).contains(&v).then(|| (v * 10.0).round() as u8)
 }
 
 #[cfg(test)]
@@ -244,5 +375,58 @@ mod tests {
             "explode=1".parse::<Faults>(),
             Err(FaultSpecError::UnknownKey { .. })
         ));
+    }
+
+    #[test]
+    fn servo_state_faults_parse_and_refuse_nonsense() {
+        let f: Faults = "supply=5.5,supply=3:13.1,firmware=2:3.9,baud=4:115200,duplicate=6:5"
+            .parse()
+            .unwrap();
+        assert_eq!(
+            f,
+            Faults::none()
+                .supply(None, 55)
+                .supply(Some(3), 131)
+                .firmware(2, 3, 9)
+                .baud(4, 4)
+                .duplicate(6, 5)
+        );
+        for bad in [
+            "supply=30",
+            "supply=x:5",
+            "firmware=2:3",
+            "baud=4:9600",
+            "duplicate=6",
+        ] {
+            assert!(
+                matches!(bad.parse::<Faults>(), Err(FaultSpecError::BadValue { .. })),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn servo_state_faults_change_the_servo() {
+        let faults = Faults::none()
+            .supply(None, 55)
+            .supply(Some(1), 131)
+            .firmware(1, 3, 9)
+            .baud(1, 4)
+            .duplicate(1, 7);
+        let mut one = SimServo::sts3215(1);
+        faults.apply_to(&mut one);
+        assert_eq!(one.register(addr::PRESENT_VOLTAGE), 131);
+        assert_eq!(
+            (one.register(addr::FIRMWARE_MAJOR), one.register(1)),
+            (3, 9)
+        );
+        assert_eq!((one.baud_index(), one.id()), (4, 7));
+        // EEPROM faults survive a power cycle, as a set-up tool's would.
+        one.power_cycle();
+        assert_eq!((one.baud_index(), one.id()), (4, 7));
+        let mut two = SimServo::sts3215(2);
+        faults.apply_to(&mut two);
+        assert_eq!(two.register(addr::PRESENT_VOLTAGE), 55);
+        assert_eq!((two.baud_index(), two.id()), (0, 2));
     }
 }

@@ -79,6 +79,8 @@ impl Publisher {
                     feedback_age: age,
                     stale: age > track.stale_after,
                     clamped: g.clamped,
+                    flags: j.flags,
+                    missing_reads: j.missing,
                 });
             }
             if tx.try_send(Telemetry::Cycle(sample)).is_err() {

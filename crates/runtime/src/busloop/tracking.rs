@@ -52,13 +52,15 @@ pub(crate) struct JointTrack {
     pub error: f64,
     /// Read in this cycle.
     fresh: bool,
-    flags: StatusFlags,
+    /// Status flags of its last reply.
+    pub flags: StatusFlags,
     /// Why the last read of it failed.
     why_missing: Option<MissingReason>,
     pub err: RunningError,
     follow: u32,
     stall: u32,
-    missing: u32,
+    /// Reads in a row it has not answered.
+    pub missing: u32,
 }
 
 impl JointTrack {

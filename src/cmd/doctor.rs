@@ -1,0 +1,255 @@
+//! `servobus doctor`: checks every bus of a robot against its robot file and
+//! the usual set-up mistakes, prints each finding with the command that
+//! fixes it, and with `--fix` applies those fixes (EEPROM with
+//! unlock-write-verify-lock). The checks live in [`servobus::doctor`].
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context;
+use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, PortKind, Target};
+use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
+use servobus_runtime::bus_settings;
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
+
+/// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
+/// process the OS schedules, which costs milliseconds on a busy machine.
+const PTY_LATENCY: Duration = Duration::from_millis(3);
+/// The USB frame an FTDI adapter adds on top of its latency timer.
+const USB_FRAME: Duration = Duration::from_millis(1);
+
+/// Arguments of `servobus doctor`.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Exit status of doctor: 0 nothing wrong, 1 warnings only, 2 errors \
+                        found (or a usage or input error)."
+)]
+pub struct Args {
+    /// The robot file to check the buses against (or a built-in robot's name).
+    #[arg(long, value_parser = super::robot_arg)]
+    pub robot: PathBuf,
+    /// Serial port of the robot's first bus (default: the robot file's
+    /// ports; without any, the built-in simulator).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Calibration file to check the servos against (default: the one the
+    /// robot file names with `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Apply the fixes that are writes (EEPROM with unlock-write-verify-lock),
+    /// then check again.
+    #[arg(long)]
+    pub fix: bool,
+}
+
+/// What was found on one bus.
+struct BusOutcome {
+    name: String,
+    target: Target,
+    first: Examined,
+    fixes: Vec<FixOutcome>,
+    after: Option<Examined>,
+}
+
+impl BusOutcome {
+    /// The findings that stand: after the fixes when there were any.
+    fn standing(&self) -> &[Finding] {
+        self.after
+            .as_ref()
+            .unwrap_or(&self.first)
+            .findings
+            .as_slice()
+    }
+}
+
+/// Runs `servobus doctor`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let robot = load_robot_any_rate_calibrated(&args.robot, args.calibration.as_deref())?;
+    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
+    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
+        *first = Some(port.clone());
+    }
+    let mut outcomes = Vec::new();
+    if ports.iter().all(Option::is_none) {
+        let buses = servobus_runtime::sim::virtual_buses(&robot)?;
+        for (mut bus, cfg) in buses.into_iter().zip(&robot.buses) {
+            let target = Target {
+                port: None,
+                baud: cfg.baud,
+            };
+            outcomes.push(check(
+                &mut bus,
+                &robot,
+                cfg,
+                target,
+                &PortKind::Simulator,
+                args.fix,
+            )?);
+        }
+    } else {
+        for (cfg, port) in robot.buses.iter().zip(&ports) {
+            let Some(port) = port else {
+                eprintln!("warning: bus `{}` has no port: not checked", cfg.name);
+                continue;
+            };
+            let kind = PortKind::of(port);
+            let clock = SystemClock::new();
+            let transport = SerialTransport::open(port, cfg.baud, clock)
+                .with_context(|| format!("bus `{}`: cannot open {port}", cfg.name))?;
+            let latency = match &kind {
+                PortKind::Pty => cfg.latency.max(PTY_LATENCY),
+                PortKind::Serial(Some(ftdi)) => cfg.latency.max(ftdi.latency + USB_FRAME),
+                _ => cfg.latency,
+            };
+            let mut bus = Bus::new(transport, clock, bus_settings(cfg).with_latency(latency));
+            let target = Target {
+                port: Some(port.clone()),
+                baud: cfg.baud,
+            };
+            outcomes.push(check(&mut bus, &robot, cfg, target, &kind, args.fix)?);
+        }
+    }
+    let standing: Vec<Finding> = outcomes
+        .iter()
+        .flat_map(|o| o.standing().iter().cloned())
+        .collect();
+    let status = doctor::exit_status(&standing);
+    if args.json {
+        print_json(&robot, &outcomes, status)?;
+    } else {
+        print_text(&robot, &outcomes, &standing, args.fix);
+    }
+    Ok(ExitCode::from(status))
+}
+
+fn check<T: Transport + BaudSwitch, C: Clock>(
+    bus: &mut Bus<T, C>,
+    robot: &Robot,
+    cfg: &BusConfig,
+    target: Target,
+    kind: &PortKind,
+    fix: bool,
+) -> anyhow::Result<BusOutcome> {
+    let context = || format!("bus `{}`", cfg.name);
+    let first = doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?;
+    let mut fixes = Vec::new();
+    let mut after = None;
+    if fix && first.findings.iter().any(Finding::fixable) {
+        fixes = doctor::apply(bus, &first.findings).with_context(context)?;
+        after = Some(doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?);
+    }
+    Ok(BusOutcome {
+        name: cfg.name.clone(),
+        target,
+        first,
+        fixes,
+        after,
+    })
+}
+
+fn print_findings(findings: &[Finding]) {
+    for f in findings {
+        let who = match (f.id, f.register) {
+            (Some(id), Some(r)) => format!("servo {id} {r}"),
+            (Some(id), None) => format!("servo {id}"),
+            (None, Some(r)) => r.to_string(),
+            (None, None) => format!("bus `{}`", f.bus),
+        };
+        println!(
+            "{:<8} {who}: {}",
+            f.severity.to_string().to_uppercase(),
+            f.problem
+        );
+        if !f.fix.is_empty() {
+            let mark = if f.fixable() { " [--fix]" } else { "" };
+            println!("         fix{mark}: {}", f.fix);
+        }
+    }
+}
+
+fn print_text(robot: &Robot, outcomes: &[BusOutcome], standing: &[Finding], fixed: bool) {
+    for o in outcomes {
+        let port = o.target.port.as_deref().unwrap_or("the built-in simulator");
+        println!(
+            "{} bus `{}` on {port} at {} baud: {} of {} servos read",
+            robot.name,
+            o.name,
+            o.target.baud,
+            o.first.servos.len(),
+            o.first.expected
+        );
+        print_findings(&o.first.findings);
+        for fx in &o.fixes {
+            match &fx.result {
+                Ok(()) => println!("fixed    servo {}: {}", fx.id, fx.command),
+                Err(e) => println!("FAILED   servo {}: {} ({e})", fx.id, fx.command),
+            }
+        }
+        if let Some(after) = &o.after {
+            println!("after the fixes:");
+            print_findings(&after.findings);
+        }
+    }
+    let count = |s| standing.iter().filter(|f| f.severity == s).count();
+    let fixable = standing.iter().filter(|f| f.fixable()).count();
+    let hint = if fixable > 0 && !fixed {
+        format!("; {fixable} can be fixed with --fix")
+    } else {
+        String::new()
+    };
+    println!(
+        "{} error(s), {} warning(s){hint}",
+        count(doctor::Severity::Error),
+        count(doctor::Severity::Warning)
+    );
+}
+
+fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Result<()> {
+    let json_findings = |fs: &[Finding]| -> Vec<serde_json::Value> {
+        fs.iter()
+            .map(|f| {
+                let mut v = serde_json::to_value(f).unwrap_or_default();
+                v["fixable"] = f.fixable().into();
+                v
+            })
+            .collect()
+    };
+    let buses: Vec<_> = outcomes
+        .iter()
+        .map(|o| {
+            let fixes: Vec<_> = o
+                .fixes
+                .iter()
+                .map(|fx| {
+                    serde_json::json!({
+                        "id": fx.id,
+                        "command": fx.command,
+                        "ok": fx.result.is_ok(),
+                        "error": fx.result.as_ref().err(),
+                    })
+                })
+                .collect();
+            serde_json::json!({
+                "name": o.name,
+                "port": o.target.port,
+                "baud": o.target.baud,
+                "expected": o.first.expected,
+                "read": o.first.servos.iter().map(|s| s.id).collect::<Vec<_>>(),
+                "findings": json_findings(&o.first.findings),
+                "fixes": fixes,
+                "after_fix": o.after.as_ref().map(|a| json_findings(&a.findings)),
+            })
+        })
+        .collect();
+    let out = serde_json::json!({
+        "robot": robot.name,
+        "buses": buses,
+        "exit": status,
+    });
+    println!("{out}");
+    Ok(())
+}

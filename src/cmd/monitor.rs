@@ -1,0 +1,286 @@
+//! `servobus monitor`: a live view of every servo of a bus (or one JSON line
+//! per refresh), and the same view of a running motion for
+//! `servobus play --monitor`. The reading and the drawing live in
+//! [`servobus::monitor`]; this file owns the terminal and the keys.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context};
+use crossbeam_channel::TryRecvError;
+use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
+use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
+use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock, Transport};
+use servobus_protocol::registers::Series;
+use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
+use servobus_runtime::{bus_settings, Command, Runner, Telemetry};
+
+/// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
+/// process the OS schedules, which costs milliseconds on a busy machine. A
+/// refresh every 50 ms can afford to wait this long.
+const PTY_LATENCY: Duration = Duration::from_millis(10);
+/// Latency assumed for a port of unknown kind without a robot file (USB
+/// CDC and CH34x adapters deliver in 1 ms USB frames).
+const DEFAULT_LATENCY: Duration = Duration::from_millis(1);
+/// Baud rate a scan without a robot file uses (the servos' factory rate).
+const SCAN_BAUD: u32 = 1_000_000;
+/// Refreshes per second of `play --monitor`'s view.
+const PLAY_REFRESH_HZ: f64 = 20.0;
+
+/// Arguments of `servobus monitor`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Robot file (or a built-in robot's name): joint names, models and the
+    /// bus (without --port, its built-in simulator).
+    #[arg(long, value_parser = super::robot_arg)]
+    pub robot: Option<PathBuf>,
+    /// Serial port (without --robot, every servo found on it is watched).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Calibration file for the joint angles (default: the one the robot
+    /// file names with `calibration:`).
+    #[arg(long, requires = "robot")]
+    pub calibration: Option<PathBuf>,
+    /// Print one JSON line per refresh instead of the live view.
+    #[arg(long)]
+    pub json: bool,
+    /// Refreshes per second.
+    #[arg(long, default_value_t = 20.0)]
+    pub rate: f64,
+    /// Stop after this many refreshes (default: until `q`, or Ctrl-C).
+    #[arg(long)]
+    pub count: Option<u64>,
+    /// The robot file's bus to watch (default: the first).
+    #[arg(long)]
+    pub bus: Option<String>,
+}
+
+/// Runs `servobus monitor`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if !(args.rate.is_finite() && args.rate > 0.0) {
+        return Err(super::exit::input(format!(
+            "--rate {}: give a positive rate in Hz",
+            args.rate
+        )));
+    }
+    let robot = match &args.robot {
+        Some(path) => Some(load_robot_any_rate_calibrated(
+            path,
+            args.calibration.as_deref(),
+        )?),
+        None => None,
+    };
+    let cfg = match &robot {
+        Some(r) => {
+            let found = match &args.bus {
+                Some(name) => r.buses.iter().find(|b| &b.name == name),
+                None => r.buses.first(),
+            };
+            Some(found.with_context(|| format!("{}: no such bus", r.path.display()))?)
+        }
+        None => None,
+    };
+    let port = args
+        .port
+        .clone()
+        .or_else(|| cfg.and_then(|c| c.port.clone()));
+    match (port, robot.as_ref(), cfg) {
+        (Some(port), _, _) => {
+            let baud = cfg.map_or(SCAN_BAUD, |c| c.baud);
+            let clock = SystemClock::new();
+            let transport = SerialTransport::open(&port, baud, clock)
+                .with_context(|| format!("cannot open {port}"))?;
+            let pty = std::fs::canonicalize(&port).is_ok_and(|p| p.starts_with("/dev/pts"));
+            let settings = match cfg {
+                Some(c) => bus_settings(c),
+                None => BusSettings::new(Series::Sts, baud).with_latency(DEFAULT_LATENCY),
+            };
+            let latency = if pty {
+                settings.link.latency.max(PTY_LATENCY)
+            } else {
+                settings.link.latency
+            };
+            let mut bus = Bus::new(transport, clock, settings.with_latency(latency));
+            let servos = match (robot.as_ref(), cfg) {
+                (Some(r), Some(c)) => Watched::of_bus(c, r.units),
+                _ => Poller::scan(&mut bus).context("scanning the port")?,
+            };
+            if servos.is_empty() {
+                bail!("no servo answered on {port}");
+            }
+            watch(&mut bus, Poller::new(servos), &args, &port, |_| {})
+        }
+        (None, Some(r), Some(c)) => {
+            let index = r.buses.iter().position(|b| b.name == c.name).unwrap_or(0);
+            let mut buses = servobus_runtime::sim::virtual_buses(r)?;
+            let mut bus = buses.swap_remove(index);
+            let poller = Poller::new(Watched::of_bus(c, r.units));
+            let title = format!("{} (built-in simulator)", r.name);
+            // The simulator runs in virtual time: keep it level with the
+            // wall clock.
+            let started = Instant::now();
+            watch(&mut bus, poller, &args, &title, |b| {
+                b.clock().advance_to(started.elapsed());
+            })
+        }
+        _ => Err(super::exit::input(
+            "give --robot FILE, --port PATH, or both",
+        )),
+    }
+}
+
+/// Restores the terminal when dropped (the view ends, an error returns);
+/// `ratatui::init` restores it on a panic too.
+struct Screen(ratatui::DefaultTerminal);
+
+impl Screen {
+    fn open() -> Screen {
+        Screen(ratatui::init())
+    }
+}
+
+impl Drop for Screen {
+    fn drop(&mut self) {
+        // While unwinding, ratatui's panic hook has restored the terminal
+        // already; leaving the alternate screen twice would move the cursor
+        // back over the panic message.
+        if !std::thread::panicking() {
+            ratatui::restore();
+        }
+    }
+}
+
+/// Makes the monitor panic after this many refreshes: how
+/// `scripts/monitor_tmux.sh` shows that a panic restores the terminal.
+const TEST_PANIC: &str = "SERVOBUS_MONITOR_TEST_PANIC";
+
+fn test_panic_after() -> Option<u64> {
+    std::env::var(TEST_PANIC).ok()?.parse().ok()
+}
+
+/// What a key asks for.
+enum Key {
+    Quit,
+    TorqueOff,
+    Other,
+}
+
+/// Waits up to `timeout` for a key.
+fn key(timeout: Duration) -> anyhow::Result<Option<Key>> {
+    if !event::poll(timeout)? {
+        return Ok(None);
+    }
+    let Event::Key(k) = event::read()? else {
+        return Ok(Some(Key::Other));
+    };
+    if k.kind != KeyEventKind::Press {
+        return Ok(Some(Key::Other));
+    }
+    Ok(Some(match k.code {
+        KeyCode::Char('q') | KeyCode::Esc => Key::Quit,
+        KeyCode::Char('c') if k.modifiers.contains(KeyModifiers::CONTROL) => Key::Quit,
+        KeyCode::Char(' ') => Key::TorqueOff,
+        _ => Key::Other,
+    }))
+}
+
+fn watch<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    mut poller: Poller,
+    args: &Args,
+    title: &str,
+    mut before_poll: impl FnMut(&Bus<T, C>),
+) -> anyhow::Result<ExitCode> {
+    let period = Duration::from_secs_f64(1.0 / args.rate);
+    let mut screen = (!args.json).then(Screen::open);
+    let mut note: Option<String> = None;
+    let mut refreshes = 0u64;
+    let mut next = Instant::now();
+    let panic_after = test_panic_after();
+    loop {
+        before_poll(bus);
+        poller.poll(bus).context("reading the servos")?;
+        refreshes += 1;
+        if panic_after == Some(refreshes) {
+            panic!("{TEST_PANIC} asked for a panic after {refreshes} refreshes");
+        }
+        let frame = poller.frame(bus.clock(), note.clone());
+        match &mut screen {
+            None => println!("{}", serde_json::to_string(&frame)?),
+            Some(s) => {
+                s.0.draw(|f| view::draw(f, &frame, title))?;
+            }
+        }
+        if args.count.is_some_and(|n| refreshes >= n) {
+            break;
+        }
+        next += period;
+        // Keys are read until the next refresh is due.
+        loop {
+            let left = next.saturating_duration_since(Instant::now());
+            if screen.is_none() {
+                std::thread::sleep(left);
+                break;
+            }
+            match key(left)? {
+                Some(Key::Quit) => return Ok(ExitCode::SUCCESS),
+                Some(Key::TorqueOff) => {
+                    monitor::torque_off(bus, poller.ids()).context("torque off")?;
+                    note = Some("torque OFF sent to every servo (one SYNC WRITE)".into());
+                }
+                Some(Key::Other) => {}
+                None => break,
+            }
+        }
+        if Instant::now() > next + period {
+            // Fell behind (a slow bus): start counting afresh.
+            next = Instant::now();
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `servobus play --monitor`: the monitor's view of a running motion, from
+/// its telemetry only. `q` stops the motion (jerk-limited) and Space turns
+/// the torque off; the view ends with the run.
+pub fn watch_run(runner: &Runner, robot: &Robot, units: Units, rate_hz: f64) -> anyhow::Result<()> {
+    let mut rows = TelemetryRows::new(robot, units, 1.0 / rate_hz);
+    let telemetry = runner.telemetry();
+    let mut screen = Screen::open();
+    let period = Duration::from_secs_f64(1.0 / PLAY_REFRESH_HZ);
+    let mut note: Option<String> = None;
+    let title = format!("{} (play)", robot.name);
+    loop {
+        let mut ended = false;
+        loop {
+            match telemetry.try_recv() {
+                Ok(Telemetry::Cycle(sample)) => rows.record(&sample),
+                Ok(Telemetry::Fault(fault)) => note = Some(format!("fault: {fault}")),
+                Ok(Telemetry::Finished(_)) => ended = true,
+                Ok(_) => {}
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    ended = true;
+                    break;
+                }
+            }
+        }
+        let frame: Frame = rows.frame(note.clone());
+        screen.0.draw(|f| view::draw(f, &frame, &title))?;
+        if ended || (runner.is_finished() && telemetry.is_empty()) {
+            return Ok(());
+        }
+        match key(period)? {
+            Some(Key::Quit) => {
+                let _ = runner.send(Command::Stop);
+                note = Some("stopping".into());
+            }
+            Some(Key::TorqueOff) => {
+                let _ = runner.send(Command::TorqueOff);
+                note = Some("torque OFF".into());
+            }
+            _ => {}
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! `servobus doctor`: checks a bus of servos against the robot file and
+//! against the set-up mistakes that break Feetech robots (wrong ID or baud
+//! rate, return delays left at the factory 500 us, an EEPROM lock left open,
+//! angle limits narrower than the joint's, a gripper free to overheat, ...).
+//!
+//! Each [`Finding`] names its severity, the servo and register, what is
+//! wrong and the exact command that fixes it. Nothing is written unless the
+//! caller asks for it with [`apply`]; EEPROM values are then written with the
+//! driver's unlock-write-verify-lock transaction.
+//!
+//! The examination is generic over the driver's [`Transport`] and
+//! [`Clock`](servobus_driver::Clock), so it runs on a serial port and on the
+//! simulator in virtual time alike.
+
+mod bus_checks;
+mod checks;
+mod fix;
+mod probe;
+
+use serde::Serialize;
+use servobus_driver::{SerialTransport, TransportError};
+use servobus_protocol::registers::{Register, Series};
+use servobus_sim::SimBus;
+
+pub use checks::{rated_voltage_dv, ServoState};
+pub use fix::{apply, FixOutcome};
+pub use probe::{examine, Examined, PortKind, Target};
+
+/// How bad a finding is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    /// Worth knowing; nothing to fix.
+    Info,
+    /// Works, but badly or riskily.
+    Warning,
+    /// Breaks motion or the robot.
+    Error,
+}
+
+impl std::fmt::Display for Severity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Severity::Info => "info",
+            Severity::Warning => "warning",
+            Severity::Error => "error",
+        })
+    }
+}
+
+/// What `--fix` does about a finding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Action {
+    /// Write `value` into `register` of servo `id` (EEPROM registers with
+    /// unlock-write-verify-lock). `silent`: the servo answers no WRITE
+    /// (status level 0), so none is waited for.
+    Write {
+        /// The servo.
+        id: u8,
+        /// The register.
+        register: &'static Register,
+        /// The value.
+        value: i32,
+        /// Whether writes go unanswered.
+        silent: bool,
+        /// The servo's series (the register's layout and lock).
+        series: Series,
+    },
+    /// Servo `id` listens at `baud`: set its baud-rate register to the
+    /// bus's index there, then find it at the bus's rate.
+    Baud {
+        /// The servo.
+        id: u8,
+        /// The rate it answers at now.
+        baud: u32,
+        /// The bus's baud-rate index to write.
+        index: u8,
+    },
+}
+
+/// One thing found wrong (or worth knowing) about a bus.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Finding {
+    /// How bad it is.
+    pub severity: Severity,
+    /// The robot file's bus.
+    pub bus: String,
+    /// The servo, when it concerns one.
+    pub id: Option<u8>,
+    /// The register, when one is at fault.
+    pub register: Option<&'static str>,
+    /// What is wrong.
+    pub problem: String,
+    /// The command that fixes it, or what to do when no command can.
+    pub fix: String,
+    /// What `--fix` does about it, if anything.
+    #[serde(skip)]
+    pub action: Option<Action>,
+}
+
+impl Finding {
+    /// Whether `--fix` can apply the fix.
+    pub fn fixable(&self) -> bool {
+        self.action.is_some()
+    }
+}
+
+/// The exit status of a set of findings: 0 when nothing is wrong, 1 on
+/// warnings only, 2 on errors.
+pub fn exit_status(findings: &[Finding]) -> u8 {
+    match findings.iter().map(|f| f.severity).max() {
+        Some(Severity::Error) => 2,
+        Some(Severity::Warning) => 1,
+        _ => 0,
+    }
+}
+
+/// A transport whose baud rate can change (to look for servos at other
+/// rates).
+pub trait BaudSwitch {
+    /// Switches to `baud`.
+    ///
+    /// # Errors
+    /// The transport's, when the rate cannot be set.
+    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError>;
+}
+
+impl BaudSwitch for SimBus {
+    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        self.set_baud(baud);
+        Ok(())
+    }
+}
+
+impl<C: servobus_driver::Clock> BaudSwitch for SerialTransport<C> {
+    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        self.set_baud(baud)
+    }
+}

@@ -1,0 +1,402 @@
+//! Examining one bus: who answers, at which baud rate, what their registers
+//! hold, and how slow the adapter is.
+
+use std::path::Path;
+use std::time::Duration;
+
+use servobus_driver::{
+    ftdi_latency_timer, Bus, BusError, BusSettings, Clock, FtdiLatency, Transport, PATIENCE,
+    PATIENT_TRIES,
+};
+use servobus_protocol::registers::{self, addr, Series};
+use servobus_protocol::MAX_ID;
+use servobus_runtime::config::{BusConfig, Robot, RobotCalibration};
+
+use super::bus_checks;
+use super::checks::{read_len, ServoState};
+use super::{Action, BaudSwitch, Finding, Severity};
+
+/// The longest return delay a servo can have (register 7 at 255, 2 us
+/// units): the doctor waits this long so that it hears servos still at
+/// their factory delay.
+pub(crate) const MAX_RETURN_DELAY: Duration = Duration::from_micros(510);
+
+/// Where the fixes are run: the port as the user names it, and the bus's
+/// baud rate (written into the commands when it is not the default).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Target {
+    /// The port; `None` for the built-in simulator.
+    pub port: Option<String>,
+    /// The bus's baud rate.
+    pub baud: u32,
+}
+
+/// The baud rate the bus tools assume without `--baud`.
+pub(crate) const TOOLS_DEFAULT_BAUD: u32 = 1_000_000;
+
+impl Target {
+    pub(crate) fn port_args(&self, baud: u32) -> String {
+        let port = self.port.as_deref().unwrap_or("<PORT>");
+        if baud == TOOLS_DEFAULT_BAUD {
+            format!("--port {port}")
+        } else {
+            format!("--port {port} --baud {baud}")
+        }
+    }
+
+    /// `servobus write` of `value` into `register` of servo `id`.
+    pub fn write_command(&self, id: u8, register: &str, value: i32) -> String {
+        format!(
+            "servobus write {} --id {id} {register} {value}",
+            self.port_args(self.baud)
+        )
+    }
+
+    fn write_command_at(&self, baud: u32, id: u8, register: &str, value: i32) -> String {
+        format!(
+            "servobus write {} --id {id} {register} {value}",
+            self.port_args(baud)
+        )
+    }
+
+    fn set_id_command(&self, id: u8, new_id: &str) -> String {
+        format!(
+            "servobus set-id {} --id {id} {new_id}",
+            self.port_args(self.baud)
+        )
+    }
+}
+
+/// What kind of port the bus is on, for the latency checks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PortKind {
+    /// The built-in simulator in virtual time: no adapter at all.
+    Simulator,
+    /// A pseudo-terminal (`servobus sim`): its round trip is the host's
+    /// scheduling, not an adapter's.
+    Pty,
+    /// A serial adapter, with its FTDI latency timer when it has one.
+    Serial(Option<FtdiLatency>),
+}
+
+impl PortKind {
+    /// The kind of the port at `path`.
+    pub fn of(path: &str) -> PortKind {
+        let real = std::fs::canonicalize(path).unwrap_or_else(|_| Path::new(path).into());
+        if real.starts_with("/dev/pts") {
+            PortKind::Pty
+        } else {
+            PortKind::Serial(ftdi_latency_timer(Path::new(path)))
+        }
+    }
+}
+
+/// What one examination found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Examined {
+    /// Every finding, errors first.
+    pub findings: Vec<Finding>,
+    /// The servos read, in ID order.
+    pub servos: Vec<ServoState>,
+    /// The servos the robot file names for this bus.
+    pub expected: usize,
+}
+
+/// The robot, bus and target every check of one bus shares.
+pub(crate) struct Ctx<'a> {
+    pub robot: &'a Robot,
+    pub bus: &'a BusConfig,
+    pub target: &'a Target,
+}
+
+/// Examines the bus `cfg` of `robot` through `bus`: pings every ID at the
+/// bus's rate, looks for the missing servos at the other rates, reads every
+/// servo that answers and runs the checks, then measures the adapter. The
+/// bus's settings are left as they were. Nothing is written.
+///
+/// # Errors
+/// Only when the transport fails ([`BusError::Transport`]); servos that do
+/// not answer are findings, not errors.
+pub fn examine<T: Transport + BaudSwitch, C: Clock>(
+    bus: &mut Bus<T, C>,
+    robot: &Robot,
+    cfg: &BusConfig,
+    target: &Target,
+    kind: &PortKind,
+) -> Result<Examined, BusError> {
+    let saved = *bus.settings();
+    let result = examine_inner(bus, robot, cfg, target, kind);
+    bus.set_settings(saved);
+    result
+}
+
+fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
+    bus: &mut Bus<T, C>,
+    robot: &Robot,
+    cfg: &BusConfig,
+    target: &Target,
+    kind: &PortKind,
+) -> Result<Examined, BusError> {
+    let ctx = Ctx {
+        robot,
+        bus: cfg,
+        target,
+    };
+    let mut findings = Vec::new();
+    let base = bus.settings().with_return_delay(MAX_RETURN_DELAY);
+    // The robot's own servos are waited for patiently (a loaded host or a
+    // slow adapter must not make a present servo look absent or garbled):
+    // longer deadlines and two more tries.
+    let patient = base
+        .with_latency(base.link.latency + PATIENCE)
+        .with_retries(PATIENT_TRIES - 1);
+    let expected = |id: u8| cfg.joints.iter().find(|j| j.id == id);
+
+    // Who answers at the bus's rate (absent IDs are asked once: that keeps
+    // the scan short).
+    let mut answering = Vec::new();
+    for id in 0..=MAX_ID {
+        bus.set_settings(if expected(id).is_some() {
+            patient
+        } else {
+            base.with_retries(0)
+        });
+        match answers(bus, id) {
+            Ok(true) => answering.push(id),
+            Ok(false) => {}
+            Err(e) => return Err(e),
+        }
+    }
+
+    // Read each one whole; replies that stay garbled are two servos on one ID.
+    bus.set_settings(patient);
+    let mut servos = Vec::new();
+    for &id in &answering {
+        match read_state(bus, id) {
+            Ok(state) => servos.push(state),
+            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => {
+                let mut f = finding(&ctx, Severity::Error, Some(id), Some("id"));
+                f.problem = format!(
+                    "two or more servos answer as ID {id}: their replies collide and none can \
+                     be read"
+                );
+                f.fix = format!(
+                    "connect them one at a time and give all but one a free ID: {}",
+                    target.set_id_command(id, "<NEW_ID>")
+                );
+                findings.push(f);
+            }
+            Err(e) if e.is_retryable() => {
+                let mut f = finding(&ctx, Severity::Error, Some(id), Some("status_level"));
+                f.problem = format!(
+                    "servo {id} answers PING but not READ: its status return level is 0 (SCS)"
+                );
+                let reg = registers::SCS.get("status_level");
+                f.fix = target.write_command(id, "status_level", 2);
+                f.action = reg.map(|register| Action::Write {
+                    id,
+                    register,
+                    value: 2,
+                    silent: true,
+                    series: Series::Scs,
+                });
+                findings.push(f);
+            }
+            Err(e) => return Err(e),
+        }
+    }
+
+    let extras: Vec<u8> = answering
+        .iter()
+        .copied()
+        .filter(|&id| expected(id).is_none())
+        .collect();
+    let mut missing: Vec<u8> = cfg
+        .joints
+        .iter()
+        .map(|j| j.id)
+        .filter(|id| !answering.contains(id))
+        .collect();
+    if !missing.is_empty() {
+        find_at_other_bauds(bus, &ctx, base, &mut missing, &mut findings)?;
+        bus.set_settings(base);
+    }
+    for &id in &missing {
+        let joint = expected(id).map_or("?", |j| j.name.as_str());
+        let mut f = finding(&ctx, Severity::Error, Some(id), None);
+        f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
+        f.fix = match extras.first() {
+            Some(&extra) => format!(
+                "if servo {extra} is joint `{joint}`'s, give it its ID: {}",
+                target.set_id_command(extra, &id.to_string())
+            ),
+            None => format!(
+                "check its cable, power and ID: servobus scan {} --all-bauds",
+                target
+                    .port_args(cfg.baud)
+                    .replace(&format!(" --baud {}", cfg.baud), "")
+            ),
+        };
+        findings.push(f);
+    }
+    for &id in &extras {
+        let mut f = finding(&ctx, Severity::Warning, Some(id), Some("id"));
+        f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
+        f.fix = format!(
+            "add it to {} or give it the ID of its joint: {}",
+            robot.path.display(),
+            target.set_id_command(id, "<ID>")
+        );
+        findings.push(f);
+    }
+
+    for s in &servos {
+        findings.extend(ctx.servo_findings(s, expected(s.id)));
+    }
+    if robot.buses.first().is_some_and(|b| b.name == cfg.name) {
+        calibration_findings(&ctx, &mut findings);
+    }
+    bus_checks::firmware(&ctx, &servos, &mut findings);
+    bus_checks::supply_drop(&ctx, &servos, &mut findings);
+    bus_checks::latency(bus, &ctx, kind, &servos, &mut findings)?;
+    findings.sort_by(|a, b| b.severity.cmp(&a.severity).then(a.id.cmp(&b.id)));
+    Ok(Examined {
+        findings,
+        servos,
+        expected: cfg.joints.len(),
+    })
+}
+
+/// Whether anything answers as `id`: a READ of the model number first,
+/// because a PING's reply with status 0x01 (the voltage flag) is byte for
+/// byte the PING itself and is skipped as an echo; then a PING, which an SCS
+/// servo at status level 0 answers alone. Garbled replies count: two
+/// servos may share the ID.
+fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, BusError> {
+    let mut number = [0u8; 2];
+    let read = bus.read(id, addr::MODEL_NUMBER, &mut number);
+    let result = match read {
+        Err(e) if e.is_timeout() => bus.ping(id).map(|_| ()),
+        other => other.map(|_| ()),
+    };
+    match result {
+        Ok(()) | Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => Ok(true),
+        Err(e) if e.is_retryable() => Ok(false),
+        Err(e) => Err(e),
+    }
+}
+
+pub(crate) fn finding(
+    ctx: &Ctx<'_>,
+    severity: Severity,
+    id: Option<u8>,
+    reg: Option<&'static str>,
+) -> Finding {
+    Finding {
+        severity,
+        bus: ctx.bus.name.clone(),
+        id,
+        register: reg,
+        problem: String::new(),
+        fix: String::new(),
+        action: None,
+    }
+}
+
+/// Whether the robot has the calibration it names (said once, with its
+/// first bus).
+fn calibration_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
+    match &ctx.robot.calibration {
+        RobotCalibration::Missing(path) => {
+            let mut f = finding(ctx, Severity::Error, None, None);
+            f.problem = format!(
+                "the robot file names the calibration {}, which does not exist: real servos \
+                 are refused until it does",
+                path.display()
+            );
+            f.fix = format!("{} -o {}", ctx.calibrate_command(), path.display());
+            out.push(f);
+        }
+        RobotCalibration::None => {
+            let mut f = finding(ctx, Severity::Info, None, None);
+            f.problem = "no calibration: joint angles count from each servo's middle tick \
+                         with the robot file's offset and inverted"
+                .into();
+            f.fix = format!(
+                "{} -o calibration.yaml, then `calibration: calibration.yaml` in the robot file",
+                ctx.calibrate_command()
+            );
+            out.push(f);
+        }
+        _ => {}
+    }
+}
+
+/// Reads servo `id`'s table from address 0, in the layout of the series its
+/// model number names (tried in both byte orders).
+fn read_state<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<ServoState, BusError> {
+    let mut bytes = vec![0u8; read_len(Series::Sts)];
+    let flags = bus.read(id, addr::FIRMWARE_MAJOR, &mut bytes)?;
+    let number = |n: u16| registers::model_by_number(n).map(|m| m.series);
+    let series = number(u16::from_le_bytes([bytes[3], bytes[4]]))
+        .or_else(|| number(u16::from_be_bytes([bytes[3], bytes[4]])))
+        .unwrap_or(bus.settings().series);
+    bytes.truncate(read_len(series));
+    Ok(ServoState::new(id, series, flags, bytes))
+}
+
+/// Looks for the `missing` servos at every other baud rate of the servo
+/// table; those found are taken out of `missing`. The transport is back at
+/// the bus's rate afterwards.
+fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
+    bus: &mut Bus<T, C>,
+    ctx: &Ctx<'_>,
+    base: BusSettings,
+    missing: &mut Vec<u8>,
+    findings: &mut Vec<Finding>,
+) -> Result<(), BusError> {
+    let home = ctx.bus.baud;
+    let Some(index) = registers::baud_index(home) else {
+        return Ok(());
+    };
+    let rates = (0..8)
+        .filter_map(registers::baud_rate)
+        .filter(|&b| b != home);
+    for baud in rates {
+        switch(bus, baud)?;
+        let mut s = base.with_retries(1);
+        s.link.baud = baud;
+        bus.set_settings(s);
+        let mut found = Vec::new();
+        for &id in missing.iter() {
+            if answers(bus, id)? {
+                found.push(id);
+            }
+        }
+        for id in found {
+            missing.retain(|&m| m != id);
+            let mut f = finding(ctx, Severity::Error, Some(id), Some("baud_rate"));
+            f.problem = format!("servo {id} answers only at {baud} baud; the bus runs at {home}");
+            f.fix = ctx
+                .target
+                .write_command_at(baud, id, "baud_rate", i32::from(index));
+            f.action = Some(Action::Baud { id, baud, index });
+            findings.push(f);
+        }
+    }
+    switch(bus, home)
+}
+
+/// Moves the transport and the bus's deadlines to `baud`.
+pub(crate) fn switch<T: Transport + BaudSwitch, C: Clock>(
+    bus: &mut Bus<T, C>,
+    baud: u32,
+) -> Result<(), BusError> {
+    bus.transport_mut()
+        .switch_baud(baud)
+        .map_err(BusError::Transport)?;
+    let mut s = *bus.settings();
+    s.link.baud = baud;
+    bus.set_settings(s);
+    Ok(())
+}

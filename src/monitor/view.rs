@@ -1,0 +1,125 @@
+//! The monitor's screen: a summary line, one table row per servo and the
+//! keys, drawn with ratatui.
+
+use ratatui::layout::{Constraint, Layout};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Cell, Paragraph, Row as TableRow, Table};
+
+use super::{Frame, Row};
+
+/// Reads in a row a servo must miss before it is shown as missing: one
+/// late reply (a busy host, a noisy line) is counted, not flagged.
+pub const MISSING_AFTER: u32 = 3;
+
+/// The keys and what they do, as shown at the bottom of the screen.
+pub const KEYS: &str = "q quit   Space torque OFF on every servo";
+
+const HEADER: [&str; 15] = [
+    "ID", "joint", "model", "pos deg", "ticks", "goal deg", "deg/s", "load %", "volt", "temp C",
+    "torque", "status", "replies", "timeouts", "p99 us",
+];
+
+const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, 22, 8, 8, 7];
+
+fn opt(v: Option<f64>, decimals: usize) -> String {
+    v.map_or_else(|| "-".to_string(), |v| format!("{v:.decimals$}"))
+}
+
+fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
+    let gone = r.missed_in_row >= MISSING_AFTER || r.position_ticks.is_none();
+    let (status, status_style) = if !r.present && gone {
+        let why = r.missing.as_deref().unwrap_or("no reply");
+        (
+            format!("MISSING ({why})"),
+            Style::default().fg(Color::Red).add_modifier(Modifier::BOLD),
+        )
+    } else if r.flags.is_empty() {
+        ("ok".to_string(), Style::default().fg(Color::Green))
+    } else {
+        (
+            r.flags.join(" ").to_uppercase(),
+            Style::default()
+                .fg(Color::White)
+                .bg(Color::Red)
+                .add_modifier(Modifier::BOLD),
+        )
+    };
+    let torque = match r.torque {
+        Some(true) => "on",
+        Some(false) => "off",
+        None => "-",
+    };
+    let cells = vec![
+        Cell::from(r.id.to_string()),
+        Cell::from(r.joint.clone().unwrap_or_else(|| "-".into())),
+        Cell::from(r.model.clone()),
+        Cell::from(opt(r.position_deg, 1)),
+        Cell::from(
+            r.position_ticks
+                .map_or_else(|| "-".into(), |t| t.to_string()),
+        ),
+        Cell::from(opt(r.goal_deg, 1)),
+        Cell::from(opt(r.speed_deg_s, 0)),
+        Cell::from(opt(r.load_pct, 1)),
+        Cell::from(opt(r.voltage_v, 1)),
+        Cell::from(opt(r.temperature_c, 0)),
+        Cell::from(torque),
+        Cell::from(status).style(status_style),
+        Cell::from(r.replies.to_string()),
+        Cell::from(r.timeouts.to_string()),
+        Cell::from(opt(r.p99_latency_us, 0)),
+    ];
+    // A missing servo keeps its last values, dimmed.
+    let style = if !gone {
+        Style::default()
+    } else {
+        Style::default().add_modifier(Modifier::DIM)
+    };
+    (cells, style)
+}
+
+/// Draws `frame` under the heading `title`.
+pub fn draw(f: &mut ratatui::Frame<'_>, frame: &Frame, title: &str) {
+    let [top, table, bottom] = Layout::vertical([
+        Constraint::Length(2),
+        Constraint::Min(3),
+        Constraint::Length(2),
+    ])
+    .areas(f.area());
+    let summary = Line::from(vec![
+        Span::styled(
+            title.to_string(),
+            Style::default().add_modifier(Modifier::BOLD),
+        ),
+        Span::raw(format!(
+            "   t {:.1} s   read rate {:.1} Hz   bus utilisation {:.1} %   ({})",
+            frame.time_s,
+            frame.read_rate_hz,
+            100.0 * frame.utilisation,
+            frame.source
+        )),
+    ]);
+    f.render_widget(Paragraph::new(summary), top);
+    let header = TableRow::new(HEADER.map(Cell::from))
+        .style(Style::default().add_modifier(Modifier::BOLD | Modifier::UNDERLINED));
+    let rows = frame.servos.iter().map(|r| {
+        let (cells, style) = row_cells(r);
+        TableRow::new(cells).style(style)
+    });
+    let widths = WIDTHS.map(Constraint::Length);
+    f.render_widget(Table::new(rows, widths).header(header), table);
+    let mut keys = vec![Span::styled(
+        format!("keys: {KEYS}"),
+        Style::default().fg(Color::Cyan),
+    )];
+    if let Some(note) = &frame.note {
+        keys.push(Span::styled(
+            format!("   [{note}]"),
+            Style::default()
+                .fg(Color::Yellow)
+                .add_modifier(Modifier::BOLD),
+        ));
+    }
+    f.render_widget(Paragraph::new(Line::from(keys)), bottom);
+}

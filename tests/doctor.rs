@@ -1,0 +1,543 @@
+//! `servobus doctor` on the simulated SO-101 arm in virtual time: every
+//! fault injected (simulator fault options, registers changed through the
+//! driver, a servo at another baud rate, the supply out of range) is found,
+//! its fix is named, and with `--fix` the fix works and persists.
+
+mod common;
+
+use std::time::Duration;
+
+use servobus::doctor::{self, Finding, PortKind, Severity, Target};
+use servobus_driver::{Bus, ManualClock, StatusLevel};
+use servobus_protocol::registers::{addr, Series};
+use servobus_runtime::bus_settings;
+use servobus_runtime::config::{load_robot, JointCalibration, Robot};
+use servobus_sim::{Faults, SimBus};
+
+const PORT: &str = "/dev/ttyACM0";
+
+struct Arm {
+    robot: Robot,
+    sim: SimBus,
+    bus: Bus<SimBus, ManualClock>,
+}
+
+fn target() -> Target {
+    Target {
+        port: Some(PORT.into()),
+        baud: 1_000_000,
+    }
+}
+
+impl Arm {
+    /// The arm as `servobus sim` serves it, with `faults`.
+    fn factory(faults: Faults) -> Arm {
+        let robot = load_robot(&common::repo("configs/robots/so101.yaml")).expect("robot");
+        let cfg = &robot.buses[0];
+        let clock = ManualClock::new();
+        let servos = servobus_runtime::sim::bus_servos(&robot, cfg).expect("servos");
+        let sim = SimBus::new(clock.clone(), cfg.baud)
+            .with_servos(servos)
+            .with_faults(faults);
+        let bus = Bus::new(sim.clone(), clock, bus_settings(cfg));
+        Arm { robot, sim, bus }
+    }
+
+    /// The arm with its gripper set up as LeRobot sets it up, so that a
+    /// healthy arm has nothing wrong.
+    fn tuned(faults: Faults) -> Arm {
+        let mut arm = Arm::factory(Faults::none());
+        for (name, value) in [
+            ("max_torque", 500),
+            ("protection_current", 250),
+            ("overload_torque", 25),
+        ] {
+            arm.write(6, name, value);
+        }
+        arm.sim.set_faults(faults);
+        arm
+    }
+
+    /// Writes a register through the driver (EEPROM: unlock-write-verify-lock).
+    fn write(&mut self, id: u8, name: &str, value: i32) {
+        let reg = Series::Sts.map().get(name).expect("register");
+        // Wait as long as a servo at its factory return delay needs, and
+        // expect no reply from one whose status level is being set to 0.
+        let saved = *self.bus.settings();
+        let mut s = saved.with_return_delay(Duration::from_micros(510));
+        if name == "status_level" {
+            s = s.with_replies(StatusLevel::PingAndRead);
+        }
+        self.bus.set_settings(s);
+        self.bus
+            .write_register(id, reg, value)
+            .unwrap_or_else(|e| panic!("writing {name} = {value} to servo {id}: {e}"));
+        self.bus.set_settings(saved);
+    }
+
+    /// The findings worth a warning or an error (the information that the
+    /// arm has no calibration is left out).
+    fn examine(&mut self) -> Vec<Finding> {
+        self.examine_all()
+            .into_iter()
+            .filter(|f| f.severity > Severity::Info)
+            .collect()
+    }
+
+    fn examine_all(&mut self) -> Vec<Finding> {
+        let cfg = self.robot.buses[0].clone();
+        doctor::examine(
+            &mut self.bus,
+            &self.robot,
+            &cfg,
+            &target(),
+            &PortKind::Simulator,
+        )
+        .expect("examined")
+        .findings
+    }
+
+    /// `--fix`: applies the fixes; every one must succeed.
+    fn fix(&mut self, findings: &[Finding]) {
+        let outcomes = doctor::apply(&mut self.bus, findings).expect("fixes applied");
+        assert!(!outcomes.is_empty(), "nothing was fixed");
+        for o in &outcomes {
+            assert!(
+                o.result.is_ok(),
+                "fix `{}` failed: {:?}",
+                o.command,
+                o.result
+            );
+        }
+    }
+
+    fn register(&self, id: u8, address: u8) -> u8 {
+        self.sim.register(id, address).expect("servo present")
+    }
+}
+
+fn about<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> Option<&'a Finding> {
+    findings
+        .iter()
+        .find(|f| f.id == Some(id) && (register.is_none() || f.register == register))
+}
+
+/// The finding about servo `id` and `register`; the test fails naming every
+/// finding when there is none.
+fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Finding {
+    about(findings, id, register)
+        .unwrap_or_else(|| panic!("nothing about servo {id} {register:?}:\n{}", show(findings)))
+}
+
+fn show(findings: &[Finding]) -> String {
+    findings
+        .iter()
+        .map(|f| {
+            format!(
+                "{:?} {:?} {:?}: {} | {}\n",
+                f.severity, f.id, f.register, f.problem, f.fix
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_healthy_arm_has_nothing_wrong() {
+    let mut arm = Arm::tuned(Faults::none());
+    let findings = arm.examine();
+    assert!(findings.is_empty(), "{}", show(&findings));
+    assert_eq!(doctor::exit_status(&findings), 0);
+}
+
+#[test]
+fn a_factory_gripper_may_overheat_and_fix_sets_it_up() {
+    let mut arm = Arm::factory(Faults::none());
+    let findings = arm.examine();
+    for (name, value) in [
+        ("max_torque", 500),
+        ("protection_current", 250),
+        ("overload_torque", 25),
+    ] {
+        let f = about(&findings, 6, Some(name))
+            .unwrap_or_else(|| panic!("{name}: {}", show(&findings)));
+        assert_eq!(f.severity, Severity::Warning);
+        assert_eq!(
+            f.fix,
+            format!("servobus write --port {PORT} --id 6 {name} {value}")
+        );
+    }
+    assert_eq!(findings.len(), 3, "{}", show(&findings));
+    assert_eq!(doctor::exit_status(&findings), 1);
+    arm.fix(&findings);
+    arm.sim.power_cycle();
+    assert!(arm.examine().is_empty(), "the settings did not persist");
+    assert_eq!(arm.register(6, addr::MAX_TORQUE), (500 & 0xFF) as u8);
+    assert_eq!(
+        arm.register(6, addr::LOCK),
+        1,
+        "lock closed after the EEPROM writes"
+    );
+}
+
+#[test]
+fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.write(3, "return_delay", 250);
+    let findings = arm.examine();
+    let f = must(&findings, 3, Some("return_delay"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(f.problem.contains("500 us"), "{}", f.problem);
+    assert_eq!(
+        f.fix,
+        "servobus write --port /dev/ttyACM0 --id 3 return_delay 0"
+    );
+    assert_eq!(doctor::exit_status(&findings), 2);
+    arm.fix(&findings);
+    arm.sim.power_cycle();
+    assert_eq!(arm.register(3, addr::RETURN_DELAY), 0);
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn an_eeprom_lock_left_open_is_found_and_closed() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.bus.write(2, addr::LOCK, &[0]).expect("unlock");
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("lock"));
+    assert_eq!(f.severity, Severity::Warning);
+    assert_eq!(f.fix, "servobus write --port /dev/ttyACM0 --id 2 lock 1");
+    assert_eq!(doctor::exit_status(&findings), 1);
+    arm.fix(&findings);
+    assert_eq!(arm.register(2, addr::LOCK), 1);
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn narrowed_angle_limits_are_found_and_widened_to_the_robot_file() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.write(1, "min_angle_limit", 1500);
+    arm.write(1, "max_angle_limit", 2600);
+    // shoulder_pan: -110..110 degrees about tick 2048, 4096 ticks a turn.
+    let half = (110.0f64 * 4096.0 / 360.0).round() as i32;
+    let (lo, hi) = (2048 - half, 2048 + half);
+    let findings = arm.examine();
+    for (name, want) in [("min_angle_limit", lo), ("max_angle_limit", hi)] {
+        let f = must(&findings, 1, Some(name));
+        assert_eq!(f.severity, Severity::Error);
+        assert_eq!(
+            f.fix,
+            format!("servobus write --port {PORT} --id 1 {name} {want}")
+        );
+    }
+    arm.fix(&findings);
+    arm.sim.power_cycle();
+    let limits = arm.sim.servo(1, |s| {
+        (
+            s.read_u16(addr::MIN_ANGLE_LIMIT),
+            s.read_u16(addr::MAX_ANGLE_LIMIT),
+        )
+    });
+    assert_eq!(limits, Some((lo as u16, hi as u16)));
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn a_joint_outside_its_limits_is_an_error() {
+    let mut arm = Arm::tuned(Faults::none());
+    // 1400 ticks is 123 degrees: past shoulder_pan's 110.
+    arm.sim.servo(1, |s| s.move_joint(2048 + 1400));
+    let findings = arm.examine();
+    let f = must(&findings, 1, Some("present_position"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(f.fix.contains("--id 1 torque_enable 0"), "{}", f.fix);
+    assert!(!f.fixable(), "moving a joint is not for --fix");
+}
+
+#[test]
+fn a_servo_at_another_baud_is_found_and_brought_back() {
+    let mut arm = Arm::tuned(Faults::none().baud(4, 4));
+    let findings = arm.examine();
+    let f = must(&findings, 4, Some("baud_rate"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(f.problem.contains("115200"), "{}", f.problem);
+    assert_eq!(
+        f.fix,
+        "servobus write --port /dev/ttyACM0 --baud 115200 --id 4 baud_rate 0"
+    );
+    assert_eq!(findings.len(), 1, "{}", show(&findings));
+    arm.fix(&findings);
+    assert_eq!(arm.sim.baud(), 1_000_000, "the bus is back at its own rate");
+    arm.sim.power_cycle();
+    assert_eq!(arm.register(4, addr::BAUD_RATE), 0);
+    assert_eq!(arm.register(4, addr::LOCK), 1);
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn status_level_0_is_found_and_set_back_without_waiting_for_replies() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.write(4, "status_level", 0);
+    let findings = arm.examine();
+    let f = must(&findings, 4, Some("status_level"));
+    assert_eq!(
+        f.fix,
+        "servobus write --port /dev/ttyACM0 --id 4 status_level 1"
+    );
+    arm.fix(&findings);
+    arm.sim.power_cycle();
+    assert_eq!(arm.register(4, addr::STATUS_LEVEL), 1);
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn protection_that_does_not_release_the_torque_is_found_and_fixed() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.write(2, "unloading_condition", 0);
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("unloading_condition"));
+    // Overheat (0x04) and overload (0x20).
+    assert_eq!(
+        f.fix,
+        "servobus write --port /dev/ttyACM0 --id 2 unloading_condition 36"
+    );
+    arm.fix(&findings);
+    assert!(arm.examine().is_empty());
+}
+
+#[test]
+fn every_simulator_fault_is_found() {
+    // (faults, servo, register, severity, words of the problem)
+    let cases: [(&str, u8, Option<&str>, Severity, &str); 8] = [
+        (
+            "overheat=3",
+            3,
+            Some("present_temperature"),
+            Severity::Error,
+            "overheat",
+        ),
+        ("vanish=5", 5, None, Severity::Error, "does not answer"),
+        (
+            "supply=3:3.5",
+            3,
+            Some("present_voltage"),
+            Severity::Error,
+            "voltage flag",
+        ),
+        (
+            "supply=5.0",
+            1,
+            Some("present_voltage"),
+            Severity::Warning,
+            "rating 6.0..12.6 V",
+        ),
+        (
+            "supply=13.5",
+            2,
+            Some("present_voltage"),
+            Severity::Warning,
+            "rating 6.0..12.6 V",
+        ),
+        (
+            "supply=5:11.2",
+            5,
+            Some("present_voltage"),
+            Severity::Warning,
+            "drops 0.8 V",
+        ),
+        (
+            "firmware=2:3.9",
+            2,
+            Some("firmware_major"),
+            Severity::Warning,
+            "3.9 differs from 3.10",
+        ),
+        (
+            "duplicate=6:5",
+            5,
+            Some("id"),
+            Severity::Error,
+            "two or more servos answer as ID 5",
+        ),
+    ];
+    for (spec, id, register, severity, words) in cases {
+        let faults: Faults = spec.parse().expect(spec);
+        let mut arm = Arm::tuned(faults);
+        let findings = arm.examine();
+        let f = about(&findings, id, register)
+            .unwrap_or_else(|| panic!("{spec}: nothing about servo {id}:\n{}", show(&findings)));
+        assert_eq!(f.severity, severity, "{spec}: {}", f.problem);
+        assert!(f.problem.contains(words), "{spec}: {}", f.problem);
+        assert!(!f.fix.is_empty(), "{spec}: no fix named");
+        let worst = if severity == Severity::Error { 2 } else { 1 };
+        assert_eq!(doctor::exit_status(&findings), worst, "{spec}");
+    }
+}
+
+#[test]
+fn a_supply_that_sags_under_load_is_found_under_load_only() {
+    // 6.1 V: inside the STS3215's rating at rest.
+    let mut arm = Arm::tuned("supply=6.1".parse().expect("faults"));
+    assert!(arm.examine().is_empty());
+    // Servo 2 holds against a heavy load (80 % of its torque): its supply
+    // sags below the rating there.
+    arm.bus
+        .write(2, addr::TORQUE_ENABLE, &[1])
+        .expect("torque on");
+    arm.sim.servo(2, |s| s.set_external_load(0.8));
+    arm.sim.clock().advance(Duration::from_millis(200));
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("present_voltage"));
+    assert_eq!(f.severity, Severity::Warning);
+    // The servo strains at its torque limit: 80 % of load plus the error.
+    assert!(f.problem.contains("% load"), "{}", f.problem);
+    assert!(!f.problem.contains("at rest"), "{}", f.problem);
+    assert!(f.problem.contains("rating 6.0..12.6 V"), "{}", f.problem);
+    assert!(
+        about(&findings, 1, Some("present_voltage")).is_none(),
+        "{}",
+        show(&findings)
+    );
+}
+
+#[test]
+fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
+    let mut arm = Arm::tuned(Faults::none());
+    // An adapter that holds every byte 2 ms, where the robot file says 0.
+    let sim = arm.sim.clone().with_latency(Duration::from_millis(2));
+    arm.sim = sim;
+    let ftdi = servobus_driver::FtdiLatency {
+        sysfs_path: "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer".into(),
+        latency: Duration::from_millis(16),
+    };
+    let cfg = arm.robot.buses[0].clone();
+    let examined = doctor::examine(
+        &mut arm.bus,
+        &arm.robot,
+        &cfg,
+        &target(),
+        &PortKind::Serial(Some(ftdi)),
+    )
+    .expect("examined");
+    let findings = examined.findings;
+    let timer = findings
+        .iter()
+        .find(|f| f.fix.contains("latency_timer"))
+        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    assert_eq!(
+        timer.fix,
+        "echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/latency_timer"
+    );
+    let measured = findings
+        .iter()
+        .find(|f| f.problem.contains("round trip"))
+        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    assert_eq!(measured.severity, Severity::Warning);
+    assert!(
+        measured.fix.contains("`latency_us: 2000` on bus `arm`"),
+        "{}",
+        measured.fix
+    );
+    assert_eq!(
+        examined.servos.len(),
+        6,
+        "every servo found despite the slow adapter"
+    );
+}
+
+#[test]
+fn a_model_other_than_the_robot_files_is_an_error() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.robot.buses[0].joints[1].model =
+        servobus_protocol::registers::model_by_name("sts3250").expect("model");
+    let findings = arm.examine();
+    let f = must(&findings, 2, Some("model_number"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(
+        f.problem
+            .contains("is a STS3215, the robot file says STS3250"),
+        "{}",
+        f.problem
+    );
+    assert_eq!(findings.len(), 1, "{}", show(&findings));
+}
+
+#[test]
+fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
+    let mut arm = Arm::tuned("vanish=5".parse().expect("faults"));
+    arm.sim.add_servo(servobus_sim::SimServo::sts3215(9));
+    let findings = arm.examine();
+    let extra = must(&findings, 9, Some("id"));
+    assert_eq!(extra.severity, Severity::Warning);
+    let missing = must(&findings, 5, None);
+    assert_eq!(missing.severity, Severity::Error);
+    assert!(
+        missing
+            .fix
+            .ends_with("servobus set-id --port /dev/ttyACM0 --id 9 5"),
+        "{}",
+        missing.fix
+    );
+}
+
+#[test]
+fn an_uncalibrated_robot_is_told_how_to_calibrate() {
+    let mut arm = Arm::tuned(Faults::none());
+    let all = arm.examine_all();
+    let f = all
+        .iter()
+        .find(|f| f.problem.starts_with("no calibration"))
+        .unwrap_or_else(|| panic!("{}", show(&all)));
+    assert_eq!(f.severity, Severity::Info, "information only: exit 0");
+    assert!(
+        f.fix.starts_with("servobus calibrate --robot ")
+            && f.fix
+                .contains("so101.yaml --port /dev/ttyACM0 -o calibration.yaml"),
+        "{}",
+        f.fix
+    );
+    assert_eq!(doctor::exit_status(&all), 0);
+}
+
+#[test]
+fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
+    let mut arm = Arm::tuned(Faults::none());
+    // The calibration of shoulder_pan was taken with homing offset 100 on
+    // firmware 3.9; the servo holds 0 and reports 3.10.
+    arm.robot.buses[0].joints[0].calibration = Some(JointCalibration {
+        name: "shoulder_pan".into(),
+        id: 1,
+        model: "STS3215".into(),
+        firmware: Some("3.9".into()),
+        homing_offset: 100,
+        pose_deg: 0.0,
+        pose_tick: 2048.0,
+        direction: 1,
+        range: [600, 3500],
+    });
+    let findings = arm.examine();
+    let offset = must(&findings, 1, Some("offset"));
+    assert_eq!(offset.severity, Severity::Error);
+    assert!(
+        offset.problem.contains("homing offset is 0"),
+        "{}",
+        offset.problem
+    );
+    assert_eq!(
+        offset.fix,
+        "servobus write --port /dev/ttyACM0 --id 1 offset 100"
+    );
+    let firmware = must(&findings, 1, Some("firmware_major"));
+    assert!(
+        firmware.problem.contains("calibrated on 3.9"),
+        "{}",
+        firmware.problem
+    );
+    arm.fix(&findings);
+    arm.sim.power_cycle();
+    assert_eq!(
+        arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
+        Some(100),
+        "the offset persists"
+    );
+    assert!(about(&arm.examine(), 1, Some("offset")).is_none());
+}

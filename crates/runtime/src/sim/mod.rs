@@ -88,8 +88,16 @@ pub fn bus_servos(robot: &Robot, bus: &BusConfig) -> Result<Vec<SimServo>, SimRo
 }
 
 /// The servos of `bus` with their shafts at `pose` (robot units, one angle
-/// per joint of the bus).
-fn servos_at(robot: &Robot, bus: &BusConfig, pose: &[f64]) -> Result<Vec<SimServo>, SimRobotError> {
+/// per joint of the bus, in the bus's joint order): a simulated robot that
+/// starts away from its rest position, e.g. on a pty.
+///
+/// # Errors
+/// [`SimRobotError`] when a servo cannot be simulated.
+pub fn servos_at(
+    robot: &Robot,
+    bus: &BusConfig,
+    pose: &[f64],
+) -> Result<Vec<SimServo>, SimRobotError> {
     let baud = baud_index(robot, bus)?;
     let mut servos = Vec::with_capacity(bus.joints.len());
     for (joint, &angle) in bus.joints.iter().zip(pose) {

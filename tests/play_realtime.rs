@@ -37,14 +37,24 @@ const J: f64 = 100.0;
 /// The shortest stop from cruise (s) and its distance (deg), by hand above.
 const STOP_S: f64 = V / A + A / J;
 const STOP_DEG: f64 = V * STOP_S / 2.0;
-/// What rounding to 4 decimals can add to [`max_jerk`] (deg/s^3).
-const JERK_NOISE: f64 = 3.3;
+/// The motions' control rate (Hz).
+const RATE: f64 = 10.0;
+/// Held by each test: three wall-clock runs at once load the machine more
+/// than the checks need.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 /// Generous: a loaded machine may be slow to start or to answer.
 const PATIENCE: Duration = Duration::from_secs(60);
 
 /// Writes the SO-101 into `dir` as `robot.yaml` with `lead_ms: 0`, so
 /// that the goal sent each cycle (`commanded` in the log) is the path at
 /// the cycle's time, and with the slow pan when `slow_pan`.
+///
+/// The simulator answers from threads of this process that a loaded
+/// machine may not run for 100 ms and more, which the runtime rightly
+/// takes for missing servos (3 CPU hogs on 2 cores do that at 25 Hz). So
+/// the robot allows 50 ms per transaction (`latency_us`) and the motions
+/// run at 10 Hz ([`RATE`]): a servo counts as missing after 3 silent
+/// cycles, 300 ms. The tests also run one at a time ([`ONE_AT_A_TIME`]).
 fn write_robot(dir: &Path, slow_pan: bool) {
     let so101 = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101.yaml");
     let rate = so101
@@ -52,6 +62,9 @@ fn write_robot(dir: &Path, slow_pan: bool) {
         .find(|l| l.starts_with("rate:"))
         .expect("so101.yaml has a rate");
     let mut robot = so101.replacen(rate, &format!("{rate}\nlead_ms: 0"), 1);
+    let latency = "    latency_us: 0 ";
+    assert!(robot.contains(latency), "so101.yaml's latency moved");
+    robot = robot.replacen(latency, "    latency_us: 50000 #", 1);
     if slow_pan {
         let pan = "        max_velocity: 180    # deg/s (the servo manages ~300 unloaded)\n        \
                    max_acceleration: 900   # deg/s^2\n        max_jerk: 9000          # deg/s^3, optional";
@@ -72,7 +85,7 @@ fn slow_pan_files(dir: &Path) -> PathBuf {
     let motion = dir.join("sweep.yaml");
     std::fs::write(
         &motion,
-        "robot: robot.yaml\nunits: deg\nkeyframes:\n  - pose: {shoulder_pan: -100, \
+        "robot: robot.yaml\nunits: deg\nrate: 10\nkeyframes:\n  - pose: {shoulder_pan: -100, \
          shoulder_lift: -90, elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}\n  \
          - pose: {shoulder_pan: 100}\n",
     )
@@ -220,47 +233,41 @@ fn joint_rows(log: &Path, joint: &str) -> Vec<(f64, f64, Option<f64>)> {
         .collect()
 }
 
-/// The row nearest to time `t`, at or after it.
-fn at(rows: &[(f64, f64, Option<f64>)], t: f64) -> usize {
-    rows.iter().position(|r| r.0 >= t).unwrap_or(rows.len() - 1)
-}
-
-/// The planned speed (deg/s) around row `i`, over +-25 ms: the log keeps
-/// 4 decimals, so this is good to about 0.005 deg/s.
+/// The goal's speed (deg/s) at row `i`: a central difference over its
+/// neighbours (one-sided at the ends).
 fn speed(rows: &[(f64, f64, Option<f64>)], i: usize) -> f64 {
-    let t = rows[i].0;
-    let (a, b) = (at(rows, t - 0.025), at(rows, t + 0.025));
+    let (a, b) = (i.saturating_sub(1), (i + 1).min(rows.len() - 1));
     ((rows[b].1 - rows[a].1) / (rows[b].0 - rows[a].0)).abs()
 }
 
-/// Third divided differences of the planned path over `[from, to]` at
-/// ~50 ms spacing: each is the path's jerk averaged over its span (mean
-/// value theorem), so none can exceed the jerk limit if the path keeps it.
-/// The log's 4 decimals (+-5e-5 deg) add at most 6 * 8 * 5e-5 / (0.05 *
-/// 0.1 * 0.15) = 3.2 deg/s^3 of noise: see [`JERK_NOISE`].
+/// The largest third divided difference (times 3!) of the goals over
+/// `[from, to]`, less what the log's rounding can contribute, on rows at
+/// least 80 ms apart. Each is the path's jerk averaged over its span (mean
+/// value theorem for divided differences), so none exceeds the jerk limit
+/// if the path keeps it. Rounding to 4 decimals (errors e_i <= 5e-5 deg)
+/// adds at most 6 * sum_i e_i / prod_(j != i) |t_i - t_j|, subtracted here.
 fn max_jerk(rows: &[(f64, f64, Option<f64>)], from: f64, to: f64) -> f64 {
-    let pts: Vec<(f64, f64)> = {
-        let mut v = Vec::new();
-        let mut t = from;
-        while t <= to {
-            let r = rows[at(rows, t)];
-            v.push((r.0, r.1));
-            t += 0.05;
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for r in rows.iter().filter(|r| r.0 >= from && r.0 <= to) {
+        if pts.last().is_none_or(|p| r.0 - p.0 >= 0.08 - 1e-9) {
+            pts.push((r.0, r.1));
         }
-        v
-    };
-    let dd = |p: &[(f64, f64)]| -> f64 {
-        // Newton's divided differences, third order, times 3!.
-        let d1: Vec<f64> = p
-            .windows(2)
-            .map(|w| (w[1].1 - w[0].1) / (w[1].0 - w[0].0))
-            .collect();
-        let d2: Vec<f64> = (0..2)
-            .map(|k| (d1[k + 1] - d1[k]) / (p[k + 2].0 - p[k].0))
-            .collect();
-        6.0 * (d2[1] - d2[0]) / (p[3].0 - p[0].0)
-    };
-    pts.windows(4).map(|w| dd(w).abs()).fold(0.0, f64::max)
+    }
+    let mut worst: f64 = 0.0;
+    for w in pts.windows(4) {
+        let mut dd = 0.0;
+        let mut noise = 0.0;
+        for i in 0..4 {
+            let prod: f64 = (0..4)
+                .filter(|&j| j != i)
+                .map(|j| w[i].0 - w[j].0)
+                .product();
+            dd += w[i].1 / prod;
+            noise += 5e-5 / prod.abs();
+        }
+        worst = worst.max(6.0 * (dd.abs() - noise));
+    }
+    worst
 }
 
 /// Starts the sweep from a pose the approach must leave (everything but the
@@ -291,6 +298,7 @@ fn sweep_and_interrupt(name: &str) -> (Play, PathBuf) {
 
 #[test]
 fn first_ctrl_c_stops_jerk_limited_then_holds_reports_and_exits_0() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (play, log) = sweep_and_interrupt("rt-stop");
     let (status, out, err) = play.finish();
     assert_eq!(status.code(), Some(0), "stdout {out}\nstderr {err}");
@@ -326,7 +334,7 @@ fn first_ctrl_c_stops_jerk_limited_then_holds_reports_and_exits_0() {
     // end position, and the end time follows from it.
     let t_s = t_c + (p_end - STOP_DEG - p_c) / V;
     assert!(
-        (t_end - (t_s + STOP_S)).abs() < 0.03,
+        (t_end - (t_s + STOP_S)).abs() < 1.5 / RATE,
         "stop from cruise at {t_s:.3} s should end at {:.3} s, {STOP_DEG} deg on; ended {t_end:.3} s",
         t_s + STOP_S
     );
@@ -336,16 +344,16 @@ fn first_ctrl_c_stops_jerk_limited_then_holds_reports_and_exits_0() {
     );
     let jerk = max_jerk(&pan, t_s - 0.2, t_end + 0.2);
     assert!(
-        jerk <= J + JERK_NOISE,
+        jerk <= J * 1.001,
         "the stop keeps the jerk limit {J}: {jerk}"
     );
     assert!(jerk > J * 0.5, "the stop uses its jerk: {jerk}");
     // The run ends as the stop comes to rest, and the servo is there.
     assert!(
-        t_last - t_end < 0.05,
+        t_last - t_end < 2.5 / RATE,
         "the run ends with the stop ({t_end:.3} s), not {t_last:.3} s"
     );
-    // The last step, to within the log's rounding (1e-4 deg / 5 ms).
+    // The last step, to within the log's rounding (1e-4 deg a cycle).
     let last = &pan[pan.len() - 2..];
     let v = (last[1].1 - last[0].1) / (last[1].0 - last[0].0);
     assert!(v.abs() < 0.05, "the last goal is at rest: {v} deg/s");
@@ -358,6 +366,7 @@ fn first_ctrl_c_stops_jerk_limited_then_holds_reports_and_exits_0() {
 
 #[test]
 fn second_ctrl_c_turns_the_torque_off_and_exits_1() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (play, log) = sweep_and_interrupt("rt-torque");
     // The stop lasts 3.1 s: time enough for the second.
     play.interrupt();
@@ -384,7 +393,7 @@ fn second_ctrl_c_turns_the_torque_off_and_exits_1() {
         .collect();
     let last_cruise = *cruise_rows.last().expect("the pan cruised");
     assert!(
-        t_last < pan[last_cruise].0 + STOP_S - 0.05,
+        t_last < pan[last_cruise].0 + STOP_S - 1.0 / RATE,
         "ended at {t_last} s, after a whole stop from {} s",
         pan[last_cruise].0
     );
@@ -397,21 +406,24 @@ fn second_ctrl_c_turns_the_torque_off_and_exits_1() {
 
 #[test]
 fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     // wrist_roll starts 60 deg from the first keyframe; at 25 % of its
     // limits (270 deg/s, 1500 deg/s^2, 15000 deg/s^3: 67.5, 375, 3750) it
     // reaches 67.5 deg/s in 67.5/375 + 375/3750 = 0.28 s over
     // 67.5 * 0.28 / 2 = 9.45 deg, cruises (60 - 18.9) / 67.5 = 0.609 s, and
     // arrives after 2 * 0.28 + 0.609 = 1.169 s. The other joints start
     // 5 deg off, which takes well under 0.6 s even for the gentlest
-    // (shoulder_lift: (32 * 5 / 1750)^(1/3) = 0.45 s on jerk alone).
+    // (shoulder_lift: (32 * 5 / 1750)^(1/3) = 0.45 s on jerk alone). The
+    // motion then holds the first keyframe for 1 s, so every joint must be
+    // exactly there from the approach's end until 1.169 + 1 s.
     let dir = scratch("rt-approach");
     let motion = dir.join("short.yaml");
     write_robot(&dir, false);
     std::fs::write(
         &motion,
-        "robot: robot.yaml\nunits: deg\nkeyframes:\n  - pose: {shoulder_pan: 0, shoulder_lift: -90, \
-         elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}\n  \
-         - pose: {shoulder_pan: 20, gripper: 40}\n",
+        "robot: robot.yaml\nunits: deg\nrate: 10\nkeyframes:\n  - {at: 0, pose: {shoulder_pan: 0, \
+         shoulder_lift: -90, elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}}\n  \
+         - {at: 1, pose: {shoulder_pan: 0}}\n  - {at: 2, pose: {shoulder_pan: 20, gripper: 40}}\n",
     )
     .expect("write motion");
     let log = dir.join("log.csv");
@@ -448,20 +460,22 @@ fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
             (planned - measured).abs() < 0.01,
             "{name}'s plan starts where it is: {planned} vs {measured}"
         );
-        // It reaches the first keyframe when the approach ends.
-        let there = rows[at(&rows, 1.169)].1;
-        assert!(
-            (there - k).abs() < 0.01,
-            "{name} at {k} after the approach: {there}"
-        );
+        // At the first keyframe from the approach's end, through the hold.
+        for r in rows.iter().filter(|r| r.0 > 1.169 && r.0 < 2.169) {
+            assert!(
+                (r.1 - k).abs() < 1e-4,
+                "{name} at {k} after the approach: {r:?}"
+            );
+        }
     }
     let roll = joint_rows(&log, "wrist_roll");
     let arrived = roll
         .iter()
         .position(|r| r.1.abs() < 1e-4)
         .expect("wrist_roll arrives");
+    // Between the rows around 1.169 s: not yet at the row before.
     assert!(
-        (roll[arrived].0 - 1.169).abs() < 0.02,
+        roll[arrived].0 >= 1.169 && roll[arrived].0 < 1.169 + 1.0 / RATE,
         "wrist_roll arrives at 1.169 s: {}",
         roll[arrived].0
     );
@@ -472,7 +486,7 @@ fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
     );
     let jerk = max_jerk(&roll, 0.0, 1.169);
     assert!(
-        jerk <= 3750.0 + JERK_NOISE,
+        jerk <= 3750.0 * 1.001,
         "and keeps 25 % of the jerk limit: {jerk}"
     );
 }

@@ -6,12 +6,14 @@
 use criterion::{criterion_group, criterion_main};
 
 mod protocol;
+mod runtime;
 mod timing;
 mod trajectory;
 
 criterion_group!(
     benches,
     protocol::benches,
+    runtime::benches,
     timing::benches,
     trajectory::benches
 );

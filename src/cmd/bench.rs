@@ -22,7 +22,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
 
@@ -36,6 +36,10 @@ pub struct Args {
     /// port in the robot file; without one, the simulator on a pty).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`); with --port it must match the servos.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// How long to measure, in seconds.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
@@ -130,7 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let robot = load_robot_any_rate(&path)?;
+    let robot = load_robot_any_rate_calibrated(&path, args.calibration.as_deref())?;
     let duration = Duration::from_secs_f64(args.seconds);
     let clock = SystemClock::new();
 
@@ -145,7 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let mut bus = bus.clone();
         bus.busy_poll |= args.busy_poll;
         runs.push(std::thread::spawn(move || {
-            bench_bus(&robot, &bus, port, clock, duration)
+            bench_bus(&robot, index, &bus, port, clock, duration)
         }));
     }
     let mut buses = Vec::new();
@@ -166,6 +170,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn bench_bus(
     robot: &Robot,
+    index: usize,
     bus: &BusConfig,
     port: Option<String>,
     clock: SystemClock,
@@ -183,7 +188,10 @@ fn bench_bus(
     // The simulator (when no port is given) serves until `stop`.
     let stop = Arc::new(AtomicBool::new(false));
     let (path, server, backend) = match port {
-        Some(port) => (port.clone(), None, format!("serial port {port}")),
+        Some(port) => {
+            super::calibrate::check_port(robot, index, &port)?;
+            (port.clone(), None, format!("serial port {port}"))
+        }
         None => {
             let servos = servobus_runtime::sim::bus_servos(robot, bus)?;
             let mut server = PtyServer::open(bus.baud, servos)
@@ -222,28 +230,31 @@ fn measure(
     if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
-    // Timeouts allow a few milliseconds of scheduling noise on top of the
-    // robot file's latency: a loaded machine's pty, or a USB adapter.
-    let latency = bus.latency.max(Duration::from_millis(3));
+    // The robot file's latency, or the port's own allowance when that is
+    // longer (a pty's scheduling noise; a real adapter never gets it).
+    let latency = bus.latency.max(transport.assumed_latency());
     let settings = BusSettings::new(series, bus.baud)
         .with_latency(latency)
         .with_return_delay(bus.return_delay);
     let mut servo_bus = Bus::new(transport, clock, settings);
 
-    // Hold every servo where it is: the goals are the present positions.
-    let mut goals = vec![0u8; ids.len() * 2];
+    // Hold every servo where it is: the goals are the present positions,
+    // in the layout of this bus's series.
     let order = series.byte_order();
-    let pos = servobus_protocol::registers::STS
+    let pos = series
+        .map()
         .at(addr::PRESENT_POSITION)
         .context("register map has no present position")?;
+    let len = usize::from(pos.size);
+    let mut goals = vec![0u8; ids.len() * len];
     // The first read is not timed: a loaded machine or a slow adapter gets
     // a patient timeout and a few tries before a servo counts as absent.
     let read = servo_bus
-        .sync_read_patiently(addr::PRESENT_POSITION, 2, ids)
+        .sync_read_patiently(pos.address, pos.size, ids)
         .with_context(|| format!("bus `{}`: first read", bus.name))?;
     for (i, reply) in read.iter().enumerate() {
         match reply {
-            Ok(r) => goals[i * 2..i * 2 + 2].copy_from_slice(r.data),
+            Ok(r) => goals[i * len..(i + 1) * len].copy_from_slice(r.data),
             Err(missing) => bail!(
                 "bus `{}`: servo {} does not answer ({}) after {} tries; \
                  check the port and `servobus scan`",
@@ -256,7 +267,7 @@ fn measure(
     }
     // Present and goal position share the layout, so the bytes read are
     // valid goals as they are; decoding them checks that they are.
-    for chunk in goals.chunks_exact(2) {
+    for chunk in goals.chunks_exact(len) {
         pos.decode(chunk, order)
             .context("a servo reported an impossible position")?;
     }
@@ -275,7 +286,7 @@ fn measure(
             .sync_write(addr::GOAL_POSITION, ids, &goals)
             .with_context(|| format!("bus `{}`: SYNC WRITE", bus.name))?;
         let read = servo_bus
-            .sync_read(addr::PRESENT_POSITION, 2, ids)
+            .sync_read(pos.address, pos.size, ids)
             .with_context(|| format!("bus `{}`: SYNC READ", bus.name))?;
         missed += read.missing() as u64;
         let now = clock.now();

@@ -20,13 +20,6 @@ use servobus_protocol::MAX_ID;
 
 type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
 
-/// Latency assumed for an adapter that is not an FTDI one (USB CDC and
-/// CH34x adapters deliver in 1 ms USB frames).
-const DEFAULT_LATENCY_US: u64 = 1000;
-/// Latency assumed for a pseudo-terminal: the program behind it (the
-/// simulator) is scheduled by the OS, which costs milliseconds on a busy
-/// machine.
-const PTY_LATENCY_US: u64 = 2000;
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
 const LATENCY_CEILING: Duration = Duration::from_millis(300);
@@ -133,26 +126,16 @@ fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Resu
     let clock = SystemClock::new();
     let transport = SerialTransport::open(&port.port, baud, clock)
         .with_context(|| format!("cannot open {}", port.port))?;
-    let ftdi = transport.ftdi_latency().cloned();
-    if let Some(warning) = ftdi.as_ref().and_then(|f| f.warning()) {
+    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
-    let latency = match (port.latency_us, ftdi) {
-        (Some(us), _) => Duration::from_micros(us),
-        // The FTDI chip holds bytes up to its timer; add the USB frame.
-        (None, Some(f)) => f.latency + Duration::from_micros(DEFAULT_LATENCY_US),
-        (None, None) if is_pty(&port.port) => Duration::from_micros(PTY_LATENCY_US),
-        (None, None) => Duration::from_micros(DEFAULT_LATENCY_US),
-    };
+    let latency = port
+        .latency_us
+        .map_or_else(|| transport.assumed_latency(), Duration::from_micros);
     let settings = BusSettings::new(series, baud)
         .with_latency(latency)
         .with_retries(retries);
     Ok(Bus::new(transport, clock, settings))
-}
-
-/// Whether `path` is (a link to) a pseudo-terminal.
-fn is_pty(path: &str) -> bool {
-    std::fs::canonicalize(path).is_ok_and(|p| p.starts_with("/dev/pts"))
 }
 
 /// Measures the adapter's latency with servo `id` and widens the bus's

@@ -151,14 +151,7 @@ fn decode(bytes: &[u8], from: Sender, map: &RegisterMap) -> Vec<Item> {
     // both are reported as one problem.
     let mut bad_checksum: Option<(u8, u8, u8)> = None;
     let mut pending: Option<Discard> = None;
-    loop {
-        let ev = match dec.decode(&mut input) {
-            Some(ev) => ev,
-            None => match dec.finish() {
-                Some(ev) => ev,
-                None => break,
-            },
-        };
+    while let Some(ev) = dec.decode_to_end(&mut input) {
         match ev {
             Event::Packet { packet, start } => {
                 flush(&mut pending, bytes, &mut items);

@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod budget;
 mod bus;
+mod calibrate;
 mod decode;
 mod docs;
 pub mod exit;
@@ -21,6 +22,7 @@ mod list;
 mod plan;
 mod play;
 mod sim;
+mod teach;
 
 const EXIT_STATUS: &str = "\
 Exit status:
@@ -50,6 +52,8 @@ enum Command {
     Budget(budget::Args),
     /// Measure the achieved bus update rate of a robot's buses.
     Bench(bench::Args),
+    /// Calibrate a physical robot: torque off, pose held, joints swept; writes the calibration file.
+    Calibrate(calibrate::Args),
     /// Serve a robot file's simulated servos on a pseudo-terminal.
     Sim(sim::Args),
     /// Find every servo on a port.
@@ -72,6 +76,8 @@ enum Command {
     Completions(docs::CompletionsArgs),
     /// Print the manual page (roff): `servobus man | man -l -`.
     Man(docs::ManArgs),
+    /// Pose the robot by hand (torque off) and write a motion file.
+    Teach(teach::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -106,6 +112,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Plan(args) => plan::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Sim(args) => sim::run(args),
         Command::Scan(args) => bus::scan(args),
         Command::Ping(args) => bus::ping(args),
@@ -117,6 +124,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Init(args) => init::run(args),
         Command::Completions(args) => docs::completions(args),
         Command::Man(args) => docs::man(args),
+        Command::Teach(args) => teach::run(args),
     }
 }
 

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use serde::Serialize;
-use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot};
+use servobus_runtime::config::{load_motion_calibrated, plan_motion, Motion, Robot};
 use servobus_trajectory::{JointState, Trajectory};
 
 /// Arguments of `servobus plan`.
@@ -18,6 +18,10 @@ pub struct Args {
     /// Robot file or built-in name (default: the one the motion file names).
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<std::path::PathBuf>,
+    /// Calibration file of the physical robot: its measured ranges clip the
+    /// joint limits the plan is checked against.
+    #[arg(long)]
+    pub calibration: Option<std::path::PathBuf>,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -64,7 +68,11 @@ struct PlanJson {
 
 /// Runs `servobus plan`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (motion, robot) = load_motion(&args.motion, args.robot.as_deref())?;
+    let (motion, robot) = load_motion_calibrated(
+        &args.motion,
+        args.robot.as_deref(),
+        args.calibration.as_deref(),
+    )?;
     let traj = plan_motion(&motion, &robot)?;
     let report = summarise(&motion, &robot, &traj);
     if let Some(path) = &args.plot {

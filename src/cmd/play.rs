@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
 use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
-use servobus_runtime::config::{load_motion, plan_motion, Motion, Robot, Units};
+use servobus_runtime::config::{load_motion_calibrated, plan_motion, Motion, Robot, Units};
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
     bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
@@ -44,6 +44,10 @@ pub struct Args {
     /// robot file's ports; without any, the built-in simulator).
     #[arg(long)]
     pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
@@ -156,15 +160,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Backend::Simulated => {
             let clock = SystemClock::new();
             let mut buses = Vec::new();
-            let mut first = 0;
+            let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
             for bus in &robot.buses {
-                let at = &pose[first..first + bus.joints.len()];
-                first += bus.joints.len();
-                let mut server = PtyServer::open(
-                    bus.baud,
-                    servobus_runtime::sim::servos_at(&robot, bus, at)?,
-                )
-                .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
+                let mut server = PtyServer::open(bus.baud, sim.servos(bus)?)
+                    .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
                 let path = server.path().to_string_lossy().into_owned();
                 let flag = Arc::clone(&stop_servers);
                 servers.push(std::thread::spawn(move || server.serve(&flag)));
@@ -174,7 +173,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
                 // A pty on a busy machine wakes late now and then: allow
                 // for it in the reply deadlines.
-                let settings = bus_settings(bus).with_latency(bus.latency.max(PTY_LATENCY));
+                let settings = bus_settings(bus)
+                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
                 buses.push(Bus::new(transport, clock, settings));
             }
             spawn(&robot, trajectory, buses, options)?
@@ -182,6 +182,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Backend::Hardware(ports) => {
             let clock = SystemClock::new();
             let mut buses = Vec::new();
+            let mut ptys = 0;
             for (bus, port) in robot.buses.iter().zip(ports) {
                 let mut transport = SerialTransport::open(port, bus.baud, clock)
                     .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
@@ -189,10 +190,25 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
                     eprintln!("warning: {warning}");
                 }
+                let mut settings = bus_settings(bus);
+                if transport.is_pty() {
+                    // A simulator served on a pty (`servobus sim`) answers
+                    // from a process that can wait for the CPU, as the
+                    // built-in one does: the same allowances.
+                    settings =
+                        settings.with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
+                    ptys += 1;
+                }
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
-                buses.push(Bus::new(transport, clock, bus_settings(bus)));
+                buses.push(Bus::new(transport, clock, settings));
             }
-            spawn(&robot, trajectory, buses, options)?
+            super::calibrate::check_buses(&robot, &mut buses, ports)?;
+            let faults = if ptys == buses.len() {
+                fault_policy(&Backend::Simulated, rate_hz)
+            } else {
+                options.faults
+            };
+            spawn(&robot, trajectory, buses, RunOptions { faults, ..options })?
         }
     };
 
@@ -368,10 +384,17 @@ fn load(args: &Args) -> anyhow::Result<Loaded> {
                 args.motion.display()
             )));
         };
-        let robot = servobus_runtime::config::load_robot(robot_path)?;
+        let robot = servobus_runtime::config::load_robot_calibrated(
+            robot_path,
+            args.calibration.as_deref(),
+        )?;
         (recording_motion(&args.motion, &robot), robot)
     } else {
-        load_motion(&args.motion, args.robot.as_deref())?
+        load_motion_calibrated(
+            &args.motion,
+            args.robot.as_deref(),
+            args.calibration.as_deref(),
+        )?
     };
     let rate_hz = match args.rate {
         Some(rate) if !(rate.is_finite() && rate > 0.0) => {
@@ -474,9 +497,6 @@ impl Shown {
         servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
     }
 }
-
-/// Reply-deadline allowance for the simulator's pseudo-terminals.
-const PTY_LATENCY: Duration = Duration::from_millis(3);
 
 /// How long the simulator on a pty may stay silent before a servo counts as
 /// missing. Its replies come from a thread of this process: when the host

@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use servobus_runtime::config::{load_robot, Robot};
-use servobus_sim::{Faults, PtyServer, SimServo};
+use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
+use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\
 Fault injection: comma-separated items, applied to every reply independently.
@@ -44,7 +45,29 @@ pub struct Args {
     /// on one pty, at the first bus's baud rate; IDs must then be distinct).
     #[arg(long)]
     pub bus: Option<String>,
+    /// How each servo horn sits on its joint: a YAML file of
+    /// `<joint>: {zero_tick, direction, stops: [min_deg, max_deg]}`
+    /// (see configs/sim/so101-mounting.yaml). Default: the robot file's.
+    #[arg(long, value_name = "M.yaml")]
+    pub mounting: Option<std::path::PathBuf>,
+    /// A randomly assembled unit instead of --mounting: horns anywhere on
+    /// the turn (some ranges across the 4095/0 seam), some directions
+    /// reversed, stops just past the limits. Same seed, same unit.
+    #[arg(long, value_name = "SEED", conflicts_with = "mounting")]
+    pub unit: Option<u64>,
+    /// A hand that moves torque-off joints along keyframes of physical
+    /// angles: `{keyframes: [{at: SECONDS, pose: {<joint>: DEG}}]}`
+    /// (see configs/sim/so101-hand.yaml).
+    #[arg(long, value_name = "H.yaml")]
+    pub hand: Option<std::path::PathBuf>,
+    /// Write the physical joint angles (deg) to this CSV, `time_s,<joint>,...`,
+    /// 100 rows a second while the simulator runs.
+    #[arg(long, value_name = "T.csv")]
+    pub truth: Option<std::path::PathBuf>,
 }
+
+/// How often the truth file is written to (rows are sampled every 10 ms).
+const TRUTH_FLUSH: std::time::Duration = std::time::Duration::from_millis(100);
 
 /// Runs `servobus sim`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -56,7 +79,42 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None => Faults::none(),
     };
     faults.echo |= args.echo;
-    let (baud, servos) = servos_of(&robot, args.bus.as_deref())?;
+    let mut builder = SimRobot::builder(&robot);
+    if let Some(path) = &args.mounting {
+        builder = builder.mounting(Mounting::load(path, &robot)?);
+    }
+    if let Some(seed) = args.unit {
+        builder = builder.mounting(Mounting::random(&robot, seed));
+    }
+    if let Some(path) = &args.hand {
+        builder = builder.hand(Hand::load(path, &robot)?);
+    }
+    // The truth file is opened before anything is served, so that a bad
+    // path fails at once.
+    let truth = match &args.truth {
+        Some(path) => {
+            let file = std::fs::File::create(path)
+                .with_context(|| format!("{}: cannot create the truth file", path.display()))?;
+            // One column per served joint.
+            let truth = match args.bus.as_deref() {
+                Some(name) => Truth::new(
+                    robot
+                        .buses
+                        .iter()
+                        .filter(|b| b.name == name)
+                        .flat_map(|b| b.joints.iter().map(|j| j.name.clone()))
+                        .collect(),
+                    servobus_runtime::sim::TRUTH_PERIOD,
+                ),
+                None => new_truth(&robot),
+            };
+            builder = builder.truth(&truth);
+            Some((truth, std::io::BufWriter::new(file), path.clone()))
+        }
+        None => None,
+    };
+    let bodies = args.mounting.is_some() || args.unit.is_some() || args.hand.is_some();
+    let (baud, servos) = servos_of(&robot, &builder, args.bus.as_deref())?;
     let count = servos.len();
     let mut server = PtyServer::open(baud, servos)?;
     if let Some(link) = &args.link {
@@ -64,6 +122,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     server.set_pacing(!args.no_pacing);
     server.set_faults(faults);
+    if bodies || truth.is_some() {
+        // Bodies move (and the truth is sampled) while no client talks.
+        server.set_tick(Some(servobus_runtime::sim::TRUTH_PERIOD));
+    }
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -79,17 +141,70 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     out.flush()?;
     drop(out);
 
+    let writer = truth.map(|(truth, out, path)| {
+        let stop = Arc::clone(&stop);
+        let done = Arc::new(AtomicBool::new(false));
+        let finished = Arc::clone(&done);
+        let handle = std::thread::spawn(move || write_truth(&truth, out, &stop, &finished));
+        (handle, done, path)
+    });
     let served = server.serve(&stop);
+    server.settle();
     // Dropping the server removes the link, also after an I/O error.
     drop(server);
+    if let Some((handle, done, path)) = writer {
+        done.store(true, Ordering::SeqCst);
+        match handle.join() {
+            Ok(result) => {
+                result.with_context(|| format!("{}: cannot write the truth", path.display()))?
+            }
+            Err(_) => anyhow::bail!("{}: the truth writer failed", path.display()),
+        }
+    }
     served?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Streams the truth's complete rows to `out` until `done`, flushing every
+/// [`TRUTH_FLUSH`] so that a reader sees the file grow.
+fn write_truth(
+    truth: &Truth,
+    mut out: impl Write,
+    stop: &AtomicBool,
+    done: &AtomicBool,
+) -> std::io::Result<()> {
+    writeln!(out, "{}", truth.csv_header())?;
+    loop {
+        // `done` is set after the server's last step: one more pass then
+        // writes every row up to the end.
+        let last = done.load(Ordering::SeqCst);
+        for row in truth.take_rows() {
+            write!(out, "{:.3}", row.time_s)?;
+            for a in &row.angles_deg {
+                write!(out, ",{a:.3}")?;
+            }
+            writeln!(out)?;
+        }
+        out.flush()?;
+        if last {
+            return Ok(());
+        }
+        if !stop.load(Ordering::SeqCst) {
+            std::thread::sleep(TRUTH_FLUSH);
+        } else {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
 }
 
 /// The servos to serve and the baud rate to serve them at: each joint's
 /// servo with its ID, model, the bus's return delay, and its shaft at the
 /// joint's rest position.
-fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimServo>)> {
+fn servos_of(
+    robot: &Robot,
+    builder: &SimRobotBuilder<'_>,
+    only: Option<&str>,
+) -> anyhow::Result<(u32, Vec<SimServo>)> {
     let buses: Vec<_> = match only {
         Some(name) => {
             let Some(bus) = robot.buses.iter().find(|b| b.name == name) else {
@@ -131,7 +246,7 @@ fn servos_of(robot: &Robot, only: Option<&str>) -> anyhow::Result<(u32, Vec<SimS
         // Every servo listens at the first bus's rate: that is the pty's.
         let mut served = bus.clone();
         served.baud = baud;
-        servos.extend(servobus_runtime::sim::bus_servos(robot, &served)?);
+        servos.extend(builder.servos(&served)?);
     }
     Ok((baud, servos))
 }

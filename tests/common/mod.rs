@@ -60,6 +60,11 @@ pub struct Sim {
 impl Sim {
     /// Starts `servobus sim` for the SO-101 arm with a link in `dir`.
     pub fn start(dir: &Path) -> Sim {
+        Sim::start_with(dir, &[])
+    }
+
+    /// Like [`Sim::start`], with more arguments for `servobus sim`.
+    pub fn start_with(dir: &Path, extra: &[&str]) -> Sim {
         let link = dir.join("bus");
         let robot = repo("configs/robots/so101.yaml");
         let mut child = Command::new(BIN)
@@ -67,6 +72,7 @@ impl Sim {
             .arg(&robot)
             .arg("--link")
             .arg(&link)
+            .args(extra)
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()

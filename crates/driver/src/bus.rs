@@ -6,7 +6,9 @@ use servobus_protocol::registers::{Access, Register};
 use servobus_protocol::{encode, frame_len, Packet, StatusFlags, BROADCAST_ID, MAX_PARAMS};
 
 use crate::io::{Io, Sink, Tally};
-use crate::settings::{BusSettings, ReplyLevel};
+use servobus_timing::Transaction;
+
+use crate::settings::BusSettings;
 use crate::stats::Counters;
 use crate::sync::SyncStore;
 use crate::{BusError, Clock, Transport};
@@ -34,6 +36,8 @@ pub struct Bus<T: Transport, C: Clock> {
     pub(crate) counters: Counters,
     pub(crate) servos: Box<[Counters; 256]>,
     pub(crate) sync: SyncStore,
+    /// SYNC WRITE frames too many for one frame, packed before sending.
+    pub(crate) packed: Vec<u8>,
 }
 
 impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
@@ -120,6 +124,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             counters: Counters::default(),
             servos: Box::new([Counters::default(); 256]),
             sync: SyncStore::new(),
+            packed: Vec::new(),
         }
     }
 
@@ -186,8 +191,39 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         self.last_rtt
     }
 
-    fn replies_to_writes(&self, id: u8) -> bool {
-        id != BROADCAST_ID && self.settings.replies == ReplyLevel::All
+    /// The deadline of `tx` to servo `id`, or `None` when no reply comes
+    /// (a broadcast, or a status level that does not answer `tx`).
+    pub(crate) fn deadline(&self, id: u8, tx: Transaction) -> Option<Duration> {
+        if id == BROADCAST_ID {
+            return None;
+        }
+        let s = &self.settings;
+        s.link.deadline(tx, s.return_delay, s.replies)
+    }
+
+    /// What a request to `id` waits for: the reply of `len` data bytes to
+    /// `tx` (accepted from `alt` too), or nothing.
+    fn expect(&self, id: u8, alt: u8, len: usize, tx: Transaction) -> Expect {
+        let deadline = self.deadline(id, tx);
+        Expect {
+            id,
+            alt,
+            len,
+            reply: deadline.is_some(),
+            timeout: deadline.unwrap_or(Duration::ZERO),
+        }
+    }
+
+    /// As [`Bus::expect`] for a transaction that must be answered.
+    fn expect_reply(&self, id: u8, len: usize, tx: Transaction) -> Result<Expect, BusError> {
+        let expect = self.expect(id, id, len, tx);
+        if expect.reply {
+            Ok(expect)
+        } else {
+            Err(BusError::InvalidRequest(
+                "the servos' status level does not answer this request",
+            ))
+        }
     }
 
     /// PING servo `id`: whether it is there, and its status flags.
@@ -202,11 +238,10 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 "a broadcast PING is answered by every servo at once",
             ));
         }
+        let expect = self.expect_reply(id, 0, Transaction::Ping)?;
         self.io.begin();
         self.io.tx_len = encode::ping(&mut self.io.tx, id)?;
-        let timeout = self.settings.link.ping_timeout(self.settings.return_delay);
-        self.transact(Expect::reply(id, 0, timeout))
-            .map(Option::unwrap_or_default)
+        self.transact(expect).map(Option::unwrap_or_default)
     }
 
     /// READ `out.len()` bytes from `address` of servo `id` into `out`.
@@ -218,22 +253,18 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     pub fn read(&mut self, id: u8, address: u8, out: &mut [u8]) -> Result<StatusFlags, BusError> {
         let len = u8::try_from(out.len())
             .map_err(|_| BusError::InvalidRequest("a READ returns at most 255 bytes"))?;
+        let expect = self.expect_reply(id, out.len(), Transaction::Read { len: out.len() })?;
         self.io.begin();
         self.io.tx_len = encode::read(&mut self.io.tx, id, address, len)?;
-        let timeout = self
-            .settings
-            .link
-            .read_timeout(out.len(), self.settings.return_delay);
-        let flags = self
-            .transact(Expect::reply(id, out.len(), timeout))?
-            .unwrap_or_default();
+        let flags = self.transact(expect)?.unwrap_or_default();
         out.copy_from_slice(&self.reply[..out.len()]);
         Ok(flags)
     }
 
     /// WRITE `data` at `address` of servo `id` (or of every servo, with the
     /// broadcast ID). Returns the reply's status flags, or `None` when no
-    /// reply is expected (broadcast, or [`ReplyLevel::PingAndRead`]).
+    /// reply is expected (broadcast, or a [`StatusLevel`](crate::StatusLevel)
+    /// that does not answer writes).
     ///
     /// Writing an EEPROM register this way changes it until the next power
     /// cycle only (unless the lock is open): use [`Bus::write_eeprom`] to make
@@ -247,10 +278,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, id, data.len());
-        self.transact(expect)
+        self.write_either(id, id, address, data)
     }
 
     /// WRITE accepting the reply from `id` or from `alt` (the new ID, when
@@ -262,24 +290,24 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, alt, data.len());
-        self.transact(expect)
+        self.send_write(id, alt, data.len(), |tx| {
+            encode::write(tx, id, address, data)
+        })
     }
 
-    fn write_expect(&self, id: u8, alt: u8, len: usize) -> Expect {
-        let timeout = self
-            .settings
-            .link
-            .write_timeout(len, self.settings.return_delay);
-        Expect {
-            id,
-            alt,
-            len: 0,
-            reply: self.replies_to_writes(id),
-            timeout,
-        }
+    /// Sends the WRITE-like request `encode` writes (answered as a WRITE of
+    /// `len` data bytes, by `id` or `alt`).
+    fn send_write(
+        &mut self,
+        id: u8,
+        alt: u8,
+        len: usize,
+        encode: impl FnOnce(&mut [u8]) -> Result<usize, servobus_protocol::EncodeError>,
+    ) -> Result<Option<StatusFlags>, BusError> {
+        self.io.begin();
+        self.io.tx_len = encode(&mut self.io.tx)?;
+        let expect = self.expect(id, alt, 0, Transaction::Write { len });
+        self.transact(expect)
     }
 
     /// REG WRITE `data` at `address` of servo `id`: held by the servo until
@@ -293,10 +321,9 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         address: u8,
         data: &[u8],
     ) -> Result<Option<StatusFlags>, BusError> {
-        self.io.begin();
-        self.io.tx_len = encode::reg_write(&mut self.io.tx, id, address, data)?;
-        let expect = self.write_expect(id, id, data.len());
-        self.transact(expect)
+        self.send_write(id, id, data.len(), |tx| {
+            encode::reg_write(tx, id, address, data)
+        })
     }
 
     /// ACTION: servos holding REG WRITE data apply it. Usually broadcast
@@ -307,15 +334,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     pub fn action(&mut self, id: u8) -> Result<Option<StatusFlags>, BusError> {
         self.io.begin();
         self.io.tx_len = encode::action(&mut self.io.tx, id)?;
-        let timeout = self.settings.link.ping_timeout(self.settings.return_delay);
-        let reply = self.replies_to_writes(id);
-        self.transact(Expect {
-            id,
-            alt: id,
-            len: 0,
-            reply,
-            timeout,
-        })
+        let expect = self.expect(id, id, 0, Transaction::Action);
+        self.transact(expect)
     }
 
     /// RESET servo `id` to factory values (its ID included, on most
@@ -326,15 +346,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     pub fn reset(&mut self, id: u8) -> Result<Option<StatusFlags>, BusError> {
         self.io.begin();
         self.io.tx_len = encode::reset(&mut self.io.tx, id)?;
-        let timeout = self.settings.link.ping_timeout(self.settings.return_delay);
-        let reply = self.replies_to_writes(id);
-        self.transact(Expect {
-            id,
-            alt: id,
-            len: 0,
-            reply,
-            timeout,
-        })
+        let expect = self.expect(id, id, 0, Transaction::Reset);
+        self.transact(expect)
     }
 
     /// Reads one register and decodes it with this bus's byte order.
@@ -529,16 +542,4 @@ pub struct LatencyMeasurement {
     pub mean: Duration,
     /// Largest latency seen: the value to configure.
     pub max: Duration,
-}
-
-impl Expect {
-    fn reply(id: u8, len: usize, timeout: Duration) -> Self {
-        Expect {
-            id,
-            alt: id,
-            len,
-            reply: true,
-            timeout,
-        }
-    }
 }

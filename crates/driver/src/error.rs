@@ -72,6 +72,9 @@ pub enum BusError {
     /// The request could not be encoded (an ID out of range, too much data).
     #[error("cannot encode the request: {0}")]
     Encode(#[from] EncodeError),
+    /// A value does not fit its register (e.g. an offset beyond +-2047).
+    #[error(transparent)]
+    Value(servobus_protocol::registers::ValueError),
     /// The arguments make no sense (e.g. a SYNC WRITE whose data is not a
     /// whole number of blocks, or a repeated ID in a SYNC READ).
     #[error("invalid request: {0}")]

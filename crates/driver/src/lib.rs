@@ -33,7 +33,34 @@
 //!             + wire(replies) + adapter latency + margin
 //! ```
 //!
-//! # Example
+//! # Reading and writing servos from your own program
+//!
+//! [`Servos`] is the typed API: open a port in one call, then read and write
+//! registers by their constants in [`registers::sts`] (STS/SMS) or
+//! [`registers::scs`] (SCS), as Rust values with the sign handled, one
+//! result per servo:
+//!
+//! ```no_run
+//! use servobus_driver::{registers::sts, Servos};
+//!
+//! let mut servos = Servos::open("/dev/ttyACM0", 1_000_000)?;
+//! let ids = [1, 2, 3, 4, 5, 6];
+//! for (id, position) in ids.iter().zip(servos.sync_read(sts::PRESENT_POSITION, &ids)?) {
+//!     match position {
+//!         Ok(steps) => println!("servo {id} is at {steps} steps"), // an i16
+//!         Err(missing) => println!("servo {id} is missing: {}", missing.reason),
+//!     }
+//! }
+//! // One (id, value) pair per servo: no block length to get wrong.
+//! servos.sync_write(sts::GOAL_POSITION, &[(1, 2048), (2, 1024)])?;
+//! # Ok::<(), servobus_driver::BusError>(())
+//! ```
+//!
+//! The example `positions` does this on a real port (`--port`) or on
+//! simulated servos (`--sim`):
+//! `cargo run -p servobus-driver --example positions -- --sim --nudge 100`.
+//!
+//! # The byte-level bus
 //!
 //! A bus over a transport that answers like one servo with ID 1 (a real
 //! program would use [`SerialTransport`] and [`SystemClock`], or the
@@ -83,26 +110,33 @@
 #![warn(missing_docs)]
 
 mod bus;
-mod clock;
 mod eeprom;
 mod error;
 mod io;
 #[cfg(feature = "serial")]
 mod serial;
+mod servos;
 mod settings;
 mod stats;
 mod sync;
 #[cfg(test)]
 mod testing;
-mod transport;
 
 pub use bus::{Bus, LatencyMeasurement};
-pub use clock::{Clock, ManualClock, SystemClock};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]
 pub use serial::{ftdi_latency_timer, FtdiLatency, OpenError, OpenProblem, SerialTransport};
-pub use settings::{BusSettings, ReplyLevel};
+pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError};
+pub use servobus_timing::StatusLevel;
+pub use servos::Servos;
+pub use settings::BusSettings;
+
+/// The register maps and typed register constants ([`registers::sts`],
+/// [`registers::scs`]), re-exported so that one crate is enough.
+pub use servobus_protocol::registers;
+pub use servobus_protocol::registers::{Reg, Series};
+pub use servobus_protocol::StatusFlags;
+pub use servobus_timing::Link;
 pub use stats::{Counters, RttStats};
 pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};
-pub use transport::{Transport, TransportError};

@@ -125,6 +125,28 @@ impl<C: Clock> SerialTransport<C> {
     pub fn clock(&self) -> &C {
         &self.clock
     }
+
+    /// Whether the port is (a link to) a pseudo-terminal: a simulator such
+    /// as `servobus sim`, not a USB adapter.
+    pub fn is_pty(&self) -> bool {
+        std::fs::canonicalize(&self.path).is_ok_and(|p| p.starts_with("/dev/pts"))
+    }
+
+    /// The adapter latency to allow for on this port when none is
+    /// configured: an FTDI adapter's latency timer plus one USB frame,
+    /// [`Link::PTY_LATENCY`](servobus_timing::Link::PTY_LATENCY) for a
+    /// pseudo-terminal, [`Link::USB_LATENCY`](servobus_timing::Link::USB_LATENCY)
+    /// for any other adapter. A real port never gets the pseudo-terminal's
+    /// allowance.
+    pub fn assumed_latency(&self) -> Duration {
+        use servobus_timing::Link;
+        match &self.ftdi {
+            // The FTDI chip holds bytes up to its timer; add the USB frame.
+            Some(f) => f.latency + Link::USB_LATENCY,
+            None if self.is_pty() => Link::PTY_LATENCY,
+            None => Link::USB_LATENCY,
+        }
+    }
 }
 
 /// Opens the port and, on Linux, asks the driver for low-latency mode

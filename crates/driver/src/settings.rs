@@ -4,19 +4,7 @@
 use std::time::Duration;
 
 use servobus_protocol::registers::Series;
-use servobus_timing::Link;
-
-/// Which instructions the servos answer: their status level (register 8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum ReplyLevel {
-    /// Level 0: only PING and READ are answered; WRITE, REG WRITE, ACTION and
-    /// RESET apply silently.
-    PingAndRead,
-    /// Level 1 (the factory setting): every instruction addressed to one
-    /// servo is answered.
-    #[default]
-    All,
-}
+use servobus_timing::{Link, StatusLevel};
 
 /// Settings of one bus.
 ///
@@ -42,8 +30,9 @@ pub struct BusSettings {
     pub return_delay: Duration,
     /// How many times a failed transaction is tried again (0: never).
     pub retries: u8,
-    /// Which instructions the servos answer.
-    pub replies: ReplyLevel,
+    /// Which instructions the servos answer: their status level (register
+    /// 8). Replies are waited for only where this level sends them.
+    pub replies: StatusLevel,
     /// Whether the adapter may echo requests back (half-duplex adapters
     /// without automatic direction control). When on (the default), one copy
     /// of each request and any copy of the previous request are skipped;
@@ -66,7 +55,7 @@ impl BusSettings {
             link: Link::new(baud),
             return_delay: Duration::ZERO,
             retries: 1,
-            replies: ReplyLevel::All,
+            replies: StatusLevel::All,
             echo: true,
             strict_status: false,
         }
@@ -90,8 +79,8 @@ impl BusSettings {
         self
     }
 
-    /// The same settings with the reply level set.
-    pub fn with_replies(mut self, replies: ReplyLevel) -> Self {
+    /// The same settings with the servos' status level set.
+    pub fn with_replies(mut self, replies: StatusLevel) -> Self {
         self.replies = replies;
         self
     }

@@ -11,7 +11,8 @@
 
 use std::time::Duration;
 
-use servobus_protocol::{encode, Packet, StatusFlags, BROADCAST_ID, MAX_LENGTH_BYTE, MAX_PARAMS};
+use servobus_protocol::{encode, Packet, StatusFlags, BROADCAST_ID, MAX_PARAMS};
+use servobus_timing::{pack_sync_write, servos_per_frame, Block, PackError, Transaction};
 
 use crate::io::Sink;
 use crate::stats::Counters;
@@ -327,12 +328,15 @@ impl Sink for Round<'_> {
 impl<T: Transport, C: Clock> Bus<T, C> {
     /// SYNC WRITE `data` at `address` to the servos `ids`: servo `ids[i]`
     /// gets `data[i * L..(i + 1) * L]` with `L = data.len() / ids.len()`.
-    /// Nobody answers. Frames are split where the length byte would pass
-    /// 255. Does not allocate.
+    /// Nobody answers. The frames are packed by
+    /// [`servobus_timing::pack_sync_write`] (split where the length byte
+    /// would pass 255), the same packer the cycle budget and the benches
+    /// measure. Does not allocate for a single frame (up to 35 servos with
+    /// 6-byte blocks), nor for more once the bus has sent as many.
     ///
     /// # Errors
     /// [`BusError::InvalidRequest`] when `data` is not `ids.len()` blocks of
-    /// 1..=251 bytes; [`BusError::Encode`] for an invalid ID;
+    /// 1..=250 bytes; [`BusError::Encode`] for an invalid ID;
     /// [`BusError::Transport`].
     pub fn sync_write(&mut self, address: u8, ids: &[u8], data: &[u8]) -> Result<(), BusError> {
         if ids.is_empty() || data.is_empty() || data.len() % ids.len() != 0 {
@@ -340,24 +344,50 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 "SYNC WRITE data must be one equal block per servo",
             ));
         }
-        let len = data.len() / ids.len();
-        // Length byte = 2 + params, params = 2 + servos * (len + 1).
-        let per_frame = (MAX_LENGTH_BYTE - 4) / (len + 1);
-        if per_frame == 0 || len > MAX_PARAMS {
-            return Err(BusError::InvalidRequest("SYNC WRITE block too long"));
-        }
-        let len_byte = len as u8;
-        for (chunk_ids, chunk_data) in ids.chunks(per_frame).zip(data.chunks(per_frame * len)) {
-            self.io.begin();
-            self.io.tx_len =
-                encode::sync_write_flat(&mut self.io.tx, address, len_byte, chunk_ids, chunk_data)?;
-            self.counters.transactions += 1;
-            for &id in chunk_ids {
-                self.servos[usize::from(id)].transactions += 1;
+        let len = u8::try_from(data.len() / ids.len())
+            .map_err(|_| BusError::InvalidRequest("SYNC WRITE block too long"))?;
+        let block = Block::new(address, len);
+        self.io.begin();
+        // The usual case, one frame: packed straight into the send buffer.
+        match pack_sync_write(&mut self.io.tx, block, ids, data) {
+            Ok(packed) => {
+                self.io.tx_len = packed.len;
+                self.count_sync_write(ids);
+                self.io.send()?;
+                return Ok(());
             }
+            Err(PackError::BufferTooSmall { needed, .. }) => {
+                if self.packed.len() < needed {
+                    self.packed.resize(needed, 0);
+                }
+            }
+            Err(e) => return Err(pack_error(e)),
+        }
+        let packed = pack_sync_write(&mut self.packed, block, ids, data).map_err(pack_error)?;
+        let per_frame = servos_per_frame(len);
+        for i in 0..packed.frames {
+            if i > 0 {
+                self.io.begin();
+            }
+            let Some(range) = packed.frame_range(i) else {
+                break;
+            };
+            let frame_len = range.len();
+            self.io.tx[..frame_len].copy_from_slice(&self.packed[range]);
+            self.io.tx_len = frame_len;
+            let first = i * per_frame;
+            self.count_sync_write(&ids[first..ids.len().min(first + per_frame)]);
             self.io.send()?;
         }
         Ok(())
+    }
+
+    /// Counts one SYNC WRITE frame to `ids`.
+    fn count_sync_write(&mut self, ids: &[u8]) {
+        self.counters.transactions += 1;
+        for &id in ids {
+            self.servos[usize::from(id)].transactions += 1;
+        }
     }
 
     /// Sends a frame encoded by the caller (e.g. a SYNC WRITE packed by
@@ -475,7 +505,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             if round >= self.settings.retries {
                 break;
             }
-            let next = self.round_timeout(self.sync.pending.len());
+            let next = self.round_timeout(self.sync.pending.len())?;
             if self.io.clock.now() + next > began.saturating_add(budget) {
                 break;
             }
@@ -492,15 +522,22 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         Ok(SyncRead { store: &self.sync })
     }
 
-    /// Deadline of a round asking `servos` servos.
-    fn round_timeout(&self, servos: usize) -> Duration {
+    /// Deadline of a round asking `servos` servos: one SYNC READ, or on
+    /// SCS servos one READ after another.
+    fn round_timeout(&self, servos: usize) -> Result<Duration, BusError> {
         let s = &self.settings;
-        if s.series.has_sync_read() {
-            s.link
-                .sync_read_timeout(servos, self.sync.len, s.return_delay)
+        let len = self.sync.len;
+        let deadline = if s.series.has_sync_read() {
+            let tx = Transaction::SyncRead { servos, len };
+            s.link.deadline(tx, s.return_delay, s.replies)
         } else {
-            s.link.read_timeout(self.sync.len, s.return_delay) * servos as u32
-        }
+            let tx = Transaction::Read { len };
+            let each = s.link.deadline(tx, s.return_delay, s.replies);
+            each.map(|d| d * u32::try_from(servos).unwrap_or(u32::MAX))
+        };
+        deadline.ok_or(BusError::InvalidRequest(
+            "the servos' status level does not answer reads",
+        ))
     }
 
     /// Asks every servo in `sync.pending` once.
@@ -522,7 +559,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             self.sync.len as u8,
             &self.sync.pending,
         )?;
-        let timeout = self.round_timeout(n);
+        let timeout = self.round_timeout(n)?;
         let start = self.io.send()?;
         let mut sink = Round {
             store: &mut self.sync,
@@ -595,5 +632,14 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         }
         self.settings.retries = saved;
         result
+    }
+}
+
+/// The bus error for a packing failure (the arguments were checked first,
+/// so only an invalid ID or an impossible block remains).
+fn pack_error(e: PackError) -> BusError {
+    match e {
+        PackError::Encode(e) => BusError::Encode(e),
+        _ => BusError::InvalidRequest("SYNC WRITE block too long"),
     }
 }

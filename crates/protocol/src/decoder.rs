@@ -250,6 +250,25 @@ impl Decoder {
         }
     }
 
+    /// [`Decoder::decode`] for a stream that ends with `input`: once `input`
+    /// is used up, the end is declared as by [`Decoder::finish`]. Call it in
+    /// a loop until it returns `None` to see every event of a complete
+    /// capture, a trailing incomplete frame included.
+    pub fn decode_to_end<'s>(&'s mut self, input: &mut &[u8]) -> Option<Event<'s>> {
+        loop {
+            match self.step(false) {
+                Step::NeedMore if input.is_empty() => {
+                    return match self.step(true) {
+                        Step::NeedMore => None,
+                        step => Some(self.apply(step)),
+                    };
+                }
+                Step::NeedMore => self.fill(input),
+                step => return Some(self.apply(step)),
+            }
+        }
+    }
+
     /// Declares the end of the stream (or of a reply window): an incomplete
     /// frame at the front is given up on (discarded up to the next possible
     /// header, as [`DiscardReason::Truncated`]) and the remaining bytes are

@@ -215,14 +215,7 @@ fn misprint_followed_by_a_reply_yields_only_the_reply() {
     let mut dec = Decoder::new();
     let mut input = &stream[..];
     let mut seen = Vec::new();
-    loop {
-        let ev = match dec.decode(&mut input) {
-            Some(ev) => ev,
-            None => match dec.finish() {
-                Some(ev) => ev,
-                None => break,
-            },
-        };
+    while let Some(ev) = dec.decode_to_end(&mut input) {
         match ev {
             Event::Packet { packet, start } => seen.push(format!("packet {start} {}", packet.id())),
             Event::ChecksumError { start, .. } => seen.push(format!("checksum {start}")),

@@ -3,52 +3,11 @@
 //! between the two marks. Only the measuring thread's allocations count: the
 //! test harness's own threads may allocate at any time.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
+use servobus_alloc_count::{allocations, Counting};
 use servobus_protocol::{encode, Decoder, Event, StatusFlags, MAX_FRAME_LEN};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    // Const-initialised and without a destructor: reading it never allocates.
-    static MEASURING: Cell<bool> = const { Cell::new(false) };
-}
-
-fn count() {
-    if MEASURING.try_with(Cell::get).unwrap_or(false) {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-    }
-}
-
-// SAFETY: forwards every call to the system allocator unchanged; the counter
-// is only incremented.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: same contract as ours.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as ours.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: same contract as ours.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.load(Ordering::SeqCst)
-}
 
 #[test]
 fn hot_paths_do_not_allocate() {
@@ -66,7 +25,6 @@ fn hot_paths_do_not_allocate() {
     let ids: [u8; 18] = core::array::from_fn(|i| i as u8 + 1);
     let mut dec = Decoder::new();
 
-    MEASURING.with(|m| m.set(true));
     let before = allocations();
     let mut frames = 0;
     for _ in 0..100 {
@@ -88,14 +46,11 @@ fn hot_paths_do_not_allocate() {
         }
     }
     let after = allocations();
-    MEASURING.with(|m| m.set(false));
 
     assert_eq!(after - before, 0, "allocations on the hot path");
 
     // The counter does see this thread's allocations.
-    MEASURING.with(|m| m.set(true));
     let v = std::hint::black_box(vec![0u8; 64]);
-    MEASURING.with(|m| m.set(false));
     drop(v);
     assert_eq!(allocations() - after, 1);
     assert_eq!((frames, packets), (200, 1000));

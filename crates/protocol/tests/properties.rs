@@ -355,6 +355,16 @@ proptest! {
         let mut dec = Decoder::new();
         let events = run(&mut dec, &stream, &chunks);
         check_tiling(&stream, &events);
+        // The whole capture at once, end declared by `decode_to_end`: the
+        // same events as decoding it in one chunk and then finishing.
+        let one_chunk = run(&mut Decoder::new(), &stream, &[stream.len()]);
+        let mut whole = Decoder::new();
+        let mut input = &stream[..];
+        let mut at_once = Vec::new();
+        while let Some(ev) = whole.decode_to_end(&mut input) {
+            at_once.push(own(ev));
+        }
+        prop_assert_eq!(at_once, one_chunk);
     }
 
     /// A half-duplex adapter echoes the request before the reply arrives.

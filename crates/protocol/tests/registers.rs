@@ -1,8 +1,11 @@
 //! Register maps: lookup, layout invariants and value conversion.
 
+use std::time::Duration;
+
 use servobus_protocol::registers::{
-    self, addr, baud_index, baud_rate, model_by_name, model_by_number, Access, ByteOrder, Series,
-    ValueError, MODELS, SCS, STS,
+    self, addr, baud_index, baud_rate, model_by_name, model_by_number, next_baud_above,
+    return_delay_from_register, Access, ByteOrder, Series, ValueError, FACTORY_RETURN_DELAY,
+    MODELS, SCS, STS,
 };
 
 #[test]
@@ -248,9 +251,17 @@ fn baud_table() {
     assert_eq!(baud_rate(5), Some(76_800));
     assert_eq!(baud_rate(7), Some(38_400));
     assert_eq!(baud_rate(8), None);
+    assert_eq!(baud_rate(255), None);
+    assert_eq!(baud_rate(4), Some(115_200));
     for i in 0..8 {
         assert_eq!(baud_index(baud_rate(i).unwrap()), Some(i));
     }
     assert_eq!(baud_index(9600), None);
+    assert_eq!(next_baud_above(38_400), Some(57_600));
+    assert_eq!(next_baud_above(100_000), Some(115_200));
+    assert_eq!(next_baud_above(1_000_000), None);
+    assert_eq!(next_baud_above(0), Some(38_400));
+    assert_eq!(FACTORY_RETURN_DELAY, Duration::from_micros(500));
+    assert_eq!(return_delay_from_register(255), Duration::from_micros(510));
     assert_eq!(registers::sign_magnitude(0x8001, 15), -1);
 }

@@ -4,10 +4,12 @@ use std::sync::Arc;
 
 use servobus_trajectory::Trajectory;
 
-/// A command to a running loop. It takes effect at the start of a cycle
-/// (on the real clock, the same cycle on every bus, a couple of cycles
-/// after it is sent), and every change of motion it causes is continuous in
-/// position and velocity.
+/// A command to a running loop. It takes effect at the start of a cycle,
+/// the same on every bus and in both runners:
+/// [`COMMAND_DELAY_CYCLES`](crate::COMMAND_DELAY_CYCLES) after the cycle
+/// that receives it, or the cycle it was stamped with
+/// ([`CommandSender::send_at`](crate::CommandSender::send_at)). Every change
+/// of motion it causes is continuous in position and velocity.
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub enum Command {

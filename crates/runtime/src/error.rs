@@ -54,3 +54,22 @@ pub enum RunError {
     #[error("bus thread: {0}")]
     Thread(String),
 }
+
+/// The serial port of a bus failed while running (unplugged adapter, closed
+/// pty): nothing more can be sent on that bus. A servo's silence is not
+/// this; it is counted and judged by tracking.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct PortGone(pub BusError);
+
+impl PortGone {
+    /// `Err` when `result` failed because the port is gone; a timeout or a
+    /// bad reply is the servos' business, not the port's.
+    pub(crate) fn check<V>(result: Result<V, BusError>) -> Result<Option<V>, PortGone> {
+        match result {
+            Ok(v) => Ok(Some(v)),
+            Err(BusError::Transport(t)) if !t.is_timeout() => Err(PortGone(BusError::Transport(t))),
+            Err(_) => Ok(None),
+        }
+    }
+}

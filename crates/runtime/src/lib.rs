@@ -8,33 +8,46 @@
 //!   trajectory: goals at `t + lead` clamped to the limits, SYNC WRITE,
 //!   feedback, tracking, faults with their [`Reaction`], [`Command`]s in and
 //!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
+//!   Both run one cycle function per bus; they differ only in the clock and
+//!   the pacing, so a test in virtual time runs the code of a real run.
 //! - [`sim`] builds a robot file's servos on the simulator (the glue the
 //!   command line, the examples and the tests share).
 #![warn(missing_docs)]
 
+pub mod calibrate;
 pub mod config;
 
 pub mod pacer;
 pub mod rt;
 pub mod sim;
 pub mod stats;
+pub mod teach;
 
 // The scheduler: runs a robot + trajectory on its buses, tracks, reacts to
-// faults. See `run` for the two entry points.
+// faults. `lane` holds the one cycle function; `virtual_run` steps the lanes
+// in virtual time, `threads` runs each on its own thread; `run` prepares
+// both and assembles the report.
 mod busloop;
 mod command;
 mod error;
+mod exchange;
 mod fault;
+mod lane;
 mod options;
 mod report;
 mod run;
 mod telemetry;
+mod threads;
 mod timeline;
+mod virtual_run;
 
 pub use command::Command;
 pub use error::RunError;
+pub use exchange::{CommandSender, COMMAND_DELAY_CYCLES};
 pub use fault::{Fault, FaultKind};
 pub use options::{FaultPolicy, Lead, Reaction, RunOptions};
 pub use report::{BusReport, JointReport, Quantiles, Report};
-pub use run::{bus_settings, spawn, spawn_virtual, Runner, VirtualRun};
+pub use run::bus_settings;
 pub use telemetry::{CycleSample, Finish, JointSample, Telemetry, SAMPLE_JOINTS};
+pub use threads::{spawn, spawn_virtual, Runner};
+pub use virtual_run::VirtualRun;

@@ -75,6 +75,12 @@ impl<C: Clock> Pacer<C> {
         self.start + mul(self.period, index)
     }
 
+    /// The index of the next cycle [`wait`](Self::wait) can return (it may
+    /// return a later one, skipping deadlines an overrun missed).
+    pub fn next_index(&self) -> u64 {
+        self.next
+    }
+
     /// Deadlines skipped so far because cycles overran.
     pub fn overruns(&self) -> u64 {
         self.overruns

@@ -365,7 +365,16 @@ impl Timeline {
     pub fn play(&mut self) {
         match self.pending.take() {
             Some(main) => {
-                let x = self.horizon;
+                // Played during the approach, the path starts where the
+                // approach ends: it leads to the path's start.
+                let x = match self.segments.last() {
+                    Some(s) if s.kind == (Kind::Hold { last: false }) => {
+                        let x = s.start.max(self.horizon);
+                        self.segments.pop();
+                        x
+                    }
+                    _ => self.horizon,
+                };
                 self.push(Segment::new(
                     x,
                     Kind::Main,

@@ -1,7 +1,7 @@
 //! Joint angle <-> tick mapping and the last-step clamp.
 
 use servobus_protocol::registers::model_by_name;
-use servobus_runtime::config::{JointConfig, JointMap, Units};
+use servobus_runtime::config::{JointCalibration, JointConfig, JointMap, Units};
 
 fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointConfig {
     JointConfig {
@@ -16,7 +16,56 @@ fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointC
         offset,
         inverted,
         home: None,
+        calibration: None,
     }
+}
+
+/// A calibrated STS3215 joint: pose at 0 deg reads `pose_tick`, range `range`.
+fn calibrated(pose_tick: f64, direction: i8, range: [i64; 2]) -> JointConfig {
+    JointConfig {
+        calibration: Some(JointCalibration {
+            name: "j".into(),
+            id: 1,
+            model: "STS3215".into(),
+            firmware: None,
+            homing_offset: 0,
+            pose_deg: 0.0,
+            pose_tick,
+            direction,
+            range,
+        }),
+        ..joint("sts3215", -30.0, 30.0, 0.0, false)
+    }
+}
+
+#[test]
+fn a_calibrated_joint_across_the_seam_maps_through_its_centred_frame() {
+    // Sensor range 3900..4296 (3900..4095 then 0..200), pose at 4100
+    // (sensor tick 4), reversed.
+    let j = calibrated(4100.0, -1, [3900, 4296]);
+    let frame = j.calibration.as_ref().expect("calibrated").play_frame();
+    let m = JointMap::new(&j, Units::Deg);
+    // In the play frame every tick is the calibration's minus the shift:
+    // pose 4100 - 2050 = 2050.
+    assert_eq!(frame.shift, 2050);
+    assert_eq!(m.to_ticks(0.0), 2050);
+    // Reversed: +10 deg is 10 / (360/4096) = 113.8 ticks lower.
+    assert_eq!(m.to_ticks(10f64.to_radians()), 2050 - 114);
+    // Readings come back exactly, on both sides of the old seam.
+    for deg in [-15.0f64, -5.0, 0.0, 5.0, 15.0] {
+        let t = m.to_ticks(deg.to_radians());
+        assert!((m.from_ticks(t).to_degrees() - deg).abs() < 0.05, "{deg}");
+    }
+}
+
+#[test]
+fn a_reading_past_the_register_end_unwraps_next_to_the_range() {
+    // Range 10..1000 in a frame that does not cross the seam; pose at 500.
+    let m = JointMap::new(&calibrated(500.0, 1, [10, 1000]), Units::Deg);
+    // Tick 4090 is 6 ticks below 0, just under the range: not 3590 above it.
+    let deg = m.from_ticks(4090).to_degrees();
+    let expect = (-6.0 - 500.0) * 360.0 / 4096.0;
+    assert!((deg - expect).abs() < 1e-9, "{deg} vs {expect}");
 }
 
 #[test]

@@ -198,3 +198,29 @@ fn pause_holds_on_the_path_and_resume_continues() {
     // a little).
     assert!(r.cycles > plain + 450, "{} vs {plain}", r.cycles);
 }
+
+#[test]
+fn play_during_the_approach_starts_the_path_where_the_approach_ends() {
+    // The servos start wherever the simulator puts them: an approach of
+    // about two seconds comes first, and Play arrives early in it.
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _) = common::sim_buses(&robot);
+    let options = RunOptions {
+        autoplay: false,
+        telemetry_capacity: 256,
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    let tx = run.commands();
+    tx.send_at(20, Command::Play).expect("room for a command");
+    let rec = common::record(&mut run, 20_000, |_| {});
+    let r = run.report();
+    assert_eq!(r.finish, Finish::Completed, "{:?}", r.fault);
+    // No jump to the path's start: every joint within its limits (5 % for
+    // the finite differences of velocity, 50 % for acceleration).
+    for (i, j) in robot.joints().enumerate() {
+        let (v, a, _) = rec.peaks(i, 0, 0.005);
+        println!("{}: {v:.1} deg/s, {a:.0} deg/s^2", j.name);
+        assert!(v <= j.max_velocity * 1.05 && a <= j.max_acceleration * 1.5);
+    }
+}

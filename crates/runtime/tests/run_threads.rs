@@ -47,13 +47,34 @@ fn a_stop_command_reaches_the_threaded_runner() {
     let (buses, _) = common::sim_buses(&robot);
     let options = RunOptions {
         telemetry_capacity: 0,
-        // Wait for Play, so that the stop surely arrives mid-run.
+        // Wait for Play, so that nothing ends before the commands are in.
         autoplay: false,
         ..RunOptions::default()
     };
     let runner = spawn(&robot, path, buses, options).expect("starts");
+    // The bus thread runs at CPU speed on its manual clock. The Stop goes
+    // first, stamped to a cycle: Play can only arrive after it, so the Stop
+    // is pending by the time the path starts and takes effect at its cycle
+    // (or at once, should Play come later than that) however the threads
+    // are scheduled.
+    runner.send_at(300, Command::Stop).expect("running");
     runner.send(Command::Play).expect("running");
-    runner.send(Command::Stop).expect("running");
     let report = runner.join().expect("joins");
-    assert_eq!(report.finish, Finish::Stopped);
+    assert_eq!(report.finish, Finish::Stopped, "{:?}", report.fault);
+    assert!(report.fault.is_none());
+}
+
+#[test]
+fn a_threaded_run_waiting_for_play_is_abandoned_when_no_sender_is_left() {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _) = common::sim_buses(&robot);
+    let options = RunOptions {
+        telemetry_capacity: 0,
+        autoplay: false,
+        ..RunOptions::default()
+    };
+    let runner = spawn(&robot, path, buses, options).expect("starts");
+    // join drops the last sender: the run can never start, and ends.
+    let report = runner.join().expect("joins");
+    assert_eq!(report.finish, Finish::Abandoned);
 }

@@ -3,7 +3,7 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use servobus_driver::{Clock, ManualClock, Transport, TransportError};
+use servobus_io::{Clock, ManualClock, Transport, TransportError};
 
 use crate::engine::{Engine, SimStats};
 use crate::{Faults, SimServo};
@@ -24,7 +24,7 @@ use crate::{Faults, SimServo};
 ///
 /// ```
 /// use std::time::Duration;
-/// use servobus_driver::{Clock, ManualClock, Transport};
+/// use servobus_io::{Clock, ManualClock, Transport};
 /// use servobus_protocol::encode;
 /// use servobus_sim::{SimBus, SimServo};
 ///

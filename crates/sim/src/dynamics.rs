@@ -46,6 +46,9 @@ pub(crate) struct Drive {
     pub blocked: bool,
     /// Highest sensor position (resolution - 1).
     pub max_pos: f64,
+    /// The shaft turns freely past the sensor's seam (a mounted joint on a
+    /// full-turn sensor): positions wrap instead of stopping at the ends.
+    pub seamless: bool,
     /// Ambient temperature, C.
     pub ambient_c: f64,
 }
@@ -174,15 +177,21 @@ impl Joint {
             }
             self.ref_pos = self.pos;
         }
-        if !d.wheel {
+        let turn = d.max_pos + 1.0;
+        if !d.wheel && !d.seamless {
             self.pos = self.pos.clamp(0.0, d.max_pos);
         } else {
-            self.pos = self.pos.rem_euclid(d.max_pos + 1.0);
+            self.pos = self.pos.rem_euclid(turn);
+        }
+        let mut moved = self.pos - before;
+        if d.seamless {
+            // Across the seam the shortest way round is the way it went.
+            moved = (moved + turn / 2.0).rem_euclid(turn) - turn / 2.0;
         }
         self.vel = if d.wheel && d.torque_on && !d.blocked {
             self.ref_vel
         } else {
-            (self.pos - before) / dt
+            moved / dt
         };
         if self.vel.abs() < 1e-9 {
             self.vel = 0.0;
@@ -221,6 +230,7 @@ mod tests {
             load: 0.0,
             blocked: false,
             max_pos: 4095.0,
+            seamless: false,
             ambient_c: 25.0,
         }
     }

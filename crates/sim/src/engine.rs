@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
+use servobus_protocol::registers::baud_rate;
 use servobus_protocol::{parse_frame, Instruction, ParseError, BROADCAST_ID};
 use servobus_timing::Link;
 
@@ -125,7 +126,7 @@ impl Engine {
         if s.is_offline() {
             return false;
         }
-        let Some(baud) = baud_of_index(s.baud_index()) else {
+        let Some(baud) = baud_rate(s.baud_index()) else {
             return false;
         };
         let bus = f64::from(self.link.baud);
@@ -374,20 +375,4 @@ impl Engine {
             s.advance_to(t);
         }
     }
-}
-
-/// The baud rate of a baud-rate register index (STS/SMS and SCS share the
-/// table of the Feetech SDKs).
-pub fn baud_of_index(index: u8) -> Option<u32> {
-    Some(match index {
-        0 => 1_000_000,
-        1 => 500_000,
-        2 => 250_000,
-        3 => 128_000,
-        4 => 115_200,
-        5 => 76_800,
-        6 => 57_600,
-        7 => 38_400,
-        _ => return None,
-    })
 }

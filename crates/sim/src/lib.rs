@@ -11,9 +11,13 @@
 //!   big-endian), the instructions it obeys, and a joint with a motion
 //!   profile, lag, dead zone, load, heat and protection flags.
 //! - [`SimBus`] puts many servos on one bus and implements
-//!   [`servobus_driver::Transport`] in virtual time on a shared
-//!   [`ManualClock`](servobus_driver::ManualClock): deterministic and as fast
+//!   [`servobus_io::Transport`] in virtual time on a shared
+//!   [`ManualClock`](servobus_io::ManualClock): deterministic and as fast
 //!   as the CPU allows. Faults ([`Faults`]) are drawn from a seeded source.
+//! - [`body`] gives a servo a joint to drive: a [`Mount`] (raw tick at the
+//!   joint's zero, direction, end stops; ranges may cross the 4095/0 seam),
+//!   a [`HandPath`] that moves it while its torque is off, and a [`Truth`]
+//!   recorder of the physical angles.
 //! - [`PtyServer`] serves a bus on a pseudo-terminal in wall-clock time, so
 //!   that any program that opens a serial port (Feetech's Python SDK,
 //!   LeRobot, the `servobus` commands) can talk to it (`servobus sim`).
@@ -61,7 +65,7 @@
 //!
 //! ```
 //! use std::time::Duration;
-//! use servobus_driver::{Clock, ManualClock, Transport};
+//! use servobus_io::{Clock, ManualClock, Transport};
 //! use servobus_protocol::{encode, parse_frame};
 //! use servobus_sim::{addr, Faults, SimBus, SimServo};
 //!
@@ -94,6 +98,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod body;
 mod bus;
 mod dynamics;
 mod engine;
@@ -102,8 +107,9 @@ pub mod model;
 pub mod pty;
 mod servo;
 
+pub use body::{HandPath, Mount, Truth, TruthRow};
 pub use bus::SimBus;
-pub use engine::{baud_of_index, SimStats};
+pub use engine::SimStats;
 pub use faults::{FaultSpecError, Faults};
 pub use model::{Area, Endian, SimModel};
 pub use pty::{PtyError, PtyServer};

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use servobus_driver::{Clock, SystemClock};
+use servobus_io::{Clock, SystemClock};
 use servobus_timing::Link;
 
 use crate::engine::{Engine, SimStats};
@@ -64,6 +64,8 @@ pub struct PtyServer {
     clock: SystemClock,
     pacing: bool,
     configured_baud: u32,
+    /// Step the servos at least this often, even when no client talks.
+    tick: Option<Duration>,
 }
 
 fn last_error() -> io::Error {
@@ -102,6 +104,7 @@ impl PtyServer {
             clock: SystemClock::new(),
             pacing: true,
             configured_baud: baud,
+            tick: None,
         })
     }
 
@@ -128,6 +131,19 @@ impl PtyServer {
     /// Turns pacing at the wire rate on (default) or off (replies at once).
     pub fn set_pacing(&mut self, on: bool) {
         self.pacing = on;
+    }
+
+    /// Steps every servo at least every `period` (`None`: only when a
+    /// request arrives, the default), so that bodies move and their truth
+    /// is recorded while no client talks.
+    pub fn set_tick(&mut self, period: Option<Duration>) {
+        self.tick = period;
+    }
+
+    /// Steps every servo to the present time.
+    pub fn settle(&mut self) {
+        let now = self.clock.now();
+        self.engine.advance_servos(now);
     }
 
     /// Injects `faults` (the random source is reseeded).
@@ -166,8 +182,15 @@ impl PtyServer {
     /// [`PtyError::Io`] when the terminal fails.
     pub fn serve(&mut self, stop: &AtomicBool) -> Result<(), PtyError> {
         let mut buf = [0u8; 4096];
+        let mut last_tick = self.clock.now();
         while !stop.load(Ordering::SeqCst) {
             let now = self.clock.now();
+            if let Some(period) = self.tick {
+                if now >= last_tick + period {
+                    self.engine.advance_servos(now);
+                    last_tick = now;
+                }
+            }
             self.deliver(now)?;
             // Sleep until the next reply byte is due or input arrives.
             let now = self.clock.now();
@@ -181,7 +204,7 @@ impl PtyServer {
                     .engine
                     .burst_end(now, Duration::MAX, usize::MAX)
                     .saturating_sub(now),
-                None => Duration::from_millis(50),
+                None => self.tick.unwrap_or(Duration::from_millis(50)),
             };
             if wait > Duration::ZERO && wait < SHORT_WAIT && self.engine.next_ready().is_some() {
                 // Short waits: the client is waiting for this reply and sends
@@ -189,7 +212,8 @@ impl PtyServer {
                 self.wait_precisely(now + wait);
                 continue;
             }
-            if !self.poll_input(wait.min(Duration::from_millis(50)))? {
+            let longest = self.tick.unwrap_or(Duration::from_millis(50));
+            if !self.poll_input(wait.min(longest).min(Duration::from_millis(50)))? {
                 continue;
             }
             let n = match read_fd(&self.master, &mut buf) {

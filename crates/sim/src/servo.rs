@@ -5,8 +5,10 @@ use std::time::Duration;
 
 use servobus_protocol::{encode, Instruction, Packet, StatusFlags, BROADCAST_ID};
 
+use crate::body::{Body, HandPath, Mount, Truth};
 use crate::dynamics::{Drive, Joint, MAX_STEP_S};
 use crate::model::{from_sign_magnitude, sign_magnitude, Area, Endian, SimModel};
+use crate::model::{CURRENT_BIT, LOAD_BIT, SPEED_BIT};
 
 /// Addresses shared by every model's layout (those of the protocol crate's
 /// register maps).
@@ -39,6 +41,8 @@ pub struct SimServo {
     ambient_c: f64,
     injected: u8,
     latched: u8,
+    /// The joint the servo is mounted on, when it has one.
+    body: Option<Body>,
 }
 
 impl SimServo {
@@ -65,6 +69,7 @@ impl SimServo {
             ambient_c: 25.0,
             injected: 0,
             latched: 0,
+            body: None,
         };
         servo.sync_outputs();
         servo
@@ -114,6 +119,79 @@ impl SimServo {
     pub fn with_byte(mut self, address: u8, value: u8) -> SimServo {
         self.set_saved(address, value);
         self
+    }
+
+    /// The same servo mounted on a joint by `mount`, the joint at physical
+    /// `angle_deg` (clamped to the stops). From now on the shaft's sensor
+    /// reads `(zero_tick + direction * angle * ticks_per_deg) mod
+    /// resolution` (see [`crate::body`]), the shaft turns freely past the
+    /// seam of a full-turn sensor, and [`SimServo::joint_angle`] is the
+    /// joint's physical angle.
+    #[must_use]
+    pub fn with_mount(mut self, mount: Mount, angle_deg: f64) -> SimServo {
+        let mut body = Body::new(
+            mount,
+            angle_deg,
+            self.model.resolution,
+            self.model.range_deg,
+        );
+        if let Some(old) = self.body.take() {
+            body.hand = old.hand;
+            body.truth = old.truth;
+        }
+        let raw = body.raw_of(body.angle);
+        self.body = Some(body);
+        self.joint.pos = self.pos_of_raw(raw);
+        self.joint.ref_pos = self.joint.pos;
+        self.joint.vel = 0.0;
+        self.joint.ref_vel = 0.0;
+
+        self.sync_outputs();
+        self
+    }
+
+    /// The same servo with a hand on its joint (see [`HandPath`]); the
+    /// servo must have been mounted ([`SimServo::with_mount`]) first, or
+    /// the hand is ignored.
+    #[must_use]
+    pub fn with_hand(mut self, hand: HandPath) -> SimServo {
+        self.set_hand(Some(hand));
+        self
+    }
+
+    /// The same servo writing its joint's physical angle into column
+    /// `column` of `truth`; ignored without a mounting.
+    #[must_use]
+    pub fn with_truth(mut self, truth: &Truth, column: usize) -> SimServo {
+        if let Some(b) = &mut self.body {
+            b.truth = Some((truth.clone(), column));
+        }
+        self
+    }
+
+    /// Puts a hand on the joint or takes it away (`None`); ignored without
+    /// a mounting.
+    pub fn set_hand(&mut self, hand: Option<HandPath>) {
+        if let Some(b) = &mut self.body {
+            b.hand = hand;
+        }
+    }
+
+    /// The mounting, if the servo has one.
+    pub fn mount(&self) -> Option<Mount> {
+        self.body.as_ref().map(|b| b.mount)
+    }
+
+    /// The joint's physical angle in degrees, if the servo is mounted.
+    pub fn joint_angle(&self) -> Option<f64> {
+        self.body.as_ref().map(|b| b.angle)
+    }
+
+    /// The raw sensor position in ticks (before the homing offset), rounded
+    /// as the sensor reports it.
+    pub fn raw_position(&self) -> i32 {
+        let raw = self.raw_of_pos(self.joint.pos);
+        (raw.round() as i32).rem_euclid(self.model.resolution as i32)
     }
 
     fn set_saved(&mut self, address: u8, value: u8) {
@@ -192,12 +270,12 @@ impl SimServo {
 
     /// Present speed (register 58) in ticks/s, signed.
     pub fn present_speed(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_SPEED), 15)
+        from_sign_magnitude(self.read_u16(addr::PRESENT_SPEED), SPEED_BIT)
     }
 
     /// Present load (register 60) in 0.1 % of the maximum torque, signed.
     pub fn present_load(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_LOAD), 10)
+        from_sign_magnitude(self.read_u16(addr::PRESENT_LOAD), LOAD_BIT)
     }
 
     /// The status flags the servo reports (register 65 and every reply).
@@ -218,7 +296,7 @@ impl SimServo {
     /// The exact shaft position in the present-position frame, in ticks
     /// (unrounded, for tests of the dynamics).
     pub fn shaft_position(&self) -> f64 {
-        self.joint.pos - f64::from(self.offset())
+        self.joint.pos - f64::from(self.shift())
     }
 
     /// Writes `data` at `address` as a WRITE instruction would, access rules
@@ -242,7 +320,17 @@ impl SimServo {
     /// turning the horn would (with torque on, the servo then returns to its goal).
     pub fn move_joint(&mut self, ticks: i32) {
         let max = f64::from(self.model.resolution - 1);
-        let pos = (f64::from(ticks) + f64::from(self.offset())).clamp(0.0, max);
+        let mut pos = f64::from(ticks) + f64::from(self.shift());
+        pos = match &self.body {
+            Some(b) if b.full_turn() => pos.rem_euclid(max + 1.0),
+            _ => pos.clamp(0.0, max),
+        };
+        let raw = self.raw_of_pos(pos);
+        let t = self.time.as_secs_f64();
+        // The body follows (a hand turning the horn), within its stops.
+        if let Some(raw) = self.body.as_mut().and_then(|b| b.settle(raw, t, true)) {
+            pos = self.pos_of_raw(raw);
+        }
         self.joint.pos = pos;
         self.joint.vel = 0.0;
         if !self.torque_enabled() {
@@ -333,19 +421,59 @@ impl SimServo {
             return;
         }
         let mut left = (t - self.time).as_secs_f64();
+        let end = t.as_secs_f64();
         self.time = t;
         while left > 0.0 {
-            let drive = self.drive();
-            let dt = if self.joint.quiescent(&drive) {
+            let mut drive = self.drive();
+            let mut dt = if self.joint.quiescent(&drive) {
                 left
             } else {
                 left.min(MAX_STEP_S)
             };
+            let now = end - left;
+            if let Some(b) = &self.body {
+                dt = body_step(b, now, dt).min(left);
+                if drive.torque_on {
+                    drive.load += b.hand_load(now);
+                    drive.blocked |= b.blocked_by_stop(self.joint.ref_pos - self.joint.pos);
+                }
+            }
+            let before = self.joint.pos;
             self.joint.step(&drive, dt);
             left -= dt;
+            self.settle_body(now, end - left.max(0.0), dt, before, drive.torque_on);
             self.protect();
         }
         self.sync_outputs();
+    }
+
+    /// Brings the body in line with the shaft after a step from `t0` to
+    /// `t1` (the shaft started at `before`): the hand moves a torque-off
+    /// joint, the stops hold it, and the truth is recorded.
+    fn settle_body(&mut self, t0: f64, t1: f64, dt: f64, before: f64, torque_on: bool) {
+        let raw = self.raw_of_pos(self.joint.pos);
+        let Some(b) = &mut self.body else {
+            return;
+        };
+        let a0 = b.angle;
+        let settled = b.settle(raw, t1, torque_on);
+        let full_turn = b.full_turn();
+        if let Some(raw) = settled {
+            let pos = self.pos_of_raw(raw);
+            let turn = f64::from(self.model.resolution);
+            let mut moved = pos - before;
+            if full_turn {
+                moved = (moved + turn / 2.0).rem_euclid(turn) - turn / 2.0;
+            }
+            self.joint.pos = pos;
+            self.joint.vel = if dt > 0.0 { moved / dt } else { 0.0 };
+            if !torque_on {
+                self.joint.ref_pos = raw;
+            }
+        }
+        if let Some(b) = &self.body {
+            b.record(t0, t1, a0);
+        }
     }
 
     /// Executes one instruction packet received at time `now` (the end of its
@@ -514,6 +642,16 @@ impl SimServo {
             self.timed_speed =
                 (t > 0.0).then(|| ((target - self.joint.ref_pos).abs() / (t / 1000.0)).max(1.0));
         }
+        if touched(addr::OFFSET, 2) && self.model.offset_sign_bit.is_some() {
+            if let Some(raw) = self.body.as_ref().map(Body::raw) {
+                // The shaft stays where it is; its reading moves with the
+                // offset, and the servo holds the shaft where it now reads.
+                let pos = self.pos_of_raw(raw);
+                self.joint.pos = pos;
+                self.joint.ref_pos = pos;
+                self.joint.ref_vel = 0.0;
+            }
+        }
         if touched(addr::GOAL_TIME, 2) && self.read_u16(addr::GOAL_TIME) == 0 {
             self.timed_speed = None;
         }
@@ -527,7 +665,7 @@ impl SimServo {
             // Calibrate: the present position becomes the midpoint.
             if let Some(bit) = self.model.offset_sign_bit {
                 let mid = (self.model.resolution / 2) as i32;
-                let offset = self.joint.pos.round() as i32 - mid;
+                let offset = self.raw_of_pos(self.joint.pos).round() as i32 - mid;
                 let raw = sign_magnitude(offset, bit);
                 self.write_u16_raw(addr::OFFSET, raw, true);
             }
@@ -562,6 +700,40 @@ impl SimServo {
         }
     }
 
+    /// The shift between the joint's frame and the present-position frame
+    /// (`present = joint - shift`). A bare shaft is simulated in the
+    /// sensor's raw frame, so the shift is the homing offset. A mounted
+    /// servo is simulated in the present frame, as the real servo's
+    /// position loop runs: the homing offset moves the seam the servo
+    /// cannot cross with torque on, which is what calibration relies on.
+    fn shift(&self) -> i32 {
+        if self.body.is_some() {
+            0
+        } else {
+            self.offset()
+        }
+    }
+
+    /// The raw sensor position of joint-frame position `pos` (mounted servos).
+    fn raw_of_pos(&self, pos: f64) -> f64 {
+        let res = f64::from(self.model.resolution);
+        if self.body.is_some() {
+            (pos + f64::from(self.offset())).rem_euclid(res)
+        } else {
+            pos
+        }
+    }
+
+    /// The joint-frame position of raw sensor position `raw` (mounted servos).
+    fn pos_of_raw(&self, raw: f64) -> f64 {
+        let res = f64::from(self.model.resolution);
+        if self.body.is_some() {
+            (raw - f64::from(self.offset())).rem_euclid(res)
+        } else {
+            raw
+        }
+    }
+
     fn offset(&self) -> i32 {
         match self.model.offset_sign_bit {
             Some(bit) => from_sign_magnitude(self.read_u16(addr::OFFSET), bit),
@@ -593,7 +765,7 @@ impl SimServo {
             goal = goal.clamp(min, max);
         }
         let res = self.model.resolution as i32;
-        f64::from((goal + self.offset()).rem_euclid(res))
+        f64::from((goal + self.shift()).rem_euclid(res))
     }
 
     fn drive(&self) -> Drive {
@@ -603,7 +775,7 @@ impl SimServo {
         } else {
             0
         };
-        let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), 15);
+        let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), SPEED_BIT);
         let max_speed = if goal_speed != 0 {
             f64::from(goal_speed.unsigned_abs()).min(m.max_speed)
         } else if let Some(v) = self.timed_speed {
@@ -641,6 +813,7 @@ impl SimServo {
             load: self.load,
             blocked: self.blocked,
             max_pos: f64::from(m.resolution - 1),
+            seamless: self.body.as_ref().is_some_and(Body::full_turn),
             ambient_c: self.ambient_c,
         }
     }
@@ -692,7 +865,7 @@ impl SimServo {
     /// Writes the joint's state into the present-value registers.
     fn sync_outputs(&mut self) {
         let res = self.model.resolution as i32;
-        let pos = (self.joint.pos.round() as i32 - self.offset()).rem_euclid(res);
+        let pos = (self.joint.pos.round() as i32 - self.shift()).rem_euclid(res);
         let raw = self.encode_position(pos);
         self.write_u16_raw(addr::PRESENT_POSITION, raw, false);
         if !self.torque_enabled() && !self.goal_given {
@@ -701,9 +874,9 @@ impl SimServo {
             self.write_u16_raw(addr::GOAL_POSITION, raw, false);
         }
         let speed = self.joint.vel.round().clamp(-32767.0, 32767.0) as i32;
-        self.write_u16_raw(addr::PRESENT_SPEED, sign_magnitude(speed, 15), false);
+        self.write_u16_raw(addr::PRESENT_SPEED, sign_magnitude(speed, SPEED_BIT), false);
         let load = (self.joint.effort * 1000.0).round() as i32;
-        self.write_u16_raw(addr::PRESENT_LOAD, sign_magnitude(load, 10), false);
+        self.write_u16_raw(addr::PRESENT_LOAD, sign_magnitude(load, LOAD_BIT), false);
         self.table[usize::from(addr::PRESENT_VOLTAGE)] = self.voltage_dv();
         self.table[usize::from(addr::PRESENT_TEMPERATURE)] =
             self.joint.temp_c.round().clamp(0.0, 255.0) as u8;
@@ -713,9 +886,28 @@ impl SimServo {
             let idle = if self.torque_enabled() { 2.0 } else { 0.0 };
             let current =
                 (self.joint.effort.abs() * self.model.stall_current + idle).round() as i32;
-            self.write_u16_raw(addr::PRESENT_CURRENT, sign_magnitude(current, 15), false);
+            self.write_u16_raw(
+                addr::PRESENT_CURRENT,
+                sign_magnitude(current, CURRENT_BIT),
+                false,
+            );
         }
     }
+}
+
+/// The length of the next step of a mounted servo from `now`, given the
+/// dynamics' own choice `dt`: short steps while a hand holds the joint, and
+/// no step past the moment a hand takes hold.
+fn body_step(b: &Body, now: f64, dt: f64) -> f64 {
+    let mut dt = dt;
+    if b.hand_active(now, now + dt) {
+        dt = dt.min(MAX_STEP_S);
+    }
+    if let Some(start) = b.hand_starts_after(now) {
+        // Never a zero step: time must move on.
+        dt = dt.min(start - now).max(1e-9);
+    }
+    dt
 }
 
 /// Whether the write of `len` bytes at `address` covers byte `reg`.

@@ -6,7 +6,7 @@ mod common;
 use std::time::Duration;
 
 use common::*;
-use servobus_driver::{ManualClock, Transport, TransportError};
+use servobus_io::{ManualClock, Transport, TransportError};
 use servobus_sim::{addr, Faults, SimBus, SimServo};
 
 const US: Duration = Duration::from_micros(1);

@@ -5,7 +5,7 @@ mod common;
 use std::time::Duration;
 
 use common::*;
-use servobus_driver::ManualClock;
+use servobus_io::ManualClock;
 use servobus_protocol::StatusFlags;
 use servobus_sim::{addr, SimBus, SimServo};
 

@@ -76,7 +76,7 @@ fn status_level_zero_answers_only_ping_and_read() {
 
 #[test]
 fn scs_status_levels_have_three_steps() {
-    let mut bus = SimBus::new(servobus_driver::ManualClock::new(), 1_000_000)
+    let mut bus = SimBus::new(servobus_io::ManualClock::new(), 1_000_000)
         .with_servo(SimServo::scs0009(3).with_status_level(0));
     assert_eq!(exchange(&mut bus, &ping(3), MS), status(3, 0, &[]));
     assert!(exchange(&mut bus, &read(3, 5, 1), MS).is_empty());
@@ -92,7 +92,7 @@ fn scs_status_levels_have_three_steps() {
 
 #[test]
 fn scs_is_big_endian_has_its_lock_at_48_and_no_sync_read() {
-    let mut bus = SimBus::new(servobus_driver::ManualClock::new(), 1_000_000)
+    let mut bus = SimBus::new(servobus_io::ManualClock::new(), 1_000_000)
         .with_servo(SimServo::scs0009(1).with_position(300));
     // Model 1284 = 0x0504, high byte first.
     assert_eq!(
@@ -203,7 +203,7 @@ fn sync_write_sets_each_listed_servo_and_is_not_answered() {
 
 #[test]
 fn sync_read_answers_in_list_order_and_skips_missing_ids() {
-    let mut bus = SimBus::new(servobus_driver::ManualClock::new(), 1_000_000).with_servos(
+    let mut bus = SimBus::new(servobus_io::ManualClock::new(), 1_000_000).with_servos(
         [(1, 100), (2, 200), (4, 400)].map(|(id, p)| {
             SimServo::sts3215(id)
                 .with_return_delay(Duration::ZERO)
@@ -265,7 +265,7 @@ fn a_servo_at_another_baud_rate_does_not_hear() {
 
 #[test]
 fn torque_enable_128_makes_the_present_position_the_midpoint() {
-    let mut bus = SimBus::new(servobus_driver::ManualClock::new(), 1_000_000)
+    let mut bus = SimBus::new(servobus_io::ManualClock::new(), 1_000_000)
         .with_servo(SimServo::sts3215(1).with_position(3000));
     exchange(&mut bus, &write(1, addr::TORQUE_ENABLE, &[128]), MS);
     assert_eq!(bus.present_position(1), Some(2048));

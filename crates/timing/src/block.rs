@@ -1,6 +1,8 @@
 //! Register blocks: a start address and a length, the unit of every SYNC
 //! WRITE, SYNC READ and READ a cycle does.
 
+use servobus_protocol::registers::{sts, Register};
+
 /// A contiguous block of `len` bytes of the memory table starting at
 /// `address`: what a cycle writes to, or reads from, every servo.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -17,19 +19,33 @@ impl Block {
         Block { address, len }
     }
 
+    /// The registers `first..=last` (in address order) as one block.
+    pub const fn span(first: &Register, last: &Register) -> Block {
+        Block::new(first.address, (last.end() - first.address as u16) as u8)
+    }
+
     /// Goal position only (2 bytes at 42): the smallest goal block.
-    pub const GOAL_POSITION: Block = Block::new(42, 2);
+    pub const GOAL_POSITION: Block =
+        Block::span(sts::GOAL_POSITION.register(), sts::GOAL_POSITION.register());
     /// Goal position, goal time and goal speed (6 bytes at 42), as in the
     /// manual's SYNC WRITE examples.
-    pub const POSITION_TIME_SPEED: Block = Block::new(42, 6);
+    pub const POSITION_TIME_SPEED: Block =
+        Block::span(sts::GOAL_POSITION.register(), sts::GOAL_SPEED.register());
     /// Acceleration, goal position, goal time and goal speed (7 bytes at 41).
-    pub const ACCEL_POSITION_TIME_SPEED: Block = Block::new(41, 7);
+    pub const ACCEL_POSITION_TIME_SPEED: Block =
+        Block::span(sts::ACCELERATION.register(), sts::GOAL_SPEED.register());
 
     /// Present position only (2 bytes at 56): the smallest feedback block.
-    pub const PRESENT_POSITION: Block = Block::new(56, 2);
+    pub const PRESENT_POSITION: Block = Block::span(
+        sts::PRESENT_POSITION.register(),
+        sts::PRESENT_POSITION.register(),
+    );
     /// Position, speed, load, voltage, temperature, async flag, status,
     /// moving and current (15 bytes, 56..=70): the whole feedback block.
-    pub const FEEDBACK: Block = Block::new(56, 15);
+    pub const FEEDBACK: Block = Block::span(
+        sts::PRESENT_POSITION.register(),
+        sts::PRESENT_CURRENT.register(),
+    );
 
     /// Bytes per servo in a SYNC WRITE frame: the ID, then the block.
     pub const fn sync_write_stride(&self) -> usize {

@@ -4,6 +4,7 @@
 
 use core::time::Duration;
 
+use servobus_protocol::registers::StatusLevel;
 use servobus_protocol::{encode::sync_write_params, frame_len};
 
 use crate::Link;
@@ -95,52 +96,6 @@ impl Transaction {
     }
 }
 
-/// Which instructions a servo answers: its status level (register 8).
-///
-/// STS/SMS servos: 0 answers PING and READ only, 1 answers everything.
-/// SCS servos (SCS0009): 0 answers PING only, 1 PING and READ, 2 everything.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum StatusLevel {
-    /// Only PING is answered.
-    PingOnly,
-    /// PING, READ and SYNC READ are answered; writes are not.
-    PingAndRead,
-    /// Every instruction addressed to one servo is answered (the factory
-    /// setting).
-    #[default]
-    All,
-}
-
-impl StatusLevel {
-    /// The level of an STS/SMS servo whose register 8 holds `value`.
-    pub const fn from_sts(value: u8) -> StatusLevel {
-        if value == 0 {
-            StatusLevel::PingAndRead
-        } else {
-            StatusLevel::All
-        }
-    }
-
-    /// The level of an SCS servo whose register 8 holds `value`.
-    pub const fn from_scs(value: u8) -> StatusLevel {
-        match value {
-            0 => StatusLevel::PingOnly,
-            1 => StatusLevel::PingAndRead,
-            _ => StatusLevel::All,
-        }
-    }
-
-    /// Whether READ and SYNC READ are answered.
-    pub const fn answers_reads(self) -> bool {
-        !matches!(self, StatusLevel::PingOnly)
-    }
-
-    /// Whether WRITE, REG WRITE, ACTION and RESET are answered.
-    pub const fn answers_writes(self) -> bool {
-        matches!(self, StatusLevel::All)
-    }
-}
-
 impl Link {
     /// Deadline, measured from the start of sending the request, by which
     /// every reply to `tx` must have arrived, or `None` when the servo sends
@@ -176,17 +131,6 @@ impl Link {
     /// reply has left the wire.
     pub fn request_time(&self, tx: Transaction) -> Duration {
         self.wire_time(tx.request_bytes())
-    }
-
-    /// Deadline for the status reply to a WRITE of `len` data bytes at status
-    /// level `level`, or `None` when the servo does not reply to writes.
-    pub fn write_deadline(
-        &self,
-        len: usize,
-        return_delay: Duration,
-        level: StatusLevel,
-    ) -> Option<Duration> {
-        self.deadline(Transaction::Write { len }, return_delay, level)
     }
 }
 
@@ -240,10 +184,6 @@ mod tests {
             l.deadline(w, Duration::ZERO, StatusLevel::PingAndRead),
             None
         );
-        assert_eq!(
-            l.write_deadline(2, Duration::ZERO, StatusLevel::from_sts(0)),
-            None
-        );
         assert_eq!(l.request_time(w), US(90));
         let r = Transaction::Read { len: 2 };
         assert_eq!(
@@ -263,26 +203,31 @@ mod tests {
         assert_eq!(StatusLevel::from_sts(1), StatusLevel::All);
     }
 
+    /// At 115200 baud a byte takes 86805.5.. ns; each wire time below is
+    /// ceil(bytes x 1e10 / 115200) ns, worked out by hand.
     #[test]
-    fn deadline_agrees_with_the_named_timeouts() {
+    fn deadlines_at_115200_worked_by_hand() {
         let l = Link::new(115_200).with_latency(Duration::from_millis(1));
         let rd = US(500);
         let all = StatusLevel::All;
+        // Return delay + turnaround = 550 us; latency + margin = 1200 us.
+        let fixed = 550_000 + 1_200_000;
+        let ns = Duration::from_nanos;
+        // 6 + 6 bytes: 520834 ns each way.
+        let ping = l.deadline(Transaction::Ping, rd, all);
+        assert_eq!(ping, Some(ns(2 * 520_834 + fixed)));
+        // 8 bytes out (694445 ns), 21 back (1822917 ns).
+        let read = l.deadline(Transaction::Read { len: 15 }, rd, all);
+        assert_eq!(read, Some(ns(694_445 + 1_822_917 + fixed)));
+        // 11 bytes out (954862 ns), 6 back.
+        let write = l.deadline(Transaction::Write { len: 4 }, rd, all);
+        assert_eq!(write, Some(ns(954_862 + 520_834 + fixed)));
+        // 26 bytes out (2256945 ns); 18 replies of 8 bytes (12.5 ms exactly),
+        // each after its own return delay and turnaround.
+        let sync = l.deadline(Transaction::SyncRead { servos: 18, len: 2 }, rd, all);
         assert_eq!(
-            l.deadline(Transaction::Ping, rd, all),
-            Some(l.ping_timeout(rd))
-        );
-        assert_eq!(
-            l.deadline(Transaction::Read { len: 15 }, rd, all),
-            Some(l.read_timeout(15, rd))
-        );
-        assert_eq!(
-            l.deadline(Transaction::Write { len: 4 }, rd, all),
-            Some(l.write_timeout(4, rd))
-        );
-        assert_eq!(
-            l.deadline(Transaction::SyncRead { servos: 18, len: 2 }, rd, all),
-            Some(l.sync_read_timeout(18, 2, rd))
+            sync,
+            Some(ns(2_256_945 + 18 * 550_000 + 12_500_000 + 1_200_000))
         );
     }
 

@@ -4,7 +4,9 @@ use core::fmt;
 use core::time::Duration;
 
 use crate::cost::{nanos, CycleCost, CycleSpec, Servo};
-use crate::{next_baud_above, Link};
+use servobus_protocol::registers::next_baud_above;
+
+use crate::Link;
 
 /// One change to the robot or its bus that makes the full cycle (every servo
 /// written and read every cycle) fit the requested rate.

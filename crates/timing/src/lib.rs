@@ -24,10 +24,10 @@
 //!
 //! The crate answers three questions:
 //!
-//! - **How long may I wait for a reply?** [`Link::deadline`] and the named
-//!   timeouts ([`Link::read_timeout`], ...) give the deadline of every kind
-//!   of [`Transaction`], or none when the servo's [`StatusLevel`] means no
-//!   reply comes, instead of the fixed 16-100 ms of other libraries.
+//! - **How long may I wait for a reply?** [`Link::deadline`] gives the
+//!   deadline of every kind of [`Transaction`], or none when the servo's
+//!   [`StatusLevel`] means no reply comes, instead of the fixed 16-100 ms of
+//!   other libraries.
 //! - **How do I send N goals?** [`pack_sync_write`] writes the fewest SYNC
 //!   WRITE frames (each length byte <= 255) into a reused buffer.
 //! - **Can this robot run at this rate?** [`plan`] costs the whole cycle
@@ -56,7 +56,6 @@
 //! ```
 #![warn(missing_docs)]
 
-mod baud;
 mod block;
 mod cost;
 mod deadline;
@@ -66,16 +65,13 @@ mod link;
 mod pack;
 mod plan;
 
-pub use baud::{
-    baud_from_index, baud_index, next_baud_above, return_delay_from_register, BAUD_TABLE,
-    FACTORY_RETURN_DELAY, MAX_SERVO_BAUD, RETURN_DELAY_UNIT,
-};
 pub use block::Block;
 pub use cost::{CycleCost, Servo, MAX_SYNC_READ_SERVOS};
-pub use deadline::{StatusLevel, Transaction};
+pub use deadline::Transaction;
 pub use fix::{Change, Fixes};
 pub use link::{Link, BITS_PER_BYTE};
 pub use pack::{
     pack_sync_write, servos_per_frame, sync_write_bytes, sync_write_frames, PackError, Packed,
 };
 pub use plan::{plan, Plan, PlanError, RoundRobin, MAX_READ_LEN, MAX_SERVOS};
+pub use servobus_protocol::registers::StatusLevel;

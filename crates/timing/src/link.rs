@@ -3,7 +3,6 @@
 
 use core::time::Duration;
 
-use servobus_protocol::frame_len;
 #[cfg(test)]
 use servobus_protocol::MAX_FRAME_LEN;
 
@@ -31,10 +30,21 @@ pub struct Link {
 
 impl Link {
     /// Default turnaround: the servo firmware's processing time before it
-    /// starts its reply.
-    pub const DEFAULT_TURNAROUND: Duration = Duration::from_micros(50);
+    /// starts its reply (the protocol crate's per-model figure).
+    pub const DEFAULT_TURNAROUND: Duration = servobus_protocol::registers::REPLY_TURNAROUND;
     /// Default safety margin.
     pub const DEFAULT_MARGIN: Duration = Duration::from_micros(200);
+    /// Latency of a USB serial adapter that is not an FTDI one: USB CDC and
+    /// CH34x adapters deliver received bytes in 1 ms USB frames.
+    pub const USB_LATENCY: Duration = Duration::from_millis(1);
+    /// Latency allowed for a pseudo-terminal (the simulator behind
+    /// `servobus sim`, or `play`'s simulated buses). The program at the other
+    /// end is scheduled by the operating system, and on a loaded machine it
+    /// now and then wakes milliseconds late; 3 ms is what simulated runs on a
+    /// busy two-core machine have needed without spurious timeouts. It is an
+    /// allowance for the simulator only: a real port uses
+    /// [`Link::USB_LATENCY`] or its adapter's measured figure.
+    pub const PTY_LATENCY: Duration = Duration::from_millis(3);
 
     /// A link at `baud` with no adapter latency and the default turnaround and
     /// margin. A baud of 0 is treated as 1 so that nothing divides by zero.
@@ -91,49 +101,6 @@ impl Link {
     /// Wire time of `bytes` bytes, rounded up to the nanosecond.
     pub const fn wire_time(&self, bytes: usize) -> Duration {
         Duration::from_nanos(self.wire_nanos(bytes))
-    }
-
-    /// Time from the start of sending a request of `request_bytes` until a
-    /// reply of `reply_bytes` (sent after `return_delay`) must have arrived.
-    pub fn reply_timeout(
-        &self,
-        request_bytes: usize,
-        return_delay: Duration,
-        reply_bytes: usize,
-    ) -> Duration {
-        self.wire_time(request_bytes)
-            + return_delay
-            + self.turnaround
-            + self.wire_time(reply_bytes)
-            + self.latency
-            + self.margin
-    }
-
-    /// Deadline (from the start of sending) for the reply to a PING.
-    pub fn ping_timeout(&self, return_delay: Duration) -> Duration {
-        self.reply_timeout(frame_len(0), return_delay, frame_len(0))
-    }
-
-    /// Deadline for the reply to a READ of `len` bytes.
-    pub fn read_timeout(&self, len: usize, return_delay: Duration) -> Duration {
-        self.reply_timeout(frame_len(2), return_delay, frame_len(len))
-    }
-
-    /// Deadline for the status reply to a WRITE of `len` data bytes (only
-    /// when the servo's status level asks for one).
-    pub fn write_timeout(&self, len: usize, return_delay: Duration) -> Duration {
-        self.reply_timeout(frame_len(1 + len), return_delay, frame_len(0))
-    }
-
-    /// Deadline for all `servos` replies of `len` bytes to a SYNC READ: the
-    /// servos answer one after the other, each after its return delay.
-    pub fn sync_read_timeout(&self, servos: usize, len: usize, return_delay: Duration) -> Duration {
-        let n = servos as u32;
-        self.wire_time(frame_len(2 + servos))
-            + (return_delay + self.turnaround) * n
-            + self.wire_time(servos * frame_len(len))
-            + self.latency
-            + self.margin
     }
 }
 
@@ -220,14 +187,17 @@ mod tests {
     fn timeouts_at_1mbps_are_milliseconds_not_tens() {
         let l = Link::new(1_000_000).with_latency(Duration::from_millis(1));
         // READ of 2 bytes: 8 + 8 bytes = 160 us, + 50 us turnaround + 1 ms + 200 us.
+        let all = crate::StatusLevel::All;
+        let read = crate::Transaction::Read { len: 2 };
         assert_eq!(
-            l.read_timeout(2, Duration::ZERO),
-            Duration::from_micros(1410)
+            l.deadline(read, Duration::ZERO, all),
+            Some(Duration::from_micros(1410))
         );
         // SYNC READ of 2 bytes from 6 servos: 14 + 48 bytes = 620 us, 6 x 50 us.
+        let sync = crate::Transaction::SyncRead { servos: 6, len: 2 };
         assert_eq!(
-            l.sync_read_timeout(6, 2, Duration::ZERO),
-            Duration::from_micros(620 + 300 + 1000 + 200)
+            l.deadline(sync, Duration::ZERO, all),
+            Some(Duration::from_micros(620 + 300 + 1000 + 200))
         );
     }
 }

@@ -14,6 +14,12 @@
 //! the conversion for one register and one byte order, refusing values that
 //! do not fit.
 //!
+//! Every register is a typed constant of [`sts`] or [`scs`] (a [`Reg<T>`]:
+//! `sts::PRESENT_POSITION` reads as an `i16`, `scs::PRESENT_POSITION` as a
+//! `u16`); [`RegisterMap`] lists them for lookup by name or address, and
+//! [`addr`] gives the raw addresses. Each fact (address, size, sign bit,
+//! factory value) is written once, in the tables.
+//!
 //! ```
 //! use servobus_protocol::registers::{self, ByteOrder, Series};
 //!
@@ -53,11 +59,23 @@
 //! - **Register 85 (maximum acceleration)** is a factory parameter; it is
 //!   listed as EEPROM because it persists.
 
+mod baud;
 mod models;
+mod status_level;
 mod tables;
+mod typed;
 
-pub use models::{model_by_name, model_by_number, Model, MODELS};
-pub use tables::{addr, SCS, STS};
+pub use baud::{
+    baud_index, baud_rate, next_baud_above, return_delay_from_register, BAUD_RATES,
+    FACTORY_RETURN_DELAY, MAX_SERVO_BAUD, RETURN_DELAY_UNIT,
+};
+pub use models::{
+    model_by_name, model_by_number, Model, MODELS, REPLY_TURNAROUND, SCS0009, SCS15, SM8512BL,
+    STS3215, STS3250,
+};
+pub use status_level::StatusLevel;
+pub use tables::{addr, scs, sts, SCS, STS};
+pub use typed::{Reg, RegisterValue};
 
 use core::fmt;
 
@@ -192,6 +210,9 @@ pub struct Register {
     pub access: Access,
     /// The direction bit of a sign-magnitude value, `None` for unsigned.
     pub sign_bit: Option<u8>,
+    /// Raw content after a factory reset (for read-only registers: what a
+    /// servo at rest reports; see the tables' notes on sources).
+    pub factory: u16,
     /// Unit of the raw value, e.g. `steps/s`, `0.1 V`; empty when unitless.
     pub unit: &'static str,
     /// One line on what it does.
@@ -254,8 +275,8 @@ impl Register {
             });
         }
         Ok(match self.sign_bit {
-            Some(bit) if value < 0 => (1u32 << bit) | value.unsigned_abs(),
-            _ => value as u32,
+            Some(bit) => to_sign_magnitude(value, bit),
+            None => value as u32,
         })
     }
 
@@ -307,6 +328,29 @@ pub const fn sign_magnitude(raw: u32, sign_bit: u8) -> i32 {
     let magnitude = (raw & ((1u32 << bit) - 1)) as i32;
     if raw & (1u32 << bit) != 0 {
         -magnitude
+    } else {
+        magnitude
+    }
+}
+
+/// Encodes `value` in sign-magnitude form with direction bit `sign_bit`;
+/// a magnitude too large for the bits below the sign saturates.
+///
+/// ```
+/// use servobus_protocol::registers::to_sign_magnitude;
+/// assert_eq!(to_sign_magnitude(-5, 15), 0x8005);
+/// assert_eq!(to_sign_magnitude(5000, 11), 2047);
+/// ```
+pub const fn to_sign_magnitude(value: i32, sign_bit: u8) -> u32 {
+    let bit = if sign_bit > 30 { 30 } else { sign_bit };
+    let max = (1u32 << bit) - 1;
+    let magnitude = if value.unsigned_abs() > max {
+        max
+    } else {
+        value.unsigned_abs()
+    };
+    if value < 0 {
+        (1u32 << bit) | magnitude
     } else {
         magnitude
     }
@@ -374,6 +418,11 @@ impl RegisterMap {
         self.registers.iter().find(|r| r.contains(address))
     }
 
+    /// Bytes of the memory table: up to the end of the last register.
+    pub fn table_len(&self) -> usize {
+        self.registers.last().map_or(0, |r| usize::from(r.end()))
+    }
+
     /// The registers sharing at least one byte with `[address, address + len)`,
     /// in address order.
     pub fn covering(
@@ -404,36 +453,4 @@ fn same_name(a: &str, b: &str) -> bool {
             _ => return false,
         }
     }
-}
-
-/// Baud rate of the baud-rate register's `index` (register 6), per Feetech's
-/// SDKs: 0 = 1 Mbps, 1 = 500 k, 2 = 250 k, 3 = 128 k, 4 = 115200,
-/// 5 = 76800, 6 = 57600, 7 = 38400. LeRobot's table differs from index 5 on;
-/// Feetech's Python and C++ SDKs agree with each other, so theirs is taken.
-pub const fn baud_rate(index: u8) -> Option<u32> {
-    match index {
-        0 => Some(1_000_000),
-        1 => Some(500_000),
-        2 => Some(250_000),
-        3 => Some(128_000),
-        4 => Some(115_200),
-        5 => Some(76_800),
-        6 => Some(57_600),
-        7 => Some(38_400),
-        _ => None,
-    }
-}
-
-/// The baud-rate register index for `baud`, if the servos support it.
-pub const fn baud_index(baud: u32) -> Option<u8> {
-    let mut i = 0;
-    while i < 8 {
-        if let Some(b) = baud_rate(i) {
-            if b == baud {
-                return Some(i);
-            }
-        }
-        i += 1;
-    }
-    None
 }

@@ -1,6 +1,18 @@
 //! Servo models: the number a servo reports in register 3 and what it means.
 
+use core::time::Duration;
+
 use super::{RegisterMap, Series};
+
+/// Time a servo's firmware takes from the end of a request to the start of
+/// its reply, on top of its return delay (register 7).
+///
+/// **A guess, not a measurement:** no public source states it. 50 us is
+/// within what LeRobot users see on SO-101 arms at 1 Mbps (a six-servo SYNC
+/// READ in about 1.0 ms, which leaves tens of microseconds per reply beyond
+/// wire time). Reply deadlines add a margin on top, so an error here costs
+/// a little waiting, not lost replies. Every model uses this one figure.
+pub const REPLY_TURNAROUND: Duration = Duration::from_micros(50);
 
 /// A servo model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -18,6 +30,9 @@ pub struct Model {
     pub range_deg: f64,
     /// Highest useful goal speed, in steps/s.
     pub max_speed: u32,
+    /// Time from the end of a request to the start of the reply, beyond
+    /// the return delay ([`REPLY_TURNAROUND`] for every model).
+    pub turnaround: Duration,
 }
 
 impl Model {
@@ -54,48 +69,62 @@ impl Model {
 ///   reference). The other STS/SMS models are given the same figure, and the
 ///   SCS figures are estimates from nominal no-load speeds; none of them is
 ///   measured, so robot files should set their own velocity limits.
-pub static MODELS: [Model; 5] = [
-    Model {
-        name: "STS3215",
-        number: 777,
-        series: Series::Sts,
-        resolution: 4096,
-        range_deg: 360.0,
-        max_speed: 3400,
-    },
-    Model {
-        name: "STS3250",
-        number: 2825,
-        series: Series::Sts,
-        resolution: 4096,
-        range_deg: 360.0,
-        max_speed: 3400,
-    },
-    Model {
-        name: "SM8512BL",
-        number: 11272,
-        series: Series::Sts,
-        resolution: 4096,
-        range_deg: 360.0,
-        max_speed: 3400,
-    },
-    Model {
-        name: "SCS0009",
-        number: 1284,
-        series: Series::Scs,
-        resolution: 1024,
-        range_deg: 300.0,
-        max_speed: 1500,
-    },
-    Model {
-        name: "SCS15",
-        number: 1792,
-        series: Series::Scs,
-        resolution: 1024,
-        range_deg: 300.0,
-        max_speed: 1000,
-    },
-];
+pub static MODELS: [Model; 5] = [STS3215, STS3250, SM8512BL, SCS0009, SCS15];
+
+/// Feetech STS3215.
+pub const STS3215: Model = Model {
+    name: "STS3215",
+    number: 777,
+    series: Series::Sts,
+    resolution: 4096,
+    range_deg: 360.0,
+    max_speed: 3400,
+    turnaround: REPLY_TURNAROUND,
+};
+
+/// Feetech STS3250.
+pub const STS3250: Model = Model {
+    name: "STS3250",
+    number: 2825,
+    series: Series::Sts,
+    resolution: 4096,
+    range_deg: 360.0,
+    max_speed: 3400,
+    turnaround: REPLY_TURNAROUND,
+};
+
+/// Feetech SM8512BL.
+pub const SM8512BL: Model = Model {
+    name: "SM8512BL",
+    number: 11272,
+    series: Series::Sts,
+    resolution: 4096,
+    range_deg: 360.0,
+    max_speed: 3400,
+    turnaround: REPLY_TURNAROUND,
+};
+
+/// Feetech SCS0009.
+pub const SCS0009: Model = Model {
+    name: "SCS0009",
+    number: 1284,
+    series: Series::Scs,
+    resolution: 1024,
+    range_deg: 300.0,
+    max_speed: 1500,
+    turnaround: REPLY_TURNAROUND,
+};
+
+/// Feetech SCS15.
+pub const SCS15: Model = Model {
+    name: "SCS15",
+    number: 1792,
+    series: Series::Scs,
+    resolution: 1024,
+    range_deg: 300.0,
+    max_speed: 1000,
+    turnaround: REPLY_TURNAROUND,
+};
 
 /// The model whose model-number register reads `number`.
 pub fn model_by_number(number: u16) -> Option<&'static Model> {

@@ -1,118 +1,225 @@
-//! The STS/SMS and SCS control tables.
+//! The STS/SMS and SCS control tables: every register written once, with
+//! its Rust type, access, sign bit and factory value.
 //!
 //! Sources: Feetech's SDKs (Python `ftservo-python-sdk`, C++ `SMS_STS.h`,
 //! `SCSCL.h`) and LeRobot's feetech `tables.py`, as collected in the
 //! project's control-tables reference. Names are servobus's own snake_case;
 //! [`ALIASES`] maps the names other tools use.
+//!
+//! Factory values are Feetech's where a public source states them (ID 1,
+//! return delay 250, angle limits, maximum temperature 70, torque 1000, the
+//! lock closed). The rest (gains, tuning bytes, firmware version) are what
+//! servos of the series are commonly reported to hold, and read-only
+//! registers give what a servo at rest on its nominal supply reports
+//! (12.0 V for STS, 6.0 V for SCS, 25 C): plausible starting values for the
+//! simulator, not guarantees about a servo on the bench.
 
-use super::{Access, ByteOrder, Register, RegisterMap, Series};
+use super::{ByteOrder, RegisterMap, Series};
 
-/// Addresses of the registers servobus uses, in the STS/SMS layout. The SCS
-/// layout shares all of them except the lock ([`SCS_LOCK`](addr::SCS_LOCK))
-/// and has no offset, mode, current or firmware-minor semantics to rely on.
-pub mod addr {
-    /// Firmware major version (read-only).
-    pub const FIRMWARE_MAJOR: u8 = 0;
-    /// Firmware minor version (read-only).
-    pub const FIRMWARE_MINOR: u8 = 1;
-    /// Model number, 2 bytes (read-only).
-    pub const MODEL_NUMBER: u8 = 3;
-    /// Servo ID.
-    pub const ID: u8 = 5;
-    /// Baud-rate index (see [`baud_rate`](crate::registers::baud_rate)).
-    pub const BAUD_RATE: u8 = 6;
-    /// Return delay, in 2 us units.
-    pub const RETURN_DELAY: u8 = 7;
-    /// Response status level: 0 answers PING and READ only, 1 answers all.
-    pub const STATUS_LEVEL: u8 = 8;
-    /// Minimum angle limit, 2 bytes.
-    pub const MIN_ANGLE_LIMIT: u8 = 9;
-    /// Maximum angle limit, 2 bytes.
-    pub const MAX_ANGLE_LIMIT: u8 = 11;
-    /// Position offset (homing), 2 bytes, sign bit 11.
-    pub const OFFSET: u8 = 31;
-    /// Operating mode: 0 position, 1 constant speed, 2 PWM, 3 step.
-    pub const MODE: u8 = 33;
-    /// Torque enable.
-    pub const TORQUE_ENABLE: u8 = 40;
-    /// Acceleration, in 100 steps/s^2.
-    pub const ACCELERATION: u8 = 41;
-    /// Goal position, 2 bytes, sign bit 15.
-    pub const GOAL_POSITION: u8 = 42;
-    /// Goal time, 2 bytes, ms.
-    pub const GOAL_TIME: u8 = 44;
-    /// Goal speed, 2 bytes, steps/s, sign bit 15.
-    pub const GOAL_SPEED: u8 = 46;
-    /// Torque limit, 2 bytes.
-    pub const TORQUE_LIMIT: u8 = 48;
-    /// EEPROM lock of the STS/SMS series.
-    pub const LOCK: u8 = 55;
-    /// EEPROM lock of the SCS series.
-    pub const SCS_LOCK: u8 = 48;
-    /// Present position, 2 bytes, sign bit 15.
-    pub const PRESENT_POSITION: u8 = 56;
-    /// Present speed, 2 bytes, sign bit 15.
-    pub const PRESENT_SPEED: u8 = 58;
-    /// Present load, 2 bytes, sign bit 10.
-    pub const PRESENT_LOAD: u8 = 60;
-    /// Present voltage, 0.1 V.
-    pub const PRESENT_VOLTAGE: u8 = 62;
-    /// Present temperature, degrees C.
-    pub const PRESENT_TEMPERATURE: u8 = 63;
-    /// Set while a REG WRITE waits for ACTION.
-    pub const ASYNC_FLAG: u8 = 64;
-    /// Servo status: the status byte's bits.
-    pub const STATUS: u8 = 65;
-    /// 1 while moving.
-    pub const MOVING: u8 = 66;
-    /// Present current, 2 bytes, sign bit 15.
-    pub const PRESENT_CURRENT: u8 = 69;
-    /// Maximum temperature limit, degrees C (EEPROM).
-    pub const MAX_TEMPERATURE: u8 = 13;
-    /// Maximum input voltage, 0.1 V (EEPROM).
-    pub const MAX_VOLTAGE: u8 = 14;
-    /// Minimum input voltage, 0.1 V (EEPROM).
-    pub const MIN_VOLTAGE: u8 = 15;
-    /// Maximum torque, 0.1 % (EEPROM).
-    pub const MAX_TORQUE: u8 = 16;
-    /// Unloading condition: which status bits release the torque (EEPROM).
-    pub const UNLOADING_CONDITION: u8 = 19;
-    /// Position loop P gain (EEPROM).
-    pub const P_GAIN: u8 = 21;
-    /// Clockwise dead zone, ticks (EEPROM).
-    pub const CW_DEAD_ZONE: u8 = 26;
-    /// Counter-clockwise dead zone, ticks (EEPROM).
-    pub const CCW_DEAD_ZONE: u8 = 27;
-    /// Protection time, 10 ms units (STS, EEPROM).
-    pub const PROTECTION_TIME: u8 = 35;
+/// Declares one series' registers as typed constants and lists them, in
+/// address order, as `REGISTERS`. A row reads either
+/// `CONST: type = (address access sign factory "name" "unit" "description");`
+/// where `sign` is the sign bit of a sign-magnitude register or `-`, or
+/// `CONST: type = (sts factory);` for a register laid out exactly as the
+/// STS/SMS one of the same name, with its own factory value.
+macro_rules! table {
+    ($($konst:ident: $ty:ty = ($($row:tt)*);)*) => {
+        $(
+            #[doc = table!(@doc $konst $($row)*)]
+            pub const $konst: Reg<$ty> = Reg::new(table!(@register $konst $ty; $($row)*));
+        )*
+        /// Every register of the series, in address order.
+        pub(crate) const REGISTERS: &[Register] = &[$($konst.register),*];
+    };
+    (@register $konst:ident $ty:ty; sts $factory:literal) => {
+        Register { factory: $factory, ..super::sts::$konst.register }
+    };
+    (@register $konst:ident $ty:ty;
+        $addr:literal $access:ident $sign:tt $factory:literal $name:literal $unit:literal $desc:literal) => {
+        Register {
+            name: $name,
+            address: $addr,
+            size: <$ty as RegisterValue>::SIZE,
+            access: $access,
+            sign_bit: table!(@sign $sign),
+            factory: $factory,
+            unit: $unit,
+            description: $desc,
+        }
+    };
+    (@doc $konst:ident sts $factory:literal) => {
+        concat!("As [`sts::", stringify!($konst), "`](super::sts::", stringify!($konst),
+            "), factory value ", stringify!($factory), ".")
+    };
+    (@doc $konst:ident $addr:literal $access:ident $sign:tt $factory:literal
+        $name:literal $unit:literal $desc:literal) => {
+        concat!("`", $name, "` (", stringify!($addr), "): ", $desc, ".")
+    };
+    (@sign -) => { None };
+    (@sign $bit:literal) => { Some($bit) };
 }
 
-use Access::{Eeprom as E, Ram as W, ReadOnly as R};
+/// The STS/SMS registers (little-endian), as typed constants.
+pub mod sts {
+    use crate::registers::typed::{Reg, RegisterValue};
+    use crate::registers::{
+        Access::Eeprom as E, Access::Ram as W, Access::ReadOnly as R, Register,
+    };
 
-const fn reg(
-    name: &'static str,
-    address: u8,
-    size: u8,
-    access: Access,
-    sign_bit: Option<u8>,
-    unit: &'static str,
-    description: &'static str,
-) -> Register {
-    Register {
-        name,
-        address,
-        size,
-        access,
-        sign_bit,
-        unit,
-        description,
+    table! {
+        FIRMWARE_MAJOR: u8 = (0 R - 3 "firmware_major" "" "firmware major version");
+        FIRMWARE_MINOR: u8 = (1 R - 10 "firmware_minor" "" "firmware minor version");
+        MODEL_NUMBER: u16 = (3 R - 777 "model_number" "" "model number (STS3215 = 777)");
+        ID: u8 = (5 E - 1 "id" "" "servo ID, 0..=253");
+        BAUD_RATE: u8 = (6 E - 0 "baud_rate" "index" "baud-rate index, 0 = 1 Mbps");
+        RETURN_DELAY: u8 = (7 E - 250 "return_delay" "2 us" "delay before a reply");
+        STATUS_LEVEL: u8 = (8 E - 1 "status_level" "" "0: reply to PING/READ only; 1: all");
+        MIN_ANGLE_LIMIT: u16 = (9 E - 0 "min_angle_limit" "steps" "lowest goal accepted");
+        MAX_ANGLE_LIMIT: u16 = (11 E - 4095 "max_angle_limit" "steps" "highest goal accepted");
+        MAX_TEMPERATURE: u8 = (13 E - 70 "max_temperature" "degC" "overheat threshold");
+        MAX_VOLTAGE: u8 = (14 E - 140 "max_voltage" "0.1 V" "over-voltage threshold");
+        MIN_VOLTAGE: u8 = (15 E - 40 "min_voltage" "0.1 V" "under-voltage threshold");
+        MAX_TORQUE: u16 = (16 E - 1000 "max_torque" "0.1 %" "torque ceiling, 0..=1000");
+        PHASE: u8 = (18 E - 12 "phase" "" "phase bits; bit 4 angle feedback mode");
+        UNLOADING_CONDITION: u8 = (19 E - 44 "unloading_condition" "" "protection mask");
+        LED_ALARM_CONDITION: u8 = (20 E - 47 "led_alarm_condition" "" "LED alarm mask");
+        P_COEFFICIENT: u8 = (21 E - 32 "p_coefficient" "" "position loop P");
+        D_COEFFICIENT: u8 = (22 E - 32 "d_coefficient" "" "position loop D");
+        I_COEFFICIENT: u8 = (23 E - 0 "i_coefficient" "" "position loop I");
+        MIN_STARTUP_FORCE: u16 = (24 E - 16 "min_startup_force" "0.1 %" "minimum output");
+        CW_DEAD_ZONE: u8 = (26 E - 1 "cw_dead_zone" "steps" "clockwise dead zone");
+        CCW_DEAD_ZONE: u8 = (27 E - 1 "ccw_dead_zone" "steps" "counter-clockwise dead zone");
+        PROTECTION_CURRENT: u16 = (28 E - 500 "protection_current" "6.5 mA" "current limit");
+        ANGULAR_RESOLUTION: u8 = (30 E - 1 "angular_resolution" "" "angular resolution factor");
+        OFFSET: i16 = (31 E 11 0 "offset" "steps" "homing offset: present = actual - offset");
+        MODE: u8 = (33 E - 0 "mode" "" "0 position, 1 speed, 2 PWM, 3 step");
+        PROTECTIVE_TORQUE: u8 = (34 E - 20 "protective_torque" "%" "torque after overload");
+        PROTECTION_TIME: u8 = (35 E - 200 "protection_time" "10 ms" "overload time before protection");
+        OVERLOAD_TORQUE: u8 = (36 E - 80 "overload_torque" "%" "overload threshold");
+        SPEED_P_COEFFICIENT: u8 = (37 E - 10 "speed_p_coefficient" "" "speed loop P");
+        OVERCURRENT_TIME: u8 = (38 E - 200 "overcurrent_time" "10 ms" "over-current time before protection");
+        SPEED_I_COEFFICIENT: u8 = (39 E - 200 "speed_i_coefficient" "" "speed loop I");
+        TORQUE_ENABLE: u8 = (40 W - 0 "torque_enable" "" "0 off, 1 on, 128 sets midpoint");
+        ACCELERATION: u8 = (41 W - 0 "acceleration" "100 steps/s^2" "0 = no limit");
+        GOAL_POSITION: i16 = (42 W 15 0 "goal_position" "steps" "target position");
+        GOAL_TIME: u16 = (44 W - 0 "goal_time" "ms" "move time (PWM in mode 2)");
+        GOAL_SPEED: i16 = (46 W 15 0 "goal_speed" "steps/s" "speed limit; 0 = maximum");
+        TORQUE_LIMIT: u16 = (48 W - 1000 "torque_limit" "0.1 %" "torque ceiling now");
+        LOCK: u8 = (55 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked");
+        PRESENT_POSITION: i16 = (56 R 15 0 "present_position" "steps" "measured position");
+        PRESENT_SPEED: i16 = (58 R 15 0 "present_speed" "steps/s" "measured speed");
+        PRESENT_LOAD: i16 = (60 R 10 0 "present_load" "0.1 %" "output PWM duty");
+        PRESENT_VOLTAGE: u8 = (62 R - 120 "present_voltage" "0.1 V" "input voltage");
+        PRESENT_TEMPERATURE: u8 = (63 R - 25 "present_temperature" "degC" "internal temperature");
+        ASYNC_FLAG: u8 = (64 R - 0 "async_flag" "" "1 while a REG WRITE waits");
+        STATUS: u8 = (65 R - 0 "status" "" "error bits, as the status byte");
+        MOVING: u8 = (66 R - 0 "moving" "" "1 while moving");
+        PRESENT_CURRENT: i16 = (69 R 15 0 "present_current" "6.5 mA" "motor current");
+        GOAL_POSITION_2: u16 = (71 R - 0 "goal_position_2" "steps" "firmware's copy of the goal (undocumented)");
+        MOVING_THRESHOLD: u8 = (80 E - 1 "moving_threshold" "" "speed below which moving reads 0");
+        DTS: u8 = (81 E - 32 "dts" "ms" "factory tuning byte (undocumented)");
+        SPEED_UNIT_FACTOR: u8 = (82 E - 1 "speed_unit_factor" "" "factory tuning byte (undocumented)");
+        HTS: u8 = (83 E - 20 "hts" "" "factory tuning byte (undocumented)");
+        MAX_SPEED_LIMIT: u8 = (84 E - 254 "max_speed_limit" "" "factory speed ceiling");
+        MAX_ACCELERATION: u8 = (85 E - 150 "max_acceleration" "100 steps/s^2" "factory acceleration ceiling");
+        ACCELERATION_MULTIPLIER: u8 = (86 E - 50 "acceleration_multiplier" "" "factory tuning byte (undocumented)");
     }
+}
+
+/// The SCS registers (big-endian, no offset or mode; unsigned positions), as
+/// typed constants.
+pub mod scs {
+    use crate::registers::typed::{Reg, RegisterValue};
+    use crate::registers::{
+        Access::Eeprom as E, Access::Ram as W, Access::ReadOnly as R, Register,
+    };
+
+    table! {
+        FIRMWARE_MAJOR: u8 = (sts 2);
+        FIRMWARE_MINOR: u8 = (sts 9);
+        MODEL_NUMBER: u16 = (3 R - 1284 "model_number" "" "model number (SCS0009 = 1284)");
+        ID: u8 = (sts 1);
+        BAUD_RATE: u8 = (sts 0);
+        RETURN_DELAY: u8 = (sts 0);
+        STATUS_LEVEL: u8 = (8 E - 2 "status_level" "" "0 PING only, 1 READ, 2 all");
+        MIN_ANGLE_LIMIT: u16 = (sts 0);
+        MAX_ANGLE_LIMIT: u16 = (sts 1023);
+        MAX_TEMPERATURE: u8 = (sts 70);
+        MAX_VOLTAGE: u8 = (sts 80);
+        MIN_VOLTAGE: u8 = (sts 40);
+        MAX_TORQUE: u16 = (sts 1000);
+        PHASE: u8 = (18 E - 0 "phase" "" "phase bits");
+        UNLOADING_CONDITION: u8 = (sts 37);
+        LED_ALARM_CONDITION: u8 = (sts 37);
+        P_COEFFICIENT: u8 = (sts 15);
+        D_COEFFICIENT: u8 = (sts 0);
+        I_COEFFICIENT: u8 = (sts 0);
+        MIN_STARTUP_FORCE: u16 = (sts 0);
+        CW_DEAD_ZONE: u8 = (sts 1);
+        CCW_DEAD_ZONE: u8 = (sts 1);
+        PROTECTIVE_TORQUE: u8 = (37 E - 20 "protective_torque" "%" "torque after overload");
+        PROTECTION_TIME: u8 = (38 E - 200 "protection_time" "10 ms" "overload time before protection");
+        TORQUE_ENABLE: u8 = (40 W - 0 "torque_enable" "" "0 off, 1 on");
+        ACCELERATION: u8 = (41 W - 0 "acceleration" "" "acceleration");
+        GOAL_POSITION: u16 = (42 W - 0 "goal_position" "steps" "target position, 0..=1023");
+        GOAL_TIME: u16 = (44 W - 0 "goal_time" "ms" "move time (PWM in PWM mode)");
+        GOAL_SPEED: u16 = (46 W - 0 "goal_speed" "steps/s" "speed limit; 0 = maximum");
+        LOCK: u8 = (48 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked");
+        PRESENT_POSITION: u16 = (56 R - 0 "present_position" "steps" "measured position");
+        PRESENT_SPEED: i16 = (sts 0);
+        PRESENT_LOAD: i16 = (sts 0);
+        PRESENT_VOLTAGE: u8 = (sts 60);
+        PRESENT_TEMPERATURE: u8 = (sts 25);
+        ASYNC_FLAG: u8 = (sts 0);
+        STATUS: u8 = (sts 0);
+        MOVING: u8 = (sts 0);
+        PRESENT_CURRENT: u16 = (69 R - 0 "present_current" "" "motor current");
+        PWM_MAX_STEP: u8 = (78 E - 50 "pwm_max_step" "" "factory tuning byte (undocumented)");
+        MOVING_THRESHOLD: u8 = (79 E - 1 "moving_threshold" "" "speed below which moving reads 0");
+        DTS: u8 = (80 E - 32 "dts" "ms" "factory tuning byte (undocumented)");
+        MIN_SPEED_LIMIT: u8 = (81 E - 1 "min_speed_limit" "" "factory speed floor");
+        MAX_SPEED_LIMIT: u8 = (82 E - 30 "max_speed_limit" "" "factory speed ceiling");
+        ACCELERATION_2: u8 = (83 E - 0 "acceleration_2" "" "factory tuning byte (undocumented)");
+    }
+}
+
+/// Addresses of the registers servobus uses, in the STS/SMS layout, for code
+/// that works with raw addresses (frames, blocks, the simulator's memory).
+/// Each is taken from the typed constant in [`sts`], never written again.
+/// The SCS layout shares all of them except the lock
+/// ([`SCS_LOCK`](addr::SCS_LOCK)) and has no offset, mode or signed position.
+pub mod addr {
+    use super::{scs, sts};
+
+    /// `pub const NAME: u8` for each STS register `NAME`, its address.
+    macro_rules! addresses {
+        ($($konst:ident)*) => {$(
+            #[doc = concat!("Address of [`sts::", stringify!($konst), "`].")]
+            pub const $konst: u8 = sts::$konst.register.address;
+        )*};
+    }
+
+    addresses! {
+        FIRMWARE_MAJOR FIRMWARE_MINOR MODEL_NUMBER ID BAUD_RATE RETURN_DELAY STATUS_LEVEL
+        MIN_ANGLE_LIMIT MAX_ANGLE_LIMIT MAX_TEMPERATURE MAX_VOLTAGE MIN_VOLTAGE MAX_TORQUE
+        UNLOADING_CONDITION CW_DEAD_ZONE CCW_DEAD_ZONE OFFSET MODE PROTECTION_TIME
+        TORQUE_ENABLE ACCELERATION GOAL_POSITION GOAL_TIME GOAL_SPEED TORQUE_LIMIT LOCK
+        PRESENT_POSITION PRESENT_SPEED PRESENT_LOAD PRESENT_VOLTAGE PRESENT_TEMPERATURE
+        ASYNC_FLAG STATUS MOVING PRESENT_CURRENT
+    }
+
+    /// Address of [`sts::P_COEFFICIENT`], the position loop's P gain.
+    pub const P_GAIN: u8 = sts::P_COEFFICIENT.register.address;
+    /// Address of [`scs::LOCK`], the EEPROM lock of the SCS series.
+    pub const SCS_LOCK: u8 = scs::LOCK.register.address;
 }
 
 /// Names used by other tools (LeRobot, Feetech's SDKs) for servobus's
 /// registers: `(alias, canonical name)`.
 pub(crate) const ALIASES: &[(&str, &str)] = &[
     ("model", "model_number"),
+    ("firmware_major_version", "firmware_major"),
+    ("firmware_minor_version", "firmware_minor"),
     ("return_delay_time", "return_delay"),
     ("response_status_level", "status_level"),
     ("min_position_limit", "min_angle_limit"),
@@ -125,640 +232,34 @@ pub(crate) const ALIASES: &[(&str, &str)] = &[
     ("homing_offset", "offset"),
     ("position_offset", "offset"),
     ("operating_mode", "mode"),
+    ("velocity_closed_loop_p", "speed_p_coefficient"),
+    ("velocity_closed_loop_i", "speed_i_coefficient"),
+    ("over_current_protection_time", "overcurrent_time"),
     ("running_time", "goal_time"),
     ("goal_velocity", "goal_speed"),
     ("present_velocity", "present_speed"),
     ("async_write_flag", "async_flag"),
     ("sync_write_flag", "async_flag"),
+    ("moving_velocity_threshold", "moving_threshold"),
+    ("velocity_unit_factor", "speed_unit_factor"),
+    ("maximum_velocity_limit", "max_speed_limit"),
+    ("minimum_velocity_limit", "min_speed_limit"),
+    ("pwm_maximum_step", "pwm_max_step"),
     ("maximum_acceleration", "max_acceleration"),
-];
-
-const STS_REGISTERS: &[Register] = &[
-    reg(
-        "firmware_major",
-        0,
-        1,
-        R,
-        None,
-        "",
-        "firmware major version",
-    ),
-    reg(
-        "firmware_minor",
-        1,
-        1,
-        R,
-        None,
-        "",
-        "firmware minor version",
-    ),
-    reg(
-        "model_number",
-        3,
-        2,
-        R,
-        None,
-        "",
-        "model number (STS3215 = 777)",
-    ),
-    reg("id", 5, 1, E, None, "", "servo ID, 0..=253"),
-    reg(
-        "baud_rate",
-        6,
-        1,
-        E,
-        None,
-        "index",
-        "baud-rate index, 0 = 1 Mbps",
-    ),
-    reg(
-        "return_delay",
-        7,
-        1,
-        E,
-        None,
-        "2 us",
-        "delay before a reply",
-    ),
-    reg(
-        "status_level",
-        8,
-        1,
-        E,
-        None,
-        "",
-        "0: reply to PING/READ only; 1: all",
-    ),
-    reg(
-        "min_angle_limit",
-        9,
-        2,
-        E,
-        None,
-        "steps",
-        "lowest goal accepted",
-    ),
-    reg(
-        "max_angle_limit",
-        11,
-        2,
-        E,
-        None,
-        "steps",
-        "highest goal accepted",
-    ),
-    reg(
-        "max_temperature",
-        13,
-        1,
-        E,
-        None,
-        "degC",
-        "overheat threshold",
-    ),
-    reg(
-        "max_voltage",
-        14,
-        1,
-        E,
-        None,
-        "0.1 V",
-        "over-voltage threshold",
-    ),
-    reg(
-        "min_voltage",
-        15,
-        1,
-        E,
-        None,
-        "0.1 V",
-        "under-voltage threshold",
-    ),
-    reg(
-        "max_torque",
-        16,
-        2,
-        E,
-        None,
-        "0.1 %",
-        "torque ceiling, 0..=1000",
-    ),
-    reg(
-        "phase",
-        18,
-        1,
-        E,
-        None,
-        "",
-        "phase bits; bit 4 angle feedback mode",
-    ),
-    reg("unloading_condition", 19, 1, E, None, "", "protection mask"),
-    reg("led_alarm_condition", 20, 1, E, None, "", "LED alarm mask"),
-    reg("p_coefficient", 21, 1, E, None, "", "position loop P"),
-    reg("d_coefficient", 22, 1, E, None, "", "position loop D"),
-    reg("i_coefficient", 23, 1, E, None, "", "position loop I"),
-    reg(
-        "min_startup_force",
-        24,
-        2,
-        E,
-        None,
-        "0.1 %",
-        "minimum output",
-    ),
-    reg(
-        "cw_dead_zone",
-        26,
-        1,
-        E,
-        None,
-        "steps",
-        "clockwise dead zone",
-    ),
-    reg(
-        "ccw_dead_zone",
-        27,
-        1,
-        E,
-        None,
-        "steps",
-        "counter-clockwise dead zone",
-    ),
-    reg(
-        "protection_current",
-        28,
-        2,
-        E,
-        None,
-        "6.5 mA",
-        "current limit",
-    ),
-    reg(
-        "angular_resolution",
-        30,
-        1,
-        E,
-        None,
-        "",
-        "angular resolution factor",
-    ),
-    reg(
-        "offset",
-        31,
-        2,
-        E,
-        Some(11),
-        "steps",
-        "homing offset: present = actual - offset",
-    ),
-    reg(
-        "mode",
-        33,
-        1,
-        E,
-        None,
-        "",
-        "0 position, 1 speed, 2 PWM, 3 step",
-    ),
-    reg(
-        "protective_torque",
-        34,
-        1,
-        E,
-        None,
-        "%",
-        "torque after overload",
-    ),
-    reg(
-        "protection_time",
-        35,
-        1,
-        E,
-        None,
-        "10 ms",
-        "overload time before protection",
-    ),
-    reg("overload_torque", 36, 1, E, None, "%", "overload threshold"),
-    reg("speed_p_coefficient", 37, 1, E, None, "", "speed loop P"),
-    reg(
-        "overcurrent_time",
-        38,
-        1,
-        E,
-        None,
-        "10 ms",
-        "over-current time before protection",
-    ),
-    reg("speed_i_coefficient", 39, 1, E, None, "", "speed loop I"),
-    reg(
-        "torque_enable",
-        40,
-        1,
-        W,
-        None,
-        "",
-        "0 off, 1 on, 128 sets midpoint",
-    ),
-    reg(
-        "acceleration",
-        41,
-        1,
-        W,
-        None,
-        "100 steps/s^2",
-        "0 = no limit",
-    ),
-    reg(
-        "goal_position",
-        42,
-        2,
-        W,
-        Some(15),
-        "steps",
-        "target position",
-    ),
-    reg(
-        "goal_time",
-        44,
-        2,
-        W,
-        None,
-        "ms",
-        "move time (PWM in mode 2)",
-    ),
-    reg(
-        "goal_speed",
-        46,
-        2,
-        W,
-        Some(15),
-        "steps/s",
-        "speed limit; 0 = maximum",
-    ),
-    reg(
-        "torque_limit",
-        48,
-        2,
-        W,
-        None,
-        "0.1 %",
-        "torque ceiling now",
-    ),
-    reg(
-        "lock",
-        55,
-        1,
-        W,
-        None,
-        "",
-        "0: EEPROM writes persist; 1: locked",
-    ),
-    reg(
-        "present_position",
-        56,
-        2,
-        R,
-        Some(15),
-        "steps",
-        "measured position",
-    ),
-    reg(
-        "present_speed",
-        58,
-        2,
-        R,
-        Some(15),
-        "steps/s",
-        "measured speed",
-    ),
-    reg(
-        "present_load",
-        60,
-        2,
-        R,
-        Some(10),
-        "0.1 %",
-        "output PWM duty",
-    ),
-    reg("present_voltage", 62, 1, R, None, "0.1 V", "input voltage"),
-    reg(
-        "present_temperature",
-        63,
-        1,
-        R,
-        None,
-        "degC",
-        "internal temperature",
-    ),
-    reg(
-        "async_flag",
-        64,
-        1,
-        R,
-        None,
-        "",
-        "1 while a REG WRITE waits",
-    ),
-    reg(
-        "status",
-        65,
-        1,
-        R,
-        None,
-        "",
-        "error bits, as the status byte",
-    ),
-    reg("moving", 66, 1, R, None, "", "1 while moving"),
-    reg(
-        "present_current",
-        69,
-        2,
-        R,
-        Some(15),
-        "6.5 mA",
-        "motor current",
-    ),
-    reg(
-        "max_acceleration",
-        85,
-        1,
-        E,
-        None,
-        "100 steps/s^2",
-        "factory acceleration ceiling",
-    ),
-];
-
-const SCS_REGISTERS: &[Register] = &[
-    reg(
-        "firmware_major",
-        0,
-        1,
-        R,
-        None,
-        "",
-        "firmware major version",
-    ),
-    reg(
-        "firmware_minor",
-        1,
-        1,
-        R,
-        None,
-        "",
-        "firmware minor version",
-    ),
-    reg(
-        "model_number",
-        3,
-        2,
-        R,
-        None,
-        "",
-        "model number (SCS0009 = 1284)",
-    ),
-    reg("id", 5, 1, E, None, "", "servo ID, 0..=253"),
-    reg(
-        "baud_rate",
-        6,
-        1,
-        E,
-        None,
-        "index",
-        "baud-rate index, 0 = 1 Mbps",
-    ),
-    reg(
-        "return_delay",
-        7,
-        1,
-        E,
-        None,
-        "2 us",
-        "delay before a reply",
-    ),
-    reg(
-        "status_level",
-        8,
-        1,
-        E,
-        None,
-        "",
-        "0 PING only, 1 READ, 2 all",
-    ),
-    reg(
-        "min_angle_limit",
-        9,
-        2,
-        E,
-        None,
-        "steps",
-        "lowest goal accepted",
-    ),
-    reg(
-        "max_angle_limit",
-        11,
-        2,
-        E,
-        None,
-        "steps",
-        "highest goal accepted",
-    ),
-    reg(
-        "max_temperature",
-        13,
-        1,
-        E,
-        None,
-        "degC",
-        "overheat threshold",
-    ),
-    reg(
-        "max_voltage",
-        14,
-        1,
-        E,
-        None,
-        "0.1 V",
-        "over-voltage threshold",
-    ),
-    reg(
-        "min_voltage",
-        15,
-        1,
-        E,
-        None,
-        "0.1 V",
-        "under-voltage threshold",
-    ),
-    reg(
-        "max_torque",
-        16,
-        2,
-        E,
-        None,
-        "0.1 %",
-        "torque ceiling, 0..=1000",
-    ),
-    reg("phase", 18, 1, E, None, "", "phase bits"),
-    reg("unloading_condition", 19, 1, E, None, "", "protection mask"),
-    reg("led_alarm_condition", 20, 1, E, None, "", "LED alarm mask"),
-    reg("p_coefficient", 21, 1, E, None, "", "position loop P"),
-    reg("d_coefficient", 22, 1, E, None, "", "position loop D"),
-    reg("i_coefficient", 23, 1, E, None, "", "position loop I"),
-    reg(
-        "min_startup_force",
-        24,
-        2,
-        E,
-        None,
-        "0.1 %",
-        "minimum output",
-    ),
-    reg(
-        "cw_dead_zone",
-        26,
-        1,
-        E,
-        None,
-        "steps",
-        "clockwise dead zone",
-    ),
-    reg(
-        "ccw_dead_zone",
-        27,
-        1,
-        E,
-        None,
-        "steps",
-        "counter-clockwise dead zone",
-    ),
-    reg(
-        "protective_torque",
-        37,
-        1,
-        E,
-        None,
-        "%",
-        "torque after overload",
-    ),
-    reg(
-        "protection_time",
-        38,
-        1,
-        E,
-        None,
-        "10 ms",
-        "overload time before protection",
-    ),
-    reg("torque_enable", 40, 1, W, None, "", "0 off, 1 on"),
-    reg("acceleration", 41, 1, W, None, "", "acceleration"),
-    reg(
-        "goal_position",
-        42,
-        2,
-        W,
-        None,
-        "steps",
-        "target position, 0..=1023",
-    ),
-    reg(
-        "goal_time",
-        44,
-        2,
-        W,
-        None,
-        "ms",
-        "move time (PWM in PWM mode)",
-    ),
-    reg(
-        "goal_speed",
-        46,
-        2,
-        W,
-        None,
-        "steps/s",
-        "speed limit; 0 = maximum",
-    ),
-    reg(
-        "lock",
-        48,
-        1,
-        W,
-        None,
-        "",
-        "0: EEPROM writes persist; 1: locked",
-    ),
-    reg(
-        "present_position",
-        56,
-        2,
-        R,
-        None,
-        "steps",
-        "measured position",
-    ),
-    reg(
-        "present_speed",
-        58,
-        2,
-        R,
-        Some(15),
-        "steps/s",
-        "measured speed",
-    ),
-    reg(
-        "present_load",
-        60,
-        2,
-        R,
-        Some(10),
-        "0.1 %",
-        "output PWM duty",
-    ),
-    reg("present_voltage", 62, 1, R, None, "0.1 V", "input voltage"),
-    reg(
-        "present_temperature",
-        63,
-        1,
-        R,
-        None,
-        "degC",
-        "internal temperature",
-    ),
-    reg(
-        "async_flag",
-        64,
-        1,
-        R,
-        None,
-        "",
-        "1 while a REG WRITE waits",
-    ),
-    reg(
-        "status",
-        65,
-        1,
-        R,
-        None,
-        "",
-        "error bits, as the status byte",
-    ),
-    reg("moving", 66, 1, R, None, "", "1 while moving"),
-    reg("present_current", 69, 2, R, None, "", "motor current"),
 ];
 
 /// The STS/SMS control table (little-endian, lock at 55).
 pub static STS: RegisterMap = RegisterMap {
     series: Series::Sts,
     byte_order: ByteOrder::Little,
-    lock_address: addr::LOCK,
-    registers: STS_REGISTERS,
+    lock_address: sts::LOCK.register.address,
+    registers: sts::REGISTERS,
 };
 
 /// The SCS control table (big-endian, lock at 48, no offset or mode).
 pub static SCS: RegisterMap = RegisterMap {
     series: Series::Scs,
     byte_order: ByteOrder::Big,
-    lock_address: addr::SCS_LOCK,
-    registers: SCS_REGISTERS,
+    lock_address: scs::LOCK.register.address,
+    registers: scs::REGISTERS,
 };

@@ -1,5 +1,6 @@
 //! Joint positions <-> servo ticks, and the last-step clamp to joint limits.
 
+use super::seam::{turn_ticks, unwrap_near};
 use super::{JointConfig, Units};
 
 /// How one joint's angle maps to its servo's position register.
@@ -10,6 +11,13 @@ use super::{JointConfig, Units};
 /// that angle times `resolution / range`, rounded to the nearest tick.
 /// Everything here is in radians, the trajectory's unit; the robot's unit is
 /// converted once, when the map is built.
+///
+/// A calibrated joint ([`JointConfig::calibration`]) maps instead through
+/// its calibration, in its play frame
+/// ([`JointCalibration::play_frame`](super::JointCalibration::play_frame)):
+/// the tick of the calibration pose and the direction give the line, and a
+/// reading is unwrapped to lie within half a turn of the measured range's
+/// middle, so a joint just past the seam reads as just past its end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointMap {
     /// Lower joint limit, rad.
@@ -22,6 +30,9 @@ pub struct JointMap {
     ticks_per_rad: f64,
     /// Highest tick the servo accepts.
     max_tick: i32,
+    /// Calibrated full-turn joints: the middle of the measured range and
+    /// the ticks of a turn, to unwrap readings near it.
+    unwrap: Option<(f64, i32)>,
 }
 
 /// A goal after the last-step clamp.
@@ -38,6 +49,20 @@ impl JointMap {
     /// The map of `joint`, whose angles are in `units`.
     pub fn new(joint: &JointConfig, units: Units) -> Self {
         let model = joint.model;
+        if let Some(cal) = &joint.calibration {
+            let c = cal.in_frame(cal.play_frame());
+            let ticks_per_rad = 1.0 / model.deg_per_tick().to_radians();
+            let sign = f64::from(c.direction.signum());
+            let middle = 0.5 * (c.range[0] + c.range[1]) as f64;
+            return JointMap {
+                min_rad: units.to_rad(joint.min),
+                max_rad: units.to_rad(joint.max),
+                zero_tick: c.pose_tick - sign * c.pose_deg.to_radians() * ticks_per_rad,
+                ticks_per_rad: sign * ticks_per_rad,
+                max_tick: i32::try_from(model.max_position()).unwrap_or(i32::MAX),
+                unwrap: turn_ticks(model).map(|turn| (middle, turn)),
+            };
+        }
         let ticks_per_rad = f64::from(model.resolution) / model.range_deg.to_radians();
         let sign = if joint.inverted { -1.0 } else { 1.0 };
         let mid = f64::from(model.resolution / 2);
@@ -47,6 +72,7 @@ impl JointMap {
             zero_tick: mid + units.to_rad(joint.offset) * ticks_per_rad,
             ticks_per_rad: sign * ticks_per_rad,
             max_tick: i32::try_from(model.max_position()).unwrap_or(i32::MAX),
+            unwrap: None,
         }
     }
 
@@ -64,6 +90,9 @@ impl JointMap {
 
     /// Ticks of joint position `rad`, rounded and kept inside the servo's
     /// range (the joint limits are not applied: see [`JointMap::goal`]).
+    /// Never wrapped: a goal past the end of the register would send the
+    /// servo the long way round; a calibrated joint's limits keep its goals
+    /// inside the measured range, which lies inside the register.
     pub fn to_ticks(&self, rad: f64) -> i32 {
         let t = self.raw_ticks(rad).round();
         if t.is_nan() {
@@ -75,7 +104,11 @@ impl JointMap {
 
     /// Joint position, rad, of a position register reading.
     pub fn from_ticks(&self, ticks: i32) -> f64 {
-        (f64::from(ticks) - self.zero_tick) / self.ticks_per_rad
+        let t = match self.unwrap {
+            Some((middle, turn)) => unwrap_near(f64::from(ticks), middle, turn),
+            None => f64::from(ticks),
+        };
+        (t - self.zero_tick) / self.ticks_per_rad
     }
 
     /// Joint position `rad` clamped to the joint limits. Not-a-number goes

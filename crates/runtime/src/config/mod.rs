@@ -23,20 +23,33 @@
 //! ```
 
 mod budget;
+mod calibrated;
+mod calibration;
 mod error;
 mod files;
 mod locate;
 mod mapping;
 mod motion;
 mod robot;
+pub mod seam;
 mod syntax;
 mod trajectory;
 mod units;
 
+pub use calibration::{
+    load_calibration, save_calibration, utc_now, Calibration, JointCalibration, PlayFrame,
+    RANGE_MARGIN_DEG,
+};
 pub use error::ConfigError;
 pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
+// For the simulator's body files, which report errors the same way.
+pub(crate) use error::Source;
+pub(crate) use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
-pub use motion::{load_motion, Interpolation, Keyframe, Motion, OnLimit};
-pub use robot::{load_robot, load_robot_any_rate, BusConfig, JointConfig, Robot};
+pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
+pub use robot::{
+    load_robot, load_robot_any_rate, load_robot_any_rate_calibrated, load_robot_calibrated,
+    load_robot_design, BusConfig, JointConfig, Robot, RobotCalibration,
+};
 pub use trajectory::{joint_limits, plan_input, plan_motion};
 pub use units::Units;

@@ -232,6 +232,19 @@ pub fn load_motion(
     path: &Path,
     robot_override: Option<&Path>,
 ) -> Result<(Motion, Robot), ConfigError> {
+    load_motion_calibrated(path, robot_override, None)
+}
+
+/// Like [`load_motion`], with the calibration file `calibration` instead of
+/// the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_motion`] and [`load_robot_calibrated`](super::load_robot_calibrated).
+pub fn load_motion_calibrated(
+    path: &Path,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
     let src = Source::read(path)?;
     let raw: RawMotion = src.parse()?;
     let root = FieldPath::root();
@@ -245,7 +258,9 @@ pub fn load_motion(
             ))
         }
     };
-    let (robot, robot_src) = robot::load(&robot_path).map_err(|e| match (e, robot_override) {
+    let (robot, robot_src) =
+        robot::load_calibrated(&robot_path, calibration).map_err(|e| {
+            match (e, robot_override) {
         // A robot the motion names but that cannot be read: point at the
         // `robot:` line, which is what to fix.
         (e @ ConfigError::Read { .. }, None) => src.error(
@@ -253,7 +268,8 @@ pub fn load_motion(
             format!("{e}; fix this `robot:` (it is relative to this motion file) or pass --robot"),
         ),
         (e, _) => e,
-    })?;
+    }
+        })?;
     match raw.rate {
         Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,

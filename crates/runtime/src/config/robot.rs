@@ -8,6 +8,7 @@ use serde::Deserialize;
 use servobus_protocol::registers::{self, model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
+use super::calibration::{Calibration, JointCalibration};
 use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
 use super::Units;
@@ -28,6 +29,32 @@ pub struct Robot {
     pub buses: Vec<BusConfig>,
     /// The file it was loaded from (empty for robots built in code).
     pub path: PathBuf,
+    /// The calibration of the physical robot, if the robot file names one
+    /// (`calibration: FILE`) or one was given (`--calibration`).
+    pub calibration: RobotCalibration,
+    /// The pose a person holds the robot in while calibrating, per joint in
+    /// the robot's joint order and units (`calibration_pose`; default 0).
+    pub calibration_pose: Vec<f64>,
+}
+
+/// Whether a robot's angles go through a calibration.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum RobotCalibration {
+    /// None asked for: angles are measured from each servo's middle tick
+    /// with the robot file's `offset` and `inverted`.
+    #[default]
+    None,
+    /// The robot file names a calibration file that does not exist yet: the
+    /// robot runs on the simulator as designed, and refuses real servos.
+    Missing(PathBuf),
+    /// Loaded and applied: every joint maps through its calibration and its
+    /// limits are clipped to the measured range.
+    Applied {
+        /// The calibration file.
+        path: PathBuf,
+        /// Its content.
+        calibration: Calibration,
+    },
 }
 
 /// One serial bus and the servos on it.
@@ -76,6 +103,9 @@ pub struct JointConfig {
     pub inverted: bool,
     /// Rest position, units.
     pub home: Option<f64>,
+    /// The joint's calibration, when the robot has one: it replaces
+    /// `offset` and `inverted` in the mapping to ticks.
+    pub calibration: Option<JointCalibration>,
 }
 
 impl Robot {
@@ -126,6 +156,10 @@ struct RawRobot {
     rate: f64,
     #[serde(default)]
     lead_ms: Option<f64>,
+    #[serde(default)]
+    calibration: Option<PathBuf>,
+    #[serde(default)]
+    calibration_pose: HashMap<String, f64>,
     buses: Vec<RawBus>,
 }
 
@@ -192,7 +226,21 @@ const MAX_RETURN_DELAY_US: u64 = 510;
 /// non-positive limit, a limit outside the servo's range, or a rate the bus
 /// cannot carry (the error says which rate would fit).
 pub fn load_robot(path: &Path) -> Result<Robot, ConfigError> {
-    let (robot, source) = load(path)?;
+    load_robot_calibrated(path, None)
+}
+
+/// Like [`load_robot`], with the calibration file `calibration` instead of
+/// the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_robot`], and the errors of [`load_calibration`] and of
+/// applying it: a joint it lacks, another servo ID or model, a measured
+/// range that leaves nothing of the joint's limits.
+pub fn load_robot_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    let (robot, source) = load_calibrated(path, calibration)?;
     check_rate(
         &robot,
         &source,
@@ -212,12 +260,63 @@ pub fn load_robot_any_rate(path: &Path) -> Result<Robot, ConfigError> {
     load(path).map(|(robot, _)| robot)
 }
 
+/// [`load_robot_any_rate`] with the calibration file `calibration` instead
+/// of the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_robot_calibrated`], less the rate check.
+pub fn load_robot_any_rate_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    load_calibrated(path, calibration).map(|(robot, _)| robot)
+}
+
+/// The robot as designed, without any calibration applied (what
+/// `servobus calibrate` starts from), and the calibration file the robot
+/// file names, if it names one.
+///
+/// # Errors
+/// As [`load_robot_any_rate`].
+pub fn load_robot_design(path: &Path) -> Result<(Robot, Option<PathBuf>), ConfigError> {
+    let (robot, _, named) = load_design(path)?;
+    Ok((robot, named))
+}
+
 pub(crate) fn load(path: &Path) -> Result<(Robot, Source), ConfigError> {
+    load_calibrated(path, None)
+}
+
+/// Loads a robot file and applies its calibration (or `calibration`, which
+/// takes precedence over the file's `calibration:`).
+pub(crate) fn load_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<(Robot, Source), ConfigError> {
+    let (robot, source, named) = load_design(path)?;
+    let robot = match calibration.map(Path::to_owned).or(named) {
+        Some(file) if calibration.is_some() || file.exists() => {
+            super::calibrated::apply(robot, &file)?
+        }
+        Some(file) => Robot {
+            calibration: RobotCalibration::Missing(file),
+            ..robot
+        },
+        None => robot,
+    };
+    Ok((robot, source))
+}
+
+fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
     let source = Source::read(path)?;
     let raw: RawRobot = source.parse()?;
+    let named = raw
+        .calibration
+        .as_ref()
+        .map(|rel| path.parent().unwrap_or(Path::new("")).join(rel));
     let robot = validate(raw, &source)?;
     check_servo_range(&robot, &source)?;
-    Ok((robot, source))
+    Ok((robot, source, named))
 }
 
 /// Checks that `rate_hz` fits every bus of `robot`; the error points at `field`.
@@ -268,6 +367,7 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
     if raw.buses.is_empty() {
         return Err(src.error(&root.key("buses"), "a robot needs at least one bus"));
     }
+    let pose = raw.calibration_pose;
     let mut bus_names = HashSet::new();
     let mut joint_names: HashMap<String, FieldPath> = HashMap::new();
     let mut buses = Vec::with_capacity(raw.buses.len());
@@ -338,14 +438,18 @@ fn validate(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
             joints,
         });
     }
-    Ok(Robot {
+    let mut robot = Robot {
         name: raw.name,
         units: raw.units,
         rate_hz: raw.rate,
         lead,
         buses,
         path: src.path.clone(),
-    })
+        calibration: RobotCalibration::None,
+        calibration_pose: Vec::new(),
+    };
+    robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
+    Ok(robot)
 }
 
 fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointConfig, ConfigError> {
@@ -402,6 +506,7 @@ fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointCon
         offset: rj.offset,
         inverted: rj.inverted,
         home: rj.home,
+        calibration: None,
     };
     if let Some(home) = joint.home {
         if !(home >= joint.min && home <= joint.max) {
@@ -412,6 +517,31 @@ fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointCon
         }
     }
     Ok(joint)
+}
+
+/// The calibration pose in joint order: every joint named exists and its
+/// angle is inside its limits; unnamed joints are at 0.
+fn calibration_pose(
+    robot: &Robot,
+    pose: &HashMap<String, f64>,
+    src: &Source,
+) -> Result<Vec<f64>, ConfigError> {
+    let field = FieldPath::root().key("calibration_pose");
+    for (name, &v) in pose {
+        let Some(joint) = robot.joint(name) else {
+            return Err(src.key_error(&field.key(name), format!("no joint `{name}`")));
+        };
+        if !(v >= joint.min && v <= joint.max) {
+            return Err(src.error(
+                &field.key(name),
+                format!("{v} is outside [{}, {}]", joint.min, joint.max),
+            ));
+        }
+    }
+    Ok(robot
+        .joints()
+        .map(|j| pose.get(&j.name).copied().unwrap_or(0.0))
+        .collect())
 }
 
 /// Checks that both limits of every joint land inside the servo's tick range

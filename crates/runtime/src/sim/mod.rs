@@ -20,11 +20,30 @@
 //! ```
 
 use std::path::PathBuf;
+use std::time::Duration;
 
 use crate::bus_settings;
 use crate::config::{BusConfig, JointMap, Robot};
 use servobus_driver::{Bus, ManualClock};
-use servobus_sim::{SimBus, SimModel, SimServo};
+use servobus_sim::{SimBus, SimModel, SimServo, Truth};
+
+mod body;
+
+pub use body::{Hand, Mounting};
+
+/// How often the truth is sampled: 100 Hz, twice the 50 Hz a reader of the
+/// truth may count on.
+pub const TRUTH_PERIOD: Duration = Duration::from_millis(10);
+
+/// A truth recorder for `robot`: one column per joint, named as in the
+/// robot file and in its joint order, sampled every [`TRUTH_PERIOD`]. Give
+/// it to [`SimRobotBuilder::truth`].
+pub fn new_truth(robot: &Robot) -> Truth {
+    Truth::new(
+        robot.joints().map(|j| j.name.clone()).collect(),
+        TRUTH_PERIOD,
+    )
+}
 
 /// Why a robot file's servos cannot be simulated.
 #[derive(Debug, thiserror::Error)]
@@ -67,13 +86,11 @@ pub enum SimRobotError {
 /// # Errors
 /// [`SimRobotError::Baud`] for a rate outside the servo baud table.
 pub fn baud_index(robot: &Robot, bus: &BusConfig) -> Result<u8, SimRobotError> {
-    (0u8..8)
-        .find(|&i| servobus_sim::baud_of_index(i) == Some(bus.baud))
-        .ok_or_else(|| SimRobotError::Baud {
-            file: robot.path.clone(),
-            bus: bus.name.clone(),
-            baud: bus.baud,
-        })
+    servobus_protocol::registers::baud_index(bus.baud).ok_or_else(|| SimRobotError::Baud {
+        file: robot.path.clone(),
+        bus: bus.name.clone(),
+        baud: bus.baud,
+    })
 }
 
 /// The simulated servos of `bus`: each joint's servo with its ID, model, the
@@ -83,41 +100,7 @@ pub fn baud_index(robot: &Robot, bus: &BusConfig) -> Result<u8, SimRobotError> {
 /// # Errors
 /// [`SimRobotError`] when a servo cannot be simulated.
 pub fn bus_servos(robot: &Robot, bus: &BusConfig) -> Result<Vec<SimServo>, SimRobotError> {
-    let rest: Vec<f64> = bus.joints.iter().map(|j| j.rest()).collect();
-    servos_at(robot, bus, &rest)
-}
-
-/// The servos of `bus` with their shafts at `pose` (robot units, one angle
-/// per joint of the bus, in the bus's joint order): a simulated robot that
-/// starts away from its rest position, e.g. on a pty.
-///
-/// # Errors
-/// [`SimRobotError`] when a servo cannot be simulated.
-pub fn servos_at(
-    robot: &Robot,
-    bus: &BusConfig,
-    pose: &[f64],
-) -> Result<Vec<SimServo>, SimRobotError> {
-    let baud = baud_index(robot, bus)?;
-    let mut servos = Vec::with_capacity(bus.joints.len());
-    for (joint, &angle) in bus.joints.iter().zip(pose) {
-        let model = SimModel::by_number(joint.model.number)
-            .or_else(|| SimModel::by_name(joint.model.name))
-            .ok_or_else(|| SimRobotError::Model {
-                file: robot.path.clone(),
-                joint: joint.name.clone(),
-                model: joint.model.name,
-            })?;
-        let map = JointMap::new(joint, robot.units);
-        let ticks = map.to_ticks(robot.units.to_rad(angle));
-        servos.push(
-            SimServo::new(model, joint.id)
-                .with_return_delay(bus.return_delay)
-                .with_byte(servobus_sim::addr::BAUD_RATE, baud)
-                .with_position(ticks),
-        );
-    }
-    Ok(servos)
+    SimRobot::builder(robot).servos(bus)
 }
 
 /// The robot's buses simulated in virtual time, ready for
@@ -133,7 +116,30 @@ pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus, ManualClock>>, Sim
 
 /// A robot file's servos on simulated buses in virtual time.
 ///
-/// Build one with [`SimRobot::builder`]. The [`SimBus`] handles it holds
+/// Build one with [`SimRobot::builder`]; its options give the robot a body:
+///
+/// ```
+/// use servobus_runtime::config::load_robot;
+/// use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
+///
+/// # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
+/// let robot = load_robot(&dir.join("so101.yaml"))?;
+/// let truth = new_truth(&robot);
+/// // Joint 0 (shoulder_pan) turned by hand from 0 to 45 deg in the first second.
+/// let hand = Hand::from_keyframes(&robot, &[(0.0, vec![(0, 0.0)]), (1.0, vec![(0, 45.0)])]);
+/// let sim = SimRobot::builder(&robot)
+///     .mounting(Mounting::random(&robot, 7)) // horns anywhere on the turn
+///     .hand(hand)
+///     .truth(&truth)
+///     .build()?;
+/// sim.buses()[0].clock().advance(std::time::Duration::from_secs(2));
+/// sim.settle();
+/// let last = truth.rows().pop().expect("rows every 10 ms");
+/// assert!((last.angles_deg[0] - 45.0).abs() < 0.01);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// The [`SimBus`] handles it holds
 /// share their servos with every driver bus made from them, so a test can
 /// run the robot through [`SimRobot::driver_buses`] and inspect the servos
 /// through [`SimRobot::buses`].
@@ -148,13 +154,22 @@ pub struct SimRobot {
 pub struct SimRobotBuilder<'a> {
     robot: &'a Robot,
     pose: Option<Vec<f64>>,
+    mounting: Option<Mounting>,
+    hand: Option<Hand>,
+    truth: Option<Truth>,
 }
 
 impl SimRobot {
     /// The options of a simulated `robot`: by default every shaft at its
     /// joint's rest position.
     pub fn builder(robot: &Robot) -> SimRobotBuilder<'_> {
-        SimRobotBuilder { robot, pose: None }
+        SimRobotBuilder {
+            robot,
+            pose: None,
+            mounting: None,
+            hand: None,
+            truth: None,
+        }
     }
 
     /// The simulated buses, one per robot bus, in the robot file's order.
@@ -171,9 +186,45 @@ impl SimRobot {
             .map(|(sim, settings)| Bus::new(sim.clone(), sim.clock().clone(), *settings))
             .collect()
     }
+
+    /// Steps every servo to its bus clock's time (so that the truth is
+    /// recorded up to now).
+    pub fn settle(&self) {
+        for b in &self.buses {
+            b.settle();
+        }
+    }
 }
 
 impl SimRobotBuilder<'_> {
+    /// Mounts every servo on its joint as `mounting` says (see
+    /// [`Mounting::load`], [`Mounting::random`]). Without a mounting (and
+    /// without a hand or a truth recorder) the servos are bare shafts at
+    /// the robot file's ticks, as before bodies existed.
+    #[must_use]
+    pub fn mounting(mut self, mounting: Mounting) -> Self {
+        self.mounting = Some(mounting);
+        self
+    }
+
+    /// Puts `hand` on the joints it names: it moves those whose torque is
+    /// off and pushes on those whose torque is on. A joint whose hand path
+    /// starts at time 0 starts in the hand's pose.
+    #[must_use]
+    pub fn hand(mut self, hand: Hand) -> Self {
+        self.hand = Some(hand);
+        self
+    }
+
+    /// Records every joint's physical angle into `truth` (see [`new_truth`]),
+    /// into the column of the joint's name (joints it has no column for are
+    /// not recorded).
+    #[must_use]
+    pub fn truth(mut self, truth: &Truth) -> Self {
+        self.truth = Some(truth.clone());
+        self
+    }
+
     /// Every shaft at `pose` instead of the rest positions: one angle per
     /// joint in the robot's joint order, in the robot file's units.
     #[must_use]
@@ -189,7 +240,7 @@ impl SimRobotBuilder<'_> {
     /// not fit the robot.
     pub fn build(self) -> Result<SimRobot, SimRobotError> {
         let robot = self.robot;
-        let pose = match self.pose {
+        let pose = match self.pose.clone() {
             Some(p) if p.len() != robot.joint_count() => {
                 return Err(SimRobotError::Pose {
                     file: robot.path.clone(),
@@ -202,14 +253,88 @@ impl SimRobotBuilder<'_> {
         };
         let mut buses = Vec::with_capacity(robot.buses.len());
         let mut settings = Vec::with_capacity(robot.buses.len());
-        let mut first = 0;
         for bus in &robot.buses {
-            let n = bus.joints.len();
-            let servos = servos_at(robot, bus, &pose[first..first + n])?;
-            first += n;
+            let servos = self.servos_at(bus, &pose)?;
             buses.push(SimBus::new(ManualClock::new(), bus.baud).with_servos(servos));
             settings.push(bus_settings(bus));
         }
         Ok(SimRobot { buses, settings })
+    }
+
+    /// The simulated servos of `bus` (one of the robot's buses, possibly
+    /// with another baud rate, as a pty serving several buses needs) with
+    /// every option of this builder, each shaft at its rest position or the
+    /// builder's pose.
+    ///
+    /// # Errors
+    /// [`SimRobotError`] when a servo cannot be simulated.
+    pub fn servos(&self, bus: &BusConfig) -> Result<Vec<SimServo>, SimRobotError> {
+        let pose = match &self.pose {
+            Some(p) => p.clone(),
+            None => self.robot.joints().map(|j| j.rest()).collect(),
+        };
+        self.servos_at(bus, &pose)
+    }
+
+    /// The servos of `bus` at `pose` (robot units, one angle per joint of
+    /// the robot).
+    fn servos_at(&self, bus: &BusConfig, pose: &[f64]) -> Result<Vec<SimServo>, SimRobotError> {
+        let robot = self.robot;
+        let baud = baud_index(robot, bus)?;
+        let bodies = self.mounting.is_some() || self.hand.is_some() || self.truth.is_some();
+        let design = Mounting::of_robot_file(robot);
+        let mounting = self.mounting.as_ref().unwrap_or(&design);
+        let mut servos = Vec::with_capacity(bus.joints.len());
+        for joint in &bus.joints {
+            let model = SimModel::by_number(joint.model.number)
+                .or_else(|| SimModel::by_name(joint.model.name))
+                .ok_or_else(|| SimRobotError::Model {
+                    file: robot.path.clone(),
+                    joint: joint.name.clone(),
+                    model: joint.model.name,
+                })?;
+            // The joint's place in the robot (bus configs may be copies).
+            let index = robot.joints().position(|j| j.name == joint.name);
+            let angle = index
+                .and_then(|i| pose.get(i))
+                .copied()
+                .unwrap_or(joint.rest());
+            let servo = SimServo::new(model, joint.id)
+                .with_return_delay(bus.return_delay)
+                .with_byte(servobus_sim::addr::BAUD_RATE, baud);
+            let servo = match index.filter(|_| bodies) {
+                None => {
+                    let map = JointMap::new(joint, robot.units);
+                    servo.with_position(map.to_ticks(robot.units.to_rad(angle)))
+                }
+                Some(i) => self.with_body(servo, mounting, i, angle),
+            };
+            servos.push(servo);
+        }
+        Ok(servos)
+    }
+
+    /// `servo` mounted as joint `i`, with the hand and the truth recorder.
+    fn with_body(&self, servo: SimServo, mounting: &Mounting, i: usize, angle: f64) -> SimServo {
+        let hand = self.hand.as_ref().and_then(|h| h.path(i)).cloned();
+        let mut deg = self.robot.units.to_rad(angle).to_degrees();
+        if let Some(&(t, a)) = hand.as_ref().and_then(|h| h.keys().first()) {
+            if t == 0.0 {
+                deg = a;
+            }
+        }
+        let mount = mounting.mounts()[i];
+        let mut servo = servo.with_mount(mount, deg);
+        if let Some(h) = hand {
+            servo = servo.with_hand(h);
+        }
+        if let Some(t) = &self.truth {
+            // Columns are matched by name: a recorder may hold a subset.
+            let name = self.robot.joints().nth(i).map(|j| j.name.as_str());
+            if let Some(col) = t.names().iter().position(|n| Some(n.as_str()) == name) {
+                servo = servo.with_truth(t, col);
+            }
+        }
+        servo
     }
 }

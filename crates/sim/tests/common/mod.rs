@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Clock, ManualClock, Transport, TransportError};
+use servobus_io::{Clock, ManualClock, Transport, TransportError};
 use servobus_protocol::{encode, parse_frame};
 use servobus_sim::{SimBus, SimServo};
 

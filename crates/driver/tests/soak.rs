@@ -3,7 +3,7 @@
 //! loss counted, no reply attributed to the wrong servo.
 //!
 //! The full 100,000 cycles run in release builds (`cargo test --release -p
-//! servobus-sim --test driver_soak`); debug builds run 20,000 so that CI
+//! servobus-driver --test soak`); debug builds run 20,000 so that CI
 //! stays fast. `SERVOBUS_SOAK_CYCLES` overrides both.
 
 use std::time::Duration;

@@ -10,7 +10,7 @@ use servobus_driver::{
 use servobus_protocol::registers::{addr, Series};
 use servobus_protocol::{checksum, parse_frame};
 use servobus_sim::{Faults, SimBus, SimServo};
-use servobus_timing::Link;
+use servobus_timing::{Link, StatusLevel, Transaction};
 
 const BAUD: u32 = 1_000_000;
 
@@ -142,7 +142,11 @@ fn sync_read_reask_recovers_dropped_replies_within_budget() -> Result<(), BusErr
     let (mut bus, sim) = setup(&ids);
     sim.set_faults(Faults::seeded(7).drop(0.3));
     let link = bus.settings().link;
-    let budget = link.sync_read_timeout(6, 2, Duration::ZERO) * 4;
+    let round = Transaction::SyncRead { servos: 6, len: 2 };
+    let budget = link
+        .deadline(round, Duration::ZERO, StatusLevel::All)
+        .unwrap()
+        * 4;
     let mut complete = 0;
     for _ in 0..50 {
         let t0 = bus.clock().now();
@@ -380,20 +384,28 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     // (50 us) and margin (200 us).
     let link = Link::new(BAUD).with_latency(Duration::from_millis(1));
     let rd = Duration::ZERO;
-    let us = |d: Duration| d.as_micros();
+    let us = |tx: Transaction| {
+        link.deadline(tx, rd, StatusLevel::All)
+            .map(|d| d.as_micros())
+    };
     // PING: 6 + 6 bytes = 120 us on the wire.
-    assert_eq!(us(link.ping_timeout(rd)), 120 + 50 + 1000 + 200);
+    assert_eq!(us(Transaction::Ping), Some(120 + 50 + 1000 + 200));
     // READ of 2 bytes: 8 + 8 bytes.
-    assert_eq!(us(link.read_timeout(2, rd)), 160 + 50 + 1000 + 200);
-    // WRITE of 2 bytes: 9 + 6 bytes.
-    assert_eq!(us(link.write_timeout(2, rd)), 150 + 50 + 1000 + 200);
-    // SYNC READ of 2 bytes from 6 servos: 14 + 6 x 8 bytes, 6 turnarounds.
-    assert_eq!(us(link.sync_read_timeout(6, 2, rd)), 620 + 300 + 1000 + 200);
-    // From 18 servos: 26 + 18 x 8 bytes.
     assert_eq!(
-        us(link.sync_read_timeout(18, 2, rd)),
-        1700 + 900 + 1000 + 200
+        us(Transaction::Read { len: 2 }),
+        Some(160 + 50 + 1000 + 200)
     );
+    // WRITE of 2 bytes: 9 + 6 bytes.
+    assert_eq!(
+        us(Transaction::Write { len: 2 }),
+        Some(150 + 50 + 1000 + 200)
+    );
+    // SYNC READ of 2 bytes from 6 servos: 14 + 6 x 8 bytes, 6 turnarounds.
+    let six = Transaction::SyncRead { servos: 6, len: 2 };
+    assert_eq!(us(six), Some(620 + 300 + 1000 + 200));
+    // From 18 servos: 26 + 18 x 8 bytes.
+    let eighteen = Transaction::SyncRead { servos: 18, len: 2 };
+    assert_eq!(us(eighteen), Some(1700 + 900 + 1000 + 200));
 
     // And the bus waits exactly that long for a servo that is not there.
     let clock = ManualClock::new();

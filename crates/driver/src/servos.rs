@@ -1,0 +1,275 @@
+//! [`Servos`]: registers by name and typed values, for programs that talk to
+//! servos directly.
+//!
+//! [`Bus`] speaks in addresses and bytes, which is what a control loop that
+//! packs its own frames wants. A program that just wants to read where six
+//! servos are and send them somewhere else should not compute a block
+//! length, a byte order or a sign bit: [`Servos`] takes the typed register
+//! constants of [`sts`](crate::registers::sts) and
+//! [`scs`](crate::registers::scs) and gives back Rust values, one result per
+//! servo.
+
+use servobus_protocol::registers::{Reg, RegisterValue, ValueError};
+use servobus_protocol::StatusFlags;
+
+use crate::{Bus, BusError, BusSettings, Clock, EepromWrite, Missing, MissingReason, Transport};
+
+/// A bus of servos, read and written through typed registers.
+///
+/// ```
+/// use std::time::Duration;
+/// use servobus_driver::registers::sts;
+/// use servobus_driver::{Bus, BusSettings, Clock, ManualClock, Series, Servos};
+/// use servobus_sim::{SimBus, SimServo};
+///
+/// // Two simulated STS3215 as they leave the factory (return delay 500 us),
+/// // in virtual time. A real program calls `Servos::open(port, baud)`.
+/// let clock = ManualClock::new();
+/// let sim = SimBus::new(clock.clone(), 1_000_000).with_servos((1..=2).map(SimServo::sts3215));
+/// let settings = BusSettings::new(Series::Sts, 1_000_000)
+///     .with_return_delay(servobus_driver::registers::FACTORY_RETURN_DELAY);
+/// let mut servos = Servos::new(Bus::new(sim, clock, settings));
+///
+/// servos.write(1, sts::TORQUE_ENABLE, 1)?;
+/// servos.write(2, sts::TORQUE_ENABLE, 1)?;
+/// servos.sync_write(sts::GOAL_POSITION, &[(1, 1000), (2, 3000)])?;
+/// let later = servos.clock().now() + Duration::from_secs(2);
+/// servos.clock().sleep_until(later);
+///
+/// let positions = servos.sync_read(sts::PRESENT_POSITION, &[1, 2])?;
+/// let steps: Vec<i16> = positions.into_iter().map(|p| p.unwrap()).collect();
+/// assert!((steps[0] - 1000).abs() <= 2 && (steps[1] - 3000).abs() <= 2);
+/// # Ok::<(), servobus_driver::BusError>(())
+/// ```
+pub struct Servos<T: Transport, C: Clock> {
+    bus: Bus<T, C>,
+    /// Reused SYNC WRITE arguments.
+    ids: Vec<u8>,
+    data: Vec<u8>,
+}
+
+impl<T: Transport, C: Clock> std::fmt::Debug for Servos<T, C> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Servos").field("bus", &self.bus).finish()
+    }
+}
+
+#[cfg(feature = "serial")]
+impl Servos<crate::SerialTransport<crate::SystemClock>, crate::SystemClock> {
+    /// Opens the serial port `path` at `baud` for STS/SMS servos (the
+    /// SO-100/SO-101 arms' STS3215), on the system clock, with the default
+    /// settings of [`BusSettings::new`] and the latency the port calls for
+    /// ([`SerialTransport::assumed_latency`](crate::SerialTransport::assumed_latency)).
+    ///
+    /// # Errors
+    /// [`BusError::Transport`] when the port cannot be opened.
+    pub fn open(path: &str, baud: u32) -> Result<Self, BusError> {
+        let clock = crate::SystemClock::new();
+        let transport = crate::SerialTransport::open(path, baud, clock)?;
+        let settings = BusSettings::new(servobus_protocol::registers::Series::Sts, baud)
+            .with_latency(transport.assumed_latency());
+        Ok(Servos::new(Bus::new(transport, clock, settings)))
+    }
+}
+
+#[cfg(feature = "serial")]
+impl<C: Clock> Servos<crate::SerialTransport<C>, C> {
+    /// Opens the serial port `path` at the baud rate of `settings`, timed by
+    /// `clock`: the baud rate and the clock are given once, here.
+    ///
+    /// # Errors
+    /// [`BusError::Transport`] when the port cannot be opened.
+    pub fn open_with(path: &str, settings: BusSettings, clock: C) -> Result<Self, BusError> {
+        let transport = crate::SerialTransport::open(path, settings.link.baud, clock.clone())?;
+        Ok(Servos::new(Bus::new(transport, clock, settings)))
+    }
+}
+
+impl<T: Transport, C: Clock> Servos<T, C> {
+    /// Typed access to `bus`.
+    pub fn new(bus: Bus<T, C>) -> Self {
+        Servos {
+            bus,
+            ids: Vec::new(),
+            data: Vec::new(),
+        }
+    }
+
+    /// The byte-level bus underneath (counters, settings, raw frames).
+    pub fn bus(&self) -> &Bus<T, C> {
+        &self.bus
+    }
+
+    /// The byte-level bus underneath, mutably.
+    pub fn bus_mut(&mut self) -> &mut Bus<T, C> {
+        &mut self.bus
+    }
+
+    /// Gives the byte-level bus back.
+    pub fn into_bus(self) -> Bus<T, C> {
+        self.bus
+    }
+
+    /// The clock the bus is timed by (to wait between commands).
+    pub fn clock(&self) -> &C {
+        self.bus.clock()
+    }
+
+    /// PING servo `id`: its status flags when it is there.
+    ///
+    /// # Errors
+    /// As [`Bus::ping`].
+    pub fn ping(&mut self, id: u8) -> Result<StatusFlags, BusError> {
+        self.bus.ping(id)
+    }
+
+    /// Reads `reg` of servo `id`.
+    ///
+    /// # Errors
+    /// [`BusError::InvalidRequest`] for a register of another series than
+    /// the bus's; otherwise as [`Bus::read`].
+    pub fn read<V: RegisterValue>(&mut self, id: u8, reg: Reg<V>) -> Result<V, BusError> {
+        self.check_series(&reg)?;
+        let mut bytes = [0u8; 2];
+        let bytes = &mut bytes[..usize::from(reg.size)];
+        self.bus.read(id, reg.address, bytes)?;
+        Ok(reg.decode_value(bytes, self.bus.settings().series.byte_order())?)
+    }
+
+    /// Writes `value` to `reg` of servo `id` (or of every servo, with the
+    /// broadcast ID) with a plain WRITE. An EEPROM register written this way
+    /// keeps the value until the next power cycle only: use
+    /// [`Servos::save`] to make it persist.
+    ///
+    /// # Errors
+    /// [`BusError::Value`] for a value that does not fit (an offset beyond
+    /// +-2047), [`BusError::InvalidRequest`] for a read-only register or one
+    /// of another series; otherwise as [`Bus::write`].
+    pub fn write<V: RegisterValue>(
+        &mut self,
+        id: u8,
+        reg: Reg<V>,
+        value: V,
+    ) -> Result<(), BusError> {
+        let bytes = self.encode_one(&reg, value)?;
+        self.bus
+            .write(id, reg.address, &bytes[..usize::from(reg.size)])?;
+        Ok(())
+    }
+
+    /// Writes `value` to the EEPROM register `reg` of servo `id` so that it
+    /// survives a power cycle: unlock, write, read back, lock
+    /// ([`Bus::write_eeprom`]).
+    ///
+    /// # Errors
+    /// As [`Servos::write`] and [`Bus::write_eeprom`].
+    pub fn save<V: RegisterValue>(
+        &mut self,
+        id: u8,
+        reg: Reg<V>,
+        value: V,
+    ) -> Result<EepromWrite, BusError> {
+        let bytes = self.encode_one(&reg, value)?;
+        self.bus
+            .write_eeprom(id, reg.address, &bytes[..usize::from(reg.size)])
+    }
+
+    /// Reads `reg` of every servo in `ids` (one SYNC READ; one READ each on
+    /// SCS servos). One result per servo, in the order of `ids`: the value,
+    /// or why the servo is missing. Status flags of the replies are in
+    /// [`Bus::last_sync_read`].
+    ///
+    /// # Errors
+    /// Only for the request as a whole, as [`Bus::sync_read`].
+    pub fn sync_read<V: RegisterValue>(
+        &mut self,
+        reg: Reg<V>,
+        ids: &[u8],
+    ) -> Result<Vec<Result<V, Missing>>, BusError> {
+        self.check_series(&reg)?;
+        let order = self.bus.settings().series.byte_order();
+        let read = self.bus.sync_read(reg.address, reg.size, ids)?;
+        Ok(read
+            .iter()
+            .map(|result| {
+                let reply = result?;
+                reg.decode_value(reply.data, order).map_err(|_| Missing {
+                    id: reply.id,
+                    reason: MissingReason::WrongLength,
+                    attempts: 1,
+                })
+            })
+            .collect())
+    }
+
+    /// Writes one value of `reg` to each servo in one SYNC WRITE: `values`
+    /// pairs an ID with its value, so every servo gets exactly one value of
+    /// the register's width. Nobody answers.
+    ///
+    /// # Errors
+    /// [`BusError::Value`] when a value does not fit (nothing is sent),
+    /// [`BusError::InvalidRequest`] for no values, an ID given twice, a
+    /// read-only register or one of another series; otherwise as
+    /// [`Bus::sync_write`].
+    pub fn sync_write<V: RegisterValue>(
+        &mut self,
+        reg: Reg<V>,
+        values: &[(u8, V)],
+    ) -> Result<(), BusError> {
+        self.check_writable(&reg)?;
+        let order = self.bus.settings().series.byte_order();
+        let size = usize::from(reg.size);
+        self.ids.clear();
+        self.data.clear();
+        let mut seen = [false; 256];
+        for &(id, value) in values {
+            if std::mem::replace(&mut seen[usize::from(id)], true) {
+                return Err(BusError::InvalidRequest(
+                    "an ID appears twice in a SYNC WRITE",
+                ));
+            }
+            self.ids.push(id);
+            let at = self.data.len();
+            self.data.resize(at + size, 0);
+            reg.encode_value(value, order, &mut self.data[at..])?;
+        }
+        self.bus.sync_write(reg.address, &self.ids, &self.data)
+    }
+
+    /// The bytes of `value` in `reg`, checked writable and of this series.
+    fn encode_one<V: RegisterValue>(&self, reg: &Reg<V>, value: V) -> Result<[u8; 2], BusError> {
+        self.check_writable(reg)?;
+        let mut bytes = [0u8; 2];
+        let order = self.bus.settings().series.byte_order();
+        reg.encode_value(value, order, &mut bytes[..usize::from(reg.size)])?;
+        Ok(bytes)
+    }
+
+    fn check_writable<V>(&self, reg: &Reg<V>) -> Result<(), BusError> {
+        self.check_series(reg)?;
+        if reg.access.is_writable() {
+            Ok(())
+        } else {
+            Err(BusError::InvalidRequest("register is read-only"))
+        }
+    }
+
+    /// Refuses a register the bus's series does not have at that address
+    /// with that layout (e.g. `sts::PRESENT_POSITION`, signed, on SCS servos,
+    /// whose position is unsigned).
+    fn check_series<V>(&self, reg: &Reg<V>) -> Result<(), BusError> {
+        let map = self.bus.settings().series.map();
+        match map.at(reg.address) {
+            Some(r) if r.size == reg.size && r.sign_bit == reg.sign_bit => Ok(()),
+            _ => Err(BusError::InvalidRequest(
+                "register of another series than the bus's",
+            )),
+        }
+    }
+}
+
+impl From<ValueError> for BusError {
+    fn from(e: ValueError) -> Self {
+        BusError::Value(e)
+    }
+}

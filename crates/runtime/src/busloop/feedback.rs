@@ -1,0 +1,111 @@
+//! Reading the joints' positions back: patiently at start-up (every servo
+//! must answer), then each cycle the servos the timing plan schedules,
+//! within what is left of the cycle.
+
+use std::ops::Range;
+use std::time::Duration;
+
+use servobus_driver::{Bus, Clock, Transport};
+use servobus_protocol::registers::{ByteOrder, Register};
+
+use super::tracking::{Reading, Tracker};
+use crate::error::{PortGone, RunError};
+
+/// The position register of one bus's servos and their IDs.
+#[derive(Debug)]
+pub(crate) struct Feedback {
+    reg: &'static Register,
+    order: ByteOrder,
+    ids: Vec<u8>,
+}
+
+impl Feedback {
+    pub fn new(reg: &'static Register, order: ByteOrder, ids: Vec<u8>) -> Self {
+        Feedback { reg, order, ids }
+    }
+
+    /// Reads every servo's position patiently (start-up is not timed; see
+    /// [`Bus::sync_read_patiently`]) into `track`.
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Startup`] when the bus fails, [`RunError::NoServo`] naming
+    /// the first servo that gave no position.
+    pub fn startup<T: Transport, C: Clock>(
+        &self,
+        bus: &mut Bus<T, C>,
+        clock: &C,
+        name: &str,
+        track: &mut Tracker,
+    ) -> Result<(), RunError> {
+        let read = bus
+            .sync_read_patiently(self.reg.address, self.reg.size, &self.ids)
+            .map_err(|source| RunError::Startup {
+                bus: name.to_owned(),
+                what: "reading the start positions",
+                source,
+            })?;
+        let at = clock.now();
+        for (i, r) in read.iter().enumerate() {
+            let reason = match r {
+                Ok(reply) => match self.reg.decode(reply.data, self.order) {
+                    Ok(ticks) => {
+                        let flags = servobus_protocol::StatusFlags(0);
+                        track.observe(i, Reading { ticks, at, flags });
+                        continue;
+                    }
+                    Err(_) => "it reported an impossible position".to_owned(),
+                },
+                Err(m) => m.reason.to_string(),
+            };
+            let j = &track.joints[i];
+            return Err(RunError::NoServo {
+                bus: name.to_owned(),
+                id: j.id,
+                joint: j.name.clone(),
+                reason,
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads the servos `range` (indices in the bus) within `budget` into
+    /// `track`. Only a lost port is an error: a silent servo is tracking's
+    /// business.
+    pub fn read<T: Transport, C: Clock>(
+        &self,
+        bus: &mut Bus<T, C>,
+        clock: &C,
+        range: Range<usize>,
+        budget: Duration,
+        track: &mut Tracker,
+    ) -> Result<(), PortGone> {
+        let Some(ids) = self.ids.get(range.clone()) else {
+            return Ok(());
+        };
+        let Some(read) =
+            PortGone::check(bus.sync_read_within(self.reg.address, self.reg.size, ids, budget))?
+        else {
+            return Ok(());
+        };
+        let at = clock.now();
+        for (i, r) in read.iter().enumerate() {
+            let joint = range.start + i;
+            match r {
+                Ok(reply) => match self.reg.decode(reply.data, self.order) {
+                    Ok(ticks) => track.observe(
+                        joint,
+                        Reading {
+                            ticks,
+                            at,
+                            flags: reply.flags,
+                        },
+                    ),
+                    Err(_) => track.miss(joint, None),
+                },
+                Err(m) => track.miss(joint, Some(m.reason)),
+            }
+        }
+        Ok(())
+    }
+}

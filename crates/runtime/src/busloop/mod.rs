@@ -1,0 +1,380 @@
+//! One bus's share of a control cycle, built from named parts: writing goals
+//! ([`goals`]), reading feedback ([`feedback`]), tracking with fault
+//! detection ([`tracking`]), lead estimation ([`lead`]), timing figures
+//! ([`counters`]) and telemetry ([`publish`]). Everything is allocated when
+//! the loop is built; a cycle allocates nothing.
+
+mod counters;
+mod feedback;
+mod goals;
+mod lead;
+mod publish;
+mod tracking;
+
+use std::time::Duration;
+
+use crossbeam_channel::Sender;
+use servobus_driver::{Bus, Clock, Transport};
+use servobus_protocol::registers::addr;
+use servobus_timing::Plan;
+use servobus_trajectory::JointState;
+
+pub(crate) use counters::CycleTiming;
+
+use counters::Counters;
+use feedback::Feedback;
+use goals::GoalWriter;
+use lead::LeadEstimator;
+use publish::{Publisher, SampleTiming};
+use tracking::Tracker;
+
+use crate::config::{BusConfig, Units};
+use crate::error::{PortGone, RunError};
+use crate::fault::{Fault, FaultKind};
+use crate::options::{FaultPolicy, Lead};
+use crate::report::{BusReport, JointReport};
+use crate::stats::Histogram;
+use crate::telemetry::Telemetry;
+
+/// What a [`BusLoop`] is built from.
+pub(crate) struct LoopConfig<'a> {
+    /// Index of the bus in the robot's bus order.
+    pub index: usize,
+    pub bus: &'a BusConfig,
+    /// Index of the bus's first joint in the robot's joint order.
+    pub first_joint: usize,
+    /// The robot file's angle units, and the report's.
+    pub units: Units,
+    pub report_units: Units,
+    pub rate_hz: f64,
+    pub period: Duration,
+    pub policy: FaultPolicy,
+    pub lead: Lead,
+    pub telemetry: Option<Sender<Telemetry>>,
+}
+
+/// One bus of a run.
+pub(crate) struct BusLoop<T: Transport, C: Clock> {
+    pub index: usize,
+    pub name: String,
+    pub bus: Bus<T, C>,
+    clock: C,
+    plan: Plan,
+    period: Duration,
+    /// Clock time of cycle 0.
+    pub start: Duration,
+    /// The report's units.
+    units: Units,
+    policy: FaultPolicy,
+    goals: GoalWriter,
+    feedback: Feedback,
+    track: Tracker,
+    lead: LeadEstimator,
+    counters: Counters,
+    out: Publisher,
+    timing: CycleTiming,
+    /// The port failed: nothing more is sent on this bus.
+    gone: bool,
+}
+
+impl<T: Transport, C: Clock> BusLoop<T, C> {
+    /// The loop of `c.bus` on `bus`.
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Plan`] when the rate does not fit the bus,
+    /// [`RunError::Invalid`] when a joint's servo is not of the bus's series.
+    pub fn new(c: LoopConfig<'_>, bus: Bus<T, C>) -> Result<Self, RunError> {
+        let config = c.bus;
+        let plan = config.plan(c.rate_hz).map_err(|source| RunError::Plan {
+            bus: config.name.clone(),
+            source,
+        })?;
+        let series = bus.settings().series;
+        if let Some(j) = config.joints.iter().find(|j| j.model.series != series) {
+            return Err(RunError::Invalid(format!(
+                "bus `{}`: joint `{}` is a {} ({:?} series) but the bus talks {:?}",
+                config.name, j.name, j.model.name, j.model.series, series
+            )));
+        }
+        let map = series.map();
+        let (Some(goal_reg), Some(pos_reg)) =
+            (map.at(addr::GOAL_POSITION), map.at(addr::PRESENT_POSITION))
+        else {
+            return Err(RunError::Invalid(format!(
+                "the {series:?} register map has no goal or present position"
+            )));
+        };
+        let order = series.byte_order();
+        let every = u32::try_from(plan.read_every()).unwrap_or(u32::MAX);
+        let stale_after = c.period * every.saturating_mul(2);
+        let ids = config.joints.iter().map(|j| j.id).collect();
+        Ok(BusLoop {
+            index: c.index,
+            name: config.name.clone(),
+            clock: bus.clock().clone(),
+            bus,
+            plan,
+            period: c.period,
+            start: Duration::ZERO,
+            units: c.report_units,
+            policy: c.policy,
+            goals: GoalWriter::new(config, c.first_joint, c.units, goal_reg, order),
+            feedback: Feedback::new(pos_reg, order, ids),
+            track: Tracker::new(
+                config,
+                c.first_joint,
+                c.units,
+                c.report_units,
+                c.policy,
+                stale_after,
+            ),
+            lead: LeadEstimator::new(c.lead),
+            counters: Counters::new(),
+            out: Publisher::new(c.index, c.telemetry),
+            timing: CycleTiming {
+                index: 0,
+                deadline: Duration::ZERO,
+                woke: Duration::ZERO,
+                skipped: 0,
+            },
+            gone: false,
+        })
+    }
+
+    /// Reads every servo's position patiently, sets the goals there
+    /// (clamped into the limits) and, when asked, enables torque.
+    ///
+    /// # Errors
+    ///
+    /// As [`Feedback::startup`]; [`RunError::Startup`] when the goals or
+    /// the torque cannot be written.
+    pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
+        self.feedback
+            .startup(&mut self.bus, &self.clock, &self.name, &mut self.track)?;
+        for (i, j) in self.track.joints.iter().enumerate() {
+            self.goals.start_at(i, j.measured.unwrap_or(0.0));
+        }
+        self.track.settle();
+        if !enable_torque {
+            return Ok(());
+        }
+        let failed = |what| {
+            let bus = self.name.clone();
+            move |source| RunError::Startup { bus, what, source }
+        };
+        self.goals
+            .send_checked(&mut self.bus)
+            .map_err(failed("setting the goals to the present positions"))?;
+        self.goals
+            .torque(&mut self.bus, true)
+            .map_err(failed("enabling torque"))
+    }
+
+    /// Positions read at start-up (rad), into `out` (robot order).
+    pub fn present(&self, out: &mut [f64]) {
+        for (g, j) in self.goals.joints.iter().zip(&self.track.joints) {
+            if let Some(slot) = out.get_mut(g.robot_index) {
+                *slot = j.measured.unwrap_or(g.rad);
+            }
+        }
+    }
+
+    /// The lead at path time `x`, s.
+    pub fn lead_at(&self, x: f64) -> f64 {
+        self.lead.at(x)
+    }
+
+    /// Records the start of a cycle.
+    pub fn begin(&mut self, mut timing: CycleTiming) {
+        self.counters.begin(&mut timing, self.period);
+        self.timing = timing;
+        self.track.begin();
+    }
+
+    /// Maps, clamps and sends the goals for `cmd` (robot order, rad).
+    pub fn write(&mut self, cmd: &[JointState]) -> Result<(), PortGone> {
+        self.goals.aim(cmd);
+        self.send_goals()
+    }
+
+    /// Sends the goals of a hold at `positions` (robot order, rad) now.
+    pub fn send_hold(&mut self, positions: &[f64]) -> Result<(), PortGone> {
+        self.goals.aim_at(positions);
+        self.send_goals()
+    }
+
+    fn send_goals(&mut self) -> Result<(), PortGone> {
+        if self.gone {
+            return Ok(());
+        }
+        let sent = self.goals.send(&mut self.bus);
+        self.gone = sent.is_err();
+        sent
+    }
+
+    /// Reads the feedback this cycle's plan asks for. Returns the time of
+    /// the reading, s since the start, or the port's failure.
+    pub fn read(&mut self) -> Result<f64, PortGone> {
+        let range = self.plan.reads_in_cycle(self.timing.index);
+        if !self.gone && !range.is_empty() {
+            // Re-ask missing servos only while the cycle leaves room.
+            let budget = (self.timing.deadline + self.period)
+                .saturating_sub(self.clock.now())
+                .saturating_sub(self.period / 8);
+            let read =
+                self.feedback
+                    .read(&mut self.bus, &self.clock, range, budget, &mut self.track);
+            self.gone = read.is_err();
+            read?;
+        }
+        Ok(self.clock.now().saturating_sub(self.start).as_secs_f64())
+    }
+
+    /// Judges the joints against `reference` (robot order, the path at the
+    /// time of the reading), learns the lag while a planned path plays
+    /// (`main`), and returns the first fault found. `t` is the cycle's time.
+    pub fn track(&mut self, reference: &[JointState], main: bool, t: f64) -> Option<Fault> {
+        let found = self.track.track(reference);
+        self.lead.learn(self.track.fresh_errors(), main, t);
+        found.map(|f| self.fault(f.kind, Some(f.joint), f.reaction))
+    }
+
+    /// The fault of a lost port, with the reaction the policy asks of the
+    /// other buses.
+    pub fn port_gone(&self, e: &PortGone) -> Fault {
+        let kind = FaultKind::PortGone {
+            message: e.to_string(),
+        };
+        self.fault(kind, None, self.policy.on_port_gone)
+    }
+
+    /// A fault on this bus, for joint `joint` (index in the bus).
+    fn fault(&self, kind: FaultKind, joint: Option<usize>, reaction: crate::Reaction) -> Fault {
+        let joint = joint.and_then(|i| self.track.joints.get(i));
+        Fault {
+            kind,
+            bus: self.name.clone(),
+            joint: joint.map(|j| j.name.clone()),
+            servo_id: joint.map(|j| j.id),
+            time_s: self.timing.index as f64 * self.period.as_secs_f64(),
+            cycle: self.timing.index,
+            reaction,
+            units: self.units.name(),
+        }
+    }
+
+    /// Where every joint should hold (its fresh reading, else its last
+    /// goal), into `out` (robot order).
+    pub fn hold_positions(&self, out: &mut [f64]) {
+        let goals = &self.goals.joints;
+        let goal = |i: usize| goals.get(i).map_or(0.0, |g| g.rad);
+        self.track.hold_positions(self.clock.now(), goal, out);
+    }
+
+    /// Disables torque on every servo of the bus.
+    pub fn torque_off(&mut self) {
+        if !self.gone {
+            // Nothing more can be done if this fails: the caller ends.
+            let _ = self.goals.torque(&mut self.bus, false);
+        }
+    }
+
+    /// Records the end of the cycle's work and publishes its telemetry.
+    pub fn finish_cycle(&mut self, lead: f64) {
+        let now = self.clock.now();
+        let busy = now.saturating_sub(self.timing.woke);
+        self.counters.busy(busy);
+        let k = self.timing.index;
+        let s = SampleTiming {
+            cycle: k,
+            time_s: k as f64 * self.period.as_secs_f64(),
+            lateness: self.timing.woke.saturating_sub(self.timing.deadline),
+            busy,
+            skipped: self.timing.skipped,
+            lead,
+            now,
+        };
+        self.out
+            .cycle(s, &self.goals.joints, &self.track, self.units);
+    }
+
+    /// Sends a message that is not a cycle sample (fault, rejection,
+    /// finish); counted as dropped when the channel is full.
+    pub fn publish(&mut self, message: Telemetry) {
+        self.out.publish(message);
+    }
+}
+
+/// What the report needs of a bus once its run is over.
+impl<T: Transport, C: Clock> BusLoop<T, C> {
+    /// The bus's share of the report, with the lead of its last cycle.
+    pub fn outcome(&self) -> Outcome {
+        let t = self.timing.index as f64 * self.period.as_secs_f64();
+        Outcome {
+            index: self.index,
+            bus: self.bus_report(),
+            joints: self.joint_reports(),
+            period_error: self.counters.period_error.clone(),
+            span: self.counters.span(),
+            cycles: self.counters.cycles,
+            dropped: self.out.dropped,
+            lead_s: self.lead.at(t),
+        }
+    }
+
+    fn bus_report(&self) -> BusReport {
+        let c = self.bus.counters();
+        let n = &self.counters;
+        let period = self.period.as_secs_f64();
+        BusReport {
+            name: self.name.clone(),
+            cycles: n.cycles,
+            overruns: n.overruns,
+            utilisation: if n.cycles == 0 {
+                0.0
+            } else {
+                n.busy_total.as_secs_f64() / n.cycles as f64 / period
+            },
+            peak_utilisation: n.busy_max.as_secs_f64() / period,
+            planned_utilisation: self.plan.utilisation(),
+            read_every: self.plan.read_every(),
+            timeouts: c.timeouts,
+            retries: c.retries,
+            missed_replies: self.track.missed,
+        }
+    }
+
+    /// The joints' tracking figures, in the report's units.
+    fn joint_reports(&self) -> Vec<(usize, JointReport)> {
+        let u = self.units;
+        let goals = self.goals.joints.iter();
+        goals
+            .zip(&self.track.joints)
+            .map(|(g, j)| {
+                let report = JointReport {
+                    name: j.name.clone(),
+                    rms_error: u.from_rad(j.err.rms()),
+                    max_error: u.from_rad(j.err.max_abs()),
+                    readings: j.err.count(),
+                    clamps: g.clamps,
+                };
+                (j.robot_index, report)
+            })
+            .collect()
+    }
+}
+
+/// One bus's share of the report.
+pub(crate) struct Outcome {
+    pub index: usize,
+    pub bus: BusReport,
+    pub joints: Vec<(usize, JointReport)>,
+    pub period_error: Histogram,
+    /// `(first woke, last woke, last deadline)` of the cycles run.
+    pub span: Option<(Duration, Duration, Duration)>,
+    pub cycles: u64,
+    pub dropped: u64,
+    /// The lead in use at the end, s.
+    pub lead_s: f64,
+}

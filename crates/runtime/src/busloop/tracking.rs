@@ -1,0 +1,293 @@
+//! Tracking: each joint's readings against the path, and the faults they
+//! show (a silent servo, a status flag, a stall, a following error).
+//!
+//! Detection counts consecutive cycles in which a joint shows the condition
+//! and raises the fault on the policy's count, so that one bad reading does
+//! not stop a robot and a real fault is found within a few cycles.
+
+use std::time::Duration;
+
+use servobus_driver::MissingReason;
+use servobus_protocol::StatusFlags;
+use servobus_trajectory::JointState;
+
+use crate::config::{BusConfig, JointMap, Units};
+use crate::fault::FaultKind;
+use crate::options::{FaultPolicy, Reaction};
+use crate::stats::RunningError;
+
+/// One reading of a joint's position, as it came off the bus.
+///
+/// Issue 12 (adaptive reply deadlines) adds the reply's lateness here: when
+/// it arrived against when the timing plan expected it. [`Tracker::observe`]
+/// is the one place readings enter, so that is where lateness will be
+/// tracked per servo.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Reading {
+    /// The position, ticks.
+    pub ticks: i32,
+    /// When it was read, on the bus's clock.
+    pub at: Duration,
+    /// The status flags of the reply.
+    pub flags: StatusFlags,
+}
+
+/// The tracking state of one joint.
+#[derive(Debug)]
+pub(crate) struct JointTrack {
+    /// Index in the robot's joint order.
+    pub robot_index: usize,
+    pub name: String,
+    pub id: u8,
+    map: JointMap,
+    pub measured: Option<f64>,
+    pub measured_at: Duration,
+    prev: Option<(f64, Duration)>,
+    /// Measured velocity, rad/s.
+    pub velocity: f64,
+    /// The path at the time of the reading, rad and rad/s.
+    pub planned: f64,
+    planned_velocity: f64,
+    /// `planned - measured` at the last fresh reading.
+    pub error: f64,
+    /// Read in this cycle.
+    fresh: bool,
+    flags: StatusFlags,
+    /// Why the last read of it failed.
+    why_missing: Option<MissingReason>,
+    pub err: RunningError,
+    follow: u32,
+    stall: u32,
+    missing: u32,
+}
+
+impl JointTrack {
+    fn observe(&mut self, r: Reading) {
+        let p = self.map.from_ticks(r.ticks);
+        if let Some((q, t)) = self.prev {
+            if r.at > t {
+                self.velocity = (p - q) / (r.at - t).as_secs_f64();
+            }
+        }
+        self.prev = Some((p, r.at));
+        self.measured = Some(p);
+        self.measured_at = r.at;
+        self.flags = r.flags;
+        self.fresh = true;
+        self.missing = 0;
+    }
+
+    /// Where the joint should hold: its fresh reading, else `goal`.
+    fn hold_position(&self, stale: bool, goal: f64) -> f64 {
+        match self.measured {
+            Some(p) if !stale => self.map.clamp(p).value,
+            _ => goal,
+        }
+    }
+}
+
+/// A fault tracking found: the joint (index in the bus), what, and the
+/// policy's reaction to it.
+#[derive(Debug)]
+pub(crate) struct Found {
+    pub joint: usize,
+    pub kind: FaultKind,
+    pub reaction: Reaction,
+}
+
+/// The tracking of one bus's joints.
+#[derive(Debug)]
+pub(crate) struct Tracker {
+    pub joints: Vec<JointTrack>,
+    policy: FaultPolicy,
+    /// The report's units, for the values of a fault.
+    units: Units,
+    /// A reading older than this is stale (two of its read periods).
+    pub stale_after: Duration,
+    /// Servo readings missing after every retry.
+    pub missed: u64,
+}
+
+impl Tracker {
+    /// `config`'s joints, whose first is robot joint `first_joint`.
+    pub fn new(
+        config: &BusConfig,
+        first_joint: usize,
+        units: Units,
+        report_units: Units,
+        policy: FaultPolicy,
+        stale_after: Duration,
+    ) -> Self {
+        let joints = config
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| JointTrack {
+                robot_index: first_joint + i,
+                name: j.name.clone(),
+                id: j.id,
+                map: JointMap::new(j, units),
+                measured: None,
+                measured_at: Duration::ZERO,
+                prev: None,
+                velocity: 0.0,
+                planned: 0.0,
+                planned_velocity: 0.0,
+                error: 0.0,
+                fresh: false,
+                flags: StatusFlags(0),
+                why_missing: None,
+                err: RunningError::default(),
+                follow: 0,
+                stall: 0,
+                missing: 0,
+            })
+            .collect();
+        Tracker {
+            joints,
+            policy,
+            units: report_units,
+            stale_after,
+            missed: 0,
+        }
+    }
+
+    /// A new cycle: no reading is fresh yet.
+    pub fn begin(&mut self) {
+        for j in &mut self.joints {
+            j.fresh = false;
+        }
+    }
+
+    /// Joint `i` (of the bus) was read.
+    pub fn observe(&mut self, i: usize, reading: Reading) {
+        if let Some(j) = self.joints.get_mut(i) {
+            j.observe(reading);
+        }
+    }
+
+    /// Joint `i` was asked and gave no usable reading (`None`: it answered
+    /// with an impossible position).
+    pub fn miss(&mut self, i: usize, why: Option<MissingReason>) {
+        if let Some(j) = self.joints.get_mut(i) {
+            j.missing += 1;
+            if why.is_some() {
+                j.why_missing = why;
+            }
+            self.missed += 1;
+        }
+    }
+
+    /// Forgets the start-up readings' motion, so that the first cycle's
+    /// velocity is not measured across the start-up.
+    pub fn settle(&mut self) {
+        for j in &mut self.joints {
+            j.prev = None;
+            j.fresh = false;
+        }
+    }
+
+    /// Where each joint stands (its fresh reading, else `goal(i)`), into
+    /// `out` (robot order), at time `now`.
+    pub fn hold_positions(&self, now: Duration, goal: impl Fn(usize) -> f64, out: &mut [f64]) {
+        for (i, j) in self.joints.iter().enumerate() {
+            if let Some(slot) = out.get_mut(j.robot_index) {
+                let stale = now.saturating_sub(j.measured_at) > self.stale_after;
+                *slot = j.hold_position(stale, goal(i));
+            }
+        }
+    }
+
+    /// `(error, planned velocity)` of every joint read this cycle.
+    pub fn fresh_errors(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.joints
+            .iter()
+            .filter(|j| j.fresh && j.measured.is_some())
+            .map(|j| (j.error, j.planned_velocity))
+    }
+
+    /// Updates every joint's error against `reference` (robot order, the
+    /// path at the time of the reading) and returns the first fault found.
+    pub fn track(&mut self, reference: &[JointState]) -> Option<Found> {
+        let p = self.policy;
+        let u = self.units;
+        let mut found: Option<Found> = None;
+        for (i, j) in self.joints.iter_mut().enumerate() {
+            let r = reference.get(j.robot_index).copied().unwrap_or_default();
+            j.planned = r.position;
+            j.planned_velocity = r.velocity;
+            if j.missing > 0 && j.missing >= p.missing_cycles && found.is_none() {
+                let reason = j
+                    .why_missing
+                    .map_or_else(|| "unreadable reply".to_owned(), |r| r.to_string());
+                let kind = FaultKind::Missing {
+                    cycles: j.missing,
+                    reason,
+                };
+                found = Some(Found {
+                    joint: i,
+                    kind,
+                    reaction: p.on_missing,
+                });
+            }
+            if !j.fresh {
+                continue;
+            }
+            let Some(m) = j.measured else { continue };
+            let e = r.position - m;
+            j.error = e;
+            j.err.record(e);
+            let kind = judge(j, &p, e, r.velocity, u);
+            if found.is_none() {
+                found = kind.map(|(kind, reaction)| Found {
+                    joint: i,
+                    kind,
+                    reaction,
+                });
+            }
+        }
+        found
+    }
+}
+
+/// Counts `j`'s stalled and off-path readings (error `e` against a path
+/// moving at `v`) and names the first fault they or its status flags show.
+fn judge(
+    j: &mut JointTrack,
+    p: &FaultPolicy,
+    e: f64,
+    v: f64,
+    u: Units,
+) -> Option<(FaultKind, Reaction)> {
+    let stalled = e.abs() > p.stall_error
+        && v.abs() >= p.stall_min_velocity
+        && (j.velocity.abs() < p.stall_ratio * v.abs() || j.velocity.signum() != v.signum());
+    j.stall = if stalled { j.stall + 1 } else { 0 };
+    j.follow = if e.abs() > p.following_error {
+        j.follow + 1
+    } else {
+        0
+    };
+    let flags = j.flags.bits() & p.status_mask;
+    if flags != 0 {
+        let names = StatusFlags(flags).to_string();
+        Some((FaultKind::Status { flags, names }, p.on_status))
+    } else if j.stall >= p.stall_cycles {
+        let kind = FaultKind::Stall {
+            error: u.from_rad(e),
+            planned_velocity: u.from_rad(v),
+            measured_velocity: u.from_rad(j.velocity),
+            cycles: j.stall,
+        };
+        Some((kind, p.on_stall))
+    } else if j.follow >= p.following_cycles {
+        let kind = FaultKind::FollowingError {
+            error: u.from_rad(e),
+            tolerance: u.from_rad(p.following_error),
+            cycles: j.follow,
+        };
+        Some((kind, p.on_following_error))
+    } else {
+        None
+    }
+}

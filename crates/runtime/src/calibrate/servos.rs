@@ -1,0 +1,279 @@
+//! What calibrating and playing ask of the servos themselves: who is there,
+//! torque off, Homing_Offset written (persistently with `--write-servos`,
+//! for the session otherwise), and the check that refuses to move a robot
+//! whose servos are not the ones its calibration was taken on.
+
+use servobus_driver::{Bus, BusError, Clock, Transport};
+use servobus_protocol::registers::{addr, model_by_number, Model, Register};
+
+use crate::config::seam::{centring_offset, turn_ticks};
+use crate::config::{BusConfig, JointCalibration, JointConfig, JointMap, Robot, RobotCalibration};
+
+use super::{CalibrateError, Refusal};
+
+/// How far outside its calibrated range a joint may be found before a run
+/// refuses to start, degrees: beyond this the servo is not where the
+/// calibration says (a horn refitted, a servo swapped), or the joint is
+/// pressed past a stop.
+pub const FAR_OUTSIDE_DEG: f64 = 15.0;
+
+/// One servo as found on the bus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoundServo {
+    /// Its model, from register 3.
+    pub model: &'static Model,
+    /// Firmware version, `major.minor`.
+    pub firmware: String,
+    /// Its homing offset (0 for models without the register).
+    pub homing_offset: i32,
+}
+
+/// The register `name` of `model`'s control table.
+pub(crate) fn register(model: &Model, name: &'static str) -> Result<&'static Register, BusError> {
+    model.map().get(name).ok_or(BusError::InvalidRequest(
+        "register missing from the model's table",
+    ))
+}
+
+/// Reads `joint`'s servo: model, firmware and homing offset.
+///
+/// # Errors
+/// The bus error of the first read that failed; [`BusError::InvalidRequest`]
+/// for a model number servobus does not know.
+pub fn identify<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+) -> Result<FoundServo, BusError> {
+    let (number, _) = bus.read_register(joint.id, register(joint.model, "model_number")?)?;
+    let model = u16::try_from(number)
+        .ok()
+        .and_then(model_by_number)
+        .ok_or(BusError::InvalidRequest("unknown model number"))?;
+    let mut fw = [0u8; 2];
+    bus.read(joint.id, addr::FIRMWARE_MAJOR, &mut fw)?;
+    let homing_offset = match model.map().get("offset") {
+        Some(reg) if turn_ticks(model).is_some() => bus.read_register(joint.id, reg)?.0,
+        _ => 0,
+    };
+    Ok(FoundServo {
+        model,
+        firmware: format!("{}.{}", fw[0], fw[1]),
+        homing_offset,
+    })
+}
+
+/// Present position of `joint`'s servo.
+///
+/// # Errors
+/// The read's bus error.
+pub fn present<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+) -> Result<i32, BusError> {
+    Ok(bus
+        .read_register(joint.id, register(joint.model, "present_position")?)?
+        .0)
+}
+
+/// Torque off on every servo of `bus`.
+///
+/// # Errors
+/// The first servo whose write failed.
+pub fn torque_off<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    config: &BusConfig,
+) -> Result<(), CalibrateError> {
+    for joint in &config.joints {
+        bus.write(joint.id, addr::TORQUE_ENABLE, &[0])
+            .map_err(|e| CalibrateError::bus(joint, e))?;
+    }
+    Ok(())
+}
+
+/// Writes to `joint`'s servo's EEPROM (unlock, write, verify, lock) the
+/// homing offset that centres its measured range on the turn, and position
+/// limits at that range, and returns the calibration in the new frame. A
+/// model without the offset register keeps its calibration.
+///
+/// # Errors
+/// The failed step's bus error.
+pub fn write_homing<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+    cal: &JointCalibration,
+) -> Result<JointCalibration, BusError> {
+    let Some(turn) = turn_ticks(joint.model) else {
+        return Ok(cal.clone());
+    };
+    let (homing_offset, shift) = centring_offset(cal.range, cal.homing_offset, turn);
+    write_frame(
+        bus,
+        joint,
+        cal,
+        crate::config::PlayFrame {
+            homing_offset,
+            shift,
+        },
+    )
+}
+
+/// Writes to `joint`'s servo's EEPROM the homing offset of `frame` and
+/// position limits at the calibrated range in that frame (what LeRobot
+/// checks to call a servo calibrated); returns the calibration in `frame`.
+/// A model without the offset register keeps its calibration.
+///
+/// # Errors
+/// The failed step's bus error; [`BusError::InvalidRequest`] when the range
+/// does not fit the position registers in that frame.
+pub fn write_frame<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+    cal: &JointCalibration,
+    frame: crate::config::PlayFrame,
+) -> Result<JointCalibration, BusError> {
+    let Some(offset_reg) = joint.model.map().get("offset") else {
+        return Ok(cal.clone());
+    };
+    if turn_ticks(joint.model).is_none() {
+        return Ok(cal.clone());
+    }
+    let moved = cal.in_frame(frame);
+    let limit = |v: i64| {
+        i32::try_from(v)
+            .ok()
+            .filter(|v| (0..=joint.model.max_position() as i32).contains(v))
+            .ok_or(BusError::InvalidRequest(
+                "range outside the position registers",
+            ))
+    };
+    let (lo, hi) = (limit(moved.range[0])?, limit(moved.range[1])?);
+    bus.write_register(joint.id, offset_reg, frame.homing_offset)?;
+    bus.write_register(joint.id, register(joint.model, "min_angle_limit")?, lo)?;
+    bus.write_register(joint.id, register(joint.model, "max_angle_limit")?, hi)?;
+    Ok(moved)
+}
+
+/// Before a run on real servos: refuses a robot whose calibration is
+/// missing or does not match the servos found, and puts every calibrated
+/// servo in its play frame. Nothing moves here: torque is not touched.
+///
+/// A range that crosses the seam is played in a frame whose homing offset
+/// centres it; unless `--write-servos` stored that offset, it is written
+/// here with the lock closed, which applies it until the servo is switched
+/// off and leaves its EEPROM as it was.
+///
+/// # Errors
+/// A [`Refusal`] naming the joint and what is wrong.
+pub fn prepare_servos<T: Transport, C: Clock>(
+    robot: &Robot,
+    buses: &mut [Bus<T, C>],
+) -> Result<(), Refusal> {
+    match &robot.calibration {
+        RobotCalibration::None => return Ok(()),
+        RobotCalibration::Missing(path) => return Err(Refusal::Missing { path: path.clone() }),
+        RobotCalibration::Applied { .. } => {}
+    }
+    for (index, bus) in buses.iter_mut().enumerate() {
+        prepare_bus(robot, index, bus)?;
+    }
+    Ok(())
+}
+
+/// [`prepare_servos`] for the robot's bus `index` alone, on `bus`.
+///
+/// # Errors
+/// As [`prepare_servos`].
+pub fn prepare_bus<T: Transport, C: Clock>(
+    robot: &Robot,
+    index: usize,
+    bus: &mut Bus<T, C>,
+) -> Result<(), Refusal> {
+    if let RobotCalibration::Missing(path) = &robot.calibration {
+        return Err(Refusal::Missing { path: path.clone() });
+    }
+    let Some(config) = robot.buses.get(index) else {
+        return Ok(());
+    };
+    for joint in &config.joints {
+        if let Some(cal) = &joint.calibration {
+            prepare_joint(bus, config, joint, cal, robot)?;
+        }
+    }
+    Ok(())
+}
+
+fn prepare_joint<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    config: &BusConfig,
+    joint: &JointConfig,
+    cal: &JointCalibration,
+    robot: &Robot,
+) -> Result<(), Refusal> {
+    let found = identify(bus, joint).map_err(|e| Refusal::bus(config, joint, e))?;
+    if !found.model.name.eq_ignore_ascii_case(&cal.model) {
+        return Err(Refusal::Model {
+            joint: joint.name.clone(),
+            id: joint.id,
+            found: found.model.name,
+            calibrated: cal.model.clone(),
+        });
+    }
+    let frame = cal.play_frame();
+    if found.homing_offset != frame.homing_offset {
+        if found.homing_offset != cal.homing_offset {
+            return Err(Refusal::Offset {
+                joint: joint.name.clone(),
+                id: joint.id,
+                found: found.homing_offset,
+                calibrated: cal.homing_offset,
+            });
+        }
+        session_offset(bus, joint, frame.homing_offset)
+            .map_err(|e| Refusal::bus(config, joint, e))?;
+    }
+    let tick = present(bus, joint).map_err(|e| Refusal::bus(config, joint, e))?;
+    let map = JointMap::new(joint, robot.units);
+    let deg = map.from_ticks(tick).to_degrees();
+    let c = cal.in_frame(frame);
+    let (a, b) = (
+        c.degrees_at(joint.model, c.range[0] as f64),
+        c.degrees_at(joint.model, c.range[1] as f64),
+    );
+    let (lo, hi) = (a.min(b), a.max(b));
+    if deg < lo - FAR_OUTSIDE_DEG || deg > hi + FAR_OUTSIDE_DEG {
+        return Err(Refusal::Position {
+            joint: joint.name.clone(),
+            id: joint.id,
+            deg,
+            range: (lo, hi),
+        });
+    }
+    Ok(())
+}
+
+/// Writes a homing offset that lasts until the servo is switched off: the
+/// lock is closed first (a write with it open would persist), then the
+/// offset is written and read back.
+fn session_offset<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+    offset: i32,
+) -> Result<(), BusError> {
+    let reg = register(joint.model, "offset")?;
+    let lock = joint.model.map().lock_address;
+    bus.write(joint.id, lock, &[1])?;
+    let mut bytes = [0u8; 2];
+    reg.encode(offset, joint.model.series.byte_order(), &mut bytes)
+        .map_err(|_| BusError::InvalidRequest("homing offset beyond +-2047"))?;
+    bus.write(joint.id, reg.address, &bytes)?;
+    let (back, _) = bus.read_register(joint.id, reg)?;
+    if back != offset {
+        return Err(BusError::Verify {
+            id: joint.id,
+            address: reg.address,
+            expected: bytes.to_vec(),
+            actual: Vec::new(),
+        });
+    }
+    Ok(())
+}

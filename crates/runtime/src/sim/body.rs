@@ -1,0 +1,302 @@
+//! The simulated robot's body, as files name it: how each servo horn is
+//! mounted (`--mounting M.yaml`, or drawn at random with `--unit SEED`) and
+//! the hand that moves the joints (`--hand H.yaml`).
+//!
+//! ```yaml
+//! # mounting: the raw tick at each joint's physical zero, whether rising
+//! # ticks turn it positive (1) or negative (-1), optional end stops (deg)
+//! shoulder_pan: {zero_tick: 3900, direction: -1, stops: [-115, 115]}
+//! ```
+//!
+//! ```yaml
+//! # hand: physical angles (deg) at seconds from the simulator's start
+//! keyframes:
+//!   - {at: 0, pose: {shoulder_pan: 0}}
+//!   - {at: 2, pose: {shoulder_pan: 90}}
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use rand::rngs::SmallRng;
+use rand::{Rng, SeedableRng};
+use serde::Deserialize;
+use servobus_sim::{HandPath, Mount};
+
+use crate::config::{ConfigError, FieldPath, JointConfig, JointMap, Robot, Source};
+
+/// Every joint's mounting, in the robot's joint order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mounting {
+    mounts: Vec<Mount>,
+}
+
+/// Degrees beyond each joint limit where a random mounting puts its stops.
+const RANDOM_STOP_MARGIN_DEG: f64 = 5.0;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMount {
+    zero_tick: f64,
+    #[serde(default = "positive")]
+    direction: i64,
+    #[serde(default)]
+    stops: Option<[f64; 2]>,
+}
+
+fn positive() -> i64 {
+    1
+}
+
+impl Mounting {
+    /// The mounting the robot file assumes: tick `resolution / 2` (2048 on
+    /// an STS3215) plus the joint's `offset` at its zero, rising ticks
+    /// positive unless `inverted`, no stops. A simulator with this mounting
+    /// behaves exactly as one without a body.
+    pub fn of_robot_file(robot: &Robot) -> Mounting {
+        Mounting {
+            mounts: robot.joints().map(|j| design_mount(robot, j)).collect(),
+        }
+    }
+
+    /// The mounting of each joint, in the robot's joint order.
+    pub fn mounts(&self) -> &[Mount] {
+        &self.mounts
+    }
+
+    /// Loads a mounting file for `robot`; joints it does not name keep the
+    /// robot file's mounting ([`Mounting::of_robot_file`]).
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the file, line, column and field of the first
+    /// problem: an unknown joint, a tick outside the servo's range, a
+    /// direction other than 1 or -1, stops not in order.
+    pub fn load(path: &Path, robot: &Robot) -> Result<Mounting, ConfigError> {
+        let src = Source::read(path)?;
+        let raw: BTreeMap<String, RawMount> = src.parse()?;
+        let mut m = Mounting::of_robot_file(robot);
+        let root = FieldPath::root();
+        let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
+        for (name, r) in raw {
+            let field = root.key(&name);
+            let Some(i) = names.iter().position(|n| *n == name) else {
+                return Err(src.key_error(
+                    &field,
+                    format!(
+                        "no joint `{name}` in the robot (joints: {})",
+                        names.join(", ")
+                    ),
+                ));
+            };
+            let Some(joint) = robot.joints().nth(i) else {
+                continue;
+            };
+            let res = f64::from(joint.model.resolution);
+            if !(0.0..res).contains(&r.zero_tick) {
+                return Err(src.error(
+                    &field.key("zero_tick"),
+                    format!("must be a tick in 0..={}, got {}", res - 1.0, r.zero_tick),
+                ));
+            }
+            let reversed = match r.direction {
+                1 => false,
+                -1 => true,
+                d => {
+                    return Err(src.error(
+                        &field.key("direction"),
+                        format!("must be 1 (rising ticks turn the joint positive) or -1, got {d}"),
+                    ))
+                }
+            };
+            let mut mount = Mount::new(r.zero_tick, reversed);
+            if let Some([lo, hi]) = r.stops {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(src.error(
+                        &field.key("stops"),
+                        format!("must be [min_deg, max_deg] with min < max, got [{lo}, {hi}]"),
+                    ));
+                }
+                mount = mount.with_stops(lo, hi);
+            }
+            m.mounts[i] = mount;
+        }
+        Ok(m)
+    }
+
+    /// A robot as it comes off a careless assembly, drawn from `seed`: every
+    /// horn at a random tick of the turn, random directions, stops a few
+    /// degrees beyond each joint's limits. On full-turn servos at least one
+    /// joint's range crosses the 4095 -> 0 seam and at least one direction
+    /// is reversed (when the robot has two such joints). Same seed, same
+    /// robot.
+    pub fn random(robot: &Robot, seed: u64) -> Mounting {
+        let mut rng = SmallRng::seed_from_u64(seed);
+        let joints: Vec<&JointConfig> = robot.joints().collect();
+        let full: Vec<usize> = (0..joints.len())
+            .filter(|&i| joints[i].model.range_deg >= 360.0)
+            .collect();
+        let seam = (!full.is_empty()).then(|| full[rng.gen_range(0..full.len())]);
+        let reversed = match full.len() {
+            0 | 1 => None,
+            n => {
+                let k = rng.gen_range(1..n);
+                let s = full.iter().position(|&i| Some(i) == seam).unwrap_or(0);
+                Some(full[(s + k) % n])
+            }
+        };
+        let mounts = joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| {
+                let (lo, hi) = limits_deg(robot, j);
+                let dir = if Some(i) == reversed || (Some(i) != seam && rng.gen_bool(0.5)) {
+                    -1.0
+                } else {
+                    1.0
+                };
+                let res = f64::from(j.model.resolution);
+                let tpd = res / j.model.range_deg;
+                let zero = if Some(i) == seam {
+                    // The seam between 25 % and 75 % of the range.
+                    let at = lo + rng.gen_range(0.25..0.75) * (hi - lo);
+                    (-dir * at * tpd).rem_euclid(res).round()
+                } else if full.contains(&i) {
+                    f64::from(rng.gen_range(0..j.model.resolution))
+                } else {
+                    // A partial-turn sensor: the whole range must stay on it.
+                    let a = -dir * lo * tpd;
+                    let b = -dir * hi * tpd;
+                    let (min_zero, max_zero) = (a.max(b), res - 1.0 + a.min(b));
+                    if min_zero < max_zero {
+                        rng.gen_range(min_zero..max_zero).round()
+                    } else {
+                        design_mount(robot, j).zero_tick
+                    }
+                };
+                Mount::new(zero, dir < 0.0)
+                    .with_stops(lo - RANDOM_STOP_MARGIN_DEG, hi + RANDOM_STOP_MARGIN_DEG)
+            })
+            .collect();
+        Mounting { mounts }
+    }
+
+    /// The mounting as a mounting file says it (to keep a random unit).
+    pub fn to_yaml(&self, robot: &Robot) -> String {
+        let mut out = String::new();
+        for (j, m) in robot.joints().zip(&self.mounts) {
+            out.push_str(&format!(
+                "{}: {{zero_tick: {}, direction: {}",
+                j.name, m.zero_tick, m.direction
+            ));
+            if let Some([lo, hi]) = m.stops {
+                out.push_str(&format!(", stops: [{lo}, {hi}]"));
+            }
+            out.push_str("}\n");
+        }
+        out
+    }
+}
+
+/// The robot file's own mounting of joint `j`.
+fn design_mount(robot: &Robot, j: &JointConfig) -> Mount {
+    let map = JointMap::new(j, robot.units);
+    Mount::new(map.raw_ticks(0.0), j.inverted)
+}
+
+/// A joint's limits in degrees.
+fn limits_deg(robot: &Robot, j: &JointConfig) -> (f64, f64) {
+    let deg = |v: f64| robot.units.to_rad(v).to_degrees();
+    (deg(j.min), deg(j.max))
+}
+
+/// A hand's path for every joint it names, in the robot's joint order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Hand {
+    paths: Vec<Option<HandPath>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHand {
+    keyframes: Vec<RawKey>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawKey {
+    at: f64,
+    pose: BTreeMap<String, f64>,
+}
+
+impl Hand {
+    /// A hand from `(time_s, [(joint index, angle_deg)])` keyframes, for
+    /// tests and tools that script it in code.
+    pub fn from_keyframes(robot: &Robot, keyframes: &[(f64, Vec<(usize, f64)>)]) -> Hand {
+        let mut keys: Vec<Vec<(f64, f64)>> = vec![Vec::new(); robot.joint_count()];
+        for (t, pose) in keyframes {
+            for &(j, a) in pose {
+                if let Some(k) = keys.get_mut(j) {
+                    k.push((*t, a));
+                }
+            }
+        }
+        Hand {
+            paths: keys
+                .into_iter()
+                .map(|k| (!k.is_empty()).then(|| HandPath::new(k)))
+                .collect(),
+        }
+    }
+
+    /// Loads a hand file for `robot`.
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the file, line, column and field of the first
+    /// problem: an unknown joint, a time that is negative or not after the
+    /// previous keyframe's, an angle that is not a number.
+    pub fn load(path: &Path, robot: &Robot) -> Result<Hand, ConfigError> {
+        let src = Source::read(path)?;
+        let raw: RawHand = src.parse()?;
+        let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
+        let root = FieldPath::root().key("keyframes");
+        let mut keyframes = Vec::with_capacity(raw.keyframes.len());
+        let mut last = f64::NEG_INFINITY;
+        for (k, key) in raw.keyframes.iter().enumerate() {
+            let field = root.index(k);
+            if !(key.at.is_finite() && key.at >= 0.0) {
+                return Err(src.error(&field.key("at"), "must be seconds >= 0"));
+            }
+            if key.at <= last {
+                return Err(src.error(
+                    &field.key("at"),
+                    format!("{} s is not after the previous keyframe's {last} s", key.at),
+                ));
+            }
+            last = key.at;
+            let mut pose = Vec::with_capacity(key.pose.len());
+            for (name, &deg) in &key.pose {
+                let f = field.key("pose").key(name);
+                let Some(i) = names.iter().position(|n| n == name) else {
+                    return Err(src.key_error(
+                        &f,
+                        format!(
+                            "no joint `{name}` in the robot (joints: {})",
+                            names.join(", ")
+                        ),
+                    ));
+                };
+                if !deg.is_finite() {
+                    return Err(src.error(&f, "must be an angle in degrees"));
+                }
+                pose.push((i, deg));
+            }
+            keyframes.push((key.at, pose));
+        }
+        Ok(Hand::from_keyframes(robot, &keyframes))
+    }
+
+    /// The path of joint `index` (robot joint order), if the hand names it.
+    pub fn path(&self, index: usize) -> Option<&HandPath> {
+        self.paths.get(index).and_then(Option::as_ref)
+    }
+}

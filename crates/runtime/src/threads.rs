@@ -1,0 +1,230 @@
+//! Running a robot on threads: one per bus on the buses' clock, each running
+//! the same lane cycle as [`VirtualRun`] behind a [`Pacer`], in step from a
+//! shared epoch; or a whole [`VirtualRun`] on a thread of its own.
+
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use crossbeam_channel::{Receiver, Sender};
+use servobus_driver::{Bus, Clock, ManualClock, Transport};
+use servobus_trajectory::Trajectory;
+
+use crate::busloop::Outcome;
+use crate::command::Command;
+use crate::config::{Robot, Units};
+use crate::error::RunError;
+use crate::exchange::{CommandSender, FaultBoard};
+use crate::lane::{overall, Lane};
+use crate::options::RunOptions;
+use crate::pacer::Pacer;
+use crate::report::Report;
+use crate::rt::RtOptions;
+use crate::run::{assemble, prepare, Ending};
+use crate::telemetry::{Finish, Telemetry};
+use crate::virtual_run::VirtualRun;
+
+/// A run in progress on its own threads.
+///
+/// The telemetry channel disconnects once the run has ended and every
+/// message has been read.
+#[derive(Debug)]
+pub struct Runner {
+    commands: CommandSender,
+    telemetry: Receiver<Telemetry>,
+    handle: JoinHandle<Result<Report, RunError>>,
+}
+
+impl Runner {
+    /// A sender of commands.
+    pub fn commands(&self) -> CommandSender {
+        self.commands.clone()
+    }
+
+    /// Sends a command (waits if the command channel is full).
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Thread`] when the run has already ended.
+    pub fn send(&self, command: Command) -> Result<(), RunError> {
+        self.commands
+            .send(command)
+            .map_err(|_| RunError::Thread("the run has ended".into()))
+    }
+
+    /// Sends a command to take effect in cycle `cycle` on every bus (see
+    /// [`CommandSender::send_at`]).
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Thread`] when the run has already ended.
+    pub fn send_at(&self, cycle: u64, command: Command) -> Result<(), RunError> {
+        self.commands
+            .send_at(cycle, command)
+            .map_err(|_| RunError::Thread("the run has ended".into()))
+    }
+
+    /// A receiver of telemetry.
+    pub fn telemetry(&self) -> Receiver<Telemetry> {
+        self.telemetry.clone()
+    }
+
+    /// Whether the run has ended.
+    pub fn is_finished(&self) -> bool {
+        self.handle.is_finished()
+    }
+
+    /// Waits for the end of the run and returns its report. A run still
+    /// waiting for [`Command::Play`] ends as [`Finish::Abandoned`] once no
+    /// other command sender is left.
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Thread`] when a bus thread panicked.
+    pub fn join(self) -> Result<Report, RunError> {
+        drop(self.commands);
+        self.handle
+            .join()
+            .map_err(|_| RunError::Thread("the run's thread panicked".into()))?
+    }
+}
+
+/// Runs a [`VirtualRun`] on a thread of its own (for `servobus play --fast`
+/// with a progress bar reading the telemetry).
+///
+/// # Errors
+///
+/// As [`VirtualRun::new`].
+pub fn spawn_virtual<T: Transport + Send + 'static>(
+    robot: &Robot,
+    trajectory: Trajectory,
+    buses: Vec<Bus<T, ManualClock>>,
+    options: RunOptions,
+) -> Result<Runner, RunError> {
+    let run = VirtualRun::new(robot, trajectory, buses, options)?;
+    let commands = run.commands();
+    let telemetry = run.telemetry();
+    let handle = std::thread::Builder::new()
+        .name("servobus-virtual".into())
+        .spawn(move || Ok(run.run()))
+        .map_err(|e| RunError::Thread(e.to_string()))?;
+    Ok(Runner {
+        commands,
+        telemetry,
+        handle,
+    })
+}
+
+/// What a bus thread hands back.
+type LaneEnd = (Outcome, Finish, Vec<String>);
+
+/// Runs `trajectory` on `buses` (one per robot bus, in order) on the clock
+/// they were built with, one thread per bus, in step from a shared epoch:
+/// cycle `k` of every bus is due at `start + k * period`.
+///
+/// The buses' clocks must share their time base (clones of one
+/// [`SystemClock`](servobus_driver::SystemClock)). Tests may give each bus
+/// its own [`ManualClock`]: each thread then runs through virtual time as
+/// fast as it can, commands still take effect at their stamped cycle, and
+/// a fault on one bus reaches the others at their next cycle. Start-up (reading
+/// positions, enabling torque, planning the approach) happens before this
+/// returns; the first cycle is due 50 ms (at least 5 periods) later. Each
+/// thread keeps its own copy of the robot-wide path, and commands take
+/// effect in the same cycle on every bus.
+///
+/// # Errors
+///
+/// As [`VirtualRun::new`]; [`RunError::Thread`] when a thread cannot start.
+pub fn spawn<T, C>(
+    robot: &Robot,
+    trajectory: Trajectory,
+    buses: Vec<Bus<T, C>>,
+    options: RunOptions,
+) -> Result<Runner, RunError>
+where
+    T: Transport + Send + 'static,
+    C: Clock,
+{
+    let p = prepare(robot, trajectory, buses, &options)?;
+    let mut threads = Vec::with_capacity(p.lanes.len());
+    for lane in p.lanes {
+        let rt = RtOptions {
+            core: options.rt.core.map(|c| c + lane.bus.index),
+            fifo_priority: options.rt.fifo_priority,
+        };
+        let pacer =
+            Pacer::new(lane.bus.bus.clock().clone(), p.start, p.period).with_spin(options.spin);
+        let handle = std::thread::Builder::new()
+            .name(format!("servobus-{}", lane.bus.name))
+            .spawn(move || drive(lane, pacer, rt))
+            .map_err(|e| RunError::Thread(e.to_string()))?;
+        threads.push(handle);
+    }
+    let end = RunEnd {
+        board: p.board,
+        rate_hz: p.rate_hz,
+        units: p.units,
+        telemetry: p.telemetry_tx,
+    };
+    let supervisor = std::thread::Builder::new()
+        .name("servobus-run".into())
+        .spawn(move || end.supervise(threads))
+        .map_err(|e| RunError::Thread(e.to_string()))?;
+    Ok(Runner {
+        commands: p.commands,
+        telemetry: p.telemetry,
+        handle: supervisor,
+    })
+}
+
+/// What the supervising thread needs to end a threaded run.
+struct RunEnd {
+    board: Arc<FaultBoard>,
+    rate_hz: f64,
+    units: Units,
+    telemetry: Option<Sender<Telemetry>>,
+}
+
+impl RunEnd {
+    /// Waits for every bus thread, says why the run ended, and reports.
+    fn supervise(self, threads: Vec<JoinHandle<LaneEnd>>) -> Result<Report, RunError> {
+        let ends = threads
+            .into_iter()
+            .map(|t| t.join())
+            .collect::<Result<Vec<LaneEnd>, _>>()
+            .map_err(|_| RunError::Thread("a bus thread panicked".into()))?;
+        let finish = overall(ends.iter().map(|e| e.1));
+        if let Some(tx) = &self.telemetry {
+            let _ = tx.try_send(Telemetry::Finished(finish));
+        }
+        let mut outcomes = Vec::with_capacity(ends.len());
+        let mut warnings = Vec::new();
+        for (o, _, w) in ends {
+            outcomes.push(o);
+            warnings.extend(w);
+        }
+        let ending = Ending {
+            rate_hz: self.rate_hz,
+            units: self.units,
+            finish,
+            fault: self.board.first(),
+            warnings,
+        };
+        Ok(assemble(outcomes, ending))
+    }
+}
+
+/// A bus thread: its real-time set-up, then the lane's cycles as the pacer
+/// releases them, until the lane's run ends.
+fn drive<T: Transport, C: Clock>(
+    mut lane: Lane<T, C>,
+    mut pacer: Pacer<C>,
+    rt: RtOptions,
+) -> LaneEnd {
+    let warnings = crate::rt::apply(rt).warnings;
+    let finish = loop {
+        if let Some(f) = lane.cycle(pacer.wait()) {
+            break f;
+        }
+    };
+    (lane.bus.outcome(), finish, warnings)
+}

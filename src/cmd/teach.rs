@@ -1,0 +1,309 @@
+//! `servobus teach`: pose the robot by hand and get a motion file back.
+
+use std::io::{BufRead, IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+use anyhow::{bail, Context};
+use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
+use servobus_runtime::bus_settings;
+use servobus_runtime::config::{load_robot_calibrated, Robot};
+use servobus_runtime::teach::{distance, motion_yaml, reduce, StillCapture, Teacher, TimedPose};
+
+/// A pseudo-terminal (the simulator) wakes late now and then on a busy
+/// machine: its reply deadlines allow this much (as `play` does).
+const PTY_LATENCY: Duration = Duration::from_millis(3);
+/// How often the pose is read in pose-and-pause mode.
+const POSE_RATE_HZ: f64 = 50.0;
+/// Tries per transaction: a reply lost now and then (a busy pty, a noisy
+/// bus) must not end a take.
+const RETRIES: u8 = 2;
+/// Pose reads that may fail in a row before the take ends with an error.
+const MISSED_POSES: u32 = 25;
+/// How often the live view is redrawn.
+const VIEW_EVERY: Duration = Duration::from_millis(250);
+
+/// Arguments of `servobus teach`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The robot file, or a built-in robot's name.
+    #[arg(long, value_parser = super::robot_arg)]
+    pub robot: PathBuf,
+    /// Serial port of the robot's first bus (default: the robot file's).
+    /// A simulated robot with a hand: `servobus sim --robot F --hand H --link L`.
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`): taught angles are then physical angles.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// The motion file to write.
+    #[arg(short = 'o', long = "output", value_name = "MOTION.yaml")]
+    pub output: PathBuf,
+    /// Joints that keep their position with torque on (e.g. a shoulder
+    /// that would fall), comma-separated.
+    #[arg(long, value_delimiter = ',', value_name = "JOINT,...")]
+    pub hold: Vec<String>,
+    /// Record the whole path at the control rate and reduce it to the
+    /// fewest timed keyframes that reproduce it (instead of pose-and-pause).
+    #[arg(long)]
+    pub continuous: bool,
+    /// With --continuous: how closely the keyframes must reproduce the
+    /// path, degrees.
+    #[arg(long, default_value_t = 0.5, value_name = "DEG")]
+    pub tolerance: f64,
+    /// Stop after this many seconds.
+    #[arg(long, value_name = "S")]
+    pub duration: Option<f64>,
+    /// No keyboard: capture a keyframe whenever the robot has moved and
+    /// then been held still for 0.7 s (also when stdin is not a terminal).
+    #[arg(long)]
+    pub yes: bool,
+}
+
+/// Runs `servobus teach`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let robot = load_robot_calibrated(&args.robot, args.calibration.as_deref())?;
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        return Err(super::exit::input(
+            "--tolerance must be a positive number of degrees",
+        ));
+    }
+    if args.duration.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
+        return Err(super::exit::input(
+            "--duration must be a positive number of seconds",
+        ));
+    }
+    // Check the output before anything moves.
+    std::fs::write(&args.output, "")
+        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
+    let buses = open_buses(&robot, args.port.as_deref())?;
+    let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
+    teacher.release()?;
+    let held = if args.hold.is_empty() {
+        String::new()
+    } else {
+        format!(" (holding {})", args.hold.join(", "))
+    };
+    let interactive = std::io::stdin().is_terminal() && !args.yes;
+    eprintln!("torque off{held}: move the robot by hand.");
+    eprintln!("{}", how_to_stop(&args, interactive));
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
+        .context("cannot install the SIGINT/SIGTERM handler")?;
+    let keys = interactive.then(stdin_lines);
+
+    let taken = take(&args, &robot, &mut teacher, &stop, keys.as_ref());
+    // Nothing is lost: what was captured is written even after an error.
+    let (keyframes, timed) = match &taken {
+        Ok(t) | Err((t, _)) => t.keyframes(&robot, &args),
+    };
+    if keyframes.is_empty() {
+        if let Err((_, e)) = taken {
+            return Err(e);
+        }
+        bail!("nothing was captured; no motion file written");
+    }
+    let robot_file = args
+        .robot
+        .canonicalize()
+        .unwrap_or_else(|_| args.robot.clone());
+    let note = if timed {
+        format!("a continuous take reduced to within {} deg", args.tolerance)
+    } else {
+        "pose-and-pause".to_owned()
+    };
+    let yaml = motion_yaml(&robot, &robot_file, &keyframes, timed, &note);
+    std::fs::write(&args.output, yaml)
+        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
+    eprintln!(
+        "wrote {} keyframes to {}; play it with `servobus play {}`",
+        keyframes.len(),
+        args.output.display(),
+        args.output.display()
+    );
+    match taken {
+        Ok(_) => Ok(ExitCode::SUCCESS),
+        Err((_, e)) => Err(e),
+    }
+}
+
+fn how_to_stop(args: &Args, interactive: bool) -> String {
+    let mut ways = vec!["Ctrl-C".to_owned()];
+    if interactive {
+        ways.insert(0, "Enter without moving (or q)".to_owned());
+    }
+    if let Some(d) = args.duration {
+        ways.push(format!("after {d} s"));
+    }
+    let what = match (args.continuous, interactive) {
+        (true, _) => "Recording the path.",
+        (false, true) => "Press Enter to capture a keyframe.",
+        (false, false) => "A keyframe is captured each time the robot is held still for 0.7 s.",
+    };
+    format!("{what} Stops on {}.", ways.join(", "))
+}
+
+/// The buses of `robot`: `port` for the first, the robot file's for the rest.
+fn open_buses(
+    robot: &Robot,
+    port: Option<&str>,
+) -> anyhow::Result<Vec<Bus<Box<dyn Transport + Send>, SystemClock>>> {
+    let clock = SystemClock::new();
+    let mut buses = Vec::new();
+    for (i, bus) in robot.buses.iter().enumerate() {
+        let path = match (i, port, bus.port.as_deref()) {
+            (0, Some(p), _) | (_, _, Some(p)) => p.to_owned(),
+            _ => bail!(
+                "bus `{}` has no port: give --port (a robot, or `servobus sim --robot {} --hand H.yaml --link L`)",
+                bus.name,
+                robot.path.display()
+            ),
+        };
+        let transport = SerialTransport::open(&path, bus.baud, clock)
+            .with_context(|| format!("bus `{}`: cannot open {path}", bus.name))?;
+        let pty = std::fs::canonicalize(&path).is_ok_and(|p| p.starts_with("/dev/pts"));
+        let mut settings = bus_settings(bus).with_retries(RETRIES);
+        if pty {
+            settings = settings.with_latency(bus.latency.max(PTY_LATENCY));
+        }
+        let transport: Box<dyn Transport + Send> = Box::new(transport);
+        buses.push(Bus::new(transport, clock, settings));
+    }
+    Ok(buses)
+}
+
+/// Lines typed on stdin, read on their own thread.
+fn stdin_lines() -> mpsc::Receiver<String> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { return };
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    rx
+}
+
+/// What a take captured.
+#[derive(Default)]
+struct Take {
+    /// Pose-and-pause keyframes.
+    poses: Vec<Vec<f64>>,
+    /// The recorded path (continuous).
+    samples: Vec<TimedPose>,
+}
+
+impl Take {
+    /// The keyframes to write and whether they are timed.
+    fn keyframes(&self, robot: &Robot, args: &Args) -> (Vec<TimedPose>, bool) {
+        if args.continuous {
+            let tol = robot.units.from_rad(args.tolerance.to_radians());
+            (reduce(robot, &self.samples, tol), true)
+        } else {
+            (self.poses.iter().map(|p| (0.0, p.clone())).collect(), false)
+        }
+    }
+}
+
+type Taken = Result<Take, (Take, anyhow::Error)>;
+
+/// Reads the pose until told to stop, capturing keyframes or the path.
+fn take<T: Transport, C: Clock>(
+    args: &Args,
+    robot: &Robot,
+    teacher: &mut Teacher<T, C>,
+    stop: &AtomicBool,
+    keys: Option<&mpsc::Receiver<String>>,
+) -> Taken {
+    let mut take = Take::default();
+    let rate = if args.continuous {
+        robot.rate_hz
+    } else {
+        POSE_RATE_HZ
+    };
+    let period = Duration::from_secs_f64(1.0 / rate);
+    let start = teacher.now();
+    let end = args.duration.map(|d| start + Duration::from_secs_f64(d));
+    let first = match teacher.pose() {
+        Ok(p) => p,
+        Err(e) => return Err((take, e.into())),
+    };
+    let mut capture = StillCapture::new(&first, robot.units);
+    let names = teacher.joint_names();
+    let view = std::io::stderr().is_terminal();
+    let mut next = start;
+    let mut next_view = start;
+    let mut missed = 0;
+    while !stop.load(Ordering::SeqCst) && end.map_or(true, |e| teacher.now() < e) {
+        next += period;
+        let now = teacher.now();
+        if next < now {
+            next = now;
+        }
+        teacher.sleep_until(next);
+        let pose = match teacher.pose() {
+            Ok(p) => {
+                missed = 0;
+                p
+            }
+            Err(_) if missed < MISSED_POSES => {
+                missed += 1;
+                continue;
+            }
+            Err(e) => return Err((take, e.into())),
+        };
+        let t = (teacher.now() - start).as_secs_f64();
+        if args.continuous {
+            take.samples.push((t, pose.clone()));
+        }
+        let mut captured = None;
+        if let Some(keys) = keys {
+            while let Ok(line) = keys.try_recv() {
+                let still = distance(&pose, capture.last()) <= capture.moved;
+                if args.continuous || line.trim() == "q" || (still && !take.poses.is_empty()) {
+                    stop.store(true, Ordering::SeqCst);
+                } else {
+                    capture.captured(&pose);
+                    captured = Some(pose.clone());
+                }
+            }
+        } else if !args.continuous {
+            captured = capture.push(t, &pose);
+        }
+        if let Some(k) = captured {
+            take.poses.push(k.clone());
+            eprintln!(
+                "{}keyframe {} at {t:.1} s: {}",
+                if view { "\r\x1b[K" } else { "" },
+                take.poses.len(),
+                show(&names, &k)
+            );
+        }
+        if view && teacher.now() >= next_view {
+            next_view = teacher.now() + VIEW_EVERY;
+            eprint!("\r\x1b[K{t:6.1} s  {}", show(&names, &pose));
+            let _ = std::io::stderr().flush();
+        }
+    }
+    if view {
+        eprintln!();
+    }
+    Ok(take)
+}
+
+fn show(names: &[String], pose: &[f64]) -> String {
+    names
+        .iter()
+        .zip(pose)
+        .map(|(n, v)| format!("{n} {v:.1}"))
+        .collect::<Vec<_>>()
+        .join("  ")
+}

@@ -1,0 +1,369 @@
+//! The whole flow on the command line, on a pty, in wall-clock time:
+//! `servobus sim` with a badly fitted body, a scripted hand and the truth;
+//! `servobus calibrate --port … --yes` while the hand poses and sweeps the
+//! joints; then `servobus play … --port …`, and the truth compared with the
+//! motion's keyframes. A hexapod with a random unit calibrates as well.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{mpsc, Mutex};
+use std::time::{Duration, Instant};
+
+use common::{repo, scratch, BIN};
+use servobus_runtime::config::{load_motion, load_robot, Robot};
+
+/// `servobus sim` serving a robot on a linked pty; killed when dropped.
+struct Sim {
+    child: Child,
+    link: PathBuf,
+    /// When it said it was serving: the hand's time 0, near enough.
+    started: Instant,
+}
+
+impl Sim {
+    fn start(dir: &Path, robot: &Path, servos: usize, extra: &[&str]) -> Sim {
+        let link = dir.join("bus");
+        let mut child = Command::new(BIN)
+            .args(["sim", "--robot"])
+            .arg(robot)
+            .arg("--link")
+            .arg(&link)
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start servobus sim");
+        let stdout = child.stdout.take().expect("sim stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let _ = BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        let line = rx.recv_timeout(Duration::from_secs(60));
+        let started = Instant::now();
+        let sim = Sim {
+            child,
+            link,
+            started,
+        };
+        let line = line.expect("servobus sim says it is serving");
+        assert_eq!(
+            line.trim(),
+            format!("serving {servos} servos on {}", sim.link.display())
+        );
+        sim
+    }
+
+    fn port(&self) -> &str {
+        self.link.to_str().expect("utf-8 path")
+    }
+
+    /// Waits until the simulator has run `s` seconds.
+    fn wait_until(&self, s: f64) {
+        let at = self.started + Duration::from_secs_f64(s);
+        std::thread::sleep(at.saturating_duration_since(Instant::now()));
+    }
+
+    fn stop(mut self) {
+        let pid = self.child.id().to_string();
+        let _ = Command::new("kill").args(["-TERM", &pid]).status();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// The two flows run one after the other: each is a simulator and a client
+/// in wall-clock time, and two at once on a small machine starve both.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn run(args: &[&str]) -> Output {
+    let out = Command::new(BIN)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("servobus runs");
+    assert!(
+        out.status.success(),
+        "servobus {args:?}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// A hand file: from `start`, to the calibration pose (all 0) by 4 s, held;
+/// then the joint groups in turn to their upper end, lower end and back
+/// (`ends`, degrees, per joint); held until it lets go. Returns the file's
+/// text and the time it lets go.
+fn hand(robot: &Robot, start: &[f64], ends: &[(f64, f64)], groups: &[Vec<usize>]) -> (String, f64) {
+    let n = robot.joint_count();
+    let zero = vec![0.0; n];
+    let mut keys: Vec<(f64, Vec<f64>)> = vec![
+        (0.0, start.to_vec()),
+        (3.0, start.to_vec()),
+        (4.0, zero.clone()),
+        (7.0, zero.clone()),
+    ];
+    let mut t = 7.0;
+    for group in groups {
+        let pose = |upper: Option<bool>| -> Vec<f64> {
+            (0..n)
+                .map(|j| match (group.contains(&j), upper) {
+                    (true, Some(true)) => ends[j].1,
+                    (true, Some(false)) => ends[j].0,
+                    _ => 0.0,
+                })
+                .collect()
+        };
+        for (dt, p) in [
+            (0.7, pose(Some(true))),
+            (0.2, pose(Some(true))),
+            (0.9, pose(Some(false))),
+            (0.2, pose(Some(false))),
+            (0.5, pose(None)),
+        ] {
+            t += dt;
+            keys.push((t, p));
+        }
+    }
+    let end = t + 3.5;
+    keys.push((end, zero));
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let mut text = String::from("keyframes:\n");
+    for (at, pose) in keys {
+        let pose: Vec<String> = names
+            .iter()
+            .zip(pose)
+            .map(|(name, a)| format!("{name}: {a}"))
+            .collect();
+        text.push_str(&format!(
+            "  - {{at: {at}, pose: {{{}}}}}\n",
+            pose.join(", ")
+        ));
+    }
+    (text, end)
+}
+
+/// The truth file's rows: time and every joint's angle.
+fn truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("the truth file");
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let rows = lines
+        .filter_map(|l| {
+            l.split(',')
+                .map(|v| v.parse().ok())
+                .collect::<Option<Vec<f64>>>()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn calibrate(robot: &Path, sim: &Sim, cal: &Path) -> String {
+    let out = run(&[
+        "calibrate",
+        "--robot",
+        robot.to_str().expect("utf-8"),
+        "--port",
+        sim.port(),
+        "--yes",
+        "-o",
+        cal.to_str().expect("utf-8"),
+    ]);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = scratch("calib-flow-arm");
+    // The SO-101 with more latency in its bus settings, as a user puts
+    // their adapter's: the simulator answers from a process that may wait
+    // for the CPU on a loaded host, so replies are given 8 ms, at 50 Hz.
+    let robot_file = dir.join("so101.yaml");
+    let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
+    std::fs::write(
+        &robot_file,
+        text.replace("latency_us: 0 ", "latency_us: 8000 ")
+            .replace("rate: 200 ", "rate: 50 "),
+    )
+    .expect("robot");
+    let robot = load_robot(&robot_file).expect("so101");
+    // The shipped badly fitted arm: the lift's range crosses the seam, the
+    // elbow and wrist are reversed. The hand sweeps to the stops (the roll
+    // has none: a little past its limits).
+    let ends = [
+        (-115.0, 115.0),
+        (-105.0, 105.0),
+        (-100.0, 100.0),
+        (-100.0, 100.0),
+        (-163.0, 163.0),
+        (-2.0, 102.0),
+    ];
+    let start = [0.0, -90.0, 90.0, 45.0, 0.0, 10.0];
+    let groups: Vec<Vec<usize>> = (0..6).map(|j| vec![j]).collect();
+    let (text, lets_go) = hand(&robot, &start, &ends, &groups);
+    let hand_file = dir.join("hand.yaml");
+    std::fs::write(&hand_file, text).expect("hand file");
+    let truth_file = dir.join("truth.csv");
+    let mounting = repo("configs/sim/so101-mounting.yaml");
+    let sim = Sim::start(
+        &dir,
+        &robot_file,
+        6,
+        &[
+            "--mounting",
+            mounting.to_str().expect("utf-8"),
+            "--hand",
+            hand_file.to_str().expect("utf-8"),
+            "--truth",
+            truth_file.to_str().expect("utf-8"),
+        ],
+    );
+    let cal = dir.join("arm.calibration.yaml");
+    let said = calibrate(&robot_file, &sim, &cal);
+    for step in [
+        "1. Torque is off",
+        "2. Hold the robot",
+        "3. Move every joint",
+        "4. Done",
+    ] {
+        assert!(said.contains(step), "calibrate says {step:?}: {said}");
+    }
+    assert!(
+        said.contains("shoulder_lift") && said.contains("across the seam"),
+        "{said}"
+    );
+    // The person steps back; then the arm plays.
+    sim.wait_until(lets_go + 0.5);
+    // arm-wave at the rate this bus allows.
+    let motion = dir.join("arm-wave.yaml");
+    let wave = std::fs::read_to_string(repo("configs/motions/arm-wave.yaml")).expect("motion");
+    assert!(wave.contains("rate: 200 "), "arm-wave sets its rate");
+    std::fs::write(&motion, wave.replace("rate: 200 ", "rate: 50 ")).expect("motion copy");
+    // A host that takes the CPU from the simulator's process for a few
+    // reads in a row stops a run with a fault (as it should on real
+    // servos): such a run is played again, up to three times.
+    let mut played_from = 0.0;
+    let mut last = None;
+    for _ in 0..3 {
+        played_from = sim.started.elapsed().as_secs_f64();
+        let out = Command::new(BIN)
+            .arg("play")
+            .arg(&motion)
+            .arg("--robot")
+            .arg(&robot_file)
+            .args(["--port", sim.port(), "--calibration"])
+            .arg(&cal)
+            .output()
+            .expect("servobus play runs");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        if out.status.success() {
+            last = None;
+            break;
+        }
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            text.contains("FAULT"),
+            "play failed before running: {text}{err}"
+        );
+        last = Some(text);
+    }
+    assert!(last.is_none(), "play stopped three times: {last:?}");
+    sim.stop();
+
+    let (header, rows) = truth(&truth_file);
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    assert_eq!(header[1..], names[..]);
+    let (m, _) = load_motion(&motion, Some(&robot_file)).expect("motion");
+    let played: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] >= played_from).collect();
+    assert!(
+        played.len() > 100,
+        "truth rows while playing: {}",
+        played.len()
+    );
+    // Every keyframe: the body passed through it (all joints at once).
+    for (k, kf) in m.keyframes.iter().enumerate() {
+        let closest = played
+            .iter()
+            .map(|r| {
+                r[1..]
+                    .iter()
+                    .zip(&kf.positions)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min);
+        println!("keyframe {k}: closest {closest:.2} deg");
+        assert!(
+            closest < 1.0,
+            "keyframe {k}: the body came within {closest:.2} deg only"
+        );
+    }
+}
+
+#[test]
+fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = scratch("calib-flow-hexapod");
+    let robot_file = repo("configs/robots/hexapod.yaml");
+    let robot = load_robot(&robot_file).expect("hexapod");
+    // The random unit's stops are 5 deg past the limits; the hand goes 4.
+    let ends: Vec<(f64, f64)> = robot.joints().map(|j| (j.min - 4.0, j.max + 4.0)).collect();
+    let start: Vec<f64> = robot.joints().map(|j| j.rest()).collect();
+    // Coxas together, then femurs, then tibias.
+    let groups: Vec<Vec<usize>> = (0..3)
+        .map(|k| (0..6).map(|leg| leg * 3 + k).collect())
+        .collect();
+    let (text, _) = hand(&robot, &start, &ends, &groups);
+    let hand_file = dir.join("hand.yaml");
+    std::fs::write(&hand_file, text).expect("hand file");
+    let truth_file = dir.join("truth.csv");
+    let sim = Sim::start(
+        &dir,
+        &robot_file,
+        18,
+        &[
+            "--unit",
+            "5",
+            "--hand",
+            hand_file.to_str().expect("utf-8"),
+            "--truth",
+            truth_file.to_str().expect("utf-8"),
+        ],
+    );
+    let cal = dir.join("hexapod.calibration.yaml");
+    let said = calibrate(&robot_file, &sim, &cal);
+    assert!(said.contains("across the seam"), "{said}");
+    sim.stop();
+    // Each joint's measured range is where the hand took it, less the margin.
+    let robot = servobus_runtime::config::load_robot_calibrated(&robot_file, Some(&cal))
+        .expect("the calibration applies");
+    for (j, &(lo, hi)) in robot.joints().zip(&ends) {
+        let c = j.calibration.as_ref().expect("calibrated");
+        let (a, b) = c.limits_deg(j.model);
+        let margin = servobus_runtime::config::RANGE_MARGIN_DEG;
+        assert!(
+            (a - margin - lo).abs() < 1.0 && (b + margin - hi).abs() < 1.0,
+            "{}: measured {a:.1}..{b:.1} plus margin, hand {lo}..{hi}",
+            j.name
+        );
+    }
+}

@@ -1,0 +1,82 @@
+//! `servobus teach` on a pty: the simulator's hand poses the arm, teach
+//! captures the poses without a keyboard, and the file plans as it is.
+
+mod common;
+
+use std::process::{Command, Stdio};
+
+use common::{repo, scratch, servobus, Sim, BIN};
+
+#[test]
+fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
+    let dir = scratch("teach-cli");
+    let hand = dir.join("hand.yaml");
+    // Rest, then two poses, each reached in 1 s and held 2 s.
+    std::fs::write(
+        &hand,
+        "keyframes:\n\
+         \x20 - {at: 0, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
+         \x20 - {at: 0.5, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
+         \x20 - {at: 1.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
+         \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
+         \x20 - {at: 4.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n\
+         \x20 - {at: 6.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n",
+    )
+    .expect("writes the hand");
+    let sim = Sim::start_with(&dir, &["--hand", hand.to_str().expect("utf-8")]);
+    let out = dir.join("taught.yaml");
+    let robot = repo("configs/robots/so101.yaml");
+    let run = Command::new(BIN)
+        .args(["teach", "--robot"])
+        .arg(&robot)
+        .args(["--port", sim.port(), "--yes", "--duration", "6.5", "-o"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs teach");
+    sim.stop();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(err.contains("torque off"), "{err}");
+    let text = std::fs::read_to_string(&out).expect("the motion file");
+    assert!(text.starts_with("# Taught by hand"), "{text}");
+    let poses: Vec<&str> = text.lines().filter(|l| l.contains("pose:")).collect();
+    assert_eq!(poses.len(), 2, "{text}");
+    assert!(
+        poses[0].contains("shoulder_pan: 40.0") || poses[0].contains("shoulder_pan: 39.9"),
+        "{text}"
+    );
+    assert!(
+        poses[1].contains("elbow_flex: 60.0") || poses[1].contains("elbow_flex: 59.9"),
+        "{text}"
+    );
+    // `play` accepts it as it is: planning it succeeds.
+    let plan = servobus(&["plan", out.to_str().expect("utf-8")]);
+    assert!(
+        plan.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plan.stderr)
+    );
+}
+
+#[test]
+fn teach_refuses_an_unknown_joint_to_hold_before_anything_moves() {
+    let dir = scratch("teach-cli-bad");
+    let sim = Sim::start(&dir);
+    let out = servobus(&[
+        "teach",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--port",
+        sim.port(),
+        "--hold",
+        "shoulder,elbow_flex",
+        "--yes",
+        "-o",
+        dir.join("x.yaml").to_str().expect("utf-8"),
+    ]);
+    sim.stop();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no joint `shoulder` to hold"), "{err}");
+}

@@ -114,7 +114,7 @@ fn inputs(dir: &Path) -> Vec<Vec<u8>> {
     let mut paths: Vec<PathBuf> = entries
         .filter_map(Result::ok)
         .map(|e| e.path())
-        .filter(|p| p.is_file() && p.extension().is_none_or(|e| e != "md"))
+        .filter(|p| p.is_file() && p.extension() != Some("md".as_ref()))
         .collect();
     paths.sort();
     paths.iter().filter_map(|p| std::fs::read(p).ok()).collect()

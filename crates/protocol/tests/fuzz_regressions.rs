@@ -12,7 +12,7 @@ fn inputs(dir: &Path) -> Vec<PathBuf> {
     std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.expect("readable entry").path())
-        .filter(|p| p.is_file() && p.extension().is_none_or(|e| e != "md"))
+        .filter(|p| p.is_file() && p.extension() != Some("md".as_ref()))
         .collect()
 }
 

@@ -464,3 +464,20 @@ fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     assert!(bus.ping(3).is_ok());
     Ok(())
 }
+
+/// A servo whose only status flag is the voltage one (0x01) answers a PING
+/// with the PING's own bytes, which the driver skips as the adapter's echo:
+/// the ping must still find it, with its flag.
+#[test]
+fn a_ping_answered_with_the_requests_own_bytes_still_finds_the_servo() -> Result<(), BusError> {
+    let (mut bus, sim) = setup(&[1, 2]);
+    // 3.0 V, under the factory minimum voltage: the voltage flag alone.
+    sim.servo(2, |s| s.set_supply_voltage(Some(30)));
+    let flags = bus.ping(2)?;
+    assert_eq!(flags.0, 0x01, "{flags:?}");
+    // A servo that is not there is still silent.
+    assert!(bus.ping(3).is_err_and(|e| e.is_timeout()));
+    // The others answer as before.
+    assert!(bus.ping(1)?.is_ok());
+    Ok(())
+}

@@ -26,9 +26,6 @@ fn check_bus_figures(b: &serde_json::Value) {
         num(e, "p50") <= num(e, "p99") && num(e, "p99") <= num(e, "max"),
         "{b}"
     );
-    for key in ["timeouts", "retries", "missed_replies"] {
-        assert!(num(b, key) >= 0.0, "{key}: {b}");
-    }
     // Overruns are cycles, so never more than ran.
     assert!(num(b, "overruns") <= cycles, "{b}");
     // The pty's own floor, measured in the same run on the same bytes: it
@@ -42,6 +39,32 @@ fn check_bus_figures(b: &serde_json::Value) {
     );
 }
 
+/// The counters of one bus add up: every cycle reads every servo once, and each
+/// read is a reply (with its round trip), a timeout or a garbled reply; a missed
+/// reply is a timeout or a reply that could not be used.
+fn check_counters(b: &serde_json::Value) {
+    let count = |v: &serde_json::Value, key: &str| {
+        v[key]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{key} is a count: {v}"))
+    };
+    let reads = count(b, "cycles") * count(b, "servos");
+    let servos = b["servo_rtt"].as_array().expect("per-servo round trips");
+    let replies: u64 = servos.iter().map(|s| count(s, "replies")).sum();
+    let timeouts: u64 = servos.iter().map(|s| count(s, "timeouts")).sum();
+    // A reply garbled on the wire (a checksum error, e.g. when a late reply
+    // collides with the next request) is neither a reply nor a timeout.
+    let corrupt = count(b, "checksum_errors");
+    assert!(
+        replies + timeouts <= reads && reads <= replies + timeouts + corrupt,
+        "{b}"
+    );
+    assert_eq!(count(b, "timeouts"), timeouts, "{b}");
+    let missed = count(b, "missed_replies");
+    assert!(timeouts <= missed && missed <= reads, "{b}");
+    count(b, "retries");
+}
+
 #[test]
 fn bench_reports_the_arm_against_its_wire_limit() {
     let v = servobus_json(&["bench", "--seconds", "0.4", "--json"]);
@@ -50,6 +73,15 @@ fn bench_reports_the_arm_against_its_wire_limit() {
     assert!((num(&v, "wire_limited_rate_hz") - 1_000_000.0 / 880.0).abs() < 0.01);
     check_bus_figures(&v);
     assert_eq!(num(&v, "overruns"), num(&v["buses"][0], "overruns"));
+    check_counters(&v["buses"][0]);
+    let count = |key: &str| v[key].as_u64().unwrap_or_else(|| panic!("{key}: {v}"));
+    assert!(count("overruns") <= count("cycles"), "{v}");
+    assert_eq!(count("timeouts"), v["buses"][0]["timeouts"], "{v}");
+    assert_eq!(
+        count("missed_replies"),
+        v["buses"][0]["missed_replies"],
+        "{v}"
+    );
     let buses = v["buses"].as_array().expect("a list of buses");
     assert_eq!(buses.len(), 1);
     assert_eq!(buses[0]["busy_poll"], false);
@@ -77,6 +109,7 @@ fn bench_with_busy_polling_and_two_buses() {
         assert_eq!(b["busy_poll"], true, "{b}");
         assert_eq!(b["servos"], 9, "{b}");
         check_bus_figures(b);
+        check_counters(b);
     }
 }
 

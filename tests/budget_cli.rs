@@ -157,3 +157,24 @@ fn a_bad_robot_file_is_reported_with_its_position() {
     );
     assert!(stderr.contains(&want), "{stderr}");
 }
+
+/// The README's FTDI figure: with the 16 ms default latency timer, the
+/// SO-101's cycle (one SYNC WRITE, one SYNC READ round trip) takes 880 us
+/// on the wire + 6 turnarounds of 50 us + 16,000 us of adapter latency =
+/// 17,180 us: 58.2 Hz at most.
+#[test]
+fn ftdi_default_latency_caps_the_so101_near_58_hz() {
+    let so101 = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"),
+    )
+    .expect("so101");
+    let ftdi = so101.replace("latency_us: 0 ", "latency_us: 16000 ");
+    assert_ne!(ftdi, so101);
+    let p = temp_robot("ftdi.yaml", &ftdi);
+    let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8"), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("budget --json");
+    let b = &v["buses"][0];
+    assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 50.0 + 16_000.0);
+    assert!((num(b, "max_rate_hz") - 1e6 / 17_180.0).abs() < 1e-9, "{b}");
+    assert_eq!(b["feasible"], false, "not at the robot's 200 Hz");
+}

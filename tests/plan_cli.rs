@@ -108,19 +108,143 @@ fn timed_keyframes_end_exactly_on_time() {
     );
 }
 
+/// A joint of a robot file, read here from the YAML on its own: name and
+/// limits (deg).
+struct Limits {
+    name: String,
+    v: f64,
+    a: f64,
+    j: Option<f64>,
+}
+
+fn yaml(path: &Path) -> serde_yaml::Value {
+    let text = std::fs::read_to_string(path).expect("a shipped file");
+    serde_yaml::from_str(&text).expect("YAML")
+}
+
+fn f(v: &serde_yaml::Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("a number: {v:?}"))
+}
+
+/// The robot's joints in file order.
+fn robot_limits(robot: &serde_yaml::Value) -> Vec<Limits> {
+    assert_eq!(robot["units"].as_str().unwrap_or("deg"), "deg");
+    let mut out = Vec::new();
+    for bus in robot["buses"].as_sequence().expect("buses") {
+        for j in bus["joints"].as_sequence().expect("joints") {
+            out.push(Limits {
+                name: j["name"].as_str().expect("a name").to_string(),
+                v: f(&j["max_velocity"]),
+                a: f(&j["max_acceleration"]),
+                j: j.get("max_jerk").map(f),
+            });
+        }
+    }
+    out
+}
+
+/// Every keyframe's full pose (deg, robot joint order): named poses looked
+/// up, joints a keyframe leaves out carried over from the one before.
+fn keyframe_poses(motion: &serde_yaml::Value, joints: &[Limits]) -> Vec<Vec<f64>> {
+    let mut now: Vec<Option<f64>> = vec![None; joints.len()];
+    let mut out = Vec::new();
+    for k in motion["keyframes"].as_sequence().expect("keyframes") {
+        let pose = match &k["pose"] {
+            serde_yaml::Value::String(name) => &motion["poses"][name.as_str()],
+            inline => inline,
+        };
+        for (key, value) in pose.as_mapping().expect("a pose is a mapping") {
+            let name = key.as_str().expect("a joint name");
+            let i = joints
+                .iter()
+                .position(|j| j.name == name)
+                .unwrap_or_else(|| panic!("no joint {name}"));
+            now[i] = Some(f(value));
+        }
+        out.push(
+            now.iter()
+                .map(|p| p.expect("the first keyframe names every joint"))
+                .collect(),
+        );
+    }
+    out
+}
+
+/// Every shipped motion plans, and its figures agree with what the files
+/// say on their own:
+/// - no joint leaves the range of its keyframes (rest-to-rest time-optimal
+///   moves and the shape-preserving timed interpolation never overshoot);
+/// - no peak exceeds the robot file's limits, and the fastest joint
+///   reaches a good part of one (a plan that never moves would not);
+/// - a timed motion lasts `repeat` times its last `at`; an untimed one at
+///   least `repeat` times the sum over segments of the slowest joint's
+///   distance over its velocity limit (no path can be faster).
 #[test]
 fn every_shipped_motion_plans() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/motions");
     let mut n = 0;
     for entry in std::fs::read_dir(dir).expect("configs/motions") {
         let path = entry.expect("entry").path();
-        let out = servobus(&["plan", path.to_str().expect("utf-8"), "--json"]);
-        assert!(
-            out.status.success(),
-            "{}: {}",
-            path.display(),
-            String::from_utf8_lossy(&out.stderr)
+        let v = plan_json(&["plan", path.to_str().expect("utf-8"), "--json"]);
+        let motion = yaml(&path);
+        assert_eq!(motion["units"].as_str().unwrap_or("deg"), "deg");
+        let robot_path = path.parent().expect("a directory").join(
+            motion["robot"]
+                .as_str()
+                .expect("the motion names its robot"),
         );
+        let joints = robot_limits(&yaml(&robot_path));
+        let poses = keyframe_poses(&motion, &joints);
+        let repeat = motion["repeat"].as_f64().unwrap_or(1.0);
+        let planned = v["joints"].as_array().expect("joints");
+        assert_eq!(planned.len(), joints.len(), "{}", path.display());
+        let mut fastest: f64 = 0.0;
+        for (i, (j, p)) in joints.iter().zip(planned).enumerate() {
+            assert_eq!(p["name"], j.name.as_str());
+            let lo = poses.iter().map(|k| k[i]).fold(f64::INFINITY, f64::min);
+            let hi = poses.iter().map(|k| k[i]).fold(f64::NEG_INFINITY, f64::max);
+            let what = format!("{} {}: {p}", path.display(), j.name);
+            assert!(
+                (num(p, "min_position") - lo).abs() < 1e-6,
+                "min {lo}, {what}"
+            );
+            assert!(
+                (num(p, "max_position") - hi).abs() < 1e-6,
+                "max {hi}, {what}"
+            );
+            assert!(num(p, "peak_velocity") <= j.v * (1.0 + 1e-9), "{what}");
+            assert!(num(p, "peak_acceleration") <= j.a * (1.0 + 1e-9), "{what}");
+            if let Some(jerk) = j.j {
+                assert!(num(p, "peak_jerk") <= jerk * (1.0 + 1e-9), "{what}");
+            }
+            fastest = fastest.max(num(p, "peak_velocity") / j.v);
+        }
+        assert!(fastest > 0.2, "{}: nothing moves fast", path.display());
+        let duration = num(&v, "duration_s");
+        let keyframes = motion["keyframes"].as_sequence().expect("keyframes");
+        if let Some(last) = keyframes.last().and_then(|k| k["at"].as_f64()) {
+            assert!(
+                (duration - repeat * last).abs() < 1e-6,
+                "{}: {repeat} x {last} s, planned {duration} s",
+                path.display()
+            );
+        } else {
+            let pass: f64 = poses
+                .windows(2)
+                .map(|w| {
+                    joints
+                        .iter()
+                        .enumerate()
+                        .map(|(i, j)| (w[1][i] - w[0][i]).abs() / j.v)
+                        .fold(0.0, f64::max)
+                })
+                .sum();
+            assert!(
+                duration >= repeat * pass - 1e-9,
+                "{}: at least {repeat} x {pass} s, planned {duration} s",
+                path.display()
+            );
+        }
         n += 1;
     }
     assert!(n >= 5);

@@ -60,7 +60,9 @@ fn check_clean(report: &Value, joints: usize, max_error: f64) {
     for j in list {
         let rms = j["rms_error"].as_f64().expect("rms");
         let max = j["max_error"].as_f64().expect("max");
-        assert!(rms >= 0.0 && rms <= max + 1e-12, "{j}");
+        // An RMS never exceeds the maximum; and a simulated servo lags its
+        // goals, so a run reporting no error at all measured nothing.
+        assert!(rms > 1e-3 && rms <= max + 1e-12, "{j}");
         assert!(
             max < max_error,
             "{} tracks within {max_error}: {j}",
@@ -91,9 +93,11 @@ fn every_motion_in_configs_plays_cleanly_on_its_robot() {
         } else {
             6
         };
-        // The SCS0009 has 0.29 deg ticks and a soft position loop; the
-        // STS3215 arms and hexapods track within 6 degrees.
-        let bound = if name.contains("scs") { 8.0 } else { 6.0 };
+        // The README's figures: the STS3215 arms and hexapods track within
+        // 3 degrees (worst shipped motion, hexapod-dance: 2.72), the
+        // SCS0009, with 0.29 deg ticks and a soft position loop, within 6
+        // (scs-mini-nod: 5.29). Virtual time makes these exact repeats.
+        let bound = if name.contains("scs") { 6.0 } else { 3.0 };
         check_clean(&report, joints, bound);
         played += 1;
     }
@@ -107,7 +111,7 @@ fn the_hexapod_plays_on_two_buses_in_step() {
         "--robot",
         "configs/robots/hexapod-2bus.yaml",
     ]);
-    check_clean(&report, 18, 4.0);
+    check_clean(&report, 18, 3.0);
     let buses = report["buses"].as_array().expect("buses");
     assert_eq!(buses.len(), 2);
     assert_eq!(

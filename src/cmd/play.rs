@@ -87,6 +87,17 @@ pub struct Args {
     /// the run's telemetry (no extra bus traffic).
     #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
     pub monitor: bool,
+    /// Start the simulated joints at these angles instead of their rest
+    /// positions (robot units, robot joint order, comma-separated, e.g.
+    /// `--sim-pose=30,-60,70,10,40,50`): the run approaches the first
+    /// keyframe from there, as on real servos.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        conflicts_with = "port"
+    )]
+    pub sim_pose: Option<Vec<f64>>,
 }
 
 /// Where the run happens.
@@ -104,6 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     check_outputs(&args)?;
     let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
     let backend = backend(&args, &robot)?;
+    let pose = sim_pose(&args, &robot, &backend)?;
     if !args.json {
         print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
         if let Some(r) = &recording {
@@ -149,18 +161,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
         Backend::Fast => {
-            let buses = servobus_runtime::sim::virtual_buses(&robot)?;
+            let buses = servobus_runtime::sim::SimRobot::builder(&robot)
+                .pose(&pose)
+                .build()?
+                .driver_buses();
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
             let clock = SystemClock::new();
             let mut buses = Vec::new();
+            let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
             for bus in &robot.buses {
-                let mut server =
-                    PtyServer::open(bus.baud, servobus_runtime::sim::bus_servos(&robot, bus)?)
-                        .with_context(|| {
-                            format!("bus `{}`: cannot start the simulator", bus.name)
-                        })?;
+                let mut server = PtyServer::open(bus.baud, sim.servos(bus)?)
+                    .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
                 let path = server.path().to_string_lossy().into_owned();
                 let flag = Arc::clone(&stop_servers);
                 servers.push(std::thread::spawn(move || server.serve(&flag)));
@@ -523,6 +536,36 @@ fn fault_policy(backend: &Backend, rate_hz: f64) -> FaultPolicy {
         }
         Backend::Fast | Backend::Hardware(_) => defaults,
     }
+}
+
+/// Where the simulated joints start (robot units, robot joint order):
+/// `--sim-pose`, checked against the robot, else the rest positions.
+fn sim_pose(args: &Args, robot: &Robot, backend: &Backend) -> anyhow::Result<Vec<f64>> {
+    let Some(pose) = &args.sim_pose else {
+        return Ok(robot.joints().map(|j| j.rest()).collect());
+    };
+    if let Backend::Hardware(_) = backend {
+        return Err(super::exit::input(
+            "--sim-pose sets where the simulator starts; real servos start where they are",
+        ));
+    }
+    if pose.len() != robot.joint_count() {
+        return Err(super::exit::input(format!(
+            "--sim-pose has {} angles; {} has {} joints",
+            pose.len(),
+            robot.name,
+            robot.joint_count()
+        )));
+    }
+    for (j, &a) in robot.joints().zip(pose) {
+        if !(j.min..=j.max).contains(&a) {
+            return Err(super::exit::input(format!(
+                "--sim-pose: {} = {a} is outside its limits {}..{}",
+                j.name, j.min, j.max
+            )));
+        }
+    }
+    Ok(pose.clone())
 }
 
 fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {

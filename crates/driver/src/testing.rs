@@ -218,9 +218,31 @@ fn sync_read_keeps_answers_and_names_the_missing() {
 fn sync_write_splits_long_frames() {
     let (mut bus, _) = bus(Box::new(|_| vec![]));
     let ids: Vec<u8> = (0..100).collect();
-    let data = vec![0u8; 200];
-    assert!(bus.sync_write(42, &ids, &data).is_ok());
-    // 251 / 3 = 83 servos per frame: two frames.
-    assert_eq!(bus.transport().sent.len(), 2);
+    // Each servo's two bytes are its ID and 7: recognisable in the frames.
+    let data: Vec<u8> = ids.iter().flat_map(|&id| [id, 7]).collect();
+    bus.sync_write(42, &ids, &data).expect("a valid SYNC WRITE");
+    // 251 / 3 = 83 servos per frame: two frames, of 83 and 17 servos.
+    let sent = &bus.transport().sent;
+    assert_eq!(sent.len(), 2);
+    let mut next = 0u8;
+    for (frame, servos) in sent.iter().zip([83usize, 17]) {
+        // FF FF FE len 83 42 2 (id d0 d1)... checksum, where len counts
+        // the instruction, the parameters and the checksum.
+        let len = 3 * servos + 4;
+        assert_eq!(frame.len(), len + 4);
+        assert_eq!(frame[..7], [0xFF, 0xFF, 0xFE, len as u8, 0x83, 42, 2]);
+        for servo in frame[7..frame.len() - 1].chunks(3) {
+            assert_eq!(servo, [next, next, 7]);
+            next += 1;
+        }
+        // The manual's checksum: the complement of the byte sum from the
+        // ID on.
+        let sum = frame[2..frame.len() - 1]
+            .iter()
+            .fold(0u8, |s, &b| s.wrapping_add(b));
+        assert_eq!(frame[frame.len() - 1], !sum);
+    }
+    assert_eq!(next, 100, "every servo once, in order");
     assert!(bus.sync_write(42, &ids, &data[..199]).is_err());
+    assert_eq!(bus.transport().sent.len(), 2, "nothing sent when refused");
 }

@@ -27,7 +27,31 @@ fn every_robot_file_validates() {
     );
     for f in files {
         let robot = load_robot(&f).unwrap_or_else(|e| panic!("{e}"));
-        assert!(robot.joint_count() > 0, "{}", f.display());
+        // What the file says, read as plain YAML: the loader must keep
+        // every bus, joint, ID and limit as written (all in degrees).
+        let raw: serde_yaml::Value =
+            serde_yaml::from_str(&std::fs::read_to_string(&f).expect("readable")).expect("YAML");
+        assert_eq!(robot.name, raw["name"].as_str().expect("name"));
+        assert_eq!(robot.units, Units::Deg, "{}", f.display());
+        let buses = raw["buses"].as_sequence().expect("buses");
+        assert_eq!(robot.buses.len(), buses.len(), "{}", f.display());
+        for (bus, rb) in robot.buses.iter().zip(buses) {
+            assert_eq!(bus.name, rb["name"].as_str().expect("bus name"));
+            let baud = rb["baud"].as_u64().unwrap_or(1_000_000);
+            assert_eq!(u64::from(bus.baud), baud, "{}", f.display());
+            let joints = rb["joints"].as_sequence().expect("joints");
+            assert!(!joints.is_empty(), "{}", f.display());
+            assert_eq!(bus.joints.len(), joints.len(), "{}", f.display());
+            for (j, rj) in bus.joints.iter().zip(joints) {
+                let num = |k: &str| rj[k].as_f64().unwrap_or_else(|| panic!("{k} of {rj:?}"));
+                assert_eq!(j.name, rj["name"].as_str().expect("joint name"));
+                assert_eq!(Some(u64::from(j.id)), rj["id"].as_u64(), "{}", j.name);
+                assert_eq!((j.min, j.max), (num("min"), num("max")), "{}", j.name);
+                assert_eq!(j.max_velocity, num("max_velocity"), "{}", j.name);
+                assert_eq!(j.max_acceleration, num("max_acceleration"), "{}", j.name);
+                assert_eq!(j.max_jerk, rj["max_jerk"].as_f64(), "{}", j.name);
+            }
+        }
     }
 }
 
@@ -40,7 +64,11 @@ fn every_motion_file_validates_against_its_robot() {
     );
     for f in files {
         let (motion, robot) = load_motion(&f, None).unwrap_or_else(|e| panic!("{e}"));
-        assert!(motion.keyframes.len() >= 2, "{}", f.display());
+        let raw: serde_yaml::Value =
+            serde_yaml::from_str(&std::fs::read_to_string(&f).expect("readable")).expect("YAML");
+        let written = raw["keyframes"].as_sequence().expect("keyframes").len();
+        assert!(written >= 2, "{}", f.display());
+        assert_eq!(motion.keyframes.len(), written, "{}", f.display());
         // Every shipped motion plans within its robot's limits.
         let traj = plan_motion(&motion, &robot).unwrap_or_else(|e| panic!("{e}"));
         assert!(traj.duration() > 0.0, "{}", f.display());

@@ -103,9 +103,17 @@ fn the_scs_robot_reads_servo_by_servo() {
     assert!(r.worst_rms_error() < 2.5, "{}", r.worst_rms_error());
 }
 
+/// Finite differences of a path within its limits stay within them up to
+/// float rounding (relative).
+const WITHIN: f64 = 1.0 + 1e-6;
+
 /// Plays arm-wave from its start, sends `command` at cycle `at`, and checks
-/// the commands of every joint stay within the arm's limits (5 % for the
-/// finite differences) around it.
+/// the commands of every joint stay within the arm's limits around it.
+///
+/// The limits hold exactly for finite differences too: the k-th difference
+/// of a sampled path over k periods is a weighted mean of its k-th
+/// derivative over them (mean value theorem for divided differences), so
+/// it cannot exceed a bound the path keeps; [`WITHIN`] is float rounding.
 fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report, common::Recorded) {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _) = common::sim_buses_at(&robot, &path);
@@ -132,9 +140,9 @@ fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report,
     for (i, (v_max, a_max, j_max)) in limits.into_iter().enumerate() {
         let (v, a, j) = rec.peaks(i, at - 20, 0.005);
         println!("joint {i}: {v:.1} deg/s, {a:.0} deg/s^2, {j:.0} deg/s^3");
-        assert!(v <= v_max * 1.05 && a <= a_max * 1.5, "joint {i}");
+        assert!(v <= v_max * WITHIN && a <= a_max * WITHIN, "joint {i}");
         if jerk_limited {
-            assert!(j <= j_max * 1.05, "joint {i}");
+            assert!(j <= j_max * WITHIN, "joint {i}");
         }
     }
     (run.report(), rec)
@@ -185,7 +193,17 @@ fn pause_holds_on_the_path_and_resume_continues() {
         let c = rec.commanded(j);
         assert!((c[800] - c[700]).abs() < 1e-9, "joint {j}");
         let (v, a, _) = rec.peaks(j, 0, 0.005);
-        assert!(v < 300.0 && a < 2000.0, "joint {j}: {v} {a}");
+        let limit = robot.joints().nth(j).expect("six joints");
+        // Known and not yet fixed: pause and resume go past the limits,
+        // by 3.7 % in velocity and 7.1 % in acceleration on elbow_flex
+        // (186.7 deg/s against 180, 963 deg/s^2 against 900; the ramp of
+        // the time scale adds the path's velocity times the ramp's rate of
+        // change to the path's own acceleration). Held here to what is
+        // true, so it cannot get worse unseen; the exact limit is the goal.
+        assert!(
+            v <= limit.max_velocity * 1.04 && a <= limit.max_acceleration * 1.08,
+            "joint {j}: {v} {a}"
+        );
     }
     // It played the whole path, about 600 cycles late (the ramps take back
     // a little).
@@ -208,11 +226,11 @@ fn play_during_the_approach_starts_the_path_where_the_approach_ends() {
     let rec = common::record(&mut run, 20_000, |_| {});
     let r = run.report();
     assert_eq!(r.finish, Finish::Completed, "{:?}", r.fault);
-    // No jump to the path's start: every joint within its limits (5 % for
-    // the finite differences of velocity, 50 % for acceleration).
+    // No jump to the path's start: every joint within its limits (exactly,
+    // see `command_mid_motion`).
     for (i, j) in robot.joints().enumerate() {
         let (v, a, _) = rec.peaks(i, 0, 0.005);
         println!("{}: {v:.1} deg/s, {a:.0} deg/s^2", j.name);
-        assert!(v <= j.max_velocity * 1.05 && a <= j.max_acceleration * 1.5);
+        assert!(v <= j.max_velocity * WITHIN && a <= j.max_acceleration * WITHIN);
     }
 }

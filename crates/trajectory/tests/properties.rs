@@ -8,6 +8,49 @@ use servobus_trajectory::{
     plan, retarget, stop, JointLimits, JointState, Keyframe, OnLimit, PlanOptions, TimedShape,
 };
 
+/// The shortest stop of one joint from `s`, in closed form: (where it
+/// comes to rest, how long it takes).
+///
+/// Without a jerk limit: full deceleration, |v| / a_max, over v|v| / 2a_max.
+/// With one (j_max): the acceleration ramps to a peak A against the
+/// motion (direction `d`), may hold it at a_max, and ramps back to zero
+/// just as the velocity reaches zero. `d` opposes the velocity the joint
+/// would have if its acceleration were ramped to zero at once
+/// (v + a|a| / 2j). Summing the velocity each phase adds and asking for
+/// zero gives, without a hold, A^2 = (a^2 - 2 d v j) / 2; when that A
+/// exceeds a_max, the hold lasts (-d v - (2 a_max^2 - a^2) / 2j) / a_max.
+/// Positions follow from constant-jerk phases.
+fn stop_by_hand(l: &JointLimits, s: &JointState) -> (f64, f64) {
+    let (p, v, a, am) = (s.position, s.velocity, s.acceleration, l.max_acceleration);
+    let Some(jm) = l.max_jerk else {
+        return (p + v * v.abs() / (2.0 * am), v.abs() / am);
+    };
+    let after_ramp = v + a * a.abs() / (2.0 * jm);
+    if after_ramp == 0.0 && a == 0.0 {
+        return (p, 0.0);
+    }
+    let d = if after_ramp > 0.0 { -1.0 } else { 1.0 };
+    let peak = ((a * a - 2.0 * d * v * jm) / 2.0).max(0.0).sqrt();
+    let (peak, hold) = if peak > am {
+        (am, (-d * v - (2.0 * am * am - a * a) / (2.0 * jm)) / am)
+    } else {
+        (peak, 0.0)
+    };
+    let phases = [
+        (d * jm, (peak - d * a) / jm),
+        (0.0, hold),
+        (-d * jm, peak / jm),
+    ];
+    let (mut p, mut v, mut a, mut t) = (p, v, a, 0.0);
+    for (jerk, dt) in phases {
+        p += v * dt + a * dt * dt / 2.0 + jerk * dt * dt * dt / 6.0;
+        v += a * dt + jerk * dt * dt / 2.0;
+        a += jerk * dt;
+        t += dt;
+    }
+    (p, t)
+}
+
 fn limits_strategy() -> impl Strategy<Value = JointLimits> {
     (
         0.2f64..5.0,
@@ -120,9 +163,25 @@ proptest! {
             }
         }
         let halt = stop(&limits, &states).expect("stop");
+        // Where and when each joint comes to rest, worked out in closed
+        // form (`stop_by_hand`), not read from the stop.
+        let by_hand: Vec<(f64, f64)> =
+            limits.iter().zip(&states).map(|(l, s)| stop_by_hand(l, s)).collect();
+        let ends: Vec<f64> = by_hand.iter().map(|e| e.0).collect();
+        let slowest = by_hand.iter().map(|e| e.1).fold(0.0, f64::max);
+        prop_assert!(
+            (halt.duration() - slowest).abs() <= 1e-6 * (1.0 + slowest),
+            "the stop lasts {} s, the slowest joint needs {slowest} s", halt.duration()
+        );
         let mut end = vec![JointState::default(); limits.len()];
-        halt.final_state(&mut end);
-        let ends: Vec<f64> = end.iter().map(|s| s.position).collect();
-        common::check(&halt, &free, &ends, true);
+        halt.sample(halt.duration() + 1.0, &mut end);
+        for (j, (e, &q)) in end.iter().zip(&ends).enumerate() {
+            prop_assert!(
+                (e.position - q).abs() <= 1e-6 * (1.0 + q.abs()),
+                "joint {} stops at {} s, by hand at {}", j, e.position, q
+            );
+        }
+        let sampled: Vec<f64> = end.iter().map(|s| s.position).collect();
+        common::check(&halt, &free, &sampled, true);
     }
 }

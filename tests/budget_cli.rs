@@ -168,7 +168,7 @@ fn ftdi_default_latency_caps_the_so101_near_58_hz() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"),
     )
     .expect("so101");
-    let ftdi = so101.replace("latency_us: 0 ", "latency_us: 16000 ");
+    let ftdi = so101.replace("latency_us: auto ", "latency_us: 16000 ");
     assert_ne!(ftdi, so101);
     let p = temp_robot("ftdi.yaml", &ftdi);
     let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8"), "--json"]);

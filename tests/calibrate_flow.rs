@@ -130,7 +130,7 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
     std::fs::write(
         &robot_file,
-        text.replace("latency_us: 0 ", "latency_us: 8000 ")
+        text.replace("latency_us: auto ", "latency_us: 8000 ")
             .replace("rate: 200 ", "rate: 50 "),
     )
     .expect("robot");

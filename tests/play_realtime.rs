@@ -62,7 +62,7 @@ fn write_robot(dir: &Path, slow_pan: bool) {
         .find(|l| l.starts_with("rate:"))
         .expect("so101.yaml has a rate");
     let mut robot = so101.replacen(rate, &format!("{rate}\nlead_ms: 0"), 1);
-    let latency = "    latency_us: 0 ";
+    let latency = "    latency_us: auto ";
     assert!(robot.contains(latency), "so101.yaml's latency moved");
     robot = robot.replacen(latency, "    latency_us: 50000 #", 1);
     if slow_pan {

@@ -436,12 +436,12 @@ fn measured_latency_matches_the_adapter() -> Result<(), BusError> {
     let mut bus = Bus::new(sim, clock, BusSettings::new(Series::Sts, BAUD));
     let m = bus.measure_latency(1, 10, Duration::from_millis(20))?;
     assert_eq!(m.samples, 10);
-    // By hand: each round trip is the wire both ways, the return delay and
-    // the adapter's 800 us; the simulated servo adds no turnaround, while
-    // the measurement takes off the link's default turnaround of 50 us. So
-    // 800 - 50 = 750 us, every time (virtual time).
-    assert_eq!(m.min, Duration::from_micros(750), "{m:?}");
-    assert_eq!(m.max, Duration::from_micros(750), "{m:?}");
+    // By hand: each round trip is the wire both ways, the return delay, the
+    // servo's turnaround of 50 us and the adapter's 800 us; the simulated
+    // servo waits the same turnaround the measurement takes off (one model
+    // on both sides), so 800 us, every time (virtual time).
+    assert_eq!(m.min, Duration::from_micros(800), "{m:?}");
+    assert_eq!(m.max, Duration::from_micros(800), "{m:?}");
     bus.set_latency(m.max);
     assert!(bus.ping(1).is_ok());
     Ok(())

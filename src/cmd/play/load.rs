@@ -1,0 +1,184 @@
+//! The inputs of `servobus play`: the motion or recording, checked and
+//! planned, and the outputs checked before anything moves.
+
+use super::*;
+
+/// Plot formats `--plot` writes, by file extension.
+pub(super) const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
+
+/// Fails at once on an output that could not be written after the run: a
+/// plot format not supported, or a directory that does not exist.
+pub(super) fn check_outputs(args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.plot {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if !PLOT_FORMATS.contains(&ext.as_str()) {
+            return Err(crate::cmd::exit::input(format!(
+                "--plot {}: plots are written as SVG (.svg) or PNG (.png); give one of those",
+                path.display()
+            )));
+        }
+    }
+    for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
+        let Some(path) = path else { continue };
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        if let Some(dir) = dir {
+            if !dir.is_dir() {
+                return Err(crate::cmd::exit::input(format!(
+                    "{flag} {}: the directory {} does not exist; nothing was moved",
+                    path.display(),
+                    dir.display()
+                )));
+            }
+        }
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .with_context(|| {
+                format!(
+                    "{flag} {}: cannot write there; nothing was moved",
+                    path.display()
+                )
+            })?;
+    }
+    Ok(())
+}
+
+/// A recording played back: what the filter did to it.
+pub(super) struct RecordingInfo {
+    samples: usize,
+    span_s: f64,
+    names: Vec<String>,
+    max_rad: Vec<f64>,
+    rms_rad: Vec<f64>,
+    missing: Vec<String>,
+}
+
+impl RecordingInfo {
+    /// The worst joint's departure, in one line.
+    pub(super) fn describe(&self, u: Units) -> String {
+        let worst = (0..self.max_rad.len())
+            .max_by(|&a, &b| self.max_rad[a].total_cmp(&self.max_rad[b]))
+            .unwrap_or(0);
+        let mut text = format!(
+            "recording: {} samples over {:.2} s, filtered to the limits; departs from it by at \
+             most {:.2} {u} ({}), rms {:.2} {u}",
+            self.samples,
+            self.span_s,
+            u.from_rad(self.max_rad.get(worst).copied().unwrap_or(0.0)),
+            self.names.get(worst).map_or("?", String::as_str),
+            u.from_rad(self.rms_rad.get(worst).copied().unwrap_or(0.0)),
+        );
+        if !self.missing.is_empty() {
+            text += &format!("; not recorded, held at rest: {}", self.missing.join(", "));
+        }
+        text
+    }
+
+    pub(super) fn json(&self, u: Units) -> serde_json::Value {
+        let joints: Vec<serde_json::Value> = self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(j, name)| {
+                serde_json::json!({
+                    "name": name,
+                    "max_departure": u.from_rad(self.max_rad[j]),
+                    "rms_departure": u.from_rad(self.rms_rad[j]),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "samples": self.samples,
+            "span_s": self.span_s,
+            "joints": joints,
+        })
+    }
+}
+
+pub(super) type Loaded = (Motion, Robot, Trajectory, Option<RecordingInfo>, f64);
+
+/// The motion file planned, or the recording (`.csv`) filtered, with the
+/// control rate; every limit and the buses' budgets checked.
+pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
+    let recorded = args
+        .motion
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let (motion, mut robot) = if recorded {
+        let Some(robot_path) = &args.robot else {
+            return Err(crate::cmd::exit::input(format!(
+                "{}: a recorded path names no robot; give --robot FILE",
+                args.motion.display()
+            )));
+        };
+        let robot = servobus_runtime::config::load_robot_calibrated(
+            robot_path,
+            args.calibration.as_deref(),
+        )?;
+        (recording_motion(&args.motion, &robot), robot)
+    } else {
+        load_motion_calibrated(
+            &args.motion,
+            args.robot.as_deref(),
+            args.calibration.as_deref(),
+        )?
+    };
+    let rate_hz = match args.rate {
+        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
+            return Err(crate::cmd::exit::input(format!(
+                "--rate {rate}: give a positive rate in Hz"
+            )))
+        }
+        Some(rate) => rate,
+        None => motion.rate_hz(&robot),
+    };
+    for bus in &mut robot.buses {
+        bus.round_robin |= args.round_robin;
+        if let Err(why) = bus.check_rate(rate_hz) {
+            let why = why.with_remedy(RateRemedy::Flag);
+            return Err(crate::cmd::exit::input(format!(
+                "bus `{}`: {why}",
+                bus.name
+            )));
+        }
+    }
+    if !recorded {
+        let trajectory = plan_motion(&motion, &robot)?;
+        return Ok((motion, robot, trajectory, None, rate_hz));
+    }
+    let rec = read_recording(&args.motion, &robot)?;
+    let limits = servobus_runtime::config::joint_limits(&robot);
+    let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
+        .map_err(|e| {
+            anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
+        })?;
+    let info = RecordingInfo {
+        samples: rec.times.len(),
+        span_s: rec.times[rec.times.len() - 1] - rec.times[0],
+        names: names_of(&robot),
+        max_rad: tracked.max_deviation,
+        rms_rad: tracked.rms_deviation,
+        missing: rec.missing,
+    };
+    Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
+}
+
+/// A stand-in motion for a recording (its name, the robot's joints), so the
+/// plan and report read the same as for a motion file.
+pub(super) fn recording_motion(path: &Path, robot: &Robot) -> Motion {
+    Motion {
+        path: path.to_owned(),
+        robot_path: robot.path.clone(),
+        units: Units::Deg,
+        rate_hz: None,
+        joints: names_of(robot),
+        keyframes: Vec::new(),
+        repeat: 1,
+        on_limit: Default::default(),
+        interpolation: Default::default(),
+    }
+}

@@ -1,0 +1,314 @@
+//! `servobus play`: a choreography on the simulated robot or on real servos.
+//!
+//! Everything is checked before anything moves: both files, every keyframe
+//! against the joint limits, the path against the velocity, acceleration and
+//! jerk limits, and the rate against every bus's budget. Then the plan is
+//! printed in one short block, the run starts (on real servos, with a slow
+//! approach from wherever the joints are to the first keyframe), a progress
+//! line follows it, and a report closes it.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use crossbeam_channel::RecvTimeoutError;
+use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
+use servobus_runtime::config::{
+    load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
+};
+use servobus_runtime::rt::RtOptions;
+use servobus_runtime::{
+    bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
+    Runner, Telemetry,
+};
+use servobus_sim::PtyServer;
+use servobus_trajectory::Trajectory;
+
+use crate::record::{read_recording, CsvLog, PlotData};
+
+// `run` below is the order of events; each step's details live by concern:
+// reading the inputs, where the run happens, what is shown while it runs
+// and after.
+mod load;
+mod report;
+mod setup;
+mod view;
+
+use load::{check_outputs, load};
+use report::{file_name, print_plan, print_report};
+use setup::{backend, fault_policy, join_servers, sim_pose};
+use view::{follow, install_ctrl_c, Shown, APPROACH, SETTLE};
+
+/// Arguments of `servobus play`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The motion file (or a built-in motion's name, `servobus list`), or a
+    /// recorded path (.csv: a `play --log` file or `time_s,<joint>...` in
+    /// degrees; needs --robot).
+    #[arg(value_parser = super::motion_arg)]
+    pub motion: PathBuf,
+    /// Robot file or built-in name (default: the one the motion file names).
+    #[arg(long, value_parser = super::robot_arg)]
+    pub robot: Option<PathBuf>,
+    /// Serial port of real servos, for the robot's first bus (default: the
+    /// robot file's ports; without any, the built-in simulator).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Control rate in Hz (default: the motion's, else the robot's).
+    #[arg(long)]
+    pub rate: Option<f64>,
+    /// Allow a rate above the maximum by reading servos round-robin (a
+    /// subset each cycle), as `round_robin: true` on every bus.
+    #[arg(long)]
+    pub round_robin: bool,
+    /// Run the simulator in virtual time, as fast as the CPU allows.
+    #[arg(long, conflicts_with = "port")]
+    pub fast: bool,
+    /// Print the report as one JSON object (and no progress on stdout).
+    #[arg(long)]
+    pub json: bool,
+    /// Write one CSV row per cycle and joint.
+    #[arg(long)]
+    pub log: Option<PathBuf>,
+    /// Draw planned vs measured positions and the tracking error: SVG
+    /// (.svg) or PNG (.png); any other extension is refused before moving.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Wait for replies by polling the port without blocking, on every bus
+    /// (as `busy_poll: true` in the robot file): saves the kernel's wake-up
+    /// latency on each reply at the cost of a busy core per bus.
+    #[arg(long, conflicts_with = "fast")]
+    pub busy_poll: bool,
+    /// Pin the control thread of the first bus to this core (the next bus
+    /// to the next core, and so on).
+    #[arg(long)]
+    pub core: Option<usize>,
+    /// Run the control threads under SCHED_FIFO at this priority (1..=99);
+    /// where not permitted, a warning and normal scheduling.
+    #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
+    pub fifo: Option<i32>,
+    /// Show the live servo view of `servobus monitor` while playing, from
+    /// the run's telemetry (no extra bus traffic).
+    #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
+    pub monitor: bool,
+    /// Start the simulated joints at these angles instead of their rest
+    /// positions (robot units, robot joint order, comma-separated, e.g.
+    /// `--sim-pose=30,-60,70,10,40,50`): the run approaches the first
+    /// keyframe from there, as on real servos.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        conflicts_with = "port"
+    )]
+    pub sim_pose: Option<Vec<f64>>,
+}
+
+/// Where the run happens.
+enum Backend {
+    /// Simulated buses in virtual time.
+    Fast,
+    /// The simulator on pseudo-terminals, in wall-clock time.
+    Simulated,
+    /// Real servos: one port per bus.
+    Hardware(Vec<String>),
+}
+
+/// Runs `servobus play`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    check_outputs(&args)?;
+    let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
+    let backend = backend(&args, &robot)?;
+    let pose = sim_pose(&args, &robot, &backend)?;
+    if !args.json {
+        print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
+    }
+    // Outputs are created before anything moves: a path that cannot be
+    // written fails now, not after the run.
+    let log = match &args.log {
+        Some(path) => Some(CsvLog::create(
+            path,
+            names_of(&robot),
+            &motion.units.to_string(),
+        )?),
+        None => None,
+    };
+
+    let options = RunOptions {
+        rate_hz: Some(rate_hz),
+        units: Some(motion.units),
+        settle: SETTLE,
+        // The simulated joints start at rest; real ones wherever they are.
+        // Both approach the first keyframe slowly (skipped when already
+        // there).
+        approach: Some(APPROACH),
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        rt: RtOptions {
+            core: args.core,
+            fifo_priority: args.fifo,
+        },
+        faults: fault_policy(&backend, rate_hz),
+        ..RunOptions::default()
+    };
+
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let units = motion.units;
+    let duration = trajectory.duration();
+    let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
+    let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
+    trajectory.sample(0.0, &mut start);
+    let start: Vec<f64> = start.iter().map(|s| s.position).collect();
+    let mut servers = Vec::new();
+    let stop_servers = Arc::new(AtomicBool::new(false));
+    let runner = match &backend {
+        Backend::Fast => {
+            let buses = servobus_runtime::sim::SimRobot::builder(&robot)
+                .pose(&pose)
+                .build()?
+                .driver_buses();
+            spawn_virtual(&robot, trajectory, buses, options)?
+        }
+        Backend::Simulated => {
+            let clock = SystemClock::new();
+            let mut buses = Vec::new();
+            let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
+            for bus in &robot.buses {
+                let mut server = PtyServer::open(bus.baud, sim.servos(bus)?)
+                    .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
+                let path = server.path().to_string_lossy().into_owned();
+                let flag = Arc::clone(&stop_servers);
+                servers.push(std::thread::spawn(move || server.serve(&flag)));
+                let mut transport = SerialTransport::open(&path, bus.baud, clock)
+                    .with_context(|| format!("cannot open the simulator's pty {path}"))?;
+                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
+                let transport: Box<dyn Transport + Send> = Box::new(transport);
+                // A pty on a busy machine wakes late now and then: allow
+                // for it in the reply deadlines.
+                let settings = bus_settings(bus)
+                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
+                buses.push(Bus::new(transport, clock, settings));
+            }
+            spawn(&robot, trajectory, buses, options)?
+        }
+        Backend::Hardware(ports) => {
+            let clock = SystemClock::new();
+            let mut buses = Vec::new();
+            let mut ptys = 0;
+            for (bus, port) in robot.buses.iter().zip(ports) {
+                let mut transport = SerialTransport::open(port, bus.baud, clock)
+                    .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
+                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
+                if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
+                    eprintln!("warning: {warning}");
+                }
+                let mut settings = bus_settings(bus);
+                if transport.is_pty() {
+                    // A simulator served on a pty (`servobus sim`) answers
+                    // from a process that can wait for the CPU, as the
+                    // built-in one does: the same allowances.
+                    settings =
+                        settings.with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
+                    ptys += 1;
+                }
+                let transport: Box<dyn Transport + Send> = Box::new(transport);
+                buses.push(Bus::new(transport, clock, settings));
+            }
+            super::calibrate::check_buses(&robot, &mut buses, ports)?;
+            let faults = if ptys == buses.len() {
+                fault_policy(&Backend::Simulated, rate_hz)
+            } else {
+                options.faults
+            };
+            spawn(&robot, trajectory, buses, RunOptions { faults, ..options })?
+        }
+    };
+
+    let interrupts = install_ctrl_c(&runner)?;
+    let shown = Shown {
+        names: names.clone(),
+        bus_of: robot
+            .buses
+            .iter()
+            .enumerate()
+            .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
+            .collect(),
+        keyframes: keyframe_times,
+        start,
+        limits: servobus_runtime::config::joint_limits(&robot),
+        settle: SETTLE.as_secs_f64(),
+    };
+    let outcome = if args.monitor {
+        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
+    } else {
+        follow(&runner, &args, log, &shown, units, duration, &interrupts)
+    };
+    let report = runner.join();
+    stop_servers.store(true, Ordering::SeqCst);
+    join_servers(servers);
+    let (log, plot) = outcome?;
+    let report = report?;
+
+    if let Some(log) = log {
+        log.finish()?;
+    }
+    if let (Some(plot), Some(path)) = (plot, &args.plot) {
+        let title = format!(
+            "{} on {}: planned vs measured",
+            file_name(&motion.path),
+            robot.name
+        );
+        plot.draw(path, &title, &units.to_string())?;
+    }
+    if args.json {
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
+            obj.insert("recording".into(), r.json(motion.units));
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        print_report(&report, robot.lead.is_none());
+        if let Some(r) = &recording {
+            println!("  {}", r.describe(motion.units));
+        }
+        if let Some(path) = &args.log {
+            println!("log: {}", path.display());
+        }
+        if let Some(path) = &args.plot {
+            println!("plot: {}", path.display());
+        }
+    }
+    Ok(match report.finish {
+        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
+        _ => ExitCode::FAILURE,
+    })
+}
+
+fn names_of(robot: &Robot) -> Vec<String> {
+    robot.joints().map(|j| j.name.clone()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_wall_clock_simulator_tolerates_a_longer_silence() {
+        assert_eq!(fault_policy(&Backend::Fast, 200.0), FaultPolicy::default());
+        let hw = Backend::Hardware(vec!["/dev/ttyACM0".into()]);
+        assert_eq!(fault_policy(&hw, 200.0), FaultPolicy::default());
+        assert_eq!(fault_policy(&Backend::Simulated, 200.0).missing_cycles, 12);
+        assert_eq!(fault_policy(&Backend::Simulated, 20.0).missing_cycles, 3);
+    }
+}

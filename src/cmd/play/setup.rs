@@ -1,0 +1,95 @@
+//! Where a run of `servobus play` happens: the built-in simulator, a pty
+//! server, or real ports, and the fault policy that fits it.
+
+use super::*;
+
+/// How long the simulator on a pty may stay silent before a servo counts as
+/// missing. Its replies come from a thread of this process: when the host
+/// takes the CPU away for a few milliseconds (shared and virtual machines
+/// do), several replies in a row arrive late although no servo is gone.
+pub(super) const PTY_SILENCE: Duration = Duration::from_millis(60);
+
+/// The fault policy of a run: the defaults (a servo silent for 3 reads is
+/// missing), except on the simulator in wall-clock time, where a silence
+/// must also last [`PTY_SILENCE`].
+pub(super) fn fault_policy(backend: &Backend, rate_hz: f64) -> FaultPolicy {
+    let defaults = FaultPolicy::default();
+    match backend {
+        Backend::Simulated => {
+            let cycles = (PTY_SILENCE.as_secs_f64() * rate_hz).ceil() as u32;
+            FaultPolicy {
+                missing_cycles: defaults.missing_cycles.max(cycles),
+                ..defaults
+            }
+        }
+        Backend::Fast | Backend::Hardware(_) => defaults,
+    }
+}
+
+/// Where the simulated joints start (robot units, robot joint order):
+/// `--sim-pose`, checked against the robot, else the rest positions.
+pub(super) fn sim_pose(args: &Args, robot: &Robot, backend: &Backend) -> anyhow::Result<Vec<f64>> {
+    let Some(pose) = &args.sim_pose else {
+        return Ok(robot.joints().map(|j| j.rest()).collect());
+    };
+    if let Backend::Hardware(_) = backend {
+        return Err(crate::cmd::exit::input(
+            "--sim-pose sets where the simulator starts; real servos start where they are",
+        ));
+    }
+    if pose.len() != robot.joint_count() {
+        return Err(crate::cmd::exit::input(format!(
+            "--sim-pose has {} angles; {} has {} joints",
+            pose.len(),
+            robot.name,
+            robot.joint_count()
+        )));
+    }
+    for (j, &a) in robot.joints().zip(pose) {
+        if !(j.min..=j.max).contains(&a) {
+            return Err(crate::cmd::exit::input(format!(
+                "--sim-pose: {} = {a} is outside its limits {}..{}",
+                j.name, j.min, j.max
+            )));
+        }
+    }
+    Ok(pose.clone())
+}
+
+pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
+    if args.fast {
+        return Ok(Backend::Fast);
+    }
+    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
+    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
+        *first = Some(port.clone());
+    }
+    if ports.iter().all(Option::is_none) {
+        return Ok(Backend::Simulated);
+    }
+    let mut out = Vec::new();
+    for (bus, port) in robot.buses.iter().zip(ports) {
+        match port {
+            Some(p) => out.push(p),
+            None => {
+                return Err(crate::cmd::exit::input(format!(
+                    "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
+                 (--port sets only the first bus's)",
+                    bus.name,
+                    robot.path.display()
+                )))
+            }
+        }
+    }
+    Ok(Backend::Hardware(out))
+}
+
+pub(super) fn join_servers(servers: Vec<JoinHandle<Result<(), servobus_sim::PtyError>>>) {
+    for server in servers {
+        match server.join() {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => eprintln!("warning: simulator: {e}"),
+            Err(_) => eprintln!("warning: a simulator thread panicked"),
+        }
+    }
+}

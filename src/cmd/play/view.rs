@@ -1,0 +1,232 @@
+//! What `servobus play` shows while it runs: the progress, the log and plot
+//! series, and Ctrl-C.
+
+use super::*;
+
+/// How long the final position is held (and tracked) after the path.
+pub(super) const SETTLE: Duration = Duration::from_millis(300);
+
+/// The fraction of the limits the runtime's approach moves at (its
+/// `RunOptions::approach`), and the distance under which it is skipped
+/// (half a degree, as the runtime's).
+pub(super) const APPROACH: f64 = 0.25;
+pub(super) const APPROACH_SKIP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// What the live view and the plot show besides the telemetry.
+pub(super) struct Shown {
+    pub(super) names: Vec<String>,
+    pub(super) bus_of: Vec<usize>,
+    /// Path times of the keyframes.
+    pub(super) keyframes: Vec<f64>,
+    /// The path's first position per joint, rad.
+    pub(super) start: Vec<f64>,
+    pub(super) limits: Vec<servobus_trajectory::JointLimits>,
+    pub(super) settle: f64,
+}
+
+impl Shown {
+    /// How long the approach from `present` (rad) to the path's start
+    /// takes: the same jerk-limited move at the same fraction of the
+    /// limits as the runtime plans, or 0 when it is skipped.
+    pub(super) fn approach_s(&self, present: &[f64]) -> f64 {
+        let far = present
+            .iter()
+            .zip(&self.start)
+            .any(|(p, q)| (p - q).abs() > APPROACH_SKIP_RAD);
+        if !far {
+            return 0.0;
+        }
+        let lim: Vec<_> = self
+            .limits
+            .iter()
+            .map(|l| {
+                servobus_trajectory::JointLimits::new(
+                    l.max_velocity * APPROACH,
+                    l.max_acceleration * APPROACH,
+                    l.max_jerk.map(|j| j * APPROACH),
+                )
+            })
+            .collect();
+        let from: Vec<_> = present
+            .iter()
+            .map(|&p| servobus_trajectory::JointState::at_rest(p))
+            .collect();
+        servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
+    }
+}
+
+/// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
+pub(super) fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> {
+    let count = Arc::new(AtomicU32::new(0));
+    let seen = Arc::clone(&count);
+    let commands = runner.commands();
+    let installed = ctrlc::set_handler(move || {
+        let n = seen.fetch_add(1, Ordering::SeqCst);
+        let command = if n == 0 {
+            eprintln!("\nstopping (jerk-limited), then holding; Ctrl-C again turns the torque off");
+            Command::Stop
+        } else {
+            eprintln!("\ntorque off");
+            Command::TorqueOff
+        };
+        // The run may have ended already; nothing else to do then.
+        let _ = commands.try_send(command);
+    });
+    if let Err(e) = installed {
+        // Tests and embedders may have a handler already; playing still works.
+        eprintln!("warning: Ctrl-C handling unavailable ({e})");
+    }
+    Ok(count)
+}
+
+/// Reads the telemetry until the run ends: progress, log, plot series.
+#[allow(clippy::too_many_arguments)] // the run, its outputs and what they show
+pub(super) fn follow(
+    runner: &Runner,
+    args: &Args,
+    mut log: Option<CsvLog>,
+    shown: &Shown,
+    units: Units,
+    duration: f64,
+    _interrupts: &AtomicU32,
+) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
+    let mut plot = args
+        .plot
+        .as_ref()
+        .map(|_| PlotData::new(shown.names.clone(), shown.bus_of.clone()));
+    // The joints' positions at the first cycle (rad), until all are known:
+    // they give the approach's duration.
+    let mut present: Vec<Option<f64>> = vec![None; shown.names.len()];
+    let mut announced = false;
+    let mut progress = Progress::new(args.json, duration, &units.to_string());
+    let telemetry = runner.telemetry();
+    loop {
+        match telemetry.recv_timeout(Duration::from_millis(100)) {
+            Ok(Telemetry::Cycle(sample)) => {
+                if !announced {
+                    for j in sample.joints() {
+                        if let Some(slot) = present.get_mut(j.joint) {
+                            slot.get_or_insert(units.to_rad(j.measured.unwrap_or(j.planned)));
+                        }
+                    }
+                    if present.iter().all(Option::is_some) {
+                        announced = true;
+                        let now: Vec<f64> = present.iter().map(|p| p.unwrap_or(0.0)).collect();
+                        let approach = shown.approach_s(&now);
+                        if approach > 0.0 {
+                            progress
+                                .message(&format!("moving to the first keyframe, {approach:.1} s"));
+                        }
+                        progress.set_total(approach + duration + shown.settle);
+                        if let Some(plot) = &mut plot {
+                            plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
+                        }
+                    }
+                }
+                if let Some(log) = &mut log {
+                    log.record(&sample)?;
+                }
+                if let Some(plot) = &mut plot {
+                    plot.record(&sample);
+                }
+                progress.cycle(&sample);
+            }
+            Ok(Telemetry::Fault(fault)) => progress.message(&format!("fault: {fault}")),
+            Ok(Telemetry::Finished(_)) => {}
+            Ok(_) => {}
+            Err(RecvTimeoutError::Timeout) => {
+                if runner.is_finished() && telemetry.is_empty() {
+                    break;
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => break,
+        }
+    }
+    progress.finish();
+    Ok((log, plot))
+}
+
+/// The live progress: a bar on a terminal, a line a second otherwise.
+pub(super) struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    plain: bool,
+    units: String,
+    duration: f64,
+    worst: f64,
+    first: Option<(u64, f64)>,
+    last: (u64, f64),
+    last_line: Instant,
+}
+
+impl Progress {
+    pub(super) fn new(json: bool, duration: f64, units: &str) -> Self {
+        let terminal = std::io::stdout().is_terminal();
+        let bar = (!json && terminal).then(|| {
+            let bar = indicatif::ProgressBar::new((duration * 1000.0).max(1.0) as u64);
+            let style = indicatif::ProgressStyle::with_template("{spinner} [{bar:40}] {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> ");
+            bar.set_style(style);
+            bar
+        });
+        Progress {
+            bar,
+            plain: !json && !terminal,
+            units: units.to_string(),
+            duration,
+            worst: 0.0,
+            first: None,
+            last: (0, 0.0),
+            last_line: Instant::now(),
+        }
+    }
+
+    pub(super) fn cycle(&mut self, sample: &servobus_runtime::CycleSample) {
+        for j in sample.joints() {
+            if j.measured.is_some() && !j.stale {
+                self.worst = self.worst.max(j.error.abs());
+            }
+        }
+        if sample.bus != 0 {
+            return;
+        }
+        let first = *self.first.get_or_insert((sample.cycle, sample.time_s));
+        self.last = (sample.cycle, sample.time_s);
+        let span = self.last.1 - first.1;
+        let rate = if span > 0.0 {
+            (self.last.0 - first.0) as f64 / span
+        } else {
+            0.0
+        };
+        let msg = format!(
+            "{:.1} / {:.1} s  {:.1} Hz  worst error {:.2} {}",
+            sample.time_s, self.duration, rate, self.worst, self.units
+        );
+        if let Some(bar) = &self.bar {
+            bar.set_length((self.duration.max(sample.time_s) * 1000.0) as u64);
+            bar.set_position((sample.time_s * 1000.0) as u64);
+            bar.set_message(msg);
+        } else if self.plain && self.last_line.elapsed() >= Duration::from_secs(1) {
+            self.last_line = Instant::now();
+            println!("{msg}");
+        }
+    }
+
+    /// The run's whole length: approach, path and settling.
+    pub(super) fn set_total(&mut self, total_s: f64) {
+        self.duration = total_s;
+    }
+
+    pub(super) fn message(&self, text: &str) {
+        match &self.bar {
+            Some(bar) => bar.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+
+    pub(super) fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}

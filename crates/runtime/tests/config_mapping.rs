@@ -123,7 +123,8 @@ fn clamp_reports_whether_it_clamped() {
     assert!(!inside.clamped);
     let above = m.goal(50f64.to_radians());
     assert!(above.clamped);
-    assert_eq!(above.value, m.to_ticks(45f64.to_radians()));
+    // Clamped to the 45 deg limit: 45 x 4096 / 360 = 512 ticks above 2048.
+    assert_eq!(above.value, 2560);
     let below = m.clamp(-1.0);
     assert!(below.clamped);
     assert_eq!(below.value, m.min_rad);

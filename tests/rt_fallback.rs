@@ -1,0 +1,62 @@
+//! `play --fifo` where the system refuses SCHED_FIFO: a warning in the
+//! report and normal scheduling, never a failure. Runs on the wall clock
+//! (real threads are what `--fifo` is about); the motion is a short nod.
+
+mod common;
+
+use std::process::Command;
+
+use common::{temp_file, BIN};
+
+#[test]
+fn a_refused_sched_fifo_is_a_warning_and_the_run_completes() {
+    let motion = temp_file(
+        "rt_fallback",
+        "nod.yaml",
+        "units: deg\nkeyframes:\n  - pose: {shoulder_pan: 0}\n  - pose: {shoulder_pan: 5}\n",
+    );
+    let args = [
+        "play",
+        motion.to_str().expect("a UTF-8 path"),
+        "--robot",
+        "so101",
+        "--fifo",
+        "80",
+    ];
+    // SAFETY: geteuid has no preconditions.
+    let root = unsafe { libc::geteuid() } == 0;
+    let out = if root {
+        // Root may set SCHED_FIFO: run as `nobody`, whose real-time
+        // priority limit is 0, so the request is refused.
+        match Command::new("setpriv")
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
+            .args(args)
+            .output()
+        {
+            Ok(out) => out,
+            Err(_) => {
+                eprintln!("\n*** SKIPPED: root, and no setpriv to drop privileges ***\n");
+                return;
+            }
+        }
+    } else {
+        Command::new(BIN).args(args).output().expect("run servobus")
+    };
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !root && !stdout.contains("SCHED_FIFO") {
+        // An unprivileged user allowed real-time priority: nothing to show.
+        eprintln!("\n*** SKIPPED: this user may use SCHED_FIFO ***\n");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(
+        stdout.contains(
+            "warning: SCHED_FIFO priority 80 not applied (Operation not permitted (os error 1)); \
+             running with normal scheduling"
+        ),
+        "{stdout}{stderr}"
+    );
+    // The run itself finished: the report's closing table is there.
+    assert!(stdout.contains("shoulder_pan"), "{stdout}");
+}

@@ -65,6 +65,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         read: args.read,
         reply: args.reply,
         trips: 1,
+        // The bare pseudo-terminal: no servo time on top of the wire.
+        servo: Duration::ZERO,
     };
     let floor = pty_floor(cycle, Duration::from_secs_f64(args.seconds))?;
     let us = |d: Duration| d.as_secs_f64() * 1e6;

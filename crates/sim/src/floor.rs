@@ -39,6 +39,11 @@ pub struct FloorCycle {
     pub reply: usize,
     /// Request/reply exchanges per cycle (at least 1).
     pub trips: usize,
+    /// What the servos add to each exchange beside the wire: their
+    /// turnarounds and return delays, which the simulator waits too. With
+    /// it, the floor is the simulator's own timing on this pty, so that
+    /// `bench` can be held to it.
+    pub servo: Duration,
 }
 
 impl FloorCycle {
@@ -171,7 +176,7 @@ fn serve(port: &OwnedFd, cycle: FloorCycle, stop: &AtomicBool) -> io::Result<()>
             continue;
         }
         got = 0;
-        let due = started + wire_of(request + cycle.reply, cycle.baud);
+        let due = started + wire_of(request + cycle.reply, cycle.baud) + cycle.servo;
         trip = (trip + 1) % cycle.trips;
         if let Some(nap) = due.checked_duration_since(Instant::now() + SPIN) {
             std::thread::sleep(nap);
@@ -231,6 +236,7 @@ mod tests {
             read: 14,
             reply: 48,
             trips: 1,
+            servo: Duration::ZERO,
         };
         assert_eq!(arm.wire_time(), Duration::from_micros(880));
     }
@@ -244,6 +250,7 @@ mod tests {
             read: 2,
             reply: 2,
             trips: 2,
+            servo: Duration::ZERO,
         };
         let floor = pty_floor(tiny, Duration::from_millis(100)).expect("a pty");
         assert!(floor.cycles > 0);

@@ -22,6 +22,15 @@ pub(super) fn cycle_of(bus: &BusConfig) -> FloorCycle {
     let len = usize::from(Block::PRESENT_POSITION.len);
     let write = sync_write_bytes(n, Block::GOAL_POSITION.len);
     let reply_one = FRAME + len;
+    // Each reply comes after its servo's turnaround and return delay, as
+    // the simulator answers (the slowest model on the bus, for every reply).
+    let per_reply = bus
+        .joints
+        .iter()
+        .map(|j| j.model.turnaround)
+        .max()
+        .unwrap_or_default()
+        + bus.return_delay;
     if bus.joints.iter().all(|j| j.model.series.has_sync_read()) {
         // SYNC READ: address, length and one ID per servo.
         FloorCycle {
@@ -30,6 +39,7 @@ pub(super) fn cycle_of(bus: &BusConfig) -> FloorCycle {
             read: FRAME + 2 + n,
             reply: n * reply_one,
             trips: 1,
+            servo: per_reply * u32::try_from(n).unwrap_or(u32::MAX),
         }
     } else {
         // READ: address and length.
@@ -39,6 +49,7 @@ pub(super) fn cycle_of(bus: &BusConfig) -> FloorCycle {
             read: FRAME + 2,
             reply: reply_one,
             trips: n.max(1),
+            servo: per_reply,
         }
     }
 }

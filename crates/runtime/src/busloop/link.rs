@@ -179,6 +179,31 @@ pub(crate) fn modelled(settings: &BusSettings, servos: usize, len: usize) -> Dur
         .saturating_mul(n)
 }
 
+/// The adapter allowance for one read of `servos` positions when the cycle
+/// has `budget` left: the learned allowance `learned`, or, when the period
+/// leaves more room than that, as much of the room as fits, up to
+/// [`CEILING`].
+///
+/// Waiting longer for a reply costs nothing while the cycle would otherwise
+/// sit idle until its next deadline, and a reply that a host stall made a
+/// millisecond late is then a reading instead of a timeout and a re-ask (a
+/// re-ask that can collide with the late reply on a half-duplex bus). A
+/// silent servo is still declared missing after the same number of
+/// cycles; at the fastest rate the budget allows, the room is nil and the
+/// learned allowance alone sets the deadline.
+pub(crate) fn allowance_within(
+    settings: &BusSettings,
+    servos: usize,
+    len: usize,
+    budget: Duration,
+    learned: Duration,
+) -> Duration {
+    let (_, n) = read_of(settings, servos, len);
+    let fixed = modelled(settings, servos, len) + settings.link.margin.saturating_mul(n);
+    let room = budget.saturating_sub(fixed) / n.max(1);
+    learned.max(room.min(CEILING))
+}
+
 /// The reply deadline in force for reading `servos` positions (the sum of
 /// the READs' on a bus without SYNC READ).
 pub(crate) fn deadline(settings: &BusSettings, servos: usize, len: usize) -> Duration {
@@ -231,6 +256,36 @@ mod tests {
     use super::*;
 
     const US: Duration = Duration::from_micros(1);
+
+    #[test]
+    fn a_roomy_cycle_waits_longer_than_learned_and_a_tight_one_does_not() {
+        let settings = BusSettings::new(servobus_protocol::registers::Series::Sts, 1_000_000);
+        // Six positions by SYNC READ at 1 Mbps, return delay 0: a request of
+        // 14 bytes and 6 replies of 8, 620 us on the wire, plus 6
+        // turnarounds of 50 us: 920 us that no adapter can shorten.
+        assert_eq!(modelled(&settings, 6, 2), 920 * US);
+        let fixed = modelled(&settings, 6, 2) + settings.link.margin;
+        let learned = 400 * US;
+        // A 200 Hz cycle with 3.5 ms left: the room is past the ceiling.
+        assert_eq!(
+            allowance_within(&settings, 6, 2, 3500 * US + fixed, learned),
+            CEILING
+        );
+        // 1 ms of room: all of it.
+        assert_eq!(
+            allowance_within(&settings, 6, 2, 1000 * US + fixed, learned),
+            1000 * US
+        );
+        // Less room than learned (the fastest rate): the learned allowance.
+        assert_eq!(
+            allowance_within(&settings, 6, 2, 100 * US + fixed, learned),
+            learned
+        );
+        assert_eq!(
+            allowance_within(&settings, 6, 2, Duration::ZERO, learned),
+            learned
+        );
+    }
 
     #[test]
     fn a_jump_from_0_to_1_ms_costs_one_miss_and_ends_with_a_deadline_that_fits() {

@@ -236,6 +236,16 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 .saturating_sub(self.clock.now())
                 .saturating_sub(self.period / 8);
             let servos = range.len();
+            if self.link.learns() {
+                let wait = link::allowance_within(
+                    self.bus.settings(),
+                    servos,
+                    self.feedback.size(),
+                    budget,
+                    self.link.in_force(),
+                );
+                self.bus.set_latency(wait);
+            }
             let began = self.clock.now();
             let read =
                 self.feedback

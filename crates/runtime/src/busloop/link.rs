@@ -179,8 +179,8 @@ pub(crate) fn modelled(settings: &BusSettings, servos: usize, len: usize) -> Dur
         .saturating_mul(n)
 }
 
-/// The adapter allowance for one read of `servos` positions when the cycle
-/// has `budget` left: the learned allowance `learned`, or, when the period
+/// The adapter allowance for one read of `servos` positions, whose fixed
+/// cost is `model` (see [`modelled`]), when the cycle has `budget` left: the learned allowance `learned`, or, when the period
 /// leaves more room than that, as much of the room as fits, up to
 /// [`CEILING`].
 ///
@@ -195,11 +195,12 @@ pub(crate) fn allowance_within(
     settings: &BusSettings,
     servos: usize,
     len: usize,
+    model: Duration,
     budget: Duration,
     learned: Duration,
 ) -> Duration {
     let (_, n) = read_of(settings, servos, len);
-    let fixed = modelled(settings, servos, len) + settings.link.margin.saturating_mul(n);
+    let fixed = model + settings.link.margin.saturating_mul(n);
     let room = budget.saturating_sub(fixed) / n.max(1);
     learned.max(room.min(CEILING))
 }
@@ -263,26 +264,27 @@ mod tests {
         // Six positions by SYNC READ at 1 Mbps, return delay 0: a request of
         // 14 bytes and 6 replies of 8, 620 us on the wire, plus 6
         // turnarounds of 50 us: 920 us that no adapter can shorten.
-        assert_eq!(modelled(&settings, 6, 2), 920 * US);
-        let fixed = modelled(&settings, 6, 2) + settings.link.margin;
+        let model = modelled(&settings, 6, 2);
+        assert_eq!(model, 920 * US);
+        let fixed = model + settings.link.margin;
         let learned = 400 * US;
         // A 200 Hz cycle with 3.5 ms left: the room is past the ceiling.
         assert_eq!(
-            allowance_within(&settings, 6, 2, 3500 * US + fixed, learned),
+            allowance_within(&settings, 6, 2, model, 3500 * US + fixed, learned),
             CEILING
         );
         // 1 ms of room: all of it.
         assert_eq!(
-            allowance_within(&settings, 6, 2, 1000 * US + fixed, learned),
+            allowance_within(&settings, 6, 2, model, 1000 * US + fixed, learned),
             1000 * US
         );
         // Less room than learned (the fastest rate): the learned allowance.
         assert_eq!(
-            allowance_within(&settings, 6, 2, 100 * US + fixed, learned),
+            allowance_within(&settings, 6, 2, model, 100 * US + fixed, learned),
             learned
         );
         assert_eq!(
-            allowance_within(&settings, 6, 2, Duration::ZERO, learned),
+            allowance_within(&settings, 6, 2, model, Duration::ZERO, learned),
             learned
         );
     }

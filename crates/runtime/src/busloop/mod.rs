@@ -236,11 +236,14 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 .saturating_sub(self.clock.now())
                 .saturating_sub(self.period / 8);
             let servos = range.len();
+            // What a perfect adapter would need: the read's fixed cost.
+            let model = link::modelled(self.bus.settings(), servos, self.feedback.size());
             if self.link.learns() {
                 let wait = link::allowance_within(
                     self.bus.settings(),
                     servos,
                     self.feedback.size(),
+                    model,
                     budget,
                     self.link.in_force(),
                 );
@@ -253,7 +256,6 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             self.gone = read.is_err();
             if read? {
                 let took = self.clock.now().saturating_sub(began);
-                let model = link::modelled(self.bus.settings(), servos, self.feedback.size());
                 self.link.on_time(took.saturating_sub(model));
             } else {
                 self.link.timed_out();

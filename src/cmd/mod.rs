@@ -145,3 +145,31 @@ pub(crate) fn robot_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> 
 pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
 }
+
+/// Fails at once, before anything moves, when the file `path` given with
+/// `flag` could not be written after the run: its directory is missing or
+/// it cannot be opened for writing. An existing file is left as it is.
+pub(crate) fn check_writable(flag: &str, path: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Some(dir) = dir {
+        if !dir.is_dir() {
+            return Err(exit::input(format!(
+                "{flag} {}: the directory {} does not exist; nothing was moved",
+                path.display(),
+                dir.display()
+            )));
+        }
+    }
+    std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .with_context(|| {
+            format!(
+                "{flag} {}: cannot write there; nothing was moved",
+                path.display()
+            )
+        })?;
+    Ok(())
+}

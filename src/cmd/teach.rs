@@ -77,9 +77,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "--duration must be a positive number of seconds",
         ));
     }
-    // Check the output before anything moves.
-    std::fs::write(&args.output, "")
-        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
+    // Check the output before anything moves, without emptying a file that
+    // is there: it is replaced only once something has been captured.
+    super::check_writable("-o", &args.output)?;
     let buses = open_buses(&robot, args.port.as_deref())?;
     let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
     teacher.release()?;

@@ -51,13 +51,8 @@ impl FloorCycle {
     /// the nanosecond.
     pub fn wire_time(&self) -> Duration {
         let total = self.write + self.trips.max(1) * (self.read + self.reply);
-        wire_of(total, self.baud)
+        servobus_timing::Link::new(self.baud).wire_time(total)
     }
-}
-
-fn wire_of(bytes: usize, baud: u32) -> Duration {
-    let baud = u64::from(baud.max(1));
-    Duration::from_nanos((bytes as u64 * 10 * 1_000_000_000).div_ceil(baud))
 }
 
 /// What [`pty_floor`] measured.
@@ -150,6 +145,7 @@ fn measure(client: &OwnedFd, cycle: FloorCycle, duration: Duration) -> io::Resul
 /// time of the exchange (the write too, on the cycle's first) has passed
 /// since its first byte was read.
 fn serve(port: &OwnedFd, cycle: FloorCycle, stop: &AtomicBool) -> io::Result<()> {
+    let link = servobus_timing::Link::new(cycle.baud);
     let mut trip = 0;
     let answer = vec![0u8; cycle.reply];
     let mut buf = vec![0u8; 4096];
@@ -176,7 +172,7 @@ fn serve(port: &OwnedFd, cycle: FloorCycle, stop: &AtomicBool) -> io::Result<()>
             continue;
         }
         got = 0;
-        let due = started + wire_of(request + cycle.reply, cycle.baud) + cycle.servo;
+        let due = started + link.wire_time(request + cycle.reply) + cycle.servo;
         trip = (trip + 1) % cycle.trips;
         if let Some(nap) = due.checked_duration_since(Instant::now() + SPIN) {
             std::thread::sleep(nap);

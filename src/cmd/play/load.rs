@@ -22,27 +22,9 @@ pub(super) fn check_outputs(args: &Args) -> anyhow::Result<()> {
         }
     }
     for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
-        let Some(path) = path else { continue };
-        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-        if let Some(dir) = dir {
-            if !dir.is_dir() {
-                return Err(crate::cmd::exit::input(format!(
-                    "{flag} {}: the directory {} does not exist; nothing was moved",
-                    path.display(),
-                    dir.display()
-                )));
-            }
+        if let Some(path) = path {
+            crate::cmd::check_writable(flag, path)?;
         }
-        std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .with_context(|| {
-                format!(
-                    "{flag} {}: cannot write there; nothing was moved",
-                    path.display()
-                )
-            })?;
     }
     Ok(())
 }

@@ -235,7 +235,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     };
 
-    let interrupts = install_ctrl_c(&runner)?;
+    install_ctrl_c(&runner);
     let shown = Shown {
         names: names.clone(),
         bus_of: robot
@@ -252,7 +252,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let outcome = if args.monitor {
         super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
     } else {
-        follow(&runner, &args, log, &shown, units, duration, &interrupts)
+        follow(&runner, &args, log, &shown, units, duration)
     };
     let report = runner.join();
     stop_servers.store(true, Ordering::SeqCst);

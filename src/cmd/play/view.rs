@@ -56,9 +56,8 @@ impl Shown {
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
-pub(super) fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> {
-    let count = Arc::new(AtomicU32::new(0));
-    let seen = Arc::clone(&count);
+pub(super) fn install_ctrl_c(runner: &Runner) {
+    let seen = AtomicU32::new(0);
     let commands = runner.commands();
     let installed = ctrlc::set_handler(move || {
         let n = seen.fetch_add(1, Ordering::SeqCst);
@@ -76,7 +75,6 @@ pub(super) fn install_ctrl_c(runner: &Runner) -> anyhow::Result<Arc<AtomicU32>> 
         // Tests and embedders may have a handler already; playing still works.
         eprintln!("warning: Ctrl-C handling unavailable ({e})");
     }
-    Ok(count)
 }
 
 /// Reads the telemetry until the run ends: progress, log, plot series.
@@ -88,7 +86,6 @@ pub(super) fn follow(
     shown: &Shown,
     units: Units,
     duration: f64,
-    _interrupts: &AtomicU32,
 ) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
     let mut plot = args
         .plot

@@ -49,6 +49,8 @@ pub(crate) struct LinkLearner {
     /// Room to find the percentile in, so that a cycle allocates nothing.
     scratch: Vec<Duration>,
     next: usize,
+    /// The window's 99th percentile, kept up to date by [`on_time`](Self::on_time).
+    p99: Duration,
     /// The allowance in force.
     in_force: Duration,
     /// Every lateness seen, for the mean.
@@ -64,6 +66,7 @@ impl LinkLearner {
             window: Vec::with_capacity(WINDOW),
             scratch: Vec::with_capacity(WINDOW),
             next: 0,
+            p99: Duration::ZERO,
             in_force: latency.min(if fixed { Duration::MAX } else { CEILING }),
             total: Duration::ZERO,
             count: 0,
@@ -82,16 +85,23 @@ impl LinkLearner {
 
     /// A read whose replies all came, `lateness` beyond the link model.
     pub fn on_time(&mut self, lateness: Duration) {
-        if self.window.len() < WINDOW {
+        let evicted = if self.window.len() < WINDOW {
             self.window.push(lateness);
+            None
         } else {
-            self.window[self.next] = lateness;
-        }
+            Some(std::mem::replace(&mut self.window[self.next], lateness))
+        };
         self.next = (self.next + 1) % WINDOW;
         self.total += lateness;
         self.count += 1;
+        // A value at or below the p99 replacing one below it leaves the
+        // p99 where it was: the steady state, which then costs no selection.
+        let unchanged = matches!(evicted, Some(e) if e < self.p99 && lateness <= self.p99);
+        if !unchanged {
+            self.p99 = self.p99_now();
+        }
         if !self.fixed {
-            let x = self.p99_now().max(self.recent_max());
+            let x = self.p99.max(self.recent_max());
             self.in_force = (x + x / 4 + HEADROOM).min(CEILING);
         }
     }
@@ -105,8 +115,7 @@ impl LinkLearner {
 
     /// The 99th percentile of the window's lateness (0 before any read).
     pub fn p99(&self) -> Duration {
-        let mut copy = self.window.clone();
-        percentile_99(&mut copy)
+        self.p99
     }
 
     /// As [`p99`](Self::p99), in the learner's own scratch space.
@@ -257,6 +266,30 @@ mod tests {
     use super::*;
 
     const US: Duration = Duration::from_micros(1);
+
+    #[test]
+    fn the_kept_p99_is_the_p99_of_the_last_window_of_reads() {
+        let mut learner = LinkLearner::new(Duration::ZERO, false);
+        let mut seen = Vec::new();
+        // A fixed pseudo-random sequence with long quiet runs and bursts,
+        // so that both the kept and the recomputed paths are taken.
+        let mut x: u64 = 12345;
+        for i in 0..3000u64 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let burst = (i / 400) % 2 == 1;
+            let us = (x >> 33) % if burst { 3000 } else { 200 };
+            let lateness = Duration::from_micros(us);
+            learner.on_time(lateness);
+            seen.push(lateness);
+            // By hand: sort the last 256 and take index 255 * 99 / 100 = 252.
+            let mut last: Vec<_> = seen[seen.len().saturating_sub(WINDOW)..].to_vec();
+            last.sort();
+            let want = last[(last.len() - 1) * 99 / 100];
+            assert_eq!(learner.p99(), want, "after {} reads", i + 1);
+        }
+    }
 
     #[test]
     fn a_roomy_cycle_waits_longer_than_learned_and_a_tight_one_does_not() {

@@ -16,12 +16,8 @@ use crate::fault::FaultKind;
 use crate::options::{FaultPolicy, Reaction};
 use crate::stats::RunningError;
 
-/// One reading of a joint's position, as it came off the bus.
-///
-/// Issue 12 (adaptive reply deadlines) adds the reply's lateness here: when
-/// it arrived against when the timing plan expected it. [`Tracker::observe`]
-/// is the one place readings enter, so that is where lateness will be
-/// tracked per servo.
+/// One reading of a joint's position, as it came off the bus. (How late
+/// replies are is learned per bus, in `busloop::link`.)
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Reading {
     /// The position, ticks.

@@ -53,7 +53,6 @@ impl BusConfig {
     ///
     /// [`RateError`], which names the fastest rate that fits.
     pub fn check_rate(&self, rate_hz: f64) -> Result<Plan, RateError> {
-        let fastest_hz = self.fastest_rate_hz();
         match self.plan(rate_hz) {
             Ok(p) if p.read_every() == 1 || self.round_robin => Ok(p),
             Ok(p) => Err(RateError::AboveMaximum {
@@ -61,7 +60,10 @@ impl BusConfig {
                 fastest_hz: p.fastest_rate_hz(),
                 read_every: p.read_every(),
             }),
-            Err(source) => Err(RateError::Unplannable { source, fastest_hz }),
+            Err(source) => Err(RateError::Unplannable {
+                source,
+                fastest_hz: self.fastest_rate_hz(),
+            }),
         }
     }
 }

@@ -315,3 +315,23 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     }
     sim.stop();
 }
+
+/// A robot with two buses and a port for the first only: the missing port
+/// is named, as an input error, before any port is opened.
+#[test]
+fn calibrate_names_the_bus_that_has_no_port() {
+    let out = servobus(&[
+        "calibrate",
+        "--robot",
+        "hexapod-2bus",
+        "--port",
+        "/nonexistent/servobus-port",
+        "--yes",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("bus `right`") && err.contains("has no port"),
+        "{err}"
+    );
+}

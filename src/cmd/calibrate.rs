@@ -68,7 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .clone()
         .or(named.clone())
         .unwrap_or_else(|| PathBuf::from(format!("{}.calibration.yaml", design.name)));
-    let ports = ports(&args, &design);
+    let ports = ports(&args, &design)?;
     let cal = if let Some(json) = &args.from_lerobot {
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("cannot read {}", json.display()))?;
@@ -124,15 +124,31 @@ fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
 
 /// One port per bus: `--port` for the first, the robot file's for the
 /// rest; `None` when no bus has one.
-fn ports(args: &Args, robot: &Robot) -> Option<Vec<String>> {
+///
+/// # Errors
+/// An input error naming the first bus without a port, when only some have
+/// one.
+fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
     let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
     if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
         *first = Some(port.clone());
     }
     if ports.iter().all(Option::is_none) {
-        return None;
+        return Ok(None);
     }
-    ports.into_iter().collect()
+    let mut found = Vec::with_capacity(ports.len());
+    for (bus, port) in robot.buses.iter().zip(ports) {
+        let Some(port) = port else {
+            return Err(super::exit::input(format!(
+                "bus `{}` of {} has no port: every bus of the robot needs one (`port:` in the \
+                 robot file; --port sets the first bus's)",
+                bus.name,
+                robot.path.display()
+            )));
+        };
+        found.push(port);
+    }
+    Ok(Some(found))
 }
 
 /// Reply deadline allowance: calibrating and the checks before a run are
@@ -153,9 +169,6 @@ fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
             .with_latency(bus.latency.max(PATIENCE))
             .with_retries(3);
         buses.push(Bus::new(transport, clock, settings));
-    }
-    if buses.len() < robot.buses.len() {
-        bail!("every bus of {} needs a port", robot.path.display());
     }
     Ok(buses)
 }

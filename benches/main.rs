@@ -5,6 +5,7 @@
 
 use criterion::{criterion_group, criterion_main};
 
+mod driver;
 mod protocol;
 mod runtime;
 mod timing;
@@ -12,6 +13,7 @@ mod trajectory;
 
 criterion_group!(
     benches,
+    driver::benches,
     protocol::benches,
     runtime::benches,
     timing::benches,

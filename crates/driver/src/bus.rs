@@ -22,9 +22,9 @@ use crate::{BusError, Clock, Transport};
 /// tried again up to [`BusSettings::retries`] times; everything is counted
 /// (see [`Bus::counters`] and [`Bus::servo_counters`]).
 ///
-/// The bus owns its buffers: after construction, [`Bus::sync_write`] and
-/// [`Bus::sync_read`] do not allocate (the SYNC READ result storage grows
-/// only when a call needs more room than any earlier one).
+/// The bus owns its buffers: after construction, [`Bus::sync_write`] never
+/// allocates and [`Bus::sync_read`] does not either (its result storage
+/// grows only when a call needs more room than any earlier one).
 pub struct Bus<T: Transport, C: Clock> {
     pub(crate) io: Io<T, C>,
     pub(crate) settings: BusSettings,
@@ -36,8 +36,6 @@ pub struct Bus<T: Transport, C: Clock> {
     pub(crate) counters: Counters,
     pub(crate) servos: Box<[Counters; 256]>,
     pub(crate) sync: SyncStore,
-    /// SYNC WRITE frames too many for one frame, packed before sending.
-    pub(crate) packed: Vec<u8>,
 }
 
 impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
@@ -124,7 +122,6 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             counters: Counters::default(),
             servos: Box::new([Counters::default(); 256]),
             sync: SyncStore::new(),
-            packed: Vec::new(),
         }
     }
 

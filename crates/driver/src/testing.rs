@@ -245,4 +245,16 @@ fn sync_write_splits_long_frames() {
     assert_eq!(next, 100, "every servo once, in order");
     assert!(bus.sync_write(42, &ids, &data[..199]).is_err());
     assert_eq!(bus.transport().sent.len(), 2, "nothing sent when refused");
+    // An invalid ID in the second frame refuses the first one too.
+    let mut bad = ids.clone();
+    bad[90] = 254;
+    assert!(matches!(
+        bus.sync_write(42, &bad, &data),
+        Err(BusError::Encode(_))
+    ));
+    assert_eq!(
+        bus.transport().sent.len(),
+        2,
+        "a half-valid request sends nothing"
+    );
 }

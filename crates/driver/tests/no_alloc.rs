@@ -19,12 +19,19 @@ struct FixedServos {
     out: [u8; 1024],
     len: usize,
     pos: usize,
+    /// Length of every frame written, in order (room for 4000).
+    sent: [u16; 4000],
+    frames: usize,
 }
 
 impl Transport for FixedServos {
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.clock
             .advance(Duration::from_micros(10) * bytes.len() as u32);
+        if let Some(slot) = self.sent.get_mut(self.frames) {
+            *slot = bytes.len() as u16;
+        }
+        self.frames += 1;
         let Ok((p, _)) = parse_frame(bytes) else {
             return Ok(());
         };
@@ -62,17 +69,24 @@ impl Transport for FixedServos {
     }
 }
 
-#[test]
-fn sync_write_and_sync_read_do_not_allocate() {
+/// A bus over [`FixedServos`] at 1 Mbaud, and its clock.
+fn fixed_bus() -> (Bus<FixedServos, ManualClock>, ManualClock) {
     let clock = ManualClock::new();
     let transport = FixedServos {
         clock: clock.clone(),
         out: [0; 1024],
         len: 0,
         pos: 0,
+        sent: [0; 4000],
+        frames: 0,
     };
     let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
-    let mut bus = Bus::new(transport, clock.clone(), settings);
+    (Bus::new(transport, clock.clone(), settings), clock)
+}
+
+#[test]
+fn sync_write_and_sync_read_do_not_allocate() {
+    let (mut bus, clock) = fixed_bus();
     let ids: [u8; 18] = core::array::from_fn(|i| i as u8 + 1);
     let goals = [0x08u8; 36];
 
@@ -102,4 +116,29 @@ fn sync_write_and_sync_read_do_not_allocate() {
     assert_eq!((answered, missing), (17_000, 1000));
     assert_eq!(bus.servo_counters(4).retries, 1000);
     assert!(clock.now() > Duration::ZERO);
+}
+
+#[test]
+fn a_sync_write_of_several_frames_does_not_allocate_even_the_first_time() {
+    let (mut bus, _clock) = fixed_bus();
+    // 64 servos x 7 bytes: 31 servos per frame (length byte 31 x 8 + 4 =
+    // 252), so frames of 31, 31 and 2 servos.
+    let ids: [u8; 64] = core::array::from_fn(|i| i as u8 + 1);
+    let goals = [0x08u8; 64 * 7];
+
+    // No warm-up: the very first call is counted.
+    let before = allocations();
+    for _ in 0..1000 {
+        bus.sync_write(41, &ids, &goals).expect("sync write");
+    }
+    let allocated = allocations() - before;
+    assert_eq!(allocated, 0, "the SYNC WRITE allocated {allocated} times");
+
+    let t = bus.transport();
+    assert_eq!(t.frames, 3000);
+    // 6 bytes of frame, the address and L, then (ID + 7 bytes) per servo.
+    for cycle in t.sent[..3000].chunks(3) {
+        assert_eq!(cycle, [8 + 31 * 8, 8 + 31 * 8, 8 + 2 * 8]);
+    }
+    assert_eq!(bus.counters().transactions, 3000);
 }

@@ -162,30 +162,10 @@ pub fn pack_sync_write(
     ids: &[u8],
     data: &[u8],
 ) -> Result<Packed, PackError> {
-    let len = usize::from(block.len);
-    if ids.is_empty() || len == 0 {
-        return Err(PackError::Empty {
-            servos: ids.len(),
-            len: block.len,
-        });
-    }
-    let per = servos_per_frame(block.len);
-    if per == 0 {
-        return Err(PackError::BlockTooLong { len: block.len });
-    }
-    // Checked arithmetic is unneeded: `ids` is a real slice, so `ids.len() *
-    // len` (len <= 250) is far below usize::MAX on any target that holds it.
-    let expected = ids.len() * len;
-    if data.len() != expected {
-        return Err(PackError::DataLength {
-            servos: ids.len(),
-            len: block.len,
-            expected,
-            actual: data.len(),
-        });
-    }
+    let per = check(block, ids, data)?;
     // The same figures as `sync_write_frames` / `sync_write_bytes`, without
     // their divisions: this runs every control cycle.
+    let len = usize::from(block.len);
     let stride = len + 1;
     let full_frame_len = frame_len(2) + per * stride;
     if ids.len() <= per {
@@ -213,7 +193,7 @@ pub fn pack_sync_write(
         });
     }
     let mut at = 0;
-    for (ids, data) in ids.chunks(per).zip(data.chunks(per * len)) {
+    for (ids, data) in chunks(block, per, ids, data) {
         at += encode::sync_write_flat(&mut buf[at..], block.address, block.len, ids, data)?;
     }
     debug_assert_eq!(at, needed);
@@ -222,6 +202,76 @@ pub fn pack_sync_write(
         frames,
         full_frame_len,
     })
+}
+
+/// The servos of each frame [`pack_sync_write`] writes, in order, as
+/// `(ids, data)` pairs that each fit one frame: for a sender that packs one
+/// frame at a time straight into its own send buffer (with
+/// [`pack_sync_write`] on each pair) instead of packing them all first.
+///
+/// ```
+/// use servobus_timing::{sync_write_chunks, Block};
+///
+/// let ids: [u8; 40] = core::array::from_fn(|i| i as u8);
+/// let data = [0u8; 40 * 6];
+/// let sizes: Vec<usize> = sync_write_chunks(Block::POSITION_TIME_SPEED, &ids, &data)
+///     .unwrap()
+///     .map(|(ids, data)| {
+///         assert_eq!(data.len(), ids.len() * 6);
+///         ids.len()
+///     })
+///     .collect();
+/// assert_eq!(sizes, [35, 5]);
+/// ```
+///
+/// # Errors
+/// As [`pack_sync_write`], except those about the buffer or the IDs, which
+/// packing each pair reports.
+pub fn sync_write_chunks<'a>(
+    block: Block,
+    ids: &'a [u8],
+    data: &'a [u8],
+) -> Result<impl Iterator<Item = (&'a [u8], &'a [u8])> + 'a, PackError> {
+    let per = check(block, ids, data)?;
+    Ok(chunks(block, per, ids, data))
+}
+
+/// `ids` and `data` cut into frames of `per` servos.
+fn chunks<'a>(
+    block: Block,
+    per: usize,
+    ids: &'a [u8],
+    data: &'a [u8],
+) -> impl Iterator<Item = (&'a [u8], &'a [u8])> + 'a {
+    ids.chunks(per)
+        .zip(data.chunks(per * usize::from(block.len)))
+}
+
+/// Checks a packing request; returns the servos one frame carries.
+fn check(block: Block, ids: &[u8], data: &[u8]) -> Result<usize, PackError> {
+    let len = usize::from(block.len);
+    if ids.is_empty() || len == 0 {
+        return Err(PackError::Empty {
+            servos: ids.len(),
+            len: block.len,
+        });
+    }
+    let per = servos_per_frame(block.len);
+    if per == 0 {
+        return Err(PackError::BlockTooLong { len: block.len });
+    }
+    // Checked arithmetic is unneeded: `ids` is a real slice, so `ids.len() *
+    // len` (len <= 250) is far below usize::MAX on any target that holds it.
+    let expected = ids.len() * len;
+    if data.len() != expected {
+        return Err(PackError::DataLength {
+            servos: ids.len(),
+            len: block.len,
+            expected,
+            actual: data.len(),
+        });
+    }
+    Ok(per)
 }
 
 #[cfg(test)]

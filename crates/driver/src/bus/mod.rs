@@ -1,0 +1,178 @@
+//! [`Bus`]: transactions with the servos of one serial bus.
+//!
+//! The bus itself and its accessors are here; the single-servo requests,
+//! the transaction that runs them (retries, counters) and the latency
+//! measurement each have a module.
+
+mod latency;
+mod requests;
+mod transact;
+
+use std::time::Duration;
+
+use servobus_protocol::{BROADCAST_ID, MAX_PARAMS};
+use servobus_timing::Transaction;
+
+pub use latency::LatencyMeasurement;
+pub(crate) use transact::Expect;
+
+use crate::io::Io;
+use crate::settings::BusSettings;
+use crate::stats::Counters;
+use crate::sync::SyncStore;
+use crate::{BusError, Clock, Transport};
+
+/// A client for one bus of Feetech servos over a [`Transport`], with time
+/// from a [`Clock`].
+///
+/// Every transaction drains stale input, sends its request, skips the echo
+/// of it, and waits for the reply until a deadline derived from the
+/// [`BusSettings::link`] (never a fixed timeout). Failed transactions are
+/// tried again up to [`BusSettings::retries`] times; everything is counted
+/// (see [`Bus::counters`] and [`Bus::servo_counters`]).
+///
+/// The bus owns its buffers: after construction, [`Bus::sync_write`] never
+/// allocates and [`Bus::sync_read`] does not either (its result storage
+/// grows only when a call needs more room than any earlier one).
+pub struct Bus<T: Transport, C: Clock> {
+    pub(crate) io: Io<T, C>,
+    pub(crate) settings: BusSettings,
+    /// Data of the last single-servo reply.
+    pub(crate) reply: [u8; MAX_PARAMS],
+    pub(crate) reply_len: usize,
+    /// Round trip of the last successful single-servo transaction.
+    pub(crate) last_rtt: Duration,
+    pub(crate) counters: Counters,
+    pub(crate) servos: Box<[Counters; 256]>,
+    pub(crate) sync: SyncStore,
+}
+
+impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bus")
+            .field("settings", &self.settings)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// A bus over `transport`, timed by `clock`.
+    pub fn new(transport: T, clock: C, settings: BusSettings) -> Self {
+        let mut io = Io::new(transport, clock);
+        io.echo = settings.echo;
+        Bus {
+            io,
+            settings,
+            reply: [0; MAX_PARAMS],
+            reply_len: 0,
+            last_rtt: Duration::ZERO,
+            counters: Counters::default(),
+            servos: Box::new([Counters::default(); 256]),
+            sync: SyncStore::new(),
+        }
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &BusSettings {
+        &self.settings
+    }
+
+    /// Changes the settings (e.g. the latency after [`Bus::measure_latency`],
+    /// or the baud rate after reopening the transport).
+    pub fn set_settings(&mut self, settings: BusSettings) {
+        self.io.echo = settings.echo;
+        self.settings = settings;
+    }
+
+    /// Sets the adapter latency used in every deadline.
+    pub fn set_latency(&mut self, latency: Duration) {
+        self.settings.link.latency = latency;
+    }
+
+    /// The transport.
+    pub fn transport(&self) -> &T {
+        &self.io.transport
+    }
+
+    /// The transport, mutably (e.g. to change its baud rate).
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.io.transport
+    }
+
+    /// The clock.
+    pub fn clock(&self) -> &C {
+        &self.io.clock
+    }
+
+    /// Gives the transport and clock back.
+    pub fn into_parts(self) -> (T, C) {
+        (self.io.transport, self.io.clock)
+    }
+
+    /// Counters of the whole bus.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// Counters of servo `id` (broadcast requests are counted under 254).
+    pub fn servo_counters(&self, id: u8) -> &Counters {
+        &self.servos[usize::from(id)]
+    }
+
+    /// Sets every counter back to zero.
+    pub fn reset_counters(&mut self) {
+        self.counters = Counters::default();
+        self.servos.fill(Counters::default());
+    }
+
+    /// The data bytes of the last single-servo reply.
+    pub fn last_reply(&self) -> &[u8] {
+        &self.reply[..self.reply_len]
+    }
+
+    /// Round trip of the last successful single-servo transaction.
+    pub fn last_rtt(&self) -> Duration {
+        self.last_rtt
+    }
+
+    /// The deadline of `tx` to servo `id`, or `None` when no reply comes
+    /// (a broadcast, or a status level that does not answer `tx`).
+    pub(crate) fn deadline(&self, id: u8, tx: Transaction) -> Option<Duration> {
+        if id == BROADCAST_ID {
+            return None;
+        }
+        let s = &self.settings;
+        s.link.deadline(tx, s.return_delay, s.replies)
+    }
+
+    /// What a request to `id` waits for: the reply of `len` data bytes to
+    /// `tx` (accepted from `alt` too), or nothing.
+    pub(crate) fn expect(&self, id: u8, alt: u8, len: usize, tx: Transaction) -> Expect {
+        let deadline = self.deadline(id, tx);
+        Expect {
+            id,
+            alt,
+            len,
+            reply: deadline.is_some(),
+            timeout: deadline.unwrap_or(Duration::ZERO),
+        }
+    }
+
+    /// As [`Bus::expect`] for a transaction that must be answered.
+    pub(crate) fn expect_reply(
+        &self,
+        id: u8,
+        len: usize,
+        tx: Transaction,
+    ) -> Result<Expect, BusError> {
+        let expect = self.expect(id, id, len, tx);
+        if expect.reply {
+            Ok(expect)
+        } else {
+            Err(BusError::InvalidRequest(
+                "the servos' status level does not answer this request",
+            ))
+        }
+    }
+}

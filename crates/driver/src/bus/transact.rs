@@ -1,0 +1,152 @@
+//! One single-servo transaction: send, wait for the reply until the
+//! deadline, try again, count.
+
+use std::time::Duration;
+
+use servobus_protocol::{Packet, StatusFlags, MAX_PARAMS};
+
+use crate::io::{Sink, Tally};
+use crate::{Bus, BusError, Clock, Transport};
+
+/// What a single-servo transaction waits for.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Expect {
+    /// The servo asked; a reply from `alt` is accepted too (an ID change).
+    pub id: u8,
+    pub alt: u8,
+    /// Data bytes the reply carries.
+    pub len: usize,
+    /// Whether a reply comes at all.
+    pub reply: bool,
+    /// Deadline from the start of sending.
+    pub timeout: Duration,
+}
+
+/// Collects the reply to a single-servo request.
+struct Single<'a> {
+    expect: Expect,
+    out: &'a mut [u8; MAX_PARAMS],
+    out_len: &'a mut usize,
+    /// `(flags, arrival)` once the reply came.
+    got: Option<(StatusFlags, Duration)>,
+    /// The first wrong reply seen, if any.
+    wrong: Option<BusError>,
+    wrong_count: u64,
+    corrupt: bool,
+}
+
+impl Sink for Single<'_> {
+    fn packet(&mut self, packet: &Packet<'_>, now: Duration) -> bool {
+        let id = packet.id();
+        let params = packet.params();
+        let err = if id != self.expect.id && id != self.expect.alt {
+            BusError::WrongId {
+                expected: self.expect.id,
+                actual: id,
+            }
+        } else if params.len() != self.expect.len {
+            BusError::WrongLength {
+                id,
+                expected: self.expect.len,
+                actual: params.len(),
+            }
+        } else {
+            self.out[..params.len()].copy_from_slice(params);
+            *self.out_len = params.len();
+            self.got = Some((packet.status(), now));
+            return true;
+        };
+        self.wrong_count += 1;
+        self.wrong.get_or_insert(err);
+        false
+    }
+
+    fn checksum_error(&mut self, _id: u8) {
+        // The ID byte of a corrupted frame cannot be trusted: any corruption
+        // in the window of a single-servo request is taken as its reply
+        // (two servos with one ID collide exactly like this).
+        self.corrupt = true;
+    }
+}
+
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// Runs one single-servo transaction whose request is in `io.tx`, with
+    /// bounded retries.
+    pub(crate) fn transact(&mut self, expect: Expect) -> Result<Option<StatusFlags>, BusError> {
+        let id = usize::from(expect.id);
+        self.counters.transactions += 1;
+        self.servos[id].transactions += 1;
+        let mut last = None;
+        for attempt in 0..=self.settings.retries {
+            if attempt > 0 {
+                self.counters.retries += 1;
+                self.servos[id].retries += 1;
+            }
+            let start = self.io.send()?;
+            if !expect.reply {
+                return Ok(None);
+            }
+            let mut sink = Single {
+                expect,
+                out: &mut self.reply,
+                out_len: &mut self.reply_len,
+                got: None,
+                wrong: None,
+                wrong_count: 0,
+                corrupt: false,
+            };
+            let tally = self.io.exchange(start + expect.timeout, &mut sink)?;
+            let (got, wrong, wrong_count, corrupt) =
+                (sink.got, sink.wrong, sink.wrong_count, sink.corrupt);
+            self.account(id, &tally, wrong_count);
+            if let Some((flags, at)) = got {
+                let rtt = at.saturating_sub(start);
+                self.last_rtt = rtt;
+                self.counters.rtt.record(rtt);
+                self.servos[id].rtt.record(rtt);
+                if !flags.is_ok() {
+                    self.counters.status_errors += 1;
+                    self.servos[id].status_errors += 1;
+                    if self.settings.strict_status {
+                        return Err(BusError::Status {
+                            id: expect.id,
+                            flags,
+                        });
+                    }
+                }
+                return Ok(Some(flags));
+            }
+            // Bytes that arrived but made no valid frame are a garbled reply,
+            // not silence.
+            let err = if corrupt || tally.garbage_bytes > 0 {
+                BusError::Corrupt { id: expect.id }
+            } else if let Some(wrong) = wrong {
+                wrong
+            } else {
+                self.counters.timeouts += 1;
+                self.servos[id].timeouts += 1;
+                BusError::Timeout {
+                    id: expect.id,
+                    waited: expect.timeout,
+                }
+            };
+            last = Some(err);
+        }
+        self.counters.failures += 1;
+        self.servos[id].failures += 1;
+        Err(last.unwrap_or(BusError::Timeout {
+            id: expect.id,
+            waited: expect.timeout,
+        }))
+    }
+
+    /// Adds what one wait saw to the bus counters and to servo `id`'s.
+    pub(crate) fn account(&mut self, id: usize, tally: &Tally, wrong: u64) {
+        for c in [&mut self.counters, &mut self.servos[id]] {
+            c.echoes += tally.echoes;
+            c.discarded_bytes += tally.discarded_bytes;
+            c.checksum_errors += tally.checksum_errors;
+            c.wrong_replies += wrong;
+        }
+    }
+}

@@ -6,6 +6,18 @@ use std::time::Duration;
 use servobus_protocol::registers::Series;
 use servobus_timing::{Link, StatusLevel};
 
+/// `with_*` methods, each giving the settings back with one field (or a
+/// field of the link) set: `name(field.path: Type);` a line.
+macro_rules! builders {
+    ($($(#[$doc:meta])* $name:ident($($field:ident).+: $ty:ty);)*) => {$(
+        $(#[$doc])*
+        pub fn $name(mut self, value: $ty) -> Self {
+            self.$($field).+ = value;
+            self
+        }
+    )*};
+}
+
 /// Settings of one bus.
 ///
 /// ```
@@ -61,45 +73,20 @@ impl BusSettings {
         }
     }
 
-    /// The same settings with the adapter latency set.
-    pub fn with_latency(mut self, latency: Duration) -> Self {
-        self.link.latency = latency;
-        self
-    }
-
-    /// The same settings with the servos' return delay set.
-    pub fn with_return_delay(mut self, return_delay: Duration) -> Self {
-        self.return_delay = return_delay;
-        self
-    }
-
-    /// The same settings with the retry count set.
-    pub fn with_retries(mut self, retries: u8) -> Self {
-        self.retries = retries;
-        self
-    }
-
-    /// The same settings with the servos' status level set.
-    pub fn with_replies(mut self, replies: StatusLevel) -> Self {
-        self.replies = replies;
-        self
-    }
-
-    /// The same settings with echo skipping on or off.
-    pub fn with_echo(mut self, echo: bool) -> Self {
-        self.echo = echo;
-        self
-    }
-
-    /// The same settings with strict status on or off.
-    pub fn with_strict_status(mut self, strict: bool) -> Self {
-        self.strict_status = strict;
-        self
-    }
-
-    /// The same settings with the whole link replaced.
-    pub fn with_link(mut self, link: Link) -> Self {
-        self.link = link;
-        self
+    builders! {
+        /// The same settings with the adapter latency set.
+        with_latency(link.latency: Duration);
+        /// The same settings with the servos' return delay set.
+        with_return_delay(return_delay: Duration);
+        /// The same settings with the retry count set.
+        with_retries(retries: u8);
+        /// The same settings with the servos' status level set.
+        with_replies(replies: StatusLevel);
+        /// The same settings with echo skipping on or off.
+        with_echo(echo: bool);
+        /// The same settings with strict status on or off.
+        with_strict_status(strict_status: bool);
+        /// The same settings with the whole link replaced.
+        with_link(link: Link);
     }
 }

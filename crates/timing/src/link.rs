@@ -122,52 +122,59 @@ mod tests {
     }
 
     /// Wire time of N bytes = ceil(N x 10 x 1e9 / baud) ns, worked out by
-    /// hand for each row.
+    /// hand for each entry: a baud rate, then `(bytes, ns)` at that rate.
     #[test]
     fn wire_time_table() {
-        let table: [(u32, usize, u64); 22] = [
-            // 1 Mbps: exactly 10 us a byte.
-            (1_000_000, 0, 0),
-            (1_000_000, 1, 10_000),
-            (1_000_000, 255, 2_550_000),
-            (1_000_000, MAX_FRAME_LEN, 2_590_000),
-            (500_000, 1, 20_000),
-            (250_000, 1, 40_000),
+        let frame = MAX_FRAME_LEN;
+        let table: [(u32, &[(usize, u64)]); 12] = [
+            // 1 Mbps: exactly 10 us a byte. The last entry is far more bytes
+            // than any cycle (1e10 bits = 1e4 s): exact, no overflow
+            // although bits x 1e9 would not fit a u64.
+            (
+                1_000_000,
+                &[
+                    (0, 0),
+                    (1, 10_000),
+                    (255, 2_550_000),
+                    (frame, 2_590_000),
+                    (1_000_000_000, 10_000_000_000_000),
+                ],
+            ),
+            (500_000, &[(1, 20_000)]),
+            (250_000, &[(1, 40_000)]),
             // 1e10 / 128000 = 78125 exactly: no rounding.
-            (128_000, 1, 78_125),
-            // 1e10 / 115200 = 86805.55.. -> 86806.
-            (115_200, 1, 86_806),
+            (128_000, &[(1, 78_125)]),
+            // 1e10 / 115200 = 86805.55.. -> 86806;
             // 2.55e12 / 115200 = 22135416.66.. -> 22135417.
-            (115_200, 255, 22_135_417),
+            (115_200, &[(1, 86_806), (255, 22_135_417)]),
             // 1e10 / 76800 = 130208.33.. -> 130209 (rounds up, not to nearest).
-            (76_800, 1, 130_209),
-            // 1e10 / 57600 = 173611.11.. -> 173612.
-            (57_600, 1, 173_612),
+            (76_800, &[(1, 130_209)]),
+            // 1e10 / 57600 = 173611.11.. -> 173612;
             // 2.59e12 / 57600 = 44965277.7.. -> 44965278.
-            (57_600, MAX_FRAME_LEN, 44_965_278),
-            // 1e10 / 38400 = 260416.66.. -> 260417.
-            (38_400, 1, 260_417),
-            // 2.55e12 / 38400 = 66406250 exactly.
-            (38_400, 255, 66_406_250),
-            // 2.59e12 / 38400 = 67447916.66.. -> 67447917.
-            (38_400, MAX_FRAME_LEN, 67_447_917),
+            (57_600, &[(1, 173_612), (frame, 44_965_278)]),
+            // 1e10 / 38400 = 260416.66.. -> 260417; 2.55e12 / 38400 =
+            // 66406250 exactly; 2.59e12 / 38400 = 67447916.66.. -> 67447917.
+            (
+                38_400,
+                &[(1, 260_417), (255, 66_406_250), (frame, 67_447_917)],
+            ),
             // Non-standard rates.
-            (921_600, 1, 10_851),
-            (921_600, MAX_FRAME_LEN, 2_810_330),
-            (3, 1, 3_333_333_334),
-            (1, 1, 10_000_000_000),
+            (921_600, &[(1, 10_851), (frame, 2_810_330)]),
+            (3, &[(1, 3_333_333_334)]),
+            (1, &[(1, 10_000_000_000)]),
             // The fastest u32 baud: 1e10 / 4294967295 = 2.3.. -> 3.
-            (u32::MAX, 1, 3),
-            (u32::MAX, MAX_FRAME_LEN, 604),
-            // Far more bytes than any cycle (1e10 bits = 1e4 s): exact, no
-            // overflow although bits x 1e9 would not fit a u64.
-            (1_000_000, 1_000_000_000, 10_000_000_000_000),
+            (u32::MAX, &[(1, 3), (frame, 604)]),
         ];
-        for (baud, bytes, nanos) in table {
+        let mut checked = 0;
+        for (baud, entries) in table {
             let l = Link::new(baud);
-            assert_eq!(l.wire_nanos(bytes), nanos, "{bytes} bytes at {baud} baud");
-            assert_eq!(l.wire_time(bytes), Duration::from_nanos(nanos));
+            for &(bytes, nanos) in entries {
+                assert_eq!(l.wire_nanos(bytes), nanos, "{bytes} bytes at {baud} baud");
+                assert_eq!(l.wire_time(bytes), Duration::from_nanos(nanos));
+                checked += 1;
+            }
         }
+        assert_eq!(checked, 22, "every entry of the table was checked");
     }
 
     #[test]

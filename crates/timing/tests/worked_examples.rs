@@ -7,7 +7,7 @@
 
 use core::time::Duration;
 
-use servobus_timing::{plan, Block, Change, Link, PlanError, Servo};
+use servobus_timing::{plan, Block, Change, Link, Plan, PlanError, Servo};
 
 const US: fn(u64) -> Duration = Duration::from_micros;
 
@@ -34,19 +34,18 @@ fn scs(n: usize, return_delay: Duration) -> Vec<Servo> {
 const POS: Option<Block> = Some(Block::GOAL_POSITION);
 const PRESENT: Option<Block> = Some(Block::PRESENT_POSITION);
 
+/// An SO-101 arm: six STS servos with return delay 0, sent goal positions
+/// and asked `read` at `rate_hz` over `link`.
+fn so101(link: &Link, read: Option<Block>, rate_hz: f64) -> Result<Plan, PlanError> {
+    plan(link, &sts(6, Duration::ZERO), POS, read, rate_hz)
+}
+
 #[test]
 fn so101_six_sts3215_return_delay_zero() {
     // 26 (SYNC WRITE 8 + 6 x 3) + 14 (SYNC READ 8 + 6) + 48 (6 x 8) = 88 bytes
     // = 880 us; nothing else to wait for, so the cycle is the wire:
     // 1 / 880 us = 1136.36 Hz.
-    let p = plan(
-        &link(Duration::ZERO),
-        &sts(6, Duration::ZERO),
-        POS,
-        PRESENT,
-        1000.0,
-    )
-    .unwrap();
+    let p = so101(&link(Duration::ZERO), PRESENT, 1000.0).unwrap();
     assert_eq!(p.bytes_per_cycle(), 88);
     assert_eq!(p.full_cycle().wire_time, US(880));
     assert_eq!(p.full_cycle().cycle_time, US(880));
@@ -69,7 +68,7 @@ fn so101_with_the_default_turnaround() {
     // Link::new assumes 50 us of servo processing before each reply:
     // 880 + 6 x 50 = 1180 us, 847.46 Hz. The wire time does not change.
     let l = Link::new(1_000_000);
-    let p = plan(&l, &sts(6, Duration::ZERO), POS, PRESENT, 500.0).unwrap();
+    let p = so101(&l, PRESENT, 500.0).unwrap();
     assert_eq!(p.wire_time_us(), 880.0);
     assert_eq!(p.cycle_time_us(), 1180.0);
     assert!((p.max_rate_hz() - 847.46).abs() < 0.01);
@@ -169,7 +168,7 @@ fn one_millisecond_usb_adapter() {
     // The SO-101 cycle behind a CDC adapter: one round trip (the SYNC READ)
     // waits 1 ms: 880 + 1000 = 1880 us, 531.91 Hz; the wire is unchanged.
     let ms = Duration::from_millis(1);
-    let p = plan(&link(ms), &sts(6, Duration::ZERO), POS, PRESENT, 200.0).unwrap();
+    let p = so101(&link(ms), PRESENT, 200.0).unwrap();
     assert_eq!(p.wire_time_us(), 880.0);
     assert_eq!(p.cycle_time_us(), 1880.0);
     assert!((p.max_rate_hz() - 531.91).abs() < 0.01);
@@ -206,7 +205,7 @@ fn ftdi_at_its_default_latency_timer_is_refused_with_the_fix() {
     // 26 + 9 + 8 = 43 bytes = 430 us + 16 ms = 16430 us.
     // The fix: (5000 - 880) / 1 = 4120 us of latency at most.
     let ftdi = link(Duration::from_millis(16));
-    let err = plan(&ftdi, &sts(6, Duration::ZERO), POS, PRESENT, 200.0).unwrap_err();
+    let err = so101(&ftdi, PRESENT, 200.0).unwrap_err();
     assert_eq!(
         err,
         PlanError::Infeasible {
@@ -228,7 +227,7 @@ fn a_slow_baud_rate_names_the_baud_that_fits() {
     // 26 + 11 + 24 = 61 bytes = 5295.2 us, no; 3 groups of 2: 52 bytes =
     // 4513.9 us, fits.
     let l = Link::new(115_200).with_turnaround(Duration::ZERO);
-    let p = plan(&l, &sts(6, Duration::ZERO), POS, PRESENT, 200.0).unwrap();
+    let p = so101(&l, PRESENT, 200.0).unwrap();
     assert_eq!(p.full_cycle().wire_time, Duration::from_nanos(7_638_889));
     assert_eq!(p.cheapest_fix(), Some(Change::HigherBaud { baud: 250_000 }));
     assert_eq!(p.read_every(), 3);
@@ -307,14 +306,7 @@ fn bad_input_is_refused() {
 #[test]
 fn write_only_cycles_have_no_round_trips() {
     // 6 servos, goal position, nothing read: 26 bytes, latency never waited on.
-    let p = plan(
-        &link(Duration::from_millis(16)),
-        &sts(6, Duration::ZERO),
-        POS,
-        None,
-        1000.0,
-    )
-    .unwrap();
+    let p = so101(&link(Duration::from_millis(16)), None, 1000.0).unwrap();
     assert_eq!(p.cycle_time_us(), 260.0);
     assert_eq!(p.reads_in_cycle(0), 0..0);
     assert!(p.read_ids(5).is_empty());

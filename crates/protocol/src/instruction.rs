@@ -58,25 +58,19 @@ impl Instruction {
     pub const fn code(self) -> u8 {
         self as u8
     }
-
-    /// The name used by the manual, e.g. `SYNC WRITE`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Instruction::Ping => "PING",
-            Instruction::Read => "READ",
-            Instruction::Write => "WRITE",
-            Instruction::RegWrite => "REG WRITE",
-            Instruction::Action => "ACTION",
-            Instruction::Reset => "RESET",
-            Instruction::SyncRead => "SYNC READ",
-            Instruction::SyncWrite => "SYNC WRITE",
-        }
-    }
 }
 
-impl fmt::Display for Instruction {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+named! {
+    /// The name used by the manual, e.g. `SYNC WRITE`.
+    Instruction {
+        Ping => "PING",
+        Read => "READ",
+        Write => "WRITE",
+        RegWrite => "REG WRITE",
+        Action => "ACTION",
+        Reset => "RESET",
+        SyncRead => "SYNC READ",
+        SyncWrite => "SYNC WRITE",
     }
 }
 

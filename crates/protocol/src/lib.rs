@@ -79,6 +79,9 @@ extern crate alloc;
 #[cfg(feature = "std")]
 extern crate std;
 
+#[macro_use]
+mod names;
+
 mod checksum;
 mod command;
 pub mod decoder;

@@ -77,7 +77,6 @@ pub use status_level::StatusLevel;
 pub use tables::{addr, scs, sts, SCS, STS};
 pub use typed::{Reg, RegisterValue};
 
-use core::fmt;
 
 /// A family of servos sharing one memory layout and byte order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -111,19 +110,13 @@ impl Series {
     pub const fn has_sync_read(self) -> bool {
         matches!(self, Series::Sts)
     }
-
-    /// A short lowercase name: `sts` or `scs`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Series::Sts => "sts",
-            Series::Scs => "scs",
-        }
-    }
 }
 
-impl fmt::Display for Series {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+named! {
+    /// A short lowercase name: `sts` or `scs`.
+    Series {
+        Sts => "sts",
+        Scs => "scs",
     }
 }
 
@@ -152,20 +145,14 @@ impl Access {
     pub const fn is_writable(self) -> bool {
         !matches!(self, Access::ReadOnly)
     }
-
-    /// A short lowercase name: `read-only`, `eeprom` or `ram`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Access::ReadOnly => "read-only",
-            Access::Eeprom => "eeprom",
-            Access::Ram => "ram",
-        }
-    }
 }
 
-impl fmt::Display for Access {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+named! {
+    /// A short lowercase name: `read-only`, `eeprom` or `ram`.
+    Access {
+        ReadOnly => "read-only",
+        Eeprom => "eeprom",
+        Ram => "ram",
     }
 }
 

@@ -8,7 +8,7 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, BusSettings, ManualClock, MissingReason};
+use servobus_driver::{Bus, BusError, BusSettings, ManualClock, MissingReason, SyncRead};
 use servobus_protocol::registers::{addr, Series};
 use servobus_sim::{Faults, SimBus, SimServo};
 
@@ -31,6 +31,64 @@ fn cycles() -> u64 {
 /// given to the wrong servo would show.
 fn home(id: u8) -> u16 {
     1000 + 100 * u16::from(id)
+}
+
+/// What the soak's SYNC READs found, servo by servo.
+#[derive(Debug, Default)]
+struct Tally {
+    answered: u64,
+    missing: u64,
+    no_reply: u64,
+    /// Corrupted replies, of the wrong length included.
+    garbled: u64,
+    wrong_length: u64,
+}
+
+impl Tally {
+    /// Adds one SYNC READ of `ids`, checking that every answer is its own
+    /// servo's and every missing servo says why.
+    fn add(&mut self, read: &SyncRead<'_>, ids: &[u8]) {
+        assert_eq!(read.len(), ids.len());
+        for (res, &id) in read.iter().zip(ids) {
+            match res {
+                Ok(reply) => {
+                    assert_eq!(reply.id, id);
+                    let pos = u16::from_le_bytes([reply.data[0], reply.data[1]]);
+                    assert!(
+                        pos.abs_diff(home(id)) <= 20,
+                        "servo {id} got {pos}, its position is {}",
+                        home(id)
+                    );
+                    self.answered += 1;
+                }
+                Err(m) => {
+                    assert_eq!(m.id, id);
+                    self.missing += 1;
+                    match m.reason {
+                        MissingReason::NoReply => self.no_reply += 1,
+                        MissingReason::Corrupt => self.garbled += 1,
+                        MissingReason::WrongLength => {
+                            self.garbled += 1;
+                            self.wrong_length += 1;
+                        }
+                        other => panic!("servo {id}: unexpected {other}"),
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One control cycle: every servo sent its goal, then asked its position.
+fn cycle(
+    bus: &mut Bus<SimBus, ManualClock>,
+    ids: &[u8],
+    goals: &[u8],
+    tally: &mut Tally,
+) -> Result<(), BusError> {
+    bus.sync_write(addr::GOAL_POSITION, ids, goals)?;
+    tally.add(&bus.sync_read(addr::PRESENT_POSITION, 2, ids)?, ids);
+    Ok(())
 }
 
 #[test]
@@ -56,43 +114,17 @@ fn soak_sync_write_sync_read_with_lossy_replies() {
     sim.set_faults(Faults::seeded(2024).drop(0.01).corrupt(0.01));
 
     let n = cycles();
-    let (mut answered, mut missing, mut no_reply, mut garbled) = (0u64, 0u64, 0u64, 0u64);
-    let mut wrong_length = 0u64;
+    let mut tally = Tally::default();
     for _ in 0..n {
-        bus.sync_write(addr::GOAL_POSITION, &ids, &goals)
-            .expect("sync write");
-        let r = bus
-            .sync_read(addr::PRESENT_POSITION, 2, &ids)
-            .expect("sync read");
-        assert_eq!(r.len(), ids.len());
-        for (res, &id) in r.iter().zip(&ids) {
-            match res {
-                Ok(reply) => {
-                    assert_eq!(reply.id, id);
-                    let pos = u16::from_le_bytes([reply.data[0], reply.data[1]]);
-                    assert!(
-                        pos.abs_diff(home(id)) <= 20,
-                        "servo {id} got {pos}, its position is {}",
-                        home(id)
-                    );
-                    answered += 1;
-                }
-                Err(m) => {
-                    assert_eq!(m.id, id);
-                    missing += 1;
-                    match m.reason {
-                        MissingReason::NoReply => no_reply += 1,
-                        MissingReason::Corrupt => garbled += 1,
-                        MissingReason::WrongLength => {
-                            garbled += 1;
-                            wrong_length += 1;
-                        }
-                        other => panic!("servo {id}: unexpected {other}"),
-                    }
-                }
-            }
-        }
+        cycle(&mut bus, &ids, &goals, &mut tally).expect("a cycle runs");
     }
+    let Tally {
+        answered,
+        missing,
+        no_reply,
+        garbled,
+        wrong_length,
+    } = tally;
 
     let stats = sim.stats();
     let c = *bus.counters();

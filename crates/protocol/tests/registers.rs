@@ -107,6 +107,23 @@ fn series_properties() {
 }
 
 #[test]
+fn scs_registers_moved_from_the_sts_layout() {
+    // The SCS control table puts these at other addresses than STS/SMS
+    // does (protection at 37 and 38 instead of 34 and 35, the lock at 48
+    // instead of 55); what they are is the same.
+    for (name, scs_at, sts_at) in [
+        ("protective_torque", 37, 34),
+        ("protection_time", 38, 35),
+        ("lock", 48, 55),
+    ] {
+        let (scs, sts) = (SCS.get(name).unwrap(), STS.get(name).unwrap());
+        assert_eq!((scs.address, sts.address), (scs_at, sts_at), "{name}");
+        assert_eq!((scs.size, scs.access), (sts.size, sts.access), "{name}");
+        assert_eq!(scs.unit, sts.unit, "{name}");
+    }
+}
+
+#[test]
 fn sign_bits_are_as_documented() {
     let bit = |name| STS.get(name).unwrap().sign_bit;
     assert_eq!(bit("goal_position"), Some(15));

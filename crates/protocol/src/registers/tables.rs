@@ -21,7 +21,9 @@ use super::{ByteOrder, RegisterMap, Series};
 /// `CONST: type = (address access sign factory "name" "unit" "description");`
 /// where `sign` is the sign bit of a sign-magnitude register or `-`, or
 /// `CONST: type = (sts factory);` for a register laid out exactly as the
-/// STS/SMS one of the same name, with its own factory value.
+/// STS/SMS one of the same name, with its own factory value, or
+/// `CONST: type = (sts @ address factory);` for the STS/SMS register moved
+/// to another address.
 macro_rules! table {
     ($($konst:ident: $ty:ty = ($($row:tt)*);)*) => {
         $(
@@ -33,6 +35,9 @@ macro_rules! table {
     };
     (@register $konst:ident $ty:ty; sts $factory:literal) => {
         Register { factory: $factory, ..super::sts::$konst.register }
+    };
+    (@register $konst:ident $ty:ty; sts @ $addr:literal $factory:literal) => {
+        Register { address: $addr, factory: $factory, ..super::sts::$konst.register }
     };
     (@register $konst:ident $ty:ty;
         $addr:literal $access:ident $sign:tt $factory:literal $name:literal $unit:literal $desc:literal) => {
@@ -50,6 +55,10 @@ macro_rules! table {
     (@doc $konst:ident sts $factory:literal) => {
         concat!("As [`sts::", stringify!($konst), "`](super::sts::", stringify!($konst),
             "), factory value ", stringify!($factory), ".")
+    };
+    (@doc $konst:ident sts @ $addr:literal $factory:literal) => {
+        concat!("As [`sts::", stringify!($konst), "`](super::sts::", stringify!($konst),
+            ") at address ", stringify!($addr), ", factory value ", stringify!($factory), ".")
     };
     (@doc $konst:ident $addr:literal $access:ident $sign:tt $factory:literal
         $name:literal $unit:literal $desc:literal) => {
@@ -157,8 +166,8 @@ pub mod scs {
         MIN_STARTUP_FORCE: u16 = (sts 0);
         CW_DEAD_ZONE: u8 = (sts 1);
         CCW_DEAD_ZONE: u8 = (sts 1);
-        PROTECTIVE_TORQUE: u8 = (37 E - 20 "protective_torque" "%" "torque after overload");
-        PROTECTION_TIME: u8 = (38 E - 200 "protection_time" "10 ms" "overload time before protection");
+        PROTECTIVE_TORQUE: u8 = (sts @ 37 20);
+        PROTECTION_TIME: u8 = (sts @ 38 200);
         TORQUE_ENABLE: u8 = (40 W - 0 "torque_enable" "" "0 off, 1 on");
         ACCELERATION: u8 = (41 W - 0 "acceleration" "" "acceleration");
         GOAL_POSITION: u16 = (42 W - 0 "goal_position" "steps" "target position, 0..=1023");

@@ -77,7 +77,6 @@ pub use status_level::StatusLevel;
 pub use tables::{addr, scs, sts, SCS, STS};
 pub use typed::{Reg, RegisterValue};
 
-
 /// A family of servos sharing one memory layout and byte order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Series {

@@ -143,4 +143,26 @@ mod tests {
         assert!(matches!(got, Err(TransportError::TimedOut)), "{got:?}");
         assert_eq!(wall.now(), Duration::from_micros(900));
     }
+
+    #[test]
+    fn a_servo_told_to_vanish_after_2_ms_answers_until_then() {
+        let faults: crate::Faults = "vanish=1@0.002".parse().expect("spec");
+        assert_eq!(
+            faults,
+            crate::Faults::none().vanish_after(1, Duration::from_millis(2))
+        );
+        assert!("vanish=1@soon".parse::<crate::Faults>().is_err());
+        assert!("vanish=1@-1".parse::<crate::Faults>().is_err());
+        let wall = Wall::default();
+        let mut bus = bus(&wall);
+        bus.sim().set_faults(faults);
+        let mut reply = [0u8; 16];
+        // The first byte at 0 starts the 2 ms; at 1 ms it still answers.
+        bus.write_all(&ping()).expect("write");
+        assert!(bus.read(&mut reply, Duration::from_millis(1)).is_ok());
+        wall.advance_to(Duration::from_millis(2));
+        bus.write_all(&ping()).expect("write");
+        let got = bus.read(&mut reply, Duration::from_millis(3));
+        assert!(matches!(got, Err(TransportError::TimedOut)), "{got:?}");
+    }
 }

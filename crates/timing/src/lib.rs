@@ -72,7 +72,7 @@ pub use fix::{Change, Fixes};
 pub use link::{Link, BITS_PER_BYTE};
 pub use pack::{
     pack_sync_write, servos_per_frame, sync_write_bytes, sync_write_chunks, sync_write_frames,
-    PackError, Packed,
+    Chunk, PackError, Packed,
 };
 pub use plan::{plan, Plan, PlanError, RoundRobin, MAX_READ_LEN, MAX_SERVOS};
 pub use servobus_protocol::registers::StatusLevel;

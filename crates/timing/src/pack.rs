@@ -193,8 +193,8 @@ pub fn pack_sync_write(
         });
     }
     let mut at = 0;
-    for (ids, data) in chunks(block, per, ids, data) {
-        at += encode::sync_write_flat(&mut buf[at..], block.address, block.len, ids, data)?;
+    for chunk in chunks(block, per, ids, data) {
+        at += chunk.pack(&mut buf[at..])?;
     }
     debug_assert_eq!(at, needed);
     Ok(Packed {
@@ -204,50 +204,115 @@ pub fn pack_sync_write(
     })
 }
 
-/// The servos of each frame [`pack_sync_write`] writes, in order, as
-/// `(ids, data)` pairs that each fit one frame: for a sender that packs one
-/// frame at a time straight into its own send buffer (with
-/// [`pack_sync_write`] on each pair) instead of packing them all first.
+/// The servos of one SYNC WRITE frame, as [`sync_write_chunks`] cuts them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Chunk<'a> {
+    /// The block every servo gets.
+    pub block: Block,
+    /// The servos of this frame, at most [`servos_per_frame`] of them.
+    pub ids: &'a [u8],
+    /// Their blocks, back to back in the order of `ids`.
+    pub data: &'a [u8],
+}
+
+impl Chunk<'_> {
+    /// Packs this frame at the start of `buf`; returns its length. The
+    /// request was checked when it was cut, so only the buffer and the IDs
+    /// remain to check.
+    ///
+    /// # Errors
+    /// [`PackError::BufferTooSmall`] (nothing written), or
+    /// [`PackError::Encode`] for an invalid ID.
+    #[inline]
+    pub fn pack(&self, buf: &mut [u8]) -> Result<usize, PackError> {
+        let Block { address, len } = self.block;
+        encode::sync_write_flat(buf, address, len, self.ids, self.data).map_err(|e| match e {
+            EncodeError::BufferTooSmall { needed, available } => {
+                PackError::BufferTooSmall { needed, available }
+            }
+            e => PackError::Encode(e),
+        })
+    }
+}
+
+/// The frames [`pack_sync_write`] writes, one [`Chunk`] each, in order: for
+/// a sender that packs one frame at a time straight into its own send
+/// buffer ([`Chunk::pack`]) instead of packing them all first.
 ///
 /// ```
 /// use servobus_timing::{sync_write_chunks, Block};
 ///
 /// let ids: [u8; 40] = core::array::from_fn(|i| i as u8);
 /// let data = [0u8; 40 * 6];
-/// let sizes: Vec<usize> = sync_write_chunks(Block::POSITION_TIME_SPEED, &ids, &data)
-///     .unwrap()
-///     .map(|(ids, data)| {
-///         assert_eq!(data.len(), ids.len() * 6);
-///         ids.len()
-///     })
-///     .collect();
+/// let mut buf = [0u8; 256];
+/// let mut sizes = Vec::new();
+/// for chunk in sync_write_chunks(Block::POSITION_TIME_SPEED, &ids, &data).unwrap() {
+///     let len = chunk.pack(&mut buf).unwrap();
+///     assert_eq!(len, 8 + chunk.ids.len() * 7);
+///     sizes.push(chunk.ids.len());
+/// }
 /// assert_eq!(sizes, [35, 5]);
 /// ```
 ///
 /// # Errors
 /// As [`pack_sync_write`], except those about the buffer or the IDs, which
-/// packing each pair reports.
+/// [`Chunk::pack`] reports.
+#[inline]
 pub fn sync_write_chunks<'a>(
     block: Block,
     ids: &'a [u8],
     data: &'a [u8],
-) -> Result<impl Iterator<Item = (&'a [u8], &'a [u8])> + 'a, PackError> {
+) -> Result<impl Iterator<Item = Chunk<'a>> + 'a, PackError> {
     let per = check(block, ids, data)?;
     Ok(chunks(block, per, ids, data))
 }
 
 /// `ids` and `data` cut into frames of `per` servos.
-fn chunks<'a>(
+#[inline]
+fn chunks<'a>(block: Block, per: usize, ids: &'a [u8], data: &'a [u8]) -> Chunks<'a> {
+    Chunks {
+        block,
+        per,
+        ids,
+        data,
+    }
+}
+
+/// The iterator of [`sync_write_chunks`]. Cutting by hand, not by zipping
+/// two `slice::chunks`: their zip divides to size itself, and this runs
+/// every control cycle.
+#[derive(Debug, Clone)]
+struct Chunks<'a> {
     block: Block,
     per: usize,
     ids: &'a [u8],
     data: &'a [u8],
-) -> impl Iterator<Item = (&'a [u8], &'a [u8])> + 'a {
-    ids.chunks(per)
-        .zip(data.chunks(per * usize::from(block.len)))
+}
+
+impl<'a> Iterator for Chunks<'a> {
+    type Item = Chunk<'a>;
+
+    #[inline]
+    fn next(&mut self) -> Option<Chunk<'a>> {
+        let n = self.per.min(self.ids.len());
+        if n == 0 {
+            return None;
+        }
+        let (ids, rest) = self.ids.split_at_checked(n)?;
+        let (data, rest_data) = self
+            .data
+            .split_at_checked(n * usize::from(self.block.len))?;
+        (self.ids, self.data) = (rest, rest_data);
+        Some(Chunk {
+            block: self.block,
+            ids,
+            data,
+        })
+    }
 }
 
 /// Checks a packing request; returns the servos one frame carries.
+#[inline]
 fn check(block: Block, ids: &[u8], data: &[u8]) -> Result<usize, PackError> {
     let len = usize::from(block.len);
     if ids.is_empty() || len == 0 {

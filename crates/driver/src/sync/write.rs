@@ -2,18 +2,19 @@
 //! carrying a block for each servo, answered by nobody.
 
 use servobus_protocol::{is_servo_id, EncodeError};
-use servobus_timing::{pack_sync_write, servos_per_frame, sync_write_chunks, Block, PackError};
+use servobus_timing::{servos_per_frame, sync_write_chunks, Block, PackError};
 
 use crate::{Bus, BusError, Clock, Transport};
 
 impl<T: Transport, C: Clock> Bus<T, C> {
     /// SYNC WRITE `data` at `address` to the servos `ids`: servo `ids[i]`
     /// gets `data[i * L..(i + 1) * L]` with `L = data.len() / ids.len()`.
-    /// Nobody answers. Each frame is packed by
-    /// [`servobus_timing::pack_sync_write`] (split where the length byte
-    /// would pass 255, see [`servobus_timing::sync_write_chunks`]), the same
-    /// packer the cycle budget and the benches measure, straight into the
-    /// send buffer: nothing allocates, however many frames it takes.
+    /// Nobody answers. The frames are cut and packed by
+    /// [`servobus_timing::sync_write_chunks`] (split where the length byte
+    /// would pass 255), the packer under
+    /// [`servobus_timing::pack_sync_write`] that the cycle budget and the
+    /// benches measure, each straight into the send buffer: nothing
+    /// allocates, however many frames it takes.
     ///
     /// # Errors
     /// [`BusError::InvalidRequest`] when `data` is not `ids.len()` blocks of
@@ -40,11 +41,10 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 }));
             }
         }
-        for (ids, data) in frames {
+        for frame in frames {
             self.io.begin();
-            let packed = pack_sync_write(&mut self.io.tx, block, ids, data).map_err(pack_error)?;
-            self.io.tx_len = packed.len;
-            self.count_sync_write(ids);
+            self.io.tx_len = frame.pack(&mut self.io.tx).map_err(pack_error)?;
+            self.count_sync_write(frame.ids);
             self.io.send()?;
         }
         Ok(())

@@ -62,6 +62,12 @@ pub enum EncodeError {
     },
 }
 
+// The checks and `start` are `#[inline]`: the SYNC WRITE encoders in
+// `sync.rs` call them every control cycle from another module, which without
+// the hint may land in another codegen unit and pay a call each. `finish`,
+// the checksum pass, is left to the compiler: a call costs little next to
+// summing the whole frame.
+#[inline]
 fn check_id(id: u8, broadcast_allowed: bool) -> Result<(), EncodeError> {
     if is_servo_id(id) || (broadcast_allowed && id == BROADCAST_ID) {
         Ok(())
@@ -73,6 +79,7 @@ fn check_id(id: u8, broadcast_allowed: bool) -> Result<(), EncodeError> {
     }
 }
 
+#[inline]
 fn check_params(params: usize) -> Result<(), EncodeError> {
     let length = params + 2;
     if params > MAX_PARAMS {
@@ -85,6 +92,7 @@ fn check_params(params: usize) -> Result<(), EncodeError> {
     }
 }
 
+#[inline]
 fn check_buf(buf: &[u8], params: usize) -> Result<usize, EncodeError> {
     let needed = frame_len(params);
     if buf.len() < needed {
@@ -99,6 +107,7 @@ fn check_buf(buf: &[u8], params: usize) -> Result<usize, EncodeError> {
 
 /// Writes header, ID, length and the fifth byte; parameters go at 5.. and the
 /// checksum is added by [`finish`].
+#[inline]
 fn start(buf: &mut [u8], id: u8, params: usize, fifth: u8) {
     buf[0] = 0xFF;
     buf[1] = 0xFF;

@@ -21,6 +21,7 @@ pub const fn sync_write_params(servos: usize, len: usize) -> usize {
 /// [`EncodeError::DataLength`], [`EncodeError::FrameTooLong`] (the length byte
 /// would pass 255: split the servos over several frames) or
 /// [`EncodeError::BufferTooSmall`].
+#[inline]
 pub fn sync_write<'d, I>(
     buf: &mut [u8],
     address: u8,

@@ -17,18 +17,17 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
-use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
-    bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
-    Runner, Telemetry,
+    spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions, Runner, Telemetry,
 };
 use servobus_sim::PtyServer;
 use servobus_trajectory::Trajectory;
 
+use super::link::{every_port, open_bus, Allowance, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
 
 // `run` below is the order of events; each step's details live by concern:
@@ -55,14 +54,9 @@ pub struct Args {
     /// Robot file or built-in name (default: the one the motion file names).
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
-    /// Serial port of real servos, for the robot's first bus (default: the
-    /// robot file's ports; without any, the built-in simulator).
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file of the physical robot (default: the robot file's
-    /// `calibration:`).
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
+    /// The port of real servos and their calibration.
+    #[command(flatten)]
+    pub servos: super::ServoArgs,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
@@ -181,7 +175,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
-            let clock = SystemClock::new();
             let mut buses = Vec::new();
             let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
             for bus in &robot.buses {
@@ -190,41 +183,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 let path = server.path().to_string_lossy().into_owned();
                 let flag = Arc::clone(&stop_servers);
                 servers.push(std::thread::spawn(move || server.serve(&flag)));
-                let mut transport = SerialTransport::open(&path, bus.baud, clock)
-                    .with_context(|| format!("cannot open the simulator's pty {path}"))?;
-                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
-                let transport: Box<dyn Transport + Send> = Box::new(transport);
-                // A pty on a busy machine wakes late now and then: allow
-                // for it in the reply deadlines.
-                let settings = bus_settings(bus)
-                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
-                buses.push(Bus::new(transport, clock, settings));
+                buses.push(open_bus(bus, &path, Allowance::Run)?);
             }
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {
-            let clock = SystemClock::new();
             let mut buses = Vec::new();
-            let mut ptys = 0;
             for (bus, port) in robot.buses.iter().zip(ports) {
-                let mut transport = SerialTransport::open(port, bus.baud, clock)
-                    .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
-                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
-                if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
-                    eprintln!("warning: {warning}");
-                }
-                let mut settings = bus_settings(bus);
-                if transport.is_pty() {
-                    // A simulator served on a pty (`servobus sim`) answers
-                    // from a process that can wait for the CPU, as the
-                    // built-in one does: the same allowances.
-                    settings =
-                        settings.with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
-                    ptys += 1;
-                }
-                let transport: Box<dyn Transport + Send> = Box::new(transport);
-                buses.push(Bus::new(transport, clock, settings));
+                buses.push(open_bus(bus, port, Allowance::Run)?);
             }
+            // A simulator served on a pty (`servobus sim`) answers from a
+            // process that can wait for the CPU, as the built-in one does.
+            let ptys = buses.iter().filter(|b| b.transport().is_pty()).count();
             super::calibrate::check_buses(&robot, &mut buses, ports)?;
             let faults = if ptys == buses.len() {
                 fault_policy(&Backend::Simulated, rate_hz)

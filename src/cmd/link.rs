@@ -8,6 +8,7 @@
 //! scheduling allowance for a simulator). How much of that a command
 //! allows for up front is its [`Allowance`].
 
+use std::sync::OnceLock;
 use std::time::Duration;
 
 use anyhow::Context;
@@ -55,7 +56,14 @@ impl Allowance {
     }
 }
 
-/// Opens `port` at `baud` with the system clock.
+/// The clock of every bus this process opens: one epoch, so that the buses
+/// of a robot run in step (a run's buses must share their time base).
+fn system_clock() -> SystemClock {
+    static CLOCK: OnceLock<SystemClock> = OnceLock::new();
+    *CLOCK.get_or_init(SystemClock::new)
+}
+
+/// Opens `port` at `baud` on the process's one [`SystemClock`].
 ///
 /// # Errors
 /// The driver's, which say why the port cannot be opened and what to do.
@@ -63,7 +71,7 @@ pub(crate) fn open_port(
     port: &str,
     baud: u32,
 ) -> Result<SerialTransport<SystemClock>, TransportError> {
-    SerialTransport::open(port, baud, SystemClock::new())
+    SerialTransport::open(port, baud, system_clock())
 }
 
 /// Warns when the port is an FTDI adapter whose latency timer slows every

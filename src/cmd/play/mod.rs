@@ -161,9 +161,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let units = motion.units;
     let duration = trajectory.duration();
     let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
-    let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
-    trajectory.sample(0.0, &mut start);
-    let start: Vec<f64> = start.iter().map(|s| s.position).collect();
     let mut servers = Vec::new();
     let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
@@ -215,8 +212,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
             .collect(),
         keyframes: keyframe_times,
-        start,
-        limits: servobus_runtime::config::joint_limits(&robot),
+        approach: runner.approach().as_secs_f64(),
         settle: SETTLE.as_secs_f64(),
     };
     let outcome = if args.monitor {

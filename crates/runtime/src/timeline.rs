@@ -492,8 +492,15 @@ mod tests {
         let limits = vec![JointLimits::new(2.0, 8.0, Some(40.0))];
         let rest = [JointState::at_rest(0.0)];
         let main = Arc::new(traj::retarget(&limits, &rest, &[1.0]).expect("a path"));
-        let tl = Timeline::new(limits.clone(), main.clone(), &[-1.0], Some(0.25), true, 0.01)
-            .expect("an approach");
+        let tl = Timeline::new(
+            limits.clone(),
+            main.clone(),
+            &[-1.0],
+            Some(0.25),
+            true,
+            0.01,
+        )
+        .expect("an approach");
         let t0 = tl.approach().as_secs_f64();
         // 2 rad at a quarter of the limits take longer than the path's 1 rad at full.
         assert!(t0 > main.duration(), "{t0}");

@@ -45,7 +45,7 @@ pub struct Args {
     /// Its port (without one, the simulator on a pty) and calibration:
     /// with a port it must match the servos.
     #[command(flatten)]
-    pub servos: super::ServoArgs,
+    pub hardware: super::HardwareArgs,
     /// How long to measure, in seconds.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
@@ -156,7 +156,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let mut robot = load_robot_any_rate_calibrated(&path, args.servos.calibration.as_deref())?;
+    let mut robot = load_robot_any_rate_calibrated(&path, args.hardware.calibration.as_deref())?;
     // The robot's rate must fit as it would for `play`: bench measures the
     // cycle that rate would run.
     for bus in &mut robot.buses {
@@ -172,7 +172,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let duration = Duration::from_secs_f64(args.seconds);
 
     let mut runs = Vec::new();
-    let ports = bus_ports(&robot, args.servos.port.as_deref());
+    let ports = bus_ports(&robot, args.hardware.port.as_deref());
     for ((index, bus), port) in robot.buses.iter().enumerate().zip(ports) {
         let robot = robot.clone();
         let mut bus = bus.clone();

@@ -1,7 +1,7 @@
 //! The bus tools: `servobus scan`, `ping`, `read`, `write` and `set-id`.
 //!
 //! Each opens the serial port (or the simulator's pty), builds a driver
-//! [`Bus`] with reply deadlines derived from the baud rate and the adapter
+//! [`Bus`](servobus_driver::Bus) with reply deadlines derived from the baud rate and the adapter
 //! latency, and reports in one line per fact. Errors are one line and a
 //! non-zero exit code.
 
@@ -14,11 +14,11 @@ use super::exit::input;
 
 mod regs;
 pub use regs::{read, set_id, write};
-use servobus_driver::{Bus, BusError, BusSettings, SerialTransport, SystemClock};
+use servobus_driver::BusError;
+
+use super::link::{open_plain_bus, SerialBus};
 use servobus_protocol::registers::{self, addr, Model, Series};
 use servobus_protocol::MAX_ID;
-
-type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
 
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
@@ -113,19 +113,10 @@ pub struct SetIdArgs {
 
 /// Opens the port and builds a bus; warns about a slow FTDI latency timer.
 fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Result<SerialBus> {
-    let clock = SystemClock::new();
-    let transport = SerialTransport::open(&port.port, baud, clock)
-        .with_context(|| format!("cannot open {}", port.port))?;
-    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
-        eprintln!("warning: {warning}");
-    }
-    let latency = port
-        .latency_us
-        .map_or_else(|| transport.assumed_latency(), Duration::from_micros);
-    let settings = BusSettings::new(series, baud)
-        .with_latency(latency)
-        .with_retries(retries);
-    Ok(Bus::new(transport, clock, settings))
+    let latency = port.latency_us.map(Duration::from_micros);
+    let mut bus = open_plain_bus(&port.port, baud, series, latency)?;
+    bus.set_settings(bus.settings().with_retries(retries));
+    Ok(bus)
 }
 
 /// Measures the adapter's latency with servo `id` and widens the bus's

@@ -84,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
     } else if let Some(out) = &args.to_lerobot {
-        let from = args.robot.servos.calibration.clone().or(named).context(
+        let from = args.robot.hardware.calibration.clone().or(named).context(
             "--to-lerobot alone exports a calibration: give --calibration FILE \
              (the robot file names none)",
         )?;
@@ -131,7 +131,7 @@ fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
 /// An input error naming the first bus without a port, when only some have
 /// one.
 fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
-    match every_port(robot, args.robot.servos.port.as_deref()) {
+    match every_port(robot, args.robot.hardware.port.as_deref()) {
         Ports::None => Ok(None),
         Ports::Every(ports) => Ok(Some(ports)),
         Ports::Missing(bus) => Err(super::exit::input(format!(

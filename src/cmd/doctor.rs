@@ -54,9 +54,11 @@ impl BusOutcome {
 
 /// Runs `servobus doctor`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot =
-        load_robot_any_rate_calibrated(&args.robot.path, args.robot.servos.calibration.as_deref())?;
-    let ports = bus_ports(&robot, args.robot.servos.port.as_deref());
+    let robot = load_robot_any_rate_calibrated(
+        &args.robot.path,
+        args.robot.hardware.calibration.as_deref(),
+    )?;
+    let ports = bus_ports(&robot, args.robot.hardware.port.as_deref());
     let mut outcomes = Vec::new();
     if ports.iter().all(Option::is_none) {
         let buses = servobus_runtime::sim::virtual_buses(&robot)?;

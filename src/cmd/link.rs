@@ -12,7 +12,8 @@ use std::sync::OnceLock;
 use std::time::Duration;
 
 use anyhow::Context;
-use servobus_driver::{Bus, SerialTransport, SystemClock, TransportError};
+use servobus_driver::{Bus, BusSettings, SerialTransport, SystemClock, TransportError};
+use servobus_protocol::registers::Series;
 use servobus_runtime::bus_settings;
 use servobus_runtime::config::{BusConfig, Robot};
 use servobus_timing::Link;
@@ -118,6 +119,27 @@ pub(crate) fn open_bus(
     let bus = open_bus_quietly(cfg, port, allowance)?;
     warn_slow_adapter(bus.transport());
     Ok(bus)
+}
+
+/// A bus on `port` without a robot file (the bus tools, a monitor that
+/// scans): `baud`, the register layout of `series`, and the adapter
+/// latency given (`--latency-us`) or else the port's assumed one. Warns
+/// about a slow FTDI adapter.
+///
+/// # Errors
+/// When the port cannot be opened.
+pub(crate) fn open_plain_bus(
+    port: &str,
+    baud: u32,
+    series: Series,
+    latency: Option<Duration>,
+) -> anyhow::Result<SerialBus> {
+    let transport = open_port(port, baud).with_context(|| format!("cannot open {port}"))?;
+    warn_slow_adapter(&transport);
+    let latency = latency.unwrap_or_else(|| Allowance::Assumed.latency(Duration::ZERO, &transport));
+    let clock = *transport.clock();
+    let settings = BusSettings::new(series, baud).with_latency(latency);
+    Ok(Bus::new(transport, clock, settings))
 }
 
 /// The port of each bus of `robot`: `port` (the command line's `--port`)

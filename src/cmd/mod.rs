@@ -141,7 +141,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
 /// how they are calibrated. A command whose flag means more says so with
 /// `#[command(mut_arg(...))]` on its own arguments.
 #[derive(Debug, Clone, clap::Args)]
-pub struct ServoArgs {
+pub struct HardwareArgs {
     /// Serial port of real servos, for the robot's first bus (default: the
     /// robot file's ports; without any, the built-in simulator).
     #[arg(long)]
@@ -152,7 +152,7 @@ pub struct ServoArgs {
     pub calibration: Option<PathBuf>,
 }
 
-/// `--robot` (required) and the [`ServoArgs`] of the commands that work on
+/// `--robot` (required) and the [`HardwareArgs`] of the commands that work on
 /// one robot's servos.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RobotArgs {
@@ -161,7 +161,7 @@ pub struct RobotArgs {
     pub path: PathBuf,
     /// Its port and calibration.
     #[command(flatten)]
-    pub servos: ServoArgs,
+    pub hardware: HardwareArgs,
 }
 
 /// Parses a robot argument: a file, or a built-in robot's name.

@@ -11,12 +11,12 @@ use anyhow::{bail, Context};
 use crossbeam_channel::TryRecvError;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
-use servobus_driver::{Bus, BusSettings, Clock, Transport};
+use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
 use servobus_runtime::{Command, Runner, Telemetry};
 
-use super::link::{open_bus, open_port, warn_slow_adapter, Allowance, SerialBus};
+use super::link::{open_bus, open_plain_bus, Allowance};
 
 /// Baud rate a scan without a robot file uses (the servos' factory rate).
 const SCAN_BAUD: u32 = 1_000_000;
@@ -41,7 +41,7 @@ pub struct Args {
     pub robot: Option<PathBuf>,
     /// The port and the calibration.
     #[command(flatten)]
-    pub servos: super::ServoArgs,
+    pub hardware: super::HardwareArgs,
     /// Print one JSON line per refresh instead of the live view.
     #[arg(long)]
     pub json: bool,
@@ -67,7 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = match &args.robot {
         Some(path) => Some(load_robot_any_rate_calibrated(
             path,
-            args.servos.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?),
         None => None,
     };
@@ -82,7 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let port = args
-        .servos
+        .hardware
         .port
         .clone()
         .or_else(|| cfg.and_then(|c| c.port.clone()));
@@ -90,7 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         (Some(port), _, _) => {
             let mut bus = match cfg {
                 Some(c) => open_bus(c, &port, Allowance::Assumed)?,
-                None => scan_bus(&port)?,
+                None => open_plain_bus(&port, SCAN_BAUD, Series::Sts, None)?,
             };
             let servos = match (robot.as_ref(), cfg) {
                 (Some(r), Some(c)) => Watched::of_bus(c, r.units),
@@ -118,17 +118,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "give --robot FILE, --port PATH, or both",
         )),
     }
-}
-
-/// A bus on `port` for a scan without a robot file: the servos' factory
-/// baud rate and series, and the port's assumed adapter latency.
-fn scan_bus(port: &str) -> anyhow::Result<SerialBus> {
-    let transport = open_port(port, SCAN_BAUD).with_context(|| format!("cannot open {port}"))?;
-    warn_slow_adapter(&transport);
-    let latency = Allowance::Assumed.latency(Duration::ZERO, &transport);
-    let clock = *transport.clock();
-    let settings = BusSettings::new(Series::Sts, SCAN_BAUD).with_latency(latency);
-    Ok(Bus::new(transport, clock, settings))
 }
 
 /// Restores the terminal when dropped (the view ends, an error returns);

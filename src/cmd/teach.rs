@@ -60,7 +60,8 @@ pub struct Args {
 
 /// Runs `servobus teach`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_calibrated(&args.robot.path, args.robot.servos.calibration.as_deref())?;
+    let robot =
+        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(super::exit::input(
             "--tolerance must be a positive number of degrees",
@@ -74,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
     super::check_writable("-o", &args.output)?;
-    let buses = open_buses(&robot, args.robot.servos.port.as_deref())?;
+    let buses = open_buses(&robot, args.robot.hardware.port.as_deref())?;
     let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
     teacher.release()?;
     let held = if args.hold.is_empty() {

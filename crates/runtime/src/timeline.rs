@@ -277,10 +277,8 @@ impl Timeline {
         Ok(tl)
     }
 
-    /// How long the approach from the present positions to the main path's
-    /// start takes, as planned ([`Duration::ZERO`] when the joints were
-    /// there already or no approach was asked for): the main path begins
-    /// that long after the run's start.
+    /// How long the planned approach to the main path's start takes (zero
+    /// without one): the main path begins then.
     pub fn approach(&self) -> Duration {
         self.approach
     }
@@ -489,25 +487,20 @@ mod tests {
 
     #[test]
     fn the_approach_is_when_the_main_path_begins() {
-        let limits = vec![JointLimits::new(2.0, 8.0, Some(40.0))];
-        let rest = [JointState::at_rest(0.0)];
-        let main = Arc::new(traj::retarget(&limits, &rest, &[1.0]).expect("a path"));
-        let tl = Timeline::new(
-            limits.clone(),
-            main.clone(),
-            &[-1.0],
-            Some(0.25),
-            true,
-            0.01,
-        )
-        .expect("an approach");
+        let lim = vec![JointLimits::new(2.0, 8.0, Some(40.0))];
+        let main = traj::retarget(&lim, &[JointState::at_rest(0.0)], &[1.0]).expect("a path");
+        let main = Arc::new(main);
+        let plan = |from| Timeline::new(lim.clone(), main.clone(), &[from], Some(0.25), true, 0.01);
+        let tl = plan(-1.0).expect("an approach");
         let t0 = tl.approach().as_secs_f64();
         // 2 rad at a quarter of the limits take longer than the path's 1 rad at full.
         assert!(t0 > main.duration(), "{t0}");
         assert_eq!(tl.kind_at(t0 - 1e-3), Some(Kind::Approach));
         assert_eq!(tl.kind_at(t0 + 1e-3), Some(Kind::Main));
-        let there = Timeline::new(limits, main, &[0.0], Some(0.25), true, 0.01).expect("none");
-        assert_eq!(there.approach(), Duration::ZERO);
-        assert_eq!(there.kind_at(0.0), Some(Kind::Main));
+        let there = plan(0.0).expect("no approach");
+        assert_eq!(
+            (there.approach(), there.kind_at(0.0)),
+            (Duration::ZERO, Some(Kind::Main))
+        );
     }
 }

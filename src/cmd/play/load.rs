@@ -99,14 +99,14 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         };
         let robot = servobus_runtime::config::load_robot_calibrated(
             robot_path,
-            args.servos.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?;
         (recording_motion(&args.motion, &robot), robot)
     } else {
         load_motion_calibrated(
             &args.motion,
             args.robot.as_deref(),
-            args.servos.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?
     };
     let rate_hz = match args.rate {

@@ -56,7 +56,7 @@ pub struct Args {
     pub robot: Option<PathBuf>,
     /// The port of real servos and their calibration.
     #[command(flatten)]
-    pub servos: super::ServoArgs,
+    pub hardware: super::HardwareArgs,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,

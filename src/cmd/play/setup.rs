@@ -60,7 +60,7 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     if args.fast {
         return Ok(Backend::Fast);
     }
-    match every_port(robot, args.servos.port.as_deref()) {
+    match every_port(robot, args.hardware.port.as_deref()) {
         Ports::None => Ok(Backend::Simulated),
         Ports::Every(ports) => Ok(Backend::Hardware(ports)),
         Ports::Missing(bus) => Err(crate::cmd::exit::input(format!(

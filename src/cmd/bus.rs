@@ -23,6 +23,12 @@ use servobus_protocol::MAX_ID;
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
 const LATENCY_CEILING: Duration = Duration::from_millis(300);
+/// PINGs the bus tools measure an adapter's latency with: few enough to
+/// stay quick, enough that one lucky reply does not set the figure.
+const LATENCY_PINGS: u32 = 3;
+/// The measured latency's worst case is allowed this many times over in
+/// the deadlines: room for the spikes a USB adapter shows now and then.
+const LATENCY_HEADROOM: u32 = 2;
 
 /// Options every bus tool shares.
 #[derive(Debug, clap::Args)]
@@ -120,12 +126,12 @@ fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Resu
 }
 
 /// Measures the adapter's latency with servo `id` and widens the bus's
-/// deadlines to twice it when the assumed latency is too short. Used by
-/// the single-servo tools, which can afford three PINGs to be sure.
+/// deadlines to [`LATENCY_HEADROOM`] times it when the assumed latency is
+/// too short. Used by the single-servo tools, which can afford the PINGs.
 fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
-    let m = bus.measure_latency(id, 3, LATENCY_CEILING)?;
-    if m.max * 2 > bus.settings().link.latency {
-        bus.set_latency(m.max * 2);
+    let m = bus.measure_latency(id, LATENCY_PINGS, LATENCY_CEILING)?;
+    if m.max * LATENCY_HEADROOM > bus.settings().link.latency {
+        bus.set_latency(m.max * LATENCY_HEADROOM);
     }
     Ok(())
 }
@@ -379,7 +385,7 @@ fn rescan_if_slow(
 ) -> anyhow::Result<()> {
     let assumed = bus.settings().link.latency;
     switch_baud(bus, baud, "the port")?;
-    let Ok(m) = bus.measure_latency(first, 3, LATENCY_CEILING) else {
+    let Ok(m) = bus.measure_latency(first, LATENCY_PINGS, LATENCY_CEILING) else {
         return Ok(());
     };
     // Occasional spikes are what retries are for; a typical latency above
@@ -393,7 +399,7 @@ fn rescan_if_slow(
         m.mean.as_micros(),
         assumed.as_micros()
     );
-    bus.set_latency(m.max * 2);
+    bus.set_latency(m.max * LATENCY_HEADROOM);
     for id in 0..=MAX_ID {
         let known =
             found.iter().any(|f| f.id == id && f.baud == baud) || collisions.contains(&(id, baud));

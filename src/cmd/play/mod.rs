@@ -10,21 +10,20 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use std::sync::Arc;
-use std::thread::JoinHandle;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
+use servobus_driver::{Bus, SystemClock, Transport};
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
-    spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions, Runner, Telemetry,
+    bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
+    Runner, Telemetry,
 };
-use servobus_sim::PtyServer;
+use servobus_sim::WallBus;
 use servobus_trajectory::Trajectory;
 
 use super::link::{every_port, open_bus, Allowance, Ports};
@@ -40,7 +39,7 @@ mod view;
 
 use load::{check_outputs, load};
 use report::{file_name, print_plan, print_report};
-use setup::{backend, fault_policy, join_servers, sim_pose};
+use setup::{backend, sim_pose};
 use view::{follow, install_ctrl_c, Shown, APPROACH, SETTLE};
 
 /// Arguments of `servobus play`.
@@ -153,7 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             core: args.core,
             fifo_priority: args.fifo,
         },
-        faults: fault_policy(&backend, rate_hz),
+        faults: FaultPolicy::default(),
         ..RunOptions::default()
     };
 
@@ -161,8 +160,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let units = motion.units;
     let duration = trajectory.duration();
     let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
-    let mut servers = Vec::new();
-    let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
         Backend::Fast => {
             let buses = servobus_runtime::sim::SimRobot::builder(&robot)
@@ -172,16 +169,22 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
-            let mut buses = Vec::new();
-            let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
-            for bus in &robot.buses {
-                let mut server = PtyServer::open(bus.baud, sim.servos(bus)?)
-                    .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
-                let path = server.path().to_string_lossy().into_owned();
-                let flag = Arc::clone(&stop_servers);
-                servers.push(std::thread::spawn(move || server.serve(&flag)));
-                buses.push(open_bus(bus, &path, Allowance::Run)?);
-            }
+            // In this process, paced by the wall clock: no pty between the
+            // runtime and its servos (see `servobus_sim::WallBus`).
+            let clock = SystemClock::new();
+            let sim = servobus_runtime::sim::SimRobot::builder(&robot)
+                .pose(&pose)
+                .build()?;
+            let buses = sim
+                .buses()
+                .iter()
+                .zip(&robot.buses)
+                .map(|(sim, bus)| {
+                    let transport: Box<dyn Transport + Send> =
+                        Box::new(WallBus::new(sim.clone(), clock));
+                    Bus::new(transport, clock, bus_settings(bus))
+                })
+                .collect();
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {
@@ -189,16 +192,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             for (bus, port) in robot.buses.iter().zip(ports) {
                 buses.push(open_bus(bus, port, Allowance::Run)?);
             }
-            // A simulator served on a pty (`servobus sim`) answers from a
-            // process that can wait for the CPU, as the built-in one does.
-            let ptys = buses.iter().filter(|b| b.transport().is_pty()).count();
             super::calibrate::check_buses(&robot, &mut buses, ports)?;
-            let faults = if ptys == buses.len() {
-                fault_policy(&Backend::Simulated, rate_hz)
-            } else {
-                options.faults
-            };
-            spawn(&robot, trajectory, buses, RunOptions { faults, ..options })?
+            spawn(&robot, trajectory, buses, options)?
         }
     };
 
@@ -221,8 +216,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         follow(&runner, &args, log, &shown, units, duration)
     };
     let report = runner.join();
-    stop_servers.store(true, Ordering::SeqCst);
-    join_servers(servers);
     let (log, plot) = outcome?;
     let report = report?;
 
@@ -263,18 +256,4 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn names_of(robot: &Robot) -> Vec<String> {
     robot.joints().map(|j| j.name.clone()).collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn only_the_wall_clock_simulator_tolerates_a_longer_silence() {
-        assert_eq!(fault_policy(&Backend::Fast, 200.0), FaultPolicy::default());
-        let hw = Backend::Hardware(vec!["/dev/ttyACM0".into()]);
-        assert_eq!(fault_policy(&hw, 200.0), FaultPolicy::default());
-        assert_eq!(fault_policy(&Backend::Simulated, 200.0).missing_cycles, 12);
-        assert_eq!(fault_policy(&Backend::Simulated, 20.0).missing_cycles, 3);
-    }
 }

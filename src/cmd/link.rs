@@ -201,6 +201,27 @@ mod tests {
     }
 
     #[test]
+    fn a_pty_gets_its_allowance_and_the_robot_file_s_larger_figure_wins() {
+        let mut robot = two_buses([None, None]);
+        let servos = servobus_runtime::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
+        let server = servobus_sim::PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
+        let path = server.path().to_string_lossy().into_owned();
+        let pty = open_port(&path, robot.buses[0].baud).expect("the pty opens");
+        assert!(pty.is_pty());
+        let none = Duration::ZERO;
+        assert_eq!(Allowance::Run.latency(none, &pty), Link::PTY_LATENCY);
+        assert_eq!(Allowance::Assumed.latency(none, &pty), Link::PTY_LATENCY);
+        let patient = Duration::from_millis(50);
+        assert_eq!(Allowance::AtLeast(patient).latency(none, &pty), patient);
+        let long = Link::PTY_LATENCY * 4;
+        assert_eq!(Allowance::Run.latency(long, &pty), long);
+        robot.buses[0].latency = long;
+        drop(pty); // opened with exclusive access
+        let bus = open_bus_quietly(&robot.buses[0], &path, Allowance::Run).expect("a bus");
+        assert_eq!(bus.settings().link.latency, long);
+    }
+
+    #[test]
     fn the_command_line_port_is_the_first_bus_s_and_the_file_gives_the_rest() {
         let robot = two_buses([Some("/dev/a"), Some("/dev/b")]);
         assert_eq!(

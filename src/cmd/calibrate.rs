@@ -16,8 +16,6 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_driver::{Bus, Clock, Transport};
-
-use super::link::{every_port, open_bus, Allowance, Ports, SerialBus};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
     Operator, ProcedureOptions, Refusal, Step,
@@ -26,6 +24,8 @@ use servobus_runtime::config::{
     load_calibration, load_robot_calibrated, load_robot_design, save_calibration, utc_now,
     Calibration, Robot, RobotCalibration,
 };
+
+use super::link::{every_port, open_bus, Allowance, Ports, SerialBus};
 
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]

@@ -7,11 +7,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
-use super::link::{bus_ports, open_bus, Allowance, SerialBus};
 use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
 use servobus_runtime::config::{load_robot_calibrated, Robot};
 use servobus_runtime::teach::{distance, motion_yaml, reduce, StillCapture, Teacher, TimedPose};
+
+use super::link::{bus_ports, open_bus, Allowance, SerialBus};
 
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use std::process::Command;
+use std::process::{Command, Output};
 
 use common::{
     arg, error, is_root, json, says, scratch, servobus, servobus_as_nobody, servobus_in, stderr,
@@ -240,6 +240,18 @@ fn list_shows_the_builtins_and_init_refuses_to_overwrite() {
     );
 }
 
+/// `SHELL -c SCRIPT` where `tool` is installed (it runs with `--version`);
+/// `None` where it is not.
+fn script_if_installed(tool: &str, shell: &str, script: &str) -> Option<Output> {
+    Command::new(tool).arg("--version").output().ok()?;
+    Some(
+        Command::new(shell)
+            .args(["-c", script])
+            .output()
+            .expect(shell),
+    )
+}
+
 #[test]
 fn completions_load_in_bash_and_the_man_page_renders() {
     for shell in ["bash", "zsh", "fish"] {
@@ -247,13 +259,8 @@ fn completions_load_in_bash_and_the_man_page_renders() {
         assert!(out.status.success(), "{shell}");
         assert!(stdout(&out).contains("servobus"), "{shell}");
     }
-    let has_bash = Command::new("bash").arg("--version").output().is_ok();
-    if has_bash {
-        let script = format!("set -e; source <('{BIN}' completions bash); complete -p servobus");
-        let out = Command::new("bash")
-            .args(["-c", &script])
-            .output()
-            .expect("bash");
+    let script = format!("set -e; source <('{BIN}' completions bash); complete -p servobus");
+    if let Some(out) = script_if_installed("bash", "bash", &script) {
         assert!(out.status.success(), "bash: {}", stderr(&out));
         assert!(stderr(&out).is_empty(), "bash: {}", stderr(&out));
         assert!(
@@ -270,13 +277,8 @@ fn completions_load_in_bash_and_the_man_page_renders() {
         "{roff}"
     );
     assert!(roff.contains("SERVOBUS PLAY") && roff.contains("SERVOBUS COMPLETIONS"));
-    let has_man = Command::new("man").arg("--version").output().is_ok();
-    if has_man {
-        let script = format!("'{BIN}' man | MANWIDTH=80 man -l - 2>&1");
-        let out = Command::new("sh")
-            .args(["-c", &script])
-            .output()
-            .expect("sh");
+    let script = format!("'{BIN}' man | MANWIDTH=80 man -l - 2>&1");
+    if let Some(out) = script_if_installed("man", "sh", &script) {
         let text = stdout(&out);
         assert!(out.status.success(), "man: {text}");
         assert!(text.contains("Exit status"), "rendered: {text}");

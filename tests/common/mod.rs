@@ -14,7 +14,7 @@ use std::process::{Command, Output};
 #[allow(unused_imports)]
 pub use process::{signal, Running};
 #[allow(unused_imports)]
-pub use sim::{virtual_bus, Sim};
+pub use sim::{read_truth, virtual_bus, Sim};
 
 /// The `servobus` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_servobus");

@@ -12,7 +12,18 @@ use servobus_runtime::bus_settings;
 use servobus_runtime::config::Robot;
 use servobus_sim::{Faults, SimBus};
 
-use super::{repo, stderr, stdout, BIN};
+use super::{arg, repo, stderr, stdout, write_file, BIN};
+
+/// A truth file's header and rows (the time, then every joint's angle).
+pub fn read_truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("the truth file");
+    let mut lines = text.lines();
+    let header = lines.next().expect("a header").split(',');
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
+        .collect();
+    (header.map(str::to_owned).collect(), rows)
+}
 
 /// The first bus of `robot` as `servobus sim` serves it, with `faults`, on
 /// a virtual clock: the simulator (to look into and to fault) and the
@@ -84,6 +95,24 @@ impl Sim {
             format!("serving {servos} servos on {}", sim.link.display())
         );
         sim
+    }
+
+    /// Starts `servobus sim` for `robot` (`servos` servos) with the
+    /// arguments `extra` and a hand that plays `hand` (written to
+    /// `hand.yaml` in `dir`); the truth goes to `truth.csv` in `dir`. The
+    /// simulator and the truth file.
+    pub fn start_hand(
+        dir: &Path,
+        robot: &Path,
+        servos: usize,
+        hand: &str,
+        extra: &[&str],
+    ) -> (Sim, PathBuf) {
+        let hand = write_file(dir, "hand.yaml", hand);
+        let truth = dir.join("truth.csv");
+        let body = ["--hand", arg(&hand), "--truth", arg(&truth)];
+        let sim = Sim::start_robot(dir, robot, servos, &[extra, &body].concat());
+        (sim, truth)
     }
 
     /// Waits until the simulator has run `s` seconds.

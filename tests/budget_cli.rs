@@ -18,8 +18,8 @@ fn budget_json(robot: &str, args: &[&str]) -> serde_json::Value {
 }
 
 /// The SO-101 with one line of its file changed, in a file of its own.
-fn so101_with(name: &str, from: &str, to: &str) -> PathBuf {
-    let text = edited("configs/robots/so101.yaml", &[(from, to)]);
+fn so101_with(name: &str, edit: (&str, &str)) -> PathBuf {
+    let text = edited("configs/robots/so101.yaml", &[edit]);
     temp_file("budget_cli", name, &text)
 }
 
@@ -80,11 +80,9 @@ fn scs_servos_are_read_one_by_one() {
 
 #[test]
 fn factory_return_delay_and_what_would_fit() {
-    let p = so101_with(
-        "factory.yaml",
-        "return_delay_us: 0 ",
-        "return_delay_us: 500 ",
-    );
+    // The factory setting: 500 us.
+    let edit = ("return_delay_us: 0 ", "return_delay_us: 500 ");
+    let p = so101_with("factory.yaml", edit);
     let path = arg(&p);
     let out = servobus(&["budget", "--robot", path, "--json", "--rate", "300"]);
     // The rate does not fit: a problem found, and still the full figures.
@@ -145,7 +143,8 @@ fn a_bad_robot_file_is_reported_with_its_position() {
 /// 17,180 us: 58.2 Hz at most.
 #[test]
 fn ftdi_default_latency_caps_the_so101_near_58_hz() {
-    let p = so101_with("ftdi.yaml", "latency_us: auto ", "latency_us: 16000 ");
+    let edit = ("latency_us: auto ", "latency_us: 16000 ");
+    let p = so101_with("ftdi.yaml", edit);
     let v = json(&servobus(&["budget", "--robot", arg(&p), "--json"]));
     let b = &v["buses"][0];
     assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 50.0 + 16_000.0);

@@ -24,7 +24,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use common::{arg, edited, scratch, write_file, Running, SO101_JOINTS};
+use common::{arg, edited, joint_names, scratch, write_file, Running};
 
 /// Cruise speed, acceleration and jerk limits of the test robot's pan.
 const V: f64 = 30.0;
@@ -332,8 +332,10 @@ fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
     );
 
     let first = [0.0, -90.0, 90.0, 45.0, 0.0, 10.0];
+    let names = joint_names("configs/robots/so101.yaml");
+    assert_eq!(names.len(), 6, "{names:?}");
     // One STS3215 tick is 360/4096 = 0.088 deg.
-    for ((name, &s), &k) in SO101_JOINTS.iter().zip(&start).zip(&first) {
+    for ((name, &s), &k) in names.iter().zip(&start).zip(&first) {
         let rows = joint_rows(&log, name);
         let (_, planned, measured) = rows[0];
         let measured = measured.expect("a first reading");

@@ -19,19 +19,22 @@ pub use sim::{read_truth, virtual_bus, Sim};
 /// The `servobus` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_servobus");
 
-/// The SO-101 arm's joints, in the order of `configs/robots/so101.yaml`.
-pub const SO101_JOINTS: [&str; 6] = [
-    "shoulder_pan",
-    "shoulder_lift",
-    "elbow_flex",
-    "wrist_flex",
-    "wrist_roll",
-    "gripper",
-];
-
 /// A file of the repository, by its path from the root.
 pub fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// The names of the joints of the robot file `path`, in its order (read
+/// from the YAML here, not by servobus).
+pub fn joint_names(path: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(repo(path)).expect("a robot file");
+    let robot: serde_yaml::Value = serde_yaml::from_str(&text).expect("YAML");
+    let buses = robot["buses"].as_sequence().expect("buses");
+    let joints = buses
+        .iter()
+        .flat_map(|b| b["joints"].as_sequence().expect("joints"));
+    let names = joints.map(|j| j["name"].as_str().expect("a joint's name").to_owned());
+    names.collect()
 }
 
 /// A path as the `&str` a command line takes.

@@ -23,6 +23,20 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
+/// The shortest signed way from `b` to `a` on a sensor of `turn` ticks a
+/// turn, in `[-turn / 2, turn / 2)`: how far a full-turn sensor moved
+/// between two readings that may lie either side of the seam.
+///
+/// ```
+/// use servobus_sim::body::turn_delta;
+/// assert_eq!(turn_delta(10.0, 4090.0, 4096.0), 16.0);
+/// assert_eq!(turn_delta(4090.0, 10.0, 4096.0), -16.0);
+/// assert_eq!(turn_delta(300.0, 100.0, 4096.0), 200.0);
+/// ```
+pub fn turn_delta(a: f64, b: f64, turn: f64) -> f64 {
+    (a - b + turn / 2.0).rem_euclid(turn) - turn / 2.0
+}
+
 /// How a servo's horn is fitted to its joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mount {
@@ -331,11 +345,11 @@ impl Body {
     /// Follows the sensor to `raw`: the nearest angle (within half a turn)
     /// that reads `raw`.
     pub(crate) fn follow(&mut self, raw: f64) {
-        let mut d = raw - self.raw;
-        if self.full_turn {
-            let half = self.resolution / 2.0;
-            d = (d + half).rem_euclid(self.resolution) - half;
-        }
+        let d = if self.full_turn {
+            turn_delta(raw, self.raw, self.resolution)
+        } else {
+            raw - self.raw
+        };
         self.angle += d / (self.mount.direction * self.ticks_per_deg);
         self.raw = raw;
     }

@@ -18,12 +18,17 @@ pub fn config(rel: &str) -> PathBuf {
         .join(rel)
 }
 
-/// Writes `text` to the file `name` in `dir` (a folder of its own under
-/// Cargo's temporary directory for tests, made if missing).
-pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+/// The path of file `name` in `dir`, a folder of its own under Cargo's
+/// temporary directory for tests (made if missing).
+pub fn temp_path(dir: &str, name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
     std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
+    d.join(name)
+}
+
+/// Writes `text` to [`temp_path`]`(dir, name)` and returns the path.
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let p = temp_path(dir, name);
     std::fs::write(&p, text).expect("temp file");
     p
 }

@@ -58,12 +58,7 @@ fn the_arm_plays_pick_and_place_within_half_a_degree_rms() {
 #[test]
 fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
     let play_on = |robot_file: &str| {
-        let (m, robot) = load_motion(
-            &common::config("motions/hexapod-tripod.yaml"),
-            Some(&common::config(robot_file)),
-        )
-        .expect("loads");
-        let path = plan_motion(&m, &robot).expect("plans");
+        let (path, robot) = common::planned("motions/hexapod-tripod.yaml", Some(robot_file));
         let r = play(&robot, path);
         assert_eq!(r.finish, Finish::Completed);
         assert_eq!(r.achieved_rate_hz, 100.0);
@@ -79,12 +74,8 @@ fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
     assert!(two.buses.iter().all(|b| b.cycles == two.cycles));
     assert_eq!(one.cycles, two.cycles);
     // Two wires in parallel: each bus is about half as busy.
-    assert!(
-        two.utilisation < 0.6 * one.utilisation,
-        "{} vs {}",
-        two.utilisation,
-        one.utilisation
-    );
+    let (busy_one, busy_two) = (one.utilisation, two.utilisation);
+    assert!(busy_two < 0.6 * busy_one, "{busy_two} vs {busy_one}");
 }
 
 #[test]

@@ -40,9 +40,32 @@ pub fn robot(name: &str) -> Robot {
 
 /// A motion under `configs/motions/`, planned, with its robot.
 pub fn motion(name: &str) -> (Trajectory, Robot) {
-    let (m, r) = load_motion(&config(&format!("motions/{name}")), None).expect("motion loads");
+    planned(&format!("motions/{name}"), None)
+}
+
+/// The motion file `motion` under `configs/`, planned for the robot file
+/// `robot` under `configs/` (or the one the motion names), with the robot.
+pub fn planned(motion: &str, robot: Option<&str>) -> (Trajectory, Robot) {
+    let robot = robot.map(config);
+    let (m, r) = load_motion(&config(motion), robot.as_deref()).expect("motion loads");
     let t = plan_motion(&m, &r).expect("motion plans");
     (t, r)
+}
+
+/// The cycle (of `period` seconds) at which joint `j` of `path` moves
+/// fastest: where a fault does the most harm.
+pub fn fastest_cycle(path: &Trajectory, j: usize, period: f64) -> u64 {
+    let mut s = vec![JointState::default(); path.joints()];
+    let mut best = (0.0, 0u64);
+    let mut k = 0u64;
+    while (k as f64) * period < path.duration() {
+        path.sample(k as f64 * period, &mut s);
+        if s[j].velocity.abs() > best.0 {
+            best = (s[j].velocity.abs(), k);
+        }
+        k += 1;
+    }
+    best.1
 }
 
 /// One simulated bus per robot bus (the runtime's simulator glue), each with

@@ -7,7 +7,7 @@ use servobus_protocol::StatusFlags;
 use servobus_runtime::{
     Fault, FaultKind, FaultPolicy, Finish, Lead, Reaction, RunOptions, VirtualRun,
 };
-use servobus_sim::SimBus;
+use servobus_sim::{SimBus, SimServo};
 use servobus_trajectory::Trajectory;
 
 const PERIOD: f64 = 0.005;
@@ -32,6 +32,24 @@ fn arm(policy: FaultPolicy, lead: Lead) -> (VirtualRun<SimBus>, Vec<SimBus>, Tra
     (run, sims, path)
 }
 
+/// The arm playing arm-wave with the default policy, `fault` done to servo
+/// `id` `before` cycles ahead of the wrist's fastest; the run ended, its
+/// telemetry, and the cycle of the fault.
+fn faulted_arm(
+    before: u64,
+    id: u8,
+    fault: fn(&mut SimServo),
+) -> (VirtualRun<SimBus>, Vec<SimBus>, common::Recorded, u64) {
+    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
+    let at = fastest_cycle(&path, WRIST_FLEX) - before;
+    let rec = common::record(&mut run, 5_000, |k| {
+        if k == at {
+            sims[0].servo(id, fault);
+        }
+    });
+    (run, sims, rec, at)
+}
+
 fn the_fault(run: &VirtualRun<SimBus>, rec: &common::Recorded) -> Fault {
     let f = run.fault().expect("a fault was detected").clone();
     assert_eq!(rec.faults.first(), Some(&f), "and published");
@@ -53,13 +71,7 @@ fn assert_smooth_from(rec: &common::Recorded, from: u64) {
 
 #[test]
 fn a_vanished_servo_is_detected_within_3_cycles_and_the_arm_stops_smoothly() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX);
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(WRIST_FLEX_ID, |s| s.set_offline(true));
-        }
-    });
+    let (run, _, rec, at) = faulted_arm(0, WRIST_FLEX_ID, |s| s.set_offline(true));
     let f = the_fault(&run, &rec);
     // Reported at the time of its cycle, at most 3 cycles of 5 ms (the
     // arm's 200 Hz) after the path time the servo vanished at.
@@ -86,13 +98,7 @@ fn a_vanished_servo_is_detected_within_3_cycles_and_the_arm_stops_smoothly() {
 
 #[test]
 fn a_status_flag_is_detected_at_the_next_reading() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX);
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(2, |s| s.inject_status(StatusFlags::OVERHEAT));
-        }
-    });
+    let (run, _, rec, at) = faulted_arm(0, 2, |s| s.inject_status(StatusFlags::OVERHEAT));
     let f = the_fault(&run, &rec);
     assert_eq!(
         f.kind,
@@ -108,13 +114,7 @@ fn a_status_flag_is_detected_at_the_next_reading() {
 
 #[test]
 fn a_blocked_joint_is_found_stalled_within_3_cycles_and_held() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX) - 10;
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(WRIST_FLEX_ID, |s| s.set_blocked(true));
-        }
-    });
+    let (run, sims, rec, at) = faulted_arm(10, WRIST_FLEX_ID, |s| s.set_blocked(true));
     let f = the_fault(&run, &rec);
     assert!(
         matches!(f.kind, FaultKind::Stall { error, planned_velocity, measured_velocity, cycles: 3 }

@@ -135,12 +135,7 @@ impl SimServo {
     /// joint's physical angle.
     #[must_use]
     pub fn with_mount(mut self, mount: Mount, angle_deg: f64) -> SimServo {
-        let mut body = Body::new(
-            mount,
-            angle_deg,
-            self.model.model.resolution,
-            self.model.model.range_deg,
-        );
+        let mut body = Body::new(mount, angle_deg, &self.model.model);
         if let Some(old) = self.body.take() {
             body.hand = old.hand;
             body.truth = old.truth;

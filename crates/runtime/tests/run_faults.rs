@@ -42,10 +42,8 @@ fn faulted_arm(
 ) -> (VirtualRun<SimBus>, Vec<SimBus>, common::Recorded, u64) {
     let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
     let at = fastest_cycle(&path, WRIST_FLEX) - before;
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(id, fault);
-        }
+    let rec = common::record_acting_at(&mut run, 5_000, at, || {
+        sims[0].servo(id, fault);
     });
     (run, sims, rec, at)
 }
@@ -190,11 +188,7 @@ fn a_lost_port_stops_the_other_bus_of_the_hexapod() {
     };
     let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
     let at = 150;
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[1].set_disconnected(true);
-        }
-    });
+    let rec = common::record_acting_at(&mut run, 5_000, at, || sims[1].set_disconnected(true));
     let f = run.fault().expect("a fault").clone();
     println!("{f}");
     assert!(matches!(f.kind, FaultKind::PortGone { .. }));

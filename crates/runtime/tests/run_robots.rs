@@ -111,13 +111,8 @@ fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report,
     let (buses, _) = common::sim_buses_at(&robot, &path);
     let mut run = VirtualRun::new(&robot, path, buses, recorded()).expect("starts");
     let tx = run.commands();
-    let mut command = Some(command);
-    let rec = common::record(&mut run, 20_000, |k| {
-        if k == at {
-            if let Some(c) = command.take() {
-                tx.try_send(c).expect("room for a command");
-            }
-        }
+    let rec = common::record_acting_at(&mut run, 20_000, at, || {
+        tx.try_send(command).expect("room for a command");
     });
     let limits: Vec<(f64, f64, f64)> = robot
         .joints()

@@ -174,6 +174,22 @@ pub fn record<T: servobus_driver::Transport>(
     rec
 }
 
+/// [`record`], doing `act` once, just before cycle `at` (a fault injected,
+/// a command sent).
+pub fn record_acting_at<T: servobus_driver::Transport>(
+    run: &mut servobus_runtime::VirtualRun<T>,
+    max: u64,
+    at: u64,
+    act: impl FnOnce(),
+) -> Recorded {
+    let mut act = Some(act);
+    record(run, max, |k| {
+        if let Some(act) = act.take_if(|_| k == at) {
+            act();
+        }
+    })
+}
+
 impl Recorded {
     /// The commanded positions of `joint`, one per cycle.
     pub fn commanded(&self, joint: usize) -> Vec<f64> {

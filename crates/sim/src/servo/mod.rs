@@ -256,6 +256,11 @@ impl SimServo {
         read_uint(&b, self.model.byte_order()) as u16
     }
 
+    /// A two-byte sign-magnitude register whose direction bit is `sign_bit`.
+    pub(super) fn read_signed(&self, address: u8, sign_bit: u8) -> i32 {
+        sign_magnitude(u32::from(self.read_u16(address)), sign_bit)
+    }
+
     /// Present position (register 56) as a signed value.
     pub fn present_position(&self) -> i32 {
         self.decode_position(self.read_u16(addr::PRESENT_POSITION))
@@ -268,12 +273,12 @@ impl SimServo {
 
     /// Present speed (register 58) in ticks/s, signed.
     pub fn present_speed(&self) -> i32 {
-        sign_magnitude(u32::from(self.read_u16(addr::PRESENT_SPEED)), SPEED_BIT)
+        self.read_signed(addr::PRESENT_SPEED, SPEED_BIT)
     }
 
     /// Present load (register 60) in 0.1 % of the maximum torque, signed.
     pub fn present_load(&self) -> i32 {
-        sign_magnitude(u32::from(self.read_u16(addr::PRESENT_LOAD)), LOAD_BIT)
+        self.read_signed(addr::PRESENT_LOAD, LOAD_BIT)
     }
 
     /// The status flags the servo reports (register 65 and every reply).

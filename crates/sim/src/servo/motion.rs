@@ -111,7 +111,7 @@ impl SimServo {
 
     pub(super) fn offset(&self) -> i32 {
         match self.model.offset_sign_bit() {
-            Some(bit) => sign_magnitude(u32::from(self.read_u16(addr::OFFSET)), bit),
+            Some(bit) => self.read_signed(addr::OFFSET, bit),
             None => 0,
         }
     }
@@ -150,7 +150,7 @@ impl SimServo {
         } else {
             0
         };
-        let goal_speed = sign_magnitude(u32::from(self.read_u16(addr::GOAL_SPEED)), SPEED_BIT);
+        let goal_speed = self.read_signed(addr::GOAL_SPEED, SPEED_BIT);
         let max_speed = if goal_speed != 0 {
             f64::from(goal_speed.unsigned_abs()).min(m.max_speed())
         } else if let Some(v) = self.timed_speed {

@@ -21,12 +21,24 @@ fn scan_read_write_set_id_against_the_simulator() {
     let dir = common::scratch("bus-tools");
     let sim = Sim::start(&dir);
 
-    // scan: the six servos of the arm, identified.
-    let out = sim.ok(&["scan", "--json"]);
-    let scan: serde_json::Value = serde_json::from_str(out.trim()).expect("scan --json");
+    // scan: the six servos of the arm, identified. A scan asks each absent
+    // ID once, so a simulator process descheduled for longer than the
+    // deadline on a loaded machine can hide a servo from one pass (a
+    // servo on a real bus is never descheduled): up to 3 passes, the first
+    // complete one counts, and it must say exactly this.
+    let json = |out: String| -> serde_json::Value {
+        serde_json::from_str(out.trim()).expect("scan --json")
+    };
+    let ids_of = |scan: &serde_json::Value| -> Vec<i64> {
+        let servos = scan["servos"].as_array().expect("servos");
+        servos.iter().filter_map(|s| s["id"].as_i64()).collect()
+    };
+    let scan = (0..2)
+        .map(|_| json(sim.ok(&["scan", "--json"])))
+        .find(|scan| ids_of(scan).len() == 6)
+        .unwrap_or_else(|| json(sim.ok(&["scan", "--json"])));
     let servos = scan["servos"].as_array().expect("servos");
-    let ids: Vec<i64> = servos.iter().filter_map(|s| s["id"].as_i64()).collect();
-    assert_eq!(ids, [1, 2, 3, 4, 5, 6]);
+    assert_eq!(ids_of(&scan), [1, 2, 3, 4, 5, 6]);
     for s in servos {
         assert_eq!(s["model"], "STS3215");
         assert_eq!(s["model_number"], 777);
@@ -37,8 +49,14 @@ fn scan_read_write_set_id_against_the_simulator() {
     }
     assert_eq!(scan["collisions"].as_array().map(Vec::len), Some(0));
     // The table form names the columns.
-    let table = sim.ok(&["scan"]);
-    assert!(table.contains("POSITION") && table.contains("found 6 servo(s)"));
+    let table = (0..2)
+        .map(|_| sim.ok(&["scan"]))
+        .find(|t| t.contains("found 6 servo(s)"))
+        .unwrap_or_else(|| sim.ok(&["scan"]));
+    assert!(
+        table.contains("POSITION") && table.contains("found 6 servo(s)"),
+        "{table}"
+    );
 
     // ping and read.
     assert!(sim.ok(&["ping", "--id", "4"]).contains("servo 4 answered"));

@@ -504,20 +504,30 @@ fn preserving_run(
     buf: &mut [Vec<Piece>],
 ) -> Result<(), PlanError> {
     buf.iter_mut().for_each(Vec::clear);
-    while let Some(short) = timed::check(limits, &times[a..=b], &pos[a..=b]) {
-        let k = a + short.segment;
+    // One pass: lengthening segment `k` delays every later keyframe alike,
+    // which leaves the later segments' durations as they were, so each
+    // segment is checked once. `shift` is the delay carried so far.
+    let mut shift = 0.0;
+    for k in a..b {
+        times[k + 1] += shift;
+        let needed = timed::rest_to_rest(limits, pos, k);
         let available = times[k + 1] - times[k];
+        if needed <= available * (1.0 + 1e-9) {
+            continue;
+        }
         if on_limit == OnLimit::Error {
             return Err(PlanError::TooSoon {
                 keyframe: entries[k + 1].index,
-                needed: short.needed,
+                needed,
                 available,
             });
         }
-        let shift = short.needed * (1.0 + 1e-9) - available;
-        for t in &mut times[k + 1..] {
-            *t += shift;
-        }
+        let extra = needed * (1.0 + 1e-9) - available;
+        times[k + 1] += extra;
+        shift += extra;
+    }
+    for t in &mut times[b + 1..] {
+        *t += shift;
     }
     timed::run(limits, &times[a..=b], &pos[a..=b], buf);
     Ok(())

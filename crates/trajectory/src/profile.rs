@@ -167,6 +167,32 @@ pub(crate) fn rest_peak(dist: f64, lim: &JointLimits) -> f64 {
 }
 
 impl Segment1 {
+    /// The segment covering `d` (either sign) from speed `vin` to `vout`,
+    /// normalised to a positive direction. The planners give a keyframe
+    /// either no speed or one in the direction of motion, so the speeds
+    /// become non-negative.
+    pub fn between(d: f64, vin: f64, vout: f64) -> Segment1 {
+        Segment1 {
+            d: d.abs(),
+            v0: vin.abs(),
+            v1: vout.abs(),
+        }
+    }
+
+    /// A feasible profile no longer than `limit` (a cruise speed for
+    /// [`stretched`](Self::stretched)), if the time-optimal one is no
+    /// longer: from the bounds when they decide, else solved.
+    pub fn fits(&self, lim: &JointLimits, limit: f64) -> Option<Profile> {
+        let b = self.fastest_bounds(lim);
+        if b.upper.duration <= limit {
+            Some(b.upper)
+        } else if b.exact || b.lower > limit {
+            None
+        } else {
+            Some(self.fastest(lim)).filter(|f| f.duration <= limit)
+        }
+    }
+
     /// Total ramp distance and its derivative at cruise speed `vc`.
     #[inline(always)]
     fn g(&self, vc: f64, c: &Acc) -> (f64, f64, f64, f64) {

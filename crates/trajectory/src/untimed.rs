@@ -136,11 +136,14 @@ pub(crate) fn section(
                     continue;
                 }
                 let vp = v.signum() * pace;
-                let Some(before) = Segment1::between(dp, via[(k - 1) * nj + j], vp).fits(lim, durations[k - 1])
+                let Some(before) =
+                    Segment1::between(dp, via[(k - 1) * nj + j], vp).fits(lim, durations[k - 1])
                 else {
                     continue;
                 };
-                if let Some(after) = Segment1::between(dn, vp, via[(k + 1) * nj + j]).fits(lim, durations[k]) {
+                if let Some(after) =
+                    Segment1::between(dn, vp, via[(k + 1) * nj + j]).fits(lim, durations[k])
+                {
                     via[k * nj + j] = vp;
                     fastest[(k - 1) * nj + j] = before;
                     fastest[k * nj + j] = after;

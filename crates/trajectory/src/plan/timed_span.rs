@@ -41,14 +41,13 @@ impl Sections<'_> {
         }
         self.pos.clear();
         self.pos.extend(entries[i..=j].iter().map(|e| e.pos));
-        timed_section(
-            self.limits,
-            &entries[i..=j],
-            &self.pos,
-            &mut self.times,
-            self.options.on_limit,
-            &mut self.out,
-        )?;
+        let section = TimedSection {
+            limits: self.limits,
+            entries: &entries[i..=j],
+            pos: &self.pos,
+            on_limit: self.options.on_limit,
+        };
+        section.plan(&mut self.times, &mut self.out)?;
         self.arrival[i..=j].copy_from_slice(&self.times);
         Ok(j)
     }
@@ -115,139 +114,141 @@ fn check_segment(
 /// Local stretching rounds before the uniform stretch.
 const LOCAL_ATTEMPTS: usize = 12;
 
-/// Plans one timed section `entries[0..=m]` at `times` (updated in place
-/// when stretched), splitting it into runs of equal shape.
-fn timed_section(
-    limits: &[JointLimits],
-    entries: &[Entry<'_>],
-    pos: &[&[f64]],
-    times: &mut [f64],
+/// One timed section `entries[0..=m]` and what planning it needs; its
+/// times are passed apart, as they change when a run is stretched.
+struct TimedSection<'s, 'e> {
+    limits: &'s [JointLimits],
+    entries: &'s [Entry<'e>],
+    pos: &'s [&'e [f64]],
     on_limit: OnLimit,
-    out: &mut [Vec<Piece>],
-) -> Result<(), PlanError> {
-    let m = entries.len() - 1;
-    let mut a = 0;
-    let mut buf: Vec<Vec<Piece>> = vec![Vec::new(); limits.len()];
-    while a < m {
-        let shape = entries[a + 1].shape;
-        let mut b = a + 1;
-        while b < m && entries[b + 1].shape == shape {
-            b += 1;
-        }
-        if shape == TimedShape::ShapePreserving {
-            preserving_run(limits, entries, pos, times, a, b, on_limit, &mut buf)?;
-        } else {
-            spline_run(limits, entries, pos, times, a, b, shape, on_limit, &mut buf)?;
-        }
-        for (o, p) in out.iter_mut().zip(&mut buf) {
-            o.append(p);
-        }
-        a = b;
-    }
-    Ok(())
 }
 
-/// A spline run `a..=b` of a timed section in `shape`, its times lengthened
-/// (with [`OnLimit::Stretch`]) until every segment is within the limits.
-#[allow(clippy::too_many_arguments)] // one run of the section's arrays
-fn spline_run(
-    limits: &[JointLimits],
-    entries: &[Entry<'_>],
-    pos: &[&[f64]],
-    times: &mut [f64],
-    a: usize,
-    b: usize,
-    shape: TimedShape,
-    on_limit: OnLimit,
-    buf: &mut [Vec<Piece>],
-) -> Result<(), PlanError> {
-    // Stretching loop: local stretching of offending segments first
-    // (keeps the others on time), then one uniform stretch, which is
-    // exact because a uniformly stretched run has the same shape (its
-    // peaks scale by 1/s, 1/s^2, 1/s^3).
-    let mut factors = vec![1.0f64; b - a];
-    let mut attempt = 0;
-    loop {
-        buf.iter_mut().for_each(Vec::clear);
-        spline::run(shape, &times[a..=b], &pos[a..=b], buf);
-        let mut worst: f64 = 1.0;
-        let mut first_err = None;
-        for k in a..b {
-            let (f, e) = check_segment(limits, buf, times[k], times[k + 1], entries[k + 1].index);
-            if let (Some(e), true) = (e, first_err.is_none() || f.is_infinite()) {
-                if f.is_infinite() {
-                    return Err(e);
-                }
-                first_err = Some(e);
+impl TimedSection<'_, '_> {
+    /// Plans the section at `times` (updated in place when stretched),
+    /// split into runs of equal shape, appending to `out`.
+    fn plan(&self, times: &mut [f64], out: &mut [Vec<Piece>]) -> Result<(), PlanError> {
+        let m = self.entries.len() - 1;
+        let mut a = 0;
+        let mut buf: Vec<Vec<Piece>> = vec![Vec::new(); self.limits.len()];
+        while a < m {
+            let shape = self.entries[a + 1].shape;
+            let mut b = a + 1;
+            while b < m && self.entries[b + 1].shape == shape {
+                b += 1;
             }
-            factors[k - a] = f;
-            worst = worst.max(f);
+            if shape == TimedShape::ShapePreserving {
+                self.preserving_run(a, b, times, &mut buf)?;
+            } else {
+                self.spline_run(a, b, shape, times, &mut buf)?;
+            }
+            for (o, p) in out.iter_mut().zip(&mut buf) {
+                o.append(p);
+            }
+            a = b;
         }
-        let Some(err) = first_err else { break };
-        if on_limit == OnLimit::Error || attempt > LOCAL_ATTEMPTS + 1 {
-            return Err(err);
+        Ok(())
+    }
+
+    /// A spline run `a..=b` in `shape`, its times lengthened (with
+    /// [`OnLimit::Stretch`]) until every segment is within the limits.
+    fn spline_run(
+        &self,
+        a: usize,
+        b: usize,
+        shape: TimedShape,
+        times: &mut [f64],
+        buf: &mut [Vec<Piece>],
+    ) -> Result<(), PlanError> {
+        // Stretching loop: local stretching of offending segments first
+        // (keeps the others on time), then one uniform stretch, which is
+        // exact because a uniformly stretched run has the same shape (its
+        // peaks scale by 1/s, 1/s^2, 1/s^3).
+        let mut factors = vec![1.0f64; b - a];
+        let mut attempt = 0;
+        loop {
+            buf.iter_mut().for_each(Vec::clear);
+            spline::run(shape, &times[a..=b], &self.pos[a..=b], buf);
+            let mut worst: f64 = 1.0;
+            let mut first_err = None;
+            for k in a..b {
+                let (f, e) = check_segment(
+                    self.limits,
+                    buf,
+                    times[k],
+                    times[k + 1],
+                    self.entries[k + 1].index,
+                );
+                if let (Some(e), true) = (e, first_err.is_none() || f.is_infinite()) {
+                    if f.is_infinite() {
+                        return Err(e);
+                    }
+                    first_err = Some(e);
+                }
+                factors[k - a] = f;
+                worst = worst.max(f);
+            }
+            let Some(err) = first_err else { break };
+            if self.on_limit == OnLimit::Error || attempt > LOCAL_ATTEMPTS + 1 {
+                return Err(err);
+            }
+            let uniform = attempt >= LOCAL_ATTEMPTS;
+            attempt += 1;
+            let mut shift = 0.0;
+            let mut prev_old = times[a];
+            for k in a..b {
+                let h = times[k + 1] - prev_old;
+                prev_old = times[k + 1];
+                let f = if uniform { worst } else { factors[k - a] };
+                let f = if f > 1.0 { f * (1.0 + 1e-6) } else { 1.0 };
+                shift += h * (f - 1.0);
+                times[k + 1] += shift;
+            }
+            // Everything after the run moves by the same amount.
+            for t in &mut times[b + 1..] {
+                *t += shift;
+            }
         }
-        let uniform = attempt >= LOCAL_ATTEMPTS;
-        attempt += 1;
+        Ok(())
+    }
+
+    /// A shape-preserving run `a..=b`: every segment too short even for a
+    /// rest-to-rest move is refused, or with [`OnLimit::Stretch`]
+    /// lengthened to the shortest such move (every later keyframe delayed
+    /// by as much); the others keep their times exactly.
+    fn preserving_run(
+        &self,
+        a: usize,
+        b: usize,
+        times: &mut [f64],
+        buf: &mut [Vec<Piece>],
+    ) -> Result<(), PlanError> {
+        buf.iter_mut().for_each(Vec::clear);
+        // One pass: lengthening segment `k` delays every later keyframe alike,
+        // which leaves the later segments' durations as they were, so each
+        // segment is checked once. `shift` is the delay carried so far.
         let mut shift = 0.0;
-        let mut prev_old = times[a];
         for k in a..b {
-            let h = times[k + 1] - prev_old;
-            prev_old = times[k + 1];
-            let f = if uniform { worst } else { factors[k - a] };
-            let f = if f > 1.0 { f * (1.0 + 1e-6) } else { 1.0 };
-            shift += h * (f - 1.0);
             times[k + 1] += shift;
+            let needed = timed::rest_to_rest(self.limits, self.pos, k);
+            let available = times[k + 1] - times[k];
+            if needed <= available * (1.0 + 1e-9) {
+                continue;
+            }
+            if self.on_limit == OnLimit::Error {
+                return Err(PlanError::TooSoon {
+                    keyframe: self.entries[k + 1].index,
+                    needed,
+                    available,
+                });
+            }
+            let extra = needed * (1.0 + 1e-9) - available;
+            times[k + 1] += extra;
+            shift += extra;
         }
-        // Everything after the run moves by the same amount.
         for t in &mut times[b + 1..] {
             *t += shift;
         }
+        timed::run(self.limits, &times[a..=b], &self.pos[a..=b], buf);
+        Ok(())
     }
-    Ok(())
-}
-
-/// A shape-preserving run `a..=b` of a timed section: every segment too
-/// short even for a rest-to-rest move is refused, or with
-/// [`OnLimit::Stretch`] lengthened to the shortest such move (every later
-/// keyframe delayed by as much); the others keep their times exactly.
-#[allow(clippy::too_many_arguments)] // one run of the section's arrays
-fn preserving_run(
-    limits: &[JointLimits],
-    entries: &[Entry<'_>],
-    pos: &[&[f64]],
-    times: &mut [f64],
-    a: usize,
-    b: usize,
-    on_limit: OnLimit,
-    buf: &mut [Vec<Piece>],
-) -> Result<(), PlanError> {
-    buf.iter_mut().for_each(Vec::clear);
-    // One pass: lengthening segment `k` delays every later keyframe alike,
-    // which leaves the later segments' durations as they were, so each
-    // segment is checked once. `shift` is the delay carried so far.
-    let mut shift = 0.0;
-    for k in a..b {
-        times[k + 1] += shift;
-        let needed = timed::rest_to_rest(limits, pos, k);
-        let available = times[k + 1] - times[k];
-        if needed <= available * (1.0 + 1e-9) {
-            continue;
-        }
-        if on_limit == OnLimit::Error {
-            return Err(PlanError::TooSoon {
-                keyframe: entries[k + 1].index,
-                needed,
-                available,
-            });
-        }
-        let extra = needed * (1.0 + 1e-9) - available;
-        times[k + 1] += extra;
-        shift += extra;
-    }
-    for t in &mut times[b + 1..] {
-        *t += shift;
-    }
-    timed::run(limits, &times[a..=b], &pos[a..=b], buf);
-    Ok(())
 }

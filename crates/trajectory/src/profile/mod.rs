@@ -72,6 +72,7 @@ impl Segment1 {
     /// normalised to a positive direction. The planners give a keyframe
     /// either no speed or one in the direction of motion, so the speeds
     /// become non-negative.
+    #[inline]
     pub fn between(d: f64, vin: f64, vout: f64) -> Segment1 {
         Segment1 {
             d: d.abs(),
@@ -112,6 +113,7 @@ impl Segment1 {
     }
 
     /// The phases (duration, jerk) of the profile, for a positive direction.
+    #[inline]
     pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
         let (a, j) = (lim.max_acceleration, lim.jerk());
         let ra = Ramp::new((p.vc - self.v0).abs(), a, j);

@@ -20,6 +20,7 @@ pub(crate) struct Phases {
 }
 
 impl Phases {
+    #[inline]
     pub fn new() -> Self {
         Phases {
             n: 0,
@@ -29,6 +30,7 @@ impl Phases {
         }
     }
 
+    #[inline]
     pub fn push(&mut self, dt: f64, jerk: f64, acc: f64) {
         if dt > 0.0 && self.n < 12 {
             self.dt[self.n] = dt;
@@ -39,6 +41,7 @@ impl Phases {
     }
 
     /// A ramp in direction `s` (+1 speeds up in the positive direction).
+    #[inline]
     pub(super) fn push_ramp(&mut self, r: &Ramp, s: f64, j: f64) {
         let jj = if j.is_finite() { s * j } else { 0.0 };
         self.push(r.tj, jj, 0.0);

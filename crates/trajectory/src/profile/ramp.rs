@@ -61,6 +61,7 @@ pub(super) struct Acc {
 }
 
 impl Acc {
+    #[inline]
     pub fn new(a: f64, j: f64) -> Self {
         Acc {
             inv_a: 1.0 / a,

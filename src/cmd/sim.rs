@@ -19,6 +19,7 @@ Fault injection: comma-separated items, applied to every reply independently.
   seed=N        seed of the random source (default 0): same seed, same faults
   echo          echo every request back (same as --echo)
   vanish=ID     servo ID is disconnected (repeatable)
+  vanish=ID@S   servo ID answers for S seconds from the first byte it hears, then is silent
   block=ID      servo ID's shaft is blocked: overload after the protection time (repeatable)
   overheat=ID   servo ID starts at its temperature limit (repeatable)
   supply=V      every servo's supply at V volts; supply=ID:V for one servo

@@ -45,7 +45,7 @@ pub use command::Command;
 pub use error::RunError;
 pub use exchange::{CommandSender, COMMAND_DELAY_CYCLES};
 pub use fault::{Fault, FaultKind};
-pub use options::{FaultPolicy, Lead, Reaction, RunOptions};
+pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
 pub use report::{BusReport, JointReport, Quantiles, Report};
 pub use run::bus_settings;
 pub use telemetry::{CycleSample, Finish, JointSample, Telemetry, SAMPLE_JOINTS};

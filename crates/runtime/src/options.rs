@@ -86,6 +86,14 @@ pub struct FaultPolicy {
     pub missing_cycles: u32,
     /// Reaction to a missing servo.
     pub on_missing: Reaction,
+    /// How long every servo of a bus may be silent at once before the run
+    /// stops (with a missing-servo fault naming the bus's silence). One
+    /// servo silent while its neighbours answer is missing after
+    /// [`missing_cycles`](Self::missing_cycles) reads; the whole bus silent
+    /// is the link (a stalled adapter, or a simulator process waiting for
+    /// the CPU) or the bus's power, which is judged over time rather than
+    /// reads. See [`BUS_SILENCE`].
+    pub bus_silence: Duration,
     /// Status bits that are faults (see [`StatusFlags`]); 0 ignores them.
     pub status_mask: u8,
     /// Reaction to a status flag.
@@ -94,6 +102,17 @@ pub struct FaultPolicy {
     /// on the bus that lost its port).
     pub on_port_gone: Reaction,
 }
+
+/// The default [`FaultPolicy::bus_silence`]: 100 ms. A host that loses the
+/// CPU for a while (shared and virtual machines do, for tens of
+/// milliseconds under load) delays every reply of a bus at once: through a
+/// USB adapter the kernel's hand-off of received bytes waits for the CPU,
+/// and a simulator process on a pty waits for it too. Such a stall is not a
+/// servo gone. 100 ms is above the longest stalls measured on a loaded
+/// 2-core machine (about 40 ms), and short enough that a bus losing its
+/// power stops the run before a joint moving at 180 deg/s has gone 20 deg
+/// further along its (limit-checked) path.
+pub const BUS_SILENCE: Duration = Duration::from_millis(100);
 
 impl Default for FaultPolicy {
     /// 15 degrees of following error for 3 cycles, a stall at 2 degrees of
@@ -113,6 +132,7 @@ impl Default for FaultPolicy {
             on_stall: Reaction::Hold,
             missing_cycles: 3,
             on_missing: Reaction::Stop,
+            bus_silence: BUS_SILENCE,
             status_mask: StatusFlags::KNOWN,
             on_status: Reaction::Stop,
             on_port_gone: Reaction::Stop,
@@ -127,6 +147,7 @@ impl FaultPolicy {
             following_error: f64::INFINITY,
             stall_error: f64::INFINITY,
             missing_cycles: u32::MAX,
+            bus_silence: Duration::MAX,
             status_mask: 0,
             ..FaultPolicy::default()
         }

@@ -69,6 +69,9 @@ pub(crate) struct Engine {
     pub latency: Duration,
     pub stats: SimStats,
     pub disconnected: bool,
+    /// When the bus heard its first byte (the origin of
+    /// [`Faults::vanish_after`]).
+    first_heard: Option<Duration>,
 }
 
 impl Engine {
@@ -86,6 +89,7 @@ impl Engine {
             latency: Duration::ZERO,
             stats: SimStats::default(),
             disconnected: false,
+            first_heard: None,
         }
     }
 
@@ -130,6 +134,7 @@ impl Engine {
     /// when the last byte has left.
     pub(crate) fn transmit(&mut self, bytes: &[u8], start: Duration) -> Duration {
         let t0 = start.max(self.host_free);
+        self.vanish_due(t0);
         // A servo drops a partial frame after the line has been idle for a
         // while, as the firmware's receive timeout does.
         let idle = self.link.wire_time(20).max(Duration::from_micros(100));
@@ -151,6 +156,19 @@ impl Engine {
         }
         self.host_free = end;
         end
+    }
+
+    /// Disconnects the servos of [`Faults::vanish_after`] whose time has
+    /// come by `t`.
+    fn vanish_due(&mut self, t: Duration) {
+        let first = *self.first_heard.get_or_insert(t);
+        for &(id, after) in &self.faults.vanish_after {
+            if t >= first + after {
+                for s in self.servos.iter_mut().filter(|s| s.id() == id) {
+                    s.set_offline(true);
+                }
+            }
+        }
     }
 
     /// Finds complete packets in the receive buffer; `t` is the arrival

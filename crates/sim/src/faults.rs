@@ -36,6 +36,10 @@ pub struct Faults {
     pub echo: bool,
     /// IDs of servos that are disconnected (hear and answer nothing).
     pub vanish: Vec<u8>,
+    /// Servos that disconnect during a run: `(id, after)` answers until
+    /// `after` has passed since the bus heard its first byte (a cable
+    /// working loose mid-motion), then stays silent.
+    pub vanish_after: Vec<(u8, Duration)>,
     /// IDs of servos whose shaft is mechanically blocked.
     pub block: Vec<u8>,
     /// IDs of servos that start at their temperature limit (overheat).
@@ -74,6 +78,7 @@ impl Faults {
             delay_by: Self::DEFAULT_DELAY,
             echo: false,
             vanish: Vec::new(),
+            vanish_after: Vec::new(),
             block: Vec::new(),
             overheat: Vec::new(),
             supply: Vec::new(),
@@ -124,6 +129,14 @@ impl Faults {
     #[must_use]
     pub fn vanish(mut self, id: u8) -> Faults {
         self.vanish.push(id);
+        self
+    }
+
+    /// The same faults with servo `id` disconnecting once `after` has passed
+    /// since the bus heard its first byte.
+    #[must_use]
+    pub fn vanish_after(mut self, id: u8, after: Duration) -> Faults {
+        self.vanish_after.push((id, after));
         self
     }
 
@@ -235,7 +248,8 @@ impl FromStr for Faults {
 
     /// Parses `key=value` items separated by commas:
     /// `drop=P`, `corrupt=P`, `delay=P` (probabilities 0..=1), `delay_us=N`,
-    /// `seed=N`, `echo` (or `echo=true`), and `vanish=ID`, `block=ID`,
+    /// `seed=N`, `echo` (or `echo=true`), and `vanish=ID` (or `vanish=ID@SECONDS`:
+    /// silent from that long after the bus's first byte), `block=ID`,
     /// `overheat=ID` (repeatable); `supply=V` (every servo) or
     /// `supply=ID:V` (volts), `firmware=ID:MAJOR.MINOR`, `baud=ID:RATE`
     /// (a rate of the servo baud table) and `duplicate=FROM:TO`
@@ -278,7 +292,20 @@ impl FromStr for Faults {
                         _ => return Err(bad("true or false")),
                     }
                 }
-                "vanish" => f.vanish.push(id()?),
+                "vanish" => match value.split_once('@') {
+                    // `vanish=ID@SECONDS`: answers until then.
+                    Some((who, after)) => {
+                        let expected = "ID or ID@SECONDS, e.g. 3@1.5";
+                        let who = parse_id(who).ok_or_else(|| bad(expected))?;
+                        let after = after
+                            .parse::<f64>()
+                            .ok()
+                            .and_then(|s| Duration::try_from_secs_f64(s).ok())
+                            .ok_or_else(|| bad(expected))?;
+                        f.vanish_after.push((who, after));
+                    }
+                    None => f.vanish.push(id()?),
+                },
                 "block" => f.block.push(id()?),
                 "overheat" => f.overheat.push(id()?),
                 "supply" => {

@@ -107,6 +107,7 @@ pub mod floor;
 pub mod model;
 pub mod pty;
 mod servo;
+mod wall;
 
 pub use body::{HandPath, Mount, Truth, TruthRow};
 pub use bus::SimBus;
@@ -116,3 +117,4 @@ pub use floor::{pty_floor, Floor, FloorCycle};
 pub use model::{Area, Endian, SimModel};
 pub use pty::{PtyError, PtyServer};
 pub use servo::{addr, SimServo};
+pub use wall::WallBus;

@@ -10,9 +10,7 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use std::sync::Arc;
-use std::thread::JoinHandle;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -26,7 +24,7 @@ use servobus_runtime::{
     bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
     Runner, Telemetry,
 };
-use servobus_sim::PtyServer;
+use servobus_sim::WallBus;
 use servobus_trajectory::Trajectory;
 
 use crate::record::{read_recording, CsvLog, PlotData};
@@ -41,7 +39,7 @@ mod view;
 
 use load::{check_outputs, load};
 use report::{file_name, print_plan, print_report};
-use setup::{backend, fault_policy, join_servers, sim_pose};
+use setup::{backend, sim_pose};
 use view::{follow, install_ctrl_c, Shown, APPROACH, SETTLE};
 
 /// Arguments of `servobus play`.
@@ -159,7 +157,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             core: args.core,
             fifo_priority: args.fifo,
         },
-        faults: fault_policy(&backend, rate_hz),
+        faults: FaultPolicy::default(),
         ..RunOptions::default()
     };
 
@@ -170,8 +168,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
     trajectory.sample(0.0, &mut start);
     let start: Vec<f64> = start.iter().map(|s| s.position).collect();
-    let mut servers = Vec::new();
-    let stop_servers = Arc::new(AtomicBool::new(false));
     let runner = match &backend {
         Backend::Fast => {
             let buses = servobus_runtime::sim::SimRobot::builder(&robot)
@@ -181,31 +177,27 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             spawn_virtual(&robot, trajectory, buses, options)?
         }
         Backend::Simulated => {
+            // In this process, paced by the wall clock: no pty between the
+            // runtime and its servos (see `servobus_sim::WallBus`).
             let clock = SystemClock::new();
-            let mut buses = Vec::new();
-            let sim = servobus_runtime::sim::SimRobot::builder(&robot).pose(&pose);
-            for bus in &robot.buses {
-                let mut server = PtyServer::open(bus.baud, sim.servos(bus)?)
-                    .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
-                let path = server.path().to_string_lossy().into_owned();
-                let flag = Arc::clone(&stop_servers);
-                servers.push(std::thread::spawn(move || server.serve(&flag)));
-                let mut transport = SerialTransport::open(&path, bus.baud, clock)
-                    .with_context(|| format!("cannot open the simulator's pty {path}"))?;
-                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
-                let transport: Box<dyn Transport + Send> = Box::new(transport);
-                // A pty on a busy machine wakes late now and then: allow
-                // for it in the reply deadlines.
-                let settings = bus_settings(bus)
-                    .with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
-                buses.push(Bus::new(transport, clock, settings));
-            }
+            let sim = servobus_runtime::sim::SimRobot::builder(&robot)
+                .pose(&pose)
+                .build()?;
+            let buses = sim
+                .buses()
+                .iter()
+                .zip(&robot.buses)
+                .map(|(sim, bus)| {
+                    let transport: Box<dyn Transport + Send> =
+                        Box::new(WallBus::new(sim.clone(), clock));
+                    Bus::new(transport, clock, bus_settings(bus))
+                })
+                .collect();
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {
             let clock = SystemClock::new();
             let mut buses = Vec::new();
-            let mut ptys = 0;
             for (bus, port) in robot.buses.iter().zip(ports) {
                 let mut transport = SerialTransport::open(port, bus.baud, clock)
                     .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
@@ -220,18 +212,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     // built-in one does: the same allowances.
                     settings =
                         settings.with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
-                    ptys += 1;
                 }
                 let transport: Box<dyn Transport + Send> = Box::new(transport);
                 buses.push(Bus::new(transport, clock, settings));
             }
             super::calibrate::check_buses(&robot, &mut buses, ports)?;
-            let faults = if ptys == buses.len() {
-                fault_policy(&Backend::Simulated, rate_hz)
-            } else {
-                options.faults
-            };
-            spawn(&robot, trajectory, buses, RunOptions { faults, ..options })?
+            spawn(&robot, trajectory, buses, options)?
         }
     };
 
@@ -255,8 +241,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         follow(&runner, &args, log, &shown, units, duration)
     };
     let report = runner.join();
-    stop_servers.store(true, Ordering::SeqCst);
-    join_servers(servers);
     let (log, plot) = outcome?;
     let report = report?;
 
@@ -297,18 +281,4 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn names_of(robot: &Robot) -> Vec<String> {
     robot.joints().map(|j| j.name.clone()).collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn only_the_wall_clock_simulator_tolerates_a_longer_silence() {
-        assert_eq!(fault_policy(&Backend::Fast, 200.0), FaultPolicy::default());
-        let hw = Backend::Hardware(vec!["/dev/ttyACM0".into()]);
-        assert_eq!(fault_policy(&hw, 200.0), FaultPolicy::default());
-        assert_eq!(fault_policy(&Backend::Simulated, 200.0).missing_cycles, 12);
-        assert_eq!(fault_policy(&Backend::Simulated, 20.0).missing_cycles, 3);
-    }
 }

@@ -1,30 +1,7 @@
 //! Where a run of `servobus play` happens: the built-in simulator, a pty
-//! server, or real ports, and the fault policy that fits it.
+//! server, or real ports.
 
 use super::*;
-
-/// How long the simulator on a pty may stay silent before a servo counts as
-/// missing. Its replies come from a thread of this process: when the host
-/// takes the CPU away for a few milliseconds (shared and virtual machines
-/// do), several replies in a row arrive late although no servo is gone.
-pub(super) const PTY_SILENCE: Duration = Duration::from_millis(60);
-
-/// The fault policy of a run: the defaults (a servo silent for 3 reads is
-/// missing), except on the simulator in wall-clock time, where a silence
-/// must also last [`PTY_SILENCE`].
-pub(super) fn fault_policy(backend: &Backend, rate_hz: f64) -> FaultPolicy {
-    let defaults = FaultPolicy::default();
-    match backend {
-        Backend::Simulated => {
-            let cycles = (PTY_SILENCE.as_secs_f64() * rate_hz).ceil() as u32;
-            FaultPolicy {
-                missing_cycles: defaults.missing_cycles.max(cycles),
-                ..defaults
-            }
-        }
-        Backend::Fast | Backend::Hardware(_) => defaults,
-    }
-}
 
 /// Where the simulated joints start (robot units, robot joint order):
 /// `--sim-pose`, checked against the robot, else the rest positions.
@@ -82,14 +59,4 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
         }
     }
     Ok(Backend::Hardware(out))
-}
-
-pub(super) fn join_servers(servers: Vec<JoinHandle<Result<(), servobus_sim::PtyError>>>) {
-    for server in servers {
-        match server.join() {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => eprintln!("warning: simulator: {e}"),
-            Err(_) => eprintln!("warning: a simulator thread panicked"),
-        }
-    }
 }

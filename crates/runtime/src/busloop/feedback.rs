@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::time::Duration;
 
-use servobus_driver::{Bus, Clock, Transport};
+use servobus_driver::{Bus, Clock, MissingReason, Transport};
 use servobus_protocol::registers::{ByteOrder, Register};
 
 use super::tracking::{Reading, Tracker};
@@ -98,8 +98,15 @@ impl Feedback {
         else {
             return Ok(false);
         };
-        let mut all = true;
         let at = clock.now();
+        let silent = read
+            .iter()
+            .all(|r| matches!(r, Err(m) if m.reason == MissingReason::NoReply));
+        if ids.len() >= 2 && silent {
+            track.bus_silent(range, at);
+            return Ok(false);
+        }
+        let mut all = true;
         for (i, r) in read.iter().enumerate() {
             let joint = range.start + i;
             match r {

@@ -104,6 +104,12 @@ pub(crate) struct Tracker {
     pub stale_after: Duration,
     /// Servo readings missing after every retry.
     pub missed: u64,
+    /// When a servo of the bus last answered, on the bus's clock.
+    last_answer: Duration,
+    /// Reads in a row in which no servo of the bus answered ...
+    silent_reads: u32,
+    /// ... and how long since one did, at the last of them.
+    silent_for: Duration,
 }
 
 impl Tracker {
@@ -147,6 +153,9 @@ impl Tracker {
             units: report_units,
             stale_after,
             missed: 0,
+            last_answer: Duration::ZERO,
+            silent_reads: 0,
+            silent_for: Duration::ZERO,
         }
     }
 
@@ -161,7 +170,21 @@ impl Tracker {
     pub fn observe(&mut self, i: usize, reading: Reading) {
         if let Some(j) = self.joints.get_mut(i) {
             j.observe(reading);
+            self.last_answer = self.last_answer.max(reading.at);
+            self.silent_reads = 0;
         }
+    }
+
+    /// No servo of `joints` (two or more) answered a read that ended at
+    /// `at`: the bus itself is silent. The joints' own counts do not move;
+    /// [`track`](Self::track) judges the silence by its length instead.
+    pub fn bus_silent(&mut self, joints: std::ops::Range<usize>, at: Duration) {
+        for j in self.joints.get_mut(joints).into_iter().flatten() {
+            j.why_missing = Some(MissingReason::NoReply);
+            self.missed += 1;
+        }
+        self.silent_reads += 1;
+        self.silent_for = at.saturating_sub(self.last_answer);
     }
 
     /// Joint `i` was asked and gave no usable reading (`None`: it answered
@@ -210,6 +233,19 @@ impl Tracker {
         let p = self.policy;
         let u = self.units;
         let mut found: Option<Found> = None;
+        if self.silent_reads >= p.missing_cycles && self.silent_for >= p.bus_silence {
+            let ms = self.silent_for.as_millis();
+            found = Some(Found {
+                joint: 0,
+                kind: FaultKind::Missing {
+                    cycles: self.silent_reads,
+                    reason: format!(
+                        "no servo of the bus answered for {ms} ms: the link or the bus's power, not one servo"
+                    ),
+                },
+                reaction: p.on_missing,
+            });
+        }
         for (i, j) in self.joints.iter_mut().enumerate() {
             let r = reference.get(j.robot_index).copied().unwrap_or_default();
             j.planned = r.position;

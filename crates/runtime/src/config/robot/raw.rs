@@ -7,6 +7,8 @@ use serde::Deserialize;
 
 use crate::config::Units;
 
+/// A robot file, field for field ([`Robot`](super::Robot) says what each
+/// means); absent optional fields take their defaults here.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawRobot {
@@ -43,6 +45,7 @@ fn default_baud() -> u32 {
     1_000_000
 }
 
+/// One entry of `buses` ([`BusConfig`](super::BusConfig)).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawBus {
@@ -62,6 +65,7 @@ pub(super) struct RawBus {
     pub joints: Vec<RawJoint>,
 }
 
+/// One entry of a bus's `joints` ([`JointConfig`](super::JointConfig)).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawJoint {

@@ -8,13 +8,24 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use common::{num, servobus, servobus_json as budget_json};
+use common::{arg, edited, exited, json, num, says, servobus, servobus_fails, temp_file};
+
+/// `servobus budget --robot ROBOT --json ARGS`, which must succeed.
+fn budget_json(robot: &str, args: &[&str]) -> serde_json::Value {
+    common::servobus_json(&[&["budget", "--robot", robot, "--json"], args].concat())
+}
+
+/// The SO-101 with one line of its file changed, in a file of its own.
+fn so101_with(name: &str, edit: (&str, &str)) -> PathBuf {
+    let text = edited("configs/robots/so101.yaml", &[edit]);
+    temp_file("budget_cli", name, &text)
+}
 
 #[test]
 fn so101_at_1mbps_with_return_delay_zero() {
-    let v = budget_json(&["budget", "--robot", "configs/robots/so101.yaml", "--json"]);
+    let v = budget_json("configs/robots/so101.yaml", &[]);
     let buses = v["buses"].as_array().expect("buses list");
     assert_eq!(buses.len(), 1);
     let b = &buses[0];
@@ -38,21 +49,14 @@ fn so101_at_1mbps_with_return_delay_zero() {
 
 #[test]
 fn hexapod_on_one_and_two_buses() {
-    let one = budget_json(&["budget", "--robot", "configs/robots/hexapod.yaml", "--json"]);
+    let one = budget_json("configs/robots/hexapod.yaml", &[]);
     let b = &one["buses"][0];
     // 62 (8 + 18 x 3) + 26 (8 + 18) + 144 (18 x 8) = 232 bytes = 2320 us.
     assert_eq!(b["bytes_per_cycle"], 232);
     assert_eq!(num(b, "wire_time_us"), 2320.0);
     assert_eq!(num(b, "cycle_time_us"), 2320.0 + 18.0 * 50.0);
 
-    let two = budget_json(&[
-        "budget",
-        "--robot",
-        "configs/robots/hexapod-2bus.yaml",
-        "--json",
-        "--rate",
-        "500",
-    ]);
+    let two = budget_json("configs/robots/hexapod-2bus.yaml", &["--rate", "500"]);
     let buses = two["buses"].as_array().expect("buses");
     assert_eq!(buses.len(), 2);
     for b in buses {
@@ -67,40 +71,23 @@ fn hexapod_on_one_and_two_buses() {
 
 #[test]
 fn scs_servos_are_read_one_by_one() {
-    let v = budget_json(&[
-        "budget",
-        "--robot",
-        "configs/robots/scs-mini.yaml",
-        "--json",
-    ]);
+    let v = budget_json("configs/robots/scs-mini.yaml", &[]);
     let b = &v["buses"][0];
     // SYNC WRITE 8 + 4 x 3 = 20; four READs of 8 bytes each answered by 8.
     assert_eq!(b["bytes_per_cycle"], 20 + 4 * 16);
     assert_eq!(num(b, "cycle_time_us"), 840.0 + 4.0 * 50.0);
 }
 
-fn temp_robot(name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("budget_cli");
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
-}
-
 #[test]
 fn factory_return_delay_and_what_would_fit() {
-    let so101 = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"),
-    )
-    .expect("so101");
-    let factory = so101.replace("return_delay_us: 0 ", "return_delay_us: 500 ");
-    assert_ne!(factory, so101);
-    let p = temp_robot("factory.yaml", &factory);
-    let path = p.to_str().expect("utf-8 path");
+    // The factory setting: 500 us.
+    let edit = ("return_delay_us: 0 ", "return_delay_us: 500 ");
+    let p = so101_with("factory.yaml", edit);
+    let path = arg(&p);
     let out = servobus(&["budget", "--robot", path, "--json", "--rate", "300"]);
     // The rate does not fit: a problem found, and still the full figures.
-    assert_eq!(out.status.code(), Some(1));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    exited(&out, 1);
+    let v = json(&out);
     let b = &v["buses"][0];
     // Same 88 bytes, but each of the 6 replies waits 500 + 50 us.
     assert_eq!(b["bytes_per_cycle"], 88);
@@ -114,20 +101,15 @@ fn factory_return_delay_and_what_would_fit() {
         "{first_fix}"
     );
 
-    let text = servobus(&["budget", "--robot", path, "--rate", "300"]);
-    assert_eq!(text.status.code(), Some(1));
-    let stdout = String::from_utf8_lossy(&text.stdout);
-    assert!(stdout.contains("88 bytes"), "{stdout}");
-    assert!(
-        stdout.contains(
+    let (stdout, _) = exited(&servobus(&["budget", "--robot", path, "--rate", "300"]), 1);
+    says(
+        &stdout,
+        &[
+            "88 bytes",
             "where the 4180 us go: wire 880; turnaround 6 x 50 = 300 (a guess per reply); \
-             return delay 6 x 500 = 3000; adapter latency 1 x 0 = 0"
-        ),
-        "{stdout}"
-    );
-    assert!(
-        stdout.contains("set the servos' return delay (register 7) to 0"),
-        "{stdout}"
+             return delay 6 x 500 = 3000; adapter latency 1 x 0 = 0",
+            "set the servos' return delay (register 7) to 0",
+        ],
     );
 }
 
@@ -141,21 +123,18 @@ fn a_rate_no_plan_can_meet_fails() {
         "5000",
     ]);
     assert!(!out.status.success());
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("cannot run"), "{stdout}");
+    says(&common::stdout(&out), &["cannot run"]);
 }
 
 #[test]
 fn a_bad_robot_file_is_reported_with_its_position() {
-    let p = temp_robot("bad.yaml", "name: bad\nbuses:\n  - name: b\n    joints:\n      - {name: j, id: 300, model: sts3215, min: 0, max: 1, max_velocity: 1, max_acceleration: 1}\n");
-    let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8 path")]);
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let p = temp_file("budget_cli", "bad.yaml", "name: bad\nbuses:\n  - name: b\n    joints:\n      - {name: j, id: 300, model: sts3215, min: 0, max: 1, max_velocity: 1, max_acceleration: 1}\n");
+    let stderr = servobus_fails(&["budget", "--robot", arg(&p)]);
     let want = format!(
         "{}:5:23: buses[0].joints[0].id: servo IDs go from 0 to 253",
         p.display()
     );
-    assert!(stderr.contains(&want), "{stderr}");
+    says(&stderr, &[&want]);
 }
 
 /// The README's FTDI figure: with the 16 ms default latency timer, the
@@ -164,15 +143,9 @@ fn a_bad_robot_file_is_reported_with_its_position() {
 /// 17,180 us: 58.2 Hz at most.
 #[test]
 fn ftdi_default_latency_caps_the_so101_near_58_hz() {
-    let so101 = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml"),
-    )
-    .expect("so101");
-    let ftdi = so101.replace("latency_us: auto ", "latency_us: 16000 ");
-    assert_ne!(ftdi, so101);
-    let p = temp_robot("ftdi.yaml", &ftdi);
-    let out = servobus(&["budget", "--robot", p.to_str().expect("utf-8"), "--json"]);
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("budget --json");
+    let edit = ("latency_us: auto ", "latency_us: 16000 ");
+    let p = so101_with("ftdi.yaml", edit);
+    let v = json(&servobus(&["budget", "--robot", arg(&p), "--json"]));
     let b = &v["buses"][0];
     assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 50.0 + 16_000.0);
     assert!((num(b, "max_rate_hz") - 1e6 / 17_180.0).abs() < 1e-9, "{b}");

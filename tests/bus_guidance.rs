@@ -7,11 +7,7 @@ mod common;
 
 use std::process::Command;
 
-use common::{Sim, BIN};
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use common::{is_root, servobus_as_nobody, stderr, stdout, Sim};
 
 #[test]
 fn bus_commands_say_what_to_do() {
@@ -20,8 +16,8 @@ fn bus_commands_say_what_to_do() {
 
     // The voltage register counts 0.1 V: shown in volts, with the raw value.
     let out = sim.run(&["read", "--id", "1", "present_voltage"]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let line = text(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let line = stdout(&out);
     let raw: i64 = line
         .split("(raw ")
         .nth(1)
@@ -40,7 +36,7 @@ fn bus_commands_say_what_to_do() {
         .success());
     let out = sim.run(&["write", "--id", "2", "goal_position", "2100"]);
     assert_eq!(out.status.code(), Some(0));
-    let err = text(&out.stderr);
+    let err = stderr(&out);
     assert!(err.contains("warning: torque is off on servo 2"), "{err}");
     assert!(err.contains("torque_enable 1"), "{err}");
     // With the torque on, no warning.
@@ -52,13 +48,13 @@ fn bus_commands_say_what_to_do() {
     assert!(
         out.status.success() && out.stderr.is_empty(),
         "{}",
-        text(&out.stderr)
+        stderr(&out)
     );
 
     // The arm runs at 1 Mbps: nobody answers at 500 kbps.
     let out = sim.run(&["scan", "--baud", "500000"]);
     assert_eq!(out.status.code(), Some(1), "a problem found");
-    let err = text(&out.stderr);
+    let err = stderr(&out);
     assert!(
         err.contains("no servo answered") && err.contains("--all-bauds"),
         "{err}"
@@ -66,24 +62,18 @@ fn bus_commands_say_what_to_do() {
 
     // Another program holds the port (exclusive, as serial tools open it).
     let held = hold_exclusively(sim.port());
-    // SAFETY: geteuid has no preconditions.
-    let root = unsafe { libc::geteuid() } == 0;
-    let out = if root {
+    let out = if is_root() {
         // Root ignores exclusive mode: try as `nobody`, who may open the pty.
         let pty = std::fs::canonicalize(sim.port()).expect("the link's pty");
         let opened = Command::new("chmod").arg("666").arg(&pty).status();
         assert!(opened.is_ok_and(|s| s.success()));
-        Command::new("setpriv")
-            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
-            .args(["ping", "--id", "1", "--port", sim.port()])
-            .output()
-            .ok()
+        servobus_as_nobody(&["ping", "--id", "1", "--port", sim.port()])
     } else {
         Some(sim.run(&["ping", "--id", "1"]))
     };
     match out {
         Some(out) => {
-            let err = text(&out.stderr);
+            let err = stderr(&out);
             assert_eq!(out.status.code(), Some(2), "{err}");
             assert!(
                 err.contains("the port is busy") && err.contains("close it and retry"),

@@ -6,79 +6,41 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{repo, scratch, servobus, Sim, BIN};
+use common::{arg, exited, repo, says, scratch, servobus, servobus_ok, stdout, write_file, Sim};
 
 const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
-
-fn run(args: &[&str], paths: &[&Path]) -> Output {
-    let mut cmd = Command::new(BIN);
-    cmd.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
-    for p in paths {
-        cmd.arg(p);
-    }
-    cmd.output().expect("servobus runs")
-}
-
-/// [`run`], which must succeed.
-fn succeeds(args: &[&str], paths: &[&Path]) -> Output {
-    let out = run(args, paths);
-    assert!(
-        out.status.success(),
-        "servobus {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+const SO101: &str = "configs/robots/so101.yaml";
 
 /// `servobus calibrate --from-lerobot FROM -o TO` for the SO-101.
 fn import_lerobot(from: &Path, to: &Path) {
-    succeeds(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--from-lerobot",
-        ],
-        &[from, Path::new("-o"), to],
-    );
+    servobus_ok(&[
+        "calibrate",
+        "--robot",
+        SO101,
+        "--from-lerobot",
+        arg(from),
+        "-o",
+        arg(to),
+    ]);
 }
 
 /// The SO-101 robot file, copied to `dir` with `calibration: FILE` added.
 fn robot_naming(dir: &Path, calibration: &str) -> PathBuf {
-    let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    let path = dir.join("so101.yaml");
-    std::fs::write(&path, format!("calibration: {calibration}\n{text}")).expect("write robot");
-    path
+    let text = std::fs::read_to_string(repo(SO101)).expect("so101");
+    write_file(
+        dir,
+        "so101.yaml",
+        &format!("calibration: {calibration}\n{text}"),
+    )
 }
 
-/// A servo register read through `servobus read`, with the generous
-/// adapter latency every test against the wall-clock simulator gives (a
-/// loaded machine may schedule the simulator milliseconds late).
-fn read(port: &str, id: &str, register: &str) -> i64 {
-    let v = common::servobus_json(&[
-        "read",
-        "--port",
-        port,
-        "--latency-us",
-        "10000",
-        "--id",
-        id,
-        register,
-        "--json",
-    ]);
-    v["value"]
-        .as_i64()
-        .unwrap_or_else(|| panic!("a value in {v}"))
-}
-
+/// The run was refused, for `why`, before anything moved, and the user is
+/// told what to run.
 fn assert_refused(out: &Output, why: &str) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "refused: {err}");
-    assert!(err.contains(why), "{err:?} says {why:?}");
-    assert!(err.contains("nothing was moved"), "{err}");
-    assert!(
-        err.contains("servobus calibrate --robot"),
-        "says what to run: {err}"
+    let (_, err) = exited(out, 1);
+    says(
+        &err,
+        &[why, "nothing was moved", "servobus calibrate --robot"],
     );
 }
 
@@ -88,15 +50,15 @@ fn a_lerobot_file_goes_through_calibrate_and_comes_back_identical() {
     let cal = dir.join("arm.calibration.yaml");
     let json = dir.join("back.json");
     import_lerobot(&repo(LEROBOT), &cal);
-    succeeds(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--to-lerobot",
-        ],
-        &[&json, Path::new("--calibration"), &cal],
-    );
+    servobus_ok(&[
+        "calibrate",
+        "--robot",
+        SO101,
+        "--to-lerobot",
+        arg(&json),
+        "--calibration",
+        arg(&cal),
+    ]);
     let original = std::fs::read_to_string(repo(LEROBOT)).expect("fixture");
     assert_eq!(std::fs::read_to_string(&json).expect("exported"), original);
 }
@@ -106,32 +68,26 @@ fn play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
     let dir = scratch("calib-missing");
     let robot = robot_naming(&dir, "arm.calibration.yaml");
     let sim = Sim::start(&dir);
-    let port = sim.port().to_owned();
-    let before = read(&port, "2", "present_position");
-    let out = run(
-        &[
-            "play",
-            "configs/motions/arm-wave.yaml",
-            "--port",
-            &port,
-            "--robot",
-        ],
-        &[&robot],
-    );
+    let (port, robot) = (sim.port(), arg(&robot));
+    let before = sim.read("2", "present_position");
+    let wave = "configs/motions/arm-wave.yaml";
+    let out = servobus(&["play", wave, "--port", port, "--robot", robot]);
     assert_refused(&out, "does not exist");
-    let out = run(
-        &["bench", "--seconds", "0.2", "--port", &port, "--robot"],
-        &[&robot],
-    );
+    let out = servobus(&[
+        "bench",
+        "--seconds",
+        "0.2",
+        "--port",
+        port,
+        "--robot",
+        robot,
+    ]);
     assert_refused(&out, "does not exist");
     // Torque was never switched on, and the joint is where it was.
-    assert_eq!(read(&port, "2", "torque_enable"), 0);
-    assert_eq!(read(&port, "2", "present_position"), before);
+    assert_eq!(sim.read("2", "torque_enable"), 0);
+    assert_eq!(sim.read("2", "present_position"), before);
     // On the built-in simulator (no port) the same robot still plays.
-    succeeds(
-        &["plan", "configs/motions/arm-wave.yaml", "--robot"],
-        &[&robot],
-    );
+    servobus_ok(&["plan", wave, "--robot", robot]);
     sim.stop();
 }
 
@@ -143,19 +99,17 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     let other = dir.join("other.calibration.yaml");
     import_lerobot(&repo(LEROBOT), &other);
     let sim = Sim::start(&dir);
-    let port = sim.port().to_owned();
     // `play` on the simulator's port with a calibration file.
     let play_with = |calibration: &Path| {
-        run(
-            &[
-                "play",
-                "configs/motions/arm-wave.yaml",
-                "--port",
-                &port,
-                "--calibration",
-            ],
-            &[calibration],
-        )
+        let wave = "configs/motions/arm-wave.yaml";
+        servobus(&[
+            "play",
+            wave,
+            "--port",
+            sim.port(),
+            "--calibration",
+            arg(calibration),
+        ])
     };
     let out = play_with(&other);
     assert_refused(
@@ -177,7 +131,7 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
     import_lerobot(&moved, &far);
     let out = play_with(&far);
     assert_refused(&out, "far outside its calibrated range");
-    assert_eq!(read(&port, "1", "torque_enable"), 0);
+    assert_eq!(sim.read("1", "torque_enable"), 0);
     sim.stop();
 }
 
@@ -209,28 +163,24 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     };
     let dir = scratch("calib-lerobot-check");
     let sim = Sim::start(&dir);
-    let port = sim.port().to_owned();
+    let port = sim.port();
     let cal = dir.join("arm.calibration.yaml");
     let json = dir.join("arm.json");
-    let out = succeeds(
-        &[
-            "calibrate",
-            "--robot",
-            "configs/robots/so101.yaml",
-            "--port",
-            &port,
-        ],
-        &[
-            Path::new("--from-lerobot"),
-            &repo(LEROBOT),
-            Path::new("--write-servos"),
-            Path::new("-o"),
-            &cal,
-            Path::new("--to-lerobot"),
-            &json,
-        ],
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let out = servobus_ok(&[
+        "calibrate",
+        "--robot",
+        SO101,
+        "--port",
+        port,
+        "--from-lerobot",
+        arg(&repo(LEROBOT)),
+        "--write-servos",
+        "-o",
+        arg(&cal),
+        "--to-lerobot",
+        arg(&json),
+    ]);
+    let text = stdout(&out);
     assert_eq!(
         text.matches("(unlocked, written, verified, locked)")
             .count(),
@@ -255,7 +205,7 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
         let id = m["id"].to_string();
         for (register, value) in [("torque_enable", "1"), ("goal_position", goal.as_str())] {
             // A loaded host may make a reply late; the write is idempotent.
-            let args = ["write", "--port", &port, "--id", &id, register, value];
+            let args = ["write", "--port", port, "--id", &id, register, value];
             let out = (0..3)
                 .map(|_| servobus(&args))
                 .find(|o| o.status.success())
@@ -273,7 +223,7 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     let lerobot_check = || {
         Command::new(&python)
             .arg(repo("tests/python/lerobot_calibration_check.py"))
-            .arg(&port)
+            .arg(port)
             .arg(&json)
             .output()
             .expect("python runs")
@@ -288,8 +238,7 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
         "{said}{}",
         String::from_utf8_lossy(&check.stderr)
     );
-    let robot = load_robot_calibrated(&repo("configs/robots/so101.yaml"), Some(&cal))
-        .expect("calibration applies");
+    let robot = load_robot_calibrated(&repo(SO101), Some(&cal)).expect("calibration applies");
     let lines: Vec<&str> = said.lines().filter(|l| !l.starts_with("OK")).collect();
     assert_eq!(lines.len(), 6, "one line per motor: {said}");
     for line in lines {
@@ -320,18 +269,15 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
 /// is named, as an input error, before any port is opened.
 #[test]
 fn calibrate_names_the_bus_that_has_no_port() {
+    let port = "/nonexistent/servobus-port";
     let out = servobus(&[
         "calibrate",
         "--robot",
         "hexapod-2bus",
         "--port",
-        "/nonexistent/servobus-port",
+        port,
         "--yes",
     ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("bus `right`") && err.contains("has no port"),
-        "{err}"
-    );
+    let (_, err) = exited(&out, 2);
+    says(&err, &["bus `right`", "has no port"]);
 }

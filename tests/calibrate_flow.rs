@@ -7,30 +7,16 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 use std::sync::Mutex;
 
-use common::{repo, scratch, Sim, BIN};
+use common::{
+    arg, edited, read_truth, repo, scratch, servobus, servobus_ok, stdout, write_file, Sim,
+};
 use servobus_runtime::config::{load_motion, load_robot, Robot};
 
 /// The two flows run one after the other: each is a simulator and a client
 /// in wall-clock time, and two at once on a small machine starve both.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
-
-fn run(args: &[&str]) -> Output {
-    let out = Command::new(BIN)
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("servobus runs");
-    assert!(
-        out.status.success(),
-        "servobus {args:?}: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 /// A hand file: from `start`, to the calibration pose (all 0) by 4 s, held;
 /// then the joint groups in turn to their upper end, lower end and back
@@ -85,38 +71,18 @@ fn hand(robot: &Robot, start: &[f64], ends: &[(f64, f64)], groups: &[Vec<usize>]
     (text, end)
 }
 
-/// The truth file's rows: time and every joint's angle.
-fn truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).expect("the truth file");
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .expect("a header")
-        .split(',')
-        .map(str::to_owned)
-        .collect();
-    let rows = lines
-        .filter_map(|l| {
-            l.split(',')
-                .map(|v| v.parse().ok())
-                .collect::<Option<Vec<f64>>>()
-        })
-        .collect();
-    (header, rows)
-}
-
 fn calibrate(robot: &Path, sim: &Sim, cal: &Path) -> String {
-    let out = run(&[
+    let robot = arg(robot);
+    stdout(&servobus_ok(&[
         "calibrate",
         "--robot",
-        robot.to_str().expect("utf-8"),
+        robot,
         "--port",
         sim.port(),
         "--yes",
         "-o",
-        cal.to_str().expect("utf-8"),
-    ]);
-    String::from_utf8_lossy(&out.stdout).into_owned()
+        arg(cal),
+    ]))
 }
 
 #[test]
@@ -126,14 +92,15 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     // The SO-101 with more latency in its bus settings, as a user puts
     // their adapter's: the simulator answers from a process that may wait
     // for the CPU on a loaded host, so replies are given 8 ms, at 50 Hz.
-    let robot_file = dir.join("so101.yaml");
-    let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    std::fs::write(
-        &robot_file,
-        text.replace("latency_us: auto ", "latency_us: 8000 ")
-            .replace("rate: 200 ", "rate: 50 "),
-    )
-    .expect("robot");
+    let edits = [
+        ("latency_us: auto ", "latency_us: 8000 "),
+        ("rate: 200 ", "rate: 50 "),
+    ];
+    let robot_file = write_file(
+        &dir,
+        "so101.yaml",
+        &edited("configs/robots/so101.yaml", &edits),
+    );
     let robot = load_robot(&robot_file).expect("so101");
     // The shipped badly fitted arm: the lift's range crosses the seam, the
     // elbow and wrist are reversed. The hand sweeps to the stops (the roll
@@ -149,23 +116,9 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     let start = [0.0, -90.0, 90.0, 45.0, 0.0, 10.0];
     let groups: Vec<Vec<usize>> = (0..6).map(|j| vec![j]).collect();
     let (text, lets_go) = hand(&robot, &start, &ends, &groups);
-    let hand_file = dir.join("hand.yaml");
-    std::fs::write(&hand_file, text).expect("hand file");
-    let truth_file = dir.join("truth.csv");
     let mounting = repo("configs/sim/so101-mounting.yaml");
-    let sim = Sim::start_robot(
-        &dir,
-        &robot_file,
-        6,
-        &[
-            "--mounting",
-            mounting.to_str().expect("utf-8"),
-            "--hand",
-            hand_file.to_str().expect("utf-8"),
-            "--truth",
-            truth_file.to_str().expect("utf-8"),
-        ],
-    );
+    let body = ["--mounting", arg(&mounting)];
+    let (sim, truth_file) = Sim::start_hand(&dir, &robot_file, 6, &text, &body);
     let cal = dir.join("arm.calibration.yaml");
     let said = calibrate(&robot_file, &sim, &cal);
     for step in [
@@ -183,10 +136,11 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     // The person steps back; then the arm plays.
     sim.wait_until(lets_go + 0.5);
     // arm-wave at the rate this bus allows.
-    let motion = dir.join("arm-wave.yaml");
-    let wave = std::fs::read_to_string(repo("configs/motions/arm-wave.yaml")).expect("motion");
-    assert!(wave.contains("rate: 200 "), "arm-wave sets its rate");
-    std::fs::write(&motion, wave.replace("rate: 200 ", "rate: 50 ")).expect("motion copy");
+    let wave = edited(
+        "configs/motions/arm-wave.yaml",
+        &[("rate: 200 ", "rate: 50 ")],
+    );
+    let motion = write_file(&dir, "arm-wave.yaml", &wave);
     // A host that takes the CPU from the simulator's process for a few
     // reads in a row stops a run with a fault (as it should on real
     // servos): such a run is played again, up to three times.
@@ -194,21 +148,22 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     let mut last = None;
     for _ in 0..3 {
         played_from = sim.started.elapsed().as_secs_f64();
-        let out = Command::new(BIN)
-            .arg("play")
-            .arg(&motion)
-            .arg("--robot")
-            .arg(&robot_file)
-            .args(["--port", sim.port(), "--calibration"])
-            .arg(&cal)
-            .output()
-            .expect("servobus play runs");
-        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        let out = servobus(&[
+            "play",
+            arg(&motion),
+            "--robot",
+            arg(&robot_file),
+            "--port",
+            sim.port(),
+            "--calibration",
+            arg(&cal),
+        ]);
+        let text = stdout(&out);
         if out.status.success() {
             last = None;
             break;
         }
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = common::stderr(&out);
         assert!(
             text.contains("FAULT"),
             "play failed before running: {text}{err}"
@@ -218,7 +173,7 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     assert!(last.is_none(), "play stopped three times: {last:?}");
     sim.stop();
 
-    let (header, rows) = truth(&truth_file);
+    let (header, rows) = read_truth(&truth_file);
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     assert_eq!(header[1..], names[..]);
     let (m, _) = load_motion(&motion, Some(&robot_file)).expect("motion");
@@ -262,22 +217,7 @@ fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
         .map(|k| (0..6).map(|leg| leg * 3 + k).collect())
         .collect();
     let (text, _) = hand(&robot, &start, &ends, &groups);
-    let hand_file = dir.join("hand.yaml");
-    std::fs::write(&hand_file, text).expect("hand file");
-    let truth_file = dir.join("truth.csv");
-    let sim = Sim::start_robot(
-        &dir,
-        &robot_file,
-        18,
-        &[
-            "--unit",
-            "5",
-            "--hand",
-            hand_file.to_str().expect("utf-8"),
-            "--truth",
-            truth_file.to_str().expect("utf-8"),
-        ],
-    );
+    let (sim, _) = Sim::start_hand(&dir, &robot_file, 18, &text, &["--unit", "5"]);
     let cal = dir.join("hexapod.calibration.yaml");
     let said = calibrate(&robot_file, &sim, &cal);
     assert!(said.contains("across the seam"), "{said}");

@@ -4,36 +4,12 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{scratch, servobus, BIN};
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-/// Runs `servobus ARGS` in `dir`.
-fn in_dir(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("servobus runs")
-}
-
-/// The one-line error of a command that must exit with `code`.
-fn error(out: &Output, code: i32) -> String {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(code), "exit code; stderr: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    err
-}
+use common::{
+    arg, error, is_root, json, says, scratch, servobus, servobus_as_nobody, servobus_in, stderr,
+    stdout, write_file as write, BIN,
+};
 
 const ROBOT: &str = "\
 name: tiny
@@ -44,42 +20,40 @@ buses:
       - {name: a, id: 1, model: sts3215, min: -90, max: 90, max_velocity: 180, max_acceleration: 900}
 ";
 
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).expect("write");
-    p
-}
-
 /// `plan` of a motion in a fresh directory with `robot.yaml` next to it.
 fn plan_error(test: &str, motion: &str) -> String {
     let dir = scratch(test);
     write(&dir, "robot.yaml", ROBOT);
     write(&dir, "m.yaml", motion);
-    error(&in_dir(&dir, &["plan", "m.yaml"]), 2)
+    error(&servobus_in(&dir, &["plan", "m.yaml"]), 2)
 }
 
 #[test]
 fn yaml_mistakes_keep_their_position_and_get_a_plain_hint() {
-    let err = plan_error("tab", "robot: robot.yaml\nkeyframes:\n\t- pose: {a: 0}\n");
-    assert!(err.contains("m.yaml:3:1: "), "{err}");
-    assert!(err.contains("line 3 is indented with a tab"), "{err}");
-
-    let err = plan_error(
-        "brace",
-        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 10\n  - pose: {a: 20}\n",
-    );
-    assert!(err.contains("m.yaml:3:15: "), "{err}");
-    assert!(err.contains("the `{` on line 3 is never closed"), "{err}");
-
-    let err = plan_error(
-        "colon",
-        "robot: robot.yaml\nrepeat:2\nkeyframes:\n  - pose: {a: 0}\n",
-    );
-    assert!(err.contains("m.yaml:3:1: "), "{err}");
-    assert!(
-        err.contains("line 2: put a space after the colon of `repeat:`"),
-        "{err}"
-    );
+    // (folder, motion, the place named, the hint)
+    let cases = [
+        (
+            "tab",
+            "robot: robot.yaml\nkeyframes:\n\t- pose: {a: 0}\n",
+            "m.yaml:3:1: ",
+            "line 3 is indented with a tab",
+        ),
+        (
+            "brace",
+            "robot: robot.yaml\nkeyframes:\n  - pose: {a: 10\n  - pose: {a: 20}\n",
+            "m.yaml:3:15: ",
+            "the `{` on line 3 is never closed",
+        ),
+        (
+            "colon",
+            "robot: robot.yaml\nrepeat:2\nkeyframes:\n  - pose: {a: 0}\n",
+            "m.yaml:3:1: ",
+            "line 2: put a space after the colon of `repeat:`",
+        ),
+    ];
+    for (test, motion, place, hint) in cases {
+        says(&plan_error(test, motion), &[place, hint]);
+    }
 }
 
 #[test]
@@ -87,13 +61,14 @@ fn a_baud_rate_the_servos_cannot_use_is_refused_with_the_valid_ones() {
     let dir = scratch("baud");
     for baud in ["1234567", "2000000"] {
         let robot = write(&dir, "r.yaml", &ROBOT.replace("1000000", baud));
-        let out = servobus(&["budget", "--robot", robot.to_str().expect("utf-8")]);
-        let err = error(&out, 2);
-        assert!(err.contains("r.yaml:4:11: buses[0].baud: "), "{err}");
-        assert!(err.contains(&format!("{baud} baud is not a rate")), "{err}");
-        assert!(
-            err.contains("1000000, 500000, 250000, 128000, 115200, 76800, 57600, 38400"),
-            "{err}"
+        let err = error(&servobus(&["budget", "--robot", arg(&robot)]), 2);
+        says(
+            &err,
+            &[
+                "r.yaml:4:11: buses[0].baud: ",
+                &format!("{baud} baud is not a rate"),
+                "1000000, 500000, 250000, 128000, 115200, 76800, 57600, 38400",
+            ],
         );
     }
 }
@@ -101,11 +76,10 @@ fn a_baud_rate_the_servos_cannot_use_is_refused_with_the_valid_ones() {
 #[test]
 fn a_missing_file_is_said_once_with_what_to_give_instead() {
     let err = error(&servobus(&["plan", "nothere.yaml"]), 2);
-    assert!(
-        err.contains("nothere.yaml: cannot read: no such file"),
-        "{err}"
+    says(
+        &err,
+        &["nothere.yaml: cannot read: no such file", "built-in"],
     );
-    assert!(err.contains("built-in"), "{err}");
     assert_eq!(err.matches("no such file").count(), 1, "{err}");
     assert!(!err.contains("os error"), "{err}");
 }
@@ -118,13 +92,15 @@ fn a_missing_robot_points_at_the_motions_robot_line() {
         "m.yaml",
         "# wave\nrobot: ../nope.yaml\nkeyframes:\n  - pose: {a: 0}\n",
     );
-    let err = error(&in_dir(&dir, &["plan", "m.yaml"]), 2);
-    assert!(err.contains("m.yaml:2:8: robot: "), "{err}");
-    assert!(
-        err.contains("nope.yaml: cannot read: no such file"),
-        "{err}"
+    let err = error(&servobus_in(&dir, &["plan", "m.yaml"]), 2);
+    says(
+        &err,
+        &[
+            "m.yaml:2:8: robot: ",
+            "nope.yaml: cannot read: no such file",
+            "fix this `robot:`",
+        ],
     );
-    assert!(err.contains("fix this `robot:`"), "{err}");
 }
 
 #[test]
@@ -158,33 +134,23 @@ fn a_port_without_permission_names_the_group_and_the_command() {
         .arg(&port)
         .status()
         .is_ok_and(|s| s.success()));
-    let port = port.to_str().expect("utf-8");
-    // SAFETY: geteuid has no preconditions.
-    let out = if unsafe { libc::geteuid() } == 0 {
+    let port = arg(&port);
+    let ping = ["ping", "--port", port, "--id", "1"];
+    let out = if is_root() {
         // Root may open anything: run as `nobody`, with no groups.
-        match Command::new("setpriv")
-            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
-            .args(["ping", "--port", port, "--id", "1"])
-            .output()
-        {
-            Ok(out) => out,
-            Err(_) => {
-                eprintln!("skipped: root, and no setpriv to drop privileges");
-                return;
-            }
-        }
+        let Some(out) = servobus_as_nobody(&ping) else {
+            return;
+        };
+        out
     } else {
-        servobus(&["ping", "--port", port, "--id", "1"])
+        servobus(&ping)
     };
     let err = error(&out, 2);
-    assert!(
-        err.contains(&format!("cannot open {port}: permission denied")),
-        "{err}"
-    );
+    let denied = format!("cannot open {port}: permission denied");
+    says(&err, &[&denied, "log out and back in"]);
     if !group.is_empty() {
-        assert!(err.contains("sudo usermod -aG dialout $USER"), "{err}");
+        says(&err, &["sudo usermod -aG dialout $USER"]);
     }
-    assert!(err.contains("log out and back in"), "{err}");
     assert_eq!(err.matches("ermission denied").count(), 1, "{err}");
 }
 
@@ -204,15 +170,17 @@ fn exit_codes_and_names_are_documented_in_help() {
 fn a_file_named_like_a_builtin_wins() {
     let dir = scratch("file-wins");
     write(&dir, "so101", &ROBOT.replace("name: tiny", "name: mine"));
-    let out = in_dir(&dir, &["budget", "--robot", "so101", "--json"]);
+    let out = servobus_in(&dir, &["budget", "--robot", "so101", "--json"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let v = json(&out);
     assert_eq!(
         v["buses"][0]["servos"], 1,
         "the file's one servo, not the arm's six"
     );
-    let out = in_dir(&dir, &["budget", "--robot", "hexapod", "--json"]);
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let v = json(&servobus_in(
+        &dir,
+        &["budget", "--robot", "hexapod", "--json"],
+    ));
     assert_eq!(
         v["buses"][0]["servos"], 18,
         "a name with no such file is built in"
@@ -233,7 +201,7 @@ fn list_shows_the_builtins_and_init_refuses_to_overwrite() {
         assert!(list.contains(&format!("  {name} ")), "{name}: {list}");
     }
     let dir = scratch("init");
-    let out = in_dir(&dir, &["init", "--robot", "hexapod", "starter"]);
+    let out = servobus_in(&dir, &["init", "--robot", "hexapod", "starter"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let robot = std::fs::read_to_string(dir.join("starter/robot.yaml")).expect("robot");
     assert!(
@@ -245,14 +213,14 @@ fn list_shows_the_builtins_and_init_refuses_to_overwrite() {
         motion.contains("robot: robot.yaml") && motion.contains("# "),
         "{motion}"
     );
-    let plan = in_dir(&dir, &["plan", "starter/motion.yaml", "--json"]);
+    let plan = servobus_in(&dir, &["plan", "starter/motion.yaml", "--json"]);
     assert!(
         plan.status.success(),
         "the starter plans: {}",
         stderr(&plan)
     );
 
-    let again = in_dir(&dir, &["init", "starter"]);
+    let again = servobus_in(&dir, &["init", "starter"]);
     let err = error(&again, 2);
     assert!(
         err.contains("robot.yaml exists") && err.contains("--force"),
@@ -263,13 +231,25 @@ fn list_shows_the_builtins_and_init_refuses_to_overwrite() {
         robot,
         "left as it was"
     );
-    let forced = in_dir(&dir, &["init", "--force", "starter"]);
+    let forced = servobus_in(&dir, &["init", "--force", "starter"]);
     assert!(forced.status.success(), "{}", stderr(&forced));
     let robot = std::fs::read_to_string(dir.join("starter/robot.yaml")).expect("robot");
     assert!(
         robot.starts_with("# SO-101"),
         "replaced by the so101 starter"
     );
+}
+
+/// `SHELL -c SCRIPT` where `tool` is installed (it runs with `--version`);
+/// `None` where it is not.
+fn script_if_installed(tool: &str, shell: &str, script: &str) -> Option<Output> {
+    Command::new(tool).arg("--version").output().ok()?;
+    Some(
+        Command::new(shell)
+            .args(["-c", script])
+            .output()
+            .expect(shell),
+    )
 }
 
 #[test]
@@ -279,13 +259,8 @@ fn completions_load_in_bash_and_the_man_page_renders() {
         assert!(out.status.success(), "{shell}");
         assert!(stdout(&out).contains("servobus"), "{shell}");
     }
-    let has_bash = Command::new("bash").arg("--version").output().is_ok();
-    if has_bash {
-        let script = format!("set -e; source <('{BIN}' completions bash); complete -p servobus");
-        let out = Command::new("bash")
-            .args(["-c", &script])
-            .output()
-            .expect("bash");
+    let script = format!("set -e; source <('{BIN}' completions bash); complete -p servobus");
+    if let Some(out) = script_if_installed("bash", "bash", &script) {
         assert!(out.status.success(), "bash: {}", stderr(&out));
         assert!(stderr(&out).is_empty(), "bash: {}", stderr(&out));
         assert!(
@@ -302,13 +277,8 @@ fn completions_load_in_bash_and_the_man_page_renders() {
         "{roff}"
     );
     assert!(roff.contains("SERVOBUS PLAY") && roff.contains("SERVOBUS COMPLETIONS"));
-    let has_man = Command::new("man").arg("--version").output().is_ok();
-    if has_man {
-        let script = format!("'{BIN}' man | MANWIDTH=80 man -l - 2>&1");
-        let out = Command::new("sh")
-            .args(["-c", &script])
-            .output()
-            .expect("sh");
+    let script = format!("'{BIN}' man | MANWIDTH=80 man -l - 2>&1");
+    if let Some(out) = script_if_installed("man", "sh", &script) {
         let text = stdout(&out);
         assert!(out.status.success(), "man: {text}");
         assert!(text.contains("Exit status"), "rendered: {text}");

@@ -1,20 +1,12 @@
 //! `servobus decode` end to end: the built binary on frames from the manual,
 //! with garbage, bad checksums and truncated frames, in text and JSON.
 
-use std::process::{Command, Output};
+mod common;
 
+use std::process::Output;
+
+use common::{servobus, stdout};
 use serde_json::Value;
-
-fn servobus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(args)
-        .output()
-        .expect("the servobus binary runs")
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
 
 /// Runs with `--json` and parses one object per line.
 fn json(args: &[&str]) -> (Vec<Value>, Output) {

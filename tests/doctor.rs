@@ -10,7 +10,6 @@ use std::time::Duration;
 use servobus::doctor::{self, Finding, PortKind, Severity, Target};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
-use servobus_runtime::bus_settings;
 use servobus_runtime::config::{load_robot, JointCalibration, Robot};
 use servobus_sim::{Faults, SimBus};
 
@@ -33,13 +32,7 @@ impl Arm {
     /// The arm as `servobus sim` serves it, with `faults`.
     fn factory(faults: Faults) -> Arm {
         let robot = load_robot(&common::repo("configs/robots/so101.yaml")).expect("robot");
-        let cfg = &robot.buses[0];
-        let clock = ManualClock::new();
-        let servos = servobus_runtime::sim::bus_servos(&robot, cfg).expect("servos");
-        let sim = SimBus::new(clock.clone(), cfg.baud)
-            .with_servos(servos)
-            .with_faults(faults);
-        let bus = Bus::new(sim.clone(), clock, bus_settings(cfg));
+        let (sim, bus) = common::virtual_bus(&robot, faults);
         Arm { robot, sim, bus }
     }
 
@@ -56,6 +49,15 @@ impl Arm {
         }
         arm.sim.set_faults(faults);
         arm
+    }
+
+    /// The tuned arm with `value` written to `register` of servo `id`, and
+    /// what doctor then finds.
+    fn written(id: u8, register: &str, value: i32) -> (Arm, Vec<Finding>) {
+        let mut arm = Arm::tuned(Faults::none());
+        arm.write(id, register, value);
+        let findings = arm.examine();
+        (arm, findings)
     }
 
     /// Writes a register through the driver (EEPROM: unlock-write-verify-lock).
@@ -85,16 +87,13 @@ impl Arm {
     }
 
     fn examine_all(&mut self) -> Vec<Finding> {
+        self.examine_on(&PortKind::Simulator).findings
+    }
+
+    /// Everything doctor reports, as if the bus were on a port of `kind`.
+    fn examine_on(&mut self, kind: &PortKind) -> doctor::Examined {
         let cfg = self.robot.buses[0].clone();
-        doctor::examine(
-            &mut self.bus,
-            &self.robot,
-            &cfg,
-            &target(),
-            &PortKind::Simulator,
-        )
-        .expect("examined")
-        .findings
+        doctor::examine(&mut self.bus, &self.robot, &cfg, &target(), kind).expect("examined")
     }
 
     /// `--fix`: applies the fixes; every one must succeed.
@@ -109,6 +108,25 @@ impl Arm {
                 o.result
             );
         }
+    }
+
+    /// `--fix`, then the power switched off and on: what was fixed in
+    /// EEPROM must stay fixed.
+    fn fix_and_restart(&mut self, findings: &[Finding]) {
+        self.fix(findings);
+        self.sim.power_cycle();
+    }
+
+    /// `--fix`, then (when `restart`) the power off and on: servo `id` must
+    /// then hold `value` at `address`, and doctor find nothing wrong.
+    fn fixed(&mut self, findings: &[Finding], restart: bool, id: u8, address: u8, value: u8) {
+        self.fix(findings);
+        if restart {
+            self.sim.power_cycle();
+        }
+        assert_eq!(self.register(id, address), value, "servo {id} @{address}");
+        let left = self.examine();
+        assert!(left.is_empty(), "{}", show(&left));
     }
 
     fn register(&self, id: u8, address: u8) -> u8 {
@@ -127,6 +145,14 @@ fn about<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> Option<
 fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Finding {
     about(findings, id, register)
         .unwrap_or_else(|| panic!("nothing about servo {id} {register:?}:\n{}", show(findings)))
+}
+
+/// [`must`], whose fix must be `servobus write` of `value` to `register`.
+fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -> &'a Finding {
+    let f = must(findings, id, Some(register));
+    let want = format!("servobus write --port {PORT} --id {id} {register} {value}");
+    assert_eq!(f.fix, want, "{}", show(findings));
+    f
 }
 
 fn show(findings: &[Finding]) -> String {
@@ -158,18 +184,14 @@ fn a_factory_gripper_may_overheat_and_fix_sets_it_up() {
         ("protection_current", 250),
         ("overload_torque", 25),
     ] {
-        let f = about(&findings, 6, Some(name))
-            .unwrap_or_else(|| panic!("{name}: {}", show(&findings)));
-        assert_eq!(f.severity, Severity::Warning);
         assert_eq!(
-            f.fix,
-            format!("servobus write --port {PORT} --id 6 {name} {value}")
+            must_write(&findings, 6, name, value).severity,
+            Severity::Warning
         );
     }
     assert_eq!(findings.len(), 3, "{}", show(&findings));
     assert_eq!(doctor::exit_status(&findings), 1);
-    arm.fix(&findings);
-    arm.sim.power_cycle();
+    arm.fix_and_restart(&findings);
     assert!(arm.examine().is_empty(), "the settings did not persist");
     assert_eq!(arm.register(6, addr::MAX_TORQUE), (500 & 0xFF) as u8);
     assert_eq!(
@@ -181,21 +203,12 @@ fn a_factory_gripper_may_overheat_and_fix_sets_it_up() {
 
 #[test]
 fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
-    let mut arm = Arm::tuned(Faults::none());
-    arm.write(3, "return_delay", 250);
-    let findings = arm.examine();
-    let f = must(&findings, 3, Some("return_delay"));
+    let (mut arm, findings) = Arm::written(3, "return_delay", 250);
+    let f = must_write(&findings, 3, "return_delay", 0);
     assert_eq!(f.severity, Severity::Error);
     assert!(f.problem.contains("500 us"), "{}", f.problem);
-    assert_eq!(
-        f.fix,
-        "servobus write --port /dev/ttyACM0 --id 3 return_delay 0"
-    );
     assert_eq!(doctor::exit_status(&findings), 2);
-    arm.fix(&findings);
-    arm.sim.power_cycle();
-    assert_eq!(arm.register(3, addr::RETURN_DELAY), 0);
-    assert!(arm.examine().is_empty());
+    arm.fixed(&findings, true, 3, addr::RETURN_DELAY, 0);
 }
 
 #[test]
@@ -203,13 +216,12 @@ fn an_eeprom_lock_left_open_is_found_and_closed() {
     let mut arm = Arm::tuned(Faults::none());
     arm.bus.write(2, addr::LOCK, &[0]).expect("unlock");
     let findings = arm.examine();
-    let f = must(&findings, 2, Some("lock"));
-    assert_eq!(f.severity, Severity::Warning);
-    assert_eq!(f.fix, "servobus write --port /dev/ttyACM0 --id 2 lock 1");
+    assert_eq!(
+        must_write(&findings, 2, "lock", 1).severity,
+        Severity::Warning
+    );
     assert_eq!(doctor::exit_status(&findings), 1);
-    arm.fix(&findings);
-    assert_eq!(arm.register(2, addr::LOCK), 1);
-    assert!(arm.examine().is_empty());
+    arm.fixed(&findings, false, 2, addr::LOCK, 1);
 }
 
 #[test]
@@ -222,15 +234,12 @@ fn narrowed_angle_limits_are_found_and_widened_to_the_robot_file() {
     let (lo, hi) = (2048 - half, 2048 + half);
     let findings = arm.examine();
     for (name, want) in [("min_angle_limit", lo), ("max_angle_limit", hi)] {
-        let f = must(&findings, 1, Some(name));
-        assert_eq!(f.severity, Severity::Error);
         assert_eq!(
-            f.fix,
-            format!("servobus write --port {PORT} --id 1 {name} {want}")
+            must_write(&findings, 1, name, want).severity,
+            Severity::Error
         );
     }
-    arm.fix(&findings);
-    arm.sim.power_cycle();
+    arm.fix_and_restart(&findings);
     let limits = arm.sim.servo(1, |s| {
         (
             s.read_u16(addr::MIN_ANGLE_LIMIT),
@@ -275,89 +284,34 @@ fn a_servo_at_another_baud_is_found_and_brought_back() {
 
 #[test]
 fn status_level_0_is_found_and_set_back_without_waiting_for_replies() {
-    let mut arm = Arm::tuned(Faults::none());
-    arm.write(4, "status_level", 0);
-    let findings = arm.examine();
-    let f = must(&findings, 4, Some("status_level"));
-    assert_eq!(
-        f.fix,
-        "servobus write --port /dev/ttyACM0 --id 4 status_level 1"
-    );
-    arm.fix(&findings);
-    arm.sim.power_cycle();
-    assert_eq!(arm.register(4, addr::STATUS_LEVEL), 1);
-    assert!(arm.examine().is_empty());
+    let (mut arm, findings) = Arm::written(4, "status_level", 0);
+    must_write(&findings, 4, "status_level", 1);
+    arm.fixed(&findings, true, 4, addr::STATUS_LEVEL, 1);
 }
 
 #[test]
 fn protection_that_does_not_release_the_torque_is_found_and_fixed() {
-    let mut arm = Arm::tuned(Faults::none());
-    arm.write(2, "unloading_condition", 0);
-    let findings = arm.examine();
-    let f = must(&findings, 2, Some("unloading_condition"));
+    let (mut arm, findings) = Arm::written(2, "unloading_condition", 0);
     // Overheat (0x04) and overload (0x20).
-    assert_eq!(
-        f.fix,
-        "servobus write --port /dev/ttyACM0 --id 2 unloading_condition 36"
-    );
+    must_write(&findings, 2, "unloading_condition", 36);
     arm.fix(&findings);
     assert!(arm.examine().is_empty());
 }
 
 #[test]
 fn every_simulator_fault_is_found() {
+    use Severity::{Error, Warning};
     // (faults, servo, register, severity, words of the problem)
+    #[rustfmt::skip]
     let cases: [(&str, u8, Option<&str>, Severity, &str); 8] = [
-        (
-            "overheat=3",
-            3,
-            Some("present_temperature"),
-            Severity::Error,
-            "overheat",
-        ),
-        ("vanish=5", 5, None, Severity::Error, "does not answer"),
-        (
-            "supply=3:3.5",
-            3,
-            Some("present_voltage"),
-            Severity::Error,
-            "voltage flag",
-        ),
-        (
-            "supply=5.0",
-            1,
-            Some("present_voltage"),
-            Severity::Warning,
-            "rating 6.0..12.6 V",
-        ),
-        (
-            "supply=13.5",
-            2,
-            Some("present_voltage"),
-            Severity::Warning,
-            "rating 6.0..12.6 V",
-        ),
-        (
-            "supply=5:11.2",
-            5,
-            Some("present_voltage"),
-            Severity::Warning,
-            "drops 0.8 V",
-        ),
-        (
-            "firmware=2:3.9",
-            2,
-            Some("firmware_major"),
-            Severity::Warning,
-            "3.9 differs from 3.10",
-        ),
-        (
-            "duplicate=6:5",
-            5,
-            Some("id"),
-            Severity::Error,
-            "two or more servos answer as ID 5",
-        ),
+        ("overheat=3", 3, Some("present_temperature"), Error, "overheat"),
+        ("vanish=5", 5, None, Error, "does not answer"),
+        ("supply=3:3.5", 3, Some("present_voltage"), Error, "voltage flag"),
+        ("supply=5.0", 1, Some("present_voltage"), Warning, "rating 6.0..12.6 V"),
+        ("supply=13.5", 2, Some("present_voltage"), Warning, "rating 6.0..12.6 V"),
+        ("supply=5:11.2", 5, Some("present_voltage"), Warning, "drops 0.8 V"),
+        ("firmware=2:3.9", 2, Some("firmware_major"), Warning, "3.9 differs from 3.10"),
+        ("duplicate=6:5", 5, Some("id"), Error, "two or more servos answer as ID 5"),
     ];
     for (spec, id, register, severity, words) in cases {
         let faults: Faults = spec.parse().expect(spec);
@@ -409,15 +363,7 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
         sysfs_path: "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer".into(),
         latency: Duration::from_millis(16),
     };
-    let cfg = arm.robot.buses[0].clone();
-    let examined = doctor::examine(
-        &mut arm.bus,
-        &arm.robot,
-        &cfg,
-        &target(),
-        &PortKind::Serial(Some(ftdi)),
-    )
-    .expect("examined");
+    let examined = arm.examine_on(&PortKind::Serial(Some(ftdi)));
     let findings = examined.findings;
     let timer = findings
         .iter()
@@ -515,16 +461,12 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
         range: [600, 3500],
     });
     let findings = arm.examine();
-    let offset = must(&findings, 1, Some("offset"));
+    let offset = must_write(&findings, 1, "offset", 100);
     assert_eq!(offset.severity, Severity::Error);
     assert!(
         offset.problem.contains("homing offset is 0"),
         "{}",
         offset.problem
-    );
-    assert_eq!(
-        offset.fix,
-        "servobus write --port /dev/ttyACM0 --id 1 offset 100"
     );
     let firmware = must(&findings, 1, Some("firmware_major"));
     assert!(
@@ -532,8 +474,7 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
         "{}",
         firmware.problem
     );
-    arm.fix(&findings);
-    arm.sim.power_cycle();
+    arm.fix_and_restart(&findings);
     assert_eq!(
         arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
         Some(100),

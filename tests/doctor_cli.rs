@@ -4,62 +4,11 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
-
-use common::{repo, scratch, servobus, BIN};
-
-/// `servobus sim --faults SPEC` on a link in `dir`; killed when dropped.
-struct FaultySim {
-    child: Child,
-    link: std::path::PathBuf,
-}
-
-impl FaultySim {
-    fn start(dir: &std::path::Path, faults: &str) -> FaultySim {
-        let link = dir.join("bus");
-        let mut child = Command::new(BIN)
-            .args(["sim", "--robot"])
-            .arg(repo("configs/robots/so101.yaml"))
-            .arg("--link")
-            .arg(&link)
-            .args(["--faults", faults])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start servobus sim");
-        let mut line = String::new();
-        let stdout = child.stdout.take().expect("stdout");
-        BufReader::new(stdout)
-            .read_line(&mut line)
-            .expect("sim's line");
-        assert!(line.starts_with("serving 6 servos"), "{line}");
-        FaultySim { child, link }
-    }
-
-    fn port(&self) -> &str {
-        self.link.to_str().expect("utf-8")
-    }
-}
-
-impl Drop for FaultySim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{arg, exited, json, repo, says, scratch, servobus, write_file, Sim};
 
 fn doctor_json(args: &[&str]) -> (i32, serde_json::Value) {
     let out = servobus(args);
-    let code = out.status.code().expect("exit code");
-    let v = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!(
-            "doctor {args:?}: not JSON ({e}): {}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        )
-    });
-    (code, v)
+    (out.status.code().expect("exit code"), json(&out))
 }
 
 fn finding<'a>(
@@ -75,21 +24,22 @@ fn finding<'a>(
 #[test]
 fn the_built_in_simulator_has_only_the_gripper_warnings() {
     let out = servobus(&["doctor", "--robot", "configs/robots/so101.yaml"]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(1), "{text}");
-    assert!(text.contains("servo 6 max_torque"), "{text}");
-    assert!(
-        text.contains("0 error(s), 3 warning(s); 3 can be fixed with --fix"),
-        "{text}"
+    let (text, _) = exited(&out, 1);
+    says(
+        &text,
+        &[
+            "servo 6 max_torque",
+            "0 error(s), 3 warning(s); 3 can be fixed with --fix",
+        ],
     );
 }
 
 #[test]
 fn doctor_finds_faults_on_a_pty_and_fix_brings_a_servo_back_to_the_bus_rate() {
     let dir = scratch("doctor-cli");
-    let sim = FaultySim::start(&dir, "baud=4:115200,overheat=3");
+    let sim = Sim::start_with(&dir, &["--faults", "baud=4:115200,overheat=3"]);
     let robot = repo("configs/robots/so101.yaml");
-    let robot = robot.to_str().expect("utf-8");
+    let robot = arg(&robot);
     let (code, v) = doctor_json(&["doctor", "--robot", robot, "--port", sim.port(), "--json"]);
     assert_eq!(code, 2, "{v}");
     let findings = &v["buses"][0]["findings"];
@@ -135,9 +85,12 @@ fn doctor_finds_faults_on_a_pty_and_fix_brings_a_servo_back_to_the_bus_rate() {
 fn a_calibration_the_robot_file_names_but_lacks_is_an_error() {
     let dir = scratch("doctor-calibration");
     let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    let robot = dir.join("arm.yaml");
-    std::fs::write(&robot, format!("calibration: missing.yaml\n{text}")).expect("robot");
-    let robot = robot.to_str().expect("utf-8");
+    let robot = write_file(
+        &dir,
+        "arm.yaml",
+        &format!("calibration: missing.yaml\n{text}"),
+    );
+    let robot = arg(&robot);
     let (code, v) = doctor_json(&["doctor", "--robot", robot, "--json"]);
     assert_eq!(code, 2, "{v}");
     let findings = v["buses"][0]["findings"].as_array().expect("findings");

@@ -9,6 +9,8 @@
 //! `SERVOBUS_INSTALL_RELEASE=1` it installs the release profile, as a user
 //! would, and checks that the binary carries no debug info (its size).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Instant;
@@ -29,23 +31,10 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// The installed `servobus ARGS`, run in `dir`, which must succeed.
 fn run(bin: &Path, dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(bin)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the installed servobus runs");
-    assert!(
-        out.status.success(),
-        "servobus {args:?} in {}: {}",
-        dir.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(out: &Output) -> serde_json::Value {
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
+    let out = Command::new(bin).args(args).current_dir(dir).output();
+    common::succeeded(out.expect("the installed servobus runs"), args)
 }
 
 #[test]
@@ -88,7 +77,7 @@ fn installed_binary_works_from_an_empty_directory() {
     }
 
     let empty = scratch("install-empty");
-    let play = json(&run(
+    let play = common::json(&run(
         &bin,
         &empty,
         &["play", "arm-wave", "--fast", "--json"],
@@ -97,7 +86,7 @@ fn installed_binary_works_from_an_empty_directory() {
     assert_eq!(play["joints"][0]["name"], "shoulder_pan", "{play}");
     assert!(play["cycles"].as_u64().unwrap_or(0) > 1000, "{play}");
 
-    let budget = json(&run(
+    let budget = common::json(&run(
         &bin,
         &empty,
         &["budget", "--robot", "hexapod", "--json"],
@@ -106,7 +95,7 @@ fn installed_binary_works_from_an_empty_directory() {
 
     run(&bin, &empty, &["init"]);
     assert!(empty.join("robot.yaml").is_file() && empty.join("motion.yaml").is_file());
-    let mine = json(&run(
+    let mine = common::json(&run(
         &bin,
         &empty,
         &["play", "motion.yaml", "--fast", "--json"],

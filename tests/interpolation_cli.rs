@@ -7,20 +7,12 @@ mod common;
 
 use std::path::PathBuf;
 
-use common::{num, servobus, servobus_json};
+use common::{arg, num, one_joint_motion, says, servobus_fails, servobus_json};
 
-fn temp(name: &str, text: &str) -> PathBuf {
-    common::temp_file("interpolation_cli", name, text)
+/// `motion` as `name`, with the one-joint robot beside it.
+fn temp(name: &str, motion: &str) -> PathBuf {
+    one_joint_motion("interpolation_cli", name, motion)
 }
-
-const ROBOT: &str = "\
-name: one
-rate: 100
-buses:
-  - name: bus
-    joints:
-      - {name: a, id: 1, model: sts3215, min: -100, max: 100, max_velocity: 90, max_acceleration: 180}
-";
 
 /// Up to 97 deg, a short step back, then a long way down: a spline through
 /// these times swings past 100 deg.
@@ -33,9 +25,8 @@ const KEYFRAMES: &str = "keyframes:
 
 #[test]
 fn shape_preserving_by_default_spline_by_name() {
-    temp("robot.yaml", ROBOT);
     let m = temp("m.yaml", &format!("robot: robot.yaml\n{KEYFRAMES}"));
-    let v = servobus_json(&["plan", m.to_str().expect("utf-8"), "--json"]);
+    let v = servobus_json(&["plan", arg(&m), "--json"]);
     assert_eq!(v["interpolation"], "shape_preserving", "{v}");
     assert!((num(&v, "duration_s") - 6.0).abs() < 1e-9, "{v}");
     let j = &v["joints"][0];
@@ -48,18 +39,13 @@ fn shape_preserving_by_default_spline_by_name() {
         "s.yaml",
         &format!("robot: robot.yaml\ninterpolation: spline\n{KEYFRAMES}"),
     );
-    let out = servobus(&["plan", s.to_str().expect("utf-8")]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("peak position") && err.contains("above the limit 100"),
-        "{err}"
-    );
+    let err = servobus_fails(&["plan", arg(&s)]);
+    says(&err, &["peak position", "above the limit 100"]);
 
     let u = temp(
         "u.yaml",
         "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 50}\n",
     );
-    let v = servobus_json(&["plan", u.to_str().expect("utf-8"), "--json"]);
+    let v = servobus_json(&["plan", arg(&u), "--json"]);
     assert_eq!(v["interpolation"], "untimed", "{v}");
 }

@@ -13,24 +13,15 @@ use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot};
-use servobus_runtime::{bus_settings, spawn_virtual, RunOptions, Telemetry};
+use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
 use servobus_sim::{Faults, SimBus};
+
+use common::virtual_bus;
 
 const PERIOD: Duration = Duration::from_millis(50);
 
 fn robot(file: &str) -> Robot {
     load_robot(&common::repo(&format!("configs/robots/{file}"))).expect("robot")
-}
-
-fn sim_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, ManualClock>) {
-    let cfg = &robot.buses[0];
-    let clock = ManualClock::new();
-    let servos = servobus_runtime::sim::bus_servos(robot, cfg).expect("servos");
-    let sim = SimBus::new(clock.clone(), cfg.baud)
-        .with_servos(servos)
-        .with_faults(faults);
-    let bus = Bus::new(sim.clone(), clock, bus_settings(cfg));
-    (sim, bus)
 }
 
 /// Polls `n` times, at the next multiples of [`PERIOD`] of virtual time.
@@ -51,7 +42,7 @@ fn row(frame: &Frame, id: u8) -> &monitor::Row {
 #[test]
 fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each() {
     let arm = robot("so101.yaml");
-    let (sim, mut bus) = sim_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
+    let (sim, mut bus) = virtual_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
     let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
     // Servo 1 turns towards tick 2548, so its position changes between reads.
     bus.write(1, addr::TORQUE_ENABLE, &[1]).expect("torque");
@@ -109,7 +100,7 @@ fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each()
 #[test]
 fn a_port_alone_is_scanned_for_its_servos_first() {
     let arm = robot("so101.yaml");
-    let (_sim, mut bus) = sim_bus(&arm, "vanish=5".parse().expect("faults"));
+    let (_sim, mut bus) = virtual_bus(&arm, "vanish=5".parse().expect("faults"));
     let found = Poller::scan(&mut bus).expect("scan");
     let ids: Vec<u8> = found.iter().map(|w| w.id).collect();
     assert_eq!(ids, [1, 2, 3, 4, 6]);
@@ -125,7 +116,7 @@ fn a_port_alone_is_scanned_for_its_servos_first() {
 #[test]
 fn scs_servos_are_read_one_by_one() {
     let mini = robot("scs-mini.yaml");
-    let (sim, mut bus) = sim_bus(&mini, Faults::none());
+    let (sim, mut bus) = virtual_bus(&mini, Faults::none());
     let mut poller = Poller::new(Watched::of_bus(&mini.buses[0], mini.units));
     poll(&mut poller, &mut bus, 1);
     let requests = sim.stats().requests;
@@ -141,7 +132,7 @@ fn scs_servos_are_read_one_by_one() {
 #[test]
 fn torque_off_reaches_every_servo_in_one_frame() {
     let arm = robot("so101.yaml");
-    let (sim, mut bus) = sim_bus(&arm, Faults::none());
+    let (sim, mut bus) = virtual_bus(&arm, Faults::none());
     let ids: Vec<u8> = arm.buses[0].joints.iter().map(|j| j.id).collect();
     bus.sync_write(addr::TORQUE_ENABLE, &ids, &vec![1; ids.len()])
         .expect("torque on");
@@ -159,7 +150,7 @@ fn torque_off_reaches_every_servo_in_one_frame() {
 #[test]
 fn the_view_shows_flags_missing_servos_and_keys() {
     let arm = robot("so101.yaml");
-    let (_sim, mut bus) = sim_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
+    let (_sim, mut bus) = virtual_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
     let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
     let frame = poll(&mut poller, &mut bus, 4);
     let mut terminal = Terminal::new(TestBackend::new(160, 14)).expect("terminal");
@@ -192,7 +183,7 @@ fn play_monitor_rows_follow_the_telemetry() {
     let (motion, arm) =
         load_motion(&common::repo("configs/motions/arm-wave.yaml"), None).expect("motion");
     let trajectory = plan_motion(&motion, &arm).expect("plan");
-    let (_sim, bus) = sim_bus(&arm, "overheat=3".parse().expect("faults"));
+    let (_sim, bus) = virtual_bus(&arm, "overheat=3".parse().expect("faults"));
     let options = RunOptions {
         units: Some(motion.units),
         ..RunOptions::default()

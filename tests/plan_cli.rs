@@ -5,37 +5,34 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{num, servobus, servobus_json as plan_json};
+use common::{
+    arg, num, one_joint_motion, says, servobus_fails, servobus_json, servobus_ok, stdout,
+};
 
-fn temp(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("plan_cli")
-        .join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+/// `motion`, for the one-joint robot, in a folder `dir` of its own: its
+/// path. The joint has no jerk limit, so rest-to-rest moves are trapezoids.
+fn motion(dir: &str, name: &str, motion: &str) -> PathBuf {
+    one_joint_motion(&format!("plan_cli/{dir}"), name, motion)
 }
 
-/// One joint, no jerk limit: rest-to-rest moves are trapezoids.
-const ONE_JOINT: &str = "\
-name: one
-rate: 100
-buses:
-  - name: bus
-    joints:
-      - {name: a, id: 1, model: sts3215, min: -100, max: 100, max_velocity: 90, max_acceleration: 180}
-";
+/// `servobus plan MOTION --json`, which must succeed.
+fn plan_json(motion: &Path) -> serde_json::Value {
+    servobus_json(&["plan", arg(motion), "--json"])
+}
+
+/// `servobus plan MOTION`, which must fail: its standard error.
+fn plan_error(motion: &Path) -> String {
+    servobus_fails(&["plan", arg(motion)])
+}
 
 #[test]
 fn a_trapezoid_worked_out_by_hand() {
-    temp("trapezoid", "robot.yaml", ONE_JOINT);
-    let m = temp(
+    let m = motion(
         "trapezoid",
         "m.yaml",
         "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 90}\n",
     );
-    let v = plan_json(&["plan", m.to_str().expect("utf-8"), "--json"]);
+    let v = plan_json(&m);
     // 90 deg at 90 deg/s and 180 deg/s^2: 0.5 s to reach full speed
     // (22.5 deg), 45 deg cruising (0.5 s), 0.5 s to stop: 1.5 s.
     assert!((num(&v, "duration_s") - 1.5).abs() < 1e-9, "{v}");
@@ -51,40 +48,22 @@ fn a_trapezoid_worked_out_by_hand() {
 
 #[test]
 fn arm_wave_respects_every_limit_and_stays_within_its_keyframes() {
-    let v = plan_json(&["plan", "configs/motions/arm-wave.yaml", "--json"]);
+    let v = plan_json(Path::new("configs/motions/arm-wave.yaml"));
     assert!(num(&v, "duration_s") > 1.0);
     let joints = v["joints"].as_array().expect("joints");
-    let names: Vec<&str> = joints.iter().filter_map(|j| j["name"].as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "shoulder_pan",
-            "shoulder_lift",
-            "elbow_flex",
-            "wrist_flex",
-            "wrist_roll",
-            "gripper"
-        ]
-    );
-    // Limits of configs/robots/so101.yaml (velocity, acceleration, jerk).
-    let limits = [
-        (180.0, 900.0, 9000.0),
-        (150.0, 700.0, 7000.0),
-        (180.0, 900.0, 9000.0),
-        (240.0, 1200.0, 12000.0),
-        (270.0, 1500.0, 15000.0),
-        (240.0, 1500.0, 15000.0),
+    // Per joint: the limits of configs/robots/so101.yaml (velocity,
+    // acceleration, jerk) and the range its keyframes in arm-wave.yaml span.
+    let expected = [
+        ("shoulder_pan", 180.0, 900.0, 9000.0, 0.0, 20.0),
+        ("shoulder_lift", 150.0, 700.0, 7000.0, -90.0, -20.0),
+        ("elbow_flex", 180.0, 900.0, 9000.0, -30.0, 90.0),
+        ("wrist_flex", 240.0, 1200.0, 12000.0, -40.0, 45.0),
+        ("wrist_roll", 270.0, 1500.0, 15000.0, -30.0, 30.0),
+        ("gripper", 240.0, 1500.0, 15000.0, 10.0, 40.0),
     ];
-    // Ranges spanned by the keyframes of arm-wave.yaml.
-    let ranges = [
-        (0.0, 20.0),
-        (-90.0, -20.0),
-        (-30.0, 90.0),
-        (-40.0, 45.0),
-        (-30.0, 30.0),
-        (10.0, 40.0),
-    ];
-    for ((j, (vmax, amax, jmax)), (lo, hi)) in joints.iter().zip(limits).zip(ranges) {
+    assert_eq!(joints.len(), expected.len(), "{v}");
+    for (j, (name, vmax, amax, jmax, lo, hi)) in joints.iter().zip(expected) {
+        assert_eq!(j["name"], name);
         let tol = 1e-6;
         assert!(num(j, "peak_velocity") <= vmax * (1.0 + tol), "{j}");
         assert!(num(j, "peak_acceleration") <= amax * (1.0 + tol), "{j}");
@@ -97,7 +76,7 @@ fn arm_wave_respects_every_limit_and_stays_within_its_keyframes() {
 
 #[test]
 fn timed_keyframes_end_exactly_on_time() {
-    let v = plan_json(&["plan", "configs/motions/arm-pick-place.yaml", "--json"]);
+    let v = plan_json(Path::new("configs/motions/arm-pick-place.yaml"));
     // The last keyframe is `at: 10.0`.
     assert!((num(&v, "duration_s") - 10.0).abs() < 1e-9, "{v}");
     let gripper = &v["joints"][5];
@@ -185,7 +164,7 @@ fn every_shipped_motion_plans() {
     let mut n = 0;
     for entry in std::fs::read_dir(dir).expect("configs/motions") {
         let path = entry.expect("entry").path();
-        let v = plan_json(&["plan", path.to_str().expect("utf-8"), "--json"]);
+        let v = plan_json(&path);
         let motion = yaml(&path);
         assert_eq!(motion["units"].as_str().unwrap_or("deg"), "deg");
         let robot_path = path.parent().expect("a directory").join(
@@ -252,119 +231,84 @@ fn every_shipped_motion_plans() {
 
 #[test]
 fn a_segment_beyond_a_limit_names_keyframe_joint_peak_and_limit() {
-    temp("too_fast", "robot.yaml", ONE_JOINT);
-    let m = temp(
+    // Half a second for 90 deg, under each kind of interpolation.
+    let fast = "keyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n";
+    let m = motion(
         "too_fast",
         "m.yaml",
-        "robot: robot.yaml\ninterpolation: spline\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+        &format!("robot: robot.yaml\ninterpolation: spline\n{fast}"),
     );
-    let out = servobus(&["plan", m.to_str().expect("utf-8")]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = plan_error(&m);
     let want = format!("{}:5:5: keyframes[1]: joint `a`: ", m.display());
-    assert!(err.contains(&want), "{err}");
-    assert!(
-        err.contains("deg/s") && err.contains("above the limit"),
-        "{err}"
+    says(
+        &err,
+        &[&want, "deg/s", "above the limit", "on_limit: stretch"],
     );
-    assert!(err.contains("on_limit: stretch"), "{err}");
 
     // The default (shape-preserving) refuses it too: even stopping at the
     // keyframe needs 1.5 s (a trapezoid at 90 deg/s and 180 deg/s^2).
-    let m3 = temp(
-        "too_fast",
-        "m3.yaml",
-        "robot: robot.yaml\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+    let m3 = motion("too_fast", "m3.yaml", &format!("robot: robot.yaml\n{fast}"));
+    let err = plan_error(&m3);
+    says(
+        &err,
+        &["keyframes[1].at", "at least 1.500 s", "on_limit: stretch"],
     );
-    let out = servobus(&["plan", m3.to_str().expect("utf-8")]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("keyframes[1].at") && err.contains("at least 1.500 s"),
-        "{err}"
-    );
-    assert!(err.contains("on_limit: stretch"), "{err}");
 
     // With `on_limit: stretch` the same motion plans, just slower.
-    let m2 = temp(
+    let m2 = motion(
         "too_fast",
         "m2.yaml",
-        "robot: robot.yaml\non_limit: stretch\nkeyframes:\n  - {at: 0, pose: {a: 0}}\n  - {at: 0.5, pose: {a: 90}}\n",
+        &format!("robot: robot.yaml\non_limit: stretch\n{fast}"),
     );
-    let v = plan_json(&["plan", m2.to_str().expect("utf-8"), "--json"]);
+    let v = plan_json(&m2);
     assert!(num(&v, "duration_s") > 0.5);
     assert!(num(&v["joints"][0], "peak_velocity") <= 90.0 * (1.0 + 1e-6));
 }
 
 #[test]
 fn format_errors_have_file_line_and_column() {
-    temp("format", "robot.yaml", ONE_JOINT);
-    let m = temp(
+    let m = motion(
         "format",
         "m.yaml",
         "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 200}\n",
     );
-    let out = servobus(&["plan", m.to_str().expect("utf-8")]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
     let want = format!(
         "{}:4:15: keyframes[1].pose.a: keyframe 1: 200 deg is outside the limits of joint `a` [-100, 100] deg",
         m.display()
     );
-    assert!(err.contains(&want), "{err}");
+    says(&plan_error(&m), &[&want]);
 }
 
 #[test]
 fn robot_override_and_text_output() {
-    let r = temp("override", "robot.yaml", ONE_JOINT);
-    let m = temp(
+    let m = motion(
         "override",
         "m.yaml",
         "robot: nowhere.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 90}\n",
     );
-    let out = servobus(&[
-        "plan",
-        m.to_str().expect("utf-8"),
-        "--robot",
-        r.to_str().expect("utf-8"),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("1.500 s at 100 Hz"), "{text}");
-    assert!(text.contains("segments"), "{text}");
+    let r = m.with_file_name("robot.yaml");
+    let out = servobus_ok(&["plan", arg(&m), "--robot", arg(&r)]);
+    says(&stdout(&out), &["1.500 s at 100 Hz", "segments"]);
 }
 
 #[test]
 fn plot_draws_titles_axes_and_a_legend() {
     let svg = Path::new(env!("CARGO_TARGET_TMPDIR")).join("plan_cli/arm-wave.svg");
     let _ = std::fs::remove_file(&svg);
-    let out = servobus(&[
-        "plan",
-        "configs/motions/arm-wave.yaml",
-        "--plot",
-        svg.to_str().expect("utf-8"),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    servobus_ok(&["plan", "configs/motions/arm-wave.yaml", "--plot", arg(&svg)]);
     let text = std::fs::read_to_string(&svg).expect("the SVG was written");
     assert!(text.starts_with("<svg"), "not an SVG");
-    for needle in [
-        "arm-wave.yaml",
-        "Position of every joint",
-        "Velocity of every joint",
-        "time (s)",
-        "position (deg)",
-        "velocity (deg/s)",
-        "shoulder_pan",
-        "gripper",
-    ] {
-        assert!(text.contains(needle), "the plot lacks `{needle}`");
-    }
+    says(
+        &text,
+        &[
+            "arm-wave.yaml",
+            "Position of every joint",
+            "Velocity of every joint",
+            "time (s)",
+            "position (deg)",
+            "velocity (deg/s)",
+            "shoulder_pan",
+            "gripper",
+        ],
+    );
 }

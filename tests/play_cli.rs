@@ -4,31 +4,12 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-use common::{repo, scratch, Sim, BIN};
+use common::{arg, repo, scratch, servobus_json, write_file, Sim};
 use serde_json::Value;
 
-fn play(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("play")
-        .args(args)
-        .current_dir(repo(""))
-        .output()
-        .expect("run servobus play")
-}
-
+/// `servobus play --fast --json ARGS`, which must succeed: its report.
 fn play_json(args: &[&str]) -> Value {
-    let mut all = vec!["--fast", "--json"];
-    all.extend_from_slice(args);
-    let out = play(&all);
-    assert!(
-        out.status.success(),
-        "servobus play {all:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("play --json prints one JSON object")
+    servobus_json(&[&["play", "--fast", "--json"], args].concat())
 }
 
 /// Checks what every clean run on the simulator must show: it completed, at
@@ -83,7 +64,7 @@ fn every_motion_in_configs_plays_cleanly_on_its_robot() {
         .collect();
     entries.sort();
     for path in entries {
-        let name = path.to_str().expect("utf-8 path");
+        let name = arg(&path);
         let report = play_json(&[name]);
         // Joint counts of the robots the motions name.
         let joints = if name.contains("hexapod") {
@@ -128,9 +109,9 @@ fn log_and_plot_are_written() {
     let report = play_json(&[
         "configs/motions/arm-wave.yaml",
         "--log",
-        log.to_str().expect("utf-8"),
+        arg(&log),
         "--plot",
-        plot.to_str().expect("utf-8"),
+        arg(&plot),
     ]);
     let cycles = report["cycles"].as_u64().expect("cycles");
 
@@ -160,27 +141,21 @@ fn log_and_plot_are_written() {
 #[test]
 fn a_bad_motion_file_names_the_place_and_moves_nothing() {
     let dir = scratch("play-bad");
-    let motion = dir.join("bad.yaml");
     let robot = repo("configs/robots/so101.yaml");
-    std::fs::write(
-        &motion,
-        format!(
+    let motion = write_file(
+        &dir,
+        "bad.yaml",
+        &format!(
             "robot: {}\nunits: deg\nkeyframes:\n  - pose: {{shoulder_pan: 0}}\n  - pose: {{shoulder_pan: 500}}\n",
             robot.display()
         ),
-    )
-    .expect("write motion");
+    );
 
     // On a simulated arm served on a pty, exactly as on real servos.
     let sim = Sim::start(&dir);
-    let out = Command::new(BIN)
-        .arg("play")
-        .arg(&motion)
-        .args(["--port", sim.port()])
-        .output()
-        .expect("run servobus play");
+    let out = common::servobus(&["play", arg(&motion), "--port", sim.port()]);
     assert_eq!(out.status.code(), Some(2), "an input error");
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = common::stderr(&out);
     let place = format!("{}:5:26:", motion.display());
     assert!(err.contains(&place), "{err:?} names {place}");
     assert!(err.contains("shoulder_pan") && err.contains("500"), "{err}");
@@ -188,28 +163,8 @@ fn a_bad_motion_file_names_the_place_and_moves_nothing() {
 
     // Torque was never enabled and no goal was ever written.
     for (register, value) in [("torque_enable", 0), ("goal_position", 2048)] {
-        let read = Command::new(BIN)
-            .args([
-                "read",
-                "--port",
-                sim.port(),
-                "--latency-us",
-                "10000",
-                "--id",
-                "1",
-                register,
-                "--json",
-            ])
-            .output()
-            .expect("run servobus read");
-        assert!(
-            read.status.success(),
-            "{}",
-            String::from_utf8_lossy(&read.stderr)
-        );
-        let v: Value = serde_json::from_slice(&read.stdout).expect("read --json");
-        assert_eq!(v["value"], value, "{register} untouched");
+        assert_eq!(sim.read("1", register), value, "{register} untouched");
     }
     sim.stop();
-    let _ = std::fs::remove_dir_all(Path::new(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
 }

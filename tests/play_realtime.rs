@@ -21,14 +21,10 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::sync::mpsc::{self, Receiver};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::sync::Mutex;
 
-use common::{repo, scratch, BIN};
+use common::{arg, edited, joint_names, scratch, write_file, Running};
 
 /// Cruise speed, acceleration and jerk limits of the test robot's pan.
 const V: f64 = 30.0;
@@ -42,8 +38,6 @@ const RATE: f64 = 10.0;
 /// Held by each test: three wall-clock runs at once load the machine more
 /// than the checks need.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
-/// Generous: a loaded machine may be slow to start or to answer.
-const PATIENCE: Duration = Duration::from_secs(60);
 
 /// Writes the SO-101 into `dir` as `robot.yaml` with `lead_ms: 0`, so
 /// that the goal sent each cycle (`commanded` in the log) is the path at
@@ -56,152 +50,45 @@ const PATIENCE: Duration = Duration::from_secs(60);
 /// run at 10 Hz ([`RATE`]): a servo counts as missing after 3 silent
 /// cycles, 300 ms. The tests also run one at a time ([`ONE_AT_A_TIME`]).
 fn write_robot(dir: &Path, slow_pan: bool) {
-    let so101 = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101.yaml");
-    let rate = so101
-        .lines()
-        .find(|l| l.starts_with("rate:"))
-        .expect("so101.yaml has a rate");
-    let mut robot = so101.replacen(rate, &format!("{rate}\nlead_ms: 0"), 1);
-    let latency = "    latency_us: auto ";
-    assert!(robot.contains(latency), "so101.yaml's latency moved");
-    robot = robot.replacen(latency, "    latency_us: 50000 #", 1);
+    let pan = "        max_velocity: 180    # deg/s (the servo manages ~300 unloaded)\n        \
+               max_acceleration: 900   # deg/s^2\n        max_jerk: 9000          # deg/s^3, optional";
+    let slow =
+        format!("        max_velocity: {V}\n        max_acceleration: {A}\n        max_jerk: {J}");
+    let mut edits = vec![
+        ("\nrate: 200 ", "\nlead_ms: 0\nrate: 200 "),
+        ("    latency_us: auto ", "    latency_us: 50000 #"),
+    ];
     if slow_pan {
-        let pan = "        max_velocity: 180    # deg/s (the servo manages ~300 unloaded)\n        \
-                   max_acceleration: 900   # deg/s^2\n        max_jerk: 9000          # deg/s^3, optional";
-        assert!(robot.contains(pan), "so101.yaml's pan limits moved");
-        robot = robot.replace(
-            pan,
-            &format!(
-                "        max_velocity: {V}\n        max_acceleration: {A}\n        max_jerk: {J}"
-            ),
-        );
+        edits.push((pan, &slow));
     }
-    std::fs::write(dir.join("robot.yaml"), robot).expect("write robot");
+    write_file(
+        dir,
+        "robot.yaml",
+        &edited("configs/robots/so101.yaml", &edits),
+    );
 }
 
 /// Writes the slow-pan robot and the sweep into `dir`; returns the motion.
 fn slow_pan_files(dir: &Path) -> PathBuf {
     write_robot(dir, true);
-    let motion = dir.join("sweep.yaml");
-    std::fs::write(
-        &motion,
+    write_file(
+        dir,
+        "sweep.yaml",
         "robot: robot.yaml\nunits: deg\nrate: 10\nkeyframes:\n  - pose: {shoulder_pan: -100, \
          shoulder_lift: -90, elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}\n  \
          - pose: {shoulder_pan: 100}\n",
     )
-    .expect("write motion");
-    motion
 }
 
-/// A running `servobus play`, its output lines collected as they come.
-struct Play {
-    child: Child,
-    stdout: Receiver<String>,
-    stderr: Receiver<String>,
-    seen_out: Arc<Mutex<Vec<String>>>,
-    seen_err: Arc<Mutex<Vec<String>>>,
-}
-
-fn lines(
-    stream: impl std::io::Read + Send + 'static,
-) -> (Receiver<String>, Arc<Mutex<Vec<String>>>) {
-    let (tx, rx) = mpsc::channel();
-    let seen = Arc::new(Mutex::new(Vec::new()));
-    let keep = Arc::clone(&seen);
-    std::thread::spawn(move || {
-        for line in BufReader::new(stream).lines().map_while(Result::ok) {
-            keep.lock().expect("lines").push(line.clone());
-            let _ = tx.send(line);
-        }
-    });
-    (rx, seen)
-}
-
-impl Play {
-    fn start(motion: &Path, log: &Path, pose: &str) -> Play {
-        let mut child = Command::new(BIN)
-            .arg("play")
-            .arg(motion)
-            .arg(format!("--sim-pose={pose}"))
-            .arg("--log")
-            .arg(log)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start servobus play");
-        let (stdout, seen_out) = lines(child.stdout.take().expect("stdout"));
-        let (stderr, seen_err) = lines(child.stderr.take().expect("stderr"));
-        Play {
-            child,
-            stdout,
-            stderr,
-            seen_out,
-            seen_err,
-        }
-    }
-
-    /// Waits for a line of `from` that `want` accepts.
-    fn wait_for(&mut self, err: bool, what: &str, want: impl Fn(&str) -> bool) -> String {
-        let deadline = Instant::now() + PATIENCE;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            let rx = if err { &self.stderr } else { &self.stdout };
-            match rx.recv_timeout(left) {
-                Ok(line) if want(&line) => return line,
-                Ok(_) => {}
-                Err(_) => {
-                    let _ = self.child.kill();
-                    panic!(
-                        "no {what} within {PATIENCE:?}; stdout {:?} stderr {:?}",
-                        self.seen_out.lock().expect("lines"),
-                        self.seen_err.lock().expect("lines")
-                    );
-                }
-            }
-        }
-    }
-
-    /// Ctrl-C, as the terminal sends it.
-    fn interrupt(&self) {
-        let sent = Command::new("kill")
-            .args(["-INT", &self.child.id().to_string()])
-            .status()
-            .expect("run kill");
-        assert!(sent.success(), "kill -INT failed");
-    }
-
-    /// Waits for the exit; returns the status, stdout and stderr.
-    fn finish(mut self) -> (ExitStatus, String, String) {
-        let deadline = Instant::now() + PATIENCE;
-        let status = loop {
-            if let Some(s) = self.child.try_wait().expect("wait") {
-                break s;
-            }
-            if Instant::now() > deadline {
-                let _ = self.child.kill();
-                panic!("servobus play did not end within {PATIENCE:?}");
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        };
-        // The readers end with the pipes; give them a moment to drain.
-        let drained = Instant::now() + Duration::from_secs(10);
-        while Instant::now() < drained
-            && (self.stdout.recv_timeout(Duration::from_millis(50)).is_ok()
-                || self.stderr.recv_timeout(Duration::from_millis(50)).is_ok())
-        {}
-        let out = self.seen_out.lock().expect("lines").join("\n");
-        let err = self.seen_err.lock().expect("lines").join("\n");
-        (status, out, err)
-    }
-}
-
-impl Drop for Play {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
+/// `servobus play MOTION --sim-pose=POSE --log LOG` on the wall clock.
+fn play(motion: &Path, log: &Path, pose: &str) -> Running {
+    Running::start(&[
+        "play",
+        arg(motion),
+        &format!("--sim-pose={pose}"),
+        "--log",
+        arg(log),
+    ])
 }
 
 /// One joint's rows of a `play --log` CSV: (time s, the goal sent, the
@@ -274,11 +161,11 @@ fn max_jerk(rows: &[(f64, f64, Option<f64>)], from: f64, to: f64) -> f64 {
 /// slow pan away from the first keyframe) and sends the first Ctrl-C while
 /// the pan cruises (run time 4 s: the approach of ~0.6 s, then 3.4 s of
 /// the sweep, past its 3.1 s acceleration; the cruise lasts 3.57 s more).
-fn sweep_and_interrupt(name: &str) -> (Play, PathBuf) {
+fn sweep_and_interrupt(name: &str) -> (Running, PathBuf) {
     let dir = scratch(name);
     let motion = slow_pan_files(&dir);
     let log = dir.join("log.csv");
-    let mut play = Play::start(&motion, &log, "-100,-80,80,30,20,20");
+    let mut play = play(&motion, &log, "-100,-80,80,30,20,20");
     play.wait_for(true, "the approach's announcement", |l| {
         l.starts_with("moving to the first keyframe")
     });
@@ -424,19 +311,18 @@ fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
     // motion then holds the first keyframe for 1 s, so every joint must be
     // exactly there from the approach's end until 1.169 + 1 s.
     let dir = scratch("rt-approach");
-    let motion = dir.join("short.yaml");
     write_robot(&dir, false);
-    std::fs::write(
-        &motion,
+    let motion = write_file(
+        &dir,
+        "short.yaml",
         "robot: robot.yaml\nunits: deg\nrate: 10\nkeyframes:\n  - {at: 0, pose: {shoulder_pan: 0, \
          shoulder_lift: -90, elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}}\n  \
          - {at: 1, pose: {shoulder_pan: 0}}\n  - {at: 2, pose: {shoulder_pan: 20, gripper: 40}}\n",
-    )
-    .expect("write motion");
+    );
     let log = dir.join("log.csv");
     let start = [5.0, -85.0, 85.0, 40.0, 60.0, 15.0];
     let pose = start.map(|a| a.to_string()).join(",");
-    let play = Play::start(&motion, &log, &pose);
+    let play = play(&motion, &log, &pose);
     let (status, out, err) = play.finish();
     assert_eq!(status.code(), Some(0), "stdout {out}\nstderr {err}");
     assert!(out.lines().any(|l| l.starts_with("completed: ")), "{out}");
@@ -446,14 +332,8 @@ fn play_approaches_the_first_keyframe_from_wherever_the_joints_are() {
     );
 
     let first = [0.0, -90.0, 90.0, 45.0, 0.0, 10.0];
-    let names = [
-        "shoulder_pan",
-        "shoulder_lift",
-        "elbow_flex",
-        "wrist_flex",
-        "wrist_roll",
-        "gripper",
-    ];
+    let names = joint_names("configs/robots/so101.yaml");
+    assert_eq!(names.len(), 6, "{names:?}");
     // One STS3215 tick is 360/4096 = 0.088 deg.
     for ((name, &s), &k) in names.iter().zip(&start).zip(&first) {
         let rows = joint_rows(&log, name);

@@ -4,9 +4,7 @@
 
 mod common;
 
-use std::process::Command;
-
-use common::{temp_file, BIN};
+use common::{arg, is_root, servobus, servobus_as_nobody, stderr, stdout, temp_file};
 
 #[test]
 fn a_refused_sched_fifo_is_a_warning_and_the_run_completes() {
@@ -15,35 +13,19 @@ fn a_refused_sched_fifo_is_a_warning_and_the_run_completes() {
         "nod.yaml",
         "units: deg\nkeyframes:\n  - pose: {shoulder_pan: 0}\n  - pose: {shoulder_pan: 5}\n",
     );
-    let args = [
-        "play",
-        motion.to_str().expect("a UTF-8 path"),
-        "--robot",
-        "so101",
-        "--fifo",
-        "80",
-    ];
-    // SAFETY: geteuid has no preconditions.
-    let root = unsafe { libc::geteuid() } == 0;
+    let args = ["play", arg(&motion), "--robot", "so101", "--fifo", "80"];
+    let root = is_root();
     let out = if root {
         // Root may set SCHED_FIFO: run as `nobody`, whose real-time
         // priority limit is 0, so the request is refused.
-        match Command::new("setpriv")
-            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
-            .args(args)
-            .output()
-        {
-            Ok(out) => out,
-            Err(_) => {
-                eprintln!("\n*** SKIPPED: root, and no setpriv to drop privileges ***\n");
-                return;
-            }
-        }
+        let Some(out) = servobus_as_nobody(&args) else {
+            return;
+        };
+        out
     } else {
-        Command::new(BIN).args(args).output().expect("run servobus")
+        servobus(&args)
     };
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (stdout, stderr) = (stdout(&out), stderr(&out));
     if !root && !stdout.contains("SCHED_FIFO") {
         // An unprivileged user allowed real-time priority: nothing to show.
         eprintln!("\n*** SKIPPED: this user may use SCHED_FIFO ***\n");

@@ -6,14 +6,15 @@
 //! commands get a generous adapter latency, as in `bus_tools.rs`, or
 //! measure it themselves, and nothing here measures time.
 
+mod common;
+
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
+use common::BIN;
 use servobus_sim::{PtyError, PtyServer, SimServo};
-
-const BIN: &str = env!("CARGO_BIN_EXE_servobus");
 
 /// A bus served on a pty until dropped.
 struct Served {
@@ -62,12 +63,8 @@ impl Drop for Served {
 }
 
 fn json(out: &Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("scan --json")
+    assert!(out.status.success(), "{}", common::stderr(out));
+    common::json(out)
 }
 
 fn ids(v: &serde_json::Value) -> Vec<u64> {

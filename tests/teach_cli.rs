@@ -5,27 +5,22 @@ mod common;
 
 use std::process::{Command, Stdio};
 
-use common::{repo, scratch, servobus, Sim, BIN};
+use common::{arg, repo, scratch, servobus, servobus_ok, Sim, BIN};
 
 #[test]
 fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
     let dir = scratch("teach-cli");
-    let hand = dir.join("hand.yaml");
     // Rest, then two poses, each reached in 1 s and held 2 s.
-    std::fs::write(
-        &hand,
-        "keyframes:\n\
+    let hand = "keyframes:\n\
          \x20 - {at: 0, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
          \x20 - {at: 0.5, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
          \x20 - {at: 1.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
          \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
          \x20 - {at: 4.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n\
-         \x20 - {at: 6.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n",
-    )
-    .expect("writes the hand");
-    let sim = Sim::start_with(&dir, &["--hand", hand.to_str().expect("utf-8")]);
-    let out = dir.join("taught.yaml");
+         \x20 - {at: 6.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n";
     let robot = repo("configs/robots/so101.yaml");
+    let (sim, _) = Sim::start_hand(&dir, &robot, 6, hand, &[]);
+    let out = dir.join("taught.yaml");
     let run = Command::new(BIN)
         .args(["teach", "--robot"])
         .arg(&robot)
@@ -51,12 +46,7 @@ fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
         "{text}"
     );
     // `play` accepts it as it is: planning it succeeds.
-    let plan = servobus(&["plan", out.to_str().expect("utf-8")]);
-    assert!(
-        plan.status.success(),
-        "{}",
-        String::from_utf8_lossy(&plan.stderr)
-    );
+    servobus_ok(&["plan", arg(&out)]);
 }
 
 #[test]
@@ -73,7 +63,7 @@ fn teach_refuses_an_unknown_joint_to_hold_before_anything_moves() {
         "shoulder,elbow_flex",
         "--yes",
         "-o",
-        dir.join("x.yaml").to_str().expect("utf-8"),
+        arg(&dir.join("x.yaml")),
     ]);
     sim.stop();
     assert!(!out.status.success());

@@ -26,11 +26,13 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use serde::Serialize;
-use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock};
+use servobus_driver::Clock;
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, RateRemedy, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
+
+use super::link::{bus_ports, open_bus, Allowance, SerialBus};
 
 mod floor;
 
@@ -40,14 +42,10 @@ pub struct Args {
     /// The robot: a file, or a built-in name (default: the built-in so101).
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
-    /// Serial port of real servos, for the robot's first bus (default: the
-    /// port in the robot file; without one, the simulator on a pty).
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file of the physical robot (default: the robot file's
-    /// `calibration:`); with --port it must match the servos.
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
+    /// Its port (without one, the simulator on a pty) and calibration:
+    /// with a port it must match the servos.
+    #[command(flatten)]
+    pub hardware: super::HardwareArgs,
     /// How long to measure, in seconds.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
@@ -158,7 +156,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let mut robot = load_robot_any_rate_calibrated(&path, args.calibration.as_deref())?;
+    let mut robot = load_robot_any_rate_calibrated(&path, args.hardware.calibration.as_deref())?;
     // The robot's rate must fit as it would for `play`: bench measures the
     // cycle that rate would run.
     for bus in &mut robot.buses {
@@ -172,20 +170,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     let duration = Duration::from_secs_f64(args.seconds);
-    let clock = SystemClock::new();
 
     let mut runs = Vec::new();
-    for (index, bus) in robot.buses.iter().enumerate() {
-        let port = if index == 0 {
-            args.port.clone().or_else(|| bus.port.clone())
-        } else {
-            bus.port.clone()
-        };
+    let ports = bus_ports(&robot, args.hardware.port.as_deref());
+    for ((index, bus), port) in robot.buses.iter().enumerate().zip(ports) {
         let robot = robot.clone();
         let mut bus = bus.clone();
         bus.busy_poll |= args.busy_poll;
         runs.push(std::thread::spawn(move || {
-            bench_bus(&robot, index, &bus, port, clock, duration)
+            bench_bus(&robot, index, &bus, port, duration)
         }));
     }
     let mut buses = Vec::new();
@@ -209,7 +202,6 @@ fn bench_bus(
     index: usize,
     bus: &BusConfig,
     port: Option<String>,
-    clock: SystemClock,
     duration: Duration,
 ) -> anyhow::Result<BusBench> {
     let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
@@ -223,11 +215,8 @@ fn bench_bus(
 
     // The simulator (when no port is given) serves until `stop`.
     let stop = Arc::new(AtomicBool::new(false));
-    let (path, server, backend) = match port {
-        Some(port) => {
-            super::calibrate::check_port(robot, index, &port)?;
-            (port.clone(), None, format!("serial port {port}"))
-        }
+    let (path, server, backend) = match &port {
+        Some(port) => (port.clone(), None, format!("serial port {port}")),
         None => {
             let servos = servobus_runtime::sim::bus_servos(robot, bus)?;
             let mut server = PtyServer::open(bus.baud, servos)
@@ -239,7 +228,14 @@ fn bench_bus(
         }
     };
     let server_ran = server.is_some();
-    let result = measure(bus, &ids, series, &path, clock, duration, &plan);
+    // One bus for the calibration check and the measurement: the port is
+    // opened once.
+    let result = open_bus(bus, &path, Allowance::Assumed).and_then(|mut servo_bus| {
+        if let Some(port) = &port {
+            super::calibrate::check_bus(robot, index, &mut servo_bus, port)?;
+        }
+        measure(&mut servo_bus, bus, &ids, series, duration, &plan)
+    });
     stop.store(true, Ordering::SeqCst);
     if let Some(handle) = server {
         match handle.join() {
@@ -259,28 +255,14 @@ fn bench_bus(
 }
 
 fn measure(
+    servo_bus: &mut SerialBus,
     bus: &BusConfig,
     ids: &[u8],
     series: servobus_protocol::registers::Series,
-    path: &str,
-    clock: SystemClock,
     duration: Duration,
     plan: &servobus_timing::Plan,
 ) -> anyhow::Result<BusBench> {
-    let mut transport = SerialTransport::open(path, bus.baud, clock)
-        .with_context(|| format!("bus `{}`: cannot open {path}", bus.name))?;
-    transport.set_busy_poll(bus.busy_poll);
-    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
-        eprintln!("warning: {warning}");
-    }
-    // The robot file's latency, or the port's own allowance when that is
-    // longer (a pty's scheduling noise; a real adapter never gets it).
-    let latency = bus.latency.max(transport.assumed_latency());
-    let settings = BusSettings::new(series, bus.baud)
-        .with_latency(latency)
-        .with_return_delay(bus.return_delay);
-    let mut servo_bus = Bus::new(transport, clock, settings);
-
+    let clock = *servo_bus.clock();
     // Hold every servo where it is: the goals are the present positions,
     // in the layout of this bus's series.
     let order = series.byte_order();

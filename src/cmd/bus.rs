@@ -1,7 +1,7 @@
 //! The bus tools: `servobus scan`, `ping`, `read`, `write` and `set-id`.
 //!
 //! Each opens the serial port (or the simulator's pty), builds a driver
-//! [`Bus`] with reply deadlines derived from the baud rate and the adapter
+//! [`Bus`](servobus_driver::Bus) with reply deadlines derived from the baud rate and the adapter
 //! latency, and reports in one line per fact. Errors are one line and a
 //! non-zero exit code.
 
@@ -14,15 +14,21 @@ use super::exit::input;
 
 mod regs;
 pub use regs::{read, set_id, write};
-use servobus_driver::{Bus, BusError, BusSettings, SerialTransport, SystemClock};
+use servobus_driver::BusError;
+
+use super::link::{open_plain_bus, SerialBus};
 use servobus_protocol::registers::{self, addr, Model, Series};
 use servobus_protocol::MAX_ID;
-
-type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
 
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
 const LATENCY_CEILING: Duration = Duration::from_millis(300);
+/// PINGs the bus tools measure an adapter's latency with: few enough to
+/// stay quick, enough that one lucky reply does not set the figure.
+const LATENCY_PINGS: u32 = 3;
+/// The measured latency's worst case is allowed this many times over in
+/// the deadlines: room for the spikes a USB adapter shows now and then.
+const LATENCY_HEADROOM: u32 = 2;
 
 /// Options every bus tool shares.
 #[derive(Debug, clap::Args)]
@@ -113,28 +119,19 @@ pub struct SetIdArgs {
 
 /// Opens the port and builds a bus; warns about a slow FTDI latency timer.
 fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Result<SerialBus> {
-    let clock = SystemClock::new();
-    let transport = SerialTransport::open(&port.port, baud, clock)
-        .with_context(|| format!("cannot open {}", port.port))?;
-    if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
-        eprintln!("warning: {warning}");
-    }
-    let latency = port
-        .latency_us
-        .map_or_else(|| transport.assumed_latency(), Duration::from_micros);
-    let settings = BusSettings::new(series, baud)
-        .with_latency(latency)
-        .with_retries(retries);
-    Ok(Bus::new(transport, clock, settings))
+    let latency = port.latency_us.map(Duration::from_micros);
+    let mut bus = open_plain_bus(&port.port, baud, series, latency)?;
+    bus.set_settings(bus.settings().with_retries(retries));
+    Ok(bus)
 }
 
 /// Measures the adapter's latency with servo `id` and widens the bus's
-/// deadlines to twice it when the assumed latency is too short. Used by
-/// the single-servo tools, which can afford three PINGs to be sure.
+/// deadlines to [`LATENCY_HEADROOM`] times it when the assumed latency is
+/// too short. Used by the single-servo tools, which can afford the PINGs.
 fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
-    let m = bus.measure_latency(id, 3, LATENCY_CEILING)?;
-    if m.max * 2 > bus.settings().link.latency {
-        bus.set_latency(m.max * 2);
+    let m = bus.measure_latency(id, LATENCY_PINGS, LATENCY_CEILING)?;
+    if m.max * LATENCY_HEADROOM > bus.settings().link.latency {
+        bus.set_latency(m.max * LATENCY_HEADROOM);
     }
     Ok(())
 }
@@ -388,7 +385,7 @@ fn rescan_if_slow(
 ) -> anyhow::Result<()> {
     let assumed = bus.settings().link.latency;
     switch_baud(bus, baud, "the port")?;
-    let Ok(m) = bus.measure_latency(first, 3, LATENCY_CEILING) else {
+    let Ok(m) = bus.measure_latency(first, LATENCY_PINGS, LATENCY_CEILING) else {
         return Ok(());
     };
     // Occasional spikes are what retries are for; a typical latency above
@@ -402,7 +399,7 @@ fn rescan_if_slow(
         m.mean.as_micros(),
         assumed.as_micros()
     );
-    bus.set_latency(m.max * 2);
+    bus.set_latency(m.max * LATENCY_HEADROOM);
     for id in 0..=MAX_ID {
         let known =
             found.iter().any(|f| f.id == id && f.baud == baud) || collisions.contains(&(id, baud));

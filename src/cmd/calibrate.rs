@@ -15,8 +15,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
-use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
-use servobus_runtime::bus_settings;
+use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
     Operator, ProcedureOptions, Refusal, Step,
@@ -26,16 +25,23 @@ use servobus_runtime::config::{
     Calibration, Robot, RobotCalibration,
 };
 
+use super::link::{every_port, open_bus, Allowance, Ports, SerialBus};
+
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
+#[command(
+    mut_arg("port", |a| a.help(
+        "Serial port of the servos, for the robot's first bus (default: the robot file's ports)"
+    )),
+    mut_arg("calibration", |a| a.help(
+        "With --to-lerobot alone: the calibration to export (default: the robot file's)"
+    ))
+)]
 pub struct Args {
-    /// The robot file, or a built-in robot's name.
-    #[arg(long, value_parser = super::robot_arg)]
-    pub robot: PathBuf,
-    /// Serial port of the servos, for the robot's first bus (default: the
-    /// robot file's ports).
-    #[arg(long)]
-    pub port: Option<String>,
+    /// The robot, its servos' port, and (with --to-lerobot alone) the
+    /// calibration to export.
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
     /// Where to write the calibration (default: the file the robot file's
     /// `calibration:` names, else `<robot name>.calibration.yaml`).
     #[arg(short = 'o', long = "output")]
@@ -54,15 +60,11 @@ pub struct Args {
     /// Also write the calibration as a LeRobot calibration file.
     #[arg(long, value_name = "JSON")]
     pub to_lerobot: Option<PathBuf>,
-    /// With --to-lerobot alone: the calibration to export (default: the
-    /// robot file's).
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
 }
 
 /// Runs `servobus calibrate`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (design, named) = load_robot_design(&args.robot)?;
+    let (design, named) = load_robot_design(&args.robot.path)?;
     let output = args
         .output
         .clone()
@@ -82,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
     } else if let Some(out) = &args.to_lerobot {
-        let from = args.calibration.clone().or(named).context(
+        let from = args.robot.hardware.calibration.clone().or(named).context(
             "--to-lerobot alone exports a calibration: give --calibration FILE \
              (the robot file names none)",
         )?;
@@ -98,14 +100,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     save_calibration(&cal, &output)
         .with_context(|| format!("cannot write {}", output.display()))?;
     // Applying it now shows at once a calibration the robot cannot use.
-    let robot = load_robot_calibrated(&args.robot, Some(&output))?;
+    let robot = load_robot_calibrated(&args.robot.path, Some(&output))?;
     print_summary(&robot, &output);
     if named.as_deref() != Some(output.as_path()) {
         println!(
             "to use it: add `calibration: {}` to {} (relative to it), or give --calibration {} \
              to play and bench",
             output.display(),
-            args.robot.display(),
+            args.robot.path.display(),
             output.display()
         );
     }
@@ -129,26 +131,16 @@ fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
 /// An input error naming the first bus without a port, when only some have
 /// one.
 fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
-    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
-    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
-        *first = Some(port.clone());
+    match every_port(robot, args.robot.hardware.port.as_deref()) {
+        Ports::None => Ok(None),
+        Ports::Every(ports) => Ok(Some(ports)),
+        Ports::Missing(bus) => Err(super::exit::input(format!(
+            "bus `{}` of {} has no port: every bus of the robot needs one (`port:` in the \
+             robot file; --port sets the first bus's)",
+            bus.name,
+            robot.path.display()
+        ))),
     }
-    if ports.iter().all(Option::is_none) {
-        return Ok(None);
-    }
-    let mut found = Vec::with_capacity(ports.len());
-    for (bus, port) in robot.buses.iter().zip(ports) {
-        let Some(port) = port else {
-            return Err(super::exit::input(format!(
-                "bus `{}` of {} has no port: every bus of the robot needs one (`port:` in the \
-                 robot file; --port sets the first bus's)",
-                bus.name,
-                robot.path.display()
-            )));
-        };
-        found.push(port);
-    }
-    Ok(Some(found))
 }
 
 /// Reply deadline allowance: calibrating and the checks before a run are
@@ -157,18 +149,16 @@ fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
 /// servo that is really missing costs this much per try, once.
 const PATIENCE: Duration = Duration::from_millis(50);
 
-type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
+/// Tries per transaction while calibrating: a reply lost now and then must
+/// not end the procedure.
+const RETRIES: u8 = 3;
 
 fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
-    let clock = SystemClock::new();
     let mut buses = Vec::new();
     for (bus, port) in robot.buses.iter().zip(ports) {
-        let transport = SerialTransport::open(port, bus.baud, clock)
-            .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
-        let settings = bus_settings(bus)
-            .with_latency(bus.latency.max(PATIENCE))
-            .with_retries(3);
-        buses.push(Bus::new(transport, clock, settings));
+        let mut opened = open_bus(bus, port, Allowance::AtLeast(PATIENCE))?;
+        opened.set_settings(opened.settings().with_retries(RETRIES));
+        buses.push(opened);
     }
     Ok(buses)
 }
@@ -376,7 +366,7 @@ pub(crate) fn check_bus<T: Transport, C: Clock>(
     bus.set_settings(
         saved
             .with_latency(saved.link.latency.max(PATIENCE))
-            .with_retries(3),
+            .with_retries(RETRIES),
     );
     let checked = prepare_bus(robot, index, bus);
     bus.set_settings(saved);
@@ -393,26 +383,6 @@ pub(crate) fn check_buses<T: Transport, C: Clock>(
         check_bus(robot, i, bus, port)?;
     }
     Ok(())
-}
-
-/// [`check_bus`] on a port opened for the check alone.
-pub(crate) fn check_port(robot: &Robot, index: usize, port: &str) -> anyhow::Result<()> {
-    if matches!(robot.calibration, RobotCalibration::None) {
-        return Ok(());
-    }
-    let Some(config) = robot.buses.get(index) else {
-        return Ok(());
-    };
-    let clock = SystemClock::new();
-    let transport = SerialTransport::open(port, config.baud, clock)
-        .with_context(|| format!("bus `{}`: cannot open {port}", config.name))?;
-    let settings = bus_settings(config).with_latency(config.latency.max(PATIENCE));
-    check_bus(
-        robot,
-        index,
-        &mut Bus::new(transport, clock, settings),
-        port,
-    )
 }
 
 fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {

@@ -3,21 +3,14 @@
 //! fixes it, and with `--fix` applies those fixes (EEPROM with
 //! unlock-write-verify-lock). The checks live in [`servobus::doctor`].
 
-use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use anyhow::Context;
 use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, PortKind, Target};
-use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
-use servobus_runtime::bus_settings;
+use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 
-/// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
-/// process the OS schedules, which costs milliseconds on a busy machine.
-const PTY_LATENCY: Duration = Duration::from_millis(3);
-/// The USB frame an FTDI adapter adds on top of its latency timer.
-const USB_FRAME: Duration = Duration::from_millis(1);
+use super::link::{bus_ports, open_bus_quietly, Allowance};
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
@@ -26,17 +19,10 @@ const USB_FRAME: Duration = Duration::from_millis(1);
                         found (or a usage or input error)."
 )]
 pub struct Args {
-    /// The robot file to check the buses against (or a built-in robot's name).
-    #[arg(long, value_parser = super::robot_arg)]
-    pub robot: PathBuf,
-    /// Serial port of the robot's first bus (default: the robot file's
-    /// ports; without any, the built-in simulator).
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file to check the servos against (default: the one the
-    /// robot file names with `calibration:`).
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
+    /// The robot to check the buses against, its port and the calibration
+    /// to check the servos against.
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -68,11 +54,11 @@ impl BusOutcome {
 
 /// Runs `servobus doctor`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_any_rate_calibrated(&args.robot, args.calibration.as_deref())?;
-    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
-    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
-        *first = Some(port.clone());
-    }
+    let robot = load_robot_any_rate_calibrated(
+        &args.robot.path,
+        args.robot.hardware.calibration.as_deref(),
+    )?;
+    let ports = bus_ports(&robot, args.robot.hardware.port.as_deref());
     let mut outcomes = Vec::new();
     if ports.iter().all(Option::is_none) {
         let buses = servobus_runtime::sim::virtual_buses(&robot)?;
@@ -91,23 +77,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             )?);
         }
     } else {
-        for (cfg, port) in robot.buses.iter().zip(&ports) {
+        for (cfg, port) in robot.buses.iter().zip(ports) {
             let Some(port) = port else {
                 eprintln!("warning: bus `{}` has no port: not checked", cfg.name);
                 continue;
             };
-            let kind = PortKind::of(port);
-            let clock = SystemClock::new();
-            let transport = SerialTransport::open(port, cfg.baud, clock)
-                .with_context(|| format!("bus `{}`: cannot open {port}", cfg.name))?;
-            let latency = match &kind {
-                PortKind::Pty => cfg.latency.max(PTY_LATENCY),
-                PortKind::Serial(Some(ftdi)) => cfg.latency.max(ftdi.latency + USB_FRAME),
-                _ => cfg.latency,
-            };
-            let mut bus = Bus::new(transport, clock, bus_settings(cfg).with_latency(latency));
+            // A slow adapter is one of the findings: no warning besides.
+            let mut bus = open_bus_quietly(cfg, &port, Allowance::Assumed)?;
+            let kind = PortKind::of(bus.transport());
             let target = Target {
-                port: Some(port.clone()),
+                port: Some(port),
                 baud: cfg.baud,
             };
             outcomes.push(check(&mut bus, &robot, cfg, target, &kind, args.fix)?);

@@ -19,6 +19,7 @@ mod docs;
 mod doctor;
 pub mod exit;
 mod init;
+mod link;
 mod list;
 mod monitor;
 mod plan;
@@ -134,6 +135,33 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
     }
+}
+
+/// `--port` and `--calibration`: where a physical robot's servos are and
+/// how they are calibrated. A command whose flag means more says so with
+/// `#[command(mut_arg(...))]` on its own arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub struct HardwareArgs {
+    /// Serial port of real servos, for the robot's first bus (default: the
+    /// robot file's ports; without any, the built-in simulator).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Calibration file of the physical robot (default: the robot file's
+    /// `calibration:`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+}
+
+/// `--robot` (required) and the [`HardwareArgs`] of the commands that work on
+/// one robot's servos.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RobotArgs {
+    /// The robot file, or a built-in robot's name.
+    #[arg(long = "robot", id = "robot", value_name = "ROBOT", value_parser = robot_arg)]
+    pub path: PathBuf,
+    /// Its port and calibration.
+    #[command(flatten)]
+    pub hardware: HardwareArgs,
 }
 
 /// Parses a robot argument: a file, or a built-in robot's name.

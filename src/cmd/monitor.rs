@@ -11,18 +11,13 @@ use anyhow::{bail, Context};
 use crossbeam_channel::TryRecvError;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
-use servobus_driver::{Bus, BusSettings, Clock, SerialTransport, SystemClock, Transport};
+use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
-use servobus_runtime::{bus_settings, Command, Runner, Telemetry};
+use servobus_runtime::{Command, Runner, Telemetry};
 
-/// Latency allowed on a pseudo-terminal (`servobus sim`): the simulator is a
-/// process the OS schedules, which costs milliseconds on a busy machine. A
-/// refresh every 50 ms can afford to wait this long.
-const PTY_LATENCY: Duration = Duration::from_millis(10);
-/// Latency assumed for a port of unknown kind without a robot file (USB
-/// CDC and CH34x adapters deliver in 1 ms USB frames).
-const DEFAULT_LATENCY: Duration = Duration::from_millis(1);
+use super::link::{open_bus, open_plain_bus, Allowance};
+
 /// Baud rate a scan without a robot file uses (the servos' factory rate).
 const SCAN_BAUD: u32 = 1_000_000;
 /// Refreshes per second of `play --monitor`'s view.
@@ -30,18 +25,23 @@ const PLAY_REFRESH_HZ: f64 = 20.0;
 
 /// Arguments of `servobus monitor`.
 #[derive(Debug, clap::Args)]
+#[command(
+    mut_arg("port", |a| a.help(
+        "Serial port (without --robot, every servo found on it is watched)"
+    )),
+    mut_arg("calibration", |a| a.requires("robot").help(
+        "Calibration file for the joint angles (default: the one the robot file names with \
+         `calibration:`)"
+    ))
+)]
 pub struct Args {
     /// Robot file (or a built-in robot's name): joint names, models and the
     /// bus (without --port, its built-in simulator).
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
-    /// Serial port (without --robot, every servo found on it is watched).
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file for the joint angles (default: the one the robot
-    /// file names with `calibration:`).
-    #[arg(long, requires = "robot")]
-    pub calibration: Option<PathBuf>,
+    /// The port and the calibration.
+    #[command(flatten)]
+    pub hardware: super::HardwareArgs,
     /// Print one JSON line per refresh instead of the live view.
     #[arg(long)]
     pub json: bool,
@@ -67,7 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = match &args.robot {
         Some(path) => Some(load_robot_any_rate_calibrated(
             path,
-            args.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?),
         None => None,
     };
@@ -82,26 +82,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let port = args
+        .hardware
         .port
         .clone()
         .or_else(|| cfg.and_then(|c| c.port.clone()));
     match (port, robot.as_ref(), cfg) {
         (Some(port), _, _) => {
-            let baud = cfg.map_or(SCAN_BAUD, |c| c.baud);
-            let clock = SystemClock::new();
-            let transport = SerialTransport::open(&port, baud, clock)
-                .with_context(|| format!("cannot open {port}"))?;
-            let pty = std::fs::canonicalize(&port).is_ok_and(|p| p.starts_with("/dev/pts"));
-            let settings = match cfg {
-                Some(c) => bus_settings(c),
-                None => BusSettings::new(Series::Sts, baud).with_latency(DEFAULT_LATENCY),
+            let mut bus = match cfg {
+                Some(c) => open_bus(c, &port, Allowance::Assumed)?,
+                None => open_plain_bus(&port, SCAN_BAUD, Series::Sts, None)?,
             };
-            let latency = if pty {
-                settings.link.latency.max(PTY_LATENCY)
-            } else {
-                settings.link.latency
-            };
-            let mut bus = Bus::new(transport, clock, settings.with_latency(latency));
             let servos = match (robot.as_ref(), cfg) {
                 (Some(r), Some(c)) => Watched::of_bus(c, r.units),
                 _ => Poller::scan(&mut bus).context("scanning the port")?,

@@ -8,14 +8,12 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use anyhow::{bail, Context};
-use servobus_driver::{Bus, Clock, SerialTransport, SystemClock, Transport};
-use servobus_runtime::bus_settings;
+use servobus_driver::{Clock, Transport};
 use servobus_runtime::config::{load_robot_calibrated, Robot};
 use servobus_runtime::teach::{distance, motion_yaml, reduce, StillCapture, Teacher, TimedPose};
 
-/// A pseudo-terminal (the simulator) wakes late now and then on a busy
-/// machine: its reply deadlines allow this much (as `play` does).
-const PTY_LATENCY: Duration = Duration::from_millis(3);
+use super::link::{bus_ports, open_bus, Allowance, SerialBus};
+
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;
 /// Tries per transaction: a reply lost now and then (a busy pty, a noisy
@@ -28,18 +26,15 @@ const VIEW_EVERY: Duration = Duration::from_millis(250);
 
 /// Arguments of `servobus teach`.
 #[derive(Debug, clap::Args)]
+#[command(mut_arg("port", |a| a.help(
+    "Serial port of the robot's first bus (default: the robot file's). A simulated robot \
+     with a hand: `servobus sim --robot F --hand H --link L`"
+)))]
 pub struct Args {
-    /// The robot file, or a built-in robot's name.
-    #[arg(long, value_parser = super::robot_arg)]
-    pub robot: PathBuf,
-    /// Serial port of the robot's first bus (default: the robot file's).
-    /// A simulated robot with a hand: `servobus sim --robot F --hand H --link L`.
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file of the physical robot (default: the robot file's
-    /// `calibration:`): taught angles are then physical angles.
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
+    /// The robot, its port and calibration: taught angles are physical
+    /// angles when it has one.
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
     /// The motion file to write.
     #[arg(short = 'o', long = "output", value_name = "MOTION.yaml")]
     pub output: PathBuf,
@@ -66,7 +61,8 @@ pub struct Args {
 
 /// Runs `servobus teach`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_calibrated(&args.robot, args.calibration.as_deref())?;
+    let robot =
+        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(super::exit::input(
             "--tolerance must be a positive number of degrees",
@@ -80,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
     super::check_writable("-o", &args.output)?;
-    let buses = open_buses(&robot, args.port.as_deref())?;
+    let buses = open_buses(&robot, args.robot.hardware.port.as_deref())?;
     let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
     teacher.release()?;
     let held = if args.hold.is_empty() {
@@ -111,8 +107,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let robot_file = args
         .robot
+        .path
         .canonicalize()
-        .unwrap_or_else(|_| args.robot.clone());
+        .unwrap_or_else(|_| args.robot.path.clone());
     let note = if timed {
         format!("a continuous take reduced to within {} deg", args.tolerance)
     } else {
@@ -150,30 +147,19 @@ fn how_to_stop(args: &Args, interactive: bool) -> String {
 }
 
 /// The buses of `robot`: `port` for the first, the robot file's for the rest.
-fn open_buses(
-    robot: &Robot,
-    port: Option<&str>,
-) -> anyhow::Result<Vec<Bus<Box<dyn Transport + Send>, SystemClock>>> {
-    let clock = SystemClock::new();
+fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus>> {
     let mut buses = Vec::new();
-    for (i, bus) in robot.buses.iter().enumerate() {
-        let path = match (i, port, bus.port.as_deref()) {
-            (0, Some(p), _) | (_, _, Some(p)) => p.to_owned(),
-            _ => bail!(
+    for (bus, path) in robot.buses.iter().zip(bus_ports(robot, port)) {
+        let Some(path) = path else {
+            bail!(
                 "bus `{}` has no port: give --port (a robot, or `servobus sim --robot {} --hand H.yaml --link L`)",
                 bus.name,
                 robot.path.display()
-            ),
+            );
         };
-        let transport = SerialTransport::open(&path, bus.baud, clock)
-            .with_context(|| format!("bus `{}`: cannot open {path}", bus.name))?;
-        let pty = std::fs::canonicalize(&path).is_ok_and(|p| p.starts_with("/dev/pts"));
-        let mut settings = bus_settings(bus).with_retries(RETRIES);
-        if pty {
-            settings = settings.with_latency(bus.latency.max(PTY_LATENCY));
-        }
-        let transport: Box<dyn Transport + Send> = Box::new(transport);
-        buses.push(Bus::new(transport, clock, settings));
+        let mut opened = open_bus(bus, &path, Allowance::Assumed)?;
+        opened.set_settings(opened.settings().with_retries(RETRIES));
+        buses.push(opened);
     }
     Ok(buses)
 }

@@ -1,11 +1,10 @@
 //! Examining one bus: who answers, at which baud rate, what their registers
 //! hold, and how slow the adapter is.
 
-use std::path::Path;
 use std::time::Duration;
 
 use servobus_driver::{
-    ftdi_latency_timer, Bus, BusError, BusSettings, Clock, FtdiLatency, Transport, PATIENCE,
+    Bus, BusError, BusSettings, Clock, FtdiLatency, SerialTransport, Transport, PATIENCE,
     PATIENT_TRIES,
 };
 use servobus_protocol::registers::{self, addr, Series};
@@ -80,13 +79,12 @@ pub enum PortKind {
 }
 
 impl PortKind {
-    /// The kind of the port at `path`.
-    pub fn of(path: &str) -> PortKind {
-        let real = std::fs::canonicalize(path).unwrap_or_else(|_| Path::new(path).into());
-        if real.starts_with("/dev/pts") {
+    /// The kind of the port `transport` is open on.
+    pub fn of<C: Clock>(transport: &SerialTransport<C>) -> PortKind {
+        if transport.is_pty() {
             PortKind::Pty
         } else {
-            PortKind::Serial(ftdi_latency_timer(Path::new(path)))
+            PortKind::Serial(transport.ftdi_latency().cloned())
         }
     }
 }
@@ -125,23 +123,22 @@ pub fn examine<T: Transport + BaudSwitch, C: Clock>(
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
     let saved = *bus.settings();
-    let result = examine_inner(bus, robot, cfg, target, kind);
+    let ctx = Ctx {
+        robot,
+        bus: cfg,
+        target,
+    };
+    let result = examine_inner(bus, &ctx, kind);
     bus.set_settings(saved);
     result
 }
 
 fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     bus: &mut Bus<T, C>,
-    robot: &Robot,
-    cfg: &BusConfig,
-    target: &Target,
+    ctx: &Ctx<'_>,
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
-    let ctx = Ctx {
-        robot,
-        bus: cfg,
-        target,
-    };
+    let (robot, cfg, target) = (ctx.robot, ctx.bus, ctx.target);
     let mut findings = Vec::new();
     let base = bus.settings().with_return_delay(MAX_RETURN_DELAY);
     // The robot's own servos are waited for patiently (a loaded host or a
@@ -175,7 +172,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         match read_state(bus, id) {
             Ok(state) => servos.push(state),
             Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => {
-                let mut f = finding(&ctx, Severity::Error, Some(id), Some("id"));
+                let mut f = finding(ctx, Severity::Error, Some(id), Some("id"));
                 f.problem = format!(
                     "two or more servos answer as ID {id}: their replies collide and none can \
                      be read"
@@ -187,7 +184,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
                 findings.push(f);
             }
             Err(e) if e.is_retryable() => {
-                let mut f = finding(&ctx, Severity::Error, Some(id), Some("status_level"));
+                let mut f = finding(ctx, Severity::Error, Some(id), Some("status_level"));
                 f.problem = format!(
                     "servo {id} answers PING but not READ: its status return level is 0 (SCS)"
                 );
@@ -218,12 +215,12 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         .filter(|id| !answering.contains(id))
         .collect();
     if !missing.is_empty() {
-        find_at_other_bauds(bus, &ctx, base, &mut missing, &mut findings)?;
+        find_at_other_bauds(bus, ctx, base, &mut missing, &mut findings)?;
         bus.set_settings(base);
     }
     for &id in &missing {
         let joint = expected(id).map_or("?", |j| j.name.as_str());
-        let mut f = finding(&ctx, Severity::Error, Some(id), None);
+        let mut f = finding(ctx, Severity::Error, Some(id), None);
         f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
         f.fix = match extras.first() {
             Some(&extra) => format!(
@@ -240,7 +237,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         findings.push(f);
     }
     for &id in &extras {
-        let mut f = finding(&ctx, Severity::Warning, Some(id), Some("id"));
+        let mut f = finding(ctx, Severity::Warning, Some(id), Some("id"));
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
         f.fix = format!(
             "add it to {} or give it the ID of its joint: {}",
@@ -254,11 +251,11 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         findings.extend(ctx.servo_findings(s, expected(s.id)));
     }
     if robot.buses.first().is_some_and(|b| b.name == cfg.name) {
-        calibration_findings(&ctx, &mut findings);
+        calibration_findings(ctx, &mut findings);
     }
-    bus_checks::firmware(&ctx, &servos, &mut findings);
-    bus_checks::supply_drop(&ctx, &servos, &mut findings);
-    bus_checks::latency(bus, &ctx, kind, &servos, &mut findings)?;
+    bus_checks::firmware(ctx, &servos, &mut findings);
+    bus_checks::supply_drop(ctx, &servos, &mut findings);
+    bus_checks::latency(bus, ctx, kind, &servos, &mut findings)?;
     findings.sort_by(|a, b| b.severity.cmp(&a.severity).then(a.id.cmp(&b.id)));
     Ok(Examined {
         findings,

@@ -1,12 +1,20 @@
-//! Helpers shared by the end-to-end tests: the `servobus` binary and a
-//! simulated robot served by `servobus sim` on a pty.
+//! Helpers shared by the end-to-end tests: the `servobus` binary run with
+//! arguments, its output read, files for it written, and a simulated robot
+//! served by `servobus sim` on a pty ([`Sim`]) or in virtual time
+//! ([`virtual_bus`]).
 #![allow(dead_code)]
 
-use std::io::{BufRead, BufReader};
+mod process;
+mod sim;
+
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+
+// Not every test uses every helper.
+#[allow(unused_imports)]
+pub use process::{signal, Running};
+#[allow(unused_imports)]
+pub use sim::{read_truth, virtual_bus, Sim};
 
 /// The `servobus` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_servobus");
@@ -16,24 +24,103 @@ pub fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
+/// The names of the joints of the robot file `path`, in its order (read
+/// from the YAML here, not by servobus).
+pub fn joint_names(path: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(repo(path)).expect("a robot file");
+    let robot: serde_yaml::Value = serde_yaml::from_str(&text).expect("YAML");
+    let buses = robot["buses"].as_sequence().expect("buses");
+    let joints = buses
+        .iter()
+        .flat_map(|b| b["joints"].as_sequence().expect("joints"));
+    let names = joints.map(|j| j["name"].as_str().expect("a joint's name").to_owned());
+    names.collect()
+}
+
+/// A path as the `&str` a command line takes.
+pub fn arg(path: &Path) -> &str {
+    path.to_str().expect("a UTF-8 path")
+}
+
 /// Runs `servobus ARGS` from the repository's root.
 pub fn servobus(args: &[&str]) -> Output {
+    servobus_in(&repo(""), args)
+}
+
+/// Runs `servobus ARGS` in `dir`.
+pub fn servobus_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(BIN)
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(dir)
         .output()
         .expect("the servobus binary runs")
 }
 
-/// Runs `servobus ARGS`, which must succeed, and parses its one JSON object.
-pub fn servobus_json(args: &[&str]) -> serde_json::Value {
-    let out = servobus(args);
+/// Runs `servobus ARGS` from the repository's root; it must succeed.
+pub fn servobus_ok(args: &[&str]) -> Output {
+    succeeded(servobus(args), args)
+}
+
+/// `out`, of `servobus ARGS`, which must have succeeded.
+pub fn succeeded(out: Output, args: &[&str]) -> Output {
     assert!(
         out.status.success(),
-        "servobus {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+        "servobus {args:?} failed: {}{}",
+        stdout(&out),
+        stderr(&out)
     );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
+    out
+}
+
+/// Runs `servobus ARGS`, which must succeed, and parses its one JSON object.
+pub fn servobus_json(args: &[&str]) -> serde_json::Value {
+    json(&servobus_ok(args))
+}
+
+/// The one JSON object a command printed.
+pub fn json(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("not one JSON object ({e}): {}{}", stdout(out), stderr(out)))
+}
+
+/// What a command printed on its standard output.
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// What a command printed on its standard error.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Checks that a command exited with `code`; returns its stdout and stderr.
+pub fn exited(out: &Output, code: i32) -> (String, String) {
+    let (o, e) = (stdout(out), stderr(out));
+    assert_eq!(out.status.code(), Some(code), "stdout {o}\nstderr {e}");
+    (o, e)
+}
+
+/// Runs `servobus ARGS`, which must fail (any exit code but 0); returns
+/// its standard error.
+pub fn servobus_fails(args: &[&str]) -> String {
+    let out = servobus(args);
+    assert!(!out.status.success(), "servobus {args:?} succeeded");
+    stderr(&out)
+}
+
+/// The one-line error of a command that must exit with `code`.
+pub fn error(out: &Output, code: i32) -> String {
+    let (_, err) = exited(out, code);
+    assert!(err.starts_with("error: "), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    err
+}
+
+/// Checks that `text` contains every one of `words`.
+pub fn says(text: &str, words: &[&str]) {
+    for w in words {
+        assert!(text.contains(w), "{text:?} should say {w:?}");
+    }
 }
 
 /// The number `v[key]`.
@@ -43,14 +130,52 @@ pub fn num(v: &serde_json::Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("`{key}` is a number in {v}"))
 }
 
-/// Writes `text` to the file `name` in `dir` (a folder of its own under
-/// Cargo's temporary directory for tests, made if missing).
+/// The text of the repository's file `path` with each `(from, to)` edit
+/// made once; each `from` must be there (the test says so if the file
+/// changed under it).
+pub fn edited(path: &str, edits: &[(&str, &str)]) -> String {
+    let mut text = std::fs::read_to_string(repo(path)).expect("a shipped file");
+    for (from, to) in edits {
+        assert!(text.contains(from), "{path} no longer has {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    text
+}
+
+/// Writes `text` to the file `name` in `dir` (made if missing).
+pub fn write_file(dir: &Path, name: &str, text: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).expect("a folder for the file");
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("the file is written");
+    path
+}
+
+/// Writes `text` to the file `name` in `dir`, a folder of its own under
+/// Cargo's temporary directory for tests.
 pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
-    std::fs::write(&p, text).expect("temp file");
-    p
+    write_file(
+        &Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir),
+        name,
+        text,
+    )
+}
+
+/// A robot of one joint `a` at 100 Hz: -100..100 deg, 90 deg/s, 180
+/// deg/s^2 and no jerk limit, so rest-to-rest moves are trapezoids.
+pub const ONE_JOINT: &str = "\
+name: one
+rate: 100
+buses:
+  - name: bus
+    joints:
+      - {name: a, id: 1, model: sts3215, min: -100, max: 100, max_velocity: 90, max_acceleration: 180}
+";
+
+/// Writes [`ONE_JOINT`] as `robot.yaml` and `motion` as `name` into `dir`
+/// (as [`temp_file`]); the motion's path.
+pub fn one_joint_motion(dir: &str, name: &str, motion: &str) -> PathBuf {
+    temp_file(dir, "robot.yaml", ONE_JOINT);
+    temp_file(dir, name, motion)
 }
 
 /// A fresh scratch directory for one test.
@@ -60,103 +185,22 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// The simulator process; killed when dropped (also when a check fails).
-pub struct Sim {
-    child: Child,
-    /// The symbolic link to the pty.
-    pub link: PathBuf,
-    /// When it said it was serving: the time 0 of its hand, near enough.
-    pub started: Instant,
+/// Whether the tests run as root (who may open anything and use any
+/// scheduling policy).
+pub fn is_root() -> bool {
+    // SAFETY: geteuid has no preconditions.
+    unsafe { libc::geteuid() == 0 }
 }
 
-impl Sim {
-    /// Starts `servobus sim` for the SO-101 arm with a link in `dir`.
-    pub fn start(dir: &Path) -> Sim {
-        Sim::start_with(dir, &[])
+/// Runs `servobus ARGS` as `nobody` (uid and gid 65534, no groups), which
+/// needs root; `None` (and a note) where `setpriv` is missing.
+pub fn servobus_as_nobody(args: &[&str]) -> Option<Output> {
+    let out = Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
+        .args(args)
+        .output();
+    if out.is_err() {
+        eprintln!("\n*** SKIPPED: root, and no setpriv to drop privileges ***\n");
     }
-
-    /// Like [`Sim::start`], with more arguments for `servobus sim`.
-    pub fn start_with(dir: &Path, extra: &[&str]) -> Sim {
-        Sim::start_robot(dir, &repo("configs/robots/so101.yaml"), 6, extra)
-    }
-
-    /// Starts `servobus sim` for `robot` (a file with `servos` servos) with
-    /// a link in `dir` and more arguments `extra`.
-    pub fn start_robot(dir: &Path, robot: &Path, servos: usize, extra: &[&str]) -> Sim {
-        let link = dir.join("bus");
-        let mut child = Command::new(BIN)
-            .args(["sim", "--robot"])
-            .arg(robot)
-            .arg("--link")
-            .arg(&link)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start servobus sim");
-        let stdout = child.stdout.take().expect("sim stdout");
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut line = String::new();
-            let _ = BufReader::new(stdout).read_line(&mut line);
-            let _ = tx.send(line);
-        });
-        let line = rx.recv_timeout(Duration::from_secs(60));
-        let mut sim = Sim {
-            child,
-            link,
-            started: Instant::now(),
-        };
-        let line = line.unwrap_or_else(|_| {
-            let _ = sim.child.kill();
-            panic!("servobus sim did not say it was serving");
-        });
-        assert_eq!(
-            line.trim(),
-            format!("serving {servos} servos on {}", sim.link.display())
-        );
-        sim
-    }
-
-    /// Waits until the simulator has run `s` seconds.
-    pub fn wait_until(&self, s: f64) {
-        let at = self.started + Duration::from_secs_f64(s);
-        std::thread::sleep(at.saturating_duration_since(Instant::now()));
-    }
-
-    /// The path to open.
-    pub fn port(&self) -> &str {
-        self.link.to_str().expect("utf-8 path")
-    }
-
-    /// Runs `servobus ARGS --port PORT --latency-us 10000` against this
-    /// simulator. The latency is generous because the simulator runs in
-    /// wall-clock time and its process may be scheduled milliseconds late
-    /// on a loaded machine; nothing here measures time.
-    pub fn run(&self, args: &[&str]) -> Output {
-        Command::new(BIN)
-            .args(args)
-            .args(["--port", self.port(), "--latency-us", "10000"])
-            .output()
-            .expect("run servobus")
-    }
-
-    /// Stops the simulator as a user would (SIGTERM) and waits for it.
-    pub fn stop(mut self) {
-        let pid = self.child.id().to_string();
-        let sent = Command::new("kill").args(["-TERM", &pid]).status();
-        if !sent.is_ok_and(|s| s.success()) {
-            let _ = self.child.kill();
-        }
-        let _ = self.child.wait();
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
+    out.ok()
 }

@@ -14,32 +14,19 @@ RANGE_M100_100, RANGE_0_100), for the test to compare with servobus.
 Prints `OK calibrated` last and exits 0, or `FAIL reason` and exits 1.
 """
 
-import importlib.machinery
 import json
+import pathlib
 import sys
-import types
 
-NAMES = ["shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex", "wrist_roll", "gripper"]
-
-
-def fail(msg):
-    print(f"FAIL {msg}")
-    sys.exit(1)
+# The LeRobot import (with its stand-in for torch), the motor names and the
+# failure line are those of the simulator's LeRobot check.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "crates/sim/tests/python"))
+from lerobot_check import NAMES, fail, import_lerobot  # noqa: E402
 
 
 def lerobot():
-    try:
-        import torch  # noqa: F401
-    except ImportError:
-        # LeRobot's utils name torch types in annotations only; the motors
-        # code never calls it.
-        torch = types.ModuleType("torch")
-        torch.__spec__ = importlib.machinery.ModuleSpec("torch", None)
-        torch.device = type("device", (), {})
-        torch.dtype = type("dtype", (), {})
-        sys.modules["torch"] = torch
-    from lerobot.motors import Motor, MotorCalibration, MotorNormMode
-    from lerobot.motors.feetech import FeetechMotorsBus
+    _, Motor, MotorNormMode, FeetechMotorsBus, _ = import_lerobot()
+    from lerobot.motors import MotorCalibration
 
     return Motor, MotorCalibration, MotorNormMode, FeetechMotorsBus
 

@@ -115,6 +115,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     pub fn new(transport: T, clock: C, settings: BusSettings) -> Self {
         let mut io = Io::new(transport, clock);
         io.echo = settings.echo;
+        io.wire = settings.link;
         Bus {
             io,
             settings,
@@ -137,6 +138,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     /// or the baud rate after reopening the transport).
     pub fn set_settings(&mut self, settings: BusSettings) {
         self.io.echo = settings.echo;
+        self.io.wire = settings.link;
         self.settings = settings;
     }
 

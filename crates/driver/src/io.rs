@@ -15,6 +15,8 @@ use std::time::Duration;
 
 use servobus_protocol::{Decoder, Event, Packet, BROADCAST_ID, MAX_FRAME_LEN};
 
+use servobus_timing::Link;
+
 use crate::{Clock, Transport, TransportError};
 
 /// Receives what the engine finds while waiting.
@@ -62,6 +64,10 @@ pub(crate) struct Io<T, C> {
     base_checksum: u64,
     /// Stale bytes dropped by the last `send`.
     stale: u64,
+    /// The wire's speed (its baud rate; the latency is not used here).
+    pub wire: Link,
+    /// When the last request sent has left the host's transmitter.
+    line_free: Duration,
 }
 
 impl<T: Transport, C: Clock> Io<T, C> {
@@ -80,6 +86,8 @@ impl<T: Transport, C: Clock> Io<T, C> {
             base_echoes: 0,
             base_checksum: 0,
             stale: 0,
+            wire: Link::new(1_000_000),
+            line_free: Duration::ZERO,
         }
     }
 
@@ -92,7 +100,12 @@ impl<T: Transport, C: Clock> Io<T, C> {
     }
 
     /// Drains input, then sends `tx[..tx_len]`. Returns the time sending
-    /// started, from which reply deadlines are measured.
+    /// started, from which reply deadlines are measured: now, or when the
+    /// request before it (one nobody answers, e.g. a SYNC WRITE) has left
+    /// the transmitter. A write returns once the bytes are queued, so a
+    /// SYNC READ sent right after a long SYNC WRITE starts on the wire only
+    /// when the SYNC WRITE is through; measured from the write call, its
+    /// deadline would be short by the rest of the SYNC WRITE.
     pub fn send(&mut self) -> Result<Duration, TransportError> {
         self.transport.discard_input()?;
         // Bytes pending in the decoder belong to an earlier exchange; they
@@ -102,8 +115,9 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.base_discarded = stats.discarded_bytes;
         self.base_echoes = stats.echoes;
         self.base_checksum = stats.checksum_errors;
-        let start = self.clock.now();
+        let start = self.clock.now().max(self.line_free);
         self.transport.write_all(&self.tx[..self.tx_len])?;
+        self.line_free = start + self.wire.wire_time(self.tx_len);
         if self.echo {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }

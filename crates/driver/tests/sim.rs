@@ -455,7 +455,7 @@ fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Scs, BAUD));
     let reg = Series::Scs.map().get("model_number").expect("register");
     let (model, _) = bus.read_register(1, reg)?;
-    let number = sim.snapshot(1).map(|s| s.model().number);
+    let number = sim.snapshot(1).map(|s| s.model().model.number);
     assert_eq!(Some(model), number.map(i32::from));
     let r = bus.sync_read(addr::PRESENT_POSITION, 2, &[1, 2])?;
     assert!(r.is_complete());

@@ -60,6 +60,8 @@ pub(crate) struct Prepared<T: Transport, C: Clock> {
     pub telemetry: Receiver<Telemetry>,
     /// For the end-of-run message (`None` without telemetry).
     pub telemetry_tx: Option<Sender<Telemetry>>,
+    /// The approach to the path's start, as the timeline planned it.
+    pub approach: Duration,
 }
 
 /// Checks the robot, buses and path against each other and `o`. Returns
@@ -125,6 +127,7 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         o.autoplay,
         APPROACH_TOLERANCE,
     )?;
+    let approach = timeline.approach();
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();
     let start = last.unwrap_or_default() + (period * 5).max(START_GAP);
@@ -151,6 +154,7 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         commands,
         telemetry,
         telemetry_tx,
+        approach,
     })
 }
 

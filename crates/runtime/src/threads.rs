@@ -4,6 +4,7 @@
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
+use std::time::Duration;
 
 use crossbeam_channel::{Receiver, Sender};
 use servobus_driver::{Bus, Clock, ManualClock, Transport};
@@ -32,6 +33,7 @@ pub struct Runner {
     commands: CommandSender,
     telemetry: Receiver<Telemetry>,
     handle: JoinHandle<Result<Report, RunError>>,
+    approach: Duration,
 }
 
 impl Runner {
@@ -66,6 +68,13 @@ impl Runner {
     /// A receiver of telemetry.
     pub fn telemetry(&self) -> Receiver<Telemetry> {
         self.telemetry.clone()
+    }
+
+    /// How long the approach to the path's start takes, as the run planned
+    /// it from the positions read at start-up (zero when the joints were
+    /// there already): the path begins that long after the first cycle.
+    pub fn approach(&self) -> Duration {
+        self.approach
     }
 
     /// Whether the run has ended.
@@ -103,6 +112,7 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
     let run = VirtualRun::new(robot, trajectory, buses, options)?;
     let commands = run.commands();
     let telemetry = run.telemetry();
+    let approach = run.approach();
     let handle = std::thread::Builder::new()
         .name("servobus-virtual".into())
         .spawn(move || Ok(run.run()))
@@ -111,6 +121,7 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
         commands,
         telemetry,
         handle,
+        approach,
     })
 }
 
@@ -173,6 +184,7 @@ where
         commands: p.commands,
         telemetry: p.telemetry,
         handle: supervisor,
+        approach: p.approach,
     })
 }
 

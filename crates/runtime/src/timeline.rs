@@ -13,6 +13,7 @@
 //! fault reaction) plans a short path once, which allocates.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use servobus_trajectory::{self as traj, Cursor, JointLimits, JointState, Trajectory};
 
@@ -179,6 +180,8 @@ pub(crate) struct Timeline {
     scratch: Vec<JointState>,
     /// When the last segment was found over (for the settling time).
     over_since: Option<f64>,
+    /// How long the approach to the main path's start takes, as planned.
+    approach: Duration,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -226,6 +229,7 @@ impl Timeline {
             ramp,
             scratch: vec![JointState::default(); n],
             over_since: None,
+            approach: Duration::ZERO,
         };
         let mut start = vec![JointState::default(); n];
         main.sample(0.0, &mut start);
@@ -247,6 +251,7 @@ impl Timeline {
                     }
                 })?;
                 t0 = path.duration();
+                tl.approach = Duration::from_secs_f64(t0);
                 tl.segments.push(Segment::new(
                     0.0,
                     Kind::Approach,
@@ -270,6 +275,12 @@ impl Timeline {
             tl.pending = Some(main);
         }
         Ok(tl)
+    }
+
+    /// How long the planned approach to the main path's start takes (zero
+    /// without one): the main path begins then.
+    pub fn approach(&self) -> Duration {
+        self.approach
     }
 
     fn active(&mut self, x: f64) -> Option<&mut Segment> {
@@ -472,5 +483,24 @@ mod tests {
         let (tau_end, v_end, _) = s.at(3.0);
         assert_eq!(v_end, 0.0);
         assert!((tau_end - 1.25).abs() < 1e-12, "{tau_end}");
+    }
+
+    #[test]
+    fn the_approach_is_when_the_main_path_begins() {
+        let lim = vec![JointLimits::new(2.0, 8.0, Some(40.0))];
+        let main = traj::retarget(&lim, &[JointState::at_rest(0.0)], &[1.0]).expect("a path");
+        let main = Arc::new(main);
+        let plan = |from| Timeline::new(lim.clone(), main.clone(), &[from], Some(0.25), true, 0.01);
+        let tl = plan(-1.0).expect("an approach");
+        let t0 = tl.approach().as_secs_f64();
+        // 2 rad at a quarter of the limits take longer than the path's 1 rad at full.
+        assert!(t0 > main.duration(), "{t0}");
+        assert_eq!(tl.kind_at(t0 - 1e-3), Some(Kind::Approach));
+        assert_eq!(tl.kind_at(t0 + 1e-3), Some(Kind::Main));
+        let there = plan(0.0).expect("no approach");
+        assert_eq!(
+            (there.approach(), there.kind_at(0.0)),
+            (Duration::ZERO, Some(Kind::Main))
+        );
     }
 }

@@ -60,6 +60,8 @@ pub struct VirtualRun<T: Transport> {
     period: Duration,
     start: Duration,
     units: Units,
+    /// The approach to the path's start, as planned.
+    approach: Duration,
     next: u64,
     /// The first fault, once the board has one (kept to lend it out).
     fault: Option<Fault>,
@@ -103,6 +105,7 @@ impl<T: Transport> VirtualRun<T> {
             period: p.period,
             start: p.start,
             units: p.units,
+            approach: p.approach,
             next: 0,
             fault: None,
             finish: None,
@@ -124,6 +127,13 @@ impl<T: Transport> VirtualRun<T> {
     /// [`RunOptions::telemetry_capacity`] is 0).
     pub fn telemetry(&self) -> Receiver<Telemetry> {
         self.telemetry.clone()
+    }
+
+    /// How long the approach to the path's start takes, as planned from
+    /// the positions read at start-up (zero when the joints were there
+    /// already): the path begins that long after cycle 0.
+    pub fn approach(&self) -> Duration {
+        self.approach
     }
 
     /// The bus at `index`, to inspect its counters or transport.

@@ -16,9 +16,9 @@ use std::time::Duration;
 
 use calib_play::Played;
 use servobus_driver::{Bus, Clock, ManualClock};
-use servobus_protocol::registers::sign_magnitude;
+use servobus_protocol::registers::{sign_magnitude, to_sign_magnitude};
 use servobus_runtime::calibrate::{
-    calibrate, prepare_servos, write_homing, LiveJoint, Operator, ProcedureOptions, Step,
+    calibrate, prepare_servos, write_homing, LiveJoint, Operator, Step,
 };
 use servobus_runtime::config::{
     load_robot, load_robot_calibrated, save_calibration, Calibration, JointMap, Robot,
@@ -81,37 +81,16 @@ fn arm(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, SimBus) {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), bus.baud).with_servos(
         bus.joints.iter().zip(mounts()).map(|(j, m)| {
-            let raw = sign_magnitude_raw(m.offset);
+            // The offset saved in EEPROM, as set-up software leaves it.
+            let [lo, hi] = (to_sign_magnitude(m.offset, 11) as u16).to_le_bytes();
             SimServo::sts3215(j.id)
                 .with_return_delay(bus.return_delay)
                 .with_position(0)
-                .tap_offset(raw)
+                .with_byte(addr::OFFSET, lo)
+                .with_byte(addr::OFFSET + 1, hi)
         }),
     );
     (vec![Bus::new(sim.clone(), clock, bus_settings(bus))], sim)
-}
-
-trait TapOffset {
-    fn tap_offset(self, raw: u16) -> Self;
-}
-
-impl TapOffset for SimServo {
-    /// The offset stored in EEPROM, as set-up software leaves it.
-    fn tap_offset(mut self, raw: u16) -> Self {
-        self.write(addr::LOCK, &[0]);
-        self.write(addr::OFFSET, &raw.to_le_bytes());
-        self.write(addr::LOCK, &[1]);
-        self
-    }
-}
-
-fn sign_magnitude_raw(v: i32) -> u16 {
-    let mag = v.unsigned_abs() as u16;
-    if v < 0 {
-        mag | 1 << 11
-    } else {
-        mag
-    }
 }
 
 /// A hand following keyframes of physical angles (linear between them),
@@ -127,6 +106,18 @@ struct Hand {
 }
 
 impl Hand {
+    /// The scripted hand on `sim`'s joints `ids`, pressing Enter at `enter_at`.
+    fn new(sim: &SimBus, ids: Vec<u8>, enter_at: Vec<f64>) -> Hand {
+        Hand {
+            sim: sim.clone(),
+            ids,
+            keys: script(),
+            steps: Vec::new(),
+            enter_at,
+            now: 0.0,
+        }
+    }
+
     fn pose_at(&self, t: f64) -> Vec<f64> {
         let last = self.keys.last().expect("keys");
         if t >= last.0 {
@@ -191,12 +182,6 @@ fn script() -> Vec<(f64, Vec<f64>)> {
     keys
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("servobus-calib-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
-}
-
 fn calibrated_arm() -> (Robot, Vec<Bus<SimBus, ManualClock>>, SimBus, PathBuf) {
     let (robot, buses, sim, path, _) = measured_arm();
     (robot, buses, sim, path)
@@ -216,19 +201,8 @@ fn measured_arm() -> (
     for (&id, m) in ids.iter().zip(mounts()) {
         place(&sim, id, m, 30.0f64.clamp(m.stops.0, m.stops.1));
     }
-    let mut hand = Hand {
-        sim: sim.clone(),
-        ids,
-        keys: script(),
-        steps: Vec::new(),
-        enter_at: Vec::new(),
-        now: 0.0,
-    };
-    let options = ProcedureOptions {
-        auto: true,
-        taken: "test".into(),
-        ..ProcedureOptions::default()
-    };
+    let mut hand = Hand::new(&sim, ids, Vec::new());
+    let options = calib_play::procedure(true);
     let cal = calibrate(&design, &mut buses, &mut hand, &options).expect("calibrates");
     assert_eq!(
         hand.steps,
@@ -241,7 +215,7 @@ fn measured_arm() -> (
         end > last + 1.5 && end < last + 2.5,
         "ended at {end} s, hand done at {last} s"
     );
-    let path = temp("so101.calibration.yaml");
+    let path = common::temp_path("calibrate_arm", "so101.calibration.yaml");
     save_calibration(&cal, &path).expect("saves");
     let robot = load_robot_calibrated(&common::config("robots/so101.yaml"), Some(&path))
         .expect("calibration applies");
@@ -378,16 +352,7 @@ fn the_calibrated_arm_plays_where_it_is_told_and_the_uncalibrated_one_misses() {
     );
     // ...so the motion either stops on a fault before it plays, or misses.
     let played = play_wave(&design, None, buses, &sim);
-    println!(
-        "uncalibrated: readings off by up to {misread:.1} deg; finish {:?}, {} keyframes reached, worst miss {:.1} deg",
-        played.finish, played.reached, played.worst
-    );
-    let refused = played.finish == Some(Finish::Fault) && played.reached == 0;
-    assert!(
-        refused || played.worst > 20.0,
-        "uncalibrated arm played within {:.1} deg",
-        played.worst
-    );
+    calib_play::assert_uncalibrated_fails(&played, misread, 0);
 }
 
 #[test]
@@ -462,7 +427,7 @@ fn write_servos_stores_centring_offsets_and_plays_the_same() {
     }
     // No range crosses the seam any more; nothing is written before playing.
     assert!(cal.joints.iter().all(|c| !c.crosses_seam()));
-    let path = temp("so101-written.calibration.yaml");
+    let path = common::temp_path("calibrate_arm", "so101-written.calibration.yaml");
     save_calibration(&cal, &path).expect("saves");
     let robot =
         load_robot_calibrated(&common::config("robots/so101.yaml"), Some(&path)).expect("applies");
@@ -485,24 +450,13 @@ fn a_person_pressing_enter_ends_each_step_instead_of_stillness() {
     let (mut buses, sim) = arm(&design);
     let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
     let last = script().last().expect("keys").0;
-    let mut hand = Hand {
-        sim: sim.clone(),
-        ids,
-        keys: script(),
-        steps: Vec::new(),
-        // Enter once the pose is held (the hand holds it from 1 s to 4 s),
-        // and again 10 s after the sweep is over.
-        enter_at: vec![3.0, last + 10.0],
-        now: 0.0,
-    };
+    // Enter once the pose is held (the hand holds it from 1 s to 4 s), and
+    // again 10 s after the sweep is over.
+    let mut hand = Hand::new(&sim, ids, vec![3.0, last + 10.0]);
     for (&id, m) in hand.ids.iter().zip(mounts()) {
         place(&sim, id, m, 30.0f64.clamp(m.stops.0, m.stops.1));
     }
-    let options = ProcedureOptions {
-        auto: false,
-        taken: "test".into(),
-        ..ProcedureOptions::default()
-    };
+    let options = calib_play::procedure(false);
     let cal = calibrate(&design, &mut buses, &mut hand, &options).expect("calibrates");
     // Without Enter, stillness would have ended the sweep 2 s after the hand.
     let end = buses[0].clock().now().as_secs_f64();

@@ -8,13 +8,11 @@
 mod calib_play;
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use servobus_driver::{Bus, Clock, ManualClock};
-use servobus_runtime::calibrate::{
-    calibrate, prepare_servos, LiveJoint, Operator, ProcedureOptions, Step,
-};
+use servobus_runtime::calibrate::{calibrate, prepare_servos, LiveJoint, Operator, Step};
 use servobus_runtime::config::{
     load_robot, load_robot_calibrated, save_calibration, Calibration, JointMap, Robot,
     RANGE_MARGIN_DEG,
@@ -127,12 +125,6 @@ impl Operator for Script {
     }
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("servobus-body-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
-}
-
 /// Calibrates `robot_file`'s robot, mounted by `mounts`, with the hand;
 /// returns the calibration and the buses, the hand gone.
 fn calibrate_body(
@@ -143,11 +135,7 @@ fn calibrate_body(
     let (hands, end) = hand_paths(mounts, start);
     let (mut buses, sim) = body(design, mounts, start, Some(hands));
     let mut script = Script(Vec::new());
-    let options = ProcedureOptions {
-        auto: true,
-        taken: "test".into(),
-        ..ProcedureOptions::default()
-    };
+    let options = calib_play::procedure(true);
     let cal = calibrate(design, &mut buses, &mut script, &options).expect("calibrates");
     assert_eq!(
         script.0,
@@ -177,7 +165,7 @@ fn play_calibrated(
     sim: &SimBus,
     motion: &str,
 ) -> calib_play::Played {
-    let path = temp(name);
+    let path = common::temp_path("calibrate_body", name);
     save_calibration(cal, &path).expect("saves");
     let robot = load_robot_calibrated(robot_file, Some(&path)).expect("applies");
     // Before moving, the servos are checked and those across the seam get
@@ -280,16 +268,8 @@ fn a_randomly_fitted_arm_is_calibrated_by_hand_then_plays_within_a_degree() {
         buses,
         || truth(&design, &sim),
     );
-    println!(
-        "uncalibrated: readings off by up to {misread:.0} deg; {:?}, {} of {} keyframes, worst miss {:.1} deg",
-        played.finish, played.reached, played.keyframes, played.worst
-    );
-    let refused = played.finish == Some(Finish::Fault) && played.reached < played.keyframes;
-    assert!(
-        refused || played.worst > 20.0,
-        "uncalibrated arm played within {:.1} deg",
-        played.worst
-    );
+    let most = played.keyframes.saturating_sub(1);
+    calib_play::assert_uncalibrated_fails(&played, misread, most);
 }
 
 #[test]

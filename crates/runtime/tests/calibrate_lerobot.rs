@@ -27,9 +27,7 @@ fn data(name: &str) -> PathBuf {
 }
 
 fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("servobus-lerobot-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+    common::temp_path("calibrate_lerobot", name)
 }
 
 fn lerobot_degrees(val: f64, min: f64, max: f64) -> f64 {

@@ -7,8 +7,8 @@ use servobus_protocol::StatusFlags;
 use servobus_runtime::{
     Fault, FaultKind, FaultPolicy, Finish, Lead, Reaction, RunOptions, VirtualRun,
 };
-use servobus_sim::SimBus;
-use servobus_trajectory::{JointState, Trajectory};
+use servobus_sim::{SimBus, SimServo};
+use servobus_trajectory::Trajectory;
 
 const PERIOD: f64 = 0.005;
 const WRIST_FLEX: usize = 3;
@@ -16,17 +16,7 @@ const WRIST_FLEX_ID: u8 = 4;
 
 /// The cycle at which joint `j` of `path` moves fastest.
 fn fastest_cycle(path: &Trajectory, j: usize) -> u64 {
-    let mut s = vec![JointState::default(); path.joints()];
-    let mut best = (0.0, 0u64);
-    let mut k = 0u64;
-    while (k as f64) * PERIOD < path.duration() {
-        path.sample(k as f64 * PERIOD, &mut s);
-        if s[j].velocity.abs() > best.0 {
-            best = (s[j].velocity.abs(), k);
-        }
-        k += 1;
-    }
-    best.1
+    common::fastest_cycle(path, j, PERIOD)
 }
 
 fn arm(policy: FaultPolicy, lead: Lead) -> (VirtualRun<SimBus>, Vec<SimBus>, Trajectory) {
@@ -40,6 +30,22 @@ fn arm(policy: FaultPolicy, lead: Lead) -> (VirtualRun<SimBus>, Vec<SimBus>, Tra
     };
     let run = VirtualRun::new(&robot, path.clone(), buses, options).expect("starts");
     (run, sims, path)
+}
+
+/// The arm playing arm-wave with the default policy, `fault` done to servo
+/// `id` `before` cycles ahead of the wrist's fastest; the run ended, its
+/// telemetry, and the cycle of the fault.
+fn faulted_arm(
+    before: u64,
+    id: u8,
+    fault: fn(&mut SimServo),
+) -> (VirtualRun<SimBus>, Vec<SimBus>, common::Recorded, u64) {
+    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
+    let at = fastest_cycle(&path, WRIST_FLEX) - before;
+    let rec = common::record_acting_at(&mut run, 5_000, at, || {
+        sims[0].servo(id, fault);
+    });
+    (run, sims, rec, at)
 }
 
 fn the_fault(run: &VirtualRun<SimBus>, rec: &common::Recorded) -> Fault {
@@ -63,13 +69,7 @@ fn assert_smooth_from(rec: &common::Recorded, from: u64) {
 
 #[test]
 fn a_vanished_servo_is_detected_within_3_cycles_and_the_arm_stops_smoothly() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX);
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(WRIST_FLEX_ID, |s| s.set_offline(true));
-        }
-    });
+    let (run, _, rec, at) = faulted_arm(0, WRIST_FLEX_ID, |s| s.set_offline(true));
     let f = the_fault(&run, &rec);
     // Reported at the time of its cycle, at most 3 cycles of 5 ms (the
     // arm's 200 Hz) after the path time the servo vanished at.
@@ -96,13 +96,7 @@ fn a_vanished_servo_is_detected_within_3_cycles_and_the_arm_stops_smoothly() {
 
 #[test]
 fn a_status_flag_is_detected_at_the_next_reading() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX);
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(2, |s| s.inject_status(StatusFlags::OVERHEAT));
-        }
-    });
+    let (run, _, rec, at) = faulted_arm(0, 2, |s| s.inject_status(StatusFlags::OVERHEAT));
     let f = the_fault(&run, &rec);
     assert_eq!(
         f.kind,
@@ -118,25 +112,13 @@ fn a_status_flag_is_detected_at_the_next_reading() {
 
 #[test]
 fn a_blocked_joint_is_found_stalled_within_3_cycles_and_held() {
-    let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
-    let at = fastest_cycle(&path, WRIST_FLEX) - 10;
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(WRIST_FLEX_ID, |s| s.set_blocked(true));
-        }
-    });
+    let (run, sims, rec, at) = faulted_arm(10, WRIST_FLEX_ID, |s| s.set_blocked(true));
     let f = the_fault(&run, &rec);
-    let FaultKind::Stall {
-        error,
-        planned_velocity,
-        measured_velocity,
-        cycles,
-    } = f.kind
-    else {
-        panic!("not a stall: {f:?}");
-    };
-    assert_eq!(cycles, 3);
-    assert!(error.abs() > 2.0 && measured_velocity.abs() < 0.25 * planned_velocity.abs());
+    assert!(
+        matches!(f.kind, FaultKind::Stall { error, planned_velocity, measured_velocity, cycles: 3 }
+            if error.abs() > 2.0 && measured_velocity.abs() < 0.25 * planned_velocity.abs()),
+        "{f:?}"
+    );
     // The condition (error beyond 2 deg while the joint does not follow)
     // first showed in telemetry at `onset`; detection is on its 3rd cycle.
     let onset = rec
@@ -167,31 +149,16 @@ fn a_following_error_is_detected_on_its_third_cycle_and_torque_goes_off() {
     let (mut run, sims, _) = arm(policy, Lead::None);
     let rec = common::record(&mut run, 5_000, |_| {});
     let f = the_fault(&run, &rec);
-    let FaultKind::FollowingError {
-        error,
-        tolerance,
-        cycles,
-    } = f.kind
-    else {
-        panic!("not a following error: {f:?}");
-    };
-    assert_eq!(cycles, 3);
-    assert!(error.abs() > tolerance && (tolerance - 1.5).abs() < 1e-9);
-    let joint = run
-        .fault()
-        .and_then(|f| f.joint.clone())
-        .unwrap_or_default();
-    let index = [
-        "shoulder_pan",
-        "shoulder_lift",
-        "elbow_flex",
-        "wrist_flex",
-        "wrist_roll",
-        "gripper",
-    ]
-    .iter()
-    .position(|n| *n == joint)
-    .expect("a joint of the arm");
+    assert!(
+        matches!(f.kind, FaultKind::FollowingError { error, tolerance, cycles: 3 }
+            if error.abs() > tolerance && (tolerance - 1.5).abs() < 1e-9),
+        "{f:?}"
+    );
+    // The row of the joint at fault in the telemetry: its place in the robot.
+    let index = common::robot("so101.yaml")
+        .joints()
+        .position(|j| Some(&j.name) == f.joint.as_ref())
+        .expect("a joint of the arm");
     let onset = rec
         .rows
         .iter()
@@ -210,17 +177,10 @@ fn a_following_error_is_detected_on_its_third_cycle_and_torque_goes_off() {
 
 #[test]
 fn a_lost_port_stops_the_other_bus_of_the_hexapod() {
-    let (path, robot) = {
-        let (m, r) = servobus_runtime::config::load_motion(
-            &common::config("motions/hexapod-tripod.yaml"),
-            Some(&common::config("robots/hexapod-2bus.yaml")),
-        )
-        .expect("loads");
-        (
-            servobus_runtime::config::plan_motion(&m, &r).expect("plans"),
-            r,
-        )
-    };
+    let (path, robot) = common::planned(
+        "motions/hexapod-tripod.yaml",
+        Some("robots/hexapod-2bus.yaml"),
+    );
     let (buses, sims) = common::sim_buses_at(&robot, &path);
     let options = RunOptions {
         telemetry_capacity: 256,
@@ -228,11 +188,7 @@ fn a_lost_port_stops_the_other_bus_of_the_hexapod() {
     };
     let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
     let at = 150;
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[1].set_disconnected(true);
-        }
-    });
+    let rec = common::record_acting_at(&mut run, 5_000, at, || sims[1].set_disconnected(true));
     let f = run.fault().expect("a fault").clone();
     println!("{f}");
     assert!(matches!(f.kind, FaultKind::PortGone { .. }));

@@ -34,11 +34,7 @@ fn in_force(run: &VirtualRun<SimBus>) -> Duration {
 #[test]
 fn a_link_whose_latency_jumps_to_1_ms_ends_with_deadlines_that_fit_it() {
     let (mut run, sims) = arm();
-    let rec = common::record(&mut run, 5_000, |k| {
-        if k == 200 {
-            sims[0].set_latency(MS);
-        }
-    });
+    let rec = common::record_acting_at(&mut run, 5_000, 200, || sims[0].set_latency(MS));
     assert!(run.cycle() > 400, "the run lasted well past the jump");
     assert!(rec.faults.is_empty(), "{:?}", rec.faults);
     assert_eq!(run.finished(), Some(Finish::Completed));
@@ -78,10 +74,8 @@ fn a_fast_link_gets_a_tight_deadline() {
 fn a_servo_that_stops_answering_is_still_found_within_3_cycles() {
     let (mut run, sims) = arm();
     let at = 300;
-    common::record(&mut run, 5_000, |k| {
-        if k == at {
-            sims[0].servo(4, |s| s.set_offline(true));
-        }
+    common::record_acting_at(&mut run, 5_000, at, || {
+        sims[0].servo(4, |s| s.set_offline(true));
     });
     let f = run.fault().expect("the silent servo is found").clone();
     assert_eq!(f.servo_id, Some(4));

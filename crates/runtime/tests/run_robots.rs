@@ -19,6 +19,16 @@ fn play(robot: &Robot, path: Trajectory) -> Report {
     r
 }
 
+/// A run that completed at its planned rate with no overrun, clamp or
+/// missed reply, every joint within 0.5 deg RMS and 2 deg at worst (the
+/// stated bound).
+fn assert_tracked(r: &Report) {
+    assert_eq!(r.finish, Finish::Completed);
+    assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
+    assert_eq!((r.overruns, r.clamps, r.missed_replies), (0, 0, 0));
+    assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
+}
+
 /// Options that keep the telemetry of a run driven by [`common::record`].
 fn recorded() -> RunOptions {
     RunOptions {
@@ -45,31 +55,17 @@ fn show(r: &Report) {
 fn the_arm_plays_pick_and_place_within_half_a_degree_rms() {
     let (path, robot) = common::motion("arm-pick-place.yaml");
     let r = play(&robot, path);
-    assert_eq!(r.finish, Finish::Completed);
-    assert_eq!(r.achieved_rate_hz, r.planned_rate_hz);
-    assert_eq!(
-        (r.overruns, r.clamps, r.missed_replies, r.timeouts),
-        (0, 0, 0, 0)
-    );
-    // Stated bound: every joint within 0.5 deg RMS and 2 deg at worst.
-    assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
+    assert_tracked(&r);
+    assert_eq!(r.timeouts, 0);
 }
 
 #[test]
 fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
     let play_on = |robot_file: &str| {
-        let (m, robot) = load_motion(
-            &common::config("motions/hexapod-tripod.yaml"),
-            Some(&common::config(robot_file)),
-        )
-        .expect("loads");
-        let path = plan_motion(&m, &robot).expect("plans");
+        let (path, robot) = common::planned("motions/hexapod-tripod.yaml", Some(robot_file));
         let r = play(&robot, path);
-        assert_eq!(r.finish, Finish::Completed);
-        assert_eq!(r.achieved_rate_hz, 100.0);
-        assert_eq!((r.overruns, r.clamps, r.missed_replies), (0, 0, 0));
-        assert_eq!(r.joints.len(), 18);
-        assert!(r.worst_rms_error() < 0.5 && r.worst_max_error() < 2.0);
+        assert_tracked(&r);
+        assert_eq!((r.achieved_rate_hz, r.joints.len()), (100.0, 18));
         r
     };
     let one = play_on("robots/hexapod.yaml");
@@ -79,12 +75,8 @@ fn the_hexapod_walks_on_one_bus_and_on_two_buses_in_step() {
     assert!(two.buses.iter().all(|b| b.cycles == two.cycles));
     assert_eq!(one.cycles, two.cycles);
     // Two wires in parallel: each bus is about half as busy.
-    assert!(
-        two.utilisation < 0.6 * one.utilisation,
-        "{} vs {}",
-        two.utilisation,
-        one.utilisation
-    );
+    let (busy_one, busy_two) = (one.utilisation, two.utilisation);
+    assert!(busy_two < 0.6 * busy_one, "{busy_two} vs {busy_one}");
 }
 
 #[test]
@@ -119,13 +111,8 @@ fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report,
     let (buses, _) = common::sim_buses_at(&robot, &path);
     let mut run = VirtualRun::new(&robot, path, buses, recorded()).expect("starts");
     let tx = run.commands();
-    let mut command = Some(command);
-    let rec = common::record(&mut run, 20_000, |k| {
-        if k == at {
-            if let Some(c) = command.take() {
-                tx.try_send(c).expect("room for a command");
-            }
-        }
+    let rec = common::record_acting_at(&mut run, 20_000, at, || {
+        tx.try_send(command).expect("room for a command");
     });
     let limits: Vec<(f64, f64, f64)> = robot
         .joints()

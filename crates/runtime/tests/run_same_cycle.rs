@@ -19,7 +19,7 @@ use servobus_runtime::{
     VirtualRun,
 };
 use servobus_sim::SimBus;
-use servobus_trajectory::{JointState, Trajectory};
+use servobus_trajectory::Trajectory;
 
 type Action = fn(&SimBus);
 
@@ -93,13 +93,16 @@ impl Scenario {
         }
     }
 
+    /// The arm with `action` done to its bus just before cycle `at`.
+    fn arm_with(at: u64, action: Action) -> Self {
+        Scenario {
+            inject: Some((0, at, action)),
+            ..Scenario::arm()
+        }
+    }
+
     fn load(&self) -> (Trajectory, Robot) {
-        let robot = self.robot.map(common::config);
-        let (m, r) =
-            servobus_runtime::config::load_motion(&common::config(self.motion), robot.as_deref())
-                .expect("loads");
-        let path = servobus_runtime::config::plan_motion(&m, &r).expect("plans");
-        (path, r)
+        common::planned(self.motion, self.robot)
     }
 
     /// The scenario's buses (the servos at the path's start), their
@@ -253,30 +256,15 @@ const WRIST_FLEX_ID: u8 = 4;
 /// 200 Hz.
 fn fastest_wrist_cycle() -> u64 {
     let (path, _) = Scenario::arm().load();
-    let mut s = vec![JointState::default(); path.joints()];
-    (0..)
-        .map(|k: u64| k)
-        .take_while(|&k| k as f64 * 0.005 < path.duration())
-        .max_by(|&a, &b| {
-            let mut speed = |k: u64| {
-                path.sample(k as f64 * 0.005, &mut s);
-                s[3].velocity.abs()
-            };
-            speed(a).total_cmp(&speed(b))
-        })
-        .expect("the path has cycles")
+    common::fastest_cycle(&path, 3, 0.005)
 }
 
 #[test]
 fn a_vanished_servo_stops_the_arm_alike_in_both_runners() {
     let at = fastest_wrist_cycle();
-    let s = Scenario {
-        inject: Some((0, at, |sim| {
-            sim.servo(WRIST_FLEX_ID, |s| s.set_offline(true));
-        })),
-        ..Scenario::arm()
-    };
-    let o = same_both_ways(&s);
+    let o = same_both_ways(&Scenario::arm_with(at, |sim| {
+        sim.servo(WRIST_FLEX_ID, |s| s.set_offline(true));
+    }));
     let f = o.report.fault.expect("a fault");
     assert!(matches!(f.kind, FaultKind::Missing { cycles: 3, .. }));
     assert_eq!(
@@ -289,13 +277,9 @@ fn a_vanished_servo_stops_the_arm_alike_in_both_runners() {
 #[test]
 fn a_blocked_joint_is_held_alike_in_both_runners() {
     let at = fastest_wrist_cycle() - 10;
-    let s = Scenario {
-        inject: Some((0, at, |sim| {
-            sim.servo(WRIST_FLEX_ID, |s| s.set_blocked(true));
-        })),
-        ..Scenario::arm()
-    };
-    let o = same_both_ways(&s);
+    let o = same_both_ways(&Scenario::arm_with(at, |sim| {
+        sim.servo(WRIST_FLEX_ID, |s| s.set_blocked(true));
+    }));
     let f = o.report.fault.expect("a fault");
     assert!(matches!(f.kind, FaultKind::Stall { cycles: 3, .. }));
     assert_eq!(f.reaction, Reaction::Hold);
@@ -308,13 +292,9 @@ fn a_blocked_joint_is_held_alike_in_both_runners() {
 #[test]
 fn a_status_flag_stops_and_a_following_error_turns_torque_off_alike() {
     let at = fastest_wrist_cycle();
-    let s = Scenario {
-        inject: Some((0, at, |sim| {
-            sim.servo(2, |s| s.inject_status(StatusFlags::OVERHEAT));
-        })),
-        ..Scenario::arm()
-    };
-    let o = same_both_ways(&s);
+    let o = same_both_ways(&Scenario::arm_with(at, |sim| {
+        sim.servo(2, |s| s.inject_status(StatusFlags::OVERHEAT));
+    }));
     let f = o.report.fault.expect("a fault");
     assert_eq!((f.cycle, f.reaction), (at, Reaction::Stop));
 

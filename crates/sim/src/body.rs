@@ -23,6 +23,22 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
+use servobus_protocol::registers::Model;
+
+/// The shortest signed way from `b` to `a` on a sensor of `turn` ticks a
+/// turn, in `[-turn / 2, turn / 2)`: how far a full-turn sensor moved
+/// between two readings that may lie either side of the seam.
+///
+/// ```
+/// use servobus_sim::body::turn_delta;
+/// assert_eq!(turn_delta(10.0, 4090.0, 4096.0), 16.0);
+/// assert_eq!(turn_delta(4090.0, 10.0, 4096.0), -16.0);
+/// assert_eq!(turn_delta(300.0, 100.0, 4096.0), 200.0);
+/// ```
+pub fn turn_delta(a: f64, b: f64, turn: f64) -> f64 {
+    (a - b + turn / 2.0).rem_euclid(turn) - turn / 2.0
+}
+
 /// How a servo's horn is fitted to its joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mount {
@@ -273,27 +289,20 @@ pub(crate) struct Body {
     pub angle: f64,
     /// The sensor position the angle was last brought in line with.
     raw: f64,
-    /// Sensor ticks per degree of joint motion.
-    ticks_per_deg: f64,
-    resolution: f64,
-    /// Whether the sensor covers a whole turn (and so wraps at the seam).
-    full_turn: bool,
+    /// The servo's model: its sensor's resolution and range.
+    model: &'static Model,
 }
 
 impl Body {
-    /// A body at physical `angle` for a sensor of `resolution` ticks over
-    /// `range_deg`.
-    pub(crate) fn new(mount: Mount, angle: f64, resolution: u32, range_deg: f64) -> Body {
-        let resolution = f64::from(resolution);
+    /// A body at physical `angle` for the sensor of a `model` servo.
+    pub(crate) fn new(mount: Mount, angle: f64, model: &'static Model) -> Body {
         let mut b = Body {
             mount,
             hand: None,
             truth: None,
             angle,
             raw: 0.0,
-            ticks_per_deg: resolution / range_deg,
-            resolution,
-            full_turn: range_deg >= 360.0,
+            model,
         };
         b.angle = b.clamp_to_stops(angle);
         b.raw = b.raw_of(b.angle);
@@ -307,17 +316,27 @@ impl Body {
 
     /// Whether the sensor wraps at the seam (a full-turn sensor).
     pub(crate) fn full_turn(&self) -> bool {
-        self.full_turn
+        self.model.range_deg >= 360.0
+    }
+
+    /// Sensor ticks a turn (or over the sensor's range).
+    fn resolution(&self) -> f64 {
+        f64::from(self.model.resolution)
+    }
+
+    /// Sensor ticks per degree of joint motion.
+    fn ticks_per_deg(&self) -> f64 {
+        self.resolution() / self.model.range_deg
     }
 
     /// The sensor position (raw ticks, before the homing offset) of a
     /// physical angle.
     pub(crate) fn raw_of(&self, angle: f64) -> f64 {
-        let t = self.mount.zero_tick + self.mount.direction * angle * self.ticks_per_deg;
-        if self.full_turn {
-            t.rem_euclid(self.resolution)
+        let t = self.mount.zero_tick + self.mount.direction * angle * self.ticks_per_deg();
+        if self.full_turn() {
+            t.rem_euclid(self.resolution())
         } else {
-            t.clamp(0.0, self.resolution - 1.0)
+            t.clamp(0.0, self.resolution() - 1.0)
         }
     }
 
@@ -331,12 +350,12 @@ impl Body {
     /// Follows the sensor to `raw`: the nearest angle (within half a turn)
     /// that reads `raw`.
     pub(crate) fn follow(&mut self, raw: f64) {
-        let mut d = raw - self.raw;
-        if self.full_turn {
-            let half = self.resolution / 2.0;
-            d = (d + half).rem_euclid(self.resolution) - half;
-        }
-        self.angle += d / (self.mount.direction * self.ticks_per_deg);
+        let d = if self.full_turn() {
+            turn_delta(raw, self.raw, self.resolution())
+        } else {
+            raw - self.raw
+        };
+        self.angle += d / (self.mount.direction * self.ticks_per_deg());
         self.raw = raw;
     }
 
@@ -406,6 +425,7 @@ impl Body {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use servobus_protocol::registers::STS3215;
 
     #[test]
     fn hand_eases_between_keyframes_and_lets_go_after_the_last() {
@@ -424,7 +444,7 @@ mod tests {
     #[test]
     fn body_unwraps_the_seam() {
         // Zero at tick 4000, rising ticks positive: +20 deg is past the seam.
-        let mut b = Body::new(Mount::new(4000.0, false), 0.0, 4096, 360.0);
+        let mut b = Body::new(Mount::new(4000.0, false), 0.0, &STS3215);
         let tpd = 4096.0 / 360.0;
         for k in 1..=200 {
             let a = 0.1 * f64::from(k);

@@ -6,6 +6,8 @@
 //! offset) and in seconds. The model is deterministic: it depends only on
 //! the inputs and the time steps it is given.
 
+use crate::body::turn_delta;
+
 /// Time constant of the first-order lag between the motion profile and the
 /// shaft: at 1000 ticks/s the shaft trails the profile by about 10 ticks.
 pub(crate) const LAG_S: f64 = 0.010;
@@ -183,11 +185,12 @@ impl Joint {
         } else {
             self.pos = self.pos.rem_euclid(turn);
         }
-        let mut moved = self.pos - before;
-        if d.seamless {
+        let moved = if d.seamless {
             // Across the seam the shortest way round is the way it went.
-            moved = (moved + turn / 2.0).rem_euclid(turn) - turn / 2.0;
-        }
+            turn_delta(self.pos, before, turn)
+        } else {
+            self.pos - before
+        };
         self.vel = if d.wheel && d.torque_on && !d.blocked {
             self.ref_vel
         } else {

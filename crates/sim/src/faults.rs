@@ -170,7 +170,7 @@ impl Faults {
     }
 
     /// The same faults with servo `id` listening at baud-rate index `index`
-    /// (see [`baud_of_index`](crate::baud_of_index)).
+    /// (see [`baud_rate`](servobus_protocol::registers::baud_rate)).
     #[must_use]
     pub fn baud(mut self, id: u8, index: u8) -> Faults {
         self.baud.push((id, index));

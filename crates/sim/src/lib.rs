@@ -114,7 +114,7 @@ pub use bus::SimBus;
 pub use engine::SimStats;
 pub use faults::{FaultSpecError, Faults};
 pub use floor::{pty_floor, Floor, FloorCycle};
-pub use model::{Area, Endian, SimModel};
+pub use model::SimModel;
 pub use pty::{PtyError, PtyServer};
 pub use servo::{addr, SimServo};
 pub use wall::WallBus;

@@ -12,8 +12,10 @@
 //! when it wakes, as in an adapter's receive buffer.
 //!
 //! The simulated servos keep their own [`ManualClock`](servobus_io::ManualClock),
-//! which every call first moves up to the wall clock's time, so the two
-//! share one epoch and the servos' dynamics follow the wall clock.
+//! which every call first moves up to the wall clock's time (plus the fixed
+//! offset between the two clocks when the bus was made: a simulated robot
+//! may have been settled for a while in virtual time before it goes live),
+//! so the servos' dynamics follow the wall clock.
 
 use std::time::Duration;
 
@@ -28,13 +30,16 @@ use crate::SimBus;
 pub struct WallBus<C> {
     sim: SimBus,
     wall: C,
+    /// Simulated time minus wall time.
+    offset: Duration,
 }
 
 impl<C: Clock> WallBus<C> {
-    /// `sim` paced by `wall`. The simulated clock is moved up to the wall
-    /// clock's time at once (it never moves back).
+    /// `sim` paced by `wall`, from now on: the simulated clock goes on from
+    /// where it stands (or from the wall clock's time, if that is later).
     pub fn new(sim: SimBus, wall: C) -> Self {
-        let bus = WallBus { sim, wall };
+        let offset = sim.clock().now().saturating_sub(wall.now());
+        let bus = WallBus { sim, wall, offset };
         bus.catch_up();
         bus
     }
@@ -47,7 +52,7 @@ impl<C: Clock> WallBus<C> {
     /// Moves the simulated time up to now. It may already be ahead: a
     /// request written is on the wire until its last byte's time.
     fn catch_up(&self) {
-        self.sim.clock().advance_to(self.wall.now());
+        self.sim.clock().advance_to(self.wall.now() + self.offset);
     }
 }
 
@@ -61,10 +66,11 @@ impl<C: Clock> Transport for WallBus<C> {
 
     fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
         self.catch_up();
-        let got = self.sim.read(buf, deadline);
+        let got = self.sim.read(buf, deadline + self.offset);
         // The simulated clock now stands where the bytes finished arriving
         // (or at the deadline): do not hand them over before that.
-        self.wall.sleep_until(self.sim.clock().now());
+        let arrived = self.sim.clock().now().saturating_sub(self.offset);
+        self.wall.sleep_until(arrived);
         got
     }
 
@@ -112,6 +118,26 @@ mod tests {
         // 6 request bytes (60 us at 1 Mbaud), the STS3215's 50 us
         // turnaround, 6 reply bytes (60 us): 170 us after the write.
         assert_eq!(wall.now(), Duration::from_micros(5_170));
+    }
+
+    #[test]
+    fn a_simulated_clock_ahead_of_the_wall_keeps_its_lead() {
+        let wall = Wall::default();
+        wall.advance_to(Duration::from_millis(1));
+        let sim = SimBus::new(ManualClock::new(), 1_000_000)
+            .with_servo(SimServo::sts3215(1).with_return_delay(Duration::ZERO));
+        // The robot was settled for 10 s of virtual time before going live.
+        sim.clock().advance_to(Duration::from_secs(10));
+        let mut bus = WallBus::new(sim.clone(), wall.clone());
+        bus.write_all(&ping()).expect("write");
+        let mut reply = [0u8; 16];
+        // The deadline is the wall clock's: 1 ms from its now.
+        let n = bus
+            .read(&mut reply, Duration::from_millis(2))
+            .expect("the servo answers within the wall clock's deadline");
+        assert_eq!(n, 6);
+        assert_eq!(wall.now(), Duration::from_micros(1_170));
+        assert_eq!(sim.clock().now(), Duration::from_micros(10_000_170));
     }
 
     #[test]

@@ -38,16 +38,10 @@ fn reads_past_the_table_end_answer_zeros() {
 #[test]
 fn write_applies_and_read_only_registers_refuse() {
     let mut bus = bus_with(&[1]);
-    assert_eq!(
-        exchange(&mut bus, &write(1, addr::ACCELERATION, &[20]), MS),
-        status(1, 0, &[])
-    );
+    assert_acked(&mut bus, &write(1, addr::ACCELERATION, &[20]));
     assert_eq!(bus.register(1, addr::ACCELERATION), Some(20));
     // Model number and present position are read-only: acknowledged, unchanged.
-    assert_eq!(
-        exchange(&mut bus, &write(1, addr::MODEL_NUMBER, &[0, 0]), MS),
-        status(1, 0, &[])
-    );
+    assert_acked(&mut bus, &write(1, addr::MODEL_NUMBER, &[0, 0]));
     assert_eq!(bus.servo(1, |s| s.read_u16(addr::MODEL_NUMBER)), Some(777));
     let before = bus.present_position(1);
     exchange(&mut bus, &write(1, addr::PRESENT_POSITION, &[0, 0]), MS);
@@ -84,10 +78,7 @@ fn scs_status_levels_have_three_steps() {
     assert_eq!(exchange(&mut bus, &read(3, 5, 1), MS), status(3, 0, &[3]));
     assert!(exchange(&mut bus, &write(3, addr::ACCELERATION, &[1]), MS).is_empty());
     bus.servo(3, |s| s.write(addr::STATUS_LEVEL, &[2]));
-    assert_eq!(
-        exchange(&mut bus, &write(3, addr::ACCELERATION, &[1]), MS),
-        status(3, 0, &[])
-    );
+    assert_acked(&mut bus, &write(3, addr::ACCELERATION, &[1]));
 }
 
 #[test]
@@ -109,11 +100,8 @@ fn scs_is_big_endian_has_its_lock_at_48_and_no_sync_read() {
     exchange(&mut bus, &write(1, addr::MAX_TEMPERATURE, &[60]), MS);
     bus.power_cycle();
     assert_eq!(bus.register(1, addr::MAX_TEMPERATURE), Some(60));
-    assert_eq!(
-        bus.register(1, addr::SCS_LOCK),
-        Some(1),
-        "the lock closes at power-up"
-    );
+    let lock = bus.register(1, addr::SCS_LOCK);
+    assert_eq!(lock, Some(1), "the lock closes at power-up");
 }
 
 #[test]
@@ -140,10 +128,7 @@ fn lock_decides_what_survives_a_power_cycle_not_what_applies() {
 #[test]
 fn id_write_is_answered_from_the_old_id_then_the_new_one_answers() {
     let mut bus = bus_with(&[1]);
-    assert_eq!(
-        exchange(&mut bus, &write(1, addr::ID, &[7]), MS),
-        status(1, 0, &[])
-    );
+    assert_acked(&mut bus, &write(1, addr::ID, &[7]));
     assert!(exchange(&mut bus, &ping(1), MS).is_empty());
     assert_eq!(exchange(&mut bus, &ping(7), MS), status(7, 0, &[]));
     // Written locked: the ID is not saved.
@@ -154,10 +139,7 @@ fn id_write_is_answered_from_the_old_id_then_the_new_one_answers() {
 #[test]
 fn reg_write_is_held_until_action() {
     let mut bus = bus_with(&[1, 2]);
-    assert_eq!(
-        exchange(&mut bus, &reg_write(1, addr::ACCELERATION, &[33]), MS),
-        status(1, 0, &[])
-    );
+    assert_acked(&mut bus, &reg_write(1, addr::ACCELERATION, &[33]));
     assert_eq!(
         exchange(&mut bus, &read(1, addr::ACCELERATION, 1), MS),
         status(1, 0, &[0]),
@@ -235,11 +217,8 @@ fn reset_restores_factory_values_but_keeps_the_id() {
     assert_eq!(bus.register(5, addr::ACCELERATION), Some(0));
     assert_eq!(bus.register(5, addr::RETURN_DELAY), Some(250));
     bus.power_cycle();
-    assert_eq!(
-        bus.register(5, addr::MAX_TEMPERATURE),
-        Some(70),
-        "RESET is saved"
-    );
+    let kept = bus.register(5, addr::MAX_TEMPERATURE);
+    assert_eq!(kept, Some(70), "RESET is saved");
 }
 
 #[test]

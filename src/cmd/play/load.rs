@@ -99,14 +99,14 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         };
         let robot = servobus_runtime::config::load_robot_calibrated(
             robot_path,
-            args.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?;
         (recording_motion(&args.motion, &robot), robot)
     } else {
         load_motion_calibrated(
             &args.motion,
             args.robot.as_deref(),
-            args.calibration.as_deref(),
+            args.hardware.calibration.as_deref(),
         )?
     };
     let rate_hz = match args.rate {
@@ -120,6 +120,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
     };
     for bus in &mut robot.buses {
         bus.round_robin |= args.round_robin;
+        bus.busy_poll |= args.busy_poll;
         if let Err(why) = bus.check_rate(rate_hz) {
             let why = why.with_remedy(RateRemedy::Flag);
             return Err(crate::cmd::exit::input(format!(

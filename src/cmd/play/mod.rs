@@ -13,9 +13,8 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
 use crossbeam_channel::RecvTimeoutError;
-use servobus_driver::{Bus, SerialTransport, SystemClock, Transport};
+use servobus_driver::{Bus, SystemClock, Transport};
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
 };
@@ -27,6 +26,7 @@ use servobus_runtime::{
 use servobus_sim::WallBus;
 use servobus_trajectory::Trajectory;
 
+use super::link::{every_port, open_bus, Allowance, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
 
 // `run` below is the order of events; each step's details live by concern:
@@ -53,14 +53,9 @@ pub struct Args {
     /// Robot file or built-in name (default: the one the motion file names).
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: Option<PathBuf>,
-    /// Serial port of real servos, for the robot's first bus (default: the
-    /// robot file's ports; without any, the built-in simulator).
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Calibration file of the physical robot (default: the robot file's
-    /// `calibration:`).
-    #[arg(long)]
-    pub calibration: Option<PathBuf>,
+    /// The port of real servos and their calibration.
+    #[command(flatten)]
+    pub hardware: super::HardwareArgs,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long)]
     pub rate: Option<f64>,
@@ -165,9 +160,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let units = motion.units;
     let duration = trajectory.duration();
     let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
-    let mut start = vec![servobus_trajectory::JointState::default(); trajectory.joints()];
-    trajectory.sample(0.0, &mut start);
-    let start: Vec<f64> = start.iter().map(|s| s.position).collect();
     let runner = match &backend {
         Backend::Fast => {
             let buses = servobus_runtime::sim::SimRobot::builder(&robot)
@@ -196,25 +188,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {
-            let clock = SystemClock::new();
             let mut buses = Vec::new();
             for (bus, port) in robot.buses.iter().zip(ports) {
-                let mut transport = SerialTransport::open(port, bus.baud, clock)
-                    .with_context(|| format!("bus `{}`: cannot open {port}", bus.name))?;
-                transport.set_busy_poll(bus.busy_poll || args.busy_poll);
-                if let Some(warning) = transport.ftdi_latency().and_then(|f| f.warning()) {
-                    eprintln!("warning: {warning}");
-                }
-                let mut settings = bus_settings(bus);
-                if transport.is_pty() {
-                    // A simulator served on a pty (`servobus sim`) answers
-                    // from a process that can wait for the CPU, as the
-                    // built-in one does: the same allowances.
-                    settings =
-                        settings.with_latency(bus.latency.max(servobus_timing::Link::PTY_LATENCY));
-                }
-                let transport: Box<dyn Transport + Send> = Box::new(transport);
-                buses.push(Bus::new(transport, clock, settings));
+                buses.push(open_bus(bus, port, Allowance::Run)?);
             }
             super::calibrate::check_buses(&robot, &mut buses, ports)?;
             spawn(&robot, trajectory, buses, options)?
@@ -231,8 +207,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
             .collect(),
         keyframes: keyframe_times,
-        start,
-        limits: servobus_runtime::config::joint_limits(&robot),
+        approach: runner.approach().as_secs_f64(),
         settle: SETTLE.as_secs_f64(),
     };
     let outcome = if args.monitor {

@@ -37,26 +37,14 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     if args.fast {
         return Ok(Backend::Fast);
     }
-    let mut ports: Vec<Option<String>> = robot.buses.iter().map(|b| b.port.clone()).collect();
-    if let (Some(port), Some(first)) = (&args.port, ports.first_mut()) {
-        *first = Some(port.clone());
+    match every_port(robot, args.hardware.port.as_deref()) {
+        Ports::None => Ok(Backend::Simulated),
+        Ports::Every(ports) => Ok(Backend::Hardware(ports)),
+        Ports::Missing(bus) => Err(crate::cmd::exit::input(format!(
+            "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
+             (--port sets only the first bus's)",
+            bus.name,
+            robot.path.display()
+        ))),
     }
-    if ports.iter().all(Option::is_none) {
-        return Ok(Backend::Simulated);
-    }
-    let mut out = Vec::new();
-    for (bus, port) in robot.buses.iter().zip(ports) {
-        match port {
-            Some(p) => out.push(p),
-            None => {
-                return Err(crate::cmd::exit::input(format!(
-                    "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
-                 (--port sets only the first bus's)",
-                    bus.name,
-                    robot.path.display()
-                )))
-            }
-        }
-    }
-    Ok(Backend::Hardware(out))
 }

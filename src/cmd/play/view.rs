@@ -7,10 +7,8 @@ use super::*;
 pub(super) const SETTLE: Duration = Duration::from_millis(300);
 
 /// The fraction of the limits the runtime's approach moves at (its
-/// `RunOptions::approach`), and the distance under which it is skipped
-/// (half a degree, as the runtime's).
+/// `RunOptions::approach`).
 pub(super) const APPROACH: f64 = 0.25;
-pub(super) const APPROACH_SKIP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
 /// What the live view and the plot show besides the telemetry.
 pub(super) struct Shown {
@@ -18,41 +16,10 @@ pub(super) struct Shown {
     pub(super) bus_of: Vec<usize>,
     /// Path times of the keyframes.
     pub(super) keyframes: Vec<f64>,
-    /// The path's first position per joint, rad.
-    pub(super) start: Vec<f64>,
-    pub(super) limits: Vec<servobus_trajectory::JointLimits>,
+    /// The approach to the path's start as the run planned it
+    /// ([`Runner::approach`]), s: the path's times shift by it.
+    pub(super) approach: f64,
     pub(super) settle: f64,
-}
-
-impl Shown {
-    /// How long the approach from `present` (rad) to the path's start
-    /// takes: the same jerk-limited move at the same fraction of the
-    /// limits as the runtime plans, or 0 when it is skipped.
-    pub(super) fn approach_s(&self, present: &[f64]) -> f64 {
-        let far = present
-            .iter()
-            .zip(&self.start)
-            .any(|(p, q)| (p - q).abs() > APPROACH_SKIP_RAD);
-        if !far {
-            return 0.0;
-        }
-        let lim: Vec<_> = self
-            .limits
-            .iter()
-            .map(|l| {
-                servobus_trajectory::JointLimits::new(
-                    l.max_velocity * APPROACH,
-                    l.max_acceleration * APPROACH,
-                    l.max_jerk.map(|j| j * APPROACH),
-                )
-            })
-            .collect();
-        let from: Vec<_> = present
-            .iter()
-            .map(|&p| servobus_trajectory::JointState::at_rest(p))
-            .collect();
-        servobus_trajectory::retarget(&lim, &from, &self.start).map_or(0.0, |t| t.duration())
-    }
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
@@ -91,9 +58,6 @@ pub(super) fn follow(
         .plot
         .as_ref()
         .map(|_| PlotData::new(shown.names.clone(), shown.bus_of.clone()));
-    // The joints' positions at the first cycle (rad), until all are known:
-    // they give the approach's duration.
-    let mut present: Vec<Option<f64>> = vec![None; shown.names.len()];
     let mut announced = false;
     let mut progress = Progress::new(args.json, duration, &units.to_string());
     let telemetry = runner.telemetry();
@@ -101,23 +65,14 @@ pub(super) fn follow(
         match telemetry.recv_timeout(Duration::from_millis(100)) {
             Ok(Telemetry::Cycle(sample)) => {
                 if !announced {
-                    for j in sample.joints() {
-                        if let Some(slot) = present.get_mut(j.joint) {
-                            slot.get_or_insert(units.to_rad(j.measured.unwrap_or(j.planned)));
-                        }
+                    announced = true;
+                    let approach = shown.approach;
+                    if approach > 0.0 {
+                        progress.message(&format!("moving to the first keyframe, {approach:.1} s"));
                     }
-                    if present.iter().all(Option::is_some) {
-                        announced = true;
-                        let now: Vec<f64> = present.iter().map(|p| p.unwrap_or(0.0)).collect();
-                        let approach = shown.approach_s(&now);
-                        if approach > 0.0 {
-                            progress
-                                .message(&format!("moving to the first keyframe, {approach:.1} s"));
-                        }
-                        progress.set_total(approach + duration + shown.settle);
-                        if let Some(plot) = &mut plot {
-                            plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
-                        }
+                    progress.set_total(approach + duration + shown.settle);
+                    if let Some(plot) = &mut plot {
+                        plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
                     }
                 }
                 if let Some(log) = &mut log {

@@ -61,6 +61,7 @@
 
 mod baud;
 mod models;
+mod reply;
 mod status_level;
 mod tables;
 mod typed;
@@ -73,6 +74,7 @@ pub use models::{
     model_by_name, model_by_number, Model, MODELS, REPLY_TURNAROUND, SCS0009, SCS15, SM8512BL,
     STS3215, STS3250,
 };
+pub use reply::return_delay_register;
 pub use status_level::StatusLevel;
 pub use tables::{addr, scs, sts, SCS, STS};
 pub use typed::{Reg, RegisterValue};

@@ -23,6 +23,7 @@ use rand::{Rng, SeedableRng};
 use serde::Deserialize;
 use servobus_sim::{HandPath, Mount};
 
+use crate::config::seam::turn_ticks;
 use crate::config::{ConfigError, FieldPath, JointConfig, JointMap, Robot, Source};
 
 /// Every joint's mounting, in the robot's joint order.
@@ -133,7 +134,7 @@ impl Mounting {
         let mut rng = SmallRng::seed_from_u64(seed);
         let joints: Vec<&JointConfig> = robot.joints().collect();
         let full: Vec<usize> = (0..joints.len())
-            .filter(|&i| joints[i].model.range_deg >= 360.0)
+            .filter(|&i| turn_ticks(joints[i].model).is_some())
             .collect();
         let seam = (!full.is_empty()).then(|| full[rng.gen_range(0..full.len())]);
         let reversed = match full.len() {

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use servobus_driver::{Bus, ManualClock};
+use servobus_runtime::calibrate::ProcedureOptions;
 use servobus_runtime::config::{load_motion_calibrated, plan_motion, Robot};
 use servobus_runtime::{Finish, RunOptions, Telemetry, VirtualRun};
 use servobus_sim::SimBus;
@@ -20,6 +21,36 @@ pub struct Played {
     /// The largest miss, degrees, between the body's physical angles and
     /// the keyframe, at every cycle where the path is at a keyframe.
     pub worst: f64,
+}
+
+/// The options of `servobus calibrate` for a test: with `auto`, a step
+/// ends once the joints are still; without it, when Enter is pressed.
+pub fn procedure(auto: bool) -> ProcedureOptions {
+    ProcedureOptions {
+        auto,
+        taken: "test".into(),
+        ..ProcedureOptions::default()
+    }
+}
+
+/// Checks that an uncalibrated robot, whose readings are off by up to
+/// `misread` degrees, did not play its motion: it stopped on a fault with
+/// at most `reached_at_most` keyframes reached, or missed by over 20 deg.
+pub fn assert_uncalibrated_fails(played: &Played, misread: f64, reached_at_most: usize) {
+    let Played {
+        finish,
+        reached,
+        keyframes,
+        worst,
+    } = played;
+    println!(
+        "uncalibrated: readings off by up to {misread:.1} deg; {finish:?}, {reached} of {keyframes} keyframes, worst miss {worst:.1} deg"
+    );
+    let refused = *finish == Some(Finish::Fault) && *reached <= reached_at_most;
+    assert!(
+        refused || *worst > 20.0,
+        "uncalibrated arm played within {worst:.1} deg"
+    );
 }
 
 /// Plays `motion` (a path) for `robot` (its file at `robot_path`, with the

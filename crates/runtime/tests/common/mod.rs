@@ -18,12 +18,17 @@ pub fn config(rel: &str) -> PathBuf {
         .join(rel)
 }
 
-/// Writes `text` to the file `name` in `dir` (a folder of its own under
-/// Cargo's temporary directory for tests, made if missing).
-pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+/// The path of file `name` in `dir`, a folder of its own under Cargo's
+/// temporary directory for tests (made if missing).
+pub fn temp_path(dir: &str, name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
     std::fs::create_dir_all(&d).expect("temp dir");
-    let p = d.join(name);
+    d.join(name)
+}
+
+/// Writes `text` to [`temp_path`]`(dir, name)` and returns the path.
+pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
+    let p = temp_path(dir, name);
     std::fs::write(&p, text).expect("temp file");
     p
 }
@@ -35,9 +40,32 @@ pub fn robot(name: &str) -> Robot {
 
 /// A motion under `configs/motions/`, planned, with its robot.
 pub fn motion(name: &str) -> (Trajectory, Robot) {
-    let (m, r) = load_motion(&config(&format!("motions/{name}")), None).expect("motion loads");
+    planned(&format!("motions/{name}"), None)
+}
+
+/// The motion file `motion` under `configs/`, planned for the robot file
+/// `robot` under `configs/` (or the one the motion names), with the robot.
+pub fn planned(motion: &str, robot: Option<&str>) -> (Trajectory, Robot) {
+    let robot = robot.map(config);
+    let (m, r) = load_motion(&config(motion), robot.as_deref()).expect("motion loads");
     let t = plan_motion(&m, &r).expect("motion plans");
     (t, r)
+}
+
+/// The cycle (of `period` seconds) at which joint `j` of `path` moves
+/// fastest: where a fault does the most harm.
+pub fn fastest_cycle(path: &Trajectory, j: usize, period: f64) -> u64 {
+    let mut s = vec![JointState::default(); path.joints()];
+    let mut best = (0.0, 0u64);
+    let mut k = 0u64;
+    while (k as f64) * period < path.duration() {
+        path.sample(k as f64 * period, &mut s);
+        if s[j].velocity.abs() > best.0 {
+            best = (s[j].velocity.abs(), k);
+        }
+        k += 1;
+    }
+    best.1
 }
 
 /// One simulated bus per robot bus (the runtime's simulator glue), each with
@@ -144,6 +172,22 @@ pub fn record<T: servobus_driver::Transport>(
         }
     }
     rec
+}
+
+/// [`record`], doing `act` once, just before cycle `at` (a fault injected,
+/// a command sent).
+pub fn record_acting_at<T: servobus_driver::Transport>(
+    run: &mut servobus_runtime::VirtualRun<T>,
+    max: u64,
+    at: u64,
+    act: impl FnOnce(),
+) -> Recorded {
+    let mut act = Some(act);
+    record(run, max, |k| {
+        if let Some(act) = act.take_if(|_| k == at) {
+            act();
+        }
+    })
 }
 
 impl Recorded {

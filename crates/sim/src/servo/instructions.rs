@@ -3,11 +3,11 @@
 
 use std::time::Duration;
 
+use servobus_protocol::registers::{to_sign_magnitude, write_uint, Access};
 use servobus_protocol::{encode, Instruction, Packet, BROADCAST_ID};
 
 use super::{addr, SimServo};
 use crate::body::Body;
-use crate::model::{sign_magnitude, Area, Endian};
 
 impl SimServo {
     /// Executes one instruction packet received at time `now` (the end of its
@@ -82,7 +82,8 @@ impl SimServo {
                 let [address, len, ref ids @ ..] = *p else {
                     return None;
                 };
-                if !self.model.sync_read || !broadcast || !ids.contains(&id) {
+                let supported = self.model.model.series.has_sync_read();
+                if !supported || !broadcast || !ids.contains(&id) || !self.answers(inst) {
                     return None;
                 }
                 return self.status_frame(id, &self.read(address, usize::from(len)));
@@ -107,16 +108,10 @@ impl SimServo {
         Some(buf)
     }
 
-    /// Whether the status level lets `inst` be answered.
+    /// Whether the status level (register 8) lets `inst` be answered.
     pub(super) fn answers(&self, inst: Instruction) -> bool {
-        let level = self.register(addr::STATUS_LEVEL);
-        match (self.model.three_status_levels, inst) {
-            (_, Instruction::Ping) => true,
-            (false, Instruction::Read | Instruction::SyncRead) => true,
-            (true, Instruction::Read) => level >= 1,
-            (false, _) => level >= 1,
-            (true, _) => level >= 2,
-        }
+        let level = self.model.status_level(self.register(addr::STATUS_LEVEL));
+        level.answers(inst)
     }
 
     /// RESET: every register back to its factory value and saved, except the
@@ -130,7 +125,7 @@ impl SimServo {
     }
 
     pub(super) fn lock_open(&self) -> bool {
-        self.register(self.model.lock_address) == 0
+        self.register(self.model.map().lock_address) == 0
     }
 
     pub(super) fn apply_write(&mut self, address: u8, data: &[u8]) {
@@ -142,9 +137,9 @@ impl SimServo {
                 break;
             }
             match self.model.area(a) {
-                Area::ReadOnly => {}
-                Area::Ram => self.table[a] = v,
-                Area::Eeprom => {
+                Access::ReadOnly => {}
+                Access::Ram => self.table[a] = v,
+                Access::Eeprom => {
                     self.table[a] = v;
                     if lock_open {
                         self.saved[a] = v;
@@ -169,7 +164,7 @@ impl SimServo {
             self.timed_speed =
                 (t > 0.0).then(|| ((target - self.joint.ref_pos).abs() / (t / 1000.0)).max(1.0));
         }
-        if touched(addr::OFFSET, 2) && self.model.offset_sign_bit.is_some() {
+        if touched(addr::OFFSET, 2) && self.model.offset_sign_bit().is_some() {
             if let Some(raw) = self.body.as_ref().map(Body::raw) {
                 // The shaft stays where it is; its reading moves with the
                 // offset, and the servo holds the shaft where it now reads.
@@ -190,10 +185,10 @@ impl SimServo {
         let v = self.register(addr::TORQUE_ENABLE);
         if v == 128 {
             // Calibrate: the present position becomes the midpoint.
-            if let Some(bit) = self.model.offset_sign_bit {
-                let mid = (self.model.resolution / 2) as i32;
+            if let Some(bit) = self.model.offset_sign_bit() {
+                let mid = (self.model.model.resolution / 2) as i32;
                 let offset = self.raw_of_pos(self.joint.pos).round() as i32 - mid;
-                let raw = sign_magnitude(offset, bit);
+                let raw = to_sign_magnitude(offset, bit);
                 self.write_u16_raw(addr::OFFSET, raw, true);
             }
             self.table[usize::from(addr::TORQUE_ENABLE)] = before;
@@ -213,11 +208,11 @@ impl SimServo {
         self.update_flags();
     }
 
-    pub(super) fn write_u16_raw(&mut self, address: u8, raw: u16, persist: bool) {
-        let b = match self.model.endian {
-            Endian::Little => raw.to_le_bytes(),
-            Endian::Big => raw.to_be_bytes(),
-        };
+    /// Writes the low 16 bits of `raw` at `address` in the model's byte
+    /// order, into the EEPROM too when `persist` and the lock is open.
+    pub(super) fn write_u16_raw(&mut self, address: u8, raw: u32, persist: bool) {
+        let mut b = [0u8; 2];
+        write_uint(raw, self.model.byte_order(), &mut b);
         let a = usize::from(address);
         if a + 1 < self.table.len() {
             self.table[a..a + 2].copy_from_slice(&b);

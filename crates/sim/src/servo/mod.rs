@@ -3,11 +3,14 @@
 
 use std::time::Duration;
 
+use servobus_protocol::registers::{
+    read_uint, return_delay_from_register, return_delay_register, sign_magnitude, Access,
+};
 use servobus_protocol::StatusFlags;
 
 use crate::body::{Body, HandPath, Mount, Truth};
 use crate::dynamics::Joint;
-use crate::model::{from_sign_magnitude, Area, Endian, SimModel, LOAD_BIT, SPEED_BIT};
+use crate::model::{SimModel, LOAD_BIT, SPEED_BIT};
 
 // The servo's behaviour, by concern: the instructions it obeys and the
 // memory writes they make, and the joint it drives with what it reports.
@@ -56,7 +59,7 @@ impl SimServo {
         let mut table = model.factory_table();
         table[usize::from(addr::ID)] = id;
         let saved = table.clone();
-        let mid = f64::from(model.resolution / 2);
+        let mid = f64::from(model.model.resolution / 2);
         let mut servo = SimServo {
             model,
             table,
@@ -105,8 +108,7 @@ impl SimServo {
     /// (rounded down to the register's 2 us units, at most 510 us).
     #[must_use]
     pub fn with_return_delay(mut self, delay: Duration) -> SimServo {
-        let units = (delay.as_micros() / 2).min(255) as u8;
-        self.set_saved(addr::RETURN_DELAY, units);
+        self.set_saved(addr::RETURN_DELAY, return_delay_register(delay));
         self
     }
 
@@ -133,12 +135,7 @@ impl SimServo {
     /// joint's physical angle.
     #[must_use]
     pub fn with_mount(mut self, mount: Mount, angle_deg: f64) -> SimServo {
-        let mut body = Body::new(
-            mount,
-            angle_deg,
-            self.model.resolution,
-            self.model.range_deg,
-        );
+        let mut body = Body::new(mount, angle_deg, &self.model.model);
         if let Some(old) = self.body.take() {
             body.hand = old.hand;
             body.truth = old.truth;
@@ -195,7 +192,7 @@ impl SimServo {
     /// as the sensor reports it.
     pub fn raw_position(&self) -> i32 {
         let raw = self.raw_of_pos(self.joint.pos);
-        (raw.round() as i32).rem_euclid(self.model.resolution as i32)
+        (raw.round() as i32).rem_euclid(self.model.model.resolution as i32)
     }
 
     fn set_saved(&mut self, address: u8, value: u8) {
@@ -224,7 +221,7 @@ impl SimServo {
 
     /// The return delay (register 7, 2 us units).
     pub fn return_delay(&self) -> Duration {
-        Duration::from_micros(2 * u64::from(self.table[usize::from(addr::RETURN_DELAY)]))
+        return_delay_from_register(self.register(addr::RETURN_DELAY))
     }
 
     /// The time the servo's state was last stepped to.
@@ -256,10 +253,12 @@ impl SimServo {
             self.register(address),
             self.register(address.wrapping_add(1)),
         ];
-        match self.model.endian {
-            Endian::Little => u16::from_le_bytes(b),
-            Endian::Big => u16::from_be_bytes(b),
-        }
+        read_uint(&b, self.model.byte_order()) as u16
+    }
+
+    /// A two-byte sign-magnitude register whose direction bit is `sign_bit`.
+    pub(super) fn read_signed(&self, address: u8, sign_bit: u8) -> i32 {
+        sign_magnitude(u32::from(self.read_u16(address)), sign_bit)
     }
 
     /// Present position (register 56) as a signed value.
@@ -274,12 +273,12 @@ impl SimServo {
 
     /// Present speed (register 58) in ticks/s, signed.
     pub fn present_speed(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_SPEED), SPEED_BIT)
+        self.read_signed(addr::PRESENT_SPEED, SPEED_BIT)
     }
 
     /// Present load (register 60) in 0.1 % of the maximum torque, signed.
     pub fn present_load(&self) -> i32 {
-        from_sign_magnitude(self.read_u16(addr::PRESENT_LOAD), LOAD_BIT)
+        self.read_signed(addr::PRESENT_LOAD, LOAD_BIT)
     }
 
     /// The status flags the servo reports (register 65 and every reply).
@@ -323,7 +322,7 @@ impl SimServo {
     /// Moves the shaft to `ticks` in the present-position frame, as a hand
     /// turning the horn would (with torque on, the servo then returns to its goal).
     pub fn move_joint(&mut self, ticks: i32) {
-        let max = f64::from(self.model.resolution - 1);
+        let max = f64::from(self.model.model.resolution - 1);
         let mut pos = f64::from(ticks) + f64::from(self.shift());
         pos = match &self.body {
             Some(b) if b.full_turn() => pos.rem_euclid(max + 1.0),
@@ -403,7 +402,7 @@ impl SimServo {
         let factory = self.model.factory_table();
         for (a, b) in self.table.iter_mut().enumerate() {
             *b = match self.model.area(a) {
-                Area::Eeprom => self.saved[a],
+                Access::Eeprom => self.saved[a],
                 _ => factory[a],
             };
         }

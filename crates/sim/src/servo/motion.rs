@@ -5,9 +5,10 @@
 use std::time::Duration;
 
 use super::{addr, SimServo};
-use crate::body::Body;
+use crate::body::{turn_delta, Body};
 use crate::dynamics::{Drive, MAX_STEP_S};
-use crate::model::{from_sign_magnitude, sign_magnitude, CURRENT_BIT, LOAD_BIT, SPEED_BIT};
+use crate::model::{CURRENT_BIT, LOAD_BIT, SPEED_BIT};
+use servobus_protocol::registers::{sign_magnitude, to_sign_magnitude};
 use servobus_protocol::StatusFlags;
 
 impl SimServo {
@@ -57,11 +58,12 @@ impl SimServo {
         let full_turn = b.full_turn();
         if let Some(raw) = settled {
             let pos = self.pos_of_raw(raw);
-            let turn = f64::from(self.model.resolution);
-            let mut moved = pos - before;
-            if full_turn {
-                moved = (moved + turn / 2.0).rem_euclid(turn) - turn / 2.0;
-            }
+            let turn = f64::from(self.model.model.resolution);
+            let moved = if full_turn {
+                turn_delta(pos, before, turn)
+            } else {
+                pos - before
+            };
             self.joint.pos = pos;
             self.joint.vel = if dt > 0.0 { moved / dt } else { 0.0 };
             if !torque_on {
@@ -89,7 +91,7 @@ impl SimServo {
 
     /// The raw sensor position of joint-frame position `pos` (mounted servos).
     pub(super) fn raw_of_pos(&self, pos: f64) -> f64 {
-        let res = f64::from(self.model.resolution);
+        let res = f64::from(self.model.model.resolution);
         if self.body.is_some() {
             (pos + f64::from(self.offset())).rem_euclid(res)
         } else {
@@ -99,7 +101,7 @@ impl SimServo {
 
     /// The joint-frame position of raw sensor position `raw` (mounted servos).
     pub(super) fn pos_of_raw(&self, raw: f64) -> f64 {
-        let res = f64::from(self.model.resolution);
+        let res = f64::from(self.model.model.resolution);
         if self.body.is_some() {
             (raw - f64::from(self.offset())).rem_euclid(res)
         } else {
@@ -108,23 +110,23 @@ impl SimServo {
     }
 
     pub(super) fn offset(&self) -> i32 {
-        match self.model.offset_sign_bit {
-            Some(bit) => from_sign_magnitude(self.read_u16(addr::OFFSET), bit),
+        match self.model.offset_sign_bit() {
+            Some(bit) => self.read_signed(addr::OFFSET, bit),
             None => 0,
         }
     }
 
     pub(super) fn decode_position(&self, raw: u16) -> i32 {
-        match self.model.position_sign_bit {
-            Some(bit) => from_sign_magnitude(raw, bit),
+        match self.model.position_sign_bit() {
+            Some(bit) => sign_magnitude(u32::from(raw), bit),
             None => i32::from(raw),
         }
     }
 
-    pub(super) fn encode_position(&self, v: i32) -> u16 {
-        match self.model.position_sign_bit {
-            Some(bit) => sign_magnitude(v, bit),
-            None => v.clamp(0, i32::from(u16::MAX)) as u16,
+    pub(super) fn encode_position(&self, v: i32) -> u32 {
+        match self.model.position_sign_bit() {
+            Some(bit) => to_sign_magnitude(v, bit),
+            None => v.clamp(0, i32::from(u16::MAX)) as u32,
         }
     }
 
@@ -137,24 +139,24 @@ impl SimServo {
         if max > min {
             goal = goal.clamp(min, max);
         }
-        let res = self.model.resolution as i32;
+        let res = self.model.model.resolution as i32;
         f64::from((goal + self.shift()).rem_euclid(res))
     }
 
     pub(super) fn drive(&self) -> Drive {
         let m = self.model;
-        let mode = if m.offset_sign_bit.is_some() {
+        let mode = if m.offset_sign_bit().is_some() {
             self.register(addr::MODE)
         } else {
             0
         };
-        let goal_speed = from_sign_magnitude(self.read_u16(addr::GOAL_SPEED), SPEED_BIT);
+        let goal_speed = self.read_signed(addr::GOAL_SPEED, SPEED_BIT);
         let max_speed = if goal_speed != 0 {
-            f64::from(goal_speed.unsigned_abs()).min(m.max_speed)
+            f64::from(goal_speed.unsigned_abs()).min(m.max_speed())
         } else if let Some(v) = self.timed_speed {
-            v.min(m.max_speed)
+            v.min(m.max_speed())
         } else {
-            m.max_speed
+            m.max_speed()
         };
         let acc = self.register(addr::ACCELERATION);
         let accel = if acc == 0 {
@@ -167,7 +169,7 @@ impl SimServo {
                 .max(self.register(addr::CCW_DEAD_ZONE)),
         );
         let max_torque = f64::from(self.read_u16(addr::MAX_TORQUE).min(1000)) / 1000.0;
-        let torque_limit = if m.lock_address == addr::LOCK {
+        let torque_limit = if m.map().lock_address == addr::LOCK {
             (f64::from(self.read_u16(addr::TORQUE_LIMIT).min(1000)) / 1000.0).min(max_torque)
         } else {
             max_torque
@@ -177,15 +179,15 @@ impl SimServo {
             torque_on: self.torque_enabled() && !self.unloaded(),
             wheel: mode == 1,
             target: self.target(),
-            wheel_speed: f64::from(goal_speed).clamp(-m.max_speed, m.max_speed),
+            wheel_speed: f64::from(goal_speed).clamp(-m.max_speed(), m.max_speed()),
             max_speed,
             accel,
             dead_zone,
             torque_limit,
-            full_effort_error: (1600.0 / p) * f64::from(m.resolution) / 4096.0,
+            full_effort_error: (1600.0 / p) * f64::from(m.model.resolution) / 4096.0,
             load: self.load,
             blocked: self.blocked,
-            max_pos: f64::from(m.resolution - 1),
+            max_pos: f64::from(m.model.resolution - 1),
             seamless: self.body.as_ref().is_some_and(Body::full_turn),
             ambient_c: self.ambient_c,
         }
@@ -196,7 +198,7 @@ impl SimServo {
     /// below it). The torque is released while a latched flag is named by
     /// the unloading condition (register 19).
     pub(super) fn protect(&mut self) {
-        let protection = if self.model.offset_sign_bit.is_some() {
+        let protection = if self.model.offset_sign_bit().is_some() {
             addr::PROTECTION_TIME
         } else {
             38
@@ -219,7 +221,7 @@ impl SimServo {
     }
 
     pub(super) fn voltage_dv(&self) -> u8 {
-        let supply = self.supply_dv.unwrap_or(self.model.nominal_voltage);
+        let supply = self.supply_dv.unwrap_or(self.model.nominal_voltage());
         // The supply sags a little under load (cable and regulator losses).
         let sag = (3.0 * self.joint.effort.abs()).round() as u8;
         supply.saturating_sub(sag)
@@ -227,7 +229,7 @@ impl SimServo {
 
     /// Recomputes the status register from latched, injected and voltage flags.
     pub(super) fn update_flags(&mut self) {
-        let v = self.supply_dv.unwrap_or(self.model.nominal_voltage);
+        let v = self.supply_dv.unwrap_or(self.model.nominal_voltage());
         let mut flags = self.latched | self.injected;
         if v > self.register(addr::MAX_VOLTAGE) || v < self.register(addr::MIN_VOLTAGE) {
             flags |= StatusFlags::VOLTAGE;
@@ -237,7 +239,7 @@ impl SimServo {
 
     /// Writes the joint's state into the present-value registers.
     pub(super) fn sync_outputs(&mut self) {
-        let res = self.model.resolution as i32;
+        let res = self.model.model.resolution as i32;
         let pos = (self.joint.pos.round() as i32 - self.shift()).rem_euclid(res);
         let raw = self.encode_position(pos);
         self.write_u16_raw(addr::PRESENT_POSITION, raw, false);
@@ -247,9 +249,13 @@ impl SimServo {
             self.write_u16_raw(addr::GOAL_POSITION, raw, false);
         }
         let speed = self.joint.vel.round().clamp(-32767.0, 32767.0) as i32;
-        self.write_u16_raw(addr::PRESENT_SPEED, sign_magnitude(speed, SPEED_BIT), false);
+        self.write_u16_raw(
+            addr::PRESENT_SPEED,
+            to_sign_magnitude(speed, SPEED_BIT),
+            false,
+        );
         let load = (self.joint.effort * 1000.0).round() as i32;
-        self.write_u16_raw(addr::PRESENT_LOAD, sign_magnitude(load, LOAD_BIT), false);
+        self.write_u16_raw(addr::PRESENT_LOAD, to_sign_magnitude(load, LOAD_BIT), false);
         self.table[usize::from(addr::PRESENT_VOLTAGE)] = self.voltage_dv();
         self.table[usize::from(addr::PRESENT_TEMPERATURE)] =
             self.joint.temp_c.round().clamp(0.0, 255.0) as u8;
@@ -261,7 +267,7 @@ impl SimServo {
                 (self.joint.effort.abs() * self.model.stall_current + idle).round() as i32;
             self.write_u16_raw(
                 addr::PRESENT_CURRENT,
-                sign_magnitude(current, CURRENT_BIT),
+                to_sign_magnitude(current, CURRENT_BIT),
                 false,
             );
         }

@@ -103,6 +103,13 @@ pub fn status(id: u8, err: u8, params: &[u8]) -> Vec<u8> {
 
 pub const MS: Duration = Duration::from_millis(1);
 
+/// Sends `frame` and checks that the servo it names acknowledges it: an
+/// empty status without error flags, from that ID.
+pub fn assert_acked(bus: &mut SimBus, frame: &[u8]) {
+    let id = frame[2];
+    assert_eq!(exchange(bus, frame, MS), status(id, 0, &[]), "{frame:02X?}");
+}
+
 /// Advances the bus's clock by `d`.
 pub fn wait(bus: &SimBus, d: Duration) {
     bus.clock().advance(d);

@@ -1,0 +1,150 @@
+//! A recorded path read back for `servobus play FILE.csv`.
+
+use std::path::Path;
+
+use anyhow::Context;
+use servobus_runtime::config::Units;
+
+/// A recorded path read back for `servobus play`: sample times and every
+/// robot joint's position, in radians.
+pub struct Recording {
+    /// Sample times, s, increasing.
+    pub times: Vec<f64>,
+    /// Per sample, one position per robot joint (robot order), rad.
+    pub samples: Vec<Vec<f64>>,
+    /// Robot joints the file does not name (held at their rest position).
+    pub missing: Vec<String>,
+}
+
+/// Reads a recorded path for `robot`: either the CSV that `play --log`
+/// writes (one row per cycle and joint; the measured position where there
+/// is one, else the commanded one) or a CSV of `time_s,<joint>...` (a
+/// column per joint, in degrees, or in radians when named `<joint>_rad`).
+pub fn read_recording(
+    path: &Path,
+    robot: &servobus_runtime::config::Robot,
+) -> anyhow::Result<Recording> {
+    let mut reader = csv::Reader::from_path(path)
+        .with_context(|| format!("cannot read the recording {}", path.display()))?;
+    let header: Vec<String> = reader.headers()?.iter().map(str::to_owned).collect();
+    let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
+    let rest: Vec<f64> = robot
+        .joints()
+        .map(|j| robot.units.to_rad(j.rest()))
+        .collect();
+    // Per robot joint, its (time, rad) series.
+    let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); names.len()];
+    let col = |n: &str| header.iter().position(|h| h == n);
+    let bad = |row: usize, what: &str| anyhow::anyhow!("{}: row {row}: {what}", path.display());
+    let Some(time_col) = col("time_s") else {
+        anyhow::bail!("{}: no `time_s` column", path.display());
+    };
+    if let Some(joint_col) = col("joint") {
+        let unit_of = |prefix: &str| {
+            header.iter().enumerate().find_map(|(i, h)| {
+                let u = h.strip_prefix(prefix)?;
+                Some((i, if u == "rad" { Units::Rad } else { Units::Deg }))
+            })
+        };
+        let (Some((cmd, units)), measured) = (unit_of("commanded_"), unit_of("measured_")) else {
+            anyhow::bail!(
+                "{}: a `play --log` file needs a commanded_<unit> column",
+                path.display()
+            );
+        };
+        for (i, row) in reader.records().enumerate() {
+            let row = row?;
+            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
+            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            let Some(j) = row
+                .get(joint_col)
+                .and_then(|n| names.iter().position(|x| *x == n))
+            else {
+                continue;
+            };
+            let value = match measured.and_then(|(c, _)| num(c)) {
+                Some(v) => v?,
+                None => num(cmd).ok_or_else(|| bad(i + 2, "no position"))??,
+            };
+            series[j].push((t, units.to_rad(value)));
+        }
+    } else {
+        let cols: Vec<Option<(usize, Units)>> = names
+            .iter()
+            .map(|n| {
+                col(n)
+                    .map(|c| (c, Units::Deg))
+                    .or_else(|| col(&format!("{n}_deg")).map(|c| (c, Units::Deg)))
+                    .or_else(|| col(&format!("{n}_rad")).map(|c| (c, Units::Rad)))
+            })
+            .collect();
+        if cols.iter().all(Option::is_none) {
+            anyhow::bail!(
+                "{}: no column names a joint of {} (joints: {})",
+                path.display(),
+                robot.name,
+                names.join(", ")
+            );
+        }
+        for (i, row) in reader.records().enumerate() {
+            let row = row?;
+            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
+            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            for (j, c) in cols.iter().enumerate() {
+                if let Some((c, u)) = c {
+                    let v = num(*c).ok_or_else(|| bad(i + 2, "a position is missing"))??;
+                    series[j].push((t, u.to_rad(v)));
+                }
+            }
+        }
+    }
+    // A common time base: the series with the most samples.
+    let base = series
+        .iter()
+        .max_by_key(|s| s.len())
+        .cloned()
+        .unwrap_or_default();
+    let mut times: Vec<f64> = Vec::with_capacity(base.len());
+    for &(t, _) in &base {
+        if times.last().map_or(true, |&l| t > l) {
+            times.push(t);
+        }
+    }
+    if times.len() < 2 {
+        anyhow::bail!("{}: fewer than two samples", path.display());
+    }
+    let mut samples = vec![Vec::with_capacity(names.len()); times.len()];
+    for (j, s) in series.iter().enumerate() {
+        for (i, &t) in times.iter().enumerate() {
+            samples[i].push(if s.is_empty() { rest[j] } else { at(s, t) });
+        }
+    }
+    let missing = names
+        .iter()
+        .zip(&series)
+        .filter(|(_, s)| s.is_empty())
+        .map(|(n, _)| n.to_string())
+        .collect();
+    Ok(Recording {
+        times,
+        samples,
+        missing,
+    })
+}
+
+/// The series at `t`, linearly interpolated (held beyond its ends).
+fn at(s: &[(f64, f64)], t: f64) -> f64 {
+    let i = s.partition_point(|p| p.0 <= t);
+    match i {
+        0 => s[0].1,
+        i if i >= s.len() => s[s.len() - 1].1,
+        i => {
+            let ((ta, a), (tb, b)) = (s[i - 1], s[i]);
+            if tb > ta {
+                a + (b - a) * (t - ta) / (tb - ta)
+            } else {
+                b
+            }
+        }
+    }
+}

@@ -1,9 +1,12 @@
 //! Benches of servobus-trajectory: sampling 18 joints (target <= 100 ns),
-//! planning 18 joints x 100 untimed keyframes (<= 1 ms), retargeting 18
-//! joints from a moving state (<= 30 us).
+//! planning 18 joints x 100 untimed keyframes (<= 1 ms), the same keyframes
+//! timed (with room to spare, and too close together so that most segments
+//! are stretched), retargeting 18 joints from a moving state (<= 30 us).
 
 use criterion::{black_box, Criterion};
-use servobus_trajectory::{plan, retarget, stop, JointLimits, JointState, Keyframe, PlanOptions};
+use servobus_trajectory::{
+    plan, retarget, stop, JointLimits, JointState, Keyframe, OnLimit, PlanOptions,
+};
 
 const JOINTS: usize = 18;
 
@@ -42,6 +45,25 @@ pub fn benches(c: &mut Criterion) {
 
     c.bench_function("trajectory/plan_18x100", |b| {
         b.iter(|| plan(black_box(&limits), black_box(&kfs), &options).map(|t| t.duration()))
+    });
+
+    // Timed: 1 s apart (every segment fits); tight: 50 ms apart, most
+    // segments too short and lengthened (`on_limit: stretch`).
+    let timed = |spacing: f64| -> Vec<Keyframe> {
+        let later = kfs.iter().enumerate().skip(1);
+        let timed = later.map(|(k, f)| f.clone().at(spacing * k as f64));
+        kfs.iter().take(1).cloned().chain(timed).collect()
+    };
+    let (spaced, tight) = (timed(1.0), timed(0.05));
+    c.bench_function("trajectory/plan_timed_18x100", |b| {
+        b.iter(|| plan(black_box(&limits), black_box(&spaced), &options).map(|t| t.duration()))
+    });
+    let stretch = PlanOptions {
+        on_limit: OnLimit::Stretch,
+        ..PlanOptions::default()
+    };
+    c.bench_function("trajectory/plan_stretch_18x100", |b| {
+        b.iter(|| plan(black_box(&limits), black_box(&tight), &stretch).map(|t| t.duration()))
     });
 
     let traj = match plan(&limits, &kfs, &options) {

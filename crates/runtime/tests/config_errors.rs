@@ -123,6 +123,17 @@ fn robot_errors_name_the_file_line_column_and_field() {
             "buses[0].joints[1].name",
             "joint name `a` is already used",
         ),
+        // a rate the baud register cannot select names the ones it can
+        // (register 6's table in the Feetech manual)
+        (
+            "baud",
+            "baud: 1000000",
+            "baud: 9600",
+            (6, 11),
+            "buses[0].baud",
+            "9600 baud is not a rate the servos can be set to; use one of 1000000, 500000, \
+             250000, 128000, 115200, 76800, 57600, 38400",
+        ),
         // type errors come from serde yaml with their position
         (
             "type",

@@ -18,19 +18,31 @@ fn yaml_files(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// The shipped files of `kind` (`robots`, `motions`), at least `expected`
+/// of them, each with its text read as plain YAML: what the file says,
+/// independently of the loader under test.
+fn shipped(kind: &str, expected: usize) -> Vec<(PathBuf, serde_yaml::Value)> {
+    let files = yaml_files(&configs().join(kind));
+    assert!(
+        files.len() >= expected,
+        "expected {expected} {kind}, found {files:?}"
+    );
+    files
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(&f).expect("readable");
+            let raw = serde_yaml::from_str(&text).expect("YAML");
+            (f, raw)
+        })
+        .collect()
+}
+
 #[test]
 fn every_robot_file_validates() {
-    let files = yaml_files(&configs().join("robots"));
-    assert!(
-        files.len() >= 4,
-        "expected the four robots, found {files:?}"
-    );
-    for f in files {
+    for (f, raw) in shipped("robots", 4) {
         let robot = load_robot(&f).unwrap_or_else(|e| panic!("{e}"));
-        // What the file says, read as plain YAML: the loader must keep
-        // every bus, joint, ID and limit as written (all in degrees).
-        let raw: serde_yaml::Value =
-            serde_yaml::from_str(&std::fs::read_to_string(&f).expect("readable")).expect("YAML");
+        // The loader must keep every bus, joint, ID and limit as written
+        // (all in degrees).
         assert_eq!(robot.name, raw["name"].as_str().expect("name"));
         assert_eq!(robot.units, Units::Deg, "{}", f.display());
         let buses = raw["buses"].as_sequence().expect("buses");
@@ -57,15 +69,8 @@ fn every_robot_file_validates() {
 
 #[test]
 fn every_motion_file_validates_against_its_robot() {
-    let files = yaml_files(&configs().join("motions"));
-    assert!(
-        files.len() >= 5,
-        "expected the five motions, found {files:?}"
-    );
-    for f in files {
+    for (f, raw) in shipped("motions", 5) {
         let (motion, robot) = load_motion(&f, None).unwrap_or_else(|e| panic!("{e}"));
-        let raw: serde_yaml::Value =
-            serde_yaml::from_str(&std::fs::read_to_string(&f).expect("readable")).expect("YAML");
         let written = raw["keyframes"].as_sequence().expect("keyframes").len();
         assert!(written >= 2, "{}", f.display());
         assert_eq!(motion.keyframes.len(), written, "{}", f.display());

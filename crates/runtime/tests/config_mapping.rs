@@ -1,7 +1,9 @@
 //! Joint angle <-> tick mapping and the last-step clamp.
 
 use servobus_protocol::registers::model_by_name;
-use servobus_runtime::config::{JointCalibration, JointConfig, JointMap, Units};
+use servobus_runtime::config::{
+    JointCalibration, JointConfig, JointMap, PlayFrame, Units, RANGE_MARGIN_DEG,
+};
 
 fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointConfig {
     JointConfig {
@@ -20,22 +22,62 @@ fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointC
     }
 }
 
+/// An STS3215 joint's calibration: the pose (0 deg) reads `pose_tick`,
+/// ticks run `direction`, measured over `range`; no homing offset.
+fn sts3215_calibration(range: [i64; 2], pose_tick: f64, direction: i8) -> JointCalibration {
+    JointCalibration {
+        name: "j".into(),
+        id: 1,
+        model: "STS3215".into(),
+        firmware: None,
+        homing_offset: 0,
+        pose_deg: 0.0,
+        pose_tick,
+        direction,
+        range,
+    }
+}
+
 /// A calibrated STS3215 joint: pose at 0 deg reads `pose_tick`, range `range`.
 fn calibrated(pose_tick: f64, direction: i8, range: [i64; 2]) -> JointConfig {
     JointConfig {
-        calibration: Some(JointCalibration {
-            name: "j".into(),
-            id: 1,
-            model: "STS3215".into(),
-            firmware: None,
-            homing_offset: 0,
-            pose_deg: 0.0,
-            pose_tick,
-            direction,
-            range,
-        }),
+        calibration: Some(sts3215_calibration(range, pose_tick, direction)),
         ..joint("sts3215", -30.0, 30.0, 0.0, false)
     }
+}
+
+#[test]
+fn a_range_across_the_seam_plays_in_a_centred_frame() {
+    let j = sts3215_calibration([3900, 4296], 4100.0, -1);
+    assert!(j.crosses_seam());
+    let f = j.play_frame();
+    let moved = j.in_frame(f);
+    assert!(!moved.crosses_seam());
+    assert_eq!(moved.range, [1850, 2246]);
+    // Angles do not change with the frame.
+    let m = j.servo_model().expect("known");
+    for t in [3900.0, 4100.0, 4296.0] {
+        let d = j.degrees_at(m, t);
+        assert!((moved.degrees_at(m, t - f.shift as f64) - d).abs() < 1e-9);
+    }
+    // 396 ticks = 34.8 deg, reversed: from pose 0 the limits are
+    // -(4296-4100) and +(4100-3900) ticks, less the margin.
+    let (lo, hi) = j.limits_deg(m);
+    let tick = 360.0 / 4096.0;
+    assert!((lo - (-196.0 * tick + RANGE_MARGIN_DEG)).abs() < 1e-9);
+    assert!((hi - (200.0 * tick - RANGE_MARGIN_DEG)).abs() < 1e-9);
+}
+
+#[test]
+fn a_range_on_one_side_keeps_its_frame() {
+    let j = sts3215_calibration([1000, 3000], 2000.0, 1);
+    assert_eq!(
+        j.play_frame(),
+        PlayFrame {
+            homing_offset: 0,
+            shift: 0
+        }
+    );
 }
 
 #[test]

@@ -108,8 +108,9 @@ pub fn stop(limits: &[JointLimits], current: &[JointState]) -> Result<Trajectory
     Ok(finish(per_joint, &hold, duration))
 }
 
-/// Pads every joint with a rest piece up to `duration`.
-fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64) -> Trajectory {
+/// The trajectory of `per_joint`, every joint padded with a rest piece at
+/// `hold[j]` up to `duration`.
+pub(crate) fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64) -> Trajectory {
     for (ps, &p) in per_joint.iter_mut().zip(hold) {
         let end = ps.last().map_or(0.0, |l| l.t1);
         if end < duration {

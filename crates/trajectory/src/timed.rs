@@ -22,17 +22,8 @@
 //! so the search ends.
 
 use crate::piece::Piece;
-use crate::profile::{rest_peak, Phases, Segment1};
+use crate::profile::{rest_peak, Phases, Profile, Segment1};
 use crate::JointLimits;
-
-/// A segment no joint can do in its time, even from rest to rest.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct TooShort {
-    /// Index of the segment in the run (segment `k` ends at keyframe `k + 1`).
-    pub segment: usize,
-    /// The shortest time the slowest joint needs, s.
-    pub needed: f64,
-}
 
 /// Halvings of a via speed before it is set to zero.
 const HALVINGS: u32 = 3;
@@ -58,45 +49,27 @@ pub(crate) fn rest_to_rest(limits: &[JointLimits], pos: &[&[f64]], k: usize) -> 
         .fold(0.0, f64::max)
 }
 
-/// The first segment of the run too short for a rest-to-rest move, if any.
-pub(crate) fn check(limits: &[JointLimits], times: &[f64], pos: &[&[f64]]) -> Option<TooShort> {
-    (0..times.len() - 1).find_map(|k| {
-        let needed = rest_to_rest(limits, pos, k);
-        let h = times[k + 1] - times[k];
-        (needed > h * (1.0 + 1e-9)).then_some(TooShort { segment: k, needed })
-    })
-}
-
-fn seg(d: f64, vin: f64, vout: f64) -> Segment1 {
-    Segment1 {
-        d: d.abs(),
-        v0: vin.abs(),
-        v1: vout.abs(),
-    }
-}
-
-/// Whether `s` can be done in `h` under `lim`.
-fn feasible(s: Segment1, lim: &JointLimits, h: f64) -> bool {
+/// A feasible profile of `s` within `h` (for [`Segment1::stretched`]), or
+/// `None` when the time-optimal one is longer. A segment that does not move
+/// fits only at rest at both ends.
+fn fit(s: Segment1, lim: &JointLimits, h: f64) -> Option<Profile> {
     if s.d == 0.0 {
-        return s.v0 == 0.0 && s.v1 == 0.0;
+        return (s.v0 == 0.0 && s.v1 == 0.0).then_some(Profile {
+            vc: 0.0,
+            duration: 0.0,
+        });
     }
-    let b = s.fastest_bounds(lim);
-    if b.upper.duration <= h {
-        return true;
-    }
-    if b.exact || b.lower > h {
-        return false;
-    }
-    s.fastest(lim).duration <= h
+    s.fits(lim, h)
 }
 
 /// Plans one run `times[0..=m]`, `pos[k][j]`, at rest at both ends, and
-/// appends the pieces to `out[j]`. Precondition: [`check`] found no
-/// segment too short.
+/// appends the pieces to `out[j]`. Precondition: no segment is shorter than
+/// its [`rest_to_rest`] time.
 pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
     let m = times.len() - 1;
     let mut via = vec![0.0; m + 1];
     let mut cuts = vec![0u32; m + 1];
+    let mut fits: Vec<Option<Profile>> = vec![None; m];
     let mut phases = Phases::new();
     for (j, lim) in limits.iter().enumerate() {
         let d = |k: usize| pos[k + 1][j] - pos[k][j];
@@ -113,12 +86,15 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
             }
         }
         // Lower the speeds at the ends of infeasible segments until every
-        // segment fits (each pass only lowers speeds; all zero fits).
+        // segment fits (each pass only lowers speeds; all zero fits). The
+        // last pass changes nothing, so it leaves each segment's profile
+        // for its final speeds in `fits`.
         let mut changed = true;
         while changed {
             changed = false;
             for k in 0..m {
-                if feasible(seg(d(k), via[k], via[k + 1]), lim, h(k)) {
+                fits[k] = fit(Segment1::between(d(k), via[k], via[k + 1]), lim, h(k));
+                if fits[k].is_some() {
                     continue;
                 }
                 for e in [k, k + 1] {
@@ -136,12 +112,15 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
         }
         for k in 0..m {
             let (vin, vout) = (via[k], via[k + 1]);
-            let s = seg(d(k), vin, vout);
+            let s = Segment1::between(d(k), vin, vout);
             if s.d == 0.0 {
                 out[j].push(Piece::hold(times[k], times[k + 1], pos[k][j]));
                 continue;
             }
-            let p = s.stretched(lim, s.fastest(lim), h(k));
+            // Every segment fits after the last pass; solving is only a
+            // fallback should that ever not hold.
+            let fastest = fits[k].unwrap_or_else(|| s.fastest(lim));
+            let p = s.stretched(lim, fastest, h(k));
             phases.n = 0;
             s.phases(lim, p, &mut phases);
             let dir = if d(k) >= 0.0 { 1.0 } else { -1.0 };

@@ -25,7 +25,7 @@
 
 use crate::error::{PlanError, Quantity};
 use crate::limits::{check_keyframe, validate_all};
-use crate::online::stop_phases;
+use crate::online::{finish, stop_phases};
 use crate::piece::Piece;
 use crate::profile::Phases;
 use crate::{retarget, JointLimits, JointState, Trajectory};
@@ -92,32 +92,22 @@ pub fn track(
     // Every joint starts at the same instant: the earliest start.
     let shift = lead.iter().copied().fold(0.0, f64::max);
     let duration = shift + tail;
-    let mut hold = Vec::with_capacity(limits.len());
-    for (pieces, &l) in per_joint.iter_mut().zip(&lead) {
-        let first = samples[0][hold.len()];
-        let last = samples[samples.len() - 1][hold.len()];
+    for (j, (pieces, &l)) in per_joint.iter_mut().zip(&lead).enumerate() {
         let offset = shift - l;
         let mut shifted = Vec::with_capacity(pieces.len() + 2);
         if offset > 0.0 {
-            shifted.push(Piece::hold(0.0, offset, first));
+            shifted.push(Piece::hold(0.0, offset, samples[0][j]));
         }
-        let mut t_end = offset;
-        for p in pieces.iter() {
-            let q = Piece {
-                t0: p.t0 + l + offset,
-                t1: p.t1 + l + offset,
-                c: p.c,
-            };
-            t_end = q.t1;
-            shifted.push(q);
-        }
-        if t_end < duration {
-            shifted.push(Piece::hold(t_end, duration, last));
-        }
+        shifted.extend(pieces.iter().map(|p| Piece {
+            t0: p.t0 + l + offset,
+            t1: p.t1 + l + offset,
+            c: p.c,
+        }));
         *pieces = shifted;
-        hold.push(last);
     }
-    let trajectory = Trajectory::from_joints(per_joint, &hold, duration, Vec::new());
+    // Every joint then rests at the recording's last position until the
+    // slowest one is done.
+    let trajectory = finish(per_joint, &samples[samples.len() - 1], duration);
     check_positions(limits, &trajectory)?;
     let (max_deviation, rms_deviation) = deviation(&trajectory, times, samples, shift, step);
     Ok(Tracked {

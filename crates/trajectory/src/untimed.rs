@@ -36,29 +36,6 @@ pub(crate) struct Scratch {
     exact: Vec<bool>,
 }
 
-fn seg(d: f64, vin: f64, vout: f64) -> Segment1 {
-    // Speeds are either zero or in the direction of motion (step 1), so
-    // after normalising the direction they are non-negative.
-    Segment1 {
-        d: d.abs(),
-        v0: vin.abs(),
-        v1: vout.abs(),
-    }
-}
-
-/// A feasible profile of `s` no longer than `limit`, if the time-optimal
-/// one is no longer: from the bounds when they decide, else solved.
-fn fits(s: Segment1, lim: &JointLimits, limit: f64) -> Option<Profile> {
-    let b = s.fastest_bounds(lim);
-    if b.upper.duration <= limit {
-        Some(b.upper)
-    } else if b.exact || b.lower > limit {
-        None
-    } else {
-        Some(s.fastest(lim)).filter(|f| f.duration <= limit)
-    }
-}
-
 /// Plans an untimed section through `pos[0..=n]` starting at `t0` at rest.
 /// Appends pieces to `out[j]`; segment durations are left in
 /// `scratch.durations`. With `stop` every keyframe is a stop (the
@@ -113,7 +90,7 @@ pub(crate) fn section(
         // the time-optimal one: solve exactly only the joints whose bounds
         // say they may be the slowest.
         let s = |j: usize| {
-            seg(
+            Segment1::between(
                 pos[k + 1][j] - pos[k][j],
                 via[k * nj + j],
                 via[(k + 1) * nj + j],
@@ -159,11 +136,14 @@ pub(crate) fn section(
                     continue;
                 }
                 let vp = v.signum() * pace;
-                let Some(before) = fits(seg(dp, via[(k - 1) * nj + j], vp), lim, durations[k - 1])
+                let Some(before) =
+                    Segment1::between(dp, via[(k - 1) * nj + j], vp).fits(lim, durations[k - 1])
                 else {
                     continue;
                 };
-                if let Some(after) = fits(seg(dn, vp, via[(k + 1) * nj + j]), lim, durations[k]) {
+                if let Some(after) =
+                    Segment1::between(dn, vp, via[(k + 1) * nj + j]).fits(lim, durations[k])
+                {
                     via[k * nj + j] = vp;
                     fastest[(k - 1) * nj + j] = before;
                     fastest[k * nj + j] = after;
@@ -178,7 +158,7 @@ pub(crate) fn section(
         for k in 0..n {
             let d = pos[k + 1][j] - pos[k][j];
             let (vin, vout) = (via[k * nj + j], via[(k + 1) * nj + j]);
-            let s = seg(d, vin, vout);
+            let s = Segment1::between(d, vin, vout);
             let p = s.stretched(lim, fastest[k * nj + j], durations[k]);
             phases.n = 0;
             if s.d == 0.0 && s.v0 == 0.0 && s.v1 == 0.0 {

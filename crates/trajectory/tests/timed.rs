@@ -236,3 +236,48 @@ fn seeded_set_of_twenty_timed_motions() {
         "the set no longer shows the spline's problem"
     );
 }
+
+/// With `on_limit: stretch`, every segment too short even from rest to
+/// rest is lengthened to exactly its rest-to-rest time (the textbook
+/// formula above), every later keyframe delayed by as much, and every
+/// segment that was long enough keeps its duration.
+#[test]
+fn stretch_lengthens_only_the_segments_too_short() {
+    let limits = [JointLimits::new(1.0, 4.0, Some(40.0))];
+    // (position, time the segment arriving here is given)
+    let plan_of = [(1.0, 0.5), (1.5, 3.0), (0.0, 0.2), (-0.5, 2.0), (1.5, 0.1)];
+    let mut keyframes = vec![Keyframe::new([0.0])];
+    let mut t = 0.0;
+    for &(p, h) in &plan_of {
+        t += h;
+        keyframes.push(Keyframe::new([p]).at(t));
+    }
+    let options = PlanOptions {
+        on_limit: servobus_trajectory::OnLimit::Stretch,
+        ..PlanOptions::default()
+    };
+    let traj = plan(&limits, &keyframes, &options).expect("stretched");
+    let segments = traj.segments();
+    assert_eq!(segments.len(), plan_of.len());
+    let mut from = 0.0;
+    let mut stretched = 0;
+    for (s, &(p, given)) in segments.iter().zip(&plan_of) {
+        let needed = rest_to_rest(p - from, &limits[0]);
+        let expected = if needed > given {
+            stretched += 1;
+            needed
+        } else {
+            given
+        };
+        let h = s.end - s.start;
+        assert!(
+            (h - expected).abs() < 1e-6 * expected,
+            "segment to keyframe {}: {h} s, expected {expected} s",
+            s.keyframe
+        );
+        from = p;
+    }
+    assert_eq!(stretched, 3, "the case must stretch several segments");
+    common::check(&traj, &limits, &[1.5], true);
+    common::check_keyframes(&traj, &keyframes);
+}

@@ -77,7 +77,6 @@ pub(crate) fn apply(mut robot: Robot, path: &Path) -> Result<Robot, ConfigError>
     }
     robot.calibration = RobotCalibration::Applied {
         path: path.to_owned(),
-        calibration: cal,
     };
     Ok(robot)
 }

@@ -260,58 +260,10 @@ fn utc_string(secs: u64) -> String {
 mod tests {
     use super::*;
 
-    fn joint(range: [i64; 2], pose_tick: f64, direction: i8) -> JointCalibration {
-        JointCalibration {
-            name: "j".into(),
-            id: 1,
-            model: "STS3215".into(),
-            firmware: None,
-            homing_offset: 0,
-            pose_deg: 0.0,
-            pose_tick,
-            direction,
-            range,
-        }
-    }
-
     #[test]
     fn dates_are_civil_utc() {
         assert_eq!(utc_string(0), "1970-01-01T00:00:00Z");
         // 2000-02-29 12:34:56 UTC, a leap day.
         assert_eq!(utc_string(951_827_696), "2000-02-29T12:34:56Z");
-    }
-
-    #[test]
-    fn a_range_across_the_seam_plays_in_a_centred_frame() {
-        let j = joint([3900, 4296], 4100.0, -1);
-        assert!(j.crosses_seam());
-        let f = j.play_frame();
-        let moved = j.in_frame(f);
-        assert!(!moved.crosses_seam());
-        assert_eq!(moved.range, [1850, 2246]);
-        // Angles do not change with the frame.
-        let m = j.servo_model().expect("known");
-        for t in [3900.0, 4100.0, 4296.0] {
-            let d = j.degrees_at(m, t);
-            assert!((moved.degrees_at(m, t - f.shift as f64) - d).abs() < 1e-9);
-        }
-        // 396 ticks = 34.8 deg, reversed: from pose 0 the limits are
-        // -(4296-4100) and +(4100-3900) ticks, less the margin.
-        let (lo, hi) = j.limits_deg(m);
-        let tick = 360.0 / 4096.0;
-        assert!((lo - (-196.0 * tick + RANGE_MARGIN_DEG)).abs() < 1e-9);
-        assert!((hi - (200.0 * tick - RANGE_MARGIN_DEG)).abs() < 1e-9);
-    }
-
-    #[test]
-    fn a_range_on_one_side_keeps_its_frame() {
-        let j = joint([1000, 3000], 2000.0, 1);
-        assert_eq!(
-            j.play_frame(),
-            PlayFrame {
-                homing_offset: 0,
-                shift: 0
-            }
-        );
     }
 }

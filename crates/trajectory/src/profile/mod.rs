@@ -1,0 +1,154 @@
+//! One joint, one segment: jerk-limited velocity profiles in closed form.
+//!
+//! A segment moves a distance `d >= 0` (after normalising the direction to
+//! positive) from speed `v0 >= 0` to speed `v1 >= 0`, with zero acceleration
+//! at both ends. Its profile is
+//!
+//! ```text
+//!  v ^        vc ____________
+//!    |   ramp A /            \ ramp B
+//!  v0|_________/              \________ v1
+//!    +----------------------------------> t
+//!       (S-curve)   cruise     (S-curve)
+//! ```
+//!
+//! where each ramp is an S-curve velocity change (jerk, constant
+//! acceleration, jerk; the middle phase vanishes for small changes and the
+//! jerk phases vanish without a jerk limit). The whole family is indexed by
+//! the cruise speed `vc`: the time-optimal profile has the largest feasible
+//! `vc`, and a longer duration `T` (to finish together with a slower joint)
+//! is met by the unique smaller `vc` whose duration is `T` — the profile is
+//! stretched, never padded with idling at the end. The duration is strictly
+//! decreasing in `vc` wherever the cruise time is non-negative, which makes
+//! the search a safe one-dimensional root find.
+//!
+//! Velocity never changes sign inside a segment, so a joint never overshoots
+//! the segment's end positions.
+//!
+//! Parts: `ramp` (one speed change, and the rest-to-rest peak speed),
+//! `fastest` (the time-optimal profile and its cheap bounds), `stretch` (a
+//! longer duration by a lower cruise speed) and `phases` (the result as
+//! constant-jerk phases and polynomial pieces).
+
+mod fastest;
+mod phases;
+mod ramp;
+mod stretch;
+
+pub(crate) use phases::Phases;
+pub(crate) use ramp::rest_peak;
+use ramp::{leg, Acc, Ramp};
+
+use crate::JointLimits;
+
+/// A normalised segment: distance `d >= 0`, boundary speeds `v0, v1 >= 0`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Segment1 {
+    pub d: f64,
+    pub v0: f64,
+    pub v1: f64,
+}
+
+/// What [`Segment1::fastest_bounds`] knows without root finding.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Bounds {
+    /// At most the time-optimal duration.
+    pub lower: f64,
+    /// A feasible profile at least as long as the time-optimal one.
+    pub upper: Profile,
+    /// `upper` is the time-optimal profile itself.
+    pub exact: bool,
+}
+
+/// The chosen profile of a segment: its cruise speed and duration.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Profile {
+    pub vc: f64,
+    pub duration: f64,
+}
+
+impl Segment1 {
+    /// The segment covering `d` (either sign) from speed `vin` to `vout`,
+    /// normalised to a positive direction. The planners give a keyframe
+    /// either no speed or one in the direction of motion, so the speeds
+    /// become non-negative.
+    #[inline]
+    pub fn between(d: f64, vin: f64, vout: f64) -> Segment1 {
+        Segment1 {
+            d: d.abs(),
+            v0: vin.abs(),
+            v1: vout.abs(),
+        }
+    }
+
+    /// A feasible profile no longer than `limit` (a cruise speed for
+    /// [`stretched`](Self::stretched)), if the time-optimal one is no
+    /// longer: from the bounds when they decide, else solved.
+    pub fn fits(&self, lim: &JointLimits, limit: f64) -> Option<Profile> {
+        let b = self.fastest_bounds(lim);
+        if b.upper.duration <= limit {
+            Some(b.upper)
+        } else if b.exact || b.lower > limit {
+            None
+        } else {
+            Some(self.fastest(lim)).filter(|f| f.duration <= limit)
+        }
+    }
+
+    /// Total ramp distance and its derivative at cruise speed `vc`.
+    #[inline(always)]
+    fn g(&self, vc: f64, c: &Acc) -> (f64, f64, f64, f64) {
+        let (ta, da, dta, dda) = leg(self.v0, vc, c);
+        let (tb, db, dtb, ddb) = leg(self.v1, vc, c);
+        (ta + tb, da + db, dta + dtb, dda + ddb)
+    }
+
+    /// Duration at cruise speed `vc > 0` and its derivative.
+    #[inline(always)]
+    fn time(&self, vc: f64, c: &Acc) -> (f64, f64) {
+        let (t, g, dt, dg) = self.g(vc, c);
+        let rest = self.d - g;
+        let inv = 1.0 / vc;
+        (t + rest * inv, dt - (dg + rest * inv) * inv)
+    }
+
+    /// The phases (duration, jerk) of the profile, for a positive direction.
+    #[inline]
+    pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
+        let (a, j) = (lim.max_acceleration, lim.jerk());
+        let ra = Ramp::new((p.vc - self.v0).abs(), a, j);
+        let rb = Ramp::new((p.vc - self.v1).abs(), a, j);
+        let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
+        let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
+        out.push_ramp(&ra, sa, j);
+        let cruise = (p.duration - ra.duration() - rb.duration()).max(0.0);
+        out.push(cruise, 0.0, 0.0);
+        out.push_ramp(&rb, sb, j);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stretched_profile_has_requested_duration_and_distance() {
+        let l = JointLimits::new(2.0, 3.0, Some(10.0));
+        let s = Segment1 {
+            d: 1.3,
+            v0: 0.4,
+            v1: 0.2,
+        };
+        let f = s.fastest(&l);
+        for k in [1.0, 1.01, 1.5, 3.0, 10.0] {
+            let p = s.stretched(&l, f, f.duration * k);
+            let mut ph = Phases::new();
+            s.phases(&l, p, &mut ph);
+            let mut out = Vec::new();
+            let (t, x, v, a) = ph.emit(0.0, 0.0, 0.4, 0.0, 1.0, true, &mut out);
+            assert!((t - f.duration * k).abs() < 1e-9, "k={k}");
+            assert!((x - 1.3).abs() < 1e-9, "k={k} x={x}");
+            assert!((v - 0.2).abs() < 1e-9 && a.abs() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! Constant-jerk phases: a profile as a list of (duration, jerk) that turns
+//! into polynomial pieces.
+
+use super::ramp::Ramp;
+use crate::piece::Piece;
+use crate::{JointLimits, JointState};
+
+/// Up to 12 constant-jerk phases: enough for a stop (3) followed by a full
+/// segment profile (7).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Phases {
+    pub n: usize,
+    pub dt: [f64; 12],
+    /// Jerk of each phase. For a jerk-free (trapezoidal) phase change the
+    /// acceleration is set directly through `acc`.
+    pub jerk: [f64; 12],
+    /// Acceleration at the start of each phase (only used when the jerk
+    /// bound is infinite: then acceleration jumps between phases).
+    pub acc: [f64; 12],
+}
+
+impl Phases {
+    #[inline]
+    pub fn new() -> Self {
+        Phases {
+            n: 0,
+            dt: [0.0; 12],
+            jerk: [0.0; 12],
+            acc: [0.0; 12],
+        }
+    }
+
+    #[inline]
+    pub fn push(&mut self, dt: f64, jerk: f64, acc: f64) {
+        if dt > 0.0 && self.n < 12 {
+            self.dt[self.n] = dt;
+            self.jerk[self.n] = jerk;
+            self.acc[self.n] = acc;
+            self.n += 1;
+        }
+    }
+
+    /// A ramp in direction `s` (+1 speeds up in the positive direction).
+    #[inline]
+    pub(super) fn push_ramp(&mut self, r: &Ramp, s: f64, j: f64) {
+        let jj = if j.is_finite() { s * j } else { 0.0 };
+        self.push(r.tj, jj, 0.0);
+        self.push(r.ta, 0.0, s * r.peak);
+        self.push(r.tj, -jj, s * r.peak);
+    }
+
+    /// [`emit`](Self::emit) from state `x` at time `t`, not mirrored, with a
+    /// finite jerk exactly when `lim` has one.
+    pub fn emit_from(
+        &self,
+        t: f64,
+        x: &JointState,
+        lim: &JointLimits,
+        out: &mut Vec<Piece>,
+    ) -> (f64, f64, f64, f64) {
+        let finite = lim.max_jerk.is_some();
+        self.emit(t, x.position, x.velocity, x.acceleration, 1.0, finite, out)
+    }
+
+    /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the
+    /// whole profile mirrored by `dir` (+1 or -1). Returns the end time and
+    /// state. With a finite jerk the acceleration is integrated (continuous);
+    /// with an infinite one it is taken from `acc`.
+    #[allow(clippy::too_many_arguments)] // a state (t, p, v, a) plus options
+    pub fn emit(
+        &self,
+        mut t: f64,
+        mut p: f64,
+        mut v: f64,
+        mut a: f64,
+        dir: f64,
+        finite_jerk: bool,
+        out: &mut Vec<Piece>,
+    ) -> (f64, f64, f64, f64) {
+        for k in 0..self.n {
+            let dt = self.dt[k];
+            let jk = dir * self.jerk[k];
+            if !finite_jerk {
+                a = dir * self.acc[k];
+            }
+            out.push(Piece::jerk(t, dt, p, v, a, jk));
+            p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
+            v += dt * (a + 0.5 * dt * jk);
+            a += dt * jk;
+            t += dt;
+        }
+        if !finite_jerk {
+            a = 0.0;
+        }
+        (t, p, v, a)
+    }
+}

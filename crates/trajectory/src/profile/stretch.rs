@@ -1,0 +1,208 @@
+//! Stretching a segment's profile to a longer duration by lowering its
+//! cruise speed: closed forms first, a safeguarded Newton search otherwise.
+
+use super::ramp::Acc;
+use super::{Profile, Segment1};
+use crate::JointLimits;
+
+impl Segment1 {
+    /// Duration at cruise speed `vc = 1 / u` and its derivative with
+    /// respect to `u`, for the stretching search. Written as
+    /// `T vc = d + sum((vc - v_i) dur_i / 2)` (the cruise covers what the
+    /// ramps, point-symmetric, do not), whose derivative
+    /// `dT/dvc = (sum(H_i') - T) / vc` with `H_i' = dur_i / 2 + |vc - v_i|
+    /// dur_i' / 2` stays accurate where a ramp vanishes (`vc` near `v_i`,
+    /// where `dur_i'` is unbounded but `|vc - v_i| dur_i'` is not).
+    #[inline(always)]
+    fn time_of_inv(&self, u: f64, c: &Acc) -> (f64, f64) {
+        let vc = 1.0 / u;
+        let mut h = self.d;
+        let mut dh = 0.0;
+        for v in [self.v0, self.v1] {
+            let e = vc - v;
+            let dv = e.abs();
+            // `dur` and `dv * d dur / d dv`.
+            let (dur, ddv) = if dv >= c.regime {
+                (dv * c.inv_a + c.k, dv * c.inv_a)
+            } else {
+                let r = 2.0 * (dv * c.j).sqrt() * c.inv_j;
+                (r, 0.5 * r)
+            };
+            h += 0.5 * e * dur;
+            dh += 0.5 * (dur + ddv);
+        }
+        let t = h * u;
+        // dT/du = -vc^2 dT/dvc = (T - sum(H_i')) vc.
+        (t, (t - dh) * vc)
+    }
+
+    /// The profile of duration exactly `t >= fastest.duration`, stretched by
+    /// lowering the cruise speed. `fastest` is the time-optimal profile or
+    /// any feasible one with a lower cruise speed (the upper bound of
+    /// [`fastest_bounds`](Self::fastest_bounds)): the search only needs a
+    /// cruise speed whose duration is at most `t`.
+    pub fn stretched(&self, lim: &JointLimits, fastest: Profile, t: f64) -> Profile {
+        if t <= fastest.duration * (1.0 + 1e-12) || fastest.vc <= 0.0 {
+            return Profile {
+                vc: fastest.vc,
+                duration: t.max(fastest.duration),
+            };
+        }
+        let (a, j) = (lim.max_acceleration, lim.jerk());
+        let acc = Acc::new(a, j);
+        if self.d <= 0.0 {
+            // Nothing to cover: only possible at rest; hold.
+            return Profile {
+                vc: 0.0,
+                duration: t,
+            };
+        }
+        let mut vc = None;
+        if self.v0 == 0.0 && self.v1 == 0.0 {
+            // Rest to rest with a constant-acceleration phase:
+            // vc^2 / a + (a / j - t) vc + d = 0, smaller root.
+            let b = t - a / j;
+            let disc = b * b - 4.0 * self.d / a;
+            if disc >= 0.0 {
+                // The smaller root, in the form without cancellation
+                // (the product of the roots is a * d).
+                let x = 2.0 * self.d / (b + disc.sqrt());
+                if x * j >= a * a && x <= fastest.vc {
+                    vc = Some(x);
+                }
+            }
+        }
+        // Every ramp reaching the acceleration limit (always so without a
+        // jerk limit) makes the duration equation a quadratic: its root,
+        // where the ramps are indeed long, is the answer. Elsewhere it is
+        // still a close first guess (long-formula ramps are slower than
+        // short ones, jerk-free ones faster: the answer lies between).
+        let model = self
+            .model_root(acc.inv_a, acc.k, t, fastest.vc)
+            .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc));
+        if vc.is_none() {
+            vc = model.filter(|&x| {
+                (x - self.v0).abs() >= acc.regime
+                    && (x - self.v1).abs() >= acc.regime
+                    && self.d - self.g(x, &acc).1 >= -1e-12 * self.d
+            });
+        }
+        let vc = match vc {
+            Some(x) => x,
+            None => {
+                // Solve in u = 1 / vc: the duration is then nearly linear
+                // (cruise time = distance * u), so Newton needs few steps.
+                // f(u) = time(1 / u) - t is increasing, <= 0 at 1 / fastest.vc.
+                let f = |u: f64| {
+                    let (tt, dt) = self.time_of_inv(u, &acc);
+                    (tt - t, dt)
+                };
+                let lo = 1.0 / fastest.vc;
+                let guess = model.map_or(t / self.d, |vc| 1.0 / vc).max(lo);
+                // No upper end known: the search finds one (f grows
+                // without bound as u does, the cruise taking ever longer).
+                1.0 / solve(f, lo, f64::INFINITY, guess, true)
+            }
+        };
+        Profile { vc, duration: t }
+    }
+
+    /// The cruise speed in `(0, hi]` of duration `t` if every ramp took
+    /// `|w - u| / a + k` (`a = 1 / inv_a`; `k = a / j`: the exact duration
+    /// of a ramp reaching the acceleration limit; `k = 0`: jerk-free), if
+    /// there is one. With `s_i = sign(vc - v_i)` the duration equation
+    /// `t vc = d + sum((vc - v_i) dur_i / 2)` is the quadratic
+    /// `A vc^2 + B vc + C = 0`, `A = (s0 + s1) / 2a`,
+    /// `B = k - t - (s0 v0 + s1 v1) / a`,
+    /// `C = d + (s0 v0^2 + s1 v1^2) / 2a - (v0 + v1) k / 2`. The duration
+    /// decreasing with `vc`, the signs follow from comparing it with `t` at
+    /// `vc = v_i`, so only one quadratic is solved.
+    fn model_root(&self, inv_a: f64, k: f64, t: f64, hi: f64) -> Option<f64> {
+        let (v0, v1, d) = (self.v0, self.v1, self.d);
+        let h = 0.5 * inv_a;
+        // `vc * (duration(vc) - t)`: positive below the root.
+        let excess = |vc: f64| {
+            let (e0, e1) = (vc - v0, vc - v1);
+            d + (e0 * e0.abs() + e1 * e1.abs()) * h + 0.5 * k * (e0 + e1) - t * vc
+        };
+        let side = |v: f64| {
+            if v <= 0.0 || (v < hi && excess(v) > 0.0) {
+                1.0
+            } else {
+                -1.0
+            }
+        };
+        let (s0, s1) = (side(v0), side(v1));
+        let qa = (s0 + s1) * h;
+        let qb = k - t - (s0 * v0 + s1 * v1) * inv_a;
+        let qc = d + (s0 * v0 * v0 + s1 * v1 * v1) * h - 0.5 * k * (v0 + v1);
+        let ok = |vc: f64| {
+            vc > 0.0
+                && vc <= hi * (1.0 + 1e-12)
+                && s0 * (vc - v0) >= -1e-12 * hi
+                && s1 * (vc - v1) >= -1e-12 * hi
+        };
+        let pick = |vc: f64| ok(vc).then(|| vc.min(hi));
+        if qa == 0.0 {
+            return pick(-qc / qb);
+        }
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc < 0.0 {
+            return None;
+        }
+        let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+        pick(q / qa).or_else(|| pick(qc / q))
+    }
+}
+
+/// Safeguarded Newton iteration on a monotone function with a bracket:
+/// `increasing` tells the sign convention (`f(lo) <= 0 <= f(hi)` when true,
+/// the reverse otherwise). Falls back to bisection whenever a Newton step
+/// leaves the bracket, so it always converges; `hi` may be infinite (then
+/// an outgoing step doubles `x` until an upper end is found, `x > 0`).
+/// Stops after a Newton step smaller than `1e-8` relative: convergence is
+/// quadratic by then, so the step left is about its square, below the
+/// rounding of the result.
+fn solve(
+    f: impl Fn(f64) -> (f64, f64),
+    mut lo: f64,
+    mut hi: f64,
+    x0: f64,
+    increasing: bool,
+) -> f64 {
+    let mut x = if hi.is_finite() {
+        x0.clamp(lo, hi)
+    } else {
+        x0.max(lo)
+    };
+    for _ in 0..200 {
+        let (fx, dfx) = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if (fx < 0.0) == increasing {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut nx = x - fx / dfx;
+        let mut newton = true;
+        if !(nx > lo && nx < hi) {
+            newton = false;
+            nx = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                2.0 * x
+            };
+        }
+        let step = (nx - x).abs();
+        if (newton && step <= 1e-8 * nx.abs())
+            || step <= 1e-13 * nx.abs()
+            || (hi.is_finite() && hi - lo <= 1e-13 * hi.abs())
+        {
+            return nx;
+        }
+        x = nx;
+    }
+    x
+}

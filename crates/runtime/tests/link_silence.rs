@@ -93,3 +93,36 @@ fn a_servo_lost_in_a_bus_stall_is_found_3_reads_after_the_bus_answers_again() {
     assert_eq!(cycles, 3);
     assert!(f.cycle >= 310 && f.cycle < 313, "cycle {}", f.cycle);
 }
+
+#[test]
+fn servos_read_in_turn_are_counted_one_by_one_even_when_a_turn_is_all_silent() {
+    // 1000 Hz is above the arm's 847 Hz maximum: with `round_robin` each
+    // cycle reads only some of the servos, so a read in which every servo
+    // asked is silent says nothing about the bus while servo 6 answers in
+    // its turn.
+    let (path, mut robot) = common::motion("arm-wave.yaml");
+    robot.buses[0].round_robin = true;
+    let (buses, mut sims) = common::sim_buses_at(&robot, &path);
+    let sim = sims.remove(0);
+    let options = RunOptions {
+        rate_hz: Some(1000.0),
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    common::record(&mut run, 50_000, |k| {
+        if k == 1000 {
+            for id in 1..=5 {
+                sim.servo(id, |s| s.set_offline(true)).expect("servo");
+            }
+        }
+    });
+    let f = run.fault().expect("the silent servos are found").clone();
+    let FaultKind::Missing { cycles, reason } = &f.kind else {
+        panic!("{f:?}");
+    };
+    assert!(f.servo_id.is_some_and(|id| (1..=5).contains(&id)), "{f:?}");
+    assert_eq!((*cycles, reason.as_str()), (3, "no reply"), "{f:?}");
+    // Found by its own count, well before a silence of the whole bus would
+    // be judged (100 ms: 100 cycles at 1000 Hz).
+    assert!(f.cycle >= 1000 && f.cycle < 1000 + 100, "cycle {}", f.cycle);
+}

@@ -99,10 +99,15 @@ impl Feedback {
             return Ok(false);
         };
         let at = clock.now();
+        // Every servo of the bus silent in one read is the link's silence,
+        // judged over time (see `Tracker::bus_silent`). A read of only some
+        // of them (round robin) or of a lone servo says nothing about the
+        // link: its silent servos are counted one by one.
+        let whole_bus = ids.len() >= 2 && ids.len() == self.ids.len();
         let silent = read
             .iter()
             .all(|r| matches!(r, Err(m) if m.reason == MissingReason::NoReply));
-        if ids.len() >= 2 && silent {
+        if whole_bus && silent {
             track.bus_silent(range, at);
             return Ok(false);
         }

@@ -67,7 +67,7 @@ pub(crate) struct Io<T, C> {
     /// The wire's speed (its baud rate; the latency is not used here).
     pub wire: Link,
     /// When the last request sent has left the host's transmitter.
-    line_free: Duration,
+    pub line_free: Duration,
 }
 
 impl<T: Transport, C: Clock> Io<T, C> {

@@ -106,3 +106,36 @@ fn a_number_in_the_robot_file_wins() {
     assert_eq!(b.startup_probes, 0);
     assert!(b.latency_us < 1.0, "{b:?}");
 }
+
+#[test]
+fn the_goals_wire_time_is_not_taken_for_the_adapters_latency() {
+    // A port whose writes return once the bytes are queued, as a real one
+    // does: the simulated servos behind `WallBus`, on a manual "wall" clock.
+    // Each cycle's SYNC READ then starts on the wire only after the SYNC
+    // WRITE of the goals (6 x 7 bytes of data, about 0.5 ms at 1 Mbaud).
+    let (path, robot) = common::motion("arm-wave.yaml");
+    let (buses, _sims) = common::sim_buses_at(&robot, &path);
+    let wall = servobus_driver::ManualClock::new();
+    let buses = buses
+        .into_iter()
+        .map(|b| {
+            let settings = *b.settings();
+            let sim = b.transport().clone();
+            servobus_driver::Bus::new(
+                servobus_sim::WallBus::new(sim, wall.clone()),
+                wall.clone(),
+                settings,
+            )
+        })
+        .collect();
+    let mut run = VirtualRun::new(&robot, path, buses, RunOptions::default()).expect("starts");
+    while run.step() {}
+    assert_eq!(run.finished(), Some(Finish::Completed));
+    let report = run.report();
+    let b = &report.buses[0];
+    // The simulated adapter adds no latency: what is learned is nothing,
+    // not the goals' half millisecond.
+    assert_eq!(b.timeouts, 0, "{b:?}");
+    assert!(b.latency_learned);
+    assert!(b.latency_us < 1.0 && b.latency_p99_us < 1.0, "{b:?}");
+}

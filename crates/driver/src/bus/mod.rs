@@ -87,6 +87,14 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         self.settings = settings;
     }
 
+    /// When the requests sent so far are through the transmitter: a write
+    /// returns once its bytes are queued, so the next request starts on the
+    /// wire then (or now, if that is later). Reply deadlines count from
+    /// there; so should any measurement of a reply's round trip.
+    pub fn line_free(&self) -> Duration {
+        self.io.line_free
+    }
+
     /// Sets the adapter latency used in every deadline.
     pub fn set_latency(&mut self, latency: Duration) {
         self.settings.link.latency = latency;

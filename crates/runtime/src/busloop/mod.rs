@@ -249,7 +249,10 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 );
                 self.bus.set_latency(wait);
             }
-            let began = self.clock.now();
+            // The read starts on the wire once this cycle's goals are
+            // through the transmitter; measured from the write call, the
+            // goals' wire time would pass for the adapter's latency.
+            let began = self.clock.now().max(self.bus.line_free());
             let read =
                 self.feedback
                     .read(&mut self.bus, &self.clock, range, budget, &mut self.track);

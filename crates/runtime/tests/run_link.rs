@@ -114,20 +114,12 @@ fn the_goals_wire_time_is_not_taken_for_the_adapters_latency() {
     // Each cycle's SYNC READ then starts on the wire only after the SYNC
     // WRITE of the goals (6 x 7 bytes of data, about 0.5 ms at 1 Mbaud).
     let (path, robot) = common::motion("arm-wave.yaml");
-    let (buses, _sims) = common::sim_buses_at(&robot, &path);
     let wall = servobus_driver::ManualClock::new();
-    let buses = buses
-        .into_iter()
-        .map(|b| {
-            let settings = *b.settings();
-            let sim = b.transport().clone();
-            servobus_driver::Bus::new(
-                servobus_sim::WallBus::new(sim, wall.clone()),
-                wall.clone(),
-                settings,
-            )
-        })
-        .collect();
+    let buses = servobus_runtime::sim::SimRobot::builder(&robot)
+        .pose(&common::start_pose(&robot, &path))
+        .build()
+        .expect("the robot simulates")
+        .wall_buses(&wall);
     let mut run = VirtualRun::new(&robot, path, buses, RunOptions::default()).expect("starts");
     while run.step() {}
     assert_eq!(run.finished(), Some(Finish::Completed));

@@ -14,16 +14,14 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
-use servobus_driver::{Bus, SystemClock, Transport};
+use servobus_driver::SystemClock;
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
-    bus_settings, spawn, spawn_virtual, Command, FaultPolicy, Finish, Lead, Report, RunOptions,
-    Runner, Telemetry,
+    spawn, spawn_virtual, Command, Finish, Lead, Report, RunOptions, Runner, Telemetry,
 };
-use servobus_sim::WallBus;
 use servobus_trajectory::Trajectory;
 
 use super::link::{every_port, open_bus, Allowance, Ports};
@@ -152,7 +150,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             core: args.core,
             fifo_priority: args.fifo,
         },
-        faults: FaultPolicy::default(),
         ..RunOptions::default()
     };
 
@@ -172,19 +169,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             // In this process, paced by the wall clock: no pty between the
             // runtime and its servos (see `servobus_sim::WallBus`).
             let clock = SystemClock::new();
-            let sim = servobus_runtime::sim::SimRobot::builder(&robot)
+            let buses = servobus_runtime::sim::SimRobot::builder(&robot)
                 .pose(&pose)
-                .build()?;
-            let buses = sim
-                .buses()
-                .iter()
-                .zip(&robot.buses)
-                .map(|(sim, bus)| {
-                    let transport: Box<dyn Transport + Send> =
-                        Box::new(WallBus::new(sim.clone(), clock));
-                    Bus::new(transport, clock, bus_settings(bus))
-                })
-                .collect();
+                .build()?
+                .wall_buses(&clock);
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {

@@ -24,8 +24,8 @@ use std::time::Duration;
 
 use crate::bus_settings;
 use crate::config::{BusConfig, JointMap, Robot};
-use servobus_driver::{Bus, ManualClock};
-use servobus_sim::{SimBus, SimModel, SimServo, Truth};
+use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_sim::{SimBus, SimModel, SimServo, Truth, WallBus};
 
 mod body;
 
@@ -184,6 +184,24 @@ impl SimRobot {
             .iter()
             .zip(&self.settings)
             .map(|(sim, settings)| Bus::new(sim.clone(), sim.clock().clone(), *settings))
+            .collect()
+    }
+
+    /// Driver buses on the simulated buses paced by the wall clock `clock`
+    /// ([`WallBus`]: the servos answer in real time, in this process), with
+    /// the robot file's settings, ready for [`crate::spawn`]. Give the run
+    /// the same clock.
+    pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>, C>> {
+        self.buses
+            .iter()
+            .zip(&self.settings)
+            .map(|(sim, settings)| {
+                Bus::new(
+                    WallBus::new(sim.clone(), clock.clone()),
+                    clock.clone(),
+                    *settings,
+                )
+            })
             .collect()
     }
 

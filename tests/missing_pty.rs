@@ -6,24 +6,16 @@
 
 mod common;
 
-use std::process::Command;
-
-use common::{num, repo, scratch, Sim, BIN};
+use common::{exited, json, num, scratch, servobus, Sim};
 
 #[test]
 fn a_servo_that_goes_silent_on_the_pty_simulator_is_missing_after_3_reads() {
     let dir = scratch("missing-pty");
     let sim = Sim::start_with(&dir, &["--faults", "vanish=4@2.0"]);
-    let motion = repo("configs/motions/arm-wave.yaml");
-    let out = Command::new(BIN)
-        .arg("play")
-        .arg(&motion)
-        .args(["--port", sim.port(), "--json"])
-        .output()
-        .expect("run servobus play");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
+    let motion = "configs/motions/arm-wave.yaml";
+    let out = servobus(&["play", motion, "--port", sim.port(), "--json"]);
+    exited(&out, 1);
+    let report = json(&out);
     let fault = &report["fault"];
     assert_eq!(fault["kind"], "missing", "{fault}");
     assert_eq!(fault["servo_id"], 4, "{fault}");

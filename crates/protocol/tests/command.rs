@@ -100,4 +100,8 @@ fn every_command_encodes_back_to_the_frame_it_was_read_from() {
             .unwrap_or_else(|e| panic!("{c:?} does not encode: {e}"));
         assert_eq!(&buf[..n], &f[..], "{c:?}");
     }
+    // One frame with its checksum worked by hand, so that a checksum the
+    // encoder and `frame` got wrong alike cannot pass: ~(3 + 4 + 2 + 56 + 2)
+    // = ~67 = 0xBC.
+    assert_eq!(frames[1], [0xFF, 0xFF, 3, 4, 0x02, 56, 2, 0xBC]);
 }

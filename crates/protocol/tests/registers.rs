@@ -111,15 +111,19 @@ fn scs_registers_moved_from_the_sts_layout() {
     // The SCS control table puts these at other addresses than STS/SMS
     // does (protection at 37 and 38 instead of 34 and 35, the lock at 48
     // instead of 55); what they are is the same.
-    for (name, scs_at, sts_at) in [
-        ("protective_torque", 37, 34),
-        ("protection_time", 38, 35),
-        ("lock", 48, 55),
+    // Sizes, kinds and units as the manual's SCS table gives them.
+    for (name, scs_at, sts_at, access, unit) in [
+        ("protective_torque", 37, 34, Access::Eeprom, "%"),
+        ("protection_time", 38, 35, Access::Eeprom, "10 ms"),
+        ("lock", 48, 55, Access::Ram, ""),
     ] {
         let (scs, sts) = (SCS.get(name).unwrap(), STS.get(name).unwrap());
         assert_eq!((scs.address, sts.address), (scs_at, sts_at), "{name}");
-        assert_eq!((scs.size, scs.access), (sts.size, sts.access), "{name}");
-        assert_eq!(scs.unit, sts.unit, "{name}");
+        assert_eq!(
+            (scs.size, scs.access, scs.unit),
+            (1, access, unit),
+            "{name}"
+        );
     }
 }
 

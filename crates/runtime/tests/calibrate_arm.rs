@@ -16,7 +16,7 @@ use std::time::Duration;
 
 use calib_play::Played;
 use servobus_driver::{Bus, Clock, ManualClock};
-use servobus_protocol::registers::{sign_magnitude, to_sign_magnitude};
+use servobus_protocol::registers::sign_magnitude;
 use servobus_runtime::calibrate::{
     calibrate, prepare_servos, write_homing, LiveJoint, Operator, Step,
 };
@@ -62,6 +62,17 @@ fn offset_of(s: &SimServo) -> i32 {
     sign_magnitude(u32::from(raw), 11)
 }
 
+/// An offset as the servo stores it, written out by hand: bit 11 is the
+/// sign, the 11 bits below it the size.
+fn sign_magnitude_raw(v: i32) -> u16 {
+    let mag = v.unsigned_abs() as u16;
+    if v < 0 {
+        mag | 1 << 11
+    } else {
+        mag
+    }
+}
+
 /// The physical angle of a servo's joint, degrees, from its sensor.
 fn truth(sim: &SimBus, id: u8, m: Mount) -> f64 {
     let sensor = sim
@@ -82,7 +93,7 @@ fn arm(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, SimBus) {
     let sim = SimBus::new(clock.clone(), bus.baud).with_servos(
         bus.joints.iter().zip(mounts()).map(|(j, m)| {
             // The offset saved in EEPROM, as set-up software leaves it.
-            let [lo, hi] = (to_sign_magnitude(m.offset, 11) as u16).to_le_bytes();
+            let [lo, hi] = sign_magnitude_raw(m.offset).to_le_bytes();
             SimServo::sts3215(j.id)
                 .with_return_delay(bus.return_delay)
                 .with_position(0)

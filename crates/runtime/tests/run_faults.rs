@@ -43,7 +43,7 @@ fn faulted_arm(
     let (mut run, sims, path) = arm(FaultPolicy::default(), Lead::default());
     let at = fastest_cycle(&path, WRIST_FLEX) - before;
     let rec = common::record_acting_at(&mut run, 5_000, at, || {
-        sims[0].servo(id, fault);
+        sims[0].servo(id, fault).expect("a servo with this ID");
     });
     (run, sims, rec, at)
 }

@@ -75,7 +75,7 @@ fn a_servo_that_stops_answering_is_still_found_within_3_cycles() {
     let (mut run, sims) = arm();
     let at = 300;
     common::record_acting_at(&mut run, 5_000, at, || {
-        sims[0].servo(4, |s| s.set_offline(true));
+        sims[0].servo(4, |s| s.set_offline(true)).expect("servo 4");
     });
     let f = run.fault().expect("the silent servo is found").clone();
     assert_eq!(f.servo_id, Some(4));

@@ -9,7 +9,6 @@ use servobus_protocol::registers::addr;
 use servobus_runtime::config::ConfigError;
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
 use servobus_runtime::VirtualRun;
-use servobus_sim::body::turn_delta;
 use servobus_trajectory::JointState;
 
 /// Ticks per degree of an STS3215.
@@ -22,7 +21,7 @@ fn raw(zero: f64, dir: f64, angle: f64) -> i32 {
 
 /// How far apart two raw ticks are, the short way round the seam.
 fn tick_diff(a: i32, b: i32) -> f64 {
-    turn_delta(f64::from(a), f64::from(b), 4096.0)
+    f64::from((a - b + 2048).rem_euclid(4096) - 2048)
 }
 
 #[test]

@@ -165,16 +165,13 @@ mod tests {
             // The fastest u32 baud: 1e10 / 4294967295 = 2.3.. -> 3.
             (u32::MAX, &[(1, 3), (frame, 604)]),
         ];
-        let mut checked = 0;
         for (baud, entries) in table {
             let l = Link::new(baud);
             for &(bytes, nanos) in entries {
                 assert_eq!(l.wire_nanos(bytes), nanos, "{bytes} bytes at {baud} baud");
                 assert_eq!(l.wire_time(bytes), Duration::from_nanos(nanos));
-                checked += 1;
             }
         }
-        assert_eq!(checked, 22, "every entry of the table was checked");
     }
 
     #[test]

@@ -173,7 +173,7 @@ pub mod scs {
         GOAL_POSITION: u16 = (42 W - 0 "goal_position" "steps" "target position, 0..=1023");
         GOAL_TIME: u16 = (44 W - 0 "goal_time" "ms" "move time (PWM in PWM mode)");
         GOAL_SPEED: u16 = (46 W - 0 "goal_speed" "steps/s" "speed limit; 0 = maximum");
-        LOCK: u8 = (48 W - 1 "lock" "" "0: EEPROM writes persist; 1: locked");
+        LOCK: u8 = (sts @ 48 1);
         PRESENT_POSITION: u16 = (56 R - 0 "present_position" "steps" "measured position");
         PRESENT_SPEED: i16 = (sts 0);
         PRESENT_LOAD: i16 = (sts 0);

@@ -16,7 +16,6 @@ use servobus_driver::{Bus, BusSettings, SerialTransport, SystemClock, TransportE
 use servobus_protocol::registers::Series;
 use servobus_runtime::bus_settings;
 use servobus_runtime::config::{BusConfig, Robot};
-use servobus_timing::Link;
 
 /// A bus on a serial port (or a simulator's pseudo-terminal).
 pub(crate) type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
@@ -48,7 +47,7 @@ impl Allowance {
         transport: &SerialTransport<SystemClock>,
     ) -> Duration {
         let floor = match self {
-            Allowance::Run if transport.is_pty() => Link::PTY_LATENCY,
+            Allowance::Run if transport.is_pty() => transport.assumed_latency(),
             Allowance::Run => Duration::ZERO,
             Allowance::Assumed => transport.assumed_latency(),
             Allowance::AtLeast(d) => d,
@@ -59,7 +58,7 @@ impl Allowance {
 
 /// The clock of every bus this process opens: one epoch, so that the buses
 /// of a robot run in step (a run's buses must share their time base).
-fn system_clock() -> SystemClock {
+pub(crate) fn system_clock() -> SystemClock {
     static CLOCK: OnceLock<SystemClock> = OnceLock::new();
     *CLOCK.get_or_init(SystemClock::new)
 }
@@ -187,6 +186,7 @@ pub(crate) fn every_port<'a>(robot: &'a Robot, port: Option<&str>) -> Ports<'a> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use servobus_timing::Link;
 
     fn two_buses(ports: [Option<&str>; 2]) -> Robot {
         let path = servobus::builtin::robot_path_or_name("hexapod-2bus".as_ref());

@@ -64,10 +64,8 @@ pub(crate) struct Io<T, C> {
     base_checksum: u64,
     /// Stale bytes dropped by the last `send`.
     stale: u64,
-    /// The wire's speed (its baud rate; the latency is not used here).
-    pub wire: Link,
     /// When the last request sent has left the host's transmitter.
-    pub line_free: Duration,
+    line_free: Duration,
 }
 
 impl<T: Transport, C: Clock> Io<T, C> {
@@ -86,7 +84,6 @@ impl<T: Transport, C: Clock> Io<T, C> {
             base_echoes: 0,
             base_checksum: 0,
             stale: 0,
-            wire: Link::new(1_000_000),
             line_free: Duration::ZERO,
         }
     }
@@ -99,14 +96,14 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.tx_len = 0;
     }
 
-    /// Drains input, then sends `tx[..tx_len]`. Returns the time sending
-    /// started, from which reply deadlines are measured: now, or when the
+    /// Drains input, then sends `tx[..tx_len]` on `wire`. Returns the time
+    /// sending started, from which reply deadlines are measured: now, or when the
     /// request before it (one nobody answers, e.g. a SYNC WRITE) has left
     /// the transmitter. A write returns once the bytes are queued, so a
     /// SYNC READ sent right after a long SYNC WRITE starts on the wire only
     /// when the SYNC WRITE is through; measured from the write call, its
     /// deadline would be short by the rest of the SYNC WRITE.
-    pub fn send(&mut self) -> Result<Duration, TransportError> {
+    pub fn send(&mut self, wire: &Link) -> Result<Duration, TransportError> {
         self.transport.discard_input()?;
         // Bytes pending in the decoder belong to an earlier exchange; they
         // count as discarded in this one, but not as garbage of its reply.
@@ -115,13 +112,19 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.base_discarded = stats.discarded_bytes;
         self.base_echoes = stats.echoes;
         self.base_checksum = stats.checksum_errors;
-        let start = self.clock.now().max(self.line_free);
+        let start = self.next_start();
         self.transport.write_all(&self.tx[..self.tx_len])?;
-        self.line_free = start + self.wire.wire_time(self.tx_len);
+        self.line_free = start + wire.wire_time(self.tx_len);
         if self.echo {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }
         Ok(start)
+    }
+
+    /// When a request sent now starts on the wire: now, or once the
+    /// requests before it are through the transmitter.
+    pub fn next_start(&self) -> Duration {
+        self.clock.now().max(self.line_free)
     }
 
     /// Feeds received bytes to `sink` until it is satisfied or `deadline`

@@ -72,6 +72,8 @@ pub(crate) struct Engine {
     /// When the bus heard its first byte (the origin of
     /// [`Faults::vanish_after`]).
     first_heard: Option<Duration>,
+    /// How many of [`Faults::vanish_after`] have vanished (sorted by time).
+    vanished: usize,
 }
 
 impl Engine {
@@ -90,6 +92,7 @@ impl Engine {
             stats: SimStats::default(),
             disconnected: false,
             first_heard: None,
+            vanished: 0,
         }
     }
 
@@ -100,6 +103,8 @@ impl Engine {
     pub(crate) fn set_faults(&mut self, faults: Faults) {
         self.rng = SmallRng::seed_from_u64(faults.seed);
         self.faults = faults;
+        self.faults.vanish_after.sort_by_key(|&(_, after)| after);
+        self.vanished = 0;
         for i in 0..self.servos.len() {
             self.apply_static_faults(i);
         }
@@ -159,15 +164,18 @@ impl Engine {
     }
 
     /// Disconnects the servos of [`Faults::vanish_after`] whose time has
-    /// come by `t`.
+    /// come by `t`; each is done once (`vanished` counts those done, in the
+    /// list's order of due times).
     fn vanish_due(&mut self, t: Duration) {
         let first = *self.first_heard.get_or_insert(t);
-        for &(id, after) in &self.faults.vanish_after {
-            if t >= first + after {
-                for s in self.servos.iter_mut().filter(|s| s.id() == id) {
-                    s.set_offline(true);
-                }
+        while let Some(&(id, after)) = self.faults.vanish_after.get(self.vanished) {
+            if t < first + after {
+                return;
             }
+            for s in self.servos.iter_mut().filter(|s| s.id() == id) {
+                s.set_offline(true);
+            }
+            self.vanished += 1;
         }
     }
 

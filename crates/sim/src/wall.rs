@@ -44,11 +44,6 @@ impl<C: Clock> WallBus<C> {
         bus
     }
 
-    /// The simulated bus, to inspect or fault its servos while a run goes.
-    pub fn sim(&self) -> &SimBus {
-        &self.sim
-    }
-
     /// Moves the simulated time up to now. It may already be ahead: a
     /// request written is on the wire until its last byte's time.
     fn catch_up(&self) {
@@ -98,17 +93,19 @@ mod tests {
         frame[..n].to_vec()
     }
 
-    fn bus(wall: &Wall) -> WallBus<Wall> {
+    /// Servo 1 behind a wall bus, and a handle on the simulated bus (a
+    /// clone shares its servos) to fault them.
+    fn bus(wall: &Wall) -> (WallBus<Wall>, SimBus) {
         let sim = SimBus::new(ManualClock::new(), 1_000_000)
             .with_servo(SimServo::sts3215(1).with_return_delay(Duration::ZERO));
-        WallBus::new(sim, wall.clone())
+        (WallBus::new(sim.clone(), wall.clone()), sim)
     }
 
     #[test]
     fn a_reply_is_handed_over_when_the_wire_has_carried_it() {
         let wall = Wall::default();
         wall.advance_to(Duration::from_millis(5));
-        let mut bus = bus(&wall);
+        let (mut bus, _) = bus(&wall);
         bus.write_all(&ping()).expect("write");
         let mut reply = [0u8; 16];
         let n = bus
@@ -143,7 +140,7 @@ mod tests {
     #[test]
     fn a_reply_due_while_the_client_slept_is_waiting_for_it() {
         let wall = Wall::default();
-        let mut bus = bus(&wall);
+        let (mut bus, _) = bus(&wall);
         bus.write_all(&ping()).expect("write");
         // The client is descheduled for 20 ms, far past its 1 ms deadline.
         wall.advance_to(Duration::from_millis(20));
@@ -158,8 +155,8 @@ mod tests {
     #[test]
     fn a_silent_servo_costs_exactly_the_deadline() {
         let wall = Wall::default();
-        let mut bus = bus(&wall);
-        bus.sim().set_faults(crate::Faults {
+        let (mut bus, sim) = bus(&wall);
+        sim.set_faults(crate::Faults {
             vanish: vec![1],
             ..crate::Faults::default()
         });
@@ -180,8 +177,8 @@ mod tests {
         assert!("vanish=1@soon".parse::<crate::Faults>().is_err());
         assert!("vanish=1@-1".parse::<crate::Faults>().is_err());
         let wall = Wall::default();
-        let mut bus = bus(&wall);
-        bus.sim().set_faults(faults);
+        let (mut bus, sim) = bus(&wall);
+        sim.set_faults(faults);
         let mut reply = [0u8; 16];
         // The first byte at 0 starts the 2 ms; at 1 ms it still answers.
         bus.write_all(&ping()).expect("write");

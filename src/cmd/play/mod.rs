@@ -14,7 +14,6 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
-use servobus_driver::SystemClock;
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
 };
@@ -168,7 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Backend::Simulated => {
             // In this process, paced by the wall clock: no pty between the
             // runtime and its servos (see `servobus_sim::WallBus`).
-            let clock = SystemClock::new();
+            let clock = super::link::system_clock();
             let buses = servobus_runtime::sim::SimRobot::builder(&robot)
                 .pose(&pose)
                 .build()?

@@ -61,7 +61,6 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     pub fn new(transport: T, clock: C, settings: BusSettings) -> Self {
         let mut io = Io::new(transport, clock);
         io.echo = settings.echo;
-        io.wire = settings.link;
         Bus {
             io,
             settings,
@@ -83,16 +82,15 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     /// or the baud rate after reopening the transport).
     pub fn set_settings(&mut self, settings: BusSettings) {
         self.io.echo = settings.echo;
-        self.io.wire = settings.link;
         self.settings = settings;
     }
 
-    /// When the requests sent so far are through the transmitter: a write
-    /// returns once its bytes are queued, so the next request starts on the
-    /// wire then (or now, if that is later). Reply deadlines count from
+    /// When a request sent now starts on the wire: now, or once the
+    /// requests already written are through the transmitter (a write
+    /// returns once its bytes are queued). Reply deadlines count from
     /// there; so should any measurement of a reply's round trip.
     pub fn line_free(&self) -> Duration {
-        self.io.line_free
+        self.io.next_start()
     }
 
     /// Sets the adapter latency used in every deadline.

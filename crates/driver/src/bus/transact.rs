@@ -82,7 +82,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 self.counters.retries += 1;
                 self.servos[id].retries += 1;
             }
-            let start = self.io.send()?;
+            let start = self.io.send(&self.settings.link)?;
             if !expect.reply {
                 return Ok(None);
             }

@@ -241,7 +241,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             &self.sync.pending,
         )?;
         let timeout = self.round_timeout(n)?;
-        let start = self.io.send()?;
+        let start = self.io.send(&self.settings.link)?;
         let mut sink = Round {
             store: &mut self.sync,
             servos: &mut self.servos,

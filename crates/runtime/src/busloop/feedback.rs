@@ -104,11 +104,12 @@ impl Feedback {
         // of them (round robin) or of a lone servo says nothing about the
         // link: its silent servos are counted one by one.
         let whole_bus = ids.len() >= 2 && ids.len() == self.ids.len();
-        let silent = read
-            .iter()
-            .all(|r| matches!(r, Err(m) if m.reason == MissingReason::NoReply));
-        if whole_bus && silent {
-            track.bus_silent(range, at);
+        let silent = || {
+            read.iter()
+                .all(|r| matches!(r, Err(m) if m.reason == MissingReason::NoReply))
+        };
+        if whole_bus && silent() {
+            track.bus_silent(at);
             return Ok(false);
         }
         let mut all = true;

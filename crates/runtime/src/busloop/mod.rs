@@ -252,7 +252,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             // The read starts on the wire once this cycle's goals are
             // through the transmitter; measured from the write call, the
             // goals' wire time would pass for the adapter's latency.
-            let began = self.clock.now().max(self.bus.line_free());
+            let began = self.bus.line_free();
             let read =
                 self.feedback
                     .read(&mut self.bus, &self.clock, range, budget, &mut self.track);
@@ -274,7 +274,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     pub fn track(&mut self, reference: &[JointState], main: bool, t: f64) -> Option<Fault> {
         let found = self.track.track(reference);
         self.lead.learn(self.track.fresh_errors(), main, t);
-        found.map(|f| self.fault(f.kind, Some(f.joint), f.reaction))
+        found.map(|f| self.fault(f.kind, f.joint, f.reaction))
     }
 
     /// The fault of a lost port, with the reaction the policy asks of the

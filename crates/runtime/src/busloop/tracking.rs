@@ -88,7 +88,7 @@ impl JointTrack {
 /// policy's reaction to it.
 #[derive(Debug)]
 pub(crate) struct Found {
-    pub joint: usize,
+    pub joint: Option<usize>,
     pub kind: FaultKind,
     pub reaction: Reaction,
 }
@@ -104,8 +104,6 @@ pub(crate) struct Tracker {
     pub stale_after: Duration,
     /// Servo readings missing after every retry.
     pub missed: u64,
-    /// When a servo of the bus last answered, on the bus's clock.
-    last_answer: Duration,
     /// Reads in a row in which no servo of the bus answered ...
     silent_reads: u32,
     /// ... and how long since one did, at the last of them.
@@ -153,7 +151,6 @@ impl Tracker {
             units: report_units,
             stale_after,
             missed: 0,
-            last_answer: Duration::ZERO,
             silent_reads: 0,
             silent_for: Duration::ZERO,
         }
@@ -170,21 +167,18 @@ impl Tracker {
     pub fn observe(&mut self, i: usize, reading: Reading) {
         if let Some(j) = self.joints.get_mut(i) {
             j.observe(reading);
-            self.last_answer = self.last_answer.max(reading.at);
             self.silent_reads = 0;
         }
     }
 
-    /// No servo of `joints` (two or more) answered a read that ended at
-    /// `at`: the bus itself is silent. The joints' own counts do not move;
+    /// No servo of the bus (two or more, all asked) answered a read that
+    /// ended at `at`: the bus itself is silent. The joints' own counts do not move;
     /// [`track`](Self::track) judges the silence by its length instead.
-    pub fn bus_silent(&mut self, joints: std::ops::Range<usize>, at: Duration) {
-        for j in self.joints.get_mut(joints).into_iter().flatten() {
-            j.why_missing = Some(MissingReason::NoReply);
-            self.missed += 1;
-        }
+    pub fn bus_silent(&mut self, at: Duration) {
+        self.missed += self.joints.len() as u64;
         self.silent_reads += 1;
-        self.silent_for = at.saturating_sub(self.last_answer);
+        let last_answer = self.joints.iter().map(|j| j.measured_at).max();
+        self.silent_for = at.saturating_sub(last_answer.unwrap_or_default());
     }
 
     /// Joint `i` was asked and gave no usable reading (`None`: it answered
@@ -236,7 +230,7 @@ impl Tracker {
         if self.silent_reads >= p.missing_cycles && self.silent_for >= p.bus_silence {
             let ms = self.silent_for.as_millis();
             found = Some(Found {
-                joint: 0,
+                joint: None,
                 kind: FaultKind::Missing {
                     cycles: self.silent_reads,
                     reason: format!(
@@ -259,7 +253,7 @@ impl Tracker {
                     reason,
                 };
                 found = Some(Found {
-                    joint: i,
+                    joint: Some(i),
                     kind,
                     reaction: p.on_missing,
                 });
@@ -274,7 +268,7 @@ impl Tracker {
             let kind = judge(j, &p, e, r.velocity, u);
             if found.is_none() {
                 found = kind.map(|(kind, reaction)| Found {
-                    joint: i,
+                    joint: Some(i),
                     kind,
                     reaction,
                 });

@@ -24,7 +24,7 @@ use std::time::Duration;
 
 use crate::bus_settings;
 use crate::config::{BusConfig, JointMap, Robot};
-use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_driver::{Bus, Clock, ManualClock, Transport};
 use servobus_sim::{SimBus, SimModel, SimServo, Truth, WallBus};
 
 mod body;
@@ -180,11 +180,7 @@ impl SimRobot {
     /// Driver buses on the simulated buses (each on its bus's own clock,
     /// with the robot file's settings), ready for [`crate::VirtualRun`].
     pub fn driver_buses(&self) -> Vec<Bus<SimBus, ManualClock>> {
-        self.buses
-            .iter()
-            .zip(&self.settings)
-            .map(|(sim, settings)| Bus::new(sim.clone(), sim.clock().clone(), *settings))
-            .collect()
+        self.buses_on(|sim| (sim.clone(), sim.clock().clone()))
     }
 
     /// Driver buses on the simulated buses paced by the wall clock `clock`
@@ -192,15 +188,18 @@ impl SimRobot {
     /// the robot file's settings, ready for [`crate::spawn`]. Give the run
     /// the same clock.
     pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>, C>> {
+        self.buses_on(|sim| (WallBus::new(sim.clone(), clock.clone()), clock.clone()))
+    }
+
+    /// One driver bus per simulated bus, on the transport and clock `on`
+    /// makes of it, with the robot file's settings.
+    fn buses_on<T: Transport, C: Clock>(&self, on: impl Fn(&SimBus) -> (T, C)) -> Vec<Bus<T, C>> {
         self.buses
             .iter()
             .zip(&self.settings)
             .map(|(sim, settings)| {
-                Bus::new(
-                    WallBus::new(sim.clone(), clock.clone()),
-                    clock.clone(),
-                    *settings,
-                )
+                let (transport, clock) = on(sim);
+                Bus::new(transport, clock, *settings)
             })
             .collect()
     }

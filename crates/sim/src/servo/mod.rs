@@ -322,7 +322,7 @@ impl SimServo {
     /// Moves the shaft to `ticks` in the present-position frame, as a hand
     /// turning the horn would (with torque on, the servo then returns to its goal).
     pub fn move_joint(&mut self, ticks: i32) {
-        let max = f64::from(self.model.model.resolution - 1);
+        let max = f64::from(self.model.model.max_position());
         let mut pos = f64::from(ticks) + f64::from(self.shift());
         pos = match &self.body {
             Some(b) if b.full_turn() => pos.rem_euclid(max + 1.0),

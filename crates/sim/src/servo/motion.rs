@@ -187,7 +187,7 @@ impl SimServo {
             full_effort_error: (1600.0 / p) * f64::from(m.model.resolution) / 4096.0,
             load: self.load,
             blocked: self.blocked,
-            max_pos: f64::from(m.model.resolution - 1),
+            max_pos: f64::from(m.model.max_position()),
             seamless: self.body.as_ref().is_some_and(Body::full_turn),
             ambient_c: self.ambient_c,
         }

@@ -1,8 +1,10 @@
-//! The robots and motions shipped in `configs/`, compiled into the program so
-//! that an installed `servobus` finds them from any directory.
+//! The robots, motions and simulator examples (mountings, hands) shipped in
+//! `configs/`, compiled into the program so that an installed `servobus`
+//! finds them from any directory.
 //!
-//! A command-line argument that names a robot or motion goes through
-//! [`robot_path_or_name`] or [`motion_path_or_name`]: an existing file wins;
+//! A command-line argument that names a robot, motion, mounting or hand goes
+//! through [`path_or_name`] (or [`robot_path_or_name`],
+//! [`motion_path_or_name`]): an existing file wins;
 //! otherwise a built-in name (`so101`, `arm-wave`) becomes the built-in file's
 //! path (`<built-in>/robots/so101.yaml`), which the loaders of
 //! `servobus_runtime::config` read like any file. A built-in motion's
@@ -19,6 +21,27 @@ pub enum Kind {
     Robot,
     /// A motion file (`configs/motions/`).
     Motion,
+    /// How the simulator's servo horns sit on their joints
+    /// (`configs/sim/*-mounting.yaml`, for `servobus sim --mounting`).
+    Mounting,
+    /// A hand that moves the simulator's torque-off joints
+    /// (`configs/sim/*-hand.yaml`, for `servobus sim --hand`).
+    Hand,
+}
+
+impl Kind {
+    /// Every kind, in the order `servobus list` shows them.
+    pub const ALL: [Kind; 4] = [Kind::Robot, Kind::Motion, Kind::Mounting, Kind::Hand];
+
+    /// The kind of the shipped file `rel` (`sim/so101-hand.yaml`).
+    fn of(rel: &str) -> Kind {
+        match rel.split_once('/') {
+            Some(("robots", _)) => Kind::Robot,
+            Some(("sim", file)) if file.ends_with("-hand.yaml") => Kind::Hand,
+            Some(("sim", _)) => Kind::Mounting,
+            _ => Kind::Motion,
+        }
+    }
 }
 
 macro_rules! shipped {
@@ -30,7 +53,7 @@ macro_rules! shipped {
     };
 }
 
-static FILES: [BuiltinFile; 9] = [
+static FILES: [BuiltinFile; 11] = [
     shipped!("robots", "so101"),
     shipped!("robots", "hexapod"),
     shipped!("robots", "hexapod-2bus"),
@@ -40,6 +63,8 @@ static FILES: [BuiltinFile; 9] = [
     shipped!("motions", "hexapod-dance"),
     shipped!("motions", "hexapod-tripod"),
     shipped!("motions", "scs-mini-nod"),
+    shipped!("sim", "so101-mounting"),
+    shipped!("sim", "so101-hand"),
 ];
 
 /// One built-in robot or motion.
@@ -47,7 +72,7 @@ static FILES: [BuiltinFile; 9] = [
 pub struct Builtin {
     /// Its name on the command line (`so101`, `arm-wave`).
     pub name: &'static str,
-    /// Robot or motion.
+    /// Robot, motion, mounting or hand.
     pub kind: Kind,
     /// The file's text.
     pub text: &'static str,
@@ -89,18 +114,14 @@ impl Builtin {
     }
 }
 
-/// Every built-in robot and motion, robots first.
+/// Every built-in file, robots first, then motions, mountings and hands.
 pub fn all() -> impl Iterator<Item = Builtin> {
     FILES.iter().filter_map(|f| {
-        let (dir, file) = f.path.split_once('/')?;
+        let (_, file) = f.path.split_once('/')?;
         let name = file.strip_suffix(".yaml")?;
-        let kind = match dir {
-            "robots" => Kind::Robot,
-            _ => Kind::Motion,
-        };
         Some(Builtin {
             name,
-            kind,
+            kind: Kind::of(f.path),
             text: f.text,
             rel: f.path,
         })
@@ -136,7 +157,10 @@ pub fn motion_path_or_name(arg: &Path) -> PathBuf {
     path_or_name(Kind::Motion, arg)
 }
 
-fn path_or_name(kind: Kind, arg: &Path) -> PathBuf {
+/// The file to load for an argument that takes a file or a built-in of
+/// `kind`: `arg` itself when it is an existing file (or not a built-in
+/// name), else the built-in of that name.
+pub fn path_or_name(kind: Kind, arg: &Path) -> PathBuf {
     if arg.exists() {
         return arg.to_owned();
     }
@@ -146,31 +170,57 @@ fn path_or_name(kind: Kind, arg: &Path) -> PathBuf {
     }
 }
 
+/// The name of the built-in file at `path` (`so101` for
+/// `<built-in>/robots/so101.yaml`), when it is one.
+pub fn builtin_name(path: &Path) -> Option<&'static str> {
+    all().find(|b| b.path() == path).map(|b| b.name)
+}
+
+/// `path` as a command line takes it: a built-in file's name, any other
+/// file's path.
+pub fn argument(path: &Path) -> String {
+    builtin_name(path).map_or_else(|| path.display().to_string(), str::to_owned)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use servobus_runtime::config::{load_motion, load_robot};
+    use servobus_runtime::sim::{Hand, Mounting};
 
     #[test]
     fn every_shipped_file_is_built_in_and_loads() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
         let mut on_disk = 0;
-        for (sub, kind) in [("robots", Kind::Robot), ("motions", Kind::Motion)] {
+        for sub in ["robots", "motions", "sim"] {
             for entry in std::fs::read_dir(dir.join(sub)).expect("configs dir") {
                 let path = entry.expect("entry").path();
                 let name = path.file_stem().and_then(|s| s.to_str()).expect("name");
-                let b = find(kind, name).unwrap_or_else(|| panic!("{name} is not built in"));
+                let b = all()
+                    .find(|b| b.name == name)
+                    .unwrap_or_else(|| panic!("{name} is not built in"));
                 assert_eq!(b.text, std::fs::read_to_string(&path).expect("read"));
                 on_disk += 1;
             }
         }
         assert_eq!(on_disk, all().count());
+        let so101 = load_robot(&robot_path_or_name(Path::new("so101"))).expect("so101");
         for b in all() {
             match b.kind {
                 Kind::Robot => drop(load_robot(&b.path()).expect("robot loads")),
                 Kind::Motion => drop(load_motion(&b.path(), None).expect("motion loads")),
+                Kind::Mounting => drop(Mounting::load(&b.path(), &so101).expect("mounting loads")),
+                Kind::Hand => drop(Hand::load(&b.path(), &so101).expect("hand loads")),
             }
         }
+        assert_eq!(
+            find(Kind::Mounting, "so101-mounting").map(|b| b.kind),
+            Some(Kind::Mounting)
+        );
+        assert_eq!(
+            find(Kind::Hand, "so101-hand").map(|b| b.kind),
+            Some(Kind::Hand)
+        );
     }
 
     #[test]
@@ -205,5 +255,18 @@ mod tests {
         assert_eq!(robot_path_or_name(&file), file);
         assert!(robot_path_or_name(Path::new("so101")).starts_with("<built-in>"));
         assert_eq!(robot_path_or_name(Path::new("nope")), Path::new("nope"));
+    }
+
+    #[test]
+    fn a_builtin_is_named_by_its_name_and_a_file_by_its_path() {
+        assert_eq!(argument(&robot_path_or_name(Path::new("so101"))), "so101");
+        assert_eq!(argument(Path::new("arm/robot.yaml")), "arm/robot.yaml");
+        let hand = path_or_name(Kind::Hand, Path::new("so101-hand"));
+        assert_eq!(argument(&hand), "so101-hand");
+        // A built-in of another kind is not found under that name.
+        assert_eq!(
+            path_or_name(Kind::Mounting, Path::new("so101-hand")),
+            Path::new("so101-hand")
+        );
     }
 }

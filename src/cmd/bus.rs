@@ -1,4 +1,5 @@
-//! The bus tools: `servobus scan`, `ping`, `read`, `write` and `set-id`.
+//! The bus tools: `servobus scan`, `ping`, `read`, `write` and `set-id`, and
+//! `servobus registers`, the register names they take.
 //!
 //! Each opens the serial port (or the simulator's pty), builds a driver
 //! [`Bus`](servobus_driver::Bus) with reply deadlines derived from the baud rate and the adapter
@@ -13,7 +14,7 @@ use anyhow::{bail, Context};
 use super::exit::input;
 
 mod regs;
-pub use regs::{read, set_id, write};
+pub use regs::{list as registers, read, set_id, write};
 use servobus_driver::BusError;
 
 use super::link::{open_plain_bus, SerialBus};
@@ -44,6 +45,7 @@ pub struct PortArgs {
 
 /// Arguments of `servobus scan`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Exit status 1 also when two servos share an ID (their replies collide).")]
 pub struct ScanArgs {
     /// Port and latency.
     #[command(flatten)]
@@ -105,6 +107,14 @@ pub struct WriteArgs {
     /// Value to write.
     #[arg(allow_negative_numbers = true)]
     pub value: i64,
+}
+
+/// Arguments of `servobus registers`.
+#[derive(Debug, clap::Args)]
+pub struct RegistersArgs {
+    /// Only this series' table: sts (STS/SMS servos) or scs.
+    #[arg(long, value_parser = ["sts", "scs"])]
+    pub series: Option<String>,
 }
 
 /// Arguments of `servobus set-id`.
@@ -322,7 +332,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     }
     for (id, baud) in &collisions {
         eprintln!(
-            "warning: ID {id} at {baud} baud: corrupted replies (checksum errors): \
+            "error: ID {id} at {baud} baud: corrupted replies (checksum errors): \
              probably two servos share this ID; connect them one at a time and use set-id"
         );
     }
@@ -337,6 +347,10 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
             args.port.port,
             baud_list(&bauds)
         );
+    }
+    if !collisions.is_empty() {
+        // A shared ID is a problem found: the servos on it cannot be used.
+        return Ok(ExitCode::from(super::exit::PROBLEM));
     }
     Ok(ExitCode::SUCCESS)
 }

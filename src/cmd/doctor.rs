@@ -1,23 +1,26 @@
 //! `servobus doctor`: checks every bus of a robot against its robot file and
 //! the usual set-up mistakes, prints each finding with the command that
 //! fixes it, and with `--fix` applies those fixes (EEPROM with
-//! unlock-write-verify-lock). The checks live in [`servobus::doctor`].
+//! unlock-write-verify-lock; homing offsets for the session unless
+//! `--write-servos`). The checks live in [`servobus::doctor`].
 
 use std::process::ExitCode;
 
 use anyhow::Context;
-use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, PortKind, Target};
+use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot};
 
 use super::link::{bus_ports, open_bus_quietly, Allowance};
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
-#[command(
-    after_help = "Exit status of doctor: 0 nothing wrong, 1 warnings only, 2 errors \
-                        found (or a usage or input error)."
-)]
+#[command(after_help = "\
+Exit status (doctor's own):
+  0  nothing wrong (information only)
+  1  warnings only
+  2  errors found, or doctor could not finish (the port failed mid-check),
+     or a usage or input error (command line, robot file, port)")]
 pub struct Args {
     /// The robot to check the buses against, its port and the calibration
     /// to check the servos against.
@@ -27,9 +30,13 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Apply the fixes that are writes (EEPROM with unlock-write-verify-lock),
-    /// then check again.
+    /// then check again. Homing offsets are set for this session only, as
+    /// play sets them (lost at power-off).
     #[arg(long)]
     pub fix: bool,
+    /// With --fix: store homing offsets in the servos' EEPROM instead.
+    #[arg(long, requires = "fix")]
+    pub write_servos: bool,
 }
 
 /// What was found on one bus.
@@ -52,8 +59,23 @@ impl BusOutcome {
     }
 }
 
-/// Runs `servobus doctor`.
+/// Exit status when doctor could not finish its checks: as for errors
+/// found, since nothing can be said about what was not checked.
+const UNFINISHED: u8 = 2;
+
+/// Runs `servobus doctor`: its exit status is its own (see `--help`), 2
+/// also when it could not finish.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    match examine_robot(&args) {
+        Ok(code) => Ok(code),
+        Err(e) => {
+            super::exit::report(&e);
+            Ok(ExitCode::from(UNFINISHED))
+        }
+    }
+}
+
+fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot_any_rate_calibrated(
         &args.robot.path,
         args.robot.hardware.calibration.as_deref(),
@@ -62,22 +84,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut outcomes = Vec::new();
     if ports.iter().all(Option::is_none) {
         let buses = servobus_runtime::sim::virtual_buses(&robot)?;
-        for (mut bus, cfg) in buses.into_iter().zip(&robot.buses) {
+        for (index, (mut bus, cfg)) in buses.into_iter().zip(&robot.buses).enumerate() {
             let target = Target {
                 port: None,
                 baud: cfg.baud,
             };
-            outcomes.push(check(
-                &mut bus,
-                &robot,
-                cfg,
-                target,
-                &PortKind::Simulator,
-                args.fix,
-            )?);
+            let kind = PortKind::Simulator;
+            outcomes.push(check(&mut bus, (&robot, index), target, &kind, args)?);
         }
     } else {
-        for (cfg, port) in robot.buses.iter().zip(ports) {
+        for (index, (cfg, port)) in robot.buses.iter().zip(ports).enumerate() {
             let Some(port) = port else {
                 eprintln!("warning: bus `{}` has no port: not checked", cfg.name);
                 continue;
@@ -89,7 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 port: Some(port),
                 baud: cfg.baud,
             };
-            outcomes.push(check(&mut bus, &robot, cfg, target, &kind, args.fix)?);
+            outcomes.push(check(&mut bus, (&robot, index), target, &kind, args)?);
         }
     }
     let standing: Vec<Finding> = outcomes
@@ -105,20 +121,30 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::from(status))
 }
 
+/// Examines the robot's bus `index` through `bus` and, with `--fix`,
+/// applies the fixes and examines it again.
 fn check<T: Transport + BaudSwitch, C: Clock>(
     bus: &mut Bus<T, C>,
-    robot: &Robot,
-    cfg: &BusConfig,
+    (robot, index): (&Robot, usize),
     target: Target,
     kind: &PortKind,
-    fix: bool,
+    args: &Args,
 ) -> anyhow::Result<BusOutcome> {
-    let context = || format!("bus `{}`", cfg.name);
+    let cfg = robot
+        .buses
+        .get(index)
+        .with_context(|| format!("the robot has no bus {index}"))?;
+    let context = || format!("bus `{}`: doctor could not finish", cfg.name);
     let first = doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?;
     let mut fixes = Vec::new();
     let mut after = None;
-    if fix && first.findings.iter().any(Finding::fixable) {
-        fixes = doctor::apply(bus, &first.findings).with_context(context)?;
+    let how = Fixing {
+        robot,
+        bus: index,
+        write_servos: args.write_servos,
+    };
+    if args.fix && first.findings.iter().any(Finding::fixable) {
+        fixes = doctor::apply(bus, &first.findings, &how).with_context(context)?;
         after = Some(doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?);
     }
     Ok(BusOutcome {

@@ -1,4 +1,4 @@
-//! `servobus list`: the built-in robots and motions.
+//! `servobus list`: the built-in robots, motions and simulator examples.
 
 use std::process::ExitCode;
 
@@ -11,13 +11,22 @@ pub struct Args {}
 /// Runs `servobus list`.
 pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
     let width = builtin::all().map(|b| b.name.len()).max().unwrap_or(0);
-    for (kind, title) in [(Kind::Robot, "Robots"), (Kind::Motion, "Motions")] {
-        println!("{title} (use the name where a file is asked for):");
+    for kind in Kind::ALL {
+        let title = match kind {
+            Kind::Robot => "Robots (use the name where a file is asked for):",
+            Kind::Motion => "Motions:",
+            Kind::Mounting => "Simulator mountings (servobus sim --mounting NAME):",
+            Kind::Hand => "Simulator hands (servobus sim --hand NAME):",
+        };
+        println!("{title}");
         for b in builtin::all().filter(|b| b.kind == kind) {
             println!("  {:width$}  {}", b.name, b.summary());
         }
         println!();
     }
-    println!("Try: servobus play arm-wave; servobus budget --robot hexapod; servobus init");
+    println!(
+        "Try: servobus play arm-wave; servobus budget --robot hexapod; servobus init;\n     \
+         servobus sim --robot so101 --mounting so101-mounting --hand so101-hand --link /tmp/arm"
+    );
     Ok(ExitCode::SUCCESS)
 }

@@ -69,6 +69,8 @@ enum Command {
     Write(bus::WriteArgs),
     /// Change a servo's ID (refuses an ID already present).
     SetId(bus::SetIdArgs),
+    /// List the register names read and write take, with addresses and units.
+    Registers(bus::RegistersArgs),
     /// Decode frames written in hex.
     Decode(decode::Args),
     /// List the built-in robots and motions.
@@ -100,6 +102,10 @@ pub fn command() -> clap::Command {
     let top_help = with_exit(Some(AFTER_HELP.to_owned()));
     top.after_help(top_help).mut_subcommands(|sub| {
         let own = sub.get_after_help().map(|h| h.to_string());
+        // A command that states its own exit status (doctor) keeps it alone.
+        if own.as_deref().is_some_and(|h| h.starts_with("Exit status")) {
+            return sub;
+        }
         let help = with_exit(own);
         sub.after_help(help)
     })
@@ -126,6 +132,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Read(args) => bus::read(args),
         Command::Write(args) => bus::write(args),
         Command::SetId(args) => bus::set_id(args),
+        Command::Registers(args) => bus::registers(args),
         Command::Decode(args) => decode::run(args),
         Command::List(args) => list::run(args),
         Command::Init(args) => init::run(args),
@@ -172,6 +179,18 @@ pub(crate) fn robot_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> 
 /// Parses a motion argument: a file, or a built-in motion's name.
 pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
+}
+
+/// Parses a simulator mounting argument: a file, or a built-in's name.
+pub(crate) fn mounting_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    use servobus::builtin::{path_or_name, Kind};
+    Ok(path_or_name(Kind::Mounting, arg.as_ref()))
+}
+
+/// Parses a simulator hand argument: a file, or a built-in's name.
+pub(crate) fn hand_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
+    use servobus::builtin::{path_or_name, Kind};
+    Ok(path_or_name(Kind::Hand, arg.as_ref()))
 }
 
 /// Fails at once, before anything moves, when the file `path` given with

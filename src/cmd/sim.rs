@@ -52,8 +52,8 @@ pub struct Args {
     pub bus: Option<String>,
     /// How each servo horn sits on its joint: a YAML file of
     /// `<joint>: {zero_tick, direction, stops: [min_deg, max_deg]}`
-    /// (see configs/sim/so101-mounting.yaml). Default: the robot file's.
-    #[arg(long, value_name = "M.yaml")]
+    /// (built-in: so101-mounting; `servobus list`). Default: the robot file's.
+    #[arg(long, value_name = "M.yaml", value_parser = super::mounting_arg)]
     pub mounting: Option<std::path::PathBuf>,
     /// A randomly assembled unit instead of --mounting: horns anywhere on
     /// the turn (some ranges across the 4095/0 seam), some directions
@@ -62,8 +62,8 @@ pub struct Args {
     pub unit: Option<u64>,
     /// A hand that moves torque-off joints along keyframes of physical
     /// angles: `{keyframes: [{at: SECONDS, pose: {<joint>: DEG}}]}`
-    /// (see configs/sim/so101-hand.yaml).
-    #[arg(long, value_name = "H.yaml")]
+    /// (built-in: so101-hand; `servobus list`).
+    #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg)]
     pub hand: Option<std::path::PathBuf>,
     /// Write the physical joint angles (deg) to this CSV, `time_s,<joint>,...`,
     /// 100 rows a second while the simulator runs.

@@ -8,7 +8,7 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx, PortKind};
-use super::{Finding, Severity};
+use super::{Finding, Severity, Step};
 
 /// How far the measured latency may exceed the robot file's before it is
 /// worth a warning (scheduling noise of the host).
@@ -29,7 +29,13 @@ pub(crate) fn firmware(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Findi
     };
     for s in servos.iter().filter(|s| s.firmware() != usual) {
         let (major, minor) = s.firmware();
-        let mut f = finding(ctx, Severity::Warning, Some(s.id), Some("firmware_major"));
+        let mut f = finding(
+            ctx,
+            Severity::Warning,
+            Step::Check,
+            Some(s.id),
+            Some("firmware_major"),
+        );
         f.problem = format!(
             "firmware {major}.{minor} differs from {}.{} on the other servos: older firmware \
              answers some instructions differently (\"incorrect status packet\")",
@@ -59,7 +65,13 @@ pub(crate) fn supply_drop(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Fi
         return;
     };
     for &(id, v) in readings.iter().filter(|r| top - r.1 >= SUPPLY_DROP_DV) {
-        let mut f = finding(ctx, Severity::Warning, Some(id), Some("present_voltage"));
+        let mut f = finding(
+            ctx,
+            Severity::Warning,
+            Step::Check,
+            Some(id),
+            Some("present_voltage"),
+        );
         f.problem = format!(
             "supply reads {:.1} V here but {:.1} V at servo {top_id}: the wiring drops {:.1} V \
              before any load, more while moving",
@@ -85,12 +97,12 @@ pub(crate) fn latency<T: Transport, C: Clock>(
 ) -> Result<(), BusError> {
     if let PortKind::Serial(Some(ftdi)) = kind {
         if ftdi.is_too_high() {
-            let mut f = finding(ctx, Severity::Warning, None, None);
+            let mut f = finding(ctx, Severity::Warning, Step::Check, None, None);
             f.problem = format!(
                 "the FTDI adapter's latency timer is {} ms: every reply waits that long",
                 ftdi.latency.as_millis()
             );
-            f.fix = format!("echo 1 | sudo tee {}", ftdi.sysfs_path.display());
+            f.run(format!("echo 1 | sudo tee {}", ftdi.sysfs_path.display()));
             out.push(f);
         }
     }
@@ -114,26 +126,30 @@ pub(crate) fn latency<T: Transport, C: Clock>(
     };
     let configured = ctx.bus.latency;
     let us = |d: Duration| d.as_micros();
-    let mut f = finding(ctx, Severity::Info, Some(first.id), None);
+    let mut f = finding(ctx, Severity::Info, Step::Check, Some(first.id), None);
+    let assumed = if ctx.bus.latency_auto {
+        // `auto` is no figure: the run measures the link and follows it.
+        "the robot file's `latency_us: auto` measures it when a run starts and follows it".into()
+    } else {
+        format!("the robot file assumes {} us", us(configured))
+    };
     f.problem = format!(
-        "round trip beyond the wire: {}..{} us (mean {} us); the robot file assumes {} us",
+        "round trip beyond the wire: {}..{} us (mean {} us); {assumed}",
         us(m.min),
         us(m.max),
         us(m.mean),
-        us(configured)
     );
     if *kind == PortKind::Pty {
         f.problem
             .push_str(" (a pseudo-terminal: the host's scheduling, not an adapter)");
-    } else if m.mean > configured + LATENCY_SLACK {
+    } else if !ctx.bus.latency_auto && m.mean > configured + LATENCY_SLACK {
         f.severity = Severity::Warning;
         // Rounded up to 100 us.
         let want = m.max.as_micros().div_ceil(100) * 100;
-        f.fix = format!(
-            "set `latency_us: {want}` on bus `{}` in {}",
-            ctx.bus.name,
-            ctx.robot.path.display()
-        );
+        f.fix = ctx.edit_robot_file(&format!(
+            "set `latency_us: {want}` (or `auto`) on bus `{}`",
+            ctx.bus.name
+        ));
     }
     out.push(f);
     Ok(())

@@ -4,10 +4,10 @@
 
 use servobus_protocol::registers::{self, Register, Series};
 use servobus_protocol::StatusFlags;
-use servobus_runtime::config::{JointConfig, JointMap};
+use servobus_runtime::config::{JointConfig, JointMap, RobotCalibration};
 
 use super::probe::Ctx;
-use super::{Action, Finding, Severity};
+use super::{Action, Finding, Severity, Step};
 
 /// Bytes read from each servo: from the firmware version (0) to the status
 /// and moving flags (65, 66) and, on STS/SMS, the present current (69, 70).
@@ -113,25 +113,31 @@ const WARM_MARGIN_C: i32 = 10;
 const OUTSIDE_TOLERANCE_RAD: f64 = 1.0 * std::f64::consts::PI / 180.0;
 
 impl Ctx<'_> {
-    fn finding(&self, severity: Severity, id: u8, register: Option<&'static str>) -> Finding {
-        Finding {
-            severity,
-            bus: self.bus.name.clone(),
-            id: Some(id),
-            register,
-            problem: String::new(),
-            fix: String::new(),
-            action: None,
-        }
+    fn finding(
+        &self,
+        severity: Severity,
+        step: Step,
+        id: u8,
+        register: Option<&'static str>,
+    ) -> Finding {
+        super::probe::finding(self, severity, step, Some(id), register)
     }
 
     /// A finding fixed by writing `value` into `register`.
-    fn write_fix(&self, severity: Severity, s: &ServoState, name: &str, value: i32) -> Finding {
+    fn write_fix(
+        &self,
+        severity: Severity,
+        step: Step,
+        s: &ServoState,
+        name: &str,
+        value: i32,
+    ) -> Finding {
         let reg = s.register(name);
-        let mut f = self.finding(severity, s.id, reg.map(|r| r.name));
-        f.fix = self
-            .target
-            .write_command(s.id, reg.map_or(name, |r| r.name), value);
+        let mut f = self.finding(severity, step, s.id, reg.map(|r| r.name));
+        f.run(
+            self.target
+                .write_command(s.id, reg.map_or(name, |r| r.name), value),
+        );
         let silent = s.value("status_level") == Some(0);
         f.action = reg.map(|register| Action::Write {
             id: s.id,
@@ -155,17 +161,20 @@ impl Ctx<'_> {
             if s.model_number() != joint.model.number {
                 let found = registers::model_by_number(s.model_number())
                     .map_or_else(|| format!("model #{}", s.model_number()), |m| m.name.into());
-                let mut f = self.finding(Severity::Error, s.id, Some("model_number"));
+                let mut f =
+                    self.finding(Severity::Error, Step::Connect, s.id, Some("model_number"));
                 f.problem = format!(
                     "servo {} is a {found}, the robot file says {} for joint `{}`",
                     s.id, joint.model.name, joint.name
                 );
                 f.fix = format!(
-                    "fit a {} or set `model: {}` for joint `{}` in {}",
+                    "fit a {}, or {}",
                     joint.model.name,
-                    found.to_ascii_lowercase(),
-                    joint.name,
-                    self.robot.path.display()
+                    self.edit_robot_file(&format!(
+                        "set `model: {}` for joint `{}`",
+                        found.to_ascii_lowercase(),
+                        joint.name
+                    ))
                 );
                 out.push(f);
                 // The other registers mean other things on another model.
@@ -191,37 +200,122 @@ impl Ctx<'_> {
         };
         let want = cal.play_frame().homing_offset;
         if let Some(offset) = s.value("offset").filter(|&o| o != want) {
-            let mut f = self.write_fix(Severity::Error, s, "offset", want);
-            f.problem = format!(
-                "homing offset is {offset}, joint `{}`'s calibration plays with {want}: the \
-                 servo was re-homed or replaced since, so every angle is off by {} ticks",
-                joint.name,
-                offset - want
-            );
-            out.push(f);
+            out.push(self.offset_finding(s, joint, offset, cal.homing_offset, want));
         }
         let (major, minor) = s.firmware();
         let now = format!("{major}.{minor}");
         if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
-            let mut f = self.finding(Severity::Warning, s.id, Some("firmware_major"));
+            let mut f = self.finding(
+                Severity::Warning,
+                Step::Calibrate,
+                s.id,
+                Some("firmware_major"),
+            );
             f.problem = format!(
                 "firmware is {now}, joint `{}` was calibrated on {then}: the servo may have been \
                  replaced",
                 joint.name
             );
-            f.fix = self.calibrate_command();
+            f.run_in("if it was, calibrate again: {}", self.calibrate_command());
             out.push(f);
         }
     }
 
-    /// `servobus calibrate` for this robot and port.
+    /// Servo `s` holds homing offset `offset` where its joint's calibration
+    /// plays with `want` and was taken with `taken`.
+    ///
+    /// The calibration's own offset is what a servo holds after a power-up
+    /// when its range crosses the seam: play sets the play frame's for the
+    /// session, so nothing is wrong. Any other offset was written since
+    /// (another tool's calibration) or belongs to another servo: play
+    /// refuses it.
+    fn offset_finding(
+        &self,
+        s: &ServoState,
+        joint: &JointConfig,
+        offset: i32,
+        taken: i32,
+        want: i32,
+    ) -> Finding {
+        let session = offset == taken;
+        let severity = if session {
+            Severity::Info
+        } else {
+            Severity::Error
+        };
+        let register = s.register("offset");
+        let mut f = self.finding(severity, Step::Calibrate, s.id, register.map(|r| r.name));
+        f.action = Some(Action::Offset {
+            id: s.id,
+            value: want,
+            store_only: !session,
+            series: s.series,
+        });
+        if session {
+            f.problem = format!(
+                "homing offset {offset} is not set for this session: joint `{}`'s range crosses \
+                 the seam and plays with {want}, which play sets (until power-off)",
+                joint.name
+            );
+            f.run_in(
+                "nothing to do before play; to set it now: {}",
+                self.target.fix_all_command(&self.robot_arg(), false),
+            );
+        } else {
+            f.problem = format!(
+                "homing offset is {offset}, joint `{}`'s calibration was taken with {taken}{}: \
+                 the offset was rewritten since (by another tool?) or the servo was replaced, \
+                 so play refuses it",
+                joint.name,
+                if want == taken {
+                    String::new()
+                } else {
+                    format!(" and plays with {want}")
+                }
+            );
+            f.run_in(
+                &format!(
+                    "if only the offset was rewritten, store the calibration's in EEPROM: {{}}; \
+                     if the servo or its horn was replaced, calibrate again: {}",
+                    self.calibrate_command()
+                ),
+                self.target.write_command(s.id, "offset", want),
+            );
+        }
+        f
+    }
+
+    /// The robot as the command line names it: a built-in's name, else
+    /// its file.
+    pub(crate) fn robot_arg(&self) -> String {
+        crate::builtin::argument(&self.robot.path)
+    }
+
+    /// `servobus calibrate` for this robot and port, with where the
+    /// calibration goes.
     pub(crate) fn calibrate_command(&self) -> String {
+        let out = match &self.robot.calibration {
+            RobotCalibration::Missing(path) => path.display().to_string(),
+            _ => "calibration.yaml".into(),
+        };
         format!(
-            "servobus calibrate --robot {} {}",
-            self.robot.path.display(),
+            "servobus calibrate --robot {} {} -o {out}",
+            self.robot_arg(),
             // calibrate takes the baud rate from the robot file.
             self.target.port_args(super::probe::TOOLS_DEFAULT_BAUD)
         )
+    }
+
+    /// What to do to change the robot file: edit it, or for a built-in
+    /// robot, write a copy to edit with `servobus init` first.
+    pub(crate) fn edit_robot_file(&self, change: &str) -> String {
+        match crate::builtin::builtin_name(&self.robot.path) {
+            Some(name) => format!(
+                "the built-in robot cannot be edited: `servobus init --robot {name}` writes \
+                 robot.yaml; {change} there and pass --robot robot.yaml"
+            ),
+            None => format!("{change} in {}", self.robot.path.display()),
+        }
     }
 
     fn reply_settings(&self, s: &ServoState, out: &mut Vec<Finding>) {
@@ -233,7 +327,7 @@ impl Ctx<'_> {
             } else {
                 Severity::Warning
             };
-            let mut f = self.write_fix(severity, s, "return_delay", 0);
+            let mut f = self.write_fix(severity, Step::Configure, s, "return_delay", 0);
             f.problem = format!(
                 "return delay is {us} us (the robot file expects {expected} us): every reply \
                  waits that long{}",
@@ -252,7 +346,7 @@ impl Ctx<'_> {
             Series::Scs => 2,
         };
         if let Some(level) = s.value("status_level").filter(|&l| l < full) {
-            let mut f = self.write_fix(Severity::Warning, s, "status_level", full);
+            let mut f = self.write_fix(Severity::Warning, Step::Configure, s, "status_level", full);
             f.problem = format!(
                 "status return level is {level}: the servo does not answer WRITE, so a write \
                  cannot be confirmed (the driver expects level {full})"
@@ -263,7 +357,7 @@ impl Ctx<'_> {
 
     fn lock(&self, s: &ServoState, out: &mut Vec<Finding>) {
         if s.value("lock") == Some(0) {
-            let mut f = self.write_fix(Severity::Warning, s, "lock", 1);
+            let mut f = self.write_fix(Severity::Warning, Step::Configure, s, "lock", 1);
             f.problem = "EEPROM lock left open: any write to a setting (ID, limits, baud rate) \
                          persists, stray ones included"
                 .into();
@@ -282,12 +376,12 @@ impl Ctx<'_> {
                 } else {
                     Severity::Warning
                 };
-                let mut f = self.finding(sev, s.id, Some("present_temperature"));
+                let mut f = self.finding(sev, Step::Check, s.id, Some("present_temperature"));
                 f.problem = format!(
                     "temperature {t} C, limit {limit} C{}",
                     if hot { " (overheat)" } else { "" }
                 );
-                f.fix = format!("let it cool with the torque off: {torque_off}");
+                f.run_in("let it cool with the torque off: {}", torque_off);
                 out.push(f);
             }
         }
@@ -306,7 +400,7 @@ impl Ctx<'_> {
         let rated = joint.and_then(|j| rated_voltage_dv(j.model.name));
         let model = joint.map_or("servo", |j| j.model.name);
         if s.flags.contains(StatusFlags::VOLTAGE) || v < lo || v > hi {
-            let mut f = self.finding(Severity::Error, s.id, Some("present_voltage"));
+            let mut f = self.finding(Severity::Error, Step::Check, s.id, Some("present_voltage"));
             f.problem = format!(
                 "supply {:.1} V {when} is outside the servo's limits {:.1}..{:.1} V (voltage flag)",
                 volts(v),
@@ -318,7 +412,12 @@ impl Ctx<'_> {
         } else if let Some((rlo, rhi)) =
             rated.filter(|&(a, b)| v < i32::from(a) || v > i32::from(b))
         {
-            let mut f = self.finding(Severity::Warning, s.id, Some("present_voltage"));
+            let mut f = self.finding(
+                Severity::Warning,
+                Step::Check,
+                s.id,
+                Some("present_voltage"),
+            );
             f.problem = format!(
                 "supply {:.1} V {when} is outside the {model}'s rating {:.1}..{:.1} V",
                 volts(v),
@@ -344,7 +443,7 @@ impl Ctx<'_> {
                     ("max_angle_limit", max, hi, max < hi),
                 ] {
                     if narrow {
-                        let mut f = self.write_fix(Severity::Error, s, name, want);
+                        let mut f = self.write_fix(Severity::Error, Step::Configure, s, name, want);
                         f.problem = format!(
                             "{name} is {reg} ticks, narrower than joint `{}`'s limits \
                              ({} ticks): the servo stops short of goals the runtime sends",
@@ -355,11 +454,14 @@ impl Ctx<'_> {
                 }
             }
         }
-        if let Some(pos) = s.value("present_position") {
-            let rad = map.from_ticks(pos);
+        // Without a calibration a real joint's angle means nothing yet: the
+        // advice is to calibrate (see `uncalibrated`), not to move it.
+        if let (Some(pos), false) = (s.value("present_position"), self.uncalibrated()) {
+            let rad = map.from_ticks(play_frame_tick(s, joint, pos));
             let (min, max) = (units.to_rad(joint.min), units.to_rad(joint.max));
             if rad < min - OUTSIDE_TOLERANCE_RAD || rad > max + OUTSIDE_TOLERANCE_RAD {
-                let mut f = self.finding(Severity::Error, s.id, Some("present_position"));
+                let mut f =
+                    self.finding(Severity::Error, Step::Check, s.id, Some("present_position"));
                 f.problem = format!(
                     "joint `{}` is at {:.1} {units} ({pos} ticks), outside its limits {}..{} {units}",
                     joint.name,
@@ -367,9 +469,9 @@ impl Ctx<'_> {
                     joint.min,
                     joint.max
                 );
-                f.fix = format!(
+                f.run_in(
                     "turn the torque off ({}) and move the joint into its limits by hand",
-                    self.target.write_command(s.id, "torque_enable", 0)
+                    self.target.write_command(s.id, "torque_enable", 0),
                 );
                 out.push(f);
             }
@@ -386,8 +488,13 @@ impl Ctx<'_> {
                 } else {
                     Severity::Warning
                 };
-                let mut f =
-                    self.write_fix(sev, s, "unloading_condition", i32::from(mask | MUST_UNLOAD));
+                let mut f = self.write_fix(
+                    sev,
+                    Step::Configure,
+                    s,
+                    "unloading_condition",
+                    i32::from(mask | MUST_UNLOAD),
+                );
                 f.problem = format!(
                     "unloading condition {mask:#04x} lacks overheat or overload: a stalled \
                      servo keeps its torque until it is damaged"
@@ -400,7 +507,7 @@ impl Ctx<'_> {
         }
         for (name, most) in GRIPPER_LIMITS {
             if let Some(v) = s.value(name).filter(|&v| v > most) {
-                let mut f = self.write_fix(Severity::Warning, s, name, most);
+                let mut f = self.write_fix(Severity::Warning, Step::Configure, s, name, most);
                 f.problem = format!(
                     "gripper `{}`: {name} is {v} (at most {most} keeps a gripper that holds an \
                      object from overheating)",
@@ -409,6 +516,26 @@ impl Ctx<'_> {
                 out.push(f);
             }
         }
+    }
+}
+
+/// Present position `pos` of servo `s` as it reads in its joint's play
+/// frame: a servo whose homing offset is not the play frame's yet (play
+/// sets it) reads the same shaft angle `offset - want` ticks higher.
+fn play_frame_tick(s: &ServoState, joint: &JointConfig, pos: i32) -> i32 {
+    let want = joint
+        .calibration
+        .as_ref()
+        .map(|c| c.play_frame().homing_offset);
+    match (
+        s.value("offset"),
+        want,
+        i32::try_from(joint.model.resolution),
+    ) {
+        (Some(offset), Some(want), Ok(turn)) if offset != want && turn > 0 => {
+            (pos + offset - want).rem_euclid(turn)
+        }
+        _ => pos,
     }
 }
 

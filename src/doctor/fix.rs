@@ -1,12 +1,17 @@
 //! `--fix`: the writes that repair what the checks found. EEPROM registers
 //! are written with unlock-write-verify-lock; a baud-rate change is the same
-//! transaction split across the two rates.
+//! transaction split across the two rates. Homing offsets are set for the
+//! session, as play sets them (lock closed: nothing persists), unless
+//! [`Fixing::write_servos`] asks for EEPROM.
 
 use servobus_driver::{Bus, BusError, Clock, StatusLevel, Transport, PATIENCE, PATIENT_TRIES};
 use servobus_protocol::registers::addr;
 
+use servobus_protocol::registers::Series;
+use servobus_runtime::calibrate::{prepare_bus, Refusal};
+
 use super::probe::{switch, MAX_RETURN_DELAY};
-use super::{Action, BaudSwitch, Finding};
+use super::{Action, BaudSwitch, Finding, Fixing};
 
 /// What became of one fix.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -19,24 +24,36 @@ pub struct FixOutcome {
     pub result: Result<(), String>,
 }
 
-/// Applies the fix of every fixable finding, servos at another baud rate
-/// first (so the others can reach them) and the EEPROM lock last. The bus's
-/// settings are left as they were.
+/// Applies the fix of every fixable finding of the bus `how.bus`, servos at
+/// another baud rate first (so the others can reach them), the EEPROM lock
+/// last, and the session's homing offsets after every EEPROM write (they
+/// are set with the lock closed). A homing offset play would refuse is
+/// fixed only by storing it (`how.write_servos`); without that it is left
+/// alone. The bus's settings are left as they were.
 ///
 /// # Errors
 /// Only when the transport fails; a fix that fails is an outcome.
 pub fn apply<T: Transport + BaudSwitch, C: Clock>(
     bus: &mut Bus<T, C>,
     findings: &[Finding],
+    how: &Fixing<'_>,
 ) -> Result<Vec<FixOutcome>, BusError> {
     let saved = *bus.settings();
-    let mut todo: Vec<&Finding> = findings.iter().filter(|f| f.fixable()).collect();
+    let mut todo: Vec<&Finding> = findings
+        .iter()
+        .filter(|f| match f.action {
+            Some(Action::Offset { store_only, .. }) => how.write_servos || !store_only,
+            other => other.is_some(),
+        })
+        .collect();
     todo.sort_by_key(|f| match f.action {
         Some(Action::Baud { .. }) => 0,
         Some(Action::Write { register, .. }) if register.name == "lock" => 2,
+        Some(Action::Offset { .. }) if !how.write_servos => 3,
         _ => 1,
     });
     let mut out = Vec::new();
+    let mut session_set = false;
     for f in todo {
         let Some(action) = f.action else { continue };
         // Patient, as the examination: a write must not fail on a slow reply.
@@ -66,6 +83,31 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
             Action::Baud { id, baud, index } => {
                 (id, change_baud(bus, id, baud, index, saved.link.baud))
             }
+            Action::Offset {
+                id, value, series, ..
+            } if how.write_servos => (id, store_offset(bus, id, value, series)),
+            Action::Offset { id, .. } => {
+                // Play's own routine, once for the bus: it sets every
+                // calibrated servo's session offset.
+                let result = if session_set {
+                    Ok(())
+                } else {
+                    session_set = true;
+                    session_offsets(bus, how)
+                };
+                match result {
+                    Err(SessionError::Bus(e)) => (id, Err(e)),
+                    Err(SessionError::Refused(why)) => {
+                        out.push(FixOutcome {
+                            id,
+                            command: f.fix.clone(),
+                            result: Err(why),
+                        });
+                        continue;
+                    }
+                    Ok(()) => (id, Ok(())),
+                }
+            }
         };
         match result {
             Err(BusError::Transport(e)) => {
@@ -81,6 +123,47 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
     }
     bus.set_settings(saved);
     Ok(out)
+}
+
+/// Why the session's offsets could not be set.
+enum SessionError {
+    /// The bus failed.
+    Bus(BusError),
+    /// Play's checks refused the robot (the reason).
+    Refused(String),
+}
+
+/// Sets the homing offsets of the bus's calibrated servos for the session,
+/// with the routine play runs before it moves.
+fn session_offsets<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    how: &Fixing<'_>,
+) -> Result<(), SessionError> {
+    prepare_bus(how.robot, how.bus, bus).map_err(|refusal| match refusal {
+        Refusal::Bus {
+            source: BusError::Transport(e),
+            ..
+        } => SessionError::Bus(BusError::Transport(e)),
+        other => SessionError::Refused(other.to_string()),
+    })
+}
+
+/// Stores homing offset `value` in servo `id`'s EEPROM
+/// (unlock-write-verify-lock).
+fn store_offset<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    id: u8,
+    value: i32,
+    series: Series,
+) -> Result<(), BusError> {
+    let register = series
+        .map()
+        .get("offset")
+        .ok_or(BusError::InvalidRequest("no homing offset on this series"))?;
+    let mut s = *bus.settings();
+    s.series = series;
+    bus.set_settings(s);
+    bus.write_register(id, register, value).map(|_| ())
 }
 
 /// Unlocks servo `id` at `baud`, writes the bus's baud-rate index, then

@@ -20,10 +20,12 @@ mod probe;
 use serde::Serialize;
 use servobus_driver::{SerialTransport, TransportError};
 use servobus_protocol::registers::{Register, Series};
+use servobus_runtime::config::Robot;
 use servobus_sim::SimBus;
 
 pub use checks::{rated_voltage_dv, ServoState};
 pub use fix::{apply, FixOutcome};
+pub use probe::fix_all_command;
 pub use probe::{examine, Examined, PortKind, Target};
 
 /// How bad a finding is.
@@ -46,6 +48,22 @@ impl std::fmt::Display for Severity {
             Severity::Error => "error",
         })
     }
+}
+
+/// Where a finding belongs in the set-up of a new robot: the order a new
+/// arm needs the advice in (findings are listed in this order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Step {
+    /// Every servo answers, alone, at its ID and the bus's baud rate, and is
+    /// the model the robot file names.
+    Connect,
+    /// The servos' settings: reply delay and level, lock, limits, protection.
+    Configure,
+    /// The calibration and the homing offsets it plays with.
+    Calibrate,
+    /// Health and timing: temperature, supply, firmware, pose, latency.
+    Check,
 }
 
 /// What `--fix` does about a finding.
@@ -76,6 +94,33 @@ pub enum Action {
         /// The bus's baud-rate index to write.
         index: u8,
     },
+    /// Servo `id`'s homing offset should be `value` (the calibration's play
+    /// frame): set for this session as play sets it (lock closed), or,
+    /// with [`Fixing::write_servos`], stored in its EEPROM.
+    Offset {
+        /// The servo.
+        id: u8,
+        /// The offset the calibration plays with.
+        value: i32,
+        /// Whether only storing it is a fix: the servo holds neither the
+        /// calibration's offset nor the play frame's, so play refuses it
+        /// and a session offset would not be accepted.
+        store_only: bool,
+        /// The servo's series.
+        series: Series,
+    },
+}
+
+/// How `--fix` applies the fixes of one bus.
+#[derive(Debug, Clone, Copy)]
+pub struct Fixing<'a> {
+    /// The robot (its calibration sets the session offsets).
+    pub robot: &'a Robot,
+    /// The index of the bus in the robot file.
+    pub bus: usize,
+    /// Store homing offsets in EEPROM (`--write-servos`) instead of
+    /// setting them for the session only.
+    pub write_servos: bool,
 }
 
 /// One thing found wrong (or worth knowing) about a bus.
@@ -83,6 +128,8 @@ pub enum Action {
 pub struct Finding {
     /// How bad it is.
     pub severity: Severity,
+    /// Where it belongs in setting a robot up.
+    pub step: Step,
     /// The robot file's bus.
     pub bus: String,
     /// The servo, when it concerns one.
@@ -91,8 +138,12 @@ pub struct Finding {
     pub register: Option<&'static str>,
     /// What is wrong.
     pub problem: String,
-    /// The command that fixes it, or what to do when no command can.
+    /// What to do about it: the command that fixes it, or the steps, with
+    /// the command among them.
     pub fix: String,
+    /// The command that fixes it, exactly as it runs (it appears in `fix`);
+    /// `None` when the fix is done by hand.
+    pub command: Option<String>,
     /// What `--fix` does about it, if anything.
     #[serde(skip)]
     pub action: Option<Action>,
@@ -102,6 +153,18 @@ impl Finding {
     /// Whether `--fix` can apply the fix.
     pub fn fixable(&self) -> bool {
         self.action.is_some()
+    }
+
+    /// Sets the fix to `command` alone.
+    pub(crate) fn run(&mut self, command: String) {
+        self.fix.clone_from(&command);
+        self.command = Some(command);
+    }
+
+    /// Sets the fix to `text` around `command` (`{}` in `text` marks where).
+    pub(crate) fn run_in(&mut self, text: &str, command: String) {
+        self.fix = text.replacen("{}", &command, 1);
+        self.command = Some(command);
     }
 }
 

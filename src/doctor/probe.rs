@@ -9,11 +9,11 @@ use servobus_driver::{
 };
 use servobus_protocol::registers::{self, addr, Series};
 use servobus_protocol::MAX_ID;
-use servobus_runtime::config::{BusConfig, Robot, RobotCalibration};
+use servobus_runtime::config::{BusConfig, JointConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, BaudSwitch, Finding, Severity};
+use super::{Action, BaudSwitch, Finding, Severity, Step};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -64,6 +64,24 @@ impl Target {
             self.port_args(self.baud)
         )
     }
+
+    /// `servobus doctor --fix` for the robot `robot` (as the command line
+    /// names it) on this port, storing homing offsets in EEPROM when
+    /// `write_servos`.
+    pub fn fix_all_command(&self, robot: &str, write_servos: bool) -> String {
+        format!(
+            "servobus doctor --robot {robot} {} --fix{}",
+            // doctor takes the baud rate from the robot file.
+            self.port_args(TOOLS_DEFAULT_BAUD),
+            if write_servos { " --write-servos" } else { "" }
+        )
+    }
+}
+
+/// `servobus doctor --fix` for `robot` on `target` (see
+/// [`Target::fix_all_command`]); the robot named as on the command line.
+pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> String {
+    target.fix_all_command(&crate::builtin::argument(&robot.path), write_servos)
 }
 
 /// What kind of port the bus is on, for the latency checks.
@@ -105,6 +123,16 @@ pub(crate) struct Ctx<'a> {
     pub robot: &'a Robot,
     pub bus: &'a BusConfig,
     pub target: &'a Target,
+    /// Real servos (or `servobus sim`'s), not the built-in simulator.
+    pub real: bool,
+}
+
+impl Ctx<'_> {
+    /// Real servos without a calibration: their joint angles mean nothing
+    /// yet (each horn sits at its own angle).
+    pub(crate) fn uncalibrated(&self) -> bool {
+        self.real && !matches!(self.robot.calibration, RobotCalibration::Applied { .. })
+    }
 }
 
 /// Examines the bus `cfg` of `robot` through `bus`: pings every ID at the
@@ -127,6 +155,7 @@ pub fn examine<T: Transport + BaudSwitch, C: Clock>(
         robot,
         bus: cfg,
         target,
+        real: *kind != PortKind::Simulator,
     };
     let result = examine_inner(bus, &ctx, kind);
     bus.set_settings(saved);
@@ -168,28 +197,24 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     // Read each one whole; replies that stay garbled are two servos on one ID.
     bus.set_settings(patient);
     let mut servos = Vec::new();
+    let mut collided = Vec::new();
     for &id in &answering {
         match read_state(bus, id) {
             Ok(state) => servos.push(state),
-            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => {
-                let mut f = finding(ctx, Severity::Error, Some(id), Some("id"));
-                f.problem = format!(
-                    "two or more servos answer as ID {id}: their replies collide and none can \
-                     be read"
-                );
-                f.fix = format!(
-                    "connect them one at a time and give all but one a free ID: {}",
-                    target.set_id_command(id, "<NEW_ID>")
-                );
-                findings.push(f);
-            }
+            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => collided.push(id),
             Err(e) if e.is_retryable() => {
-                let mut f = finding(ctx, Severity::Error, Some(id), Some("status_level"));
+                let mut f = finding(
+                    ctx,
+                    Severity::Error,
+                    Step::Connect,
+                    Some(id),
+                    Some("status_level"),
+                );
                 f.problem = format!(
                     "servo {id} answers PING but not READ: its status return level is 0 (SCS)"
                 );
                 let reg = registers::SCS.get("status_level");
-                f.fix = target.write_command(id, "status_level", 2);
+                f.run(target.write_command(id, "status_level", 2));
                 f.action = reg.map(|register| Action::Write {
                     id,
                     register,
@@ -218,31 +243,43 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         find_at_other_bauds(bus, ctx, base, &mut missing, &mut findings)?;
         bus.set_settings(base);
     }
+    // Two servos on one ID while an expected servo is silent: the silent
+    // one most likely has that ID.
+    for &id in &collided {
+        let silent = missing.first().copied();
+        missing.retain(|&m| Some(m) != silent);
+        findings.push(collision(
+            ctx,
+            id,
+            silent.and_then(|s| Some((s, expected(s)?))),
+        ));
+    }
     for &id in &missing {
         let joint = expected(id).map_or("?", |j| j.name.as_str());
-        let mut f = finding(ctx, Severity::Error, Some(id), None);
+        let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
         f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
-        f.fix = match extras.first() {
-            Some(&extra) => format!(
-                "if servo {extra} is joint `{joint}`'s, give it its ID: {}",
-                target.set_id_command(extra, &id.to_string())
+        match extras.first() {
+            Some(&extra) => f.run_in(
+                &format!("if servo {extra} is joint `{joint}`'s, give it its ID: {{}}"),
+                target.set_id_command(extra, &id.to_string()),
             ),
-            None => format!(
-                "check its cable, power and ID: servobus scan {} --all-bauds",
-                target
-                    .port_args(cfg.baud)
-                    .replace(&format!(" --baud {}", cfg.baud), "")
+            None => f.run_in(
+                "check its cable, power and ID: {}",
+                format!(
+                    "servobus scan {} --all-bauds",
+                    target.port_args(TOOLS_DEFAULT_BAUD)
+                ),
             ),
         };
         findings.push(f);
     }
     for &id in &extras {
-        let mut f = finding(ctx, Severity::Warning, Some(id), Some("id"));
+        let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
         f.fix = format!(
-            "add it to {} or give it the ID of its joint: {}",
-            robot.path.display(),
-            target.set_id_command(id, "<ID>")
+            "give it the ID of its joint ({}), or {}",
+            target.set_id_command(id, "<ID>"),
+            ctx.edit_robot_file(&format!("add a joint with ID {id}"))
         );
         findings.push(f);
     }
@@ -256,7 +293,8 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
     bus_checks::firmware(ctx, &servos, &mut findings);
     bus_checks::supply_drop(ctx, &servos, &mut findings);
     bus_checks::latency(bus, ctx, kind, &servos, &mut findings)?;
-    findings.sort_by(|a, b| b.severity.cmp(&a.severity).then(a.id.cmp(&b.id)));
+    // In the order a new robot needs them; the worst first within a step.
+    findings.sort_by(|a, b| (a.step, b.severity, a.id).cmp(&(b.step, a.severity, b.id)));
     Ok(Examined {
         findings,
         servos,
@@ -286,46 +324,94 @@ fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, 
 pub(crate) fn finding(
     ctx: &Ctx<'_>,
     severity: Severity,
+    step: Step,
     id: Option<u8>,
     reg: Option<&'static str>,
 ) -> Finding {
     Finding {
         severity,
+        step,
         bus: ctx.bus.name.clone(),
         id,
         register: reg,
         problem: String::new(),
         fix: String::new(),
+        command: None,
         action: None,
     }
 }
 
+/// Two or more servos answer as `id`; `silent` is the robot's servo that
+/// does not answer (its ID and joint), which most likely is one of them.
+fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Finding {
+    let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), Some("id"));
+    let set_id = |to: &str| ctx.target.set_id_command(id, to);
+    match silent {
+        Some((want, joint)) => {
+            f.problem = format!(
+                "two servos answer as ID {id} and servo {want} (joint `{}`) is silent: servo \
+                 {want} probably has ID {id}",
+                joint.name
+            );
+            f.fix = format!(
+                "unplug every servo but joint `{}`'s (one servo on the bus), run `{}`, then plug \
+                 the others back in",
+                joint.name,
+                set_id(&want.to_string())
+            );
+        }
+        None => {
+            f.problem = format!(
+                "two or more servos answer as ID {id}: their replies collide and none can be read"
+            );
+            f.fix = format!(
+                "connect them one at a time and give all but one a free ID: {}",
+                set_id("<NEW_ID>")
+            );
+        }
+    }
+    f
+}
+
 /// Whether the robot has the calibration it names (said once, with its
-/// first bus).
+/// first bus). Real servos without one are told to calibrate first.
 fn calibration_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
+    let then = match crate::builtin::builtin_name(&ctx.robot.path) {
+        Some(_) => "then pass --calibration calibration.yaml to play, teach and bench".to_owned(),
+        None => format!(
+            "then add `calibration: calibration.yaml` to {} (or pass --calibration)",
+            ctx.robot.path.display()
+        ),
+    };
     match &ctx.robot.calibration {
         RobotCalibration::Missing(path) => {
-            let mut f = finding(ctx, Severity::Error, None, None);
+            let mut f = finding(ctx, Severity::Error, Step::Calibrate, None, None);
             f.problem = format!(
                 "the robot file names the calibration {}, which does not exist: real servos \
                  are refused until it does",
                 path.display()
             );
-            f.fix = format!("{} -o {}", ctx.calibrate_command(), path.display());
+            f.run(ctx.calibrate_command());
+            out.push(f);
+        }
+        RobotCalibration::None if ctx.real => {
+            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
+            f.problem = "not calibrated: calibrate first. Until then the joint angles mean \
+                         nothing (each servo horn sits at its own angle), so no joint is checked \
+                         against its limits"
+                .into();
+            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
             out.push(f);
         }
         RobotCalibration::None => {
-            let mut f = finding(ctx, Severity::Info, None, None);
+            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
             f.problem = "no calibration: joint angles count from each servo's middle tick \
                          with the robot file's offset and inverted"
                 .into();
-            f.fix = format!(
-                "{} -o calibration.yaml, then `calibration: calibration.yaml` in the robot file",
-                ctx.calibrate_command()
-            );
+            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
             out.push(f);
         }
-        _ => {}
+        RobotCalibration::Applied { .. } => {}
     }
 }
 
@@ -372,11 +458,21 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
         }
         for id in found {
             missing.retain(|&m| m != id);
-            let mut f = finding(ctx, Severity::Error, Some(id), Some("baud_rate"));
-            f.problem = format!("servo {id} answers only at {baud} baud; the bus runs at {home}");
-            f.fix = ctx
-                .target
-                .write_command_at(baud, id, "baud_rate", i32::from(index));
+            let mut f = finding(
+                ctx,
+                Severity::Error,
+                Step::Connect,
+                Some(id),
+                Some("baud_rate"),
+            );
+            f.problem = format!(
+                "servo {id} answers only at {baud} baud; the bus runs at {home} (baud_rate \
+                 {index} in the servo's table)"
+            );
+            f.run(
+                ctx.target
+                    .write_command_at(baud, id, "baud_rate", i32::from(index)),
+            );
             f.action = Some(Action::Baud { id, baud, index });
             findings.push(f);
         }

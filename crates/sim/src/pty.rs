@@ -51,7 +51,8 @@ const SPIN: Duration = Duration::from_micros(150);
 
 /// A simulated bus served on a pseudo-terminal in wall-clock time.
 ///
-/// The link (if any) is removed when the server is dropped.
+/// The link (if any) is removed when the server is dropped, unless it
+/// points elsewhere by then (another server took the path over).
 #[derive(Debug)]
 pub struct PtyServer {
     master: OwnedFd,
@@ -316,8 +317,12 @@ impl PtyServer {
 
 impl Drop for PtyServer {
     fn drop(&mut self) {
+        // Only a link that still points at this server's terminal: another
+        // server may have taken the path over since.
         if let Some(link) = &self.link {
-            let _ = std::fs::remove_file(link);
+            if std::fs::read_link(link).is_ok_and(|to| to == self.path) {
+                let _ = std::fs::remove_file(link);
+            }
         }
     }
 }

@@ -97,6 +97,24 @@ fn the_link_points_at_the_pty_and_is_removed_on_drop() {
     assert!(std::fs::symlink_metadata(&dir).is_err());
 }
 
+#[test]
+fn a_server_leaves_a_link_another_server_took_over() {
+    let link = std::env::temp_dir().join(format!("servobus-sim-relink-{}", std::process::id()));
+    let mut first = PtyServer::open(1_000_000, [SimServo::sts3215(1)]).unwrap();
+    first.link_to(&link).unwrap();
+    let mut second = PtyServer::open(1_000_000, [SimServo::sts3215(1)]).unwrap();
+    second.link_to(&link).unwrap();
+    assert_eq!(std::fs::read_link(&link).unwrap(), second.path());
+    drop(first);
+    assert_eq!(
+        std::fs::read_link(&link).unwrap(),
+        second.path(),
+        "the first server removed the second one's link"
+    );
+    drop(second);
+    assert!(std::fs::symlink_metadata(&link).is_err());
+}
+
 /// Runs a Python check script (from `tests/python/`) with `python` and
 /// `args` against six STS3215 servos on a paced pty; it must succeed and
 /// print `ok`. Its output is shown, so the client's own PASS line appears in

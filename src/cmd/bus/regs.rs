@@ -1,14 +1,14 @@
 //! `servobus read`, `write` and `set-id`: one servo's registers, by name,
 //! with values in their units and a warning where a write has no visible
-//! effect.
+//! effect; `servobus registers`: the names, for each series.
 
 use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use servobus_driver::BusError;
-use servobus_protocol::registers::{addr, Access, Register, Series};
+use servobus_protocol::registers::{self, addr, Access, Register, Series};
 
-use super::{check_id, open_servo, ReadArgs, SerialBus, SetIdArgs, WriteArgs};
+use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
 use crate::cmd::exit::input;
 
 /// The register named `name` (or at the address `name`) of `series`.
@@ -17,11 +17,57 @@ fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
     let by_address = name.parse::<u8>().ok().and_then(|a| map.at(a));
     match by_address.or_else(|| map.get(name)) {
         Some(r) => Ok(r),
-        None => Err(input(format!(
-            "no register called {name:?} on {} servos (e.g. present_position, goal_position, id)",
-            series.name().to_uppercase()
-        ))),
+        None => {
+            let names: Vec<&str> = map.registers.iter().map(|r| r.name).collect();
+            Err(input(format!(
+                "no register called {name:?} on {} servos; the registers are: {} \
+                 (addresses, sizes and units: servobus registers --series {})",
+                series.name().to_uppercase(),
+                names.join(", "),
+                series.name()
+            )))
+        }
     }
+}
+
+/// Runs `servobus registers`: the control table of each series asked for.
+pub fn list(args: RegistersArgs) -> anyhow::Result<ExitCode> {
+    let all = [Series::Sts, Series::Scs];
+    let chosen: Vec<Series> = match args.series.as_deref() {
+        None => all.to_vec(),
+        Some(name) => match all
+            .into_iter()
+            .find(|s| s.name().eq_ignore_ascii_case(name))
+        {
+            Some(s) => vec![s],
+            None => return Err(input(format!("--series {name}: sts or scs"))),
+        },
+    };
+    for (n, series) in chosen.into_iter().enumerate() {
+        if n > 0 {
+            println!();
+        }
+        println!(
+            "{} servos (EEPROM: kept over power-off; RAM: lost; read-only: reported)",
+            series.name().to_uppercase()
+        );
+        println!(
+            "{:>4} {:>4}  {:<9} {:<22} {:<16} WHAT",
+            "ADDR", "SIZE", "ACCESS", "NAME", "UNIT"
+        );
+        for r in series.map().registers {
+            let access = match r.access {
+                Access::Eeprom => "EEPROM",
+                Access::Ram => "RAM",
+                Access::ReadOnly => "read-only",
+            };
+            println!(
+                "{:>4} {:>4}  {access:<9} {:<22} {:<16} {}",
+                r.address, r.size, r.name, r.unit, r.description
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Runs `servobus read`.
@@ -42,7 +88,7 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
         });
         println!("{out}");
     } else {
-        println!("{} = {}", reg.name, human_value(value, reg.unit));
+        println!("{} = {}", reg.name, human_value(value, reg));
     }
     if !flags.is_ok() {
         eprintln!("warning: servo {} reports {flags}", args.servo.id);
@@ -80,7 +126,11 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
         Access::ReadOnly => return Err(input(format!("{} is read-only", reg.name))),
         Access::Ram => {
             bus.write_register(args.servo.id, reg, value)?;
-            println!("{} = {value} (RAM: lost at power-off)", reg.name);
+            println!(
+                "{} = {} (RAM: lost at power-off)",
+                reg.name,
+                human_value(value, reg)
+            );
             warn_if_torque_off(&mut bus, args.servo.id, reg, &args.servo.port.port);
         }
         Access::Eeprom => {
@@ -101,17 +151,31 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
                 .with_context(|| format!("{} cannot hold {value}", reg.name))?;
             let w = bus.write_eeprom(args.servo.id, reg.address, bytes)?;
             println!(
-                "{} = {value} on servo {} (unlocked, written, verified, locked)",
-                reg.name, w.id
+                "{} = {} on servo {} (unlocked, written, verified, locked)",
+                reg.name,
+                human_value(value, reg),
+                w.id
             );
         }
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// A register value in its unit: a unit with a scale (`0.1 V`) is applied
-/// (`120` reads `12.0 V (raw 120)`); a plain unit is appended.
-fn human_value(value: i32, unit: &str) -> String {
+/// A register value as people read it: the baud-rate register's index with
+/// its rate (`0 (1000000 baud)`), else the value in its unit.
+fn human_value(value: i32, reg: &Register) -> String {
+    if reg.address == addr::BAUD_RATE {
+        let rate = u8::try_from(value).ok().and_then(registers::baud_rate);
+        if let Some(rate) = rate {
+            return format!("{value} ({rate} baud)");
+        }
+    }
+    in_unit(value, reg.unit)
+}
+
+/// A value in its unit: a unit with a scale (`0.1 V`) is applied (`120`
+/// reads `12.0 V (raw 120)`); a plain unit is appended.
+fn in_unit(value: i32, unit: &str) -> String {
     let scaled = unit
         .split_once(' ')
         .and_then(|(factor, rest)| Some((factor.parse::<f64>().ok()?, rest)));
@@ -165,12 +229,20 @@ pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
 mod tests {
     #[test]
     fn scaled_units_read_as_people_write_them() {
-        assert_eq!(super::human_value(120, "0.1 V"), "12.0 V (raw 120)");
+        assert_eq!(super::in_unit(120, "0.1 V"), "12.0 V (raw 120)");
         assert_eq!(
-            super::human_value(50, "100 steps/s^2"),
+            super::in_unit(50, "100 steps/s^2"),
             "5000 steps/s^2 (raw 50)"
         );
-        assert_eq!(super::human_value(-30, "steps"), "-30 steps");
-        assert_eq!(super::human_value(7, ""), "7");
+        assert_eq!(super::in_unit(-30, "steps"), "-30 steps");
+        assert_eq!(super::in_unit(7, ""), "7");
+    }
+
+    #[test]
+    fn a_baud_rate_index_reads_with_its_rate() {
+        use servobus_protocol::registers::Series;
+        let reg = Series::Sts.map().get("baud_rate").expect("baud_rate");
+        assert_eq!(super::human_value(0, reg), "0 (1000000 baud)");
+        assert_eq!(super::human_value(4, reg), "4 (115200 baud)");
     }
 }

@@ -3,7 +3,10 @@
 //! driver, a servo at another baud rate, the supply out of range) is found,
 //! its fix is named, and with `--fix` the fix works and persists.
 
+#[path = "../common/mod.rs"]
 mod common;
+
+mod advice;
 
 use std::time::Duration;
 
@@ -32,6 +35,11 @@ impl Arm {
     /// The arm as `servobus sim` serves it, with `faults`.
     fn factory(faults: Faults) -> Arm {
         let robot = load_robot(&common::repo("configs/robots/so101.yaml")).expect("robot");
+        Arm::of(robot, faults)
+    }
+
+    /// `robot`'s servos as `servobus sim` serves them, with `faults`.
+    fn of(robot: Robot, faults: Faults) -> Arm {
         let (sim, bus) = common::virtual_bus(&robot, faults);
         Arm { robot, sim, bus }
     }
@@ -98,7 +106,17 @@ impl Arm {
 
     /// `--fix`: applies the fixes; every one must succeed.
     fn fix(&mut self, findings: &[Finding]) {
-        let outcomes = doctor::apply(&mut self.bus, findings).expect("fixes applied");
+        self.fix_storing(findings, false);
+    }
+
+    /// `--fix`, with `--write-servos` when `write_servos`.
+    fn fix_storing(&mut self, findings: &[Finding], write_servos: bool) {
+        let how = doctor::Fixing {
+            robot: &self.robot,
+            bus: 0,
+            write_servos,
+        };
+        let outcomes = doctor::apply(&mut self.bus, findings, &how).expect("fixes applied");
         assert!(!outcomes.is_empty(), "nothing was fixed");
         for o in &outcomes {
             assert!(
@@ -152,6 +170,7 @@ fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -
     let f = must(findings, id, Some(register));
     let want = format!("servobus write --port {PORT} --id {id} {register} {value}");
     assert_eq!(f.fix, want, "{}", show(findings));
+    assert_eq!(f.command.as_deref(), Some(want.as_str()), "runs as printed");
     f
 }
 
@@ -311,7 +330,7 @@ fn every_simulator_fault_is_found() {
         ("supply=13.5", 2, Some("present_voltage"), Warning, "rating 6.0..12.6 V"),
         ("supply=5:11.2", 5, Some("present_voltage"), Warning, "drops 0.8 V"),
         ("firmware=2:3.9", 2, Some("firmware_major"), Warning, "3.9 differs from 3.10"),
-        ("duplicate=6:5", 5, Some("id"), Error, "two or more servos answer as ID 5"),
+        ("duplicate=6:5", 5, Some("id"), Error, "servo 6 probably has ID 5"),
     ];
     for (spec, id, register, severity, words) in cases {
         let faults: Faults = spec.parse().expect(spec);
@@ -356,9 +375,11 @@ fn a_supply_that_sags_under_load_is_found_under_load_only() {
 #[test]
 fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
     let mut arm = Arm::tuned(Faults::none());
-    // An adapter that holds every byte 2 ms, where the robot file says 0.
+    // An adapter that holds every byte 2 ms, where the robot file says 0
+    // (`latency_us: 0`, not so101's `auto`).
     let sim = arm.sim.clone().with_latency(Duration::from_millis(2));
     arm.sim = sim;
+    arm.robot.buses[0].latency_auto = false;
     let ftdi = servobus_driver::FtdiLatency {
         sysfs_path: "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer".into(),
         latency: Duration::from_millis(16),
@@ -379,7 +400,9 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
         .unwrap_or_else(|| panic!("{}", show(&findings)));
     assert_eq!(measured.severity, Severity::Warning);
     assert!(
-        measured.fix.contains("`latency_us: 2000` on bus `arm`"),
+        measured
+            .fix
+            .contains("`latency_us: 2000` (or `auto`) on bus `arm`"),
         "{}",
         measured.fix
     );
@@ -461,7 +484,11 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
         range: [600, 3500],
     });
     let findings = arm.examine();
-    let offset = must_write(&findings, 1, "offset", 100);
+    let offset = must(&findings, 1, Some("offset"));
+    assert_eq!(
+        offset.command.as_deref(),
+        Some("servobus write --port /dev/ttyACM0 --id 1 offset 100")
+    );
     assert_eq!(offset.severity, Severity::Error);
     assert!(
         offset.problem.contains("homing offset is 0"),
@@ -474,7 +501,16 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
         "{}",
         firmware.problem
     );
-    arm.fix_and_restart(&findings);
+    // Without --write-servos, --fix leaves an offset play refuses alone.
+    let how = doctor::Fixing {
+        robot: &arm.robot,
+        bus: 0,
+        write_servos: false,
+    };
+    let outcomes = doctor::apply(&mut arm.bus, &findings, &how).expect("fixes");
+    assert!(outcomes.iter().all(|o| o.id != 1), "{outcomes:?}");
+    arm.fix_storing(&findings, true);
+    arm.sim.power_cycle();
     assert_eq!(
         arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
         Some(100),

@@ -1,0 +1,239 @@
+//! The advice itself: in the order a new arm needs it, commands that run
+//! as printed (a built-in robot named by its name), the homing offset of a
+//! session, a swapped ID, an uncalibrated arm on a port, `latency_us: auto`.
+
+use std::path::Path;
+use std::time::Duration;
+
+use servobus::doctor::{self, PortKind, Severity, Step};
+use servobus_protocol::registers::addr;
+use servobus_runtime::config::{load_robot, JointCalibration};
+use servobus_sim::Faults;
+
+use super::{about, must, show, Arm, PORT};
+
+/// shoulder_pan (servo 1, at tick 2048 with homing offset 0) calibrated
+/// with offset 0 over ticks 2000..4600: a range across the seam.
+fn across_the_seam() -> JointCalibration {
+    JointCalibration {
+        name: "shoulder_pan".into(),
+        id: 1,
+        model: "STS3215".into(),
+        firmware: Some("3.10".into()),
+        homing_offset: 0,
+        pose_deg: 0.0,
+        pose_tick: 2048.0,
+        direction: 1,
+        range: [2000, 4600],
+    }
+}
+
+/// The play frame of [`across_the_seam`], worked out by hand: the middle of
+/// 2000..4600 is 3300, which the offset 3300 - 2048 = 1252 brings to 2048.
+const PLAY_OFFSET: u16 = 1252;
+
+#[test]
+fn an_offset_not_set_after_a_power_up_is_information_and_fix_sets_it_for_the_session() {
+    let mut arm = Arm::tuned(Faults::none());
+    arm.robot.buses[0].joints[0].calibration = Some(across_the_seam());
+    let all = arm.examine_all();
+    let f = must(&all, 1, Some("offset"));
+    assert_eq!(f.severity, Severity::Info, "play sets it: nothing wrong");
+    assert_eq!(f.step, Step::Calibrate);
+    assert!(
+        f.problem.contains("not set for this session") && !f.problem.contains("replaced"),
+        "{}",
+        f.problem
+    );
+    let robot = common_robot_arg();
+    assert_eq!(
+        f.command.as_deref(),
+        Some(format!("servobus doctor --robot {robot} --port {PORT} --fix").as_str())
+    );
+    // Read in the frame play will set, the joint is at 0: within limits.
+    assert!(
+        about(&all, 1, Some("present_position")).is_none(),
+        "{}",
+        show(&all)
+    );
+    assert_eq!(doctor::exit_status(&all), 0, "{}", show(&all));
+
+    // --fix sets it as play does: for the session, not in EEPROM.
+    arm.fix(&all);
+    assert_eq!(
+        arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
+        Some(PLAY_OFFSET)
+    );
+    assert!(about(&arm.examine_all(), 1, Some("offset")).is_none());
+    arm.sim.power_cycle();
+    assert_eq!(
+        arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
+        Some(0),
+        "nothing persisted without --write-servos"
+    );
+
+    // --fix --write-servos stores it.
+    let all = arm.examine_all();
+    arm.fix_storing(&all, true);
+    arm.sim.power_cycle();
+    assert_eq!(
+        arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
+        Some(PLAY_OFFSET)
+    );
+    assert!(about(&arm.examine_all(), 1, Some("offset")).is_none());
+}
+
+/// The test arm's robot file as the commands name it.
+fn common_robot_arg() -> String {
+    super::common::repo("configs/robots/so101.yaml")
+        .display()
+        .to_string()
+}
+
+#[test]
+fn two_servos_on_one_id_and_a_silent_servo_is_a_swapped_id() {
+    let mut arm = Arm::tuned("duplicate=6:5".parse().expect("faults"));
+    let findings = arm.examine();
+    let f = must(&findings, 5, Some("id"));
+    assert_eq!(f.severity, Severity::Error);
+    assert!(
+        f.problem
+            .contains("servo 6 (joint `gripper`) is silent: servo 6 probably has ID 5"),
+        "{}",
+        f.problem
+    );
+    assert!(
+        f.fix.contains("unplug every servo but joint `gripper`'s")
+            && f.fix
+                .contains("`servobus set-id --port /dev/ttyACM0 --id 5 6`")
+            && f.fix.contains("plug the others back in"),
+        "{}",
+        f.fix
+    );
+    assert_eq!(f.command, None, "it takes hands: no command runs it alone");
+    assert!(
+        about(&findings, 6, None).is_none(),
+        "servo 6 is explained by the shared ID:\n{}",
+        show(&findings)
+    );
+}
+
+#[test]
+fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint() {
+    let mut arm = Arm::tuned(Faults::none());
+    // 1400 ticks from the middle: 123 degrees by the robot file's design,
+    // which means nothing on an uncalibrated arm.
+    arm.sim.servo(1, |s| s.move_joint(2048 + 1400));
+    let all = arm.examine_on(&PortKind::Pty).findings;
+    assert!(
+        about(&all, 1, Some("present_position")).is_none(),
+        "{}",
+        show(&all)
+    );
+    assert!(
+        !all.iter().any(|f| f.fix.contains("by hand")),
+        "{}",
+        show(&all)
+    );
+    let f = all
+        .iter()
+        .find(|f| f.step == Step::Calibrate && f.id.is_none())
+        .unwrap_or_else(|| panic!("{}", show(&all)));
+    assert!(f.problem.contains("calibrate first"), "{}", f.problem);
+    let robot = common_robot_arg();
+    assert_eq!(
+        f.command.as_deref(),
+        Some(
+            format!("servobus calibrate --robot {robot} --port {PORT} -o calibration.yaml")
+                .as_str()
+        )
+    );
+}
+
+#[test]
+fn a_builtin_robot_is_named_by_its_name_in_every_command() {
+    let path = servobus::builtin::robot_path_or_name(Path::new("so101"));
+    let robot = load_robot(&path).expect("built-in so101");
+    let mut arm = Arm::of(robot, Faults::none());
+    arm.robot.buses[0].joints[0].calibration = Some(across_the_seam());
+    // A slow adapter where the robot file says 0 us: a file to edit.
+    arm.sim = arm.sim.clone().with_latency(Duration::from_millis(2));
+    arm.robot.buses[0].latency_auto = false;
+    let all = arm.examine_on(&PortKind::Serial(None)).findings;
+    // The calibrate and doctor commands: what follows each `--robot`.
+    let robot_args: Vec<&str> = all
+        .iter()
+        .filter_map(|f| f.command.as_deref())
+        .flat_map(|c| c.split(" --robot ").skip(1))
+        .filter_map(|rest| rest.split_whitespace().next())
+        .collect();
+    assert_eq!(robot_args.len(), 2, "{}", show(&all));
+    assert!(robot_args.iter().all(|&r| r == "so101"), "{robot_args:?}");
+    assert!(
+        !all.iter().any(|f| f.fix.contains("<built-in>")),
+        "{}",
+        show(&all)
+    );
+    let offset = must(&all, 1, Some("offset"));
+    assert_eq!(
+        offset.command.as_deref(),
+        Some("servobus doctor --robot so101 --port /dev/ttyACM0 --fix")
+    );
+    let latency = all
+        .iter()
+        .find(|f| f.problem.contains("round trip"))
+        .unwrap_or_else(|| panic!("{}", show(&all)));
+    assert!(
+        latency
+            .fix
+            .contains("`servobus init --robot so101` writes robot.yaml")
+            && latency.fix.contains("pass --robot robot.yaml"),
+        "{}",
+        latency.fix
+    );
+}
+
+#[test]
+fn latency_auto_is_measured_not_an_assumed_0_us() {
+    let mut arm = Arm::tuned(Faults::none());
+    assert!(
+        arm.robot.buses[0].latency_auto,
+        "so101 says `latency_us: auto`"
+    );
+    arm.sim = arm.sim.clone().with_latency(Duration::from_millis(2));
+    let all = arm.examine_on(&PortKind::Serial(None)).findings;
+    let f = all
+        .iter()
+        .find(|f| f.problem.contains("round trip"))
+        .unwrap_or_else(|| panic!("{}", show(&all)));
+    assert_eq!(f.severity, Severity::Info, "auto follows the adapter");
+    assert!(
+        f.problem.contains("`latency_us: auto` measures it") && !f.problem.contains("assumes"),
+        "{}",
+        f.problem
+    );
+}
+
+#[test]
+fn advice_comes_in_the_order_a_new_arm_needs_it() {
+    let mut arm = Arm::tuned("overheat=3".parse().expect("faults"));
+    arm.write(2, "return_delay", 250);
+    arm.sim.add_servo(servobus_sim::SimServo::sts3215(9));
+    let findings = arm.examine();
+    let at = |id: u8, register: &str| {
+        findings
+            .iter()
+            .position(|f| f.id == Some(id) && f.register == Some(register))
+            .unwrap_or_else(|| panic!("servo {id} {register}:\n{}", show(&findings)))
+    };
+    // A servo the file lacks (connect), a setting (configure), then a hot
+    // servo (check), though that one is the worst.
+    assert!(at(9, "id") < at(2, "return_delay"), "{}", show(&findings));
+    assert!(
+        at(2, "return_delay") < at(3, "present_temperature"),
+        "{}",
+        show(&findings)
+    );
+    let steps: Vec<Step> = findings.iter().map(|f| f.step).collect();
+    assert!(steps.windows(2).all(|w| w[0] <= w[1]), "{steps:?}");
+}

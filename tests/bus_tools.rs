@@ -87,6 +87,14 @@ fn scan_read_write_set_id_against_the_simulator() {
     for (args, why) in [
         (&["read", "--id", "1", "nonsense"][..], "no register called"),
         (
+            &["read", "--id", "1", "nonsense"][..],
+            "goal_position, goal_time, goal_speed",
+        ),
+        (
+            &["write", "--id", "1", "nonsense", "1"][..],
+            "servobus registers --series sts",
+        ),
+        (
             &["write", "--id", "1", "present_position", "5"],
             "read-only",
         ),
@@ -101,5 +109,52 @@ fn scan_read_write_set_id_against_the_simulator() {
     let link = sim.link.clone();
     sim.stop();
     assert!(!link.exists(), "sim removes its link on exit");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn registers_lists_each_series_table() {
+    let sts = common::stdout(&common::servobus_ok(&["registers", "--series", "sts"]));
+    // Address, size, access and name, by hand from Feetech's STS table.
+    for row in [
+        "  42    2  RAM       goal_position",
+        "  55    1  RAM       lock",
+        "   6    1  EEPROM    baud_rate",
+        "  56    2  read-only present_position",
+    ] {
+        assert!(sts.contains(row), "{row:?} not in:\n{sts}");
+    }
+    assert!(!sts.contains("SCS servos"), "{sts}");
+    let scs = common::stdout(&common::servobus_ok(&["registers", "--series", "scs"]));
+    assert!(scs.contains("  48    1  RAM       lock"), "{scs}");
+    let both = common::stdout(&common::servobus_ok(&["registers"]));
+    assert!(
+        both.contains("STS servos") && both.contains("SCS servos"),
+        "{both}"
+    );
+    let out = common::servobus(&["registers", "--series", "xl"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn the_simulators_examples_are_built_in_and_listed() {
+    let list = common::stdout(&common::servobus_ok(&["list"]));
+    says(
+        &list,
+        &[
+            "so101-mounting",
+            "so101-hand",
+            "--mounting NAME",
+            "--hand NAME",
+        ],
+    );
+    // By name (no file of that name in the working directory).
+    let dir = common::scratch("sim-examples");
+    let sim = Sim::start_with(&dir, &["--mounting", "so101-mounting"]);
+    // The mounting puts shoulder_pan's zero (its rest) at tick 1300.
+    assert_eq!(sim.read("1", "present_position"), 1300);
+    sim.stop();
+    // The hand loads and the simulator serves with it.
+    Sim::start_with(&dir, &["--hand", "so101-hand"]).stop();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -77,7 +77,7 @@ fn ids(v: &serde_json::Value) -> Vec<u64> {
 }
 
 #[test]
-fn scan_warns_when_two_servos_share_an_id() {
+fn scan_reports_two_servos_sharing_an_id_and_exits_1() {
     // Two servos at ID 1 (answering at once, their replies garble each
     // other) and one alone at ID 2.
     let bus = Served::start(
@@ -89,7 +89,9 @@ fn scan_warns_when_two_servos_share_an_id() {
         ],
     );
     let out = bus.scan(&["--json"]);
-    let v = json(&out);
+    assert_eq!(out.status.code(), Some(1), "a shared ID is a problem found");
+    let v: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("scan --json prints its findings");
     assert_eq!(ids(&v), [2], "only the servo alone is identified: {v}");
     let collisions: Vec<u64> = v["collisions"]
         .as_array()
@@ -101,7 +103,7 @@ fn scan_warns_when_two_servos_share_an_id() {
     assert_eq!(v["collisions"][0]["baud"], 1_000_000);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("warning: ID 1 at 1000000 baud")
+        err.contains("error: ID 1 at 1000000 baud")
             && err.contains("two servos share this ID")
             && err.contains("set-id"),
         "{err}"

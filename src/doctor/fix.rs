@@ -18,7 +18,8 @@ use super::{Action, BaudSwitch, Finding, Fixing};
 pub struct FixOutcome {
     /// The servo.
     pub id: u8,
-    /// The command the fix stands for.
+    /// What the fix did: the command it stands for, or for a homing
+    /// offset what was set.
     pub command: String,
     /// `Err` with the reason when it failed.
     pub result: Result<(), String>,
@@ -80,9 +81,7 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
                 bus.set_settings(s);
                 (id, bus.write_register(id, register, value).map(|_| ()))
             }
-            Action::Baud { id, baud, index } => {
-                (id, change_baud(bus, id, baud, index, saved.link.baud))
-            }
+            Action::Baud { id, baud, index } => (id, change_baud(bus, id, baud, index)),
             Action::Offset {
                 id, value, series, ..
             } if how.write_servos => (id, store_offset(bus, id, value, series)),
@@ -100,7 +99,7 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
                     Err(SessionError::Refused(why)) => {
                         out.push(FixOutcome {
                             id,
-                            command: f.fix.clone(),
+                            command: done(f, how),
                             result: Err(why),
                         });
                         continue;
@@ -116,13 +115,27 @@ pub fn apply<T: Transport + BaudSwitch, C: Clock>(
             }
             r => out.push(FixOutcome {
                 id,
-                command: f.fix.clone(),
+                command: done(f, how),
                 result: r.map_err(|e| e.to_string()),
             }),
         }
     }
     bus.set_settings(saved);
     Ok(out)
+}
+
+/// What applying `f`'s fix does, for the report: its command, or for a
+/// homing offset where it goes.
+fn done(f: &Finding, how: &Fixing<'_>) -> String {
+    match f.action {
+        Some(Action::Offset { value, .. }) if how.write_servos => {
+            format!("homing offset {value} stored in EEPROM")
+        }
+        Some(Action::Offset { value, .. }) => {
+            format!("homing offset {value} set for this session (as play sets it)")
+        }
+        _ => f.command.clone().unwrap_or_else(|| f.fix.clone()),
+    }
 }
 
 /// Why the session's offsets could not be set.
@@ -166,15 +179,24 @@ fn store_offset<T: Transport, C: Clock>(
     bus.write_register(id, register, value).map(|_| ())
 }
 
-/// Unlocks servo `id` at `baud`, writes the bus's baud-rate index, then
-/// reads it back and locks again at the bus's rate `home`.
-fn change_baud<T: Transport + BaudSwitch, C: Clock>(
+/// Moves servo `id`, which listens at `baud`, to the rate of baud-rate
+/// index `index`: unlocks it at `baud`, writes the index (the servo may
+/// switch before its reply leaves), then reads it back and locks again at
+/// the new rate. The transport is left at the new rate.
+///
+/// # Errors
+/// The bus's; [`BusError::Verify`] when the servo does not hold the index
+/// at the new rate; [`BusError::InvalidRequest`] for an index outside the
+/// baud table.
+pub fn change_baud<T: Transport + BaudSwitch, C: Clock>(
     bus: &mut Bus<T, C>,
     id: u8,
     baud: u32,
     index: u8,
-    home: u32,
 ) -> Result<(), BusError> {
+    let home = servobus_protocol::registers::baud_rate(index).ok_or(BusError::InvalidRequest(
+        "baud-rate index outside the table",
+    ))?;
     let lock = bus.settings().series.map().lock_address;
     switch(bus, baud)?;
     let unlocked = bus.write(id, lock, &[0]);

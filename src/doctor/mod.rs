@@ -24,7 +24,7 @@ use servobus_runtime::config::Robot;
 use servobus_sim::SimBus;
 
 pub use checks::{rated_voltage_dv, ServoState};
-pub use fix::{apply, FixOutcome};
+pub use fix::{apply, change_baud, FixOutcome};
 pub use probe::fix_all_command;
 pub use probe::{examine, Examined, PortKind, Target};
 

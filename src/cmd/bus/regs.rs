@@ -145,6 +145,9 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
                 "{} is an EEPROM register: the new value will persist across power cycles",
                 reg.name
             );
+            if reg.address == addr::BAUD_RATE {
+                return write_baud_rate(&mut bus, &args, value);
+            }
             let mut buf = [0u8; 4];
             let bytes = &mut buf[..usize::from(reg.size)];
             reg.encode(value, series.byte_order(), bytes)
@@ -158,6 +161,25 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
             );
         }
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes baud-rate index `value` to the servo: it then listens at the
+/// new rate, so the write is verified and locked there.
+fn write_baud_rate(bus: &mut SerialBus, args: &WriteArgs, value: i32) -> anyhow::Result<ExitCode> {
+    let id = args.servo.id;
+    let index = u8::try_from(value).unwrap_or(u8::MAX);
+    let Some(rate) = registers::baud_rate(index) else {
+        return Err(input(format!(
+            "baud_rate {value} is not an index of the baud table"
+        )));
+    };
+    servobus::doctor::change_baud(bus, id, args.servo.baud, index)
+        .with_context(|| format!("servo {id}: moving it to {rate} baud"))?;
+    println!(
+        "baud_rate = {value} ({rate} baud) on servo {id} (unlocked, written, verified, locked): \
+         it now answers at {rate} baud"
+    );
     Ok(ExitCode::SUCCESS)
 }
 

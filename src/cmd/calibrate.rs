@@ -18,7 +18,7 @@ use anyhow::{bail, Context};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
-    Operator, ProcedureOptions, Refusal, Step,
+    Operator, ProcedureOptions, Refusal, Step, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot_calibrated, load_robot_design, save_calibration, utc_now,
@@ -143,21 +143,11 @@ fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
     }
 }
 
-/// Reply deadline allowance: calibrating and the checks before a run are
-/// not timed, so a slow adapter or a loaded host (a pty served by a process
-/// that waits for the CPU) must not make a present servo look absent. A
-/// servo that is really missing costs this much per try, once.
-const PATIENCE: Duration = Duration::from_millis(50);
-
-/// Tries per transaction while calibrating: a reply lost now and then must
-/// not end the procedure.
-const RETRIES: u8 = 3;
-
 fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
     let mut buses = Vec::new();
     for (bus, port) in robot.buses.iter().zip(ports) {
         let mut opened = open_bus(bus, port, Allowance::AtLeast(PATIENCE))?;
-        opened.set_settings(opened.settings().with_retries(RETRIES));
+        opened.set_settings(opened.settings().with_retries(PATIENT_RETRIES));
         buses.push(opened);
     }
     Ok(buses)
@@ -351,26 +341,16 @@ impl Operator for Terminal {
     }
 }
 
-/// Before `play` or `bench` moves real servos: stops when the robot's
-/// calibration is missing or does not fit the servos on bus `index`, with
-/// what to run; otherwise puts the servos in their play frame.
+/// Before any command reads or moves joints through the calibration on real
+/// servos: the library's one check ([`prepare_bus`]), with what to run when
+/// it refuses.
 pub(crate) fn check_bus<T: Transport, C: Clock>(
     robot: &Robot,
     index: usize,
     bus: &mut Bus<T, C>,
     port: &str,
 ) -> anyhow::Result<()> {
-    // Not timed: patient deadlines, so that a slow adapter or a loaded host
-    // does not make a servo look absent; the run's own settings after.
-    let saved = *bus.settings();
-    bus.set_settings(
-        saved
-            .with_latency(saved.link.latency.max(PATIENCE))
-            .with_retries(RETRIES),
-    );
-    let checked = prepare_bus(robot, index, bus);
-    bus.set_settings(saved);
-    checked.map_err(|refusal| refused(robot, &refusal, port))
+    prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
 }
 
 /// [`check_bus`] for every bus.
@@ -385,7 +365,7 @@ pub(crate) fn check_buses<T: Transport, C: Clock>(
     Ok(())
 }
 
-fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
+pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
     let file = match &robot.calibration {
         RobotCalibration::Missing(path) | RobotCalibration::Applied { path, .. } => path.clone(),
         RobotCalibration::None => PathBuf::from(format!("{}.calibration.yaml", robot.name)),

@@ -37,6 +37,7 @@ mod trajectory;
 mod units;
 
 pub use budget::{RateError, RateRemedy};
+pub use calibrated::{limit_origins, LimitOrigin};
 pub use calibration::{
     load_calibration, save_calibration, utc_now, Calibration, JointCalibration, PlayFrame,
     RANGE_MARGIN_DEG,

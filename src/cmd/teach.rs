@@ -11,7 +11,7 @@ use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
 use servobus_runtime::config::{load_robot_calibrated, LimitOrigin, Robot};
 use servobus_runtime::teach::{
-    self, check_pose, distance, motion_yaml, StillCapture, TeachError, Taught, Teacher, TimedPose,
+    self, check_pose, distance, motion_yaml, StillCapture, Taught, TeachError, Teacher, TimedPose,
 };
 
 use super::link::{bus_ports, open_bus, Allowance, SerialBus};
@@ -274,7 +274,10 @@ fn take<T: Transport, C: Clock>(
     let period = Duration::from_secs_f64(1.0 / rate);
     let start = teacher.now();
     let end = args.duration.map(|d| start + Duration::from_secs_f64(d));
-    let first = match teacher.pose().and_then(|p| check_pose(robot, &p).map(|()| p)) {
+    let first = match teacher
+        .pose()
+        .and_then(|p| check_pose(robot, &p).map(|()| p))
+    {
         Ok(p) => p,
         Err(e) => return Err((take, e.into())),
     };

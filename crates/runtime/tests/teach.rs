@@ -10,7 +10,7 @@ use servobus_driver::ManualClock;
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::sim::{new_truth, Hand, SimRobot};
 use servobus_runtime::teach::{
-    check_pose, merge_identical, motion_yaml, reduce, trim_idle, StillCapture, TeachError, Taught,
+    check_pose, merge_identical, motion_yaml, reduce, trim_idle, StillCapture, Taught, TeachError,
     Teacher, TimedPose,
 };
 use servobus_runtime::VirtualRun;
@@ -131,7 +131,10 @@ fn pose_and_pause_with_the_hand_then_play_passes_every_keyframe() {
         let at = start_time + Duration::from_secs_f64(*t);
         for (j, want) in k.iter().enumerate() {
             let got = truth.angle_at(j, at).expect("truth at the keyframe");
-            assert!((got - want).abs() <= 1.0, "joint {j} at {t} s: {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 1.0,
+                "joint {j} at {t} s: {got} vs {want}"
+            );
         }
     }
     for (_, k) in &taught {
@@ -281,7 +284,10 @@ fn a_take_stopped_while_the_arm_moves_is_reduced_and_plays_within_the_limits() {
         samples.len()
     );
     let file = Taught::continuous(&robot, &samples, 0.5, 0.3).expect("reduces");
-    assert!(file.notes.iter().any(|n| n.contains("while the robot moved")));
+    assert!(file
+        .notes
+        .iter()
+        .any(|n| n.contains("while the robot moved")));
     // The file plays: `play` accepts it and plans it within every limit.
     let yaml = motion_yaml(&robot, &robot_file(), &file);
     play(&robot, &yaml, &REST, "stopped.yaml");

@@ -224,10 +224,13 @@ pub fn prepare_bus<T: Transport, C: Clock>(
             .with_latency(saved.link.latency.max(PATIENCE))
             .with_retries(PATIENT_RETRIES),
     );
-    let checked = config.joints.iter().try_for_each(|joint| match &joint.calibration {
-        Some(cal) => prepare_joint(bus, config, joint, cal, robot),
-        None => Ok(()),
-    });
+    let checked = config
+        .joints
+        .iter()
+        .try_for_each(|joint| match &joint.calibration {
+            Some(cal) => prepare_joint(bus, config, joint, cal, robot),
+            None => Ok(()),
+        });
     bus.set_settings(saved);
     checked
 }

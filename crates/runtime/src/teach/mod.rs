@@ -282,4 +282,3 @@ impl StillCapture {
         &self.last
     }
 }
-

@@ -60,7 +60,10 @@ pub fn trim_idle(samples: &[TimedPose], still: f64) -> &[TimedPose] {
     let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
         return samples;
     };
-    let Some(moves) = samples.iter().position(|s| distance(&s.1, &first.1) > still) else {
+    let Some(moves) = samples
+        .iter()
+        .position(|s| distance(&s.1, &first.1) > still)
+    else {
         return &samples[..1];
     };
     let rests = samples

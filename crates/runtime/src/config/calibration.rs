@@ -138,12 +138,26 @@ impl JointCalibration {
         self.pose_deg + f64::from(self.direction) * (tick - self.pose_tick) * model.deg_per_tick()
     }
 
-    /// The joint angles, degrees, at the two ends of the measured range,
-    /// each brought [`RANGE_MARGIN_DEG`] inwards; lowest first.
-    pub fn limits_deg(&self, model: &Model) -> (f64, f64) {
+    /// The joint angles, degrees, at the two ends of the measured range;
+    /// lowest first.
+    pub fn range_deg(&self, model: &Model) -> (f64, f64) {
         let a = self.degrees_at(model, self.range[0] as f64);
         let b = self.degrees_at(model, self.range[1] as f64);
-        (a.min(b) + RANGE_MARGIN_DEG, a.max(b) - RANGE_MARGIN_DEG)
+        (a.min(b), a.max(b))
+    }
+
+    /// The joint angles, degrees, at the two ends of the measured range,
+    /// each brought [`RANGE_MARGIN_DEG`] inwards; lowest first. The
+    /// calibration pose stays reachable: where it lies within the margin of
+    /// an end (a gripper held closed against its stop), that side's limit is
+    /// the pose itself.
+    pub fn limits_deg(&self, model: &Model) -> (f64, f64) {
+        let (lo, hi) = self.range_deg(model);
+        let pose = self.pose_deg.clamp(lo, hi);
+        (
+            (lo + RANGE_MARGIN_DEG).min(pose),
+            (hi - RANGE_MARGIN_DEG).max(pose),
+        )
     }
 }
 

@@ -103,13 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot_calibrated(&args.robot.path, Some(&output))?;
     print_summary(&robot, &output);
     if named.as_deref() != Some(output.as_path()) {
-        println!(
-            "to use it: add `calibration: {}` to {} (relative to it), or give --calibration {} \
-             to play and bench",
-            output.display(),
-            args.robot.path.display(),
-            output.display()
-        );
+        println!("to use it: {}", how_to_use(&args.robot.path, &output));
     }
     if let Some(out) = &args.to_lerobot {
         write_lerobot(&cal, out)?;
@@ -206,6 +200,50 @@ fn write_imported(
     Ok(cal)
 }
 
+/// How to name the calibration at `output` for the robot file at `robot`:
+/// the `calibration:` line with the path as the robot file reads it
+/// (relative to its own directory), or, for a built-in robot, `--calibration`.
+fn how_to_use(robot: &Path, output: &Path) -> String {
+    let flag = format!(
+        "give --calibration {} to the commands that move or read joints",
+        output.display()
+    );
+    if servobus_runtime::config::is_builtin_path(robot) {
+        return format!(
+            "{flag} (or `servobus init` for a robot file of your own, and              `calibration: FILE` in it)"
+        );
+    }
+    let dir = robot
+        .canonicalize()
+        .ok()
+        .and_then(|r| r.parent().map(Path::to_path_buf));
+    let cal = output.canonicalize().ok();
+    let line = match (dir, cal) {
+        (Some(dir), Some(cal)) => relative(&dir, &cal),
+        _ => output.to_path_buf(),
+    };
+    format!(
+        "add `calibration: {}` to {}, or {flag}",
+        line.display(),
+        robot.display()
+    )
+}
+
+/// `target` as a path relative to the directory `base` (both absolute).
+fn relative(base: &Path, target: &Path) -> PathBuf {
+    let base: Vec<_> = base.components().collect();
+    let target: Vec<_> = target.components().collect();
+    let common = base.iter().zip(&target).take_while(|(a, b)| a == b).count();
+    let mut out = PathBuf::new();
+    for _ in common..base.len() {
+        out.push("..");
+    }
+    for c in &target[common..] {
+        out.push(c);
+    }
+    out
+}
+
 fn print_summary(robot: &Robot, output: &Path) {
     println!("calibration: {}", output.display());
     for joint in robot.joints() {
@@ -241,6 +279,9 @@ struct Terminal {
     entered: Arc<AtomicBool>,
     shown: Option<Duration>,
     lines: usize,
+    /// Without a terminal: the latest readings, summed up once when the
+    /// step ends (a log, not a redrawn table).
+    latest: Vec<LiveJoint>,
 }
 
 impl Terminal {
@@ -272,7 +313,23 @@ impl Terminal {
             entered,
             shown: None,
             lines: 0,
+            latest: Vec::new(),
         }
+    }
+
+    /// One line per joint: its measured ticks and how far it was swept.
+    fn table(&self, joints: &[LiveJoint], end_of_line: &str) -> String {
+        let mut out = String::new();
+        for ((name, j), dpt) in self.names.iter().zip(joints).zip(&self.deg_per_tick) {
+            out.push_str(&format!(
+                "  {name:<16} min {:>6}  max {:>6}  now {:>6}  ({:.0} deg swept){end_of_line}\n",
+                j.min,
+                j.max,
+                j.now,
+                (j.max - j.min) as f64 * dpt
+            ));
+        }
+        out
     }
 
     fn ends(&self) -> &'static str {
@@ -288,6 +345,11 @@ impl Operator for Terminal {
     fn step(&mut self, step: Step) {
         self.shown = None;
         self.lines = 0;
+        if !self.latest.is_empty() {
+            // The step that ended, as it ended.
+            let latest = std::mem::take(&mut self.latest);
+            print!("{}", self.table(&latest, ""));
+        }
         let text = match step {
             Step::TorqueOff => {
                 "1. Torque is off on every servo: the joints move freely. Support the robot."
@@ -310,27 +372,22 @@ impl Operator for Terminal {
     }
 
     fn watch(&mut self, at: Duration, joints: &[LiveJoint]) {
-        let every = if self.live { 100 } else { 2000 };
+        if !self.live {
+            self.latest = joints.to_vec();
+            return;
+        }
         if self
             .shown
-            .is_some_and(|s| at < s + Duration::from_millis(every))
+            .is_some_and(|s| at < s + Duration::from_millis(100))
         {
             return;
         }
         self.shown = Some(at);
         let mut out = String::new();
-        if self.live && self.lines > 0 {
+        if self.lines > 0 {
             out.push_str(&format!("\x1b[{}A", self.lines));
         }
-        for ((name, j), dpt) in self.names.iter().zip(joints).zip(&self.deg_per_tick) {
-            out.push_str(&format!(
-                "  {name:<16} min {:>6}  max {:>6}  now {:>6}  ({:.0} deg swept)\x1b[K\n",
-                j.min,
-                j.max,
-                j.now,
-                (j.max - j.min) as f64 * dpt
-            ));
-        }
+        out.push_str(&self.table(joints, "\x1b[K"));
         self.lines = joints.len();
         print!("{out}");
         let _ = std::io::stdout().flush();
@@ -375,4 +432,30 @@ pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::E
         robot.path.display(),
         file.display()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hint_names_the_calibration_as_the_robot_file_reads_it() {
+        assert_eq!(
+            relative(Path::new("/home/a/f"), Path::new("/home/a/cal/c.yaml")),
+            PathBuf::from("../cal/c.yaml")
+        );
+        assert_eq!(
+            relative(Path::new("/home/a/f"), Path::new("/home/a/f/c.yaml")),
+            PathBuf::from("c.yaml")
+        );
+        let dir = std::env::temp_dir().join(format!("servobus-hint-{}", std::process::id()));
+        let (f, cal) = (dir.join("f"), dir.join("cal"));
+        std::fs::create_dir_all(&f).expect("dirs");
+        std::fs::create_dir_all(&cal).expect("dirs");
+        std::fs::write(f.join("robot.yaml"), "").expect("robot file");
+        std::fs::write(cal.join("c.yaml"), "").expect("calibration");
+        let hint = how_to_use(&f.join("robot.yaml"), &cal.join("c.yaml"));
+        assert!(hint.contains("`calibration: ../cal/c.yaml`"), "{hint}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

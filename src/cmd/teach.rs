@@ -116,8 +116,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         "pose-and-pause".to_owned()
     };
     let yaml = motion_yaml(&robot, &robot_file, &keyframes, timed, &note);
-    std::fs::write(&args.output, yaml)
-        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
+    // Whole or not at all: a failed write leaves no partial motion file,
+    // and an earlier file at the path as it was.
+    servobus_io::write_atomic(&args.output, yaml.as_bytes())?;
     eprintln!(
         "wrote {} keyframes to {}; play it with `servobus play {}`",
         keyframes.len(),

@@ -6,9 +6,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
+use servobus_io::AtomicFile;
 use servobus_runtime::config::{load_robot, Robot};
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
-use servobus_io::AtomicFile;
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\

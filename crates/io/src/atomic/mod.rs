@@ -77,7 +77,9 @@ impl OutputError {
     pub fn is_bad_path(&self) -> bool {
         matches!(
             self,
-            OutputError::IsDirectory(_) | OutputError::NoDirectory { .. } | OutputError::ReadOnly(_)
+            OutputError::IsDirectory(_)
+                | OutputError::NoDirectory { .. }
+                | OutputError::ReadOnly(_)
         )
     }
 }
@@ -149,9 +151,9 @@ static SERIAL: AtomicU32 = AtomicU32::new(0);
 /// Creates a new temporary file beside `dest`: `.<name>.<pid>.tmp`, or
 /// `.<name>.<pid>.<n>.tmp` when that one exists already.
 fn create_temp(dest: &Path) -> io::Result<(PathBuf, File)> {
-    let name = dest.file_name().ok_or_else(|| {
-        io::Error::new(io::ErrorKind::InvalidInput, "the path has no file name")
-    })?;
+    let name = dest
+        .file_name()
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path has no file name"))?;
     let name = name.to_string_lossy();
     let dir = directory_of(dest);
     let pid = std::process::id();

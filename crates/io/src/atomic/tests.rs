@@ -2,10 +2,8 @@ use super::*;
 
 /// A new empty directory for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "servobus-io-atomic-{name}-{}",
-        std::process::id()
-    ));
+    let dir =
+        std::env::temp_dir().join(format!("servobus-io-atomic-{name}-{}", std::process::id()));
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).expect("a scratch directory");
     dir
@@ -15,7 +13,12 @@ fn scratch(name: &str) -> PathBuf {
 fn names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = fs::read_dir(dir)
         .expect("the directory lists")
-        .map(|e| e.expect("an entry").file_name().to_string_lossy().into_owned())
+        .map(|e| {
+            e.expect("an entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
         .collect();
     names.sort();
     names
@@ -182,5 +185,8 @@ fn a_device_is_written_in_place_and_its_errors_name_it() {
     // Through `Write`, the I/O error says the file too.
     let mut full = AtomicFile::create("/dev/full").expect("opened");
     let err = full.write_all(b"row\n").expect_err("the device is full");
-    assert!(err.to_string().starts_with("cannot write /dev/full: "), "{err}");
+    assert!(
+        err.to_string().starts_with("cannot write /dev/full: "),
+        "{err}"
+    );
 }

@@ -225,7 +225,7 @@ fn a_log_that_fails_during_the_run_is_dropped_and_the_old_one_kept() {
     says(
         &err,
         &[
-            "the log cannot be written; the run goes on without it",
+            "the log prev.csv cannot be written; the run goes on without it",
             "error: the log prev.csv was not kept: cannot write prev.csv: ",
         ],
     );

@@ -3,7 +3,8 @@
 //! `0` ok, `1` a problem was found (a servo missing, a fault, a bad frame,
 //! an output that could not be written), `2` a usage or input error (the
 //! command line, a robot or motion file, a port that cannot be opened, an
-//! output path that cannot be a file). clap already exits 2 for a bad command line.
+//! output path that cannot be a file). clap already exits 2 for a bad
+//! command line.
 
 use std::process::ExitCode;
 

@@ -97,6 +97,11 @@ impl CsvLog {
         }
     }
 
+    /// The log's path, as given.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// Whether a write has failed (the log will not be kept).
     pub fn has_failed(&self) -> bool {
         self.failed.is_some()

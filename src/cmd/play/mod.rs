@@ -215,7 +215,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Err(e) => failed_outputs.push(e),
         }
     }
-    let report = report?;
+    let report = match report {
+        Ok(report) => report,
+        Err(e) => {
+            for failed in &failed_outputs {
+                super::exit::report(failed);
+            }
+            return Err(e.into());
+        }
+    };
 
     let mut plot_written = false;
     if let (Some(plot), Some(path)) = (plot, &args.plot) {

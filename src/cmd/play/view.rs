@@ -81,7 +81,10 @@ pub(super) fn follow(
                     let failed = log.has_failed();
                     log.record(&sample);
                     if !failed && log.has_failed() {
-                        progress.message("the log cannot be written; the run goes on without it");
+                        progress.message(&format!(
+                            "the log {} cannot be written; the run goes on without it",
+                            log.path().display()
+                        ));
                     }
                 }
                 if let Some(plot) = &mut plot {

@@ -1,21 +1,13 @@
 //! Output files written whole or not at all.
 //!
 //! A file servobus writes (a log, a plot, a motion, a calibration) goes to a
-//! temporary file beside its target, `.<name>.<pid>.tmp` in the same
-//! directory, and is renamed over the target only once it is complete and
-//! on disk ([`AtomicFile::commit`]). Until then an existing file is
-//! untouched; a file not committed (an error, a refused run, a panic) has
-//! its temporary removed when it is dropped. Only a process killed outright
-//! (SIGKILL, power loss) can leave a temporary behind, and then the target is
-//! still the old file, whole.
-//!
-//! Targets that are not regular files (`/dev/stdout`, `/dev/null`, a FIFO,
-//! a terminal) cannot be replaced by a rename and are not meant to be: they
-//! are written directly, and a write error there may leave part of the
-//! output in them. A symbolic link to a regular file is followed: the file
-//! it points to is replaced, and the link stays a link. A replaced file
-//! keeps its permission bits; a directory, or a read-only file, is never a
-//! target.
+//! temporary file beside its target and is renamed over the target only
+//! once it is complete and on disk ([`AtomicFile::commit`]). Until then an
+//! existing file is untouched; a file not committed (an error, a refused
+//! run, a panic) has its temporary removed when it is dropped. Only a
+//! process killed outright (SIGKILL, power loss) can leave a temporary
+//! behind, and then the target is still the old file, whole. Targets that
+//! are not regular files are written in place (see [`AtomicFile`]).
 
 use std::fs::{self, File, OpenOptions, Permissions};
 use std::io::{self, Write};
@@ -210,8 +202,16 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), OutputEr
 
 /// A file written to a temporary beside its target and renamed over it by
 /// [`commit`](AtomicFile::commit); dropped without a commit, it removes its
-/// temporary and leaves the target untouched. See the [module](self) for
-/// targets that are not regular files.
+/// temporary and leaves the target untouched.
+///
+/// The temporary is `.<name>.<pid>.tmp` in the target's directory (so that
+/// the rename stays on one file system). A target that is not a regular
+/// file (`/dev/stdout`, `/dev/null`, a FIFO, a terminal) is written in
+/// place instead, as nothing can be renamed over it: a failed write may
+/// leave part of the output there ([`is_direct`](AtomicFile::is_direct)). A
+/// symbolic link to a regular file is followed (the file is replaced, the
+/// link stays); a replaced file keeps its permission bits; a directory or a
+/// read-only file is never a target.
 ///
 /// Its [`Write`] errors carry an [`OutputError::Write`] naming the target.
 ///

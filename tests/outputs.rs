@@ -236,31 +236,26 @@ fn a_log_that_fails_during_the_run_is_dropped_and_the_old_one_kept() {
 fn a_directory_given_as_an_output_is_an_input_error() {
     let dir = empty("outputs-dir");
     let old = yesterday(&dir);
-    std::fs::create_dir(dir.join("sub")).expect("a directory");
-    for flag in ["--log", "--plot"] {
-        let target = if flag == "--log" { "sub" } else { "prev.svg" };
-        let other = if flag == "--log" { "--plot" } else { "--log" };
-        let other_target = if flag == "--log" { "prev.svg" } else { "sub" };
-        let out = servobus_in(
-            &dir,
-            &[
-                "play",
-                arg(&repo(WAVE)),
-                "--fast",
-                flag,
-                target,
-                other,
-                other_target,
-            ],
-        );
+    // A directory named as the log, then one named as the plot (with a
+    // plot's extension, which a directory may have).
+    for (log, plot, said) in [
+        ("sub", "prev.svg", "--log: sub is a directory, not a file"),
+        (
+            "prev.csv",
+            "sub.svg",
+            "--plot: sub.svg is a directory, not a file",
+        ),
+    ] {
+        let sub = dir.join(if log == "sub" { log } else { plot });
+        std::fs::create_dir(&sub).expect("a directory");
+        let wave = repo(WAVE);
+        let args = ["play", arg(&wave), "--fast", "--log", log, "--plot", plot];
+        let out = servobus_in(&dir, &args);
         let (_, err) = exited(&out, 2);
-        says(
-            &err,
-            &["sub is a directory, not a file", "nothing was moved"],
-        );
+        says(&err, &[said, "nothing was moved"]);
+        std::fs::remove_dir(&sub).expect("removed");
+        untouched(&dir, &old);
     }
-    std::fs::remove_dir(dir.join("sub")).expect("removed");
-    untouched(&dir, &old);
 }
 
 #[test]

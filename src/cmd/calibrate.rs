@@ -71,6 +71,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .or(named.clone())
         .unwrap_or_else(|| PathBuf::from(format!("{}.calibration.yaml", design.name)));
     let ports = ports(&args, &design)?;
+    // The outputs are checked before the procedure, which they would
+    // otherwise lose at its end; nothing is created or changed yet.
+    let exporting_only = ports.is_none() && args.from_lerobot.is_none();
+    if !exporting_only {
+        super::check_writable("-o", &output)?;
+    }
+    if let Some(out) = &args.to_lerobot {
+        super::check_writable("--to-lerobot", out)?;
+    }
     let cal = if let Some(json) = &args.from_lerobot {
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("cannot read {}", json.display()))?;
@@ -97,8 +106,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
              or --from-lerobot FILE to import a LeRobot calibration"
         );
     };
-    save_calibration(&cal, &output)
-        .with_context(|| format!("cannot write {}", output.display()))?;
+    // Replaced whole or not at all: a failure leaves an earlier calibration
+    // at the path untouched.
+    save_calibration(&cal, &output)?;
     // Applying it now shows at once a calibration the robot cannot use.
     let robot = load_robot_calibrated(&args.robot.path, Some(&output))?;
     print_summary(&robot, &output);
@@ -112,8 +122,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
-    std::fs::write(out, to_lerobot(cal))
-        .with_context(|| format!("cannot write {}", out.display()))?;
+    servobus_io::write_atomic(out, to_lerobot(cal).as_bytes())?;
     println!("LeRobot calibration: {}", out.display());
     Ok(())
 }

@@ -113,7 +113,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     let taught = match (taught, taken) {
         (Ok(Some(taught)), taken) => (taught, taken),
-        (Ok(None), Err((_, e))) => return Err(explain(e, &args, None)),
+        (Ok(None), Err((_, e))) => return Err(explain(e, None)),
         (Ok(None), Ok(_)) => bail!("nothing was captured; no motion file written"),
         (Err(e), _) => {
             return Err(anyhow::Error::new(e).context("the take is not written: nothing was"))
@@ -126,8 +126,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .canonicalize()
         .unwrap_or_else(|_| args.robot.path.clone());
     let yaml = motion_yaml(&robot, &robot_file, &taught);
-    std::fs::write(&args.output, yaml)
-        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
+    // Whole or not at all: a failed write leaves no partial motion file,
+    // and an earlier file at the path as it was.
+    servobus_io::write_atomic(&args.output, yaml.as_bytes())?;
     let written = format!(
         "wrote {} keyframe{} to {}",
         taught.keyframes.len(),
@@ -142,13 +143,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Err((_, e)) => Err(explain(e, &args, Some(&written))),
+        Err((_, e)) => Err(explain(e, Some(&written))),
     }
 }
 
 /// What to do about a take that stopped on `e`; `written` says what was
 /// kept of it.
-fn explain(e: anyhow::Error, args: &Args, written: Option<&str>) -> anyhow::Error {
+fn explain(e: anyhow::Error, written: Option<&str>) -> anyhow::Error {
     let kept = written.map_or_else(
         || "nothing was written".to_owned(),
         |w| format!("the keyframes before it are kept: {w}"),
@@ -164,8 +165,8 @@ fn explain(e: anyhow::Error, args: &Args, written: Option<&str>) -> anyhow::Erro
                 }
             };
             e.context(format!(
-                "the take stopped there and {kept}. Keep the joint inside its limits and teach                  again ({widen}); {} was not changed otherwise",
-                args.output.display()
+                "the take stopped there and {kept}. Keep the joint inside its limits and teach \
+                 again ({widen})"
             ))
         }
         _ => e.context(format!("the take stopped and {kept}")),

@@ -164,12 +164,12 @@ fn explain(e: anyhow::Error, written: Option<&str>) -> anyhow::Error {
                     "if the joint really reaches there, calibrate again, sweeping it to its end stops"
                 }
             };
-            e.context(format!(
-                "the take stopped there and {kept}. Keep the joint inside its limits and teach \
-                 again ({widen})"
-            ))
+            anyhow::anyhow!(
+                "{e}.\nThe take stopped there and {kept}. Keep the joint inside its limits and \
+                 teach again ({widen})."
+            )
         }
-        _ => e.context(format!("the take stopped and {kept}")),
+        _ => anyhow::anyhow!("{}\nThe take stopped and {kept}.", super::exit::message(&e)),
     }
 }
 

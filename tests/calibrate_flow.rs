@@ -222,16 +222,15 @@ fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
     let said = calibrate(&robot_file, &sim, &cal);
     assert!(said.contains("across the seam"), "{said}");
     sim.stop();
-    // Each joint's measured range is where the hand took it, less the margin.
+    // Each joint's measured range is where the hand took it.
     let robot = servobus_runtime::config::load_robot_calibrated(&robot_file, Some(&cal))
         .expect("the calibration applies");
     for (j, &(lo, hi)) in robot.joints().zip(&ends) {
         let c = j.calibration.as_ref().expect("calibrated");
-        let (a, b) = c.limits_deg(j.model);
-        let margin = servobus_runtime::config::RANGE_MARGIN_DEG;
+        let (a, b) = c.range_deg(j.model);
         assert!(
-            (a - margin - lo).abs() < 1.0 && (b + margin - hi).abs() < 1.0,
-            "{}: measured {a:.1}..{b:.1} plus margin, hand {lo}..{hi}",
+            (a - lo).abs() < 1.0 && (b - hi).abs() < 1.0,
+            "{}: measured {a:.1}..{b:.1}, hand {lo}..{hi}",
             j.name
         );
     }

@@ -273,7 +273,7 @@ fn format_errors_have_file_line_and_column() {
         "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 200}\n",
     );
     let want = format!(
-        "{}:4:15: keyframes[1].pose.a: keyframe 1: 200 deg is outside the limits of joint `a` [-100, 100] deg",
+        "{}:4:15: keyframes[1].pose.a: keyframe 1: 200 deg is outside the limits of joint `a` [-100, 100] deg (the upper limit comes from the robot file's `min`/`max`)",
         m.display()
     );
     says(&plan_error(&m), &[&want]);

@@ -18,7 +18,7 @@ use anyhow::{bail, Context};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
-    Operator, ProcedureOptions, Refusal, Step,
+    Operator, ProcedureOptions, Refusal, Step, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot_calibrated, load_robot_design, save_calibration, utc_now,
@@ -71,6 +71,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .or(named.clone())
         .unwrap_or_else(|| PathBuf::from(format!("{}.calibration.yaml", design.name)));
     let ports = ports(&args, &design)?;
+    // The outputs are checked before the procedure, which they would
+    // otherwise lose at its end; nothing is created or changed yet.
+    let exporting_only = ports.is_none() && args.from_lerobot.is_none();
+    if !exporting_only {
+        super::check_writable("-o", &output)?;
+    }
+    if let Some(out) = &args.to_lerobot {
+        super::check_writable("--to-lerobot", out)?;
+    }
     let cal = if let Some(json) = &args.from_lerobot {
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("cannot read {}", json.display()))?;
@@ -97,19 +106,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
              or --from-lerobot FILE to import a LeRobot calibration"
         );
     };
-    save_calibration(&cal, &output)
-        .with_context(|| format!("cannot write {}", output.display()))?;
+    // Replaced whole or not at all: a failure leaves an earlier calibration
+    // at the path untouched.
+    save_calibration(&cal, &output)?;
     // Applying it now shows at once a calibration the robot cannot use.
     let robot = load_robot_calibrated(&args.robot.path, Some(&output))?;
     print_summary(&robot, &output);
     if named.as_deref() != Some(output.as_path()) {
-        println!(
-            "to use it: add `calibration: {}` to {} (relative to it), or give --calibration {} \
-             to play and bench",
-            output.display(),
-            args.robot.path.display(),
-            output.display()
-        );
+        println!("to use it: {}", how_to_use(&args.robot.path, &output));
     }
     if let Some(out) = &args.to_lerobot {
         write_lerobot(&cal, out)?;
@@ -118,8 +122,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
-    std::fs::write(out, to_lerobot(cal))
-        .with_context(|| format!("cannot write {}", out.display()))?;
+    servobus_io::write_atomic(out, to_lerobot(cal).as_bytes())?;
     println!("LeRobot calibration: {}", out.display());
     Ok(())
 }
@@ -143,21 +146,11 @@ fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
     }
 }
 
-/// Reply deadline allowance: calibrating and the checks before a run are
-/// not timed, so a slow adapter or a loaded host (a pty served by a process
-/// that waits for the CPU) must not make a present servo look absent. A
-/// servo that is really missing costs this much per try, once.
-const PATIENCE: Duration = Duration::from_millis(50);
-
-/// Tries per transaction while calibrating: a reply lost now and then must
-/// not end the procedure.
-const RETRIES: u8 = 3;
-
 fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
     let mut buses = Vec::new();
     for (bus, port) in robot.buses.iter().zip(ports) {
         let mut opened = open_bus(bus, port, Allowance::AtLeast(PATIENCE))?;
-        opened.set_settings(opened.settings().with_retries(RETRIES));
+        opened.set_settings(opened.settings().with_retries(PATIENT_RETRIES));
         buses.push(opened);
     }
     Ok(buses)
@@ -216,6 +209,50 @@ fn write_imported(
     Ok(cal)
 }
 
+/// How to name the calibration at `output` for the robot file at `robot`:
+/// the `calibration:` line with the path as the robot file reads it
+/// (relative to its own directory), or, for a built-in robot, `--calibration`.
+fn how_to_use(robot: &Path, output: &Path) -> String {
+    let flag = format!(
+        "give --calibration {} to the commands that move or read joints",
+        output.display()
+    );
+    if servobus_runtime::config::is_builtin_path(robot) {
+        return format!(
+            "{flag} (or `servobus init` for a robot file of your own, and              `calibration: FILE` in it)"
+        );
+    }
+    let dir = robot
+        .canonicalize()
+        .ok()
+        .and_then(|r| r.parent().map(Path::to_path_buf));
+    let cal = output.canonicalize().ok();
+    let line = match (dir, cal) {
+        (Some(dir), Some(cal)) => relative(&dir, &cal),
+        _ => output.to_path_buf(),
+    };
+    format!(
+        "add `calibration: {}` to {}, or {flag}",
+        line.display(),
+        robot.display()
+    )
+}
+
+/// `target` as a path relative to the directory `base` (both absolute).
+fn relative(base: &Path, target: &Path) -> PathBuf {
+    let base: Vec<_> = base.components().collect();
+    let target: Vec<_> = target.components().collect();
+    let common = base.iter().zip(&target).take_while(|(a, b)| a == b).count();
+    let mut out = PathBuf::new();
+    for _ in common..base.len() {
+        out.push("..");
+    }
+    for c in &target[common..] {
+        out.push(c);
+    }
+    out
+}
+
 fn print_summary(robot: &Robot, output: &Path) {
     println!("calibration: {}", output.display());
     for joint in robot.joints() {
@@ -251,6 +288,9 @@ struct Terminal {
     entered: Arc<AtomicBool>,
     shown: Option<Duration>,
     lines: usize,
+    /// Without a terminal: the latest readings, summed up once when the
+    /// step ends (a log, not a redrawn table).
+    latest: Vec<LiveJoint>,
 }
 
 impl Terminal {
@@ -282,7 +322,23 @@ impl Terminal {
             entered,
             shown: None,
             lines: 0,
+            latest: Vec::new(),
         }
+    }
+
+    /// One line per joint: its measured ticks and how far it was swept.
+    fn table(&self, joints: &[LiveJoint], end_of_line: &str) -> String {
+        let mut out = String::new();
+        for ((name, j), dpt) in self.names.iter().zip(joints).zip(&self.deg_per_tick) {
+            out.push_str(&format!(
+                "  {name:<16} min {:>6}  max {:>6}  now {:>6}  ({:.0} deg swept){end_of_line}\n",
+                j.min,
+                j.max,
+                j.now,
+                (j.max - j.min) as f64 * dpt
+            ));
+        }
+        out
     }
 
     fn ends(&self) -> &'static str {
@@ -298,6 +354,11 @@ impl Operator for Terminal {
     fn step(&mut self, step: Step) {
         self.shown = None;
         self.lines = 0;
+        if !self.latest.is_empty() {
+            // The step that ended, as it ended.
+            let latest = std::mem::take(&mut self.latest);
+            print!("{}", self.table(&latest, ""));
+        }
         let text = match step {
             Step::TorqueOff => {
                 "1. Torque is off on every servo: the joints move freely. Support the robot."
@@ -320,27 +381,22 @@ impl Operator for Terminal {
     }
 
     fn watch(&mut self, at: Duration, joints: &[LiveJoint]) {
-        let every = if self.live { 100 } else { 2000 };
+        if !self.live {
+            self.latest = joints.to_vec();
+            return;
+        }
         if self
             .shown
-            .is_some_and(|s| at < s + Duration::from_millis(every))
+            .is_some_and(|s| at < s + Duration::from_millis(100))
         {
             return;
         }
         self.shown = Some(at);
         let mut out = String::new();
-        if self.live && self.lines > 0 {
+        if self.lines > 0 {
             out.push_str(&format!("\x1b[{}A", self.lines));
         }
-        for ((name, j), dpt) in self.names.iter().zip(joints).zip(&self.deg_per_tick) {
-            out.push_str(&format!(
-                "  {name:<16} min {:>6}  max {:>6}  now {:>6}  ({:.0} deg swept)\x1b[K\n",
-                j.min,
-                j.max,
-                j.now,
-                (j.max - j.min) as f64 * dpt
-            ));
-        }
+        out.push_str(&self.table(joints, "\x1b[K"));
         self.lines = joints.len();
         print!("{out}");
         let _ = std::io::stdout().flush();
@@ -351,26 +407,16 @@ impl Operator for Terminal {
     }
 }
 
-/// Before `play` or `bench` moves real servos: stops when the robot's
-/// calibration is missing or does not fit the servos on bus `index`, with
-/// what to run; otherwise puts the servos in their play frame.
+/// Before any command reads or moves joints through the calibration on real
+/// servos: the library's one check ([`prepare_bus`]), with what to run when
+/// it refuses.
 pub(crate) fn check_bus<T: Transport, C: Clock>(
     robot: &Robot,
     index: usize,
     bus: &mut Bus<T, C>,
     port: &str,
 ) -> anyhow::Result<()> {
-    // Not timed: patient deadlines, so that a slow adapter or a loaded host
-    // does not make a servo look absent; the run's own settings after.
-    let saved = *bus.settings();
-    bus.set_settings(
-        saved
-            .with_latency(saved.link.latency.max(PATIENCE))
-            .with_retries(RETRIES),
-    );
-    let checked = prepare_bus(robot, index, bus);
-    bus.set_settings(saved);
-    checked.map_err(|refusal| refused(robot, &refusal, port))
+    prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
 }
 
 /// [`check_bus`] for every bus.
@@ -385,7 +431,7 @@ pub(crate) fn check_buses<T: Transport, C: Clock>(
     Ok(())
 }
 
-fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
+pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
     let file = match &robot.calibration {
         RobotCalibration::Missing(path) | RobotCalibration::Applied { path, .. } => path.clone(),
         RobotCalibration::None => PathBuf::from(format!("{}.calibration.yaml", robot.name)),
@@ -395,4 +441,30 @@ fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
         robot.path.display(),
         file.display()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hint_names_the_calibration_as_the_robot_file_reads_it() {
+        assert_eq!(
+            relative(Path::new("/home/a/f"), Path::new("/home/a/cal/c.yaml")),
+            PathBuf::from("../cal/c.yaml")
+        );
+        assert_eq!(
+            relative(Path::new("/home/a/f"), Path::new("/home/a/f/c.yaml")),
+            PathBuf::from("c.yaml")
+        );
+        let dir = std::env::temp_dir().join(format!("servobus-hint-{}", std::process::id()));
+        let (f, cal) = (dir.join("f"), dir.join("cal"));
+        std::fs::create_dir_all(&f).expect("dirs");
+        std::fs::create_dir_all(&cal).expect("dirs");
+        std::fs::write(f.join("robot.yaml"), "").expect("robot file");
+        std::fs::write(cal.join("c.yaml"), "").expect("calibration");
+        let hint = how_to_use(&f.join("robot.yaml"), &cal.join("c.yaml"));
+        assert!(hint.contains("`calibration: ../cal/c.yaml`"), "{hint}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

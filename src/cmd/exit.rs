@@ -1,12 +1,15 @@
 //! Exit codes and error messages, the same for every command.
 //!
-//! `0` ok, `1` a problem was found (a servo missing, a fault, a bad frame),
-//! `2` a usage or input error (the command line, a robot or motion file, a
-//! port that cannot be opened). clap already exits 2 for a bad command line.
+//! `0` ok, `1` a problem was found (a servo missing, a fault, a bad frame,
+//! an output that could not be written), `2` a usage or input error (the
+//! command line, a robot or motion file, a port that cannot be opened, an
+//! output path that cannot be a file). clap already exits 2 for a bad
+//! command line.
 
 use std::process::ExitCode;
 
 use servobus_driver::OpenError;
+use servobus_io::OutputError;
 use servobus_runtime::config::{is_builtin_path, ConfigError};
 
 /// Exit code: a problem was found.
@@ -33,9 +36,13 @@ pub fn report(err: &anyhow::Error) -> ExitCode {
 
 /// The exit code for `err`: 2 for input errors, 1 otherwise.
 pub fn code(err: &anyhow::Error) -> u8 {
-    let input = err
-        .chain()
-        .any(|e| e.is::<ConfigError>() || e.is::<InputError>() || OpenError::find(e).is_some());
+    let input = err.chain().any(|e| {
+        e.is::<ConfigError>()
+            || e.is::<InputError>()
+            || OpenError::find(e).is_some()
+            || e.downcast_ref::<OutputError>()
+                .is_some_and(OutputError::is_bad_path)
+    });
     if input {
         USAGE
     } else {

@@ -2,9 +2,11 @@
 //! built-in robot.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use servobus_io::AtomicFile;
 use servobus_runtime::config::{load_robot, Robot};
 
 use super::exit::input;
@@ -45,9 +47,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.dir)
         .map_err(|e| input(format!("cannot create {}: {e}", args.dir.display())))?;
+    // Both files are written in full (to temporaries) before either
+    // replaces anything: a failure (a full disk) leaves neither, so that
+    // `init` can simply be run again.
+    let mut written = Vec::new();
     for (path, text) in &files {
-        std::fs::write(path, text)
-            .map_err(|e| input(format!("cannot write {}: {e}", path.display())))?;
+        let mut file = AtomicFile::create(path)?;
+        file.write_all(text.as_bytes())?;
+        written.push(file);
+    }
+    for file in written {
+        let path = file.path().to_path_buf();
+        file.commit()?;
         println!("wrote {}", path.display());
     }
     // `./motion.yaml` reads better as `motion.yaml`.

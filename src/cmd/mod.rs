@@ -194,29 +194,14 @@ pub(crate) fn hand_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
 }
 
 /// Fails at once, before anything moves, when the file `path` given with
-/// `flag` could not be written after the run: its directory is missing or
-/// it cannot be opened for writing. An existing file is left as it is.
+/// `flag` could not be written after the run: a directory, a missing
+/// directory, a read-only file, a directory in which no file can be created
+/// ([`servobus_io::check_output`]). Nothing is created or changed: an
+/// existing file stays as it is until the run's new one replaces it whole.
+///
+/// # Errors
+/// An input error (exit 2) naming the flag and the file.
 pub(crate) fn check_writable(flag: &str, path: &std::path::Path) -> anyhow::Result<()> {
-    use anyhow::Context;
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-    if let Some(dir) = dir {
-        if !dir.is_dir() {
-            return Err(exit::input(format!(
-                "{flag} {}: the directory {} does not exist; nothing was moved",
-                path.display(),
-                dir.display()
-            )));
-        }
-    }
-    std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .with_context(|| {
-            format!(
-                "{flag} {}: cannot write there; nothing was moved",
-                path.display()
-            )
-        })?;
-    Ok(())
+    servobus_io::check_output(path)
+        .map_err(|e| exit::input(format!("{flag}: {e}; nothing was moved")))
 }

@@ -92,6 +92,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 Some(c) => open_bus(c, &port, Allowance::Assumed)?,
                 None => open_plain_bus(&port, SCAN_BAUD, Series::Sts, None)?,
             };
+            if let (Some(r), Some(c)) = (robot.as_ref(), cfg) {
+                // Angles are shown through the calibration: the servos must
+                // match it (and hold its session offsets) first.
+                let index = r.buses.iter().position(|b| b.name == c.name).unwrap_or(0);
+                super::calibrate::check_bus(r, index, &mut bus, &port)?;
+            }
             let servos = match (robot.as_ref(), cfg) {
                 (Some(r), Some(c)) => Watched::of_bus(c, r.units),
                 _ => Poller::scan(&mut bus).context("scanning the port")?,

@@ -4,7 +4,6 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::Context;
 use serde::Serialize;
 use servobus_runtime::config::{load_motion_calibrated, plan_motion, Motion, Robot};
 use servobus_trajectory::{JointState, Trajectory};
@@ -76,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let traj = plan_motion(&motion, &robot)?;
     let report = summarise(&motion, &robot, &traj);
     if let Some(path) = &args.plot {
-        plot(&motion, &traj, path).with_context(|| format!("drawing {}", path.display()))?;
+        plot(&motion, &traj, path)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -247,8 +246,17 @@ fn print_text(r: &PlanJson, motion: &Motion) {
     }
 }
 
-/// Position and velocity of every joint over time, one chart above the other.
+/// Position and velocity of every joint over time, one chart above the
+/// other, drawn as SVG and written to `path` whole.
 fn plot(motion: &Motion, traj: &Trajectory, path: &Path) -> anyhow::Result<()> {
+    let mut svg = String::new();
+    draw_plot(motion, traj, &mut svg)?;
+    servobus_io::write_atomic(path, svg.as_bytes())?;
+    Ok(())
+}
+
+/// The SVG of [`plot`], drawn into `svg`.
+fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Result<()> {
     use plotters::prelude::*;
 
     let u = motion.units;
@@ -279,7 +287,7 @@ fn plot(motion: &Motion, traj: &Trajectory, path: &Path) -> anyhow::Result<()> {
     };
 
     let height = 900u32;
-    let root = SVGBackend::new(path, (1200, height)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1200, height)).into_drawing_area();
     root.fill(&WHITE)?;
     let title = format!(
         "{} — planned path, {:.2} s",

@@ -6,6 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
+use servobus_io::AtomicFile;
 use servobus_runtime::config::{load_robot, Robot};
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
@@ -66,7 +67,8 @@ pub struct Args {
     #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg)]
     pub hand: Option<std::path::PathBuf>,
     /// Write the physical joint angles (deg) to this CSV, `time_s,<joint>,...`,
-    /// 100 rows a second while the simulator runs.
+    /// 100 rows a second while the simulator runs; the file appears (or
+    /// replaces an earlier one) when the simulator stops.
     #[arg(long, value_name = "T.csv")]
     pub truth: Option<std::path::PathBuf>,
 }
@@ -94,12 +96,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.hand {
         builder = builder.hand(Hand::load(path, &robot)?);
     }
-    // The truth file is opened before anything is served, so that a bad
-    // path fails at once.
+    // The truth file's temporary is created before anything is served, so
+    // that a bad path fails at once; it becomes the truth file when the
+    // simulator stops (an earlier file there stays whole until then).
     let truth = match &args.truth {
         Some(path) => {
-            let file = std::fs::File::create(path)
-                .with_context(|| format!("{}: cannot create the truth file", path.display()))?;
+            let file = AtomicFile::create(path)?;
             // One column per served joint.
             let truth = match args.bus.as_deref() {
                 Some(name) => Truth::new(
@@ -114,7 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 None => new_truth(&robot),
             };
             builder = builder.truth(&truth);
-            Some((truth, std::io::BufWriter::new(file), path.clone()))
+            Some((truth, file, path.clone()))
         }
         None => None,
     };
@@ -150,7 +152,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let stop = Arc::clone(&stop);
         let done = Arc::new(AtomicBool::new(false));
         let finished = Arc::clone(&done);
-        let handle = std::thread::spawn(move || write_truth(&truth, out, &stop, &finished));
+        let handle = std::thread::spawn(move || -> anyhow::Result<()> {
+            let mut out = std::io::BufWriter::new(out);
+            write_truth(&truth, &mut out, &stop, &finished)?;
+            out.into_inner().map_err(|e| e.into_error())?.commit()?;
+            Ok(())
+        });
         (handle, done, path)
     });
     let served = server.serve(&stop);
@@ -160,9 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some((handle, done, path)) = writer {
         done.store(true, Ordering::SeqCst);
         match handle.join() {
-            Ok(result) => {
-                result.with_context(|| format!("{}: cannot write the truth", path.display()))?
-            }
+            Ok(result) => result?,
             Err(_) => anyhow::bail!("{}: the truth writer failed", path.display()),
         }
     }
@@ -171,10 +176,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 /// Streams the truth's complete rows to `out` until `done`, flushing every
-/// [`TRUTH_FLUSH`] so that a reader sees the file grow.
+/// [`TRUTH_FLUSH`] (to the truth file's temporary: memory does not grow
+/// with a long session).
 fn write_truth(
     truth: &Truth,
-    mut out: impl Write,
+    out: &mut impl Write,
     stop: &AtomicBool,
     done: &AtomicBool,
 ) -> std::io::Result<()> {

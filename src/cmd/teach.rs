@@ -9,8 +9,10 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
-use servobus_runtime::config::{load_robot_calibrated, Robot};
-use servobus_runtime::teach::{distance, motion_yaml, reduce, StillCapture, Teacher, TimedPose};
+use servobus_runtime::config::{load_robot_calibrated, LimitOrigin, Robot};
+use servobus_runtime::teach::{
+    self, check_pose, distance, motion_yaml, StillCapture, Taught, TeachError, Teacher, TimedPose,
+};
 
 use super::link::{bus_ports, open_bus, Allowance, SerialBus};
 
@@ -76,8 +78,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
     super::check_writable("-o", &args.output)?;
-    let buses = open_buses(&robot, args.robot.hardware.port.as_deref())?;
-    let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
+    let port = args.robot.hardware.port.as_deref();
+    let buses = open_buses(&robot, port)?;
+    // The servos are made to match the calibration before the first pose is
+    // read: a taught angle is the angle `play` moves to.
+    let mut teacher = Teacher::new(&robot, buses, &args.hold).map_err(|e| match e {
+        TeachError::Refused(refusal) => {
+            let port = bus_ports(&robot, port).into_iter().flatten().next();
+            super::calibrate::refused(&robot, &refusal, port.as_deref().unwrap_or("PORT"))
+        }
+        e => e.into(),
+    })?;
     teacher.release()?;
     let held = if args.hold.is_empty() {
         String::new()
@@ -95,38 +106,70 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let keys = interactive.then(stdin_lines);
 
     let taken = take(&args, &robot, &mut teacher, &stop, keys.as_ref());
-    // Nothing is lost: what was captured is written even after an error.
-    let (keyframes, timed) = match &taken {
-        Ok(t) | Err((t, _)) => t.keyframes(&robot, &args),
+    // Nothing is lost: what was captured (inside the limits) is written even
+    // after an error.
+    let taught = match &taken {
+        Ok(t) | Err((t, _)) => t.taught(&robot, &args),
     };
-    if keyframes.is_empty() {
-        if let Err((_, e)) = taken {
-            return Err(e);
+    let taught = match (taught, taken) {
+        (Ok(Some(taught)), taken) => (taught, taken),
+        (Ok(None), Err((_, e))) => return Err(explain(e, None)),
+        (Ok(None), Ok(_)) => bail!("nothing was captured; no motion file written"),
+        (Err(e), _) => {
+            return Err(anyhow::Error::new(e).context("the take is not written: nothing was"))
         }
-        bail!("nothing was captured; no motion file written");
-    }
+    };
+    let (taught, taken) = taught;
     let robot_file = args
         .robot
         .path
         .canonicalize()
         .unwrap_or_else(|_| args.robot.path.clone());
-    let note = if timed {
-        format!("a continuous take reduced to within {} deg", args.tolerance)
-    } else {
-        "pose-and-pause".to_owned()
-    };
-    let yaml = motion_yaml(&robot, &robot_file, &keyframes, timed, &note);
-    std::fs::write(&args.output, yaml)
-        .with_context(|| format!("{}: cannot write the motion file", args.output.display()))?;
-    eprintln!(
-        "wrote {} keyframes to {}; play it with `servobus play {}`",
-        keyframes.len(),
-        args.output.display(),
+    let yaml = motion_yaml(&robot, &robot_file, &taught);
+    // Whole or not at all: a failed write leaves no partial motion file,
+    // and an earlier file at the path as it was.
+    servobus_io::write_atomic(&args.output, yaml.as_bytes())?;
+    let written = format!(
+        "wrote {} keyframe{} to {}",
+        taught.keyframes.len(),
+        if taught.keyframes.len() == 1 { "" } else { "s" },
         args.output.display()
     );
     match taken {
-        Ok(_) => Ok(ExitCode::SUCCESS),
-        Err((_, e)) => Err(e),
+        Ok(_) => {
+            eprintln!(
+                "{written}; play it with `servobus play {}`",
+                args.output.display()
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Err((_, e)) => Err(explain(e, Some(&written))),
+    }
+}
+
+/// What to do about a take that stopped on `e`; `written` says what was
+/// kept of it.
+fn explain(e: anyhow::Error, written: Option<&str>) -> anyhow::Error {
+    let kept = written.map_or_else(
+        || "nothing was written".to_owned(),
+        |w| format!("the keyframes before it are kept: {w}"),
+    );
+    match e.downcast_ref::<TeachError>() {
+        Some(TeachError::OutsideLimits { origin, .. }) => {
+            let widen = match origin {
+                LimitOrigin::RobotFile => {
+                    "to allow it, widen `min`/`max` of the joint in the robot file"
+                }
+                LimitOrigin::Calibration => {
+                    "if the joint really reaches there, calibrate again, sweeping it to its end stops"
+                }
+            };
+            anyhow::anyhow!(
+                "{e}.\nThe take stopped there and {kept}. Keep the joint inside its limits and \
+                 teach again ({widen})."
+            )
+        }
+        _ => anyhow::anyhow!("{}\nThe take stopped and {kept}.", super::exit::message(&e)),
     }
 }
 
@@ -181,20 +224,34 @@ fn stdin_lines() -> mpsc::Receiver<String> {
 /// What a take captured.
 #[derive(Default)]
 struct Take {
-    /// Pose-and-pause keyframes.
-    poses: Vec<Vec<f64>>,
+    /// The pose the take started from.
+    start: Option<Vec<f64>>,
+    /// Pose-and-pause keyframes, at the time each was captured.
+    poses: Vec<TimedPose>,
     /// The recorded path (continuous).
     samples: Vec<TimedPose>,
 }
 
 impl Take {
-    /// The keyframes to write and whether they are timed.
-    fn keyframes(&self, robot: &Robot, args: &Args) -> (Vec<TimedPose>, bool) {
+    /// The motion to write, if anything was captured.
+    fn taught(&self, robot: &Robot, args: &Args) -> Result<Option<Taught>, TeachError> {
+        let Some(start) = &self.start else {
+            return Ok(None);
+        };
+        let deg = |d: f64| robot.units.from_rad(d.to_radians());
         if args.continuous {
-            let tol = robot.units.from_rad(args.tolerance.to_radians());
-            (reduce(robot, &self.samples, tol), true)
+            if self.samples.is_empty() {
+                return Ok(None);
+            }
+            Taught::continuous(
+                robot,
+                &self.samples,
+                deg(args.tolerance),
+                deg(teach::STILL_DEG),
+            )
+            .map(Some)
         } else {
-            (self.poses.iter().map(|p| (0.0, p.clone())).collect(), false)
+            Ok(Some(Taught::paced(robot, start, &self.poses)))
         }
     }
 }
@@ -218,10 +275,14 @@ fn take<T: Transport, C: Clock>(
     let period = Duration::from_secs_f64(1.0 / rate);
     let start = teacher.now();
     let end = args.duration.map(|d| start + Duration::from_secs_f64(d));
-    let first = match teacher.pose() {
+    let first = match teacher
+        .pose()
+        .and_then(|p| check_pose(robot, &p).map(|()| p))
+    {
         Ok(p) => p,
         Err(e) => return Err((take, e.into())),
     };
+    take.start = Some(first.clone());
     let mut capture = StillCapture::new(&first, robot.units);
     let names = teacher.joint_names();
     let view = std::io::stderr().is_terminal();
@@ -248,6 +309,10 @@ fn take<T: Transport, C: Clock>(
         };
         let t = (teacher.now() - start).as_secs_f64();
         if args.continuous {
+            // Every sample is a point of the path: none leaves the limits.
+            if let Err(e) = check_pose(robot, &pose) {
+                return Err((take, e.into()));
+            }
             take.samples.push((t, pose.clone()));
         }
         let mut captured = None;
@@ -265,7 +330,10 @@ fn take<T: Transport, C: Clock>(
             captured = capture.push(t, &pose);
         }
         if let Some(k) = captured {
-            take.poses.push(k.clone());
+            if let Err(e) = check_pose(robot, &k) {
+                return Err((take, e.into()));
+            }
+            take.poses.push((t, k.clone()));
             eprintln!(
                 "{}keyframe {} at {t:.1} s: {}",
                 if view { "\r\x1b[K" } else { "" },

@@ -1,25 +1,47 @@
 //! The CSV log of a run (`play --log`): one row per cycle and joint.
+//!
+//! The rows go, while the run goes on, to a temporary file beside the log
+//! ([`AtomicFile`]), which replaces the log once the run is over
+//! ([`CsvLog::finish`]). A run refused before it moved drops the log: the
+//! temporary is removed and a log of an earlier run is untouched. A write
+//! that fails during the run (a full disk) stops the logging, not the run:
+//! the temporary is removed at once, and [`CsvLog::finish`] returns the
+//! error, naming the file, after the run.
 
-use std::fs::File;
-use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use servobus_io::AtomicFile;
 use servobus_runtime::CycleSample;
 
 /// The CSV log of a run.
 pub struct CsvLog {
-    writer: csv::Writer<BufWriter<File>>,
+    /// `None` once a write has failed.
+    writer: Option<csv::Writer<AtomicFile>>,
+    path: PathBuf,
+    /// Written in place (not a regular file): a failure leaves part of it.
+    direct: bool,
     names: Vec<String>,
+    /// The first write error.
+    failed: Option<csv::Error>,
 }
 
 impl CsvLog {
-    /// Creates `path` and writes the header; angles are in `units`.
+    /// Starts the log `path` (its temporary) and writes the header; angles
+    /// are in `units`.
+    ///
+    /// # Errors
+    /// The path cannot be an output, or the temporary cannot be created.
     pub fn create(path: &Path, names: Vec<String>, units: &str) -> anyhow::Result<Self> {
-        let file = File::create(path)
-            .with_context(|| format!("cannot create the log {}", path.display()))?;
-        let mut writer = csv::Writer::from_writer(BufWriter::new(file));
-        writer.write_record([
+        let file = AtomicFile::create(path)?;
+        let mut log = CsvLog {
+            direct: file.is_direct(),
+            writer: Some(csv::Writer::from_writer(file)),
+            path: path.to_path_buf(),
+            names,
+            failed: None,
+        };
+        log.write([
             "time_s".to_string(),
             "bus".into(),
             "cycle".into(),
@@ -35,15 +57,15 @@ impl CsvLog {
             "lateness_us".into(),
             "busy_us".into(),
             "skipped".into(),
-        ])?;
-        Ok(CsvLog { writer, names })
+        ]);
+        Ok(log)
     }
 
-    /// Writes one row per joint of `sample`.
-    pub fn record(&mut self, sample: &CycleSample) -> anyhow::Result<()> {
+    /// Writes one row per joint of `sample` (nothing once a write failed).
+    pub fn record(&mut self, sample: &CycleSample) {
         for j in sample.joints() {
             let name = self.names.get(j.joint).map_or("?", String::as_str);
-            self.writer.write_record([
+            let row = [
                 format!("{:.6}", sample.time_s),
                 sample.bus.to_string(),
                 sample.cycle.to_string(),
@@ -59,14 +81,54 @@ impl CsvLog {
                 format!("{:.1}", sample.lateness.as_secs_f64() * 1e6),
                 format!("{:.1}", sample.busy.as_secs_f64() * 1e6),
                 sample.skipped.to_string(),
-            ])?;
+            ];
+            self.write(row);
         }
-        Ok(())
     }
 
-    /// Flushes the file.
-    pub fn finish(mut self) -> anyhow::Result<()> {
-        self.writer.flush()?;
-        Ok(())
+    /// Writes one row; the first error ends the logging and drops the
+    /// temporary.
+    fn write<const N: usize>(&mut self, row: [String; N]) {
+        if let Some(writer) = &mut self.writer {
+            if let Err(e) = writer.write_record(row) {
+                self.writer = None;
+                self.failed = Some(e);
+            }
+        }
+    }
+
+    /// The log's path, as given.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether a write has failed (the log will not be kept).
+    pub fn has_failed(&self) -> bool {
+        self.failed.is_some()
+    }
+
+    /// Makes the rows the log: flushes them and replaces the file at the
+    /// log's path with them.
+    ///
+    /// # Errors
+    /// The first write error of the run, or the flush's or the rename's,
+    /// naming the file; a regular file at the path is then as it was before
+    /// the run.
+    pub fn finish(self) -> anyhow::Result<()> {
+        let path = self.path.display();
+        let what = if self.direct {
+            format!("the log {path} is incomplete")
+        } else {
+            format!("the log {path} was not kept")
+        };
+        let result = match (self.failed, self.writer) {
+            (Some(e), _) => Err(anyhow::Error::new(e)),
+            (None, Some(writer)) => match writer.into_inner() {
+                Ok(file) => file.commit().map_err(anyhow::Error::new),
+                Err(e) => Err(anyhow::Error::new(e.into_error())),
+            },
+            (None, None) => Ok(()),
+        };
+        result.context(what)
     }
 }

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use anyhow::Context;
+use image::ImageEncoder;
 
 use servobus_runtime::CycleSample;
 
@@ -61,24 +62,49 @@ impl PlotData {
     }
 
     /// Draws one chart per joint (planned and measured position) and one
-    /// of every joint's tracking error, as SVG or (for a `.png` path) PNG.
+    /// of every joint's tracking error, as SVG or (for a `.png` path) PNG,
+    /// and writes it to `path` whole (an earlier file there is replaced
+    /// only by a complete drawing).
+    ///
+    /// # Errors
+    /// Drawing or encoding failed, or the file could not be written (the
+    /// error names it).
     pub fn draw(&self, path: &Path, title: &str, units: &str) -> anyhow::Result<()> {
         let png = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let bytes = self
+            .render(png, title, units)
+            .with_context(|| format!("cannot draw {}", path.display()))?;
+        servobus_io::write_atomic(path, &bytes)?;
+        Ok(())
+    }
+
+    /// The drawing of [`draw`](PlotData::draw), encoded as PNG or SVG.
+    fn render(&self, png: bool, title: &str, units: &str) -> anyhow::Result<Vec<u8>> {
         let n = self.joints.len().max(1);
         let cols = if n <= 4 { 2 } else { 3 };
         let rows = n.div_ceil(cols);
         let width = 520 * cols as u32;
         let height = 60 + 300 * rows as u32 + 340;
         if png {
-            let root = plotters::prelude::BitMapBackend::new(path, (width, height));
-            self.draw_on(root, title, units, rows, cols)
+            let mut rgb = vec![0u8; width as usize * height as usize * 3];
+            let root = plotters::prelude::BitMapBackend::with_buffer(&mut rgb, (width, height));
+            self.draw_on(root, title, units, rows, cols)?;
+            let mut bytes = Vec::new();
+            image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+                &rgb,
+                width,
+                height,
+                image::ColorType::Rgb8,
+            )?;
+            Ok(bytes)
         } else {
-            let root = plotters::prelude::SVGBackend::new(path, (width, height));
-            self.draw_on(root, title, units, rows, cols)
+            let mut svg = String::new();
+            let root = plotters::prelude::SVGBackend::with_string(&mut svg, (width, height));
+            self.draw_on(root, title, units, rows, cols)?;
+            Ok(svg.into_bytes())
         }
-        .with_context(|| format!("cannot draw {}", path.display()))
     }
 
     fn draw_on<DB>(

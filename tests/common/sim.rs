@@ -139,6 +139,28 @@ impl Sim {
             .expect("run servobus")
     }
 
+    /// Runs `servobus ARGS --port PORT` against this simulator: a robot
+    /// command, whose deadlines come from the robot file.
+    pub fn robot_command(&self, args: &[&str]) -> Output {
+        Command::new(BIN)
+            .args(args)
+            .args(["--port", self.port()])
+            .current_dir(repo(""))
+            .output()
+            .expect("run servobus")
+    }
+
+    /// [`Sim::robot_command`], which must succeed: its standard output.
+    pub fn robot_ok(&self, args: &[&str]) -> String {
+        let out = self.robot_command(args);
+        assert!(
+            out.status.success(),
+            "servobus {args:?} failed: {}",
+            stderr(&out)
+        );
+        stdout(&out)
+    }
+
     /// [`Sim::run`], which must succeed: its standard output.
     pub fn ok(&self, args: &[&str]) -> String {
         let out = self.run(args);

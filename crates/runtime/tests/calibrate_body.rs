@@ -15,7 +15,6 @@ use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_runtime::calibrate::{calibrate, prepare_servos, LiveJoint, Operator, Step};
 use servobus_runtime::config::{
     load_robot, load_robot_calibrated, save_calibration, Calibration, JointMap, Robot,
-    RANGE_MARGIN_DEG,
 };
 use servobus_runtime::sim::Mounting;
 use servobus_runtime::{bus_settings, Finish};
@@ -189,11 +188,11 @@ fn check_calibration(robot: &Robot, mounts: &[Mount], sim: &SimBus) {
     for ((j, m), t) in robot.joints().zip(mounts).zip(now) {
         let c = j.calibration.as_ref().expect("calibrated");
         assert_eq!(f64::from(c.direction), m.direction, "{}", j.name);
-        let (lo, hi) = c.limits_deg(j.model);
+        let (lo, hi) = c.range_deg(j.model);
         let [slo, shi] = m.stops.expect("stops");
         assert!(
-            (lo - RANGE_MARGIN_DEG - slo).abs() < 0.3 && (hi + RANGE_MARGIN_DEG - shi).abs() < 0.3,
-            "{}: measured {lo}..{hi} (+- margin), stops {slo}..{shi}",
+            (lo - slo).abs() < 0.3 && (hi - shi).abs() < 0.3,
+            "{}: measured {lo}..{hi}, stops {slo}..{shi}",
             j.name
         );
         let tick = sim.present_position(j.id).expect("servo");

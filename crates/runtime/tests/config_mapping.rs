@@ -69,6 +69,24 @@ fn a_range_across_the_seam_plays_in_a_centred_frame() {
 }
 
 #[test]
+fn the_calibration_pose_stays_inside_the_limits_at_an_end_stop() {
+    // A gripper held closed against its stop: pose 0 deg at tick 3100, and
+    // swept 1137 ticks (99.93 deg) open from there.
+    let j = sts3215_calibration([3100, 4237], 3100.0, 1);
+    let m = j.servo_model().expect("known");
+    let (lo, hi) = j.limits_deg(m);
+    // No margin on the closed side: 0 deg ("closed") can be played.
+    assert_eq!(lo, 0.0);
+    assert!((hi - (1137.0 * 360.0 / 4096.0 - RANGE_MARGIN_DEG)).abs() < 1e-9);
+    // A pose 1 deg inside an end: the limit there is the pose, not the margin.
+    let j = sts3215_calibration([3089, 4237], 3100.0, 1);
+    let (lo, _) = j.limits_deg(m);
+    assert_eq!(lo, 0.0);
+    let measured = j.range_deg(m).0;
+    assert!((measured - (-11.0 * 360.0 / 4096.0)).abs() < 1e-9);
+}
+
+#[test]
 fn a_range_on_one_side_keeps_its_frame() {
     let j = sts3215_calibration([1000, 3000], 2000.0, 1);
     assert_eq!(

@@ -9,7 +9,10 @@ use std::time::Duration;
 use servobus_driver::ManualClock;
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::sim::{new_truth, Hand, SimRobot};
-use servobus_runtime::teach::{motion_yaml, reduce, StillCapture, Teacher, TimedPose};
+use servobus_runtime::teach::{
+    check_pose, merge_identical, motion_yaml, reduce, trim_idle, StillCapture, Taught, TeachError,
+    Teacher, TimedPose,
+};
 use servobus_runtime::VirtualRun;
 use servobus_sim::{SimBus, Truth};
 
@@ -94,7 +97,7 @@ fn pose_and_pause_with_the_hand_then_play_passes_every_keyframe() {
         teacher.sleep_until(t);
         let pose = teacher.pose().expect("reads");
         if let Some(k) = capture.push(teacher.now().as_secs_f64(), &pose) {
-            taught.push((0.0, k));
+            taught.push((teacher.now().as_secs_f64(), k));
         }
     }
     assert_eq!(taught.len(), 5, "one keyframe per pose: {taught:?}");
@@ -103,9 +106,37 @@ fn pose_and_pause_with_the_hand_then_play_passes_every_keyframe() {
             assert!((g - w).abs() < 0.5, "taught {got:?}, posed {want:?}");
         }
     }
-    let yaml = motion_yaml(&robot, &robot_file(), &taught, false, "test");
-    let (truth, _) = play(&robot, &yaml, &taught[0].1, "poses.yaml");
+    let file = Taught::paced(&robot, &start, &taught);
+    // The starting pose, then the five poses at the times they were
+    // captured: moves of 1 s that the arm's limits allow.
+    assert!(file.timed, "{:?}", file.notes);
+    assert_eq!(file.keyframes.len(), 6);
+    assert_eq!(file.keyframes[0], (0.0, start.clone()));
+    for (k, (t, _)) in file.keyframes.iter().enumerate().skip(1) {
+        // Captured once the hand had held pose k - 1 still for 0.7 s (it
+        // reaches it at 1.5 + 2.5 (k - 1) s, easing in: still a little
+        // before), and before it moved on.
+        let reached = 1.5 + 2.5 * (k - 1) as f64;
+        assert!(
+            *t >= reached + 0.5 && *t <= reached + 1.5,
+            "keyframe {k} at {t} s"
+        );
+    }
+    let yaml = motion_yaml(&robot, &robot_file(), &file);
+    assert!(yaml.contains("at: "), "{yaml}");
+    let (truth, start_time) = play(&robot, &yaml, &start, "poses.yaml");
     let rows = truth.rows();
+    // Each pose is reached at its time, as taught.
+    for (t, k) in file.keyframes.iter().skip(1) {
+        let at = start_time + Duration::from_secs_f64(*t);
+        for (j, want) in k.iter().enumerate() {
+            let got = truth.angle_at(j, at).expect("truth at the keyframe");
+            assert!(
+                (got - want).abs() <= 1.0,
+                "joint {j} at {t} s: {got} vs {want}"
+            );
+        }
+    }
     for (_, k) in &taught {
         let closest = rows
             .iter()
@@ -133,14 +164,15 @@ fn continuous_take_reduces_to_few_keyframes_and_plays_back_within_a_degree() {
         samples.push((teacher.now().as_secs_f64(), pose));
         t += period;
     }
-    let keyframes = reduce(&robot, &samples, 0.5);
+    let file = Taught::continuous(&robot, &samples, 0.5, 0.3).expect("reduces");
+    let keyframes = file.keyframes.clone();
     assert!(
         keyframes.len() * 10 <= samples.len(),
         "{} keyframes for {} samples",
         keyframes.len(),
         samples.len()
     );
-    let yaml = motion_yaml(&robot, &robot_file(), &keyframes, true, "test");
+    let yaml = motion_yaml(&robot, &robot_file(), &file);
     let (truth, start) = play(&robot, &yaml, &keyframes[0].1, "take.yaml");
     let t0 = samples[0].0;
     let mut sum = 0.0;
@@ -155,4 +187,108 @@ fn continuous_take_reduces_to_few_keyframes_and_plays_back_within_a_degree() {
     }
     let rms = (sum / n).sqrt();
     assert!(rms <= 1.0, "path RMS error {rms} deg");
+}
+
+#[test]
+fn a_pose_outside_the_limits_is_refused_naming_the_joint_and_whose_limit() {
+    let robot = common::robot("so101.yaml");
+    let mut pose = REST.to_vec();
+    assert!(check_pose(&robot, &pose).is_ok());
+    // The so101 file limits the elbow to [-100, 100] deg.
+    pose[2] = 104.25;
+    match check_pose(&robot, &pose) {
+        Err(e @ TeachError::OutsideLimits { .. }) => {
+            let text = e.to_string();
+            for part in ["`elbow_flex`", "104.2 deg", "upper", "robot file"] {
+                assert!(text.contains(part), "{part} in {text}");
+            }
+        }
+        other => panic!("refused, not {other:?}"),
+    }
+    // Never clamped: a reduction of a path that leaves the limits is refused
+    // too.
+    let samples = vec![(0.0, REST.to_vec()), (1.0, pose)];
+    assert!(matches!(
+        reduce(&robot, &samples, 0.5),
+        Err(TeachError::OutsideLimits { .. })
+    ));
+}
+
+#[test]
+fn idle_ends_are_trimmed_and_identical_keyframes_merged() {
+    let p = |x: f64| vec![x, 0.0];
+    // Idle for 2 s, a move at 3 s, still within 0.3 of the end from 4 s,
+    // idle until 7 s.
+    let samples: Vec<TimedPose> = vec![
+        (0.0, p(0.0)),
+        (1.0, p(0.1)),
+        (2.0, p(0.0)),
+        (2.6, p(0.2)),
+        (3.0, p(2.0)),
+        (4.0, p(5.0)),
+        (4.4, p(5.2)),
+        (5.0, p(5.0)),
+        (7.0, p(5.0)),
+    ];
+    // Moves first at 3 s (more than 0.3 from the start), stays within 0.3
+    // of the end from 4 s; 0.5 s of idle time is kept at each end: kept
+    // from 2.6 s to 4.4 s.
+    let kept = trim_idle(&samples, 0.3);
+    assert_eq!(kept.first().map(|s| s.0), Some(2.6));
+    assert_eq!(kept.last().map(|s| s.0), Some(4.4));
+    // Nothing moved: one sample.
+    assert_eq!(trim_idle(&samples[..3], 0.3).len(), 1);
+
+    let keys: Vec<TimedPose> = vec![
+        (0.0, p(1.0)),
+        (1.0, p(1.0)),
+        (2.0, p(1.0)),
+        (3.0, p(4.0)),
+        (4.0, p(4.0)),
+    ];
+    // Timed: a run keeps its first and last (a hold from 0 to 2 s).
+    assert_eq!(
+        merge_identical(keys.clone(), true),
+        vec![(0.0, p(1.0)), (2.0, p(1.0)), (3.0, p(4.0)), (4.0, p(4.0))]
+    );
+    // Untimed: one of each run.
+    assert_eq!(
+        merge_identical(keys, false),
+        vec![(0.0, p(1.0)), (3.0, p(4.0))]
+    );
+}
+
+#[test]
+fn a_take_stopped_while_the_arm_moves_is_reduced_and_plays_within_the_limits() {
+    let robot = common::robot("so101.yaml");
+    // The pan eases into a swing at 90 deg/s (smoothstep speed over 0.5 s)
+    // and the take ends mid-swing (a Ctrl-C): the path cannot stop at the
+    // last sample within the limits.
+    let rate = robot.rate_hz;
+    let samples: Vec<TimedPose> = (0..=(rate as usize))
+        .map(|i| {
+            let t = i as f64 / rate;
+            let x = (t / 0.5).min(1.0);
+            let pan = 45.0 * (x.powi(3) - x.powi(4) / 2.0) + 90.0 * (t - 0.5).max(0.0);
+            let mut pose = REST.to_vec();
+            pose[0] = pan;
+            (t, pose)
+        })
+        .collect();
+    let reduced = reduce(&robot, &samples, 0.5).expect("reduces");
+    assert!(reduced.settle_s.is_some(), "came to rest later");
+    assert!(
+        reduced.keyframes.len() * 4 <= samples.len(),
+        "{} keyframes for {} samples",
+        reduced.keyframes.len(),
+        samples.len()
+    );
+    let file = Taught::continuous(&robot, &samples, 0.5, 0.3).expect("reduces");
+    assert!(file
+        .notes
+        .iter()
+        .any(|n| n.contains("while the robot moved")));
+    // The file plays: `play` accepts it and plans it within every limit.
+    let yaml = motion_yaml(&robot, &robot_file(), &file);
+    play(&robot, &yaml, &REST, "stopped.yaml");
 }

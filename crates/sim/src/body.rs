@@ -77,8 +77,11 @@ impl Mount {
 /// (minimum-jerk: the hand starts and stops each move with zero velocity
 /// and acceleration).
 ///
-/// Before its first keyframe and after its last the hand does not touch the
-/// joint (a person lets go); in between it holds it on the path.
+/// Only the keyframes of this joint count: a hand file's keyframe that does
+/// not name the joint is not one of them, so the joint eases from the
+/// keyframe before it to the one after it as if it were not there. Before
+/// its first keyframe and after its last the hand does not touch the joint
+/// (a person lets go); in between it holds it on the path.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct HandPath {
     keys: Vec<(f64, f64)>,

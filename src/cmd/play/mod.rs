@@ -125,8 +125,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             println!("  {}", r.describe(motion.units));
         }
     }
-    // Outputs are created before anything moves: a path that cannot be
-    // written fails now, not after the run.
+    // The log's temporary is created before anything moves: a path that
+    // cannot be written fails now, not after the run. A run refused from
+    // here on drops it, and a log already at the path is untouched.
     let log = match &args.log {
         Some(path) => Some(CsvLog::create(
             path,
@@ -204,18 +205,37 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     let report = runner.join();
     let (log, plot) = outcome?;
-    let report = report?;
-
+    // The run has moved: what it logged is kept, also when it ended in an
+    // error (the error is said after the log is in place).
+    let mut failed_outputs = Vec::new();
+    let mut log_written = false;
     if let Some(log) = log {
-        log.finish()?;
+        match log.finish() {
+            Ok(()) => log_written = true,
+            Err(e) => failed_outputs.push(e),
+        }
     }
+    let report = match report {
+        Ok(report) => report,
+        Err(e) => {
+            for failed in &failed_outputs {
+                super::exit::report(failed);
+            }
+            return Err(e.into());
+        }
+    };
+
+    let mut plot_written = false;
     if let (Some(plot), Some(path)) = (plot, &args.plot) {
         let title = format!(
             "{} on {}: planned vs measured",
             file_name(&motion.path),
             robot.name
         );
-        plot.draw(path, &title, &units.to_string())?;
+        match plot.draw(path, &title, &units.to_string()) {
+            Ok(()) => plot_written = true,
+            Err(e) => failed_outputs.push(e),
+        }
     }
     if args.json {
         let mut value = serde_json::to_value(&report)?;
@@ -228,12 +248,21 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let Some(r) = &recording {
             println!("  {}", r.describe(motion.units));
         }
-        if let Some(path) = &args.log {
+        if let (true, Some(path)) = (log_written, &args.log) {
             println!("log: {}", path.display());
         }
-        if let Some(path) = &args.plot {
+        if let (true, Some(path)) = (plot_written, &args.plot) {
             println!("plot: {}", path.display());
         }
+    }
+    // An output that failed fails the command (exit 1) after the report:
+    // each error is said, the last by `main` as it returns.
+    let last = failed_outputs.pop();
+    for e in &failed_outputs {
+        super::exit::report(e);
+    }
+    if let Some(e) = last {
+        return Err(e);
     }
     Ok(match report.finish {
         Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,

@@ -76,7 +76,16 @@ pub(super) fn follow(
                     }
                 }
                 if let Some(log) = &mut log {
-                    log.record(&sample)?;
+                    // A failed write stops the log, not the run; it is
+                    // reported after the run.
+                    let failed = log.has_failed();
+                    log.record(&sample);
+                    if !failed && log.has_failed() {
+                        progress.message(&format!(
+                            "the log {} cannot be written; the run goes on without it",
+                            log.path().display()
+                        ));
+                    }
                 }
                 if let Some(plot) = &mut plot {
                     plot.record(&sample);

@@ -36,7 +36,7 @@ pub use lerobot::{from_lerobot, lerobot_value, to_lerobot, LeRobotError, LeRobot
 pub use procedure::{calibrate, LiveJoint, ProcedureOptions, MIN_RANGE_DEG};
 pub use servos::{
     identify, prepare_bus, prepare_servos, present, torque_off, write_frame, write_homing,
-    FoundServo, FAR_OUTSIDE_DEG,
+    FoundServo, FAR_OUTSIDE_DEG, PATIENCE, PATIENT_RETRIES,
 };
 
 /// A step of the procedure, announced to the [`Operator`] as it begins.

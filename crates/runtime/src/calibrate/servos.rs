@@ -3,6 +3,8 @@
 //! for the session otherwise), and the check that refuses to move a robot
 //! whose servos are not the ones its calibration was taken on.
 
+use std::time::Duration;
+
 use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::{addr, model_by_number, Model, Register};
 
@@ -16,6 +18,17 @@ use super::{CalibrateError, Refusal};
 /// calibration says (a horn refitted, a servo swapped), or the joint is
 /// pressed past a stop.
 pub const FAR_OUTSIDE_DEG: f64 = 15.0;
+
+/// Reply deadline allowance of every step that is not timed (calibrating,
+/// and the calibration check every command runs before its first read): a
+/// slow adapter or a loaded host (a pty served by a process that waits for
+/// the CPU) must not make a present servo look absent. A servo that is
+/// really missing costs this much per try, once.
+pub const PATIENCE: Duration = Duration::from_millis(50);
+
+/// Tries per transaction of the untimed steps: a reply lost now and then
+/// must not end a calibration or refuse a run.
+pub const PATIENT_RETRIES: u8 = 3;
 
 /// One servo as found on the bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -153,14 +166,22 @@ pub fn write_frame<T: Transport, C: Clock>(
     Ok(moved)
 }
 
-/// Before a run on real servos: refuses a robot whose calibration is
-/// missing or does not match the servos found, and puts every calibrated
-/// servo in its play frame. Nothing moves here: torque is not touched.
+/// Makes the servos match the robot's calibration: the one routine every
+/// command runs on real servos before its first reading of a joint through
+/// the calibration (play, bench, teach, monitor, doctor, stream, follow).
 ///
-/// A range that crosses the seam is played in a frame whose homing offset
-/// centres it; unless `--write-servos` stored that offset, it is written
-/// here with the lock closed, which applies it until the servo is switched
-/// off and leaves its EEPROM as it was.
+/// It refuses a robot whose calibration is missing or does not match the
+/// servos found, and puts every calibrated servo in its play frame. After a
+/// power-up a servo holds the homing offset of its EEPROM; a range that
+/// crosses the seam is played in a frame whose homing offset centres it,
+/// and unless `--write-servos` stored that offset, it is written here with
+/// the lock closed, which applies it until the servo is switched off and
+/// leaves its EEPROM as it was. Without this, the same joint reads a
+/// different angle after every power cycle. Nothing moves here: torque is
+/// not touched.
+///
+/// The check is not timed: it runs with patient deadlines ([`PATIENCE`],
+/// [`PATIENT_RETRIES`]) and gives each bus its own settings back after.
 ///
 /// # Errors
 /// A [`Refusal`] naming the joint and what is wrong.
@@ -194,12 +215,24 @@ pub fn prepare_bus<T: Transport, C: Clock>(
     let Some(config) = robot.buses.get(index) else {
         return Ok(());
     };
-    for joint in &config.joints {
-        if let Some(cal) = &joint.calibration {
-            prepare_joint(bus, config, joint, cal, robot)?;
-        }
+    if config.joints.iter().all(|j| j.calibration.is_none()) {
+        return Ok(());
     }
-    Ok(())
+    let saved = *bus.settings();
+    bus.set_settings(
+        saved
+            .with_latency(saved.link.latency.max(PATIENCE))
+            .with_retries(PATIENT_RETRIES),
+    );
+    let checked = config
+        .joints
+        .iter()
+        .try_for_each(|joint| match &joint.calibration {
+            Some(cal) => prepare_joint(bus, config, joint, cal, robot),
+            None => Ok(()),
+        });
+    bus.set_settings(saved);
+    checked
 }
 
 fn prepare_joint<T: Transport, C: Clock>(

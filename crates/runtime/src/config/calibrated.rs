@@ -6,7 +6,47 @@ use std::path::Path;
 use super::calibration::{load_source, Calibration};
 use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
-use super::robot::{Robot, RobotCalibration};
+use super::robot::{JointConfig, Robot, RobotCalibration};
+use super::Units;
+
+/// Where one of a joint's limits comes from: a limit error names it, so
+/// that the user knows which file to change (or whether to calibrate
+/// again).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LimitOrigin {
+    /// The robot file's `min` or `max`.
+    RobotFile,
+    /// The calibration: the range measured there, less its margin.
+    Calibration,
+}
+
+impl std::fmt::Display for LimitOrigin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LimitOrigin::RobotFile => "the robot file's `min`/`max`",
+            LimitOrigin::Calibration => "the calibration (the measured range, less its margin)",
+        })
+    }
+}
+
+/// Where `joint`'s lower and upper limits (in `units`) come from: the
+/// calibration where its measured range is what bounds the joint, the robot
+/// file otherwise.
+pub fn limit_origins(joint: &JointConfig, units: Units) -> [LimitOrigin; 2] {
+    let Some(cal) = &joint.calibration else {
+        return [LimitOrigin::RobotFile; 2];
+    };
+    let (lo_deg, hi_deg) = cal.limits_deg(joint.model);
+    let from = |limit: f64, measured_deg: f64| {
+        let measured = Units::Deg.convert(measured_deg, units);
+        if (limit - measured).abs() <= 1e-9 * measured.abs().max(1.0) {
+            LimitOrigin::Calibration
+        } else {
+            LimitOrigin::RobotFile
+        }
+    };
+    [from(joint.min, lo_deg), from(joint.max, hi_deg)]
+}
 
 /// `robot` with the calibration file at `path` applied.
 ///

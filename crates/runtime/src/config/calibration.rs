@@ -138,12 +138,26 @@ impl JointCalibration {
         self.pose_deg + f64::from(self.direction) * (tick - self.pose_tick) * model.deg_per_tick()
     }
 
-    /// The joint angles, degrees, at the two ends of the measured range,
-    /// each brought [`RANGE_MARGIN_DEG`] inwards; lowest first.
-    pub fn limits_deg(&self, model: &Model) -> (f64, f64) {
+    /// The joint angles, degrees, at the two ends of the measured range;
+    /// lowest first.
+    pub fn range_deg(&self, model: &Model) -> (f64, f64) {
         let a = self.degrees_at(model, self.range[0] as f64);
         let b = self.degrees_at(model, self.range[1] as f64);
-        (a.min(b) + RANGE_MARGIN_DEG, a.max(b) - RANGE_MARGIN_DEG)
+        (a.min(b), a.max(b))
+    }
+
+    /// The joint angles, degrees, at the two ends of the measured range,
+    /// each brought [`RANGE_MARGIN_DEG`] inwards; lowest first. The
+    /// calibration pose stays reachable: where it lies within the margin of
+    /// an end (a gripper held closed against its stop), that side's limit is
+    /// the pose itself.
+    pub fn limits_deg(&self, model: &Model) -> (f64, f64) {
+        let (lo, hi) = self.range_deg(model);
+        let pose = self.pose_deg.clamp(lo, hi);
+        (
+            (lo + RANGE_MARGIN_DEG).min(pose),
+            (hi - RANGE_MARGIN_DEG).max(pose),
+        )
     }
 }
 
@@ -166,19 +180,45 @@ pub(crate) fn load_source(path: &Path) -> Result<(Calibration, Source), ConfigEr
     Ok((cal, src))
 }
 
-/// Writes `cal` to `path` as YAML, with a header saying what it is.
+/// Why a calibration could not be saved.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrationSaveError {
+    /// The calibration could not be put in YAML (a value YAML cannot hold).
+    #[error("cannot write the calibration of `{robot}` as YAML: {source}")]
+    Yaml {
+        /// The robot it is the calibration of.
+        robot: String,
+        /// The serialiser's error.
+        #[source]
+        source: serde_yaml::Error,
+    },
+    /// The file could not be written; an earlier file at the path is as it
+    /// was.
+    #[error(transparent)]
+    Output(#[from] servobus_io::OutputError),
+}
+
+/// Writes `cal` to `path` as YAML, with a header saying what it is. The file
+/// is replaced whole or not at all ([`servobus_io::write_atomic`]): a
+/// failure leaves an earlier calibration at `path` untouched.
 ///
 /// # Errors
-/// The operating system's error when the file cannot be written.
-pub fn save_calibration(cal: &Calibration, path: &Path) -> std::io::Result<()> {
-    let body = serde_yaml::to_string(cal).unwrap_or_default();
+/// [`CalibrationSaveError::Yaml`] when the calibration cannot be put in
+/// YAML, [`CalibrationSaveError::Output`] (naming the file) when it cannot
+/// be written.
+pub fn save_calibration(cal: &Calibration, path: &Path) -> Result<(), CalibrationSaveError> {
+    let body = serde_yaml::to_string(cal).map_err(|source| CalibrationSaveError::Yaml {
+        robot: cal.robot.clone(),
+        source,
+    })?;
     let text = format!(
         "# servobus calibration of one physical `{}` robot: ticks of the calibration\n\
          # pose, directions and measured ranges (servobus calibrate). Angles in the\n\
          # robot's files mean physical angles through this file.\n{body}",
         cal.robot
     );
-    std::fs::write(path, text)
+    servobus_io::write_atomic(path, text.as_bytes())?;
+    Ok(())
 }
 
 fn validate(cal: &Calibration, src: &Source) -> Result<(), ConfigError> {

@@ -37,9 +37,10 @@ mod trajectory;
 mod units;
 
 pub use budget::{RateError, RateRemedy};
+pub use calibrated::{limit_origins, LimitOrigin};
 pub use calibration::{
-    load_calibration, save_calibration, utc_now, Calibration, JointCalibration, PlayFrame,
-    RANGE_MARGIN_DEG,
+    load_calibration, save_calibration, utc_now, Calibration, CalibrationSaveError,
+    JointCalibration, PlayFrame, RANGE_MARGIN_DEG,
 };
 pub use error::ConfigError;
 pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};

@@ -415,16 +415,28 @@ impl Resolver<'_> {
                     self.robot.units.convert(joint.min, self.units),
                     self.robot.units.convert(joint.max, self.units),
                 );
+                let [lo, hi] = super::limit_origins(joint, self.robot.units);
+                let origin = if v < joint.min { lo } else { hi };
                 return Err(self.src.error(
                     &field,
                     format!(
                         "{which}{value} {} is outside the limits of joint `{name}` \
-                         [{min}, {max}] {}",
-                        self.units, self.units
+                         [{}, {}] {} (the {} limit comes from {origin})",
+                        self.units,
+                        round(min),
+                        round(max),
+                        self.units,
+                        if v < joint.min { "lower" } else { "upper" },
                     ),
                 ));
             }
         }
         Ok(())
     }
+}
+
+/// `x` to two decimals, as a limit is said in a message (a calibrated limit
+/// is measured: 96.92578125 says nothing 96.93 does not).
+fn round(x: f64) -> f64 {
+    (x * 100.0).round() / 100.0
 }

@@ -5,24 +5,36 @@
 //!   keep their position) and reads the pose, in the robot file's units.
 //! - [`StillCapture`] captures a keyframe each time the robot has moved and
 //!   then been held still (pose-and-pause without a keyboard).
-//! - [`reduce`] turns a recorded path into the fewest timed keyframes whose
-//!   planned path reproduces it within a tolerance, planned exactly as
-//!   `play` plans the written file.
+//! - [`check_pose`] refuses a pose outside the joint limits: a taught
+//!   angle is never clamped, the take stops and says which joint, where,
+//!   and whose limit (the robot file's or the calibration's).
+//! - [`Taught::paced`] keeps pose-and-pause keyframes at the times they were
+//!   captured, from the starting pose, so that the motion replays at the
+//!   pace it was taught (or says in the file why it cannot).
+//! - [`Taught::continuous`] trims the idle time at both ends of a recorded
+//!   path and [`reduce`]s it to the fewest timed keyframes whose planned
+//!   path reproduces it within a tolerance, planned exactly as `play` plans
+//!   the written file; a take interrupted while the robot moved gets time
+//!   to come to rest at its last pose.
 //! - [`motion_yaml`] writes the motion file.
 //!
 //! ```text
-//! pose -> [StillCapture] -> keyframes ----------------\
-//! path -> [reduce: plan, worst sample, insert, again] -> motion_yaml -> play
+//! pose -> [check_pose] -> [StillCapture] -> keyframes -> [Taught::paced] ------\
+//! path -> [check_pose] -> [trim_idle] -> [reduce: plan, worst, insert] -> [Taught::continuous]
+//!                                                         -> motion_yaml -> play
 //! ```
-
-use std::fmt::Write as _;
-use std::path::Path;
 
 use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::addr;
-use servobus_trajectory::{self as traj, JointState, PlanOptions, TimedShape};
 
-use crate::config::{joint_limits, JointMap, Robot, Units};
+use crate::config::{JointMap, Robot, Units};
+
+mod taught;
+
+pub use taught::{
+    check_pose, merge_identical, motion_yaml, reduce, trim_idle, Reduced, Taught, TimedPose,
+    IDLE_KEPT_S,
+};
 
 /// Why teaching failed.
 #[derive(Debug, thiserror::Error)]
@@ -36,6 +48,10 @@ pub enum TeachError {
         /// The robot's joints.
         joints: String,
     },
+    /// The servos do not match the robot's calibration (nothing was
+    /// released or read through it).
+    #[error(transparent)]
+    Refused(#[from] crate::calibrate::Refusal),
     /// A bus transaction with a joint's servo failed.
     #[error("joint `{joint}` (ID {id}): {source}")]
     Bus {
@@ -46,6 +62,34 @@ pub enum TeachError {
         /// What the bus said.
         #[source]
         source: BusError,
+    },
+    /// A taught pose puts a joint outside its limits (it is not clamped).
+    #[error(
+        "joint `{joint}` was taught at {value:.1} {units}, outside its limits \
+         [{min:.1}, {max:.1}] {units} (the {} limit comes from {})",
+        if *value < *min { "lower" } else { "upper" },
+        origin
+    )]
+    OutsideLimits {
+        /// The joint.
+        joint: String,
+        /// The angle read, in the robot file's units.
+        value: f64,
+        /// The joint's lower limit.
+        min: f64,
+        /// The joint's upper limit.
+        max: f64,
+        /// The robot file's angle unit.
+        units: Units,
+        /// Where the limit that was passed comes from.
+        origin: crate::config::LimitOrigin,
+    },
+    /// No timing of the recorded path plays within the joint limits, even
+    /// with time to come to rest at its end.
+    #[error("the recorded path cannot be played within the joint limits: {reason}")]
+    Unplayable {
+        /// The planner's last refusal.
+        reason: String,
     },
 }
 
@@ -66,11 +110,18 @@ pub struct Teacher<T: Transport, C: Clock> {
 
 impl<T: Transport, C: Clock> Teacher<T, C> {
     /// A teacher of `robot` on `buses` (one per robot bus, in order), holding
-    /// the joints named in `hold`.
+    /// the joints named in `hold`. The servos are first made to match the
+    /// robot's calibration ([`prepare_servos`](crate::calibrate::prepare_servos)),
+    /// so that a pose reads the same angles as `play` moves to.
     ///
     /// # Errors
-    /// [`TeachError::UnknownJoint`] for a name in `hold` the robot lacks.
-    pub fn new(robot: &Robot, buses: Vec<Bus<T, C>>, hold: &[String]) -> Result<Self, TeachError> {
+    /// [`TeachError::UnknownJoint`] for a name in `hold` the robot lacks;
+    /// [`TeachError::Refused`] when the servos do not match the calibration.
+    pub fn new(
+        robot: &Robot,
+        mut buses: Vec<Bus<T, C>>,
+        hold: &[String],
+    ) -> Result<Self, TeachError> {
         let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
         if let Some(bad) = hold.iter().find(|h| !names.contains(&h.as_str())) {
             return Err(TeachError::UnknownJoint {
@@ -78,6 +129,7 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
                 joints: names.join(", "),
             });
         }
+        crate::calibrate::prepare_servos(robot, &mut buses)?;
         let mut joints = Vec::new();
         for (b, bus) in robot.buses.iter().enumerate() {
             for j in &bus.joints {
@@ -167,6 +219,10 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
     }
 }
 
+/// Below this change, degrees, a robot under a person's hand counts as
+/// still (a hand's tremor and a servo's last tick stay under it).
+pub const STILL_DEG: f64 = 0.3;
+
 /// Largest absolute difference between two poses.
 pub fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
@@ -189,12 +245,12 @@ pub struct StillCapture {
 
 impl StillCapture {
     /// A detector that starts from `start` (not captured itself): still is
-    /// a change under 0.3 deg for 0.7 s, moved is 2 deg from the last
+    /// a change under [`STILL_DEG`] for 0.7 s, moved is 2 deg from the last
     /// capture (converted to `units`).
     pub fn new(start: &[f64], units: Units) -> StillCapture {
         let deg = |d: f64| units.from_rad(f64::to_radians(d));
         StillCapture {
-            still: deg(0.3),
+            still: deg(STILL_DEG),
             still_for_s: 0.7,
             moved: deg(2.0),
             anchor: None,
@@ -225,153 +281,4 @@ impl StillCapture {
     pub fn last(&self) -> &[f64] {
         &self.last
     }
-}
-
-/// A timed keyframe: seconds from the start, and every joint's angle in
-/// the robot file's units.
-pub type TimedPose = (f64, Vec<f64>);
-
-/// The planner options of a reduced path, as its motion file sets them
-/// (`interpolation: cubic`, `on_limit: error`): the smooth spline through
-/// the keyframes, refused where it breaks a limit. The reduction checks the
-/// very plan `play` makes of the file, so the file plays as checked.
-fn reduced_options() -> PlanOptions {
-    PlanOptions {
-        shape: TimedShape::Cubic,
-        on_limit: traj::OnLimit::Error,
-        ..PlanOptions::default()
-    }
-}
-
-/// The sample halfway through the longest gap between chosen keyframes.
-fn split_longest(chosen: &[usize]) -> Option<(usize, usize)> {
-    let (at, gap) = chosen
-        .windows(2)
-        .enumerate()
-        .map(|(k, w)| (k + 1, w[1] - w[0]))
-        .max_by_key(|&(_, g)| g)?;
-    (gap >= 2).then(|| (at, chosen[at - 1] + gap / 2))
-}
-
-/// The fewest timed keyframes (chosen among `samples`) whose planned path
-/// stays within `tolerance` (robot units) of every sample, each clamped to
-/// the joint limits. Times count from the first sample. Keyframes are
-/// added one at a time at the worst-reproduced sample until the path fits
-/// (or every sample is a keyframe); where the spline breaks a limit (it
-/// swings past a joint limit between keyframes far apart), the longest gap
-/// is split first.
-pub fn reduce(robot: &Robot, samples: &[TimedPose], tolerance: f64) -> Vec<TimedPose> {
-    let Some(first) = samples.first() else {
-        return Vec::new();
-    };
-    let t0 = first.0;
-    let limits = joint_limits(robot);
-    let units = robot.units;
-    let clamp = |p: &[f64]| -> Vec<f64> {
-        p.iter()
-            .zip(robot.joints())
-            .map(|(&v, j)| v.clamp(j.min, j.max))
-            .collect()
-    };
-    let mut chosen = vec![0, samples.len() - 1];
-    chosen.dedup();
-    let mut state = vec![JointState::default(); robot.joint_count()];
-    loop {
-        let keyframes: Vec<traj::Keyframe> = chosen
-            .iter()
-            .map(|&i| {
-                let (t, p) = &samples[i];
-                let rad: Vec<f64> = clamp(p).iter().map(|&v| units.to_rad(v)).collect();
-                let k = traj::Keyframe::new(rad);
-                if i == 0 {
-                    k
-                } else {
-                    k.at(t - t0)
-                }
-            })
-            .collect();
-        let Ok(path) = traj::plan(&limits, &keyframes, &reduced_options()) else {
-            match split_longest(&chosen) {
-                Some((at, i)) => {
-                    chosen.insert(at, i);
-                    continue;
-                }
-                None => break,
-            }
-        };
-        let mut worst = (0.0, None);
-        for (i, (t, p)) in samples.iter().enumerate() {
-            path.sample(t - t0, &mut state);
-            let err = clamp(p).iter().zip(&state).fold(0.0f64, |m, (v, s)| {
-                m.max((v - units.from_rad(s.position)).abs())
-            });
-            if err > worst.0 {
-                worst = (err, Some(i));
-            }
-        }
-        match worst {
-            (e, Some(i)) if e > tolerance && !chosen.contains(&i) => {
-                let at = chosen.partition_point(|&c| c < i);
-                chosen.insert(at, i);
-            }
-            _ => break,
-        }
-    }
-    chosen
-        .iter()
-        .map(|&i| (samples[i].0 - t0, clamp(&samples[i].1)))
-        .collect()
-}
-
-/// A commented motion file for `robot` (loaded from `robot_file`):
-/// untimed keyframes (`timed` false: as fast as the limits allow) or timed
-/// ones (reduced from a recorded path by [`reduce`], played with
-/// `interpolation: cubic`). Angles are
-/// clamped to the joint limits and written in the robot's units.
-pub fn motion_yaml(
-    robot: &Robot,
-    robot_file: &Path,
-    keyframes: &[TimedPose],
-    timed: bool,
-    note: &str,
-) -> String {
-    let mut y = String::new();
-    let _ = writeln!(y, "# Taught by hand with `servobus teach`: {note}.");
-    let _ = writeln!(
-        y,
-        "# {} keyframes of every joint of `{}`; edit freely, then `servobus play` this file.",
-        keyframes.len(),
-        robot.name
-    );
-    let _ = writeln!(y, "robot: {}", robot_file.display());
-    let _ = writeln!(y, "units: {}", robot.units);
-    if timed {
-        let _ = writeln!(
-            y,
-            "# `at` is seconds from the first keyframe, as recorded; the spline through the\n\
-             # keyframes was checked to stay within the tolerance of the recording and the limits."
-        );
-        let _ = writeln!(y, "interpolation: cubic");
-    } else {
-        let _ = writeln!(
-            y,
-            "# No `at`: each move is as fast as the joint limits allow. Add `at: SECONDS`\n\
-             # to a keyframe to time it."
-        );
-    }
-    let _ = writeln!(y, "keyframes:");
-    for (k, (t, pose)) in keyframes.iter().enumerate() {
-        let mut line = String::from("  - ");
-        if timed && k > 0 {
-            let _ = write!(line, "at: {t:.3}\n    ");
-        }
-        line.push_str("pose: {");
-        for (i, (v, j)) in pose.iter().zip(robot.joints()).enumerate() {
-            let sep = if i == 0 { "" } else { ", " };
-            let _ = write!(line, "{sep}{}: {:.2}", j.name, v.clamp(j.min, j.max));
-        }
-        line.push('}');
-        let _ = writeln!(y, "{line}");
-    }
-    y
 }

@@ -176,6 +176,14 @@ fn the_view_shows_flags_missing_servos_and_keys() {
     assert!(line_of("5").contains("MISSING (no reply)"), "{lines:#?}");
     assert!(line_of("1").contains(" ok "), "{lines:#?}");
     assert!(lines.iter().any(|l| l.contains(view::KEYS)), "{lines:#?}");
+    // The reply column says what it measures (it grows along the bus).
+    assert!(lines.iter().any(|l| l.contains("reply p99")), "{lines:#?}");
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("servos answer one SYNC READ in turn")),
+        "{lines:#?}"
+    );
 }
 
 #[test]

@@ -92,8 +92,10 @@ pub struct Row {
     pub timeouts: u64,
     /// Reads in a row it has not answered (0 when it answered the last).
     pub missed_in_row: u32,
-    /// 99th percentile of its reply latency (request sent to reply
-    /// received), microseconds.
+    /// 99th percentile of its reply latency (request sent to its reply
+    /// received), microseconds. With one SYNC READ the servos answer in
+    /// turn, so it grows along the bus: a later servo waits for the earlier
+    /// ones' replies, not for itself.
     pub p99_latency_us: Option<f64>,
 }
 

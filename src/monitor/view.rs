@@ -15,12 +15,32 @@ pub const MISSING_AFTER: u32 = 3;
 /// The keys and what they do, as shown at the bottom of the screen.
 pub const KEYS: &str = "q quit   Space torque OFF on every servo";
 
+/// What the reply column measures, as shown under the table: one SYNC
+/// READ asks every servo and they answer in turn, so a later servo's reply
+/// comes after the earlier ones' and its figure is larger without the
+/// servo being slower.
+pub const REPLY_COLUMN: &str = "reply p99: request sent to this servo's reply received, p99; \
+     servos answer one SYNC READ in turn, so later ones wait for earlier ones";
+
 const HEADER: [&str; 15] = [
-    "ID", "joint", "model", "pos deg", "ticks", "goal deg", "deg/s", "load %", "volt", "temp C",
-    "torque", "status", "replies", "timeouts", "p99 us",
+    "ID",
+    "joint",
+    "model",
+    "pos deg",
+    "ticks",
+    "goal deg",
+    "deg/s",
+    "load %",
+    "volt",
+    "temp C",
+    "torque",
+    "status",
+    "replies",
+    "timeouts",
+    "reply p99",
 ];
 
-const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, 22, 8, 8, 7];
+const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, 22, 8, 8, 9];
 
 fn opt(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "-".to_string(), |v| format!("{v:.decimals$}"))
@@ -121,5 +141,6 @@ pub fn draw(f: &mut ratatui::Frame<'_>, frame: &Frame, title: &str) {
                 .add_modifier(Modifier::BOLD),
         ));
     }
-    f.render_widget(Paragraph::new(Line::from(keys)), bottom);
+    let legend = Line::styled(REPLY_COLUMN, Style::default().add_modifier(Modifier::DIM));
+    f.render_widget(Paragraph::new(vec![Line::from(keys), legend]), bottom);
 }

@@ -45,7 +45,9 @@ pub struct PortArgs {
 
 /// Arguments of `servobus scan`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Exit status 1 also when two servos share an ID (their replies collide).")]
+#[command(
+    after_help = "Two servos sharing an ID (their replies collide) is a problem found: exit 1."
+)]
 pub struct ScanArgs {
     /// Port and latency.
     #[command(flatten)]

@@ -103,7 +103,10 @@ pub fn command() -> clap::Command {
     top.after_help(top_help).mut_subcommands(|sub| {
         let own = sub.get_after_help().map(|h| h.to_string());
         // A command that states its own exit status (doctor) keeps it alone.
-        if own.as_deref().is_some_and(|h| h.starts_with("Exit status")) {
+        if own
+            .as_deref()
+            .is_some_and(|h| h.starts_with("Exit status ("))
+        {
             return sub;
         }
         let help = with_exit(own);

@@ -21,27 +21,66 @@ struct Series {
 pub struct PlotData {
     names: Vec<String>,
     joints: Vec<Series>,
-    /// Bus of each joint (colours of the error panel are grouped by bus).
-    bus_of: Vec<usize>,
+    /// The name of each joint's bus (said in the error panel's key).
+    bus_of: Vec<String>,
     /// Run times at which a keyframe is reached (marked on every chart).
     keyframes: Vec<f64>,
+    /// The end of the approach to the first keyframe, s (0: none).
+    approach: f64,
 }
 
+/// Above this many keyframes, they are marked by ticks along the top of
+/// each chart only: full-height lines that close together would grey the
+/// whole chart out and hide the curves.
+const KEYFRAME_LINES_UP_TO: usize = 60;
+
+/// One colour per joint, distinct from its neighbours (a qualitative
+/// palette of 20: ten hues, each dark then light).
+const PALETTE: [(u8, u8, u8); 20] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+    (174, 199, 232),
+    (255, 187, 120),
+    (152, 223, 138),
+    (255, 152, 150),
+    (197, 176, 213),
+    (196, 156, 148),
+    (247, 182, 210),
+    (199, 199, 199),
+    (219, 219, 141),
+    (158, 218, 229),
+];
+
 impl PlotData {
-    /// Empty series for the joints `names`.
-    pub fn new(names: Vec<String>, bus_of: Vec<usize>) -> Self {
+    /// Empty series for the joints `names`, each on the bus named in
+    /// `bus_of`.
+    pub fn new(names: Vec<String>, bus_of: Vec<String>) -> Self {
         let joints = names.iter().map(|_| Series::default()).collect();
         PlotData {
             names,
             joints,
             bus_of,
             keyframes: Vec::new(),
+            approach: 0.0,
         }
     }
 
     /// Marks keyframes reached at these run times, s.
     pub fn mark_keyframes(&mut self, times: impl IntoIterator<Item = f64>) {
         self.keyframes.extend(times);
+    }
+
+    /// Marks the approach to the first keyframe, from the start to `end` s.
+    pub fn mark_approach(&mut self, end: f64) {
+        self.approach = end.max(0.0);
     }
 
     /// Adds the joints of `sample`.
@@ -131,7 +170,7 @@ impl PlotData {
             let name = self.names.get(j).map_or("?", String::as_str);
             let range = span(series.planned.iter().chain(&series.measured));
             // The key is in the caption: a legend box would cover curves.
-            let caption = format!("{name}  (blue: planned, red: measured, grey: keyframes)");
+            let caption = format!("{name}  (blue dashes: planned, red line: measured)");
             let mut chart = self.panel(
                 area,
                 (&caption, 15),
@@ -141,8 +180,10 @@ impl PlotData {
                 2,
             )?;
             chart
-                .draw_series(LineSeries::new(
+                .draw_series(DashedLineSeries::new(
                     series.planned.iter().copied(),
+                    7,
+                    4,
                     BLUE.stroke_width(2),
                 ))
                 .map_err(plot_err)?;
@@ -155,14 +196,17 @@ impl PlotData {
         }
 
         // The error panel: chart on the left, its key beside it (never on
-        // the curves); colours in one hue family per bus, distinct shades
-        // within it, so 18 joints on 2 or 3 buses stay readable.
+        // the curves); a colour of its own for every joint.
         let (_, bw) = (0, bottom.dim_in_pixel().0);
         let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
         let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
         let mut chart = self.panel(
             &left,
-            ("tracking error (planned minus measured)", 18),
+            (
+                "tracking error (planned minus measured); grey band: approach, black line: \
+                 first keyframe, grey: keyframes",
+                16,
+            ),
             36,
             range,
             format!("error ({units})"),
@@ -185,9 +229,9 @@ impl PlotData {
             let y = 30 + j as i32 * line;
             key.draw(&PathElement::new([(4, y), (26, y)], color.stroke_width(3)))
                 .map_err(plot_err)?;
-            let bus = self.bus_of.get(j).copied().unwrap_or(0);
+            let bus = self.bus_of.get(j).map_or("?", String::as_str);
             key.draw(&Text::new(
-                format!("{name} (bus {bus})"),
+                format!("{name} ({bus})"),
                 (32, y - line / 2 + 2),
                 font,
             ))
@@ -255,7 +299,9 @@ impl PlotData {
         Ok(chart)
     }
 
-    /// Thin grey vertical lines at the keyframes.
+    /// The approach as a light band, the first keyframe as a black line,
+    /// the others as thin grey lines (as ticks along the top only when
+    /// there are more than [`KEYFRAME_LINES_UP_TO`]).
     fn draw_keyframes<DB: plotters::prelude::DrawingBackend>(
         &self,
         chart: &mut Chart<'_, DB>,
@@ -265,47 +311,48 @@ impl PlotData {
         DB::ErrorType: 'static,
     {
         use plotters::prelude::*;
+        if self.approach > 0.0 {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(0.0, range.start), (self.approach, range.end)],
+                    RGBColor(225, 225, 225).filled(),
+                )))
+                .map_err(plot_err)?;
+        }
         let grey = RGBColor(150, 150, 150).stroke_width(1);
+        let (first, rest) = match self.keyframes.split_first() {
+            Some((first, rest)) => (Some(*first), rest),
+            None => (None, &[][..]),
+        };
+        let tick = range.end - (range.end - range.start) * 0.06;
+        let from = if self.keyframes.len() > KEYFRAME_LINES_UP_TO {
+            tick
+        } else {
+            range.start
+        };
         chart
             .draw_series(
-                self.keyframes
-                    .iter()
-                    .map(|&t| PathElement::new([(t, range.start), (t, range.end)], grey)),
+                rest.iter()
+                    .map(|&t| PathElement::new([(t, from), (t, range.end)], grey)),
             )
             .map_err(plot_err)?;
+        if let Some(t) = first {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    [(t, range.start), (t, range.end)],
+                    BLACK.stroke_width(2),
+                )))
+                .map_err(plot_err)?;
+        }
         Ok(())
     }
 
-    /// One colour per joint: a hue family per bus (blues, oranges, greens,
-    /// purples), shades spread within the family.
+    /// A colour of its own for every joint (the palette repeats past 20).
     fn colours(&self) -> Vec<plotters::style::RGBColor> {
-        use plotters::style::RGBColor;
-        let families: [[(u8, u8, u8); 2]; 4] = [
-            [(8, 48, 107), (107, 174, 214)],
-            [(166, 54, 3), (253, 174, 107)],
-            [(0, 68, 27), (116, 196, 118)],
-            [(63, 0, 125), (188, 189, 220)],
-        ];
-        let per_bus = |b: usize| self.bus_of.iter().filter(|&&x| x == b).count().max(1);
-        let mut seen = vec![0usize; self.bus_of.iter().max().map_or(1, |m| m + 1)];
         (0..self.names.len())
             .map(|j| {
-                let b = self.bus_of.get(j).copied().unwrap_or(0);
-                let n = per_bus(b);
-                let k = seen.get(b).copied().unwrap_or(0);
-                if let Some(s) = seen.get_mut(b) {
-                    *s += 1;
-                }
-                // Alternate dark and light so neighbours differ most.
-                let order = if k % 2 == 0 { k / 2 } else { n - 1 - k / 2 };
-                let f = if n > 1 {
-                    order as f64 / (n - 1) as f64
-                } else {
-                    0.0
-                };
-                let [(r0, g0, b0), (r1, g1, b1)] = families[b % families.len()];
-                let mix = |a: u8, c: u8| (a as f64 + (c as f64 - a as f64) * f).round() as u8;
-                RGBColor(mix(r0, r1), mix(g0, g1), mix(b0, b1))
+                let (r, g, b) = PALETTE[j % PALETTE.len()];
+                plotters::style::RGBColor(r, g, b)
             })
             .collect()
     }

@@ -156,7 +156,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = motion.units;
     let duration = trajectory.duration();
-    let keyframe_times: Vec<f64> = trajectory.segments().iter().map(|s| s.end).collect();
+    // The first keyframe is the path's start; each segment ends at the next.
+    let keyframe_times: Vec<f64> = std::iter::once(0.0)
+        .chain(trajectory.segments().iter().map(|s| s.end))
+        .collect();
     let runner = match &backend {
         Backend::Fast => {
             let buses = servobus_runtime::sim::SimRobot::builder(&robot)
@@ -191,8 +194,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bus_of: robot
             .buses
             .iter()
-            .enumerate()
-            .flat_map(|(b, bus)| bus.joints.iter().map(move |_| b))
+            .flat_map(|bus| bus.joints.iter().map(|_| bus.name.clone()))
             .collect(),
         keyframes: keyframe_times,
         approach: runner.approach().as_secs_f64(),

@@ -13,7 +13,8 @@ pub(super) const APPROACH: f64 = 0.25;
 /// What the live view and the plot show besides the telemetry.
 pub(super) struct Shown {
     pub(super) names: Vec<String>,
-    pub(super) bus_of: Vec<usize>,
+    /// The name of each joint's bus.
+    pub(super) bus_of: Vec<String>,
     /// Path times of the keyframes.
     pub(super) keyframes: Vec<f64>,
     /// The approach to the path's start as the run planned it
@@ -72,6 +73,7 @@ pub(super) fn follow(
                     }
                     progress.set_total(approach + duration + shown.settle);
                     if let Some(plot) = &mut plot {
+                        plot.mark_approach(approach);
                         plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
                     }
                 }

@@ -53,7 +53,7 @@ macro_rules! shipped {
     };
 }
 
-static FILES: [BuiltinFile; 11] = [
+static FILES: [BuiltinFile; 12] = [
     shipped!("robots", "so101"),
     shipped!("robots", "hexapod"),
     shipped!("robots", "hexapod-2bus"),
@@ -65,6 +65,7 @@ static FILES: [BuiltinFile; 11] = [
     shipped!("motions", "scs-mini-nod"),
     shipped!("sim", "so101-mounting"),
     shipped!("sim", "so101-hand"),
+    shipped!("sim", "so101-first-arm-hand"),
 ];
 
 /// One built-in robot or motion.

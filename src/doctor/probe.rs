@@ -466,8 +466,9 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
                 Some("baud_rate"),
             );
             f.problem = format!(
-                "servo {id} answers only at {baud} baud; the bus runs at {home} (baud_rate \
-                 {index} in the servo's table)"
+                "servo {id} answers only at {baud} baud; the bus runs at {home}, which is \
+                 baud_rate {index} (the register holds an index into the baud table: \
+                 {index} = {home} baud)"
             );
             f.run(
                 ctx.target

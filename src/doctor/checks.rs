@@ -4,7 +4,7 @@
 
 use servobus_protocol::registers::{self, Register, Series};
 use servobus_protocol::StatusFlags;
-use servobus_runtime::config::{JointConfig, JointMap, RobotCalibration};
+use servobus_runtime::config::{JointConfig, JointMap};
 
 use super::probe::Ctx;
 use super::{Action, Finding, Severity, Step};
@@ -113,7 +113,7 @@ const WARM_MARGIN_C: i32 = 10;
 const OUTSIDE_TOLERANCE_RAD: f64 = 1.0 * std::f64::consts::PI / 180.0;
 
 impl Ctx<'_> {
-    fn finding(
+    pub(crate) fn finding(
         &self,
         severity: Severity,
         step: Step,
@@ -190,132 +190,6 @@ impl Ctx<'_> {
             self.calibration(s, joint, &mut out);
         }
         out
-    }
-
-    /// The servo against the joint's calibration: the homing offset the
-    /// calibration plays with, and the firmware it was taken on.
-    fn calibration(&self, s: &ServoState, joint: &JointConfig, out: &mut Vec<Finding>) {
-        let Some(cal) = &joint.calibration else {
-            return;
-        };
-        let want = cal.play_frame().homing_offset;
-        if let Some(offset) = s.value("offset").filter(|&o| o != want) {
-            out.push(self.offset_finding(s, joint, offset, cal.homing_offset, want));
-        }
-        let (major, minor) = s.firmware();
-        let now = format!("{major}.{minor}");
-        if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
-            let mut f = self.finding(
-                Severity::Warning,
-                Step::Calibrate,
-                s.id,
-                Some("firmware_major"),
-            );
-            f.problem = format!(
-                "firmware is {now}, joint `{}` was calibrated on {then}: the servo may have been \
-                 replaced",
-                joint.name
-            );
-            f.run_in("if it was, calibrate again: {}", self.calibrate_command());
-            out.push(f);
-        }
-    }
-
-    /// Servo `s` holds homing offset `offset` where its joint's calibration
-    /// plays with `want` and was taken with `taken`.
-    ///
-    /// The calibration's own offset is what a servo holds after a power-up
-    /// when its range crosses the seam: play sets the play frame's for the
-    /// session, so nothing is wrong. Any other offset was written since
-    /// (another tool's calibration) or belongs to another servo: play
-    /// refuses it.
-    fn offset_finding(
-        &self,
-        s: &ServoState,
-        joint: &JointConfig,
-        offset: i32,
-        taken: i32,
-        want: i32,
-    ) -> Finding {
-        let session = offset == taken;
-        let severity = if session {
-            Severity::Info
-        } else {
-            Severity::Error
-        };
-        let register = s.register("offset");
-        let mut f = self.finding(severity, Step::Calibrate, s.id, register.map(|r| r.name));
-        f.action = Some(Action::Offset {
-            id: s.id,
-            value: want,
-            store_only: !session,
-            series: s.series,
-        });
-        if session {
-            f.problem = format!(
-                "homing offset {offset} is not set for this session: joint `{}`'s range crosses \
-                 the seam and plays with {want}, which play sets (until power-off)",
-                joint.name
-            );
-            f.run_in(
-                "nothing to do before play; to set it now: {}",
-                self.target.fix_all_command(&self.robot_arg(), false),
-            );
-        } else {
-            f.problem = format!(
-                "homing offset is {offset}, joint `{}`'s calibration was taken with {taken}{}: \
-                 the offset was rewritten since (by another tool?) or the servo was replaced, \
-                 so play refuses it",
-                joint.name,
-                if want == taken {
-                    String::new()
-                } else {
-                    format!(" and plays with {want}")
-                }
-            );
-            f.run_in(
-                &format!(
-                    "if only the offset was rewritten, store the calibration's in EEPROM: {{}}; \
-                     if the servo or its horn was replaced, calibrate again: {}",
-                    self.calibrate_command()
-                ),
-                self.target.write_command(s.id, "offset", want),
-            );
-        }
-        f
-    }
-
-    /// The robot as the command line names it: a built-in's name, else
-    /// its file.
-    pub(crate) fn robot_arg(&self) -> String {
-        crate::builtin::argument(&self.robot.path)
-    }
-
-    /// `servobus calibrate` for this robot and port, with where the
-    /// calibration goes.
-    pub(crate) fn calibrate_command(&self) -> String {
-        let out = match &self.robot.calibration {
-            RobotCalibration::Missing(path) => path.display().to_string(),
-            _ => "calibration.yaml".into(),
-        };
-        format!(
-            "servobus calibrate --robot {} {} -o {out}",
-            self.robot_arg(),
-            // calibrate takes the baud rate from the robot file.
-            self.target.port_args(super::probe::TOOLS_DEFAULT_BAUD)
-        )
-    }
-
-    /// What to do to change the robot file: edit it, or for a built-in
-    /// robot, write a copy to edit with `servobus init` first.
-    pub(crate) fn edit_robot_file(&self, change: &str) -> String {
-        match crate::builtin::builtin_name(&self.robot.path) {
-            Some(name) => format!(
-                "the built-in robot cannot be edited: `servobus init --robot {name}` writes \
-                 robot.yaml; {change} there and pass --robot robot.yaml"
-            ),
-            None => format!("{change} in {}", self.robot.path.display()),
-        }
     }
 
     fn reply_settings(&self, s: &ServoState, out: &mut Vec<Finding>) {
@@ -457,7 +331,7 @@ impl Ctx<'_> {
         // Without a calibration a real joint's angle means nothing yet: the
         // advice is to calibrate (see `uncalibrated`), not to move it.
         if let (Some(pos), false) = (s.value("present_position"), self.uncalibrated()) {
-            let rad = map.from_ticks(play_frame_tick(s, joint, pos));
+            let rad = map.from_ticks(super::calibration::play_frame_tick(s, joint, pos));
             let (min, max) = (units.to_rad(joint.min), units.to_rad(joint.max));
             if rad < min - OUTSIDE_TOLERANCE_RAD || rad > max + OUTSIDE_TOLERANCE_RAD {
                 let mut f =
@@ -516,26 +390,6 @@ impl Ctx<'_> {
                 out.push(f);
             }
         }
-    }
-}
-
-/// Present position `pos` of servo `s` as it reads in its joint's play
-/// frame: a servo whose homing offset is not the play frame's yet (play
-/// sets it) reads the same shaft angle `offset - want` ticks higher.
-fn play_frame_tick(s: &ServoState, joint: &JointConfig, pos: i32) -> i32 {
-    let want = joint
-        .calibration
-        .as_ref()
-        .map(|c| c.play_frame().homing_offset);
-    match (
-        s.value("offset"),
-        want,
-        i32::try_from(joint.model.resolution),
-    ) {
-        (Some(offset), Some(want), Ok(turn)) if offset != want && turn > 0 => {
-            (pos + offset - want).rem_euclid(turn)
-        }
-        _ => pos,
     }
 }
 

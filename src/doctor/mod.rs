@@ -13,6 +13,7 @@
 //! simulator in virtual time alike.
 
 mod bus_checks;
+mod calibration;
 mod checks;
 mod fix;
 mod probe;

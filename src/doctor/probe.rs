@@ -288,7 +288,7 @@ fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
         findings.extend(ctx.servo_findings(s, expected(s.id)));
     }
     if robot.buses.first().is_some_and(|b| b.name == cfg.name) {
-        calibration_findings(ctx, &mut findings);
+        super::calibration::robot_findings(ctx, &mut findings);
     }
     bus_checks::firmware(ctx, &servos, &mut findings);
     bus_checks::supply_drop(ctx, &servos, &mut findings);
@@ -371,48 +371,6 @@ fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Findi
         }
     }
     f
-}
-
-/// Whether the robot has the calibration it names (said once, with its
-/// first bus). Real servos without one are told to calibrate first.
-fn calibration_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
-    let then = match crate::builtin::builtin_name(&ctx.robot.path) {
-        Some(_) => "then pass --calibration calibration.yaml to play, teach and bench".to_owned(),
-        None => format!(
-            "then add `calibration: calibration.yaml` to {} (or pass --calibration)",
-            ctx.robot.path.display()
-        ),
-    };
-    match &ctx.robot.calibration {
-        RobotCalibration::Missing(path) => {
-            let mut f = finding(ctx, Severity::Error, Step::Calibrate, None, None);
-            f.problem = format!(
-                "the robot file names the calibration {}, which does not exist: real servos \
-                 are refused until it does",
-                path.display()
-            );
-            f.run(ctx.calibrate_command());
-            out.push(f);
-        }
-        RobotCalibration::None if ctx.real => {
-            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
-            f.problem = "not calibrated: calibrate first. Until then the joint angles mean \
-                         nothing (each servo horn sits at its own angle), so no joint is checked \
-                         against its limits"
-                .into();
-            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
-            out.push(f);
-        }
-        RobotCalibration::None => {
-            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
-            f.problem = "no calibration: joint angles count from each servo's middle tick \
-                         with the robot file's offset and inverted"
-                .into();
-            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
-            out.push(f);
-        }
-        RobotCalibration::Applied { .. } => {}
-    }
 }
 
 /// Reads servo `id`'s table from address 0, in the layout of the series its

@@ -13,7 +13,7 @@ use std::time::Duration;
 use servobus::doctor::{self, Finding, PortKind, Severity, Target};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
-use servobus_runtime::config::{load_robot, JointCalibration, Robot};
+use servobus_runtime::config::{load_robot, Robot};
 use servobus_sim::{Faults, SimBus};
 
 const PORT: &str = "/dev/ttyACM0";
@@ -446,75 +446,4 @@ fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
         "{}",
         missing.fix
     );
-}
-
-#[test]
-fn an_uncalibrated_robot_is_told_how_to_calibrate() {
-    let mut arm = Arm::tuned(Faults::none());
-    let all = arm.examine_all();
-    let f = all
-        .iter()
-        .find(|f| f.problem.starts_with("no calibration"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
-    assert_eq!(f.severity, Severity::Info, "information only: exit 0");
-    assert!(
-        f.fix.starts_with("servobus calibrate --robot ")
-            && f.fix
-                .contains("so101.yaml --port /dev/ttyACM0 -o calibration.yaml"),
-        "{}",
-        f.fix
-    );
-    assert_eq!(doctor::exit_status(&all), 0);
-}
-
-#[test]
-fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
-    let mut arm = Arm::tuned(Faults::none());
-    // The calibration of shoulder_pan was taken with homing offset 100 on
-    // firmware 3.9; the servo holds 0 and reports 3.10.
-    arm.robot.buses[0].joints[0].calibration = Some(JointCalibration {
-        name: "shoulder_pan".into(),
-        id: 1,
-        model: "STS3215".into(),
-        firmware: Some("3.9".into()),
-        homing_offset: 100,
-        pose_deg: 0.0,
-        pose_tick: 2048.0,
-        direction: 1,
-        range: [600, 3500],
-    });
-    let findings = arm.examine();
-    let offset = must(&findings, 1, Some("offset"));
-    assert_eq!(
-        offset.command.as_deref(),
-        Some("servobus write --port /dev/ttyACM0 --id 1 offset 100")
-    );
-    assert_eq!(offset.severity, Severity::Error);
-    assert!(
-        offset.problem.contains("homing offset is 0"),
-        "{}",
-        offset.problem
-    );
-    let firmware = must(&findings, 1, Some("firmware_major"));
-    assert!(
-        firmware.problem.contains("calibrated on 3.9"),
-        "{}",
-        firmware.problem
-    );
-    // Without --write-servos, --fix leaves an offset play refuses alone.
-    let how = doctor::Fixing {
-        robot: &arm.robot,
-        bus: 0,
-        write_servos: false,
-    };
-    let outcomes = doctor::apply(&mut arm.bus, &findings, &how).expect("fixes");
-    assert!(outcomes.iter().all(|o| o.id != 1), "{outcomes:?}");
-    arm.fix_storing(&findings, true);
-    arm.sim.power_cycle();
-    assert_eq!(
-        arm.sim.servo(1, |s| s.read_u16(addr::OFFSET)),
-        Some(100),
-        "the offset persists"
-    );
-    assert!(about(&arm.examine(), 1, Some("offset")).is_none());
 }

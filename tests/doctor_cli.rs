@@ -32,6 +32,17 @@ fn the_built_in_simulator_has_only_the_gripper_warnings() {
             "0 error(s), 3 warning(s); 3 can be fixed with --fix",
         ],
     );
+    // No port to run a command on: none is given as runnable.
+    let v = json(&servobus(&["doctor", "--robot", "so101", "--json"]));
+    let findings = v["buses"][0]["findings"].as_array().expect("findings");
+    assert!(!findings.is_empty(), "{v}");
+    assert!(findings.iter().all(|f| f["command"].is_null()), "{v}");
+    assert!(
+        findings.iter().any(|f| f["fix"]
+            .as_str()
+            .is_some_and(|fix| fix.contains("--port <PORT>"))),
+        "{v}"
+    );
 }
 
 #[test]

@@ -156,8 +156,15 @@ fn check<T: Transport + BaudSwitch, C: Clock>(
     })
 }
 
+/// Prints `findings` (in the order a new robot needs them) under the
+/// heading of each step.
 fn print_findings(findings: &[Finding]) {
+    let mut step = None;
     for f in findings {
+        if step != Some(f.step) {
+            step = Some(f.step);
+            println!("{}", f.step.heading());
+        }
         let who = match (f.id, f.register) {
             (Some(id), Some(r)) => format!("servo {id} {r}"),
             (Some(id), None) => format!("servo {id}"),

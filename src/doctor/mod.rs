@@ -67,6 +67,19 @@ pub enum Step {
     Check,
 }
 
+impl Step {
+    /// A heading for the step's findings: its number in the set-up and
+    /// what it is about.
+    pub fn heading(self) -> &'static str {
+        match self {
+            Step::Connect => "1. connect: every servo answers, alone, at its ID and the bus's rate",
+            Step::Configure => "2. configure: the servos' settings",
+            Step::Calibrate => "3. calibrate: the calibration and its homing offsets",
+            Step::Check => "4. check: health and timing",
+        }
+    }
+}
+
 /// What `--fix` does about a finding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Action {
@@ -143,7 +156,8 @@ pub struct Finding {
     /// the command among them.
     pub fix: String,
     /// The command that fixes it, exactly as it runs (it appears in `fix`);
-    /// `None` when the fix is done by hand.
+    /// `None` when the fix is done by hand or the command has a part to
+    /// fill in (`<PORT>` on the built-in simulator).
     pub command: Option<String>,
     /// What `--fix` does about it, if anything.
     #[serde(skip)]
@@ -158,14 +172,14 @@ impl Finding {
 
     /// Sets the fix to `command` alone.
     pub(crate) fn run(&mut self, command: String) {
-        self.fix.clone_from(&command);
-        self.command = Some(command);
+        self.run_in("{}", command);
     }
 
     /// Sets the fix to `text` around `command` (`{}` in `text` marks where).
     pub(crate) fn run_in(&mut self, text: &str, command: String) {
         self.fix = text.replacen("{}", &command, 1);
-        self.command = Some(command);
+        // A placeholder (`<PORT>`) is for the user to fill in.
+        self.command = (!command.contains('<')).then_some(command);
     }
 }
 

@@ -198,6 +198,7 @@ pub(crate) fn check_writable(flag: &str, path: &std::path::Path) -> anyhow::Resu
                 "{flag} {}: cannot write there; nothing was moved",
                 path.display()
             )
-        })?;
+        })
+        .map_err(exit::invalid)?;
     Ok(())
 }

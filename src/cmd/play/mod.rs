@@ -115,6 +115,11 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if args.monitor {
+        // The live view needs a terminal: without one, refuse before
+        // anything is opened or moved.
+        super::monitor::check_play_terminal()?;
+    }
     check_outputs(&args)?;
     let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
     let backend = backend(&args, &robot)?;

@@ -73,7 +73,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let ports = ports(&args, &design)?;
     let cal = if let Some(json) = &args.from_lerobot {
         if args.write_servos && ports.is_none() {
-            return Err(super::exit::input("--write-servos needs the servos' --port"));
+            return Err(super::exit::input(
+                "--write-servos needs the servos' --port",
+            ));
         }
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("--from-lerobot: cannot read {}", json.display()))
@@ -88,12 +90,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
     } else if let Some(out) = &args.to_lerobot {
-        let from = args.robot.hardware.calibration.clone().or(named).ok_or_else(|| {
-            super::exit::input(
-                "--to-lerobot alone exports a calibration: give --calibration FILE \
+        let from = args
+            .robot
+            .hardware
+            .calibration
+            .clone()
+            .or(named)
+            .ok_or_else(|| {
+                super::exit::input(
+                    "--to-lerobot alone exports a calibration: give --calibration FILE \
                  (the robot file names none)",
-            )
-        })?;
+                )
+            })?;
         let cal = load_calibration(&from)?;
         write_lerobot(&cal, out)?;
         return Ok(ExitCode::SUCCESS);

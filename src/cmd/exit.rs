@@ -52,7 +52,10 @@ pub fn code(err: &anyhow::Error) -> u8 {
             || e.is::<InputError>()
             || e.is::<Invalid>()
             || e.is::<FaultSpecError>()
-            || matches!(e.downcast_ref::<PtyError>(), Some(PtyError::LinkOccupied(_)))
+            || matches!(
+                e.downcast_ref::<PtyError>(),
+                Some(PtyError::LinkOccupied(_))
+            )
             || OpenError::find(e).is_some()
     });
     if input {
@@ -166,11 +169,17 @@ mod tests {
     fn os_errors_are_said_in_the_users_terms() {
         let dir = std::io::Error::from_raw_os_error(21);
         let err = anyhow::Error::new(dir).context("--log /tmp: cannot write there");
-        assert_eq!(message(&err), "--log /tmp: cannot write there: it is a directory");
+        assert_eq!(
+            message(&err),
+            "--log /tmp: cannot write there: it is a directory"
+        );
         let tty = std::io::Error::from_raw_os_error(25);
         assert_eq!(os_text(&tty), "not a serial port");
         let marked = invalid(err);
         assert_eq!(code(&marked), USAGE);
-        assert_eq!(message(&marked), "--log /tmp: cannot write there: it is a directory");
+        assert_eq!(
+            message(&marked),
+            "--log /tmp: cannot write there: it is a directory"
+        );
     }
 }

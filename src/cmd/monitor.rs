@@ -8,7 +8,6 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use std::io::IsTerminal;
 use crossbeam_channel::TryRecvError;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
@@ -16,6 +15,7 @@ use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
 use servobus_runtime::{Command, Runner, Telemetry};
+use std::io::IsTerminal;
 
 use super::link::{open_bus, open_plain_bus, Allowance};
 
@@ -65,14 +65,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             args.rate
         )));
     }
-    // Before the bus is touched: without a terminal, JSON lines instead.
-    let live = !args.json && terminal_available();
-    if !args.json && !live {
-        eprintln!(
-            "note: no terminal (stdin and stdout must be one): printing one JSON line per \
-             refresh instead of the live view, as --json does"
-        );
-    }
     let robot = match &args.robot {
         Some(path) => Some(load_robot_any_rate_calibrated(
             path,
@@ -90,6 +82,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
+    // Before the bus is touched: without a terminal, JSON lines instead.
+    let live = !args.json && terminal_available();
+    if !args.json && !live {
+        eprintln!(
+            "note: no terminal (stdin and stdout must be one): printing one JSON line per \
+             refresh instead of the live view, as --json does"
+        );
+    }
     let port = args
         .hardware
         .port

@@ -73,15 +73,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "--duration must be a positive number of seconds",
         ));
     }
-    // Check the output before anything moves, without emptying a file that
-    // is there: it is replaced only once something has been captured.
-    super::check_writable("-o", &args.output)?;
-    if let Some(bad) = args.hold.iter().find(|h| robot.joints().all(|j| &j.name != *h)) {
+    if let Some(bad) = args
+        .hold
+        .iter()
+        .find(|h| robot.joints().all(|j| &j.name != *h))
+    {
         return Err(super::exit::input(format!(
             "--hold {bad}: no such joint in {}",
             robot.path.display()
         )));
     }
+    // Check the output before anything moves, without emptying a file that
+    // is there: it is replaced only once something has been captured.
+    super::check_writable("-o", &args.output)?;
     let buses = open_buses(&robot, args.robot.hardware.port.as_deref())?;
     let mut teacher = Teacher::new(&robot, buses, &args.hold)?;
     teacher.release()?;

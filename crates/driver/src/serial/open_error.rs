@@ -59,33 +59,32 @@ impl OpenError {
     pub(crate) fn classify(path: &str, kind: io::ErrorKind, locked: bool, text: &str) -> Self {
         let lower = text.to_ascii_lowercase();
         let file = Path::new(path);
-        let problem = if kind == io::ErrorKind::PermissionDenied
-            || lower.contains("permission denied")
-        {
-            OpenProblem::PermissionDenied {
-                group: owning_group(file),
-            }
-        } else if !file.exists() {
-            OpenProblem::NotFound {
-                present: present_ports(),
-            }
-        } else if let Some(what) = not_a_device(file) {
-            OpenProblem::NotSerial { what }
-        } else if locked || lower.contains("busy") {
-            OpenProblem::Busy {
-                holders: holders(file),
-            }
-        } else if lower.contains("typewriter") || lower.contains("inappropriate ioctl") {
-            OpenProblem::NotSerial {
-                what: "a device that is not a terminal".into(),
-            }
-        } else if kind == io::ErrorKind::NotFound || lower.contains("no such device") {
-            OpenProblem::NotFound {
-                present: present_ports(),
-            }
-        } else {
-            OpenProblem::Other(plain_os_text(text))
-        };
+        let problem =
+            if kind == io::ErrorKind::PermissionDenied || lower.contains("permission denied") {
+                OpenProblem::PermissionDenied {
+                    group: owning_group(file),
+                }
+            } else if !file.exists() {
+                OpenProblem::NotFound {
+                    present: present_ports(),
+                }
+            } else if let Some(what) = not_a_device(file) {
+                OpenProblem::NotSerial { what }
+            } else if locked || lower.contains("busy") {
+                OpenProblem::Busy {
+                    holders: holders(file),
+                }
+            } else if lower.contains("typewriter") || lower.contains("inappropriate ioctl") {
+                OpenProblem::NotSerial {
+                    what: "a device that is not a terminal".into(),
+                }
+            } else if kind == io::ErrorKind::NotFound || lower.contains("no such device") {
+                OpenProblem::NotFound {
+                    present: present_ports(),
+                }
+            } else {
+                OpenProblem::Other(plain_os_text(text))
+            };
         OpenError {
             path: path.to_owned(),
             problem,
@@ -150,7 +149,10 @@ impl fmt::Display for OpenError {
                 holders.join(", ")
             ),
             OpenProblem::NotSerial { what } => {
-                write!(f, "not a serial port ({what}); give the servos' adapter, e.g. /dev/ttyUSB0")
+                write!(
+                    f,
+                    "not a serial port ({what}); give the servos' adapter, e.g. /dev/ttyUSB0"
+                )
             }
             OpenProblem::Other(text) => f.write_str(text),
         }
@@ -284,12 +286,14 @@ fn lock_holders(path: &Path) -> Vec<String> {
         for line in locks.lines() {
             let fields: Vec<&str> = line.split_whitespace().collect();
             // A blocked waiter's line has a `->` field more; skip it.
-            let (Some(&"FLOCK"), Some(pid), Some(file)) = (fields.get(1), fields.get(4), fields.get(5))
+            let (Some(&"FLOCK"), Some(pid), Some(file)) =
+                (fields.get(1), fields.get(4), fields.get(5))
             else {
                 continue;
             };
             let mut parts = file.split(':');
-            let (Some(maj), Some(min), Some(ino)) = (parts.next(), parts.next(), parts.next()) else {
+            let (Some(maj), Some(min), Some(ino)) = (parts.next(), parts.next(), parts.next())
+            else {
                 continue;
             };
             let same = u64::from_str_radix(maj, 16).ok() == Some(major)
@@ -362,13 +366,22 @@ mod tests {
         let text = "Unable to acquire exclusive lock on serial port";
         let e = OpenError::classify("/dev/null", io::ErrorKind::NotFound, true, text);
         assert!(matches!(e.problem, OpenProblem::Busy { .. }), "{e:?}");
-        assert!(e.to_string().starts_with("cannot open /dev/null: the port is busy"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("cannot open /dev/null: the port is busy"),
+            "{e}"
+        );
     }
 
     #[test]
     fn a_file_or_directory_is_not_a_serial_port() {
         let dir = std::env::temp_dir();
-        let e = OpenError::classify(&dir.to_string_lossy(), io::ErrorKind::Other, false, "EISDIR");
+        let e = OpenError::classify(
+            &dir.to_string_lossy(),
+            io::ErrorKind::Other,
+            false,
+            "EISDIR",
+        );
         assert_eq!(
             e.problem,
             OpenProblem::NotSerial {

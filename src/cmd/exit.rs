@@ -160,7 +160,7 @@ mod tests {
     fn a_context_the_cause_repeats_is_said_once() {
         let err = anyhow::anyhow!("servo 42: no reply within 300 us").context("servo 42");
         assert_eq!(message(&err), "servo 42: no reply within 300 us");
-        let gone = std::io::Error::new(std::io::ErrorKind::Other, "I/O error");
+        let gone = std::io::Error::other("I/O error");
         let err = anyhow::Error::new(servobus_driver::TransportError::Io(gone));
         assert_eq!(message(&err), "I/O error");
     }

@@ -21,6 +21,7 @@ fn each_input_error_exits_2_with_one_line() {
     let taught = dir.join("taught.yaml");
     let missing = dir.join("none.json");
     let robot = "configs/robots/so101.yaml";
+    let sim = Sim::start(&dir);
     let cases: Vec<(Vec<&str>, &[&str])> = vec![
         (vec!["calibrate", "--robot", robot], &["give --port"]),
         (
@@ -71,12 +72,18 @@ fn each_input_error_exits_2_with_one_line() {
                 "teach",
                 "--robot",
                 robot,
+                "--port",
+                sim.port(),
                 "--hold",
                 "nosuch",
                 "-o",
                 arg(&taught),
             ],
-            &["--hold nosuch", "no such joint"],
+            &["no joint `nosuch` to hold", "joints: shoulder_pan"],
+        ),
+        (
+            vec!["teach", "--robot", robot, "-o", arg(&taught)],
+            &["bus `arm` has no port", "give --port"],
         ),
         (
             vec![
@@ -101,7 +108,15 @@ fn each_input_error_exits_2_with_one_line() {
         says(&err, words);
         assert!(!err.contains("os error"), "{args:?}: {err}");
     }
-    assert!(!taught.exists(), "teach wrote nothing");
+    assert!(
+        std::fs::read(&taught).map_or(true, |t| t.is_empty()),
+        "teach wrote nothing"
+    );
+    // Nothing moved: the torque is still off on every servo.
+    for id in 1..=6 {
+        assert_eq!(sim.read(&id.to_string(), "torque_enable"), 0, "servo {id}");
+    }
+    sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
 

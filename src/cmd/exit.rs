@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 use servobus_driver::OpenError;
 use servobus_runtime::config::{is_builtin_path, ConfigError};
+use servobus_runtime::teach::TeachError;
 use servobus_sim::{FaultSpecError, PtyError};
 
 /// Exit code: a problem was found.
@@ -55,6 +56,10 @@ pub fn code(err: &anyhow::Error) -> u8 {
             || matches!(
                 e.downcast_ref::<PtyError>(),
                 Some(PtyError::LinkOccupied(_))
+            )
+            || matches!(
+                e.downcast_ref::<TeachError>(),
+                Some(TeachError::UnknownJoint { .. })
             )
             || OpenError::find(e).is_some()
     });

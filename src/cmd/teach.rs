@@ -73,16 +73,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "--duration must be a positive number of seconds",
         ));
     }
-    if let Some(bad) = args
-        .hold
-        .iter()
-        .find(|h| robot.joints().all(|j| &j.name != *h))
-    {
-        return Err(super::exit::input(format!(
-            "--hold {bad}: no such joint in {}",
-            robot.path.display()
-        )));
-    }
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
     super::check_writable("-o", &args.output)?;
@@ -161,11 +151,11 @@ fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus
     let mut buses = Vec::new();
     for (bus, path) in robot.buses.iter().zip(bus_ports(robot, port)) {
         let Some(path) = path else {
-            bail!(
+            return Err(super::exit::input(format!(
                 "bus `{}` has no port: give --port (a robot, or `servobus sim --robot {} --hand H.yaml --link L`)",
                 bus.name,
                 robot.path.display()
-            );
+            )));
         };
         let mut opened = open_bus(bus, &path, Allowance::Assumed)?;
         opened.set_settings(opened.settings().with_retries(RETRIES));

@@ -99,7 +99,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let truth = match &args.truth {
         Some(path) => {
             let file = std::fs::File::create(path)
-                .with_context(|| format!("{}: cannot create the truth file", path.display()))?;
+                .with_context(|| format!("{}: cannot create the truth file", path.display()))
+                .map_err(super::exit::invalid)?;
             // One column per served joint.
             let truth = match args.bus.as_deref() {
                 Some(name) => Truth::new(

@@ -312,17 +312,27 @@ fn exit_code(problem: bool) -> ExitCode {
 /// its telemetry only. `q` stops the motion (jerk-limited) and Space turns
 /// the torque off; the view ends with the run.
 pub fn watch_run(runner: &Runner, robot: &Robot, units: Units, rate_hz: f64) -> anyhow::Result<()> {
+    let shown =
+        Screen::open().and_then(|mut screen| show_run(&mut screen, runner, robot, units, rate_hz));
+    if shown.is_err() {
+        // The terminal failed (refused, or gone mid-run): stop the motion
+        // (jerk-limited) rather than let it run on unwatched; the caller
+        // joins the run and reports.
+        let _ = runner.send(Command::Stop);
+    }
+    shown
+}
+
+/// The view of [`watch_run`] on `screen`, until the run ends.
+fn show_run(
+    screen: &mut Screen,
+    runner: &Runner,
+    robot: &Robot,
+    units: Units,
+    rate_hz: f64,
+) -> anyhow::Result<()> {
     let mut rows = TelemetryRows::new(robot, units, 1.0 / rate_hz);
     let telemetry = runner.telemetry();
-    let mut screen = match Screen::open() {
-        Ok(screen) => screen,
-        Err(e) => {
-            // The run has started: stop it (jerk-limited) rather than leave
-            // it unwatched; the caller joins it and reports.
-            let _ = runner.send(Command::Stop);
-            return Err(e);
-        }
-    };
     let period = Duration::from_secs_f64(1.0 / PLAY_REFRESH_HZ);
     let mut note: Option<String> = None;
     let title = format!("{} (play)", robot.name);

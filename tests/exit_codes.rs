@@ -175,6 +175,11 @@ fn a_port_another_servobus_holds_is_busy_and_names_it() {
     // Free again once the holder has gone.
     let out = sim.run(&["ping", "--id", "1"]);
     exited(&out, 0);
+    // A servo that does not answer: a problem found, said once.
+    let out = sim.run(&["read", "--id", "42", "present_position"]);
+    let err = error(&out, 1);
+    assert_eq!(err.matches("servo 42").count(), 1, "{err}");
+    says(&err, &["no reply"]);
     sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -99,6 +99,14 @@ pub fn message(err: &anyhow::Error) -> String {
                 *prev = text;
                 continue;
             }
+            // `servo 42 at 1000000 baud` then `servo 42: no reply`: the
+            // cause's subject is said already.
+            if let Some((subject, rest)) = text.split_once(": ") {
+                if prev.starts_with(subject) {
+                    parts.push(rest.to_owned());
+                    continue;
+                }
+            }
         }
         parts.push(text);
     }
@@ -165,6 +173,12 @@ mod tests {
     fn a_context_the_cause_repeats_is_said_once() {
         let err = anyhow::anyhow!("servo 42: no reply within 300 us").context("servo 42");
         assert_eq!(message(&err), "servo 42: no reply within 300 us");
+        let err = anyhow::anyhow!("servo 42: no reply within 300 us")
+            .context("servo 42 at 1000000 baud (scan to find it)");
+        assert_eq!(
+            message(&err),
+            "servo 42 at 1000000 baud (scan to find it): no reply within 300 us"
+        );
         let gone = std::io::Error::other("I/O error");
         let err = anyhow::Error::new(servobus_driver::TransportError::Io(gone));
         assert_eq!(message(&err), "I/O error");

@@ -108,6 +108,10 @@ fn each_input_error_exits_2_with_one_line() {
         says(&err, words);
         assert!(!err.contains("os error"), "{args:?}: {err}");
     }
+    // A baud rate of 0 is refused by the command line (it used to hang).
+    let out = servobus(&["scan", "--port", sim.port(), "--baud", "0"]);
+    let (_, err) = exited(&out, 2);
+    says(&err, &["--baud", "0"]);
     assert!(
         std::fs::read(&taught).map_or(true, |t| t.is_empty()),
         "teach wrote nothing"

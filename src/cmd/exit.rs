@@ -141,7 +141,7 @@ pub fn os_text(err: &std::io::Error) -> String {
         _ => match err.kind() {
             std::io::ErrorKind::NotFound => "no such file or directory",
             std::io::ErrorKind::PermissionDenied => "permission denied",
-            std::io::ErrorKind::AlreadyExists => "it exists already",
+            std::io::ErrorKind::AlreadyExists => "a file of that name exists",
             _ => "",
         },
     };

@@ -43,11 +43,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             )));
         }
     }
-    std::fs::create_dir_all(&args.dir)
-        .map_err(|e| input(format!("cannot create {}: {e}", args.dir.display())))?;
+    std::fs::create_dir_all(&args.dir).map_err(|e| {
+        let why = super::exit::os_text(&e);
+        input(format!("cannot create {}: {why}", args.dir.display()))
+    })?;
     for (path, text) in &files {
-        std::fs::write(path, text)
-            .map_err(|e| input(format!("cannot write {}: {e}", path.display())))?;
+        std::fs::write(path, text).map_err(|e| {
+            let why = super::exit::os_text(&e);
+            input(format!("cannot write {}: {why}", path.display()))
+        })?;
         println!("wrote {}", path.display());
     }
     // `./motion.yaml` reads better as `motion.yaml`.

@@ -43,7 +43,9 @@ pub struct Args {
     /// The port and the calibration.
     #[command(flatten)]
     pub hardware: super::HardwareArgs,
-    /// Print one JSON line per refresh instead of the live view.
+    /// Print one JSON line per refresh instead of the live view (what
+    /// happens anyway without a terminal). Exits 1 when a refresh saw a
+    /// servo missing or reporting a status flag.
     #[arg(long)]
     pub json: bool,
     /// Refreshes per second.

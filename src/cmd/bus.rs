@@ -53,7 +53,7 @@ pub struct ScanArgs {
     #[command(flatten)]
     pub port: PortArgs,
     /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
     pub baud: u32,
     /// Try every baud rate of the servo baud table.
     #[arg(long, conflicts_with = "baud")]
@@ -70,7 +70,7 @@ pub struct ServoArgs {
     #[command(flatten)]
     pub port: PortArgs,
     /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
     pub baud: u32,
     /// Servo ID (for set-id: the servo's current ID).
     #[arg(long)]

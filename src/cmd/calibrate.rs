@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
@@ -81,30 +81,44 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         super::check_writable("--to-lerobot", out)?;
     }
     let cal = if let Some(json) = &args.from_lerobot {
+        if args.write_servos && ports.is_none() {
+            return Err(super::exit::input(
+                "--write-servos needs the servos' --port",
+            ));
+        }
         let text = std::fs::read_to_string(json)
-            .with_context(|| format!("cannot read {}", json.display()))?;
+            .with_context(|| format!("--from-lerobot: cannot read {}", json.display()))
+            .map_err(super::exit::invalid)?;
         let cal = from_lerobot(&design, &text, &format!("imported from {}", json.display()))
-            .with_context(|| json.display().to_string())?;
+            .with_context(|| json.display().to_string())
+            .map_err(super::exit::invalid)?;
         match (&ports, args.write_servos) {
             (Some(ports), true) => write_imported(&design, ports, cal)?,
-            (None, true) => bail!("--write-servos needs the servos' --port"),
             _ => cal,
         }
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
     } else if let Some(out) = &args.to_lerobot {
-        let from = args.robot.hardware.calibration.clone().or(named).context(
-            "--to-lerobot alone exports a calibration: give --calibration FILE \
-             (the robot file names none)",
-        )?;
+        let from = args
+            .robot
+            .hardware
+            .calibration
+            .clone()
+            .or(named)
+            .ok_or_else(|| {
+                super::exit::input(
+                    "--to-lerobot alone exports a calibration: give --calibration FILE \
+                 (the robot file names none)",
+                )
+            })?;
         let cal = load_calibration(&from)?;
         write_lerobot(&cal, out)?;
         return Ok(ExitCode::SUCCESS);
     } else {
-        bail!(
+        return Err(super::exit::input(
             "nothing to calibrate on: give --port (the servos' serial port), \
-             or --from-lerobot FILE to import a LeRobot calibration"
-        );
+             or --from-lerobot FILE to import a LeRobot calibration",
+        ));
     };
     // Replaced whole or not at all: a failure leaves an earlier calibration
     // at the path untouched.

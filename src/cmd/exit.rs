@@ -11,6 +11,8 @@ use std::process::ExitCode;
 use servobus_driver::OpenError;
 use servobus_io::OutputError;
 use servobus_runtime::config::{is_builtin_path, ConfigError};
+use servobus_runtime::teach::TeachError;
+use servobus_sim::{FaultSpecError, PtyError};
 
 /// Exit code: a problem was found.
 pub const PROBLEM: u8 = 1;
@@ -28,6 +30,19 @@ pub fn input(message: impl Into<String>) -> anyhow::Error {
     InputError(message.into()).into()
 }
 
+/// An error of any kind that came from what the user gave (exits 2): a file
+/// that is missing or malformed, a path that cannot be written. Says what
+/// the error inside says.
+#[derive(Debug, thiserror::Error)]
+#[error(transparent)]
+pub struct Invalid(Box<dyn std::error::Error + Send + Sync + 'static>);
+
+/// `err` marked as an input error (exits 2), its message unchanged: for
+/// `.map_err(invalid)` where a failure can only mean a bad input.
+pub fn invalid(err: anyhow::Error) -> anyhow::Error {
+    Invalid(err.into()).into()
+}
+
 /// Prints `err` (each cause once) and returns its exit code.
 pub fn report(err: &anyhow::Error) -> ExitCode {
     eprintln!("error: {}", message(err));
@@ -39,6 +54,16 @@ pub fn code(err: &anyhow::Error) -> u8 {
     let input = err.chain().any(|e| {
         e.is::<ConfigError>()
             || e.is::<InputError>()
+            || e.is::<Invalid>()
+            || e.is::<FaultSpecError>()
+            || matches!(
+                e.downcast_ref::<PtyError>(),
+                Some(PtyError::LinkOccupied(_))
+            )
+            || matches!(
+                e.downcast_ref::<TeachError>(),
+                Some(TeachError::UnknownJoint { .. })
+            )
             || OpenError::find(e).is_some()
             || e.downcast_ref::<OutputError>()
                 .is_some_and(OutputError::is_bad_path)
@@ -52,8 +77,11 @@ pub fn code(err: &anyhow::Error) -> u8 {
 
 /// The message for `err`: the context chain joined by `: `, each cause said
 /// once. A cause already spelled out by the message before it is skipped
-/// (`I/O error: X: denied` followed by its source `X: denied`); a port that
-/// cannot be opened is said by its [`OpenError`], which names the remedy.
+/// (`I/O error: X: denied` followed by its source `X: denied`), and a
+/// context the cause repeats is said by the cause alone (`servo 42`
+/// followed by `servo 42: no reply`); a port that cannot be opened is said
+/// by its [`OpenError`], which names the remedy. The operating system's
+/// errors are said in the user's terms ([`os_text`]).
 pub fn message(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for e in err.chain() {
@@ -63,9 +91,27 @@ pub fn message(err: &anyhow::Error) -> String {
             parts.push(open.to_string());
             break;
         }
-        let text = e.to_string();
+        let text = match e.downcast_ref::<std::io::Error>() {
+            Some(io) if io.get_ref().is_none() => os_text(io),
+            _ => e.to_string(),
+        };
+        let text = text.strip_prefix("I/O error: ").unwrap_or(&text).to_owned();
         if parts.last().is_some_and(|prev| prev.contains(&text)) {
             continue;
+        }
+        if let Some(prev) = parts.last_mut() {
+            if text.starts_with(prev.as_str()) {
+                *prev = text;
+                continue;
+            }
+            // `servo 42 at 1000000 baud` then `servo 42: no reply`: the
+            // cause's subject is said already.
+            if let Some((subject, rest)) = text.split_once(": ") {
+                if prev.starts_with(subject) {
+                    parts.push(rest.to_owned());
+                    continue;
+                }
+            }
         }
         parts.push(text);
     }
@@ -80,6 +126,40 @@ pub fn message(err: &anyhow::Error) -> String {
     text
 }
 
+/// An operating system error in the user's terms: what it means for a file
+/// or a port, without the `(os error N)` of the C library's wording.
+pub fn os_text(err: &std::io::Error) -> String {
+    const EIO: i32 = 5;
+    const ENXIO: i32 = 6;
+    const ENOTDIR: i32 = 20;
+    const EISDIR: i32 = 21;
+    const ENOTTY: i32 = 25;
+    const ENOSPC: i32 = 28;
+    const EROFS: i32 = 30;
+    let said = match err.raw_os_error() {
+        Some(ENOTTY) => "not a serial port",
+        Some(EISDIR) => "it is a directory",
+        Some(ENOTDIR) => "a part of the path is not a directory",
+        Some(EIO) | Some(ENXIO) => "the device is gone (unplugged, or its program ended)",
+        Some(ENOSPC) => "the disk is full",
+        Some(EROFS) => "the file system is read-only",
+        _ => match err.kind() {
+            std::io::ErrorKind::NotFound => "no such file or directory",
+            std::io::ErrorKind::PermissionDenied => "permission denied",
+            std::io::ErrorKind::AlreadyExists => "a file of that name exists",
+            _ => "",
+        },
+    };
+    if !said.is_empty() {
+        return said.to_owned();
+    }
+    let text = err.to_string();
+    match text.find(" (os error ") {
+        Some(at) => text[..at].to_owned(),
+        None => text,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,8 +169,41 @@ mod tests {
         let io = std::io::Error::new(std::io::ErrorKind::NotFound, "x: gone");
         let err =
             anyhow::Error::new(servobus_driver::TransportError::Io(io)).context("cannot use x");
-        assert_eq!(message(&err), "cannot use x: I/O error: x: gone");
+        assert_eq!(message(&err), "cannot use x: x: gone");
         assert_eq!(code(&err), PROBLEM);
         assert_eq!(code(&input("bad")), USAGE);
+    }
+
+    #[test]
+    fn a_context_the_cause_repeats_is_said_once() {
+        let err = anyhow::anyhow!("servo 42: no reply within 300 us").context("servo 42");
+        assert_eq!(message(&err), "servo 42: no reply within 300 us");
+        let err = anyhow::anyhow!("servo 42: no reply within 300 us")
+            .context("servo 42 at 1000000 baud (scan to find it)");
+        assert_eq!(
+            message(&err),
+            "servo 42 at 1000000 baud (scan to find it): no reply within 300 us"
+        );
+        let gone = std::io::Error::other("I/O error");
+        let err = anyhow::Error::new(servobus_driver::TransportError::Io(gone));
+        assert_eq!(message(&err), "I/O error");
+    }
+
+    #[test]
+    fn os_errors_are_said_in_the_users_terms() {
+        let dir = std::io::Error::from_raw_os_error(21);
+        let err = anyhow::Error::new(dir).context("--log /tmp: cannot write there");
+        assert_eq!(
+            message(&err),
+            "--log /tmp: cannot write there: it is a directory"
+        );
+        let tty = std::io::Error::from_raw_os_error(25);
+        assert_eq!(os_text(&tty), "not a serial port");
+        let marked = invalid(err);
+        assert_eq!(code(&marked), USAGE);
+        assert_eq!(
+            message(&marked),
+            "--log /tmp: cannot write there: it is a directory"
+        );
     }
 }

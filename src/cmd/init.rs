@@ -45,8 +45,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             )));
         }
     }
-    std::fs::create_dir_all(&args.dir)
-        .map_err(|e| input(format!("cannot create {}: {e}", args.dir.display())))?;
+    std::fs::create_dir_all(&args.dir).map_err(|e| {
+        let why = super::exit::os_text(&e);
+        input(format!("cannot create {}: {why}", args.dir.display()))
+    })?;
     // Both files are written in full (to temporaries) before either
     // replaces anything: a failure (a full disk) leaves neither, so that
     // `init` can simply be run again.

@@ -15,6 +15,7 @@ use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
 use servobus_runtime::{Command, Runner, Telemetry};
+use std::io::IsTerminal;
 
 use super::link::{open_bus, open_plain_bus, Allowance};
 
@@ -42,7 +43,9 @@ pub struct Args {
     /// The port and the calibration.
     #[command(flatten)]
     pub hardware: super::HardwareArgs,
-    /// Print one JSON line per refresh instead of the live view.
+    /// Print one JSON line per refresh instead of the live view (what
+    /// happens anyway without a terminal). Exits 1 when a refresh saw a
+    /// servo missing or reporting a status flag.
     #[arg(long)]
     pub json: bool,
     /// Refreshes per second.
@@ -77,10 +80,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 Some(name) => r.buses.iter().find(|b| &b.name == name),
                 None => r.buses.first(),
             };
-            Some(found.with_context(|| format!("{}: no such bus", r.path.display()))?)
+            Some(found.ok_or_else(|| no_such_bus(r, args.bus.as_deref()))?)
         }
         None => None,
     };
+    // Before the bus is touched: without a terminal, JSON lines instead.
+    let live = !args.json && terminal_available();
+    if !args.json && !live {
+        eprintln!(
+            "note: no terminal (stdin and stdout must be one): printing one JSON line per \
+             refresh instead of the live view, as --json does"
+        );
+    }
     let port = args
         .hardware
         .port
@@ -105,7 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             if servos.is_empty() {
                 bail!("no servo answered on {port}");
             }
-            watch(&mut bus, Poller::new(servos), &args, &port, |_| {})
+            watch(&mut bus, Poller::new(servos), &args, live, &port, |_| {})
         }
         (None, Some(r), Some(c)) => {
             let index = r.buses.iter().position(|b| b.name == c.name).unwrap_or(0);
@@ -116,7 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             // The simulator runs in virtual time: keep it level with the
             // wall clock.
             let started = Instant::now();
-            watch(&mut bus, poller, &args, &title, |b| {
+            watch(&mut bus, poller, &args, live, &title, |b| {
                 b.clock().advance_to(started.elapsed());
             })
         }
@@ -126,13 +137,66 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// `--bus NAME` that the robot file does not have (or a robot file with no
+/// bus at all): an input error naming the buses there are.
+fn no_such_bus(robot: &Robot, name: Option<&str>) -> anyhow::Error {
+    let names: Vec<&str> = robot.buses.iter().map(|b| b.name.as_str()).collect();
+    let file = robot.path.display();
+    match name {
+        Some(name) => super::exit::input(format!(
+            "--bus {name}: {file} has no such bus (buses: {})",
+            names.join(", ")
+        )),
+        None => super::exit::input(format!("{file}: the robot has no bus")),
+    }
+}
+
+/// Whether the live view can run: standard output is a terminal, and keys
+/// can be read from one (standard input, or the controlling terminal
+/// `/dev/tty`, as the terminal library reads them). Not under cron, CI,
+/// `ssh` without `-t`, or with the output redirected.
+pub(crate) fn terminal_available() -> bool {
+    std::io::stdout().is_terminal()
+        && (std::io::stdin().is_terminal()
+            || std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .open("/dev/tty")
+                .is_ok())
+}
+
+/// `play --monitor` without a terminal: refused before anything moves.
+///
+/// # Errors
+/// An input error (exit 2) when [`terminal_available`] is false.
+pub(crate) fn check_play_terminal() -> anyhow::Result<()> {
+    if terminal_available() {
+        return Ok(());
+    }
+    Err(super::exit::input(
+        "--monitor needs a terminal (stdin and stdout must be one) and there is none; \
+         nothing was moved. Play without --monitor (progress lines), or run `servobus \
+         monitor --json` beside it",
+    ))
+}
+
 /// Restores the terminal when dropped (the view ends, an error returns);
-/// `ratatui::init` restores it on a panic too.
+/// ratatui's panic hook restores it on a panic too.
 struct Screen(ratatui::DefaultTerminal);
 
 impl Screen {
-    fn open() -> Screen {
-        Screen(ratatui::init())
+    /// Takes the terminal (raw mode, alternate screen).
+    ///
+    /// # Errors
+    /// When the terminal refuses; it is left as it was.
+    fn open() -> anyhow::Result<Screen> {
+        match ratatui::try_init() {
+            Ok(terminal) => Ok(Screen(terminal)),
+            Err(e) => {
+                ratatui::restore();
+                Err(anyhow::Error::new(e).context("cannot take over the terminal"))
+            }
+        }
     }
 }
 
@@ -181,15 +245,20 @@ fn key(timeout: Duration) -> anyhow::Result<Option<Key>> {
     }))
 }
 
+/// Watches the servos until `q` or `--count` refreshes: on the screen when
+/// `live`, else one JSON line per refresh. Exits 1 when any refresh saw a
+/// servo missing or reporting a status flag.
 fn watch<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     mut poller: Poller,
     args: &Args,
+    live: bool,
     title: &str,
     mut before_poll: impl FnMut(&Bus<T, C>),
 ) -> anyhow::Result<ExitCode> {
     let period = Duration::from_secs_f64(1.0 / args.rate);
-    let mut screen = (!args.json).then(Screen::open);
+    let mut screen = if live { Some(Screen::open()?) } else { None };
+    let mut problem = false;
     let mut note: Option<String> = None;
     let mut refreshes = 0u64;
     let mut next = Instant::now();
@@ -202,6 +271,7 @@ fn watch<T: Transport, C: Clock>(
             panic!("{TEST_PANIC} asked for a panic after {refreshes} refreshes");
         }
         let frame = poller.frame(bus.clock(), note.clone());
+        problem |= frame.has_problem();
         match &mut screen {
             None => println!("{}", serde_json::to_string(&frame)?),
             Some(s) => {
@@ -220,7 +290,7 @@ fn watch<T: Transport, C: Clock>(
                 break;
             }
             match key(left)? {
-                Some(Key::Quit) => return Ok(ExitCode::SUCCESS),
+                Some(Key::Quit) => return Ok(exit_code(problem)),
                 Some(Key::TorqueOff) => {
                     monitor::torque_off(bus, poller.ids()).context("torque off")?;
                     note = Some("torque OFF sent to every servo (one SYNC WRITE)".into());
@@ -234,16 +304,43 @@ fn watch<T: Transport, C: Clock>(
             next = Instant::now();
         }
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(exit_code(problem))
+}
+
+/// 1 when a problem was seen, else 0.
+fn exit_code(problem: bool) -> ExitCode {
+    if problem {
+        ExitCode::from(super::exit::PROBLEM)
+    } else {
+        ExitCode::SUCCESS
+    }
 }
 
 /// `servobus play --monitor`: the monitor's view of a running motion, from
 /// its telemetry only. `q` stops the motion (jerk-limited) and Space turns
 /// the torque off; the view ends with the run.
 pub fn watch_run(runner: &Runner, robot: &Robot, units: Units, rate_hz: f64) -> anyhow::Result<()> {
+    let shown =
+        Screen::open().and_then(|mut screen| show_run(&mut screen, runner, robot, units, rate_hz));
+    if shown.is_err() {
+        // The terminal failed (refused, or gone mid-run): stop the motion
+        // (jerk-limited) rather than let it run on unwatched; the caller
+        // joins the run and reports.
+        let _ = runner.send(Command::Stop);
+    }
+    shown
+}
+
+/// The view of [`watch_run`] on `screen`, until the run ends.
+fn show_run(
+    screen: &mut Screen,
+    runner: &Runner,
+    robot: &Robot,
+    units: Units,
+    rate_hz: f64,
+) -> anyhow::Result<()> {
     let mut rows = TelemetryRows::new(robot, units, 1.0 / rate_hz);
     let telemetry = runner.telemetry();
-    let mut screen = Screen::open();
     let period = Duration::from_secs_f64(1.0 / PLAY_REFRESH_HZ);
     let mut note: Option<String> = None;
     let title = format!("{} (play)", robot.name);

@@ -194,11 +194,11 @@ fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus
     let mut buses = Vec::new();
     for (bus, path) in robot.buses.iter().zip(bus_ports(robot, port)) {
         let Some(path) = path else {
-            bail!(
+            return Err(super::exit::input(format!(
                 "bus `{}` has no port: give --port (a robot, or `servobus sim --robot {} --hand H.yaml --link L`)",
                 bus.name,
                 robot.path.display()
-            );
+            )));
         };
         let mut opened = open_bus(bus, &path, Allowance::Assumed)?;
         opened.set_settings(opened.settings().with_retries(RETRIES));

@@ -144,6 +144,16 @@ pub struct Frame {
     pub note: Option<String>,
 }
 
+impl Frame {
+    /// Whether a servo is missing or reports a status flag (overheat,
+    /// overload, ...): a problem found, for the exit code.
+    pub fn has_problem(&self) -> bool {
+        self.servos
+            .iter()
+            .any(|r| !r.present || !r.flags.is_empty())
+    }
+}
+
 /// One servo to watch.
 #[derive(Debug, Clone)]
 pub struct Watched {

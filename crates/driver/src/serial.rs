@@ -30,11 +30,6 @@ use crate::{Clock, Transport, TransportError};
 mod open_error;
 pub use open_error::{OpenError, OpenProblem};
 
-/// The `errno` of the last failed system call (the open that just failed).
-fn last_errno() -> Option<i32> {
-    io::Error::last_os_error().raw_os_error()
-}
-
 /// A serial port (or pseudo-terminal) as a [`Transport`], with deadlines on
 /// the time base of `C`.
 pub struct SerialTransport<C: Clock> {
@@ -56,7 +51,11 @@ impl<C: Clock> std::fmt::Debug for SerialTransport<C> {
 }
 
 impl<C: Clock> SerialTransport<C> {
-    /// Opens `path` at `baud`, 8N1, raw, with exclusive access.
+    /// Opens `path` at `baud`, 8N1, raw, with exclusive access: the
+    /// terminal's `TIOCEXCL` flag (further opens fail with `EBUSY`, except
+    /// for root) and an exclusive `flock` (which binds root too), as other
+    /// serial tools do. A second program, or a second servobus, is refused
+    /// the port while this one has it.
     ///
     /// # Errors
     /// [`TransportError::Io`] carrying an [`OpenError`] (find it with
@@ -68,15 +67,18 @@ impl<C: Clock> SerialTransport<C> {
             .parity(Parity::None)
             .stop_bits(StopBits::One)
             .flow_control(FlowControl::None)
-            .timeout(Duration::ZERO);
+            .timeout(Duration::ZERO)
+            .exclusive(true);
         let opened = open_low_latency(builder);
         let port = opened.map_err(|e| {
-            let kind = match e.kind() {
-                serialport::ErrorKind::Io(kind) => kind,
-                serialport::ErrorKind::NoDevice => io::ErrorKind::NotFound,
-                _ => io::ErrorKind::Other,
+            // The crate says `NoDevice` for EBUSY (TIOCEXCL held) and for a
+            // flock held by another program: both mean the port is taken.
+            let (kind, locked) = match e.kind() {
+                serialport::ErrorKind::Io(kind) => (kind, false),
+                serialport::ErrorKind::NoDevice => (io::ErrorKind::NotFound, true),
+                _ => (io::ErrorKind::Other, false),
             };
-            let open = OpenError::classify(path, kind, last_errno(), &e.to_string());
+            let open = OpenError::classify(path, kind, locked, &e.to_string());
             TransportError::Io(io::Error::new(open.kind(), open))
         })?;
         let ftdi = ftdi_latency_timer(Path::new(path));
@@ -219,10 +221,16 @@ fn set_low_latency(fd: std::os::unix::io::RawFd) {
     let _ = unsafe { libc::ioctl(fd, libc::TIOCSSERIAL, &ss as *const SerialStruct) };
 }
 
+/// Sorts an error of the serialport crate (a failed `ioctl` or `tcflush`)
+/// as [`io_error`] sorts a read's: EIO ("I/O error") is a port that is
+/// gone, as is `NoDevice`.
 fn serial_error(e: serialport::Error) -> TransportError {
+    let text = e.to_string();
     match e.kind() {
-        serialport::ErrorKind::NoDevice => TransportError::Disconnected(e.to_string()),
-        _ => TransportError::Io(io::Error::other(e.to_string())),
+        serialport::ErrorKind::NoDevice => TransportError::Disconnected(text),
+        serialport::ErrorKind::Io(kind) => io_error(io::Error::new(kind, text)),
+        _ if text.contains("I/O error") => TransportError::Disconnected(text),
+        _ => TransportError::Io(io::Error::other(text)),
     }
 }
 

@@ -117,10 +117,58 @@ impl fmt::Display for Fault {
         if let Some(id) = self.servo_id {
             write!(f, " (ID {id})")?;
         }
+        write!(f, ": {}", self.kind)?;
+        // The unit belongs to the angles, which only these kinds carry.
+        if matches!(
+            self.kind,
+            FaultKind::FollowingError { .. } | FaultKind::Stall { .. }
+        ) {
+            write!(f, " [{}]", self.units)?;
+        }
         write!(
             f,
-            ": {} [{}] at {:.3} s (cycle {}); reaction: {:?}",
-            self.kind, self.units, self.time_s, self.cycle, self.reaction
+            " at {:.3} s (cycle {}); reaction: {:?}",
+            self.time_s, self.cycle, self.reaction
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fault(kind: FaultKind) -> Fault {
+        Fault {
+            kind,
+            bus: "arm".into(),
+            joint: None,
+            servo_id: None,
+            time_s: 1.5,
+            cycle: 150,
+            reaction: Reaction::Hold,
+            units: "deg",
+        }
+    }
+
+    #[test]
+    fn the_unit_is_said_only_with_angles() {
+        let gone = fault(FaultKind::PortGone {
+            message: "port disconnected: end of file".into(),
+        });
+        assert_eq!(
+            gone.to_string(),
+            "bus `arm`: port gone: port disconnected: end of file at 1.500 s (cycle 150); \
+             reaction: Hold"
+        );
+        let error = fault(FaultKind::FollowingError {
+            error: 2.0,
+            tolerance: 1.0,
+            cycles: 3,
+        });
+        assert_eq!(
+            error.to_string(),
+            "bus `arm`: following error 2.000 beyond 1.000 for 3 cycles [deg] at 1.500 s \
+             (cycle 150); reaction: Hold"
+        );
     }
 }

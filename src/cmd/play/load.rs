@@ -133,7 +133,8 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         let trajectory = plan_motion(&motion, &robot)?;
         return Ok((motion, robot, trajectory, None, rate_hz));
     }
-    let rec = read_recording(&args.motion, &robot)?;
+    // A recording that cannot be read is a bad input file (exit 2).
+    let rec = read_recording(&args.motion, &robot).map_err(crate::cmd::exit::invalid)?;
     let limits = servobus_runtime::config::joint_limits(&robot);
     let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
         .map_err(|e| {

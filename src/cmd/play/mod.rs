@@ -87,7 +87,8 @@ pub struct Args {
     #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
     pub fifo: Option<i32>,
     /// Show the live servo view of `servobus monitor` while playing, from
-    /// the run's telemetry (no extra bus traffic).
+    /// the run's telemetry (no extra bus traffic). Needs a terminal: refused
+    /// (exit 2) before anything moves without one.
     #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
     pub monitor: bool,
     /// Start the simulated joints at these angles instead of their rest
@@ -115,6 +116,11 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if args.monitor {
+        // The live view needs a terminal: without one, refuse before
+        // anything is opened or moved.
+        super::monitor::check_play_terminal()?;
+    }
     check_outputs(&args)?;
     let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
     let backend = backend(&args, &robot)?;

@@ -123,7 +123,9 @@ pub(super) struct Progress {
 
 impl Progress {
     pub(super) fn new(json: bool, duration: f64, units: &str) -> Self {
-        let terminal = std::io::stdout().is_terminal();
+        // The bar draws on stderr and hides itself when that is no
+        // terminal: then plain lines on stdout instead.
+        let terminal = std::io::stdout().is_terminal() && std::io::stderr().is_terminal();
         let bar = (!json && terminal).then(|| {
             let bar = indicatif::ProgressBar::new((duration * 1000.0).max(1.0) as u64);
             let style = indicatif::ProgressStyle::with_template("{spinner} [{bar:40}] {msg}")

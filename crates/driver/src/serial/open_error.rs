@@ -40,45 +40,51 @@ pub enum OpenProblem {
         /// The programs holding it (`minicom (pid 1234)`), when they can be found.
         holders: Vec<String>,
     },
+    /// The path is there but is no serial port (a regular file, a
+    /// directory, a device that is not a terminal).
+    NotSerial {
+        /// What it is instead, e.g. `a regular file`.
+        what: String,
+    },
     /// Anything else, in the operating system's words.
     Other(String),
 }
 
 impl OpenError {
-    /// Sorts a failure to open `path`: `kind` and `errno` as the operating
-    /// system reported them, `text` its message.
-    pub(crate) fn classify(
-        path: &str,
-        kind: io::ErrorKind,
-        errno: Option<i32>,
-        text: &str,
-    ) -> Self {
-        const EBUSY: i32 = 16;
-        const ENOENT: i32 = 2;
-        const ENODEV: i32 = 19;
-        const EACCES: i32 = 13;
+    /// Sorts a failure to open `path`: `kind` as the operating system
+    /// reported it, `locked` when the port refused exclusive access (the
+    /// `TIOCEXCL` flag or the `flock` of another program), `text` the
+    /// message. The path itself is looked at too, since the `errno` of a
+    /// failed open is not always carried this far.
+    pub(crate) fn classify(path: &str, kind: io::ErrorKind, locked: bool, text: &str) -> Self {
         let lower = text.to_ascii_lowercase();
-        let problem = if kind == io::ErrorKind::PermissionDenied
-            || errno == Some(EACCES)
-            || lower.contains("permission denied")
-        {
-            OpenProblem::PermissionDenied {
-                group: owning_group(Path::new(path)),
-            }
-        } else if errno == Some(EBUSY) || lower.contains("busy") {
-            OpenProblem::Busy {
-                holders: holders(Path::new(path)),
-            }
-        } else if kind == io::ErrorKind::NotFound
-            || matches!(errno, Some(ENOENT | ENODEV))
-            || !Path::new(path).exists()
-        {
-            OpenProblem::NotFound {
-                present: present_ports(),
-            }
-        } else {
-            OpenProblem::Other(text.to_owned())
-        };
+        let file = Path::new(path);
+        let problem =
+            if kind == io::ErrorKind::PermissionDenied || lower.contains("permission denied") {
+                OpenProblem::PermissionDenied {
+                    group: owning_group(file),
+                }
+            } else if !file.exists() {
+                OpenProblem::NotFound {
+                    present: present_ports(),
+                }
+            } else if let Some(what) = not_a_device(file) {
+                OpenProblem::NotSerial { what }
+            } else if locked || lower.contains("busy") {
+                OpenProblem::Busy {
+                    holders: holders(file),
+                }
+            } else if lower.contains("typewriter") || lower.contains("inappropriate ioctl") {
+                OpenProblem::NotSerial {
+                    what: "a device that is not a terminal".into(),
+                }
+            } else if kind == io::ErrorKind::NotFound || lower.contains("no such device") {
+                OpenProblem::NotFound {
+                    present: present_ports(),
+                }
+            } else {
+                OpenProblem::Other(plain_os_text(text))
+            };
         OpenError {
             path: path.to_owned(),
             problem,
@@ -90,6 +96,7 @@ impl OpenError {
         match self.problem {
             OpenProblem::PermissionDenied { .. } => io::ErrorKind::PermissionDenied,
             OpenProblem::NotFound { .. } => io::ErrorKind::NotFound,
+            OpenProblem::NotSerial { .. } => io::ErrorKind::InvalidInput,
             OpenProblem::Busy { .. } | OpenProblem::Other(_) => io::ErrorKind::Other,
         }
     }
@@ -141,6 +148,12 @@ impl fmt::Display for OpenError {
                 "the port is busy: {} has it open; close it and retry",
                 holders.join(", ")
             ),
+            OpenProblem::NotSerial { what } => {
+                write!(
+                    f,
+                    "not a serial port ({what}); give the servos' adapter, e.g. /dev/ttyUSB0"
+                )
+            }
             OpenProblem::Other(text) => f.write_str(text),
         }
     }
@@ -179,9 +192,43 @@ fn present_ports() -> Vec<String> {
     ports
 }
 
-/// Programs with `path` open, as `name (pid N)`: found through `/proc` on
-/// Linux (only processes the user may inspect), none elsewhere.
+/// What `path` is when it is no character device (`a directory`, `a
+/// regular file`); `None` for a device, or when it cannot be told.
+fn not_a_device(path: &Path) -> Option<String> {
+    let meta = std::fs::metadata(path).ok()?;
+    if meta.is_dir() {
+        return Some("a directory".into());
+    }
+    if meta.is_file() {
+        return Some("a regular file".into());
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if !meta.file_type().is_char_device() {
+            return Some("not a character device".into());
+        }
+    }
+    None
+}
+
+/// An operating system's message without its `(os error N)` suffix.
+fn plain_os_text(text: &str) -> String {
+    match text.find(" (os error ") {
+        Some(at) => text[..at].to_owned(),
+        None => text.to_owned(),
+    }
+}
+
+/// Programs holding `path`, as `name (pid N)`: the holder of its `flock`
+/// (from `/proc/locks`) when there is one, else every program with it open
+/// (from the `/proc/*/fd` links). Linux only (and only processes the user
+/// may inspect); none elsewhere.
 fn holders(path: &Path) -> Vec<String> {
+    let lockers = lock_holders(path);
+    if !lockers.is_empty() {
+        return lockers;
+    }
     let Ok(target) = std::fs::canonicalize(path) else {
         return Vec::new();
     };
@@ -204,11 +251,75 @@ fn holders(path: &Path) -> Vec<String> {
             .flatten()
             .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|link| link == target));
         if holds && pid != std::process::id().to_string() {
-            let comm = std::fs::read_to_string(entry.path().join("comm")).unwrap_or_default();
-            found.push(format!("{} (pid {pid})", comm.trim()));
+            found.push(process_name(pid));
         }
     }
     found
+}
+
+/// `name (pid N)` for the process `pid`.
+fn process_name(pid: &str) -> String {
+    let comm = std::fs::read_to_string(Path::new("/proc").join(pid).join("comm"));
+    let comm = comm.unwrap_or_default();
+    match comm.trim() {
+        "" => format!("pid {pid}"),
+        name => format!("{name} (pid {pid})"),
+    }
+}
+
+/// The processes holding a `flock` on `path`, from `/proc/locks`, whose
+/// lines read `1: FLOCK ADVISORY WRITE <pid> <major>:<minor>:<inode> 0 EOF`
+/// (major and minor of the file system's device, in hex).
+fn lock_holders(path: &Path) -> Vec<String> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let Ok(meta) = std::fs::metadata(path) else {
+            return Vec::new();
+        };
+        let Ok(locks) = std::fs::read_to_string("/proc/locks") else {
+            return Vec::new();
+        };
+        let (major, minor) = split_dev(meta.dev());
+        let me = std::process::id().to_string();
+        let mut found = Vec::new();
+        for line in locks.lines() {
+            let fields: Vec<&str> = line.split_whitespace().collect();
+            // A blocked waiter's line has a `->` field more; skip it.
+            let (Some(&"FLOCK"), Some(pid), Some(file)) =
+                (fields.get(1), fields.get(4), fields.get(5))
+            else {
+                continue;
+            };
+            let mut parts = file.split(':');
+            let (Some(maj), Some(min), Some(ino)) = (parts.next(), parts.next(), parts.next())
+            else {
+                continue;
+            };
+            let same = u64::from_str_radix(maj, 16).ok() == Some(major)
+                && u64::from_str_radix(min, 16).ok() == Some(minor)
+                && ino.parse::<u64>().ok() == Some(meta.ino());
+            if same && *pid != me {
+                found.push(process_name(pid));
+            }
+        }
+        found.dedup();
+        found
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        Vec::new()
+    }
+}
+
+/// The major and minor numbers of a Linux device number (glibc's
+/// `gnu_dev_major` and `gnu_dev_minor`).
+#[cfg(unix)]
+fn split_dev(dev: u64) -> (u64, u64) {
+    let major = ((dev >> 8) & 0xfff) | ((dev >> 32) & !0xfff);
+    let minor = (dev & 0xff) | ((dev >> 12) & !0xff);
+    (major, minor)
 }
 
 #[cfg(test)]
@@ -244,9 +355,42 @@ mod tests {
 
     #[test]
     fn a_missing_path_is_not_found() {
-        let e = OpenError::classify("/dev/servobus-none", io::ErrorKind::Other, None, "x");
+        let e = OpenError::classify("/dev/servobus-none", io::ErrorKind::Other, false, "x");
         assert!(matches!(e.problem, OpenProblem::NotFound { .. }), "{e:?}");
-        let e = OpenError::classify("/dev/null", io::ErrorKind::Other, Some(16), "x");
+    }
+
+    #[test]
+    fn a_locked_device_is_busy_not_missing() {
+        // What the serialport crate says when another program holds the
+        // port's flock: `NoDevice`, with no errno.
+        let text = "Unable to acquire exclusive lock on serial port";
+        let e = OpenError::classify("/dev/null", io::ErrorKind::NotFound, true, text);
         assert!(matches!(e.problem, OpenProblem::Busy { .. }), "{e:?}");
+        assert!(
+            e.to_string()
+                .starts_with("cannot open /dev/null: the port is busy"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_file_or_directory_is_not_a_serial_port() {
+        let dir = std::env::temp_dir();
+        let e = OpenError::classify(
+            &dir.to_string_lossy(),
+            io::ErrorKind::Other,
+            false,
+            "EISDIR",
+        );
+        assert_eq!(
+            e.problem,
+            OpenProblem::NotSerial {
+                what: "a directory".into()
+            }
+        );
+        let e = OpenError::classify("/dev/null", io::ErrorKind::Other, false, "Not a typewriter");
+        assert_eq!(e.to_string(), "cannot open /dev/null: not a serial port (a device that is not a terminal); give the servos' adapter, e.g. /dev/ttyUSB0");
+        assert_eq!(split_dev(0x0000_0000_0000_1a01), (0x1a, 0x01));
+        assert_eq!(split_dev(136 << 8 | 4), (136, 4));
     }
 }

@@ -277,11 +277,7 @@ impl Taught {
             captured.len(),
             if captured.len() == 1 { "" } else { "s" }
         )];
-        let why_not = match paced_plan(robot, &keyframes) {
-            Ok(()) => None,
-            Err(reason) => Some(reason),
-        };
-        match why_not {
+        match paced_plan(robot, &keyframes).err() {
             None => {
                 notes.push(
                     "`at` is when each pose was captured, s from the start: the motion replays at \

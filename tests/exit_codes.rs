@@ -95,7 +95,7 @@ fn each_input_error_exits_2_with_one_line() {
                 "--log",
                 arg(&dir),
             ],
-            &["--log", "it is a directory", "nothing was moved"],
+            &["--log", "is a directory", "nothing was moved"],
         ),
         (
             vec!["monitor", "--robot", robot, "--bus", "nosuch", "--json"],

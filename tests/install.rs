@@ -108,6 +108,42 @@ fn installed_binary_works_from_an_empty_directory() {
     let entries = std::fs::read_dir(&empty).expect("dir").count();
     assert_eq!(entries, 2, "only init's two files were written");
 
+    // The README's simulator with a body, by names only, from an empty
+    // directory: it serves, and the truth file appears when it stops.
+    let sim_dir = scratch("install-sim");
+    let link = sim_dir.join("arm");
+    let truth = sim_dir.join("truth.csv");
+    let mut sim = common::Running::start_bin(
+        &bin,
+        Some(&sim_dir),
+        &[
+            "sim",
+            "--robot",
+            "so101",
+            "--link",
+            common::arg(&link),
+            "--mounting",
+            "so101-mounting",
+            "--hand",
+            "so101-hand",
+            "--truth",
+            common::arg(&truth),
+        ],
+    );
+    sim.wait_for(false, "serving", |l| l.starts_with("serving 6 servos on"));
+    let scan = run(&bin, &sim_dir, &["scan", "--port", common::arg(&link)]);
+    assert!(
+        String::from_utf8_lossy(&scan.stdout).contains("STS3215"),
+        "scan: {}",
+        String::from_utf8_lossy(&scan.stdout)
+    );
+    sim.interrupt();
+    let (status, _, err) = sim.finish();
+    assert!(status.success(), "sim: {err}");
+    assert!(truth.is_file(), "the truth file");
+    assert!(!link.exists(), "the link is removed");
+
     let _ = std::fs::remove_dir_all(&root);
     let _ = std::fs::remove_dir_all(&empty);
+    let _ = std::fs::remove_dir_all(&sim_dir);
 }

@@ -50,7 +50,21 @@ fn lines(
 impl Running {
     /// Starts `servobus ARGS`.
     pub fn start(args: &[&str]) -> Running {
-        let mut child = Command::new(BIN)
+        Running::start_bin(std::path::Path::new(BIN), None, args)
+    }
+
+    /// Starts the `servobus` binary at `bin` (an installed one, say) with
+    /// `ARGS`, in `dir` (the test's own directory when `None`).
+    pub fn start_bin(
+        bin: &std::path::Path,
+        dir: Option<&std::path::Path>,
+        args: &[&str],
+    ) -> Running {
+        let mut command = Command::new(bin);
+        if let Some(dir) = dir {
+            command.current_dir(dir);
+        }
+        let mut child = command
             .args(args)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())

@@ -7,6 +7,27 @@ use std::process::{Command, Stdio};
 
 use common::{arg, repo, scratch, servobus, servobus_ok, Sim, BIN};
 
+/// `servobus teach --yes --duration 6.5` on the SO-101 served by a
+/// simulator whose hand plays `hand`; its output and the motion file's path.
+fn teach_with_hand(
+    dir: &std::path::Path,
+    hand: &str,
+) -> (std::process::Output, std::path::PathBuf) {
+    let robot = repo("configs/robots/so101.yaml");
+    let (sim, _) = Sim::start_hand(dir, &robot, 6, hand, &[]);
+    let out = dir.join("taught.yaml");
+    let run = Command::new(BIN)
+        .args(["teach", "--robot"])
+        .arg(&robot)
+        .args(["--port", sim.port(), "--yes", "--duration", "6.5", "-o"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs teach");
+    sim.stop();
+    (run, out)
+}
+
 #[test]
 fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
     let dir = scratch("teach-cli");
@@ -18,18 +39,7 @@ fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
          \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
          \x20 - {at: 4.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n\
          \x20 - {at: 6.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n";
-    let robot = repo("configs/robots/so101.yaml");
-    let (sim, _) = Sim::start_hand(&dir, &robot, 6, hand, &[]);
-    let out = dir.join("taught.yaml");
-    let run = Command::new(BIN)
-        .args(["teach", "--robot"])
-        .arg(&robot)
-        .args(["--port", sim.port(), "--yes", "--duration", "6.5", "-o"])
-        .arg(&out)
-        .stdin(Stdio::null())
-        .output()
-        .expect("runs teach");
-    sim.stop();
+    let (run, out) = teach_with_hand(&dir, hand);
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{err}");
     assert!(err.contains("torque off"), "{err}");
@@ -89,18 +99,7 @@ fn teach_stops_at_a_pose_outside_the_limits_instead_of_clamping_it() {
          \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
          \x20 - {at: 4.5, pose: {shoulder_pan: 40, elbow_flex: 106}}\n\
          \x20 - {at: 6.5, pose: {shoulder_pan: 40, elbow_flex: 106}}\n";
-    let robot = repo("configs/robots/so101.yaml");
-    let (sim, _) = Sim::start_hand(&dir, &robot, 6, hand, &[]);
-    let out = dir.join("taught.yaml");
-    let run = Command::new(BIN)
-        .args(["teach", "--robot"])
-        .arg(&robot)
-        .args(["--port", sim.port(), "--yes", "--duration", "6.5", "-o"])
-        .arg(&out)
-        .stdin(Stdio::null())
-        .output()
-        .expect("runs teach");
-    sim.stop();
+    let (run, out) = teach_with_hand(&dir, hand);
     let err = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "a problem found: {err}");
     for part in [

@@ -27,12 +27,15 @@ mod calibrated;
 mod calibration;
 mod error;
 mod files;
+pub mod limits;
 mod locate;
 mod mapping;
 mod motion;
+mod nesting;
 mod robot;
 pub mod seam;
 mod syntax;
+mod terms;
 mod trajectory;
 mod units;
 

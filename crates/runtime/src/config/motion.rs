@@ -59,6 +59,7 @@ pub struct Keyframe {
 /// What to do when timed keyframes ask more than a joint's limits allow.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[serde(expecting = "`error` or `stretch`")]
 pub enum OnLimit {
     /// Refuse the motion, naming the keyframe, joint, peak and limit.
     #[default]
@@ -70,6 +71,7 @@ pub enum OnLimit {
 /// The path shape through timed keyframes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[serde(expecting = "`shape_preserving`, `spline`, `monotone` or `quintic`")]
 pub enum Interpolation {
     /// Shape-preserving, jerk-limited segments (the default): every joint
     /// stays within the range of the two keyframes around each segment and
@@ -129,6 +131,7 @@ impl Motion {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a motion file: a mapping with `keyframes:` and optional `robot:`, `poses:`, `repeat:`, ...")]
 struct RawMotion {
     #[serde(default)]
     robot: Option<String>,
@@ -153,6 +156,7 @@ fn one() -> i64 {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a keyframe: a mapping with `pose:` and optional `at:`")]
 struct RawKeyframe {
     #[serde(default)]
     at: Option<f64>,

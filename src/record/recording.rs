@@ -2,8 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::Context;
-use servobus_runtime::config::Units;
+use servobus_runtime::config::{limits, ConfigError, Units};
 
 /// A recorded path read back for `servobus play`: sample times and every
 /// robot joint's position, in radians.
@@ -24,8 +23,8 @@ pub fn read_recording(
     path: &Path,
     robot: &servobus_runtime::config::Robot,
 ) -> anyhow::Result<Recording> {
-    let mut reader = csv::Reader::from_path(path)
-        .with_context(|| format!("cannot read the recording {}", path.display()))?;
+    let bytes = limits::read_capped(path, limits::MAX_RECORDING_BYTES)?;
+    let mut reader = csv::Reader::from_reader(bytes.as_slice());
     let header: Vec<String> = reader.headers()?.iter().map(str::to_owned).collect();
     let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
     let rest: Vec<f64> = robot
@@ -54,6 +53,7 @@ pub fn read_recording(
         };
         for (i, row) in reader.records().enumerate() {
             let row = row?;
+            check_rows(path, i)?;
             let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
             let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
             let Some(j) = row
@@ -88,6 +88,7 @@ pub fn read_recording(
         }
         for (i, row) in reader.records().enumerate() {
             let row = row?;
+            check_rows(path, i)?;
             let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
             let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
             for (j, c) in cols.iter().enumerate() {
@@ -130,6 +131,16 @@ pub fn read_recording(
         samples,
         missing,
     })
+}
+
+/// Refuses row `index` (0-based, after the header) past
+/// [`limits::MAX_RECORDING_ROWS`].
+fn check_rows(path: &Path, index: usize) -> Result<(), ConfigError> {
+    if index < limits::MAX_RECORDING_ROWS {
+        return Ok(());
+    }
+    let e = limits::LimitError::Rows;
+    Err(ConfigError::invalid(path, index + 2, 1, "", e.to_string()))
 }
 
 /// The series at `t`, linearly interpolated (held beyond its ends).

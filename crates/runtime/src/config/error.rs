@@ -4,7 +4,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::files::{builtin_text, is_builtin_path};
-use super::limits::{read_capped, ReadError, MAX_FILE_BYTES, MAX_NESTING};
+use super::limits::{read_capped, MAX_FILE_BYTES, MAX_NESTING};
 use super::locate::{locate_nearest, FieldPath, Part};
 use super::nesting::too_deep;
 use super::syntax::hint;
@@ -187,16 +187,7 @@ impl Source {
                     error: std::io::ErrorKind::NotFound.into(),
                 })?
         } else {
-            let bytes = read_capped(path, limit).map_err(|e| match e {
-                ReadError::Io(error) => ConfigError::Read {
-                    path: path.to_owned(),
-                    error,
-                },
-                ReadError::TooLarge(limit) => ConfigError::TooLarge {
-                    path: path.to_owned(),
-                    limit,
-                },
-            })?;
+            let bytes = read_capped(path, limit)?;
             String::from_utf8(bytes).map_err(|_| ConfigError::Read {
                 path: path.to_owned(),
                 error: std::io::ErrorKind::InvalidData.into(),

@@ -15,6 +15,8 @@ use std::time::Duration;
 
 use servobus_protocol::registers::{baud_index, BAUD_RATES};
 
+use super::ConfigError;
+
 /// The largest robot, motion, calibration or simulator-body file read,
 /// bytes. The shipped files are under 10 KB; a hexapod with every field
 /// commented is under 30 KB. At 1 MiB serde_yaml still parses in well under
@@ -200,15 +202,26 @@ pub fn check_rate_hz(rate_hz: f64) -> Result<f64, LimitError> {
     }
 }
 
+/// Checks that a motion or recording of `duration_s` is within
+/// [`MAX_MOTION_DURATION_S`] (NaN is not).
+///
+/// # Errors
+/// [`LimitError::Duration`].
+pub fn check_duration(duration_s: f64) -> Result<(), LimitError> {
+    if duration_s <= MAX_MOTION_DURATION_S {
+        Ok(())
+    } else {
+        Err(LimitError::Duration { duration_s })
+    }
+}
+
 /// Checks that a motion or recording of `duration_s` played at `rate_hz`
 /// is within [`MAX_MOTION_DURATION_S`] and [`MAX_MOTION_CYCLES`].
 ///
 /// # Errors
 /// [`LimitError::Duration`] or [`LimitError::Cycles`].
 pub fn check_length(duration_s: f64, rate_hz: f64) -> Result<(), LimitError> {
-    if !(duration_s <= MAX_MOTION_DURATION_S) {
-        return Err(LimitError::Duration { duration_s });
-    }
+    check_duration(duration_s)?;
     if !(duration_s * rate_hz <= MAX_MOTION_CYCLES) {
         return Err(LimitError::Cycles {
             duration_s,
@@ -243,9 +256,7 @@ pub fn check_segments(keyframes: usize, repeat: u64, joints: usize) -> Result<()
 /// # Errors
 /// [`LimitError::Duration`] or [`LimitError::TrackSteps`].
 pub fn check_recording(span_s: f64, rate_hz: f64, joints: usize) -> Result<(), LimitError> {
-    if !(span_s <= MAX_MOTION_DURATION_S) {
-        return Err(LimitError::Duration { duration_s: span_s });
-    }
+    check_duration(span_s)?;
     if !(span_s * rate_hz * joints as f64 <= MAX_TRACK_STEPS) {
         return Err(LimitError::TrackSteps {
             span_s,
@@ -256,25 +267,27 @@ pub fn check_recording(span_s: f64, rate_hz: f64, joints: usize) -> Result<(), L
     Ok(())
 }
 
-/// Why a file could not be read within its size limit.
-#[derive(Debug)]
-pub(crate) enum ReadError {
-    /// The operating system's error.
-    Io(std::io::Error),
-    /// More than the limit, bytes.
-    TooLarge(u64),
-}
-
 /// The bytes of `path`, reading at most `limit + 1` of them: a larger file
 /// (or a device such as `/dev/zero`) is refused after that many.
-pub(crate) fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
-    let file = std::fs::File::open(path).map_err(ReadError::Io)?;
+///
+/// # Errors
+/// [`ConfigError::Read`] with the operating system's reason, or
+/// [`ConfigError::TooLarge`].
+pub fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>, ConfigError> {
+    let read = |error| ConfigError::Read {
+        path: path.to_owned(),
+        error,
+    };
+    let file = std::fs::File::open(path).map_err(read)?;
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(ReadError::Io)?;
+        .map_err(read)?;
     if bytes.len() as u64 > limit {
-        return Err(ReadError::TooLarge(limit));
+        return Err(ConfigError::TooLarge {
+            path: path.to_owned(),
+            limit,
+        });
     }
     Ok(bytes)
 }

@@ -106,7 +106,10 @@ impl Scan {
                     }
                 }
                 None => {
-                    let token_start = prev.map_or(true, |p| b"[{,:-?".contains(&p));
+                    // Where a quote or a bracket opens something, not the
+                    // middle of a plain scalar (`x[1]`).
+                    let starters: &[u8] = if self.flow > 0 { b"[{,:-?" } else { b":-?" };
+                    let token_start = prev.map_or(true, |p| starters.contains(&p));
                     match b {
                         b'#' if i == 0 || bytes[i - 1] == b' ' || bytes[i - 1] == b'\t' => break,
                         b'"' if token_start => self.quote = Some(Quote::Double),

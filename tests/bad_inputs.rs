@@ -69,7 +69,10 @@ fn refused_in(dir: &Path, args: &[&str], words: &[&str], never: &[&str]) -> Stri
         assert!(err.contains(w), "servobus {args:?} should say {w:?}: {err}");
     }
     for w in never {
-        assert!(!err.contains(w), "servobus {args:?} should not say {w:?}: {err}");
+        assert!(
+            !err.contains(w),
+            "servobus {args:?} should not say {w:?}: {err}"
+        );
     }
     err
 }
@@ -92,7 +95,13 @@ fn a_small_file_cannot_ask_for_unbounded_work() {
         &[],
     );
     refused(
-        &["play", "--fast", "recording-1e9s.csv", "--robot", "robot-tiny.yaml"],
+        &[
+            "play",
+            "--fast",
+            "recording-1e9s.csv",
+            "--robot",
+            "robot-tiny.yaml",
+        ],
         &["recording-1e9s.csv", "1e9 s", "limit of 86400 s"],
         &[],
     );
@@ -137,7 +146,15 @@ fn values_that_cannot_work_are_refused_with_their_range() {
         );
     }
     refused(
-        &["ping", "--port", "/dev/null", "--id", "1", "--latency-us", "999999999"],
+        &[
+            "ping",
+            "--port",
+            "/dev/null",
+            "--id",
+            "1",
+            "--latency-us",
+            "999999999",
+        ],
         &["999999999 us", "0 to 255000 us"],
         &[],
     );
@@ -153,7 +170,10 @@ fn values_that_cannot_work_are_refused_with_their_range() {
     );
     refused(
         &["plan", "motion-rate-tiny.yaml"],
-        &["motion-rate-tiny.yaml:3:7: rate: 0.001 Hz", "10 to 10000 Hz"],
+        &[
+            "motion-rate-tiny.yaml:3:7: rate: 0.001 Hz",
+            "10 to 10000 Hz",
+        ],
         &[],
     );
     refused(

@@ -32,17 +32,64 @@ const SLOW: Duration = Duration::from_secs(1);
 /// Text a mutation may insert: YAML's structure, and values at and past
 /// the limits.
 const TOKENS: [&str; 40] = [
-    "[", "]", "{", "}", "- ", ": ", ", ", "\n", "\n  ", "  ", "\t", "#", "\"", "'", "&a ", "*a",
-    "<<: *a\n", "!!str ", "|\n", ">-\n", "~", "null", "true", "-1", "0", "1e308", "-1e308",
-    ".inf", ".nan", "1e12", "4294967296", "18446744073709551616", "0.001", "1e-300",
-    "repeat: 1000000000\n", "at: 1e12\n", "rate: 0.001\n", "baud: 12345\n",
-    "latency_us: 999999999\n", "calibration: nope.yaml\n",
+    "[",
+    "]",
+    "{",
+    "}",
+    "- ",
+    ": ",
+    ", ",
+    "\n",
+    "\n  ",
+    "  ",
+    "\t",
+    "#",
+    "\"",
+    "'",
+    "&a ",
+    "*a",
+    "<<: *a\n",
+    "!!str ",
+    "|\n",
+    ">-\n",
+    "~",
+    "null",
+    "true",
+    "-1",
+    "0",
+    "1e308",
+    "-1e308",
+    ".inf",
+    ".nan",
+    "1e12",
+    "4294967296",
+    "18446744073709551616",
+    "0.001",
+    "1e-300",
+    "repeat: 1000000000\n",
+    "at: 1e12\n",
+    "rate: 0.001\n",
+    "baud: 12345\n",
+    "latency_us: 999999999\n",
+    "calibration: nope.yaml\n",
 ];
 
 /// Numbers a mutation may put in place of one in the text.
 const NUMBERS: [&str; 14] = [
-    "0", "-0", "1", "-1", "255", "256", "4095", "1e9", "1e308", "-1e-308", ".inf", ".nan",
-    "99999999999999999999", "0.000001",
+    "0",
+    "-0",
+    "1",
+    "-1",
+    "255",
+    "256",
+    "4095",
+    "1e9",
+    "1e308",
+    "-1e-308",
+    ".inf",
+    ".nan",
+    "99999999999999999999",
+    "0.000001",
 ];
 
 fn main() -> ExitCode {
@@ -164,7 +211,12 @@ fn crash(dir: &Path, input: &[u8], why: &str) -> ExitCode {
 fn seeds(repo: &Path) -> Vec<Vec<u8>> {
     let yaml = |p: &Path| p.extension().is_some_and(|e| e == "yaml");
     let mut all = Vec::new();
-    for dir in ["configs/robots", "configs/motions", "configs/sim", "tests/bad_inputs"] {
+    for dir in [
+        "configs/robots",
+        "configs/motions",
+        "configs/sim",
+        "tests/bad_inputs",
+    ] {
         all.extend(files(&repo.join(dir), yaml));
     }
     all.extend(files(&repo.join("testdata/fuzz-config"), |p| {
@@ -267,7 +319,10 @@ fn replace_number(v: &mut Vec<u8>, rng: &mut Rng) {
 /// The start of the line holding byte `at`.
 fn line_start(v: &[u8], at: usize) -> usize {
     let at = at.min(v.len());
-    v[..at].iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1)
+    v[..at]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1)
 }
 
 /// The line holding byte `at`, with its newline.

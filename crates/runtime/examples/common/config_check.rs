@@ -33,7 +33,14 @@ impl Workspace {
     /// Copies `configs/robots/*.yaml` and `configs/motions/*.yaml` of the
     /// repository at `repo` into a new scratch directory.
     pub fn new(repo: &Path) -> std::io::Result<Workspace> {
-        let dir = std::env::temp_dir().join(format!(
+        // Memory-backed where there is one: every input is written twice.
+        let shm = Path::new("/dev/shm");
+        let base = if shm.is_dir() {
+            shm.to_owned()
+        } else {
+            std::env::temp_dir()
+        };
+        let dir = base.join(format!(
             "servobus-fuzz-config-{}-{:x}",
             std::process::id(),
             std::time::SystemTime::now()
@@ -103,8 +110,19 @@ fn feature(load: &str, outcome: Result<(), ConfigError>) -> String {
     check_message(&e, &text);
     let kind = match &e {
         ConfigError::Invalid { field, reason, .. } => {
-            let words: Vec<&str> = reason.split_whitespace().take(3).collect();
-            format!("{}:{}", shape(field), shape(&words.join(" ")))
+            // The message's own first words, not the file's text it echoes.
+            let words: Vec<&str> = reason
+                .split_whitespace()
+                .take_while(|w| {
+                    w.chars()
+                        .all(|c| c.is_ascii_alphabetic() || ",;:".contains(c))
+                })
+                .take(3)
+                .collect();
+            // The field's depth, not its names (a file's own keys would
+            // make every input new).
+            let depth = field.matches(['.', '[']).count();
+            format!("{depth}:{}", shape(&words.join(" ")))
         }
         ConfigError::Read { error, .. } => format!("read:{:?}", error.kind()),
         other => format!("{:?}", std::mem::discriminant(other)),
@@ -112,8 +130,8 @@ fn feature(load: &str, outcome: Result<(), ConfigError>) -> String {
     format!("{load}:{kind}")
 }
 
-/// `text` without digits (`buses[0].joints[12]` and `buses[].joints[]`
-/// are one feature).
+/// `text` without digits (`keyframe 3:` and `keyframe 12:` are one
+/// feature).
 fn shape(text: &str) -> String {
     text.chars().filter(|c| !c.is_ascii_digit()).collect()
 }
@@ -121,11 +139,19 @@ fn shape(text: &str) -> String {
 /// A refusal names its file and speaks in the file's terms.
 fn check_message(e: &ConfigError, text: &str) {
     let file = e.file().display().to_string();
-    assert!(text.starts_with(&file), "the message does not name the file: {text}");
+    assert!(
+        text.starts_with(&file),
+        "the message does not name the file: {text}"
+    );
     if config::is_builtin_path(e.file()) {
         return;
     }
-    let own = outside_echoes(&text[file.len()..]);
+    // The field path (`poses.<name>`) and the echoed text are the file's own.
+    let said = match e {
+        ConfigError::Invalid { reason, .. } => reason.as_str(),
+        _ => &text[file.len()..],
+    };
+    let own = outside_echoes(said);
     for rust in [
         "expected struct",
         "untagged enum",
@@ -147,7 +173,10 @@ fn check_message(e: &ConfigError, text: &str) {
         .map(str::len)
         .max()
         .unwrap_or(0);
-    assert!(longest <= 20, "a number of {longest} digits in the message: {text}");
+    assert!(
+        longest <= 20,
+        "a number of {longest} digits in the message: {text}"
+    );
 }
 
 /// `text` without the parts that echo the file: `backticked`, "quoted",

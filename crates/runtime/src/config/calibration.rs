@@ -55,7 +55,9 @@ pub struct Calibration {
 /// One joint's calibration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a joint's calibration: a mapping with `name:`, `id:`, `model:`, `pose_deg:`, `pose_tick:`, `direction:` and `range:`")]
+#[serde(
+    expecting = "a joint's calibration: a mapping with `name:`, `id:`, `model:`, `pose_deg:`, `pose_tick:`, `direction:` and `range:`"
+)]
 pub struct JointCalibration {
     /// The joint's name in the robot file.
     pub name: String,

@@ -247,19 +247,43 @@ impl Source {
         if let Some(i) = text.find(&suffix) {
             text.replace_range(i..i + suffix.len(), "");
         }
-        // A leading `path: ` is serde_yaml's field path (it has no spaces;
-        // messages such as `invalid type: ...` do).
-        let (field, reason) = match text.split_once(": ") {
-            Some((head, rest)) if !head.contains(' ') && !head.is_empty() => {
-                (head.to_owned(), rest.to_owned())
-            }
-            _ => (String::new(), text),
-        };
-        let reason = user_terms(&reason);
+        let (field, reason) = split_path(&text);
+        let reason = user_terms(reason);
         let reason = match hint(&self.text, line) {
             Some(h) => format!("{reason} ({h})"),
             None => reason,
         };
         ConfigError::invalid(&self.path, line, column, field, reason)
+    }
+}
+
+/// serde's messages, which follow serde_yaml's field path and `: `.
+const SERDE_MESSAGES: [&str; 8] = [
+    "invalid type",
+    "invalid value",
+    "invalid length",
+    "unknown field",
+    "unknown variant",
+    "missing field",
+    "duplicate field",
+    "data did not match",
+];
+
+/// serde_yaml's `path: message` as (path, message). The path is what comes
+/// before the first `: ` that starts one of serde's messages (a key of the
+/// path may hold spaces and colons); failing that, before the first `: `
+/// when that part has no spaces (a visitor's own message).
+fn split_path(text: &str) -> (String, &str) {
+    let mut from = 0;
+    while let Some(i) = text[from..].find(": ").map(|i| from + i) {
+        let rest = &text[i + 2..];
+        if SERDE_MESSAGES.iter().any(|m| rest.starts_with(m)) {
+            return (text[..i].to_owned(), rest);
+        }
+        from = i + 2;
+    }
+    match text.split_once(": ") {
+        Some((head, rest)) if !head.contains(' ') && !head.is_empty() => (head.to_owned(), rest),
+        _ => (String::new(), text),
     }
 }

@@ -80,7 +80,10 @@ pub const MAX_LATENCY: Duration = Duration::from_millis(255);
 #[non_exhaustive]
 pub enum LimitError {
     /// A baud rate the servos cannot be set to (register 6's table).
-    #[error("{baud} baud is not a rate the servos can be set to; use one of {}", baud_list())]
+    #[error(
+        "{baud} baud is not a rate the servos can be set to; use one of {}",
+        baud_list()
+    )]
     Baud {
         /// The rate asked for.
         baud: u32,
@@ -173,7 +176,9 @@ fn baud_list() -> String {
 /// # Errors
 /// [`LimitError::Baud`], which lists the rates there are.
 pub fn check_baud(baud: u32) -> Result<u32, LimitError> {
-    baud_index(baud).map(|_| baud).ok_or(LimitError::Baud { baud })
+    baud_index(baud)
+        .map(|_| baud)
+        .ok_or(LimitError::Baud { baud })
 }
 
 /// The adapter latency of `latency_us` microseconds, if at most [`MAX_LATENCY`].

@@ -132,7 +132,9 @@ impl Motion {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a motion file: a mapping with `keyframes:` and optional `robot:`, `poses:`, `repeat:`, ...")]
+#[serde(
+    expecting = "a motion file: a mapping with `keyframes:` and optional `robot:`, `poses:`, `repeat:`, ..."
+)]
 struct RawMotion {
     #[serde(default)]
     robot: Option<String>,

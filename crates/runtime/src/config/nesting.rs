@@ -159,7 +159,10 @@ mod tests {
         assert_eq!(too_deep(robot, 4), Some((5, 7)));
         let deep: String = (0..40).map(|i| format!("{}a:\n", " ".repeat(i))).collect();
         assert_eq!(too_deep(&deep, 32), Some((33, 33)));
-        assert_eq!(too_deep(&format!("{}x\n", "- ".repeat(40)), 32), Some((1, 1)));
+        assert_eq!(
+            too_deep(&format!("{}x\n", "- ".repeat(40)), 32),
+            Some((1, 1))
+        );
         // Lists at the indentation of their key are one level, not two.
         assert_eq!(too_deep("k:\n- a\n- b\n", 2), None);
     }

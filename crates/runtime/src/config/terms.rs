@@ -33,7 +33,11 @@ const LONG_NUMBER: usize = 16;
 pub(crate) fn user_terms(reason: &str) -> String {
     let mut text = reason.to_owned();
     for (rust, words) in PRIMITIVES {
-        text = replace_word(&text, &format!("expected {rust}"), &format!("expected {words}"));
+        text = replace_word(
+            &text,
+            &format!("expected {rust}"),
+            &format!("expected {words}"),
+        );
     }
     if let Some(i) = text.find("data did not match any variant of untagged enum") {
         text.replace_range(i.., "not one of the forms this field takes");
@@ -137,9 +141,6 @@ mod tests {
             user_terms("keyframes[12]: 300 is not 4294967295"),
             "keyframes[12]: 300 is not 4294967295"
         );
-        assert_eq!(
-            user_terms("got 0.30000000000000004 here"),
-            "got 0.3 here"
-        );
+        assert_eq!(user_terms("got 0.30000000000000004 here"), "got 0.3 here");
     }
 }

@@ -37,7 +37,9 @@ const RANDOM_STOP_MARGIN_DEG: f64 = 5.0;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a joint's mounting: a mapping with `zero_tick:` and optional `direction:`, `stops:`")]
+#[serde(
+    expecting = "a joint's mounting: a mapping with `zero_tick:` and optional `direction:`, `stops:`"
+)]
 struct RawMount {
     zero_tick: f64,
     #[serde(default = "positive")]

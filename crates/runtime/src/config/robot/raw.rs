@@ -14,7 +14,9 @@ use crate::config::Units;
 /// means); absent optional fields take their defaults here.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a robot file: a mapping with `name:`, `buses:` and optional `units:`, `rate:`, ...")]
+#[serde(
+    expecting = "a robot file: a mapping with `name:`, `buses:` and optional `units:`, `rate:`, ..."
+)]
 pub(super) struct RawRobot {
     pub name: String,
     #[serde(default)]
@@ -92,7 +94,9 @@ pub(super) struct RawBus {
 /// One entry of a bus's `joints` ([`JointConfig`](super::JointConfig)).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:`, `max_velocity:`, `max_acceleration:`, ...")]
+#[serde(
+    expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:`, `max_velocity:`, `max_acceleration:`, ..."
+)]
 pub(super) struct RawJoint {
     pub name: String,
     pub id: i64,

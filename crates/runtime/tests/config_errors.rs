@@ -1,6 +1,8 @@
 //! Bad robot and motion files are refused with `file:line:column: field: reason`.
 
 mod common;
+#[path = "../examples/common/config_check.rs"]
+mod config_check;
 
 use std::path::{Path, PathBuf};
 
@@ -329,4 +331,76 @@ fn busy_polling_is_off_unless_the_robot_file_asks() {
     );
     let r = load_robot(&p).expect("valid");
     assert!(r.buses[0].busy_poll);
+}
+
+/// The YAML fuzzers' kept inputs (`testdata/fuzz-config/`) pass every
+/// check again; the hand-made seeds are refused by every loader.
+#[test]
+fn the_fuzzers_kept_inputs_are_refused_cleanly() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let workspace = config_check::Workspace::new(&repo).expect("a scratch directory");
+    let dir = repo.join("testdata/fuzz-config");
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(&dir).expect("testdata/fuzz-config") {
+        let path = entry.expect("a directory entry").path();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let Some(name) = name.filter(|n| !n.ends_with(".md")) else {
+            continue;
+        };
+        let input = std::fs::read(&path).expect("a kept input");
+        // Panics, with the message, when a check fails.
+        let outcomes = workspace.check(&input);
+        if name.starts_with("seed-") {
+            seeds += 1;
+            for outcome in &outcomes {
+                assert!(!outcome.ends_with(":ok"), "{name}: {outcomes:?}");
+            }
+        }
+    }
+    assert!(seeds >= 3, "the seeds of testdata/fuzz-config/ are missing");
+}
+
+/// Limits with the limit in the message, and messages in the file's terms.
+#[test]
+fn limits_and_type_errors_speak_in_the_files_terms() {
+    let (p, e) = robot_error(
+        "latency-list",
+        "baud: 1000000",
+        "baud: 1000000\n    latency_us: [5]",
+    );
+    let reason = "invalid type: sequence, expected a number of microseconds or `auto`";
+    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
+    let (p, e) = robot_error(
+        "latency-long",
+        "baud: 1000000",
+        "baud: 1000000\n    latency_us: 300000",
+    );
+    let reason = "300000 us is not an adapter latency: give 0 to 255000 us";
+    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
+    let (p, e) = robot_error("rate", "rate: 100", "rate: 5");
+    let reason = "5 Hz is outside the control rates servobus runs, 10 to 10000 Hz";
+    expect(&e, &p, 3, 7, "rate", reason);
+    let digits = format!("max_velocity: -1{}", "0".repeat(308));
+    let (p, e) = robot_error(
+        "digits",
+        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+        &format!("{digits}\n        max_acceleration: 900\n      - name: b"),
+    );
+    expect(
+        &e,
+        &p,
+        13,
+        23,
+        "buses[0].joints[0].max_velocity",
+        "must be positive, got -1e308",
+    );
+    let list = write("list", "robot.yaml", "- name: x\n");
+    let text = load_robot(&list)
+        .expect_err("a list is not a robot")
+        .to_string();
+    let said = format!(
+        "{}:1:1: invalid type: sequence, expected a robot file: a mapping with `name:`",
+        list.display()
+    );
+    assert!(text.starts_with(&said), "{text}");
 }

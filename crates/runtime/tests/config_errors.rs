@@ -404,3 +404,35 @@ fn limits_and_type_errors_speak_in_the_files_terms() {
     );
     assert!(text.starts_with(&said), "{text}");
 }
+
+/// A motion cannot ask for unbounded work: the loader refuses a billion
+/// repetitions and a keyframe at 1e12 s, and the planner a motion that
+/// would last longer than a day; each names the limit.
+#[test]
+fn motions_are_capped_with_the_limit_in_the_message() {
+    let (p, e) = motion_error(
+        "repeat_cap",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10}\nrepeat: 1000000000\n",
+    );
+    let reason = "2 keyframes x 1000000000 repetitions x 2 joints is 4e9 joint segments to plan, \
+                  more than the limit of 500000";
+    expect(&e, &p, 5, 9, "repeat", reason);
+    let (p, e) = motion_error(
+        "at_cap",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - at: 1e12\n    pose: {a: 10}\n",
+    );
+    let reason = "1e12 s is longer than the limit of 86400 s (a day) for one motion";
+    expect(&e, &p, 4, 9, "keyframes[1].at", reason);
+    // A joint of 1e-6 deg/s takes 1e7 s for 10 deg: the plan is refused.
+    let slow = ROBOT.replacen("max_velocity: 180", "max_velocity: 0.000001", 1);
+    write("slow_cap", "robot.yaml", &slow);
+    let p = write(
+        "slow_cap",
+        "motion.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10}\n",
+    );
+    let (motion, robot) = load_motion(&p, None).expect("the files are valid");
+    let e = servobus_runtime::config::plan_motion(&motion, &robot).expect_err("too long");
+    let reason = "the motion is too long: 10000000 s is longer than the limit of 86400 s";
+    expect(&e, &p, 4, 5, "keyframes[1]", reason);
+}

@@ -227,13 +227,15 @@ pub fn check_duration(duration_s: f64) -> Result<(), LimitError> {
 /// [`LimitError::Duration`] or [`LimitError::Cycles`].
 pub fn check_length(duration_s: f64, rate_hz: f64) -> Result<(), LimitError> {
     check_duration(duration_s)?;
-    if !(duration_s * rate_hz <= MAX_MOTION_CYCLES) {
-        return Err(LimitError::Cycles {
+    // NaN fails the test, so it is refused.
+    if duration_s * rate_hz <= MAX_MOTION_CYCLES {
+        Ok(())
+    } else {
+        Err(LimitError::Cycles {
             duration_s,
             rate_hz,
-        });
+        })
     }
-    Ok(())
 }
 
 /// Checks that planning `keyframes` keyframes `repeat` times for `joints`
@@ -262,14 +264,15 @@ pub fn check_segments(keyframes: usize, repeat: u64, joints: usize) -> Result<()
 /// [`LimitError::Duration`] or [`LimitError::TrackSteps`].
 pub fn check_recording(span_s: f64, rate_hz: f64, joints: usize) -> Result<(), LimitError> {
     check_duration(span_s)?;
-    if !(span_s * rate_hz * joints as f64 <= MAX_TRACK_STEPS) {
-        return Err(LimitError::TrackSteps {
+    if span_s * rate_hz * joints as f64 <= MAX_TRACK_STEPS {
+        Ok(())
+    } else {
+        Err(LimitError::TrackSteps {
             span_s,
             rate_hz,
             joints,
-        });
+        })
     }
-    Ok(())
 }
 
 /// The bytes of `path`, reading at most `limit + 1` of them: a larger file

@@ -182,7 +182,7 @@ pub fn load_robot(path: &Path) -> Result<Robot, ConfigError> {
 /// the one the robot file names (`--calibration`).
 ///
 /// # Errors
-/// As [`load_robot`], and the errors of [`load_calibration`] and of
+/// As [`load_robot`], and the errors of [`load_calibration`](super::load_calibration) and of
 /// applying it: a joint it lacks, another servo ID or model, a measured
 /// range that leaves nothing of the joint's limits.
 pub fn load_robot_calibrated(

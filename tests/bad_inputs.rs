@@ -236,6 +236,17 @@ fn messages_speak_in_the_files_terms() {
         &["hand-list.yaml:2:1:", "expected a hand file"],
         &rust,
     );
+    refused(
+        &[
+            "play",
+            "--fast",
+            "recording-not-a-number.csv",
+            "--robot",
+            "robot-tiny.yaml",
+        ],
+        &["recording-not-a-number.csv:3:2: `1e999x` in column `pan` is not a number"],
+        &["float literal"],
+    );
     let err = refused(
         &["budget", "--robot", "robot-309-digits.yaml"],
         &["buses[0].joints[0].max_velocity: must be positive, got -1e308"],

@@ -39,7 +39,7 @@ pub struct PortArgs {
     pub port: String,
     /// The adapter's latency per transaction, in microseconds (default: the
     /// FTDI latency timer when the adapter is an FTDI one, else 1000).
-    #[arg(long, value_name = "US")]
+    #[arg(long, value_name = "US", value_parser = super::latency_us_arg)]
     pub latency_us: Option<u64>,
 }
 
@@ -52,8 +52,8 @@ pub struct ScanArgs {
     /// Port and latency.
     #[command(flatten)]
     pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
+    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
     pub baud: u32,
     /// Try every baud rate of the servo baud table.
     #[arg(long, conflicts_with = "baud")]
@@ -69,8 +69,8 @@ pub struct ServoArgs {
     /// Port and latency.
     #[command(flatten)]
     pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
+    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
     pub baud: u32,
     /// Servo ID (for set-id: the servo's current ID).
     #[arg(long)]

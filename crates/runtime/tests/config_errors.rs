@@ -1,6 +1,8 @@
 //! Bad robot and motion files are refused with `file:line:column: field: reason`.
 
 mod common;
+#[path = "../examples/common/config_check.rs"]
+mod config_check;
 
 use std::path::{Path, PathBuf};
 
@@ -329,4 +331,108 @@ fn busy_polling_is_off_unless_the_robot_file_asks() {
     );
     let r = load_robot(&p).expect("valid");
     assert!(r.buses[0].busy_poll);
+}
+
+/// The YAML fuzzers' kept inputs (`testdata/fuzz-config/`) pass every
+/// check again; the hand-made seeds are refused by every loader.
+#[test]
+fn the_fuzzers_kept_inputs_are_refused_cleanly() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let workspace = config_check::Workspace::new(&repo).expect("a scratch directory");
+    let dir = repo.join("testdata/fuzz-config");
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(&dir).expect("testdata/fuzz-config") {
+        let path = entry.expect("a directory entry").path();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let Some(name) = name.filter(|n| !n.ends_with(".md")) else {
+            continue;
+        };
+        let input = std::fs::read(&path).expect("a kept input");
+        // Panics, with the message, when a check fails.
+        let outcomes = workspace.check(&input);
+        if name.starts_with("seed-") {
+            seeds += 1;
+            for outcome in &outcomes {
+                assert!(!outcome.ends_with(":ok"), "{name}: {outcomes:?}");
+            }
+        }
+    }
+    assert!(seeds >= 3, "the seeds of testdata/fuzz-config/ are missing");
+}
+
+/// Limits with the limit in the message, and messages in the file's terms.
+#[test]
+fn limits_and_type_errors_speak_in_the_files_terms() {
+    let (p, e) = robot_error(
+        "latency-list",
+        "baud: 1000000",
+        "baud: 1000000\n    latency_us: [5]",
+    );
+    let reason = "invalid type: sequence, expected a number of microseconds or `auto`";
+    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
+    let (p, e) = robot_error(
+        "latency-long",
+        "baud: 1000000",
+        "baud: 1000000\n    latency_us: 300000",
+    );
+    let reason = "300000 us is not an adapter latency: give 0 to 255000 us";
+    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
+    let (p, e) = robot_error("rate", "rate: 100", "rate: 5");
+    let reason = "5 Hz is outside the control rates servobus runs, 10 to 10000 Hz";
+    expect(&e, &p, 3, 7, "rate", reason);
+    let digits = format!("max_velocity: -1{}", "0".repeat(308));
+    let (p, e) = robot_error(
+        "digits",
+        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
+        &format!("{digits}\n        max_acceleration: 900\n      - name: b"),
+    );
+    expect(
+        &e,
+        &p,
+        13,
+        23,
+        "buses[0].joints[0].max_velocity",
+        "must be positive, got -1e308",
+    );
+    let list = write("list", "robot.yaml", "- name: x\n");
+    let text = load_robot(&list)
+        .expect_err("a list is not a robot")
+        .to_string();
+    let said = format!(
+        "{}:1:1: invalid type: sequence, expected a robot file: a mapping with `name:`",
+        list.display()
+    );
+    assert!(text.starts_with(&said), "{text}");
+}
+
+/// A motion cannot ask for unbounded work: the loader refuses a billion
+/// repetitions and a keyframe at 1e12 s, and the planner a motion that
+/// would last longer than a day; each names the limit.
+#[test]
+fn motions_are_capped_with_the_limit_in_the_message() {
+    let (p, e) = motion_error(
+        "repeat_cap",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10}\nrepeat: 1000000000\n",
+    );
+    let reason = "2 keyframes x 1000000000 repetitions x 2 joints is 4e9 joint segments to plan, \
+                  more than the limit of 500000";
+    expect(&e, &p, 5, 9, "repeat", reason);
+    let (p, e) = motion_error(
+        "at_cap",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - at: 1e12\n    pose: {a: 10}\n",
+    );
+    let reason = "1e12 s is longer than the limit of 86400 s (a day) for one motion";
+    expect(&e, &p, 4, 9, "keyframes[1].at", reason);
+    // A joint of 1e-6 deg/s takes 1e7 s for 10 deg: the plan is refused.
+    let slow = ROBOT.replacen("max_velocity: 180", "max_velocity: 0.000001", 1);
+    write("slow_cap", "robot.yaml", &slow);
+    let p = write(
+        "slow_cap",
+        "motion.yaml",
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10}\n",
+    );
+    let (motion, robot) = load_motion(&p, None).expect("the files are valid");
+    let e = servobus_runtime::config::plan_motion(&motion, &robot).expect_err("too long");
+    let reason = "the motion is too long: 10000000 s is longer than the limit of 86400 s";
+    expect(&e, &p, 4, 5, "keyframes[1]", reason);
 }

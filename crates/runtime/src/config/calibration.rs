@@ -42,6 +42,7 @@ pub const RANGE_MARGIN_DEG: f64 = 3.0;
 /// One physical robot's calibration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a calibration file: a mapping with `robot:`, `taken:` and `joints:`")]
 pub struct Calibration {
     /// The robot file's `name` it was taken for.
     pub robot: String,
@@ -54,6 +55,9 @@ pub struct Calibration {
 /// One joint's calibration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a joint's calibration: a mapping with `name:`, `id:`, `model:`, `pose_deg:`, `pose_tick:`, `direction:` and `range:`"
+)]
 pub struct JointCalibration {
     /// The joint's name in the robot file.
     pub name: String,

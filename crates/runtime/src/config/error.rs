@@ -4,8 +4,11 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::files::{builtin_text, is_builtin_path};
+use super::limits::{read_capped, MAX_FILE_BYTES, MAX_NESTING};
 use super::locate::{locate_nearest, FieldPath, Part};
+use super::nesting::too_deep;
 use super::syntax::hint;
+use super::terms::{round_long_numbers, user_terms};
 
 /// Why a robot or motion file was refused.
 ///
@@ -25,6 +28,19 @@ pub enum ConfigError {
         /// What the operating system said.
         error: std::io::Error,
     },
+    /// The file is larger than the limit for its kind (or never ends, as
+    /// `/dev/zero`): it was not read past the limit.
+    #[error(
+        "{}: larger than {}, the limit for this kind of file; is it the right file?",
+        path.display(),
+        bytes_text(*limit)
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit, bytes.
+        limit: u64,
+    },
     /// The file was read but its content is wrong.
     #[error("{}", InvalidDisplay::new(.file, .line, .column, .field, .reason))]
     Invalid {
@@ -43,7 +59,8 @@ pub enum ConfigError {
 }
 
 impl ConfigError {
-    /// A content error at an explicit position.
+    /// A content error at an explicit position. Long numbers in `reason`
+    /// are rounded.
     pub fn invalid(
         file: impl Into<PathBuf>,
         line: usize,
@@ -56,14 +73,16 @@ impl ConfigError {
             line,
             column,
             field: field.into(),
-            reason: reason.into(),
+            // However a value was formatted, a message never echoes a
+            // 309-digit number.
+            reason: round_long_numbers(&reason.into()),
         }
     }
 
     /// The file the error is about.
     pub fn file(&self) -> &Path {
         match self {
-            ConfigError::Read { path, .. } => path,
+            ConfigError::Read { path, .. } | ConfigError::TooLarge { path, .. } => path,
             ConfigError::Invalid { file, .. } => file,
         }
     }
@@ -71,7 +90,7 @@ impl ConfigError {
     /// Line and column (1-based), when the error is about content.
     pub fn position(&self) -> Option<(usize, usize)> {
         match self {
-            ConfigError::Read { .. } => None,
+            ConfigError::Read { .. } | ConfigError::TooLarge { .. } => None,
             ConfigError::Invalid { line, column, .. } => Some((*line, *column)),
         }
     }
@@ -79,9 +98,19 @@ impl ConfigError {
     /// The field path, when the error is about content.
     pub fn field(&self) -> Option<&str> {
         match self {
-            ConfigError::Read { .. } => None,
+            ConfigError::Read { .. } | ConfigError::TooLarge { .. } => None,
             ConfigError::Invalid { field, .. } => Some(field),
         }
+    }
+}
+
+/// A byte count as `1 MiB` when it is a whole number of MiB.
+fn bytes_text(bytes: u64) -> String {
+    const MIB: u64 = 1 << 20;
+    if bytes >= MIB && bytes % MIB == 0 {
+        format!("{} MiB", bytes / MIB)
+    } else {
+        format!("{bytes} bytes")
     }
 }
 
@@ -142,8 +171,14 @@ pub(crate) struct Source {
 }
 
 impl Source {
-    /// Reads `path`: a built-in file (see [`super::files`]) or one on disk.
+    /// Reads `path`: a built-in file (see [`super::files`]) or one on disk
+    /// of at most [`MAX_FILE_BYTES`].
     pub(crate) fn read(path: &Path) -> Result<Self, ConfigError> {
+        Self::read_capped(path, MAX_FILE_BYTES)
+    }
+
+    /// Reads `path`, refusing it past `limit` bytes.
+    pub(crate) fn read_capped(path: &Path, limit: u64) -> Result<Self, ConfigError> {
         let text = if is_builtin_path(path) {
             builtin_text(path)
                 .map(str::to_owned)
@@ -152,9 +187,10 @@ impl Source {
                     error: std::io::ErrorKind::NotFound.into(),
                 })?
         } else {
-            std::fs::read_to_string(path).map_err(|error| ConfigError::Read {
+            let bytes = read_capped(path, limit)?;
+            String::from_utf8(bytes).map_err(|_| ConfigError::Read {
                 path: path.to_owned(),
-                error,
+                error: std::io::ErrorKind::InvalidData.into(),
             })?
         };
         Ok(Source {
@@ -164,7 +200,21 @@ impl Source {
     }
 
     /// Deserializes the whole text, turning serde_yaml's error into ours.
+    /// A text nested deeper than [`MAX_NESTING`] is refused before serde_yaml
+    /// sees it.
     pub(crate) fn parse<T: serde::de::DeserializeOwned>(&self) -> Result<T, ConfigError> {
+        if let Some((line, column)) = too_deep(&self.text, MAX_NESTING) {
+            return Err(ConfigError::invalid(
+                &self.path,
+                line,
+                column,
+                "",
+                format!(
+                    "nested more than {MAX_NESTING} levels deep (mappings and lists inside \
+                     each other), the limit for this kind of file"
+                ),
+            ));
+        }
         serde_yaml::from_str(&self.text).map_err(|e| self.yaml_error(&e))
     }
 
@@ -197,18 +247,43 @@ impl Source {
         if let Some(i) = text.find(&suffix) {
             text.replace_range(i..i + suffix.len(), "");
         }
-        // A leading `path: ` is serde_yaml's field path (it has no spaces;
-        // messages such as `invalid type: ...` do).
-        let (field, reason) = match text.split_once(": ") {
-            Some((head, rest)) if !head.contains(' ') && !head.is_empty() => {
-                (head.to_owned(), rest.to_owned())
-            }
-            _ => (String::new(), text),
-        };
+        let (field, reason) = split_path(&text);
+        let reason = user_terms(reason);
         let reason = match hint(&self.text, line) {
             Some(h) => format!("{reason} ({h})"),
             None => reason,
         };
         ConfigError::invalid(&self.path, line, column, field, reason)
+    }
+}
+
+/// serde's messages, which follow serde_yaml's field path and `: `.
+const SERDE_MESSAGES: [&str; 8] = [
+    "invalid type",
+    "invalid value",
+    "invalid length",
+    "unknown field",
+    "unknown variant",
+    "missing field",
+    "duplicate field",
+    "data did not match",
+];
+
+/// serde_yaml's `path: message` as (path, message). The path is what comes
+/// before the first `: ` that starts one of serde's messages (a key of the
+/// path may hold spaces and colons); failing that, before the first `: `
+/// when that part has no spaces (a visitor's own message).
+fn split_path(text: &str) -> (String, &str) {
+    let mut from = 0;
+    while let Some(i) = text[from..].find(": ").map(|i| from + i) {
+        let rest = &text[i + 2..];
+        if SERDE_MESSAGES.iter().any(|m| rest.starts_with(m)) {
+            return (text[..i].to_owned(), rest);
+        }
+        from = i + 2;
+    }
+    match text.split_once(": ") {
+        Some((head, rest)) if !head.contains(' ') && !head.is_empty() => (head.to_owned(), rest),
+        _ => (String::new(), text),
     }
 }

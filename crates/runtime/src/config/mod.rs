@@ -27,12 +27,15 @@ mod calibrated;
 mod calibration;
 mod error;
 mod files;
+pub mod limits;
 mod locate;
 mod mapping;
 mod motion;
+mod nesting;
 mod robot;
 pub mod seam;
 mod syntax;
+mod terms;
 mod trajectory;
 mod units;
 
@@ -51,7 +54,7 @@ pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{
     load_robot, load_robot_any_rate, load_robot_any_rate_calibrated, load_robot_calibrated,
-    load_robot_design, BusConfig, JointConfig, Robot, RobotCalibration,
+    load_robot_design, load_robot_to_play, BusConfig, JointConfig, Robot, RobotCalibration,
 };
-pub use trajectory::{joint_limits, plan_input, plan_motion};
+pub use trajectory::{check_motion_length, joint_limits, plan_input, plan_motion};
 pub use units::Units;

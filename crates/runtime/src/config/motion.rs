@@ -7,6 +7,7 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 
 use super::error::{ConfigError, Source};
+use super::limits::{check_duration, check_segments};
 use super::locate::FieldPath;
 use super::robot::{self, Robot};
 use super::Units;
@@ -59,6 +60,7 @@ pub struct Keyframe {
 /// What to do when timed keyframes ask more than a joint's limits allow.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[serde(expecting = "`error` or `stretch`")]
 pub enum OnLimit {
     /// Refuse the motion, naming the keyframe, joint, peak and limit.
     #[default]
@@ -70,6 +72,7 @@ pub enum OnLimit {
 /// The path shape through timed keyframes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[serde(expecting = "`shape_preserving`, `spline`, `monotone` or `quintic`")]
 pub enum Interpolation {
     /// Shape-preserving, jerk-limited segments (the default): every joint
     /// stays within the range of the two keyframes around each segment and
@@ -129,6 +132,9 @@ impl Motion {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a motion file: a mapping with `keyframes:` and optional `robot:`, `poses:`, `repeat:`, ..."
+)]
 struct RawMotion {
     #[serde(default)]
     robot: Option<String>,
@@ -153,6 +159,7 @@ fn one() -> i64 {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a keyframe: a mapping with `pose:` and optional `at:`")]
 struct RawKeyframe {
     #[serde(default)]
     at: Option<f64>,
@@ -259,28 +266,40 @@ pub fn load_motion_calibrated(
         }
     };
     let (robot, robot_src) =
-        robot::load_calibrated(&robot_path, calibration).map_err(|e| {
-            match (e, robot_override) {
-        // A robot the motion names but that cannot be read: point at the
-        // `robot:` line, which is what to fix.
-        (e @ ConfigError::Read { .. }, None) => src.error(
-            &root.key("robot"),
-            format!("{e}; fix this `robot:` (it is relative to this motion file) or pass --robot"),
-        ),
-        (e, _) => e,
-    }
+        robot::load_calibrated(&robot_path, calibration).map_err(|e| match e {
+            // The robot the motion names cannot be read: point at the
+            // `robot:` line, which is what to fix. (Another file that cannot
+            // be read, a calibration, speaks for itself.)
+            ConfigError::Read { ref path, .. } | ConfigError::TooLarge { ref path, .. }
+                if robot_override.is_none() && *path == robot_path =>
+            {
+                src.error(
+                    &root.key("robot"),
+                    format!(
+                        "{e}; fix this `robot:` (it is relative to this motion file) or pass \
+                         --robot"
+                    ),
+                )
+            }
+            e => e,
         })?;
+    robot::require_calibration(&robot, &robot_src)?;
     match raw.rate {
         Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,
     }
-    if raw.repeat < 1 || raw.repeat > i64::from(u32::MAX) {
+    if raw.repeat < 1 {
         return Err(src.error(
             &root.key("repeat"),
             format!("must be at least 1, got {}", raw.repeat),
         ));
     }
-    let repeat = u32::try_from(raw.repeat).unwrap_or(u32::MAX);
+    let repeat = u64::try_from(raw.repeat).unwrap_or(u64::MAX);
+    if let Err(e) = check_segments(raw.keyframes.len(), repeat, robot.joint_count()) {
+        return Err(src.error(&root.key("repeat"), e.to_string()));
+    }
+    // At most MAX_PLANNED_SEGMENTS: it fits.
+    let repeat = u32::try_from(repeat).unwrap_or(u32::MAX);
     let resolver = Resolver {
         src: &src,
         robot: &robot,
@@ -306,6 +325,9 @@ pub fn load_motion_calibrated(
         if let Some(at) = rk.at {
             if !(at.is_finite() && at >= 0.0) {
                 return Err(src.error(&kp.key("at"), format!("must be a time >= 0 s, got {at}")));
+            }
+            if let Err(e) = check_duration(at) {
+                return Err(src.error(&kp.key("at"), e.to_string()));
             }
             if i == 0 && at != 0.0 {
                 return Err(src.error(

@@ -5,6 +5,7 @@ use servobus_trajectory::{
     self as traj, JointLimits, PlanError, PlanOptions, Quantity, TimedShape, Trajectory,
 };
 
+use super::limits::check_length;
 use super::{ConfigError, Interpolation, Motion, OnLimit, Robot, Units};
 
 /// Per-joint limits of `robot` in radians, in the robot's joint order.
@@ -65,7 +66,44 @@ pub fn plan_input(motion: &Motion) -> (Vec<traj::Keyframe>, PlanOptions) {
 pub fn plan_motion(motion: &Motion, robot: &Robot) -> Result<Trajectory, ConfigError> {
     let limits = joint_limits(robot);
     let (keyframes, options) = plan_input(motion);
-    traj::plan(&limits, &keyframes, &options).map_err(|e| locate_plan_error(motion, &e))
+    let trajectory =
+        traj::plan(&limits, &keyframes, &options).map_err(|e| locate_plan_error(motion, &e))?;
+    check_motion_length(motion, &trajectory, motion.rate_hz(robot))?;
+    Ok(trajectory)
+}
+
+/// Checks that `trajectory`, planned from `motion`, played at `rate_hz`
+/// is within [`MAX_MOTION_DURATION_S`](super::limits::MAX_MOTION_DURATION_S)
+/// and [`MAX_MOTION_CYCLES`](super::limits::MAX_MOTION_CYCLES) (`play
+/// --rate` checks again at its own rate).
+///
+/// # Errors
+/// [`ConfigError::Invalid`] at the first keyframe the motion reaches past
+/// a limit, saying the limit.
+pub fn check_motion_length(
+    motion: &Motion,
+    trajectory: &Trajectory,
+    rate_hz: f64,
+) -> Result<(), ConfigError> {
+    let Err(e) = check_length(trajectory.duration(), rate_hz) else {
+        return Ok(());
+    };
+    let keyframe = trajectory
+        .segments()
+        .iter()
+        .find(|s| check_length(s.end, rate_hz).is_err())
+        .map_or(0, |s| s.keyframe);
+    let (line, column) = motion
+        .keyframes
+        .get(keyframe)
+        .map_or((1, 1), |k| (k.line, k.column));
+    Err(ConfigError::invalid(
+        &motion.path,
+        line,
+        column,
+        format!("keyframes[{keyframe}]"),
+        format!("the motion is too long: {e}"),
+    ))
 }
 
 /// `value` (rad-based, divided by s^order) in the motion's units.

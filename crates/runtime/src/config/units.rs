@@ -5,6 +5,7 @@ use serde::Deserialize;
 /// The unit of every angle in a file (velocities are units/s, and so on).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[serde(expecting = "`deg` or `rad`")]
 pub enum Units {
     /// Degrees (the default).
     #[default]

@@ -50,8 +50,11 @@ pub enum RobotCalibration {
     /// with the robot file's `offset` and `inverted`.
     #[default]
     None,
-    /// The robot file names a calibration file that does not exist yet: the
-    /// robot runs on the simulator as designed, and refuses real servos.
+    /// The robot file names a calibration file that does not exist yet.
+    /// The simulator serves such a robot as designed (to be calibrated),
+    /// but nothing plans or plays it: [`load_motion`](super::load_motion)
+    /// and [`load_robot_to_play`] refuse it, naming the file, and real
+    /// servos are refused before they move.
     Missing(PathBuf),
     /// Loaded and applied: every joint maps through its calibration (held
     /// in [`JointConfig::calibration`]) and its limits are clipped to the
@@ -179,7 +182,7 @@ pub fn load_robot(path: &Path) -> Result<Robot, ConfigError> {
 /// the one the robot file names (`--calibration`).
 ///
 /// # Errors
-/// As [`load_robot`], and the errors of [`load_calibration`] and of
+/// As [`load_robot`], and the errors of [`load_calibration`](super::load_calibration) and of
 /// applying it: a joint it lacks, another servo ID or model, a measured
 /// range that leaves nothing of the joint's limits.
 pub fn load_robot_calibrated(
@@ -194,6 +197,44 @@ pub fn load_robot_calibrated(
         &FieldPath::root().key("rate"),
     )?;
     Ok(robot)
+}
+
+/// Like [`load_robot_calibrated`], for a robot about to play a motion or
+/// a recording: a calibration file the robot file names must exist, since
+/// the calibrated limits are what the path is kept within.
+///
+/// # Errors
+/// As [`load_robot_calibrated`], and [`ConfigError::Invalid`] at the robot
+/// file's `calibration:` when that file does not exist.
+pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
+    let (robot, source) = load_calibrated(path, calibration)?;
+    require_calibration(&robot, &source)?;
+    check_rate(
+        &robot,
+        &source,
+        robot.rate_hz,
+        &FieldPath::root().key("rate"),
+    )?;
+    Ok(robot)
+}
+
+/// Refuses a robot whose robot file (`source`) names a calibration file
+/// that does not exist.
+pub(crate) fn require_calibration(robot: &Robot, source: &Source) -> Result<(), ConfigError> {
+    let RobotCalibration::Missing(file) = &robot.calibration else {
+        return Ok(());
+    };
+    Err(source.error(
+        &FieldPath::root().key("calibration"),
+        format!(
+            "the calibration file {} does not exist; motions are planned and played within \
+             the calibrated limits: calibrate first (`servobus calibrate --robot {} -o {}`), \
+             or remove `calibration:` to use the robot as designed",
+            file.display(),
+            source.path.display(),
+            file.display()
+        ),
+    ))
 }
 
 /// Like [`load_robot`], but accepts a default rate that does not fit (for

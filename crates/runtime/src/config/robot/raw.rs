@@ -3,7 +3,10 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use serde::Deserialize;
+use std::fmt;
+
+use serde::de::{self, Visitor};
+use serde::{Deserialize, Deserializer};
 
 use crate::config::Units;
 
@@ -11,6 +14,9 @@ use crate::config::Units;
 /// means); absent optional fields take their defaults here.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a robot file: a mapping with `name:`, `buses:` and optional `units:`, `rate:`, ..."
+)]
 pub(super) struct RawRobot {
     pub name: String,
     #[serde(default)]
@@ -31,14 +37,33 @@ fn default_rate() -> f64 {
 }
 
 /// `latency_us`: a number of microseconds, or `auto`.
-#[derive(Deserialize, Default)]
-#[serde(untagged)]
+#[derive(Default)]
 pub(super) enum LatencySpec {
     Micros(u64),
     #[default]
-    #[serde(skip)]
     Auto,
     Word(String),
+}
+
+impl<'de> Deserialize<'de> for LatencySpec {
+    // By hand rather than `untagged`: serde's untagged enums lose the
+    // position of the value and say `untagged enum LatencySpec`.
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = LatencySpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number of microseconds or `auto`")
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<LatencySpec, E> {
+                Ok(LatencySpec::Micros(v))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<LatencySpec, E> {
+                Ok(LatencySpec::Word(v.to_owned()))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 fn default_baud() -> u32 {
@@ -48,6 +73,7 @@ fn default_baud() -> u32 {
 /// One entry of `buses` ([`BusConfig`](super::BusConfig)).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a bus: a mapping with `name:`, `joints:` and optional `baud:`, `port:`, ...")]
 pub(super) struct RawBus {
     pub name: String,
     #[serde(default)]
@@ -68,6 +94,9 @@ pub(super) struct RawBus {
 /// One entry of a bus's `joints` ([`JointConfig`](super::JointConfig)).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:`, `max_velocity:`, `max_acceleration:`, ..."
+)]
 pub(super) struct RawJoint {
     pub name: String,
     pub id: i64,

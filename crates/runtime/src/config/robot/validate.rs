@@ -4,13 +4,14 @@
 use std::collections::{HashMap, HashSet};
 use std::time::Duration;
 
-use servobus_protocol::registers::{self, model_by_name, BAUD_RATES, MODELS};
+use servobus_protocol::registers::{model_by_name, MODELS};
 use servobus_protocol::MAX_ID;
 
 use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
 use super::{BusConfig, JointConfig, Robot, RobotCalibration};
 use crate::config::budget::RateRemedy;
 use crate::config::error::{ConfigError, Source};
+use crate::config::limits::{check_baud, check_latency_us, check_rate_hz};
 use crate::config::locate::FieldPath;
 
 /// The largest lag-compensation lead a robot file may set, ms.
@@ -26,8 +27,8 @@ pub(crate) fn check_rate(
     rate_hz: f64,
     field: &FieldPath,
 ) -> Result<(), ConfigError> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(source.error(field, format!("rate must be positive, got {rate_hz}")));
+    if let Err(e) = check_rate_hz(rate_hz) {
+        return Err(source.error(field, e.to_string()));
     }
     for bus in &robot.buses {
         if let Err(why) = bus.check_rate(rate_hz) {
@@ -50,11 +51,8 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
     if raw.name.trim().is_empty() {
         return Err(src.error(&root.key("name"), "must not be empty"));
     }
-    if !positive(raw.rate) {
-        return Err(src.error(
-            &root.key("rate"),
-            format!("must be a positive rate in Hz, got {}", raw.rate),
-        ));
+    if let Err(e) = check_rate_hz(raw.rate) {
+        return Err(src.error(&root.key("rate"), e.to_string()));
     }
     let lead = match raw.lead_ms {
         None => None,
@@ -107,16 +105,8 @@ fn bus(
     joint_names: &mut HashMap<String, FieldPath>,
     src: &Source,
 ) -> Result<BusConfig, ConfigError> {
-    if registers::baud_index(rb.baud).is_none() {
-        let valid: Vec<String> = BAUD_RATES.iter().map(u32::to_string).collect();
-        return Err(src.error(
-            &bp.key("baud"),
-            format!(
-                "{} baud is not a rate the servos can be set to; use one of {}",
-                rb.baud,
-                valid.join(", ")
-            ),
-        ));
+    if let Err(e) = check_baud(rb.baud) {
+        return Err(src.error(&bp.key("baud"), e.to_string()));
     }
     if rb.return_delay_us > MAX_RETURN_DELAY_US || rb.return_delay_us % 2 != 0 {
         return Err(src.error(
@@ -154,7 +144,10 @@ fn bus(
         joints.push(joint);
     }
     let (latency, latency_auto) = match rb.latency_us {
-        LatencySpec::Micros(us) => (Duration::from_micros(us), false),
+        LatencySpec::Micros(us) => match check_latency_us(us) {
+            Ok(latency) => (latency, false),
+            Err(e) => return Err(src.error(&bp.key("latency_us"), e.to_string())),
+        },
         LatencySpec::Auto => (Duration::ZERO, true),
         LatencySpec::Word(w) if w == "auto" => (Duration::ZERO, true),
         LatencySpec::Word(w) => {

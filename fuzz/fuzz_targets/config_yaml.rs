@@ -1,7 +1,7 @@
 //! Fuzz target: robot, motion and calibration YAML through the real
 //! loaders, each motion that loads planned. The checks live in
-//! `crates/runtime/examples/common/config_check.rs`, shared with the stable
-//! fuzzer (`cargo run --release -p servobus-runtime --example fuzz_config`)
+//! `crates/config/examples/common/config_check.rs`, shared with the stable
+//! fuzzer (`cargo run --release -p servobus-config --example fuzz_config`)
 //! and the regression test that replays `testdata/fuzz-config/`.
 //!
 //! Run: `cd fuzz && cargo fuzz run -s none config_yaml -- -max_len=16384`.
@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 
 use libfuzzer_sys::fuzz_target;
 
-#[path = "../../crates/runtime/examples/common/config_check.rs"]
+#[path = "../../crates/config/examples/common/config_check.rs"]
 mod config_check;
 
 use config_check::{Workspace, MAX_LEN};

@@ -185,6 +185,17 @@ pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible>
     Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
 }
 
+/// A rate that does not fit a bus, with the library's advice and this
+/// command line's own switch for a round-robin read.
+pub(crate) fn rate_advice(why: &servobus_runtime::config::RateError) -> String {
+    let flag = if why.round_robin_helps() {
+        " (for one run: --round-robin)"
+    } else {
+        ""
+    };
+    format!("{}{flag}", why.with_advice())
+}
+
 /// Parses a simulator mounting argument: a file, or a built-in's name.
 pub(crate) fn mounting_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     use servobus::builtin::{path_or_name, Kind};

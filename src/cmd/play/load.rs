@@ -115,7 +115,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         bus.round_robin |= args.round_robin;
         bus.busy_poll |= args.busy_poll;
         if let Err(why) = bus.check_rate(rate_hz) {
-            let why = why.with_remedy(RateRemedy::Flag);
+            let why = crate::cmd::rate_advice(&why);
             return Err(crate::cmd::exit::input(format!(
                 "bus `{}`: {why}",
                 bus.name

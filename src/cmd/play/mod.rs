@@ -15,8 +15,7 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
 use servobus_runtime::config::{
-    check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot,
-    Units,
+    check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{

@@ -9,10 +9,9 @@ use servobus_protocol::MAX_ID;
 
 use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
 use super::{BusConfig, JointConfig, Robot, RobotCalibration};
-use crate::config::budget::RateRemedy;
-use crate::config::error::{ConfigError, Source};
-use crate::config::limits::{check_baud, check_latency_us, check_rate_hz};
-use crate::config::locate::FieldPath;
+use crate::error::{ConfigError, Source};
+use crate::limits::{check_baud, check_latency_us, check_rate_hz};
+use crate::locate::FieldPath;
 
 /// The largest lag-compensation lead a robot file may set, ms.
 const MAX_LEAD_MS: f64 = 500.0;
@@ -32,10 +31,7 @@ pub(crate) fn check_rate(
     }
     for bus in &robot.buses {
         if let Err(why) = bus.check_rate(rate_hz) {
-            return Err(source.error(
-                field,
-                format!("bus `{}`: {}", bus.name, why.with_remedy(RateRemedy::File)),
-            ));
+            return Err(source.error(field, format!("bus `{}`: {}", bus.name, why.with_advice())));
         }
     }
     Ok(())
@@ -268,7 +264,7 @@ pub(crate) fn check_servo_range(robot: &Robot, src: &Source) -> Result<(), Confi
     let root = FieldPath::root();
     for (bi, bus) in robot.buses.iter().enumerate() {
         for (ji, joint) in bus.joints.iter().enumerate() {
-            let map = crate::config::JointMap::new(joint, robot.units);
+            let map = crate::JointMap::new(joint, robot.units);
             let jp = root.key("buses").index(bi).key("joints").index(ji);
             for (field, v) in [("min", joint.min), ("max", joint.max)] {
                 let t = map.raw_ticks(robot.units.to_rad(v));

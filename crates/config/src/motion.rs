@@ -259,10 +259,7 @@ pub fn load_motion_calibrated(
         (Some(p), _) => p.to_owned(),
         (None, Some(rel)) => super::files::tidy(path.parent().unwrap_or(Path::new("")).join(rel)),
         (None, None) => {
-            return Err(src.error(
-                &root,
-                "no robot: add `robot: FILE` (relative to this file) or pass --robot",
-            ))
+            return Err(src.error(&root, "no robot: add `robot: FILE` (relative to this file)"))
         }
     };
     let (robot, robot_src) =

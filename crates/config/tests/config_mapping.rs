@@ -1,9 +1,9 @@
 //! Joint angle <-> tick mapping and the last-step clamp.
 
-use servobus_protocol::registers::model_by_name;
-use servobus_runtime::config::{
+use servobus_config::{
     JointCalibration, JointConfig, JointMap, PlayFrame, Units, RANGE_MARGIN_DEG,
 };
+use servobus_protocol::registers::model_by_name;
 
 fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointConfig {
     JointConfig {

@@ -165,7 +165,7 @@ impl fmt::Display for InvalidDisplay<'_> {
 /// A file's path and text, kept while loading so that errors found after
 /// parsing can be located.
 #[derive(Debug, Clone)]
-pub(crate) struct Source {
+pub struct Source {
     pub(crate) path: PathBuf,
     pub(crate) text: String,
 }
@@ -173,7 +173,7 @@ pub(crate) struct Source {
 impl Source {
     /// Reads `path`: a built-in file (see [`super::files`]) or one on disk
     /// of at most [`MAX_FILE_BYTES`].
-    pub(crate) fn read(path: &Path) -> Result<Self, ConfigError> {
+    pub fn read(path: &Path) -> Result<Self, ConfigError> {
         Self::read_capped(path, MAX_FILE_BYTES)
     }
 
@@ -202,7 +202,7 @@ impl Source {
     /// Deserializes the whole text, turning serde_yaml's error into ours.
     /// A text nested deeper than [`MAX_NESTING`] is refused before serde_yaml
     /// sees it.
-    pub(crate) fn parse<T: serde::de::DeserializeOwned>(&self) -> Result<T, ConfigError> {
+    pub fn parse<T: serde::de::DeserializeOwned>(&self) -> Result<T, ConfigError> {
         if let Some((line, column)) = too_deep(&self.text, MAX_NESTING) {
             return Err(ConfigError::invalid(
                 &self.path,
@@ -219,12 +219,12 @@ impl Source {
     }
 
     /// An error about the value at `path`.
-    pub(crate) fn error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
+    pub fn error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
         self.error_at(path, Part::Value, reason)
     }
 
     /// An error about the key of the last segment of `path` (an unknown name).
-    pub(crate) fn key_error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
+    pub fn key_error(&self, path: &FieldPath, reason: impl Into<String>) -> ConfigError {
         self.error_at(path, Part::Key, reason)
     }
 

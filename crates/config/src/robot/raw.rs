@@ -8,7 +8,7 @@ use std::fmt;
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer};
 
-use crate::config::Units;
+use crate::Units;
 
 /// A robot file, field for field ([`Robot`](super::Robot) says what each
 /// means); absent optional fields take their defaults here.

@@ -6,7 +6,7 @@ mod config_check;
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::config::{load_motion, load_robot, ConfigError};
+use servobus_config::{load_motion, load_robot, ConfigError};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
@@ -295,7 +295,9 @@ fn a_motion_without_robot_asks_for_one() {
         e.to_string().starts_with(&format!("{}:1:1: ", p.display())),
         "{e}"
     );
-    assert!(e.to_string().contains("--robot"));
+    // In the file's terms: the library names no command-line flag.
+    assert!(e.to_string().contains("add `robot: FILE`"), "{e}");
+    assert!(!e.to_string().contains("--"), "{e}");
 }
 
 #[test]
@@ -432,7 +434,7 @@ fn motions_are_capped_with_the_limit_in_the_message() {
         "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - pose: {a: 10}\n",
     );
     let (motion, robot) = load_motion(&p, None).expect("the files are valid");
-    let e = servobus_runtime::config::plan_motion(&motion, &robot).expect_err("too long");
+    let e = servobus_config::plan_motion(&motion, &robot).expect_err("too long");
     let reason = "the motion is too long: 10000000 s is longer than the limit of 86400 s";
     expect(&e, &p, 4, 5, "keyframes[1]", reason);
 }

@@ -24,23 +24,23 @@ pub(crate) enum Seg {
 /// A path from the document root to a node, printed like serde_yaml prints
 /// its own paths (`buses[0].joints[2].min`).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub(crate) struct FieldPath(pub(crate) Vec<Seg>);
+pub struct FieldPath(pub(crate) Vec<Seg>);
 
 impl FieldPath {
     /// The root of the document.
-    pub(crate) fn root() -> Self {
+    pub fn root() -> Self {
         FieldPath(Vec::new())
     }
 
     /// This path extended by a key.
-    pub(crate) fn key(&self, key: &str) -> Self {
+    pub fn key(&self, key: &str) -> Self {
         let mut v = self.0.clone();
         v.push(Seg::Key(key.to_owned()));
         FieldPath(v)
     }
 
     /// This path extended by an index.
-    pub(crate) fn index(&self, index: usize) -> Self {
+    pub fn index(&self, index: usize) -> Self {
         let mut v = self.0.clone();
         v.push(Seg::Index(index));
         FieldPath(v)

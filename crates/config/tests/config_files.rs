@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::config::{load_motion, load_robot, plan_motion, Units};
+use servobus_config::{load_motion, load_robot, plan_motion, Units};
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")

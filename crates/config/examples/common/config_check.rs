@@ -15,8 +15,8 @@
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::config::{
-    self, limits, load_calibration, load_motion, load_robot, plan_motion, ConfigError,
+use servobus_config::{
+    limits, load_calibration, load_motion, load_robot, plan_motion, ConfigError,
 };
 
 /// Inputs longer than this are not tried (the fuzz target's size cap):
@@ -148,7 +148,7 @@ fn check_message(e: &ConfigError, text: &str, input: &str) {
         text.starts_with(&file),
         "the message does not name the file: {text}"
     );
-    if config::is_builtin_path(e.file()) {
+    if servobus_config::is_builtin_path(e.file()) {
         return;
     }
     // The field path (`poses.<name>`) and the echoed text are the file's own.

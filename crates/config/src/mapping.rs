@@ -77,7 +77,7 @@ impl JointMap {
     }
 
     /// Unrounded, unclamped tick of a joint position.
-    pub(crate) fn raw_ticks(&self, rad: f64) -> f64 {
+    pub fn raw_ticks(&self, rad: f64) -> f64 {
         self.zero_tick + rad * self.ticks_per_rad
     }
 

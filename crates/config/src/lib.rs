@@ -1,4 +1,10 @@
-//! Robot and motion files: loading, validation, and joint mapping.
+//! Robot, motion and calibration files: loading, validation, the built-in
+//! files, and the mapping between joint angles and servo ticks.
+//!
+//! This crate knows the files and what they mean; it runs nothing. The
+//! scheduler (`servobus-runtime`) and the programs that drive a robot build
+//! on it, and so do the simulator's body files, which report their errors
+//! the same way ([`Source`], [`FieldPath`]).
 //!
 //! A robot file describes buses, servos and joint limits; a motion file
 //! describes poses and keyframes for one robot. Both are validated in full
@@ -12,14 +18,14 @@
 //!
 //! ```no_run
 //! use std::path::Path;
-//! use servobus_runtime::config::{load_motion, JointMap};
+//! use servobus_config::{load_motion, JointMap};
 //!
 //! let (motion, robot) = load_motion(Path::new("configs/motions/arm-wave.yaml"), None)?;
 //! let joint = robot.joint("elbow_flex").expect("the arm has an elbow");
 //! let map = JointMap::new(joint, robot.units);
 //! let goal = map.goal(motion.units.to_rad(45.0));
 //! println!("{} keyframes; elbow at 45 deg = tick {}", motion.keyframes.len(), goal.value);
-//! # Ok::<(), servobus_runtime::config::ConfigError>(())
+//! # Ok::<(), servobus_config::ConfigError>(())
 //! ```
 
 mod budget;
@@ -39,7 +45,7 @@ mod terms;
 mod trajectory;
 mod units;
 
-pub use budget::{RateError, RateRemedy};
+pub use budget::RateError;
 pub use calibrated::{limit_origins, LimitOrigin};
 pub use calibration::{
     load_calibration, save_calibration, utc_now, Calibration, CalibrationSaveError,
@@ -48,8 +54,8 @@ pub use calibration::{
 pub use error::ConfigError;
 pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
 // For the simulator's body files, which report errors the same way.
-pub(crate) use error::Source;
-pub(crate) use locate::FieldPath;
+pub use error::Source;
+pub use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{

@@ -5,7 +5,7 @@ mod common;
 
 use std::path::PathBuf;
 
-use servobus_runtime::config::{load_motion, Interpolation, OnLimit, Units};
+use servobus_config::{load_motion, Interpolation, OnLimit, Units};
 
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
     common::temp_file(&format!("config_motion/{dir}"), name, text)

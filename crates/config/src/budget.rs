@@ -96,15 +96,6 @@ pub enum RateError {
     },
 }
 
-/// Where the user can allow a round-robin read, for the error's advice.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RateRemedy {
-    /// The rate came from a file: name the robot file's bus field.
-    File,
-    /// The rate came from the command line: name the flag, then the field.
-    Flag,
-}
-
 impl RateError {
     /// The fastest whole rate that fits the full cycle, if the bus has one.
     pub fn fastest_hz(&self) -> Option<f64> {
@@ -114,18 +105,26 @@ impl RateError {
         }
     }
 
-    /// The error with its advice: the fastest rate that fits, and how to
-    /// allow reading servos round-robin.
-    pub fn with_remedy(&self, remedy: RateRemedy) -> impl fmt::Display + '_ {
-        Advised(self, remedy)
+    /// The error with its advice: the fastest rate that fits, and (where it
+    /// helps) reading the bus's servos round-robin, said in the robot file's
+    /// terms. A program that has its own switch for it adds that itself
+    /// ([`RateError::round_robin_helps`]).
+    pub fn with_advice(&self) -> impl fmt::Display + '_ {
+        Advised(self)
+    }
+
+    /// Whether reading the bus's servos round-robin (one per cycle instead
+    /// of all) would let the rate fit.
+    pub fn round_robin_helps(&self) -> bool {
+        matches!(self, RateError::AboveMaximum { .. })
     }
 }
 
-struct Advised<'a>(&'a RateError, RateRemedy);
+struct Advised<'a>(&'a RateError);
 
 impl fmt::Display for Advised<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let Advised(error, remedy) = *self;
+        let Advised(error) = *self;
         write!(f, "{error}")?;
         let Some(fastest) = error.fastest_hz() else {
             return Ok(());
@@ -143,17 +142,11 @@ impl fmt::Display for Advised<'_> {
             return Ok(());
         }
         write!(f, "; the fastest rate that fits is {fastest} Hz")?;
-        if matches!(error, RateError::AboveMaximum { .. }) {
-            match remedy {
-                RateRemedy::File => f.write_str(
-                    ", or set `round_robin: true` on the bus in the robot file to read servos \
-                     round-robin",
-                )?,
-                RateRemedy::Flag => f.write_str(
-                    ", or give --round-robin (or `round_robin: true` on the bus in the robot \
-                     file) to read servos round-robin",
-                )?,
-            }
+        if error.round_robin_helps() {
+            f.write_str(
+                ", or set `round_robin: true` on the bus in the robot file to read servos \
+                 round-robin",
+            )?;
         }
         Ok(())
     }

@@ -1,15 +1,14 @@
 //! Built-in files: robot and motion texts compiled into a program and read
 //! through the same loaders as files on disk.
 //!
-//! A program that ships robots and motions registers them once with
-//! [`register_builtin_files`]; they are then addressed by paths under
+//! The shipped robots, motions and simulator examples
+//! ([`builtin`](crate::builtin)) are addressed by paths under
 //! [`BUILTIN_DIR`] (`<built-in>/robots/so101.yaml`). A built-in motion's
 //! `robot: ../robots/so101.yaml` therefore resolves to the built-in robot
 //! exactly as it would next to the file on disk, and errors point into the
 //! built-in text with the same `file:line:column` as for any file.
 
 use std::path::{Component, Path, PathBuf};
-use std::sync::OnceLock;
 
 /// The first component of every built-in file's path. It cannot be a real
 /// directory name by accident (the angle brackets are unusual in paths).
@@ -24,20 +23,12 @@ pub struct BuiltinFile {
     pub text: &'static str,
 }
 
-static BUILTINS: OnceLock<&'static [BuiltinFile]> = OnceLock::new();
-
-/// Makes `files` readable under [`BUILTIN_DIR`]. The first registration
-/// wins; later calls are ignored (a program has one set of built-in files).
-pub fn register_builtin_files(files: &'static [BuiltinFile]) {
-    let _ = BUILTINS.set(files);
-}
-
 /// The path under which the built-in file `rel` (`robots/so101.yaml`) is read.
 pub fn builtin_path(rel: &str) -> PathBuf {
     Path::new(BUILTIN_DIR).join(rel)
 }
 
-/// Whether `path` names a built-in file (registered or not).
+/// Whether `path` names a built-in file (one that exists or not).
 pub fn is_builtin_path(path: &Path) -> bool {
     path.components().next() == Some(Component::Normal(BUILTIN_DIR.as_ref()))
 }
@@ -80,40 +71,26 @@ pub(crate) fn builtin_text(path: &Path) -> Option<&'static str> {
             Component::RootDir | Component::Prefix(_) => return None,
         }
     }
-    let rel = parts.join("/");
-    BUILTINS
-        .get()?
-        .iter()
-        .find(|f| f.path == rel)
-        .map(|f| f.text)
+    crate::builtin::text(&parts.join("/"))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    static FILES: [BuiltinFile; 2] = [
-        BuiltinFile {
-            path: "robots/r.yaml",
-            text: "robot",
-        },
-        BuiltinFile {
-            path: "motions/m.yaml",
-            text: "motion",
-        },
-    ];
-
     #[test]
     fn relative_paths_between_builtin_files_resolve() {
-        register_builtin_files(&FILES);
-        let motion = builtin_path("motions/m.yaml");
-        assert_eq!(builtin_text(&motion), Some("motion"));
-        let robot = motion.parent().map(|d| d.join("../robots/./r.yaml"));
-        assert_eq!(robot.as_deref().and_then(builtin_text), Some("robot"));
+        let motion = builtin_path("motions/arm-wave.yaml");
+        assert!(builtin_text(&motion).is_some_and(|t| t.contains("keyframes:")));
+        let robot = motion.parent().map(|d| d.join("../robots/./so101.yaml"));
+        assert!(robot
+            .as_deref()
+            .and_then(builtin_text)
+            .is_some_and(|t| t.contains("name: so101")));
         assert_eq!(builtin_text(&builtin_path("robots/none.yaml")), None);
         assert_eq!(builtin_text(&builtin_path("../../etc/passwd")), None);
-        assert_eq!(builtin_text(Path::new("robots/r.yaml")), None);
-        let tidy_robot = tidy(builtin_path("motions/../robots/./r.yaml"));
-        assert_eq!(tidy_robot, builtin_path("robots/r.yaml"));
+        assert_eq!(builtin_text(Path::new("robots/so101.yaml")), None);
+        let tidy_robot = tidy(builtin_path("motions/../robots/./so101.yaml"));
+        assert_eq!(tidy_robot, builtin_path("robots/so101.yaml"));
     }
 }

@@ -29,6 +29,7 @@
 //! ```
 
 mod budget;
+pub mod builtin;
 mod calibrated;
 mod calibration;
 mod error;
@@ -52,7 +53,7 @@ pub use calibration::{
     JointCalibration, PlayFrame, RANGE_MARGIN_DEG,
 };
 pub use error::ConfigError;
-pub use files::{builtin_path, is_builtin_path, register_builtin_files, BuiltinFile, BUILTIN_DIR};
+pub use files::{builtin_path, is_builtin_path, BuiltinFile, BUILTIN_DIR};
 // For the simulator's body files, which report errors the same way.
 pub use error::Source;
 pub use locate::FieldPath;

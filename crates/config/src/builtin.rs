@@ -1,18 +1,19 @@
 //! The robots, motions and simulator examples (mountings, hands) shipped in
-//! `configs/`, compiled into the program so that an installed `servobus`
-//! finds them from any directory.
+//! `configs/`, compiled into every program built on this crate, so that an
+//! installed `servobus` (or a Python program) finds them from any directory
+//! and by name. No registration: the table is this module's.
 //!
 //! A command-line argument that names a robot, motion, mounting or hand goes
 //! through [`path_or_name`] (or [`robot_path_or_name`],
 //! [`motion_path_or_name`]): an existing file wins;
 //! otherwise a built-in name (`so101`, `arm-wave`) becomes the built-in file's
 //! path (`<built-in>/robots/so101.yaml`), which the loaders of
-//! `servobus_runtime::config` read like any file. A built-in motion's
+//! this crate read like any file. A built-in motion's
 //! `robot: ../robots/so101.yaml` thus resolves to the built-in robot.
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::config::{builtin_path, register_builtin_files, BuiltinFile};
+use crate::files::{builtin_path, BuiltinFile};
 
 /// What a built-in file describes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,7 +49,7 @@ macro_rules! shipped {
     ($dir:literal, $name:literal) => {
         BuiltinFile {
             path: concat!($dir, "/", $name, ".yaml"),
-            text: include_str!(concat!("../configs/", $dir, "/", $name, ".yaml")),
+            text: include_str!(concat!("../../../configs/", $dir, "/", $name, ".yaml")),
         }
     };
 }
@@ -83,7 +84,6 @@ pub struct Builtin {
 impl Builtin {
     /// The path the configuration loaders read it under.
     pub fn path(&self) -> PathBuf {
-        register_builtin_files(&FILES);
         builtin_path(self.rel)
     }
 
@@ -113,6 +113,11 @@ impl Builtin {
         let cut = sentence[..72].rfind(' ').unwrap_or(72);
         format!("{}...", &sentence[..cut])
     }
+}
+
+/// The text of the shipped file `rel` (`robots/so101.yaml`).
+pub(crate) fn text(rel: &str) -> Option<&'static str> {
+    FILES.iter().find(|f| f.path == rel).map(|f| f.text)
 }
 
 /// Every built-in file, robots first, then motions, mountings and hands.
@@ -186,12 +191,11 @@ pub fn argument(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use servobus_runtime::config::{load_motion, load_robot};
-    use servobus_runtime::sim::{Hand, Mounting};
+    use crate::{load_motion, load_robot};
 
     #[test]
     fn every_shipped_file_is_built_in_and_loads() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
         let mut on_disk = 0;
         for sub in ["robots", "motions", "sim"] {
             for entry in std::fs::read_dir(dir.join(sub)).expect("configs dir") {
@@ -205,13 +209,13 @@ mod tests {
             }
         }
         assert_eq!(on_disk, all().count());
-        let so101 = load_robot(&robot_path_or_name(Path::new("so101"))).expect("so101");
+        // (The simulator's mountings and hands load in the runtime's
+        // `sim_body` tests.)
         for b in all() {
             match b.kind {
                 Kind::Robot => drop(load_robot(&b.path()).expect("robot loads")),
                 Kind::Motion => drop(load_motion(&b.path(), None).expect("motion loads")),
-                Kind::Mounting => drop(Mounting::load(&b.path(), &so101).expect("mounting loads")),
-                Kind::Hand => drop(Hand::load(&b.path(), &so101).expect("hand loads")),
+                Kind::Mounting | Kind::Hand => {}
             }
         }
         assert_eq!(

@@ -93,9 +93,7 @@ fn simulated(args: &Args) -> Servos<SimBus, ManualClock> {
     let sim = SimBus::new(clock.clone(), args.baud).with_servos(servos);
     Servos::new(Bus::new(
         sim,
-        clock,
-        BusSettings::new(Series::Sts, args.baud),
-    ))
+        BusSettings::new(Series::Sts),))
 }
 
 /// Degrees per step of servo `id`, from the model it reports.

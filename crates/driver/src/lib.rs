@@ -71,9 +71,13 @@
 //! use servobus_driver::{Bus, BusSettings, ManualClock, Transport, TransportError};
 //! use servobus_protocol::{encode, parse_frame, registers::Series, StatusFlags};
 //!
-//! /// Answers every READ of servo 1 with the bytes 0x00 0x08 (2048).
-//! struct OneServo { pending: Vec<u8> }
+//! /// Answers every READ of servo 1 with the bytes 0x00 0x08 (2048), at
+//! /// 1 Mbps, with deadlines on `clock`.
+//! struct OneServo { pending: Vec<u8>, clock: ManualClock }
 //! impl Transport for OneServo {
+//!     type Clock = ManualClock;
+//!     fn clock(&self) -> &ManualClock { &self.clock }
+//!     fn baud(&self) -> u32 { 1_000_000 }
 //!     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
 //!         if let Ok((p, _)) = parse_frame(bytes) {
 //!             let mut buf = [0u8; 16];
@@ -95,8 +99,10 @@
 //!     }
 //! }
 //!
-//! let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
-//! let mut bus = Bus::new(OneServo { pending: Vec::new() }, ManualClock::new(), settings);
+//! let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
+//! // The clock and the baud rate come from the transport; the settings
+//! // carry the rest.
+//! let mut bus = Bus::new(OneServo { pending: Vec::new(), clock: ManualClock::new() }, settings);
 //! let mut position = [0u8; 2];
 //! let flags = bus.read(1, 56, &mut position)?;
 //! assert!(flags.is_ok());

@@ -24,8 +24,8 @@ fn servo(id: u8) -> SimServo {
 fn setup(ids: &[u8]) -> (Bus<SimBus, ManualClock>, SimBus) {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD).with_servos(ids.iter().map(|&id| servo(id)));
-    let settings = BusSettings::new(Series::Sts, BAUD).with_retries(2);
-    (Bus::new(sim.clone(), clock, settings), sim)
+    let settings = BusSettings::new(Series::Sts).with_retries(2);
+    (Bus::new(sim.clone(), settings), sim)
 }
 
 fn le(bytes: &[u8]) -> u16 {
@@ -237,6 +237,13 @@ struct Misroute {
 }
 
 impl Transport for Misroute {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        self.inner.clock()
+    }
+    fn baud(&self) -> u32 {
+        self.inner.baud()
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.inner.write_all(bytes)
     }
@@ -264,7 +271,7 @@ fn a_reply_from_another_id_is_never_taken() {
         from: 1,
         to: 2,
     };
-    let mut bus = Bus::new(t, clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(t, BusSettings::new(Series::Sts));
     let mut pos = [0u8; 2];
     let err = bus.read(1, addr::PRESENT_POSITION, &mut pos).unwrap_err();
     assert!(
@@ -313,7 +320,7 @@ fn two_servos_with_one_id_collide() {
             .with_return_delay(Duration::ZERO)
             .with_position(3000),
     ]);
-    let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(sim.clone(), BusSettings::new(Series::Sts));
     // Identical PING replies may merge into one valid frame on a wired-AND
     // line; replies that differ (the positions) garble.
     let mut pos = [0u8; 2];
@@ -410,10 +417,10 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     // And the bus waits exactly that long for a servo that is not there.
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD);
-    let settings = BusSettings::new(Series::Sts, BAUD)
+    let settings = BusSettings::new(Series::Sts)
         .with_link(link)
         .with_retries(0);
-    let mut bus = Bus::new(sim, clock.clone(), settings);
+    let mut bus = Bus::new(sim, settings);
     let t0 = clock.now();
     let err = bus.ping(9).unwrap_err();
     assert!(
@@ -433,7 +440,7 @@ fn measured_latency_matches_the_adapter() -> Result<(), BusError> {
     let sim = SimBus::new(clock.clone(), BAUD)
         .with_servo(servo(1))
         .with_latency(Duration::from_micros(800));
-    let mut bus = Bus::new(sim, clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(sim, BusSettings::new(Series::Sts));
     let m = bus.measure_latency(1, 10, Duration::from_millis(20))?;
     assert_eq!(m.samples, 10);
     // By hand: each round trip is the wire both ways, the return delay, the
@@ -452,7 +459,7 @@ fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD)
         .with_servos([1, 2].map(|id| SimServo::scs0009(id).with_return_delay(Duration::ZERO)));
-    let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Scs, BAUD));
+    let mut bus = Bus::new(sim.clone(), BusSettings::new(Series::Scs));
     let reg = Series::Scs.map().get("model_number").expect("register");
     let (model, _) = bus.read_register(1, reg)?;
     let number = sim.snapshot(1).map(|s| s.model().model.number);
@@ -480,4 +487,87 @@ fn a_ping_answered_with_the_requests_own_bytes_still_finds_the_servo() -> Result
     // The others answer as before.
     assert!(bus.ping(1)?.is_ok());
     Ok(())
+}
+
+/// A scan across two baud rates through [`Bus::set_baud`]: servo 1 listens
+/// at 1 Mbps, servo 2 at 115200 (baud-rate register 6 = index 4), and each
+/// is heard at its own rate only. The port and the deadlines move together.
+#[test]
+fn a_scan_across_two_baud_rates_finds_each_servo_at_its_own() -> Result<(), BusError> {
+    let clock = ManualClock::new();
+    let sim = SimBus::new(clock.clone(), BAUD)
+        .with_servos([servo(1), servo(2).with_byte(addr::BAUD_RATE, 4)]);
+    let mut bus = Bus::new(sim.clone(), BusSettings::new(Series::Sts).with_retries(0));
+    let mut found = Vec::new();
+    for baud in [1_000_000, 115_200] {
+        bus.set_baud(baud)?;
+        assert_eq!((sim.baud(), bus.baud(), bus.settings().link.baud), (baud, baud, baud));
+        for id in 1..=2 {
+            if bus.ping(id).is_ok() {
+                found.push((id, baud));
+            }
+        }
+    }
+    assert_eq!(found, [(1, 1_000_000), (2, 115_200)]);
+
+    // The deadline is the one of 115200 baud: a PING of 6 bytes and its
+    // reply of 6, each 60 bits = 520 834 ns (rounded up), plus the 50 us
+    // turnaround and the 200 us margin, no adapter latency.
+    let t0 = clock.now();
+    let err = bus.ping(3).unwrap_err();
+    let waited = Duration::from_nanos(2 * 520_834 + 50_000 + 200_000);
+    assert!(
+        matches!(err, BusError::Timeout { id: 3, waited: w } if w == waited),
+        "{err:?}"
+    );
+    assert_eq!(clock.now() - t0, waited);
+
+    // Settings saved at one rate and put back at another keep the rate the
+    // transport is at: the baud rate is not theirs to change.
+    let saved = *bus.settings();
+    bus.set_baud(1_000_000)?;
+    bus.set_settings(saved.with_retries(1));
+    assert_eq!((bus.baud(), sim.baud()), (1_000_000, 1_000_000));
+    assert!(bus.ping(1).is_ok());
+
+    // A rate of 0 is refused and changes nothing.
+    let err = bus.set_baud(0).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            BusError::Transport(TransportError::BaudRefused {
+                requested: 0,
+                current: 1_000_000
+            })
+        ),
+        "{err:?}"
+    );
+    assert_eq!(bus.baud(), 1_000_000);
+    Ok(())
+}
+
+/// A transport whose rate is fixed refuses a switch, and the bus stays at
+/// its rate.
+#[test]
+fn a_fixed_rate_transport_refuses_a_switch() {
+    let sim = SimBus::new(ManualClock::new(), BAUD).with_servo(servo(1));
+    let t = Misroute {
+        inner: sim,
+        from: 9,
+        to: 9,
+    };
+    let mut bus = Bus::new(t, BusSettings::new(Series::Sts));
+    let err = bus.set_baud(115_200).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            BusError::Transport(TransportError::BaudRefused {
+                requested: 115_200,
+                current: BAUD
+            })
+        ),
+        "{err:?}"
+    );
+    assert_eq!(bus.baud(), BAUD);
+    assert!(bus.ping(1).is_ok());
 }

@@ -46,10 +46,13 @@ pub fn benches(c: &mut Criterion) {
     let ids: [u8; 64] = core::array::from_fn(|i| i as u8 + 1);
     let data: [u8; 64 * 7] = core::array::from_fn(|i| i as u8);
     let settings = BusSettings::new(Series::Sts);
-    let mut bus = Bus::new(Sink {
+    let mut bus = Bus::new(
+        Sink {
             bytes: 0,
             clock: ManualClock::new(),
-        }, settings);
+        },
+        settings,
+    );
     for n in [18usize, 64] {
         g.bench_function(BenchmarkId::new("L7", n), |b| {
             b.iter(|| {

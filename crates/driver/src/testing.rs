@@ -94,10 +94,7 @@ fn status(id: u8, flags: u8, params: &[u8]) -> Vec<u8> {
 fn bus(responder: Responder) -> (Bus<Scripted, ManualClock>, ManualClock) {
     let clock = ManualClock::new();
     let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
-    (
-        Bus::new(Scripted::new(&clock, responder), settings),
-        clock,
-    )
+    (Bus::new(Scripted::new(&clock, responder), settings), clock)
 }
 
 #[test]

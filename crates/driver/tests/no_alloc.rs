@@ -7,8 +7,7 @@ use std::time::Duration;
 use servobus_alloc_count::{allocations, Counting};
 use servobus_driver::registers::sts;
 use servobus_driver::{
-    Bus, BusSettings, Clock, ManualClock, Missing, MissingReason, Servos, Transport,
-    TransportError,
+    Bus, BusSettings, Clock, ManualClock, Missing, MissingReason, Servos, Transport, TransportError,
 };
 use servobus_protocol::registers::Series;
 use servobus_protocol::{encode, parse_frame, Instruction, StatusFlags};

@@ -88,7 +88,10 @@ fn bad_writes_send_nothing() {
     let err = bus.sync_write(sts::OFFSET, &[(1, 0), (2, 3000)]);
     assert!(matches!(err, Err(BusError::Value(_))), "{err:?}");
     let err = bus.sync_write(sts::GOAL_POSITION, &[(1, 0), (1, 5)]);
-    assert!(matches!(err, Err(BusError::DuplicateId { id: 1 })), "{err:?}");
+    assert!(
+        matches!(err, Err(BusError::DuplicateId { id: 1 })),
+        "{err:?}"
+    );
     // Present position is at address 56.
     let err = bus.write(1, sts::PRESENT_POSITION, 5);
     assert!(
@@ -213,5 +216,48 @@ fn the_series_is_found_by_a_ping_and_a_model_read() -> Result<(), BusError> {
         ),
         "{err:?}"
     );
+    Ok(())
+}
+
+/// `Servos::open` on a serial port: here the simulator's pseudo-terminal
+/// (wall-clock time) with SCS0009 servos, found by a PING and a model read
+/// and then read with the SCS registers. `open_series` skips the asking.
+#[cfg(unix)]
+#[test]
+fn servos_open_finds_scs_servos_on_a_port() -> Result<(), BusError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let servos = [1, 2].map(|id| {
+        SimServo::scs0009(id)
+            .with_return_delay(Duration::ZERO)
+            .with_position(400 + 100 * i32::from(id))
+    });
+    let Ok(mut server) = servobus_sim::PtyServer::open(BAUD, servos) else {
+        // No pseudo-terminals in this environment: nothing to open.
+        return Ok(());
+    };
+    server.set_pacing(false);
+    let path = server.path().to_string_lossy().into_owned();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let thread = std::thread::spawn(move || server.serve(&flag));
+
+    let result = (|| {
+        let mut found = Servos::open(&path, BAUD)?;
+        let series = found.bus().settings().series;
+        let positions = found.sync_read(scs::PRESENT_POSITION, &[1, 2])?;
+        drop(found);
+        let mut given = Servos::open_series(&path, BAUD, Series::Scs)?;
+        let one = given.read(1, scs::PRESENT_POSITION)?;
+        Ok::<_, BusError>((series, positions, one))
+    })();
+    stop.store(true, Ordering::SeqCst);
+    let served = thread.join();
+    let (series, positions, one) = result?;
+    assert!(matches!(served, Ok(Ok(()))), "{served:?}");
+    assert_eq!(series, Series::Scs);
+    assert_eq!(positions, [Ok(500), Ok(600)]);
+    assert_eq!(one, 500);
     Ok(())
 }

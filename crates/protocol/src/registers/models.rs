@@ -137,7 +137,8 @@ pub fn model_by_number(number: u16) -> Option<&'static Model> {
 /// order is part of what is being found out. No known model's number reads
 /// as another's in the other order.
 pub fn model_by_register(bytes: [u8; 2]) -> Option<&'static Model> {
-    model_by_number(u16::from_le_bytes(bytes)).or_else(|| model_by_number(u16::from_be_bytes(bytes)))
+    model_by_number(u16::from_le_bytes(bytes))
+        .or_else(|| model_by_number(u16::from_be_bytes(bytes)))
 }
 
 /// The model called `name`, ignoring ASCII case and `-`, `_`, space

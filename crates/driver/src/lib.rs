@@ -56,15 +56,29 @@
 //! # Ok::<(), servobus_driver::BusError>(())
 //! ```
 //!
+//! [`Servos::open`] finds out which servos are on the port (a PING and a
+//! read of the model number of the first servo that answers) and reads
+//! STS/SMS or SCS registers accordingly; [`Servos::open_series`] takes the
+//! series instead. [`Servos::sync_read_into`] fills a buffer of the
+//! caller's, so a control loop reads without allocating.
+//!
 //! The example `positions` does this on a real port (`--port`) or on
 //! simulated servos (`--sim`):
 //! `cargo run -p servobus-driver --example positions -- --sim --nudge 100`.
 //!
 //! # The byte-level bus
 //!
+//! A [`Bus`] is built from a [`Transport`] and [`BusSettings`], each fact
+//! once: the transport owns the clock its deadlines are measured on and
+//! the baud rate (a [`SerialTransport`] is opened at a rate on a clock, the
+//! simulator's bus is made at one on its [`ManualClock`]); the settings
+//! carry the rest (series, latency, return delay, retries).
+//! [`Bus::set_baud`] is the one way to change the rate: it moves the port
+//! and every deadline together.
+//!
 //! A bus over a transport that answers like one servo with ID 1 (a real
-//! program would use [`SerialTransport`] and [`SystemClock`], or the
-//! simulator's bus and a [`ManualClock`]):
+//! program would use [`SerialTransport`] on a [`SystemClock`], or the
+//! simulator's bus):
 //!
 //! ```
 //! use std::time::Duration;
@@ -132,7 +146,9 @@ pub use bus::{Bus, LatencyMeasurement};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]
-pub use serial::{ftdi_latency_timer, FtdiLatency, OpenError, OpenProblem, SerialTransport};
+pub use serial::{
+    ftdi_latency_timer, FtdiLatency, Holder, NotSerial, OpenError, OpenProblem, SerialTransport,
+};
 pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError};
 pub use servobus_timing::StatusLevel;
 pub use servos::Servos;

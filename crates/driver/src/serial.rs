@@ -28,7 +28,7 @@ use serialport::{ClearBuffer, DataBits, FlowControl, Parity, SerialPort, StopBit
 use crate::{Clock, Transport, TransportError};
 
 mod open_error;
-pub use open_error::{OpenError, OpenProblem};
+pub use open_error::{Holder, NotSerial, OpenError, OpenProblem};
 
 /// A serial port (or pseudo-terminal) as a [`Transport`], with deadlines on
 /// the time base of `C`.

@@ -160,5 +160,5 @@ pub use servobus_protocol::registers;
 pub use servobus_protocol::registers::{Reg, Series};
 pub use servobus_protocol::StatusFlags;
 pub use servobus_timing::Link;
-pub use stats::{Counters, RttStats};
+pub use stats::{BusCounters, RttStats};
 pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};

@@ -18,7 +18,7 @@ pub(crate) use transact::Expect;
 
 use crate::io::Io;
 use crate::settings::BusSettings;
-use crate::stats::Counters;
+use crate::stats::BusCounters;
 use crate::sync::SyncStore;
 use crate::{BusError, Clock, Transport, TransportError};
 
@@ -42,8 +42,8 @@ pub struct Bus<T: Transport, C: Clock> {
     pub(crate) reply_len: usize,
     /// Round trip of the last successful single-servo transaction.
     pub(crate) last_rtt: Duration,
-    pub(crate) counters: Counters,
-    pub(crate) servos: Box<[Counters; 256]>,
+    pub(crate) counters: BusCounters,
+    pub(crate) servos: Box<[BusCounters; 256]>,
     pub(crate) sync: SyncStore,
 }
 
@@ -77,8 +77,8 @@ impl<T: Transport> Bus<T, T::Clock> {
             reply: [0; MAX_PARAMS],
             reply_len: 0,
             last_rtt: Duration::ZERO,
-            counters: Counters::default(),
-            servos: Box::new([Counters::default(); 256]),
+            counters: BusCounters::default(),
+            servos: Box::new([BusCounters::default(); 256]),
             sync: SyncStore::new(),
         }
     }
@@ -164,19 +164,19 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     }
 
     /// Counters of the whole bus.
-    pub fn counters(&self) -> &Counters {
+    pub fn counters(&self) -> &BusCounters {
         &self.counters
     }
 
     /// Counters of servo `id` (broadcast requests are counted under 254).
-    pub fn servo_counters(&self, id: u8) -> &Counters {
+    pub fn servo_counters(&self, id: u8) -> &BusCounters {
         &self.servos[usize::from(id)]
     }
 
     /// Sets every counter back to zero.
     pub fn reset_counters(&mut self) {
-        self.counters = Counters::default();
-        self.servos.fill(Counters::default());
+        self.counters = BusCounters::default();
+        self.servos.fill(BusCounters::default());
     }
 
     /// The data bytes of the last single-servo reply.

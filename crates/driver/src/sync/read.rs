@@ -8,7 +8,7 @@ use servobus_timing::Transaction;
 
 use super::results::{MissingReason, Slot, SyncRead, SyncStore};
 use crate::io::Sink;
-use crate::stats::Counters;
+use crate::stats::BusCounters;
 use crate::{Bus, BusError, Clock, Transport};
 
 /// Added to every reply timeout by [`Bus::sync_read_patiently`].
@@ -19,7 +19,7 @@ pub const PATIENT_TRIES: u8 = 3;
 /// Collects the replies of one SYNC READ round.
 struct Round<'a> {
     store: &'a mut SyncStore,
-    servos: &'a mut [Counters; 256],
+    servos: &'a mut [BusCounters; 256],
     start: Duration,
     /// Replies this round is waiting for.
     outstanding: usize,

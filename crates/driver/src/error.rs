@@ -127,8 +127,8 @@ pub enum BusError {
     UnknownModel {
         /// The servo.
         id: u8,
-        /// Its model-number register, read little-endian (as STS servos
-        /// store it).
+        /// Its model-number register as read (in the bus's byte order, or
+        /// little-endian while the series is being found out).
         number: u16,
     },
     /// No servo answered a PING at the bus's baud rate.

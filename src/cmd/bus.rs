@@ -184,17 +184,11 @@ impl Found {
     }
 }
 
-/// The model behind a model-number register, trying both byte orders.
+/// The model behind a model-number register, trying both byte orders, and
+/// its number (read little-endian when no model has it).
 fn model_of(bytes: [u8; 2]) -> (u16, Option<&'static Model>) {
-    let le = u16::from_le_bytes(bytes);
-    if let Some(m) = registers::model_by_number(le) {
-        return (le, Some(m));
-    }
-    let be = u16::from_be_bytes(bytes);
-    match registers::model_by_number(be) {
-        Some(m) => (be, Some(m)),
-        None => (le, None),
-    }
+    let model = registers::model_by_register(bytes);
+    (model.map_or(u16::from_le_bytes(bytes), |m| m.number), model)
 }
 
 /// Identifies servo `id` and switches the bus to its series.
@@ -223,7 +217,7 @@ fn identify(bus: &mut SerialBus, id: u8) -> Result<Found, BusError> {
         };
     Ok(Found {
         id,
-        baud: bus.settings().link.baud,
+        baud: bus.baud(),
         model,
         model_number,
         firmware: (head[0], head[1]),
@@ -380,15 +374,8 @@ fn sort_answer(
 /// Moves the port and the bus's deadlines to `baud` (nothing when already
 /// there).
 fn switch_baud(bus: &mut SerialBus, baud: u32, port: &str) -> anyhow::Result<()> {
-    if bus.settings().link.baud != baud {
-        bus.transport_mut()
-            .set_baud(baud)
-            .with_context(|| format!("cannot set {port} to {baud} baud"))?;
-        let mut s = *bus.settings();
-        s.link.baud = baud;
-        bus.set_settings(s);
-    }
-    Ok(())
+    bus.set_baud(baud)
+        .with_context(|| format!("cannot set {port} to {baud} baud"))
 }
 
 /// Measures the latency on servo `first` and, when it exceeds the one the

@@ -2,7 +2,7 @@
 
 use core::fmt;
 
-use servobus_timing::{plan, Block, Change, Plan, PlanError, Servo};
+use servobus_timing::{plan, Block, Change, CycleError, Plan, Servo};
 
 use super::BusConfig;
 
@@ -23,9 +23,9 @@ impl BusConfig {
     ///
     /// # Errors
     ///
-    /// [`PlanError`] when not even the round-robin cycle fits (it names the
+    /// [`CycleError`] when not even the round-robin cycle fits (it names the
     /// cheapest change that would), or the rate is not positive.
-    pub fn plan(&self, rate_hz: f64) -> Result<Plan, PlanError> {
+    pub fn plan(&self, rate_hz: f64) -> Result<Plan, CycleError> {
         plan(
             &self.link(),
             &self.timing_servos(),
@@ -90,7 +90,7 @@ pub enum RateError {
     #[error("{source}")]
     Unplannable {
         /// The planner's reason.
-        source: PlanError,
+        source: CycleError,
         /// The fastest whole rate at which the full cycle fits, if any.
         fastest_hz: Option<f64>,
     },
@@ -131,7 +131,7 @@ impl fmt::Display for Advised<'_> {
         };
         if let RateError::Unplannable {
             source:
-                PlanError::Infeasible {
+                CycleError::Infeasible {
                     fix: Change::LowerRate { .. },
                     ..
                 },

@@ -12,6 +12,8 @@ use servobus_protocol::{checksum, parse_frame};
 use servobus_sim::{Faults, SimBus, SimServo};
 use servobus_timing::{Link, StatusLevel, Transaction};
 
+mod baud;
+
 const BAUD: u32 = 1_000_000;
 
 fn servo(id: u8) -> SimServo {
@@ -24,8 +26,8 @@ fn servo(id: u8) -> SimServo {
 fn setup(ids: &[u8]) -> (Bus<SimBus, ManualClock>, SimBus) {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD).with_servos(ids.iter().map(|&id| servo(id)));
-    let settings = BusSettings::new(Series::Sts, BAUD).with_retries(2);
-    (Bus::new(sim.clone(), clock, settings), sim)
+    let settings = BusSettings::new(Series::Sts).with_retries(2);
+    (Bus::new(sim.clone(), settings), sim)
 }
 
 fn le(bytes: &[u8]) -> u16 {
@@ -237,6 +239,13 @@ struct Misroute {
 }
 
 impl Transport for Misroute {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        self.inner.clock()
+    }
+    fn baud(&self) -> u32 {
+        self.inner.baud()
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.inner.write_all(bytes)
     }
@@ -264,7 +273,7 @@ fn a_reply_from_another_id_is_never_taken() {
         from: 1,
         to: 2,
     };
-    let mut bus = Bus::new(t, clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(t, BusSettings::new(Series::Sts));
     let mut pos = [0u8; 2];
     let err = bus.read(1, addr::PRESENT_POSITION, &mut pos).unwrap_err();
     assert!(
@@ -313,7 +322,7 @@ fn two_servos_with_one_id_collide() {
             .with_return_delay(Duration::ZERO)
             .with_position(3000),
     ]);
-    let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(sim.clone(), BusSettings::new(Series::Sts));
     // Identical PING replies may merge into one valid frame on a wired-AND
     // line; replies that differ (the positions) garble.
     let mut pos = [0u8; 2];
@@ -410,10 +419,10 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     // And the bus waits exactly that long for a servo that is not there.
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD);
-    let settings = BusSettings::new(Series::Sts, BAUD)
+    let settings = BusSettings::new(Series::Sts)
         .with_link(link)
         .with_retries(0);
-    let mut bus = Bus::new(sim, clock.clone(), settings);
+    let mut bus = Bus::new(sim, settings);
     let t0 = clock.now();
     let err = bus.ping(9).unwrap_err();
     assert!(
@@ -433,7 +442,7 @@ fn measured_latency_matches_the_adapter() -> Result<(), BusError> {
     let sim = SimBus::new(clock.clone(), BAUD)
         .with_servo(servo(1))
         .with_latency(Duration::from_micros(800));
-    let mut bus = Bus::new(sim, clock, BusSettings::new(Series::Sts, BAUD));
+    let mut bus = Bus::new(sim, BusSettings::new(Series::Sts));
     let m = bus.measure_latency(1, 10, Duration::from_millis(20))?;
     assert_eq!(m.samples, 10);
     // By hand: each round trip is the wire both ways, the return delay, the
@@ -452,7 +461,7 @@ fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD)
         .with_servos([1, 2].map(|id| SimServo::scs0009(id).with_return_delay(Duration::ZERO)));
-    let mut bus = Bus::new(sim.clone(), clock, BusSettings::new(Series::Scs, BAUD));
+    let mut bus = Bus::new(sim.clone(), BusSettings::new(Series::Scs));
     let reg = Series::Scs.map().get("model_number").expect("register");
     let (model, _) = bus.read_register(1, reg)?;
     let number = sim.snapshot(1).map(|s| s.model().model.number);

@@ -281,6 +281,16 @@ pub(crate) fn load_calibrated(
     calibration: Option<&Path>,
 ) -> Result<(Robot, Source), ConfigError> {
     let (robot, source, named) = load_design(path)?;
+    with_calibration(robot, source, named, calibration)
+}
+
+/// `robot` with `calibration` applied, or else the file it `named`.
+fn with_calibration(
+    robot: Robot,
+    source: Source,
+    named: Option<PathBuf>,
+    calibration: Option<&Path>,
+) -> Result<(Robot, Source), ConfigError> {
     let robot = match calibration.map(Path::to_owned).or(named) {
         Some(file) if calibration.is_some() || file.exists() => {
             super::calibrated::apply(robot, &file)?
@@ -294,13 +304,44 @@ pub(crate) fn load_calibrated(
     Ok((robot, source))
 }
 
+/// Loads a robot file given as `text`, called `name` in errors, with the
+/// calibration file `calibration` (or the one the text names, relative to
+/// the current directory), checking that its default rate fits every bus
+/// unless `any_rate` (as [`load_robot_any_rate_calibrated`]).
+///
+/// # Errors
+/// As [`load_robot_calibrated`], with `name` as the file.
+pub fn load_robot_text(
+    name: &Path,
+    text: &str,
+    calibration: Option<&Path>,
+    any_rate: bool,
+) -> Result<Robot, ConfigError> {
+    let source = Source {
+        path: name.to_owned(),
+        text: text.to_owned(),
+    };
+    let (robot, source, named) = design_of(source, Path::new(""))?;
+    let (robot, source) = with_calibration(robot, source, named, calibration)?;
+    if !any_rate {
+        check_rate(&robot, &source, robot.rate_hz, &FieldPath::root().key("rate"))?;
+    }
+    Ok(robot)
+}
+
 fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
     let source = Source::read(path)?;
+    design_of(source, path.parent().unwrap_or(Path::new("")))
+}
+
+/// The robot as designed in `source`, and the calibration file it names
+/// (relative to `dir`).
+fn design_of(source: Source, dir: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
     let raw: RawRobot = source.parse()?;
     let named = raw
         .calibration
         .as_ref()
-        .map(|rel| path.parent().unwrap_or(Path::new("")).join(rel));
+        .map(|rel| dir.join(rel));
     let robot = validate::robot(raw, &source)?;
     check_servo_range(&robot, &source)?;
     Ok((robot, source, named))

@@ -1,0 +1,244 @@
+//! Connecting to a robot's buses: serial ports or the built-in simulator,
+//! with the calibration checked before anything is read or moved.
+
+use std::fmt;
+
+use servobus_config::Robot;
+use servobus_driver::FtdiLatency;
+use servobus_runtime::calibrate::prepare_servos;
+use servobus_runtime::sim::SimRobot;
+use servobus_runtime::{Lead, RunOptions};
+
+use crate::link::{open_bus, slow_adapter, system_clock, Allowance, SerialBus};
+use crate::Error;
+
+/// Where a robot's buses are.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    /// The ports of the robot file (each bus's `port:`).
+    RobotFile,
+    /// These ports, the first for the robot's first bus and so on; a bus
+    /// past the list is on the robot file's port.
+    Ports(Vec<String>),
+    /// The built-in simulator in this process, in virtual time: a run takes
+    /// as long as the computer needs, not as long as the motion.
+    VirtualSimulator,
+    /// The built-in simulator in this process, paced by the wall clock.
+    Simulator,
+}
+
+/// An FTDI adapter whose latency timer slows every reply of a bus down.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SlowAdapter {
+    /// The bus.
+    pub bus: String,
+    /// Its adapter's timer, and where to set it.
+    pub timer: FtdiLatency,
+}
+
+impl fmt::Display for SlowAdapter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.timer.warning() {
+            Some(w) => write!(f, "bus `{}`: {w}", self.bus),
+            None => write!(f, "bus `{}`: FTDI latency timer", self.bus),
+        }
+    }
+}
+
+/// The buses of a connection.
+enum Buses {
+    /// Serial ports (real servos, or a `servobus sim` pty).
+    Serial(Vec<SerialBus>),
+    /// The built-in simulator in virtual time.
+    Virtual(SimRobot),
+    /// The built-in simulator paced by the wall clock.
+    Wall(SimRobot),
+}
+
+/// A robot's buses, open and checked: on serial ports, the servos found
+/// match the robot's calibration (each calibrated servo in its play frame),
+/// as before every run of the command line. Play on it with
+/// [`Connection::play`].
+///
+/// The built-in simulator's servos are the robot file's design; as on the
+/// command line, they are not checked against a calibration.
+pub struct Connection {
+    pub(crate) robot: Robot,
+    buses: Buses,
+    slow: Vec<SlowAdapter>,
+}
+
+impl fmt::Debug for Connection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let on = match &self.buses {
+            Buses::Serial(b) => format!("{} serial buses", b.len()),
+            Buses::Virtual(_) => "the simulator in virtual time".to_owned(),
+            Buses::Wall(_) => "the simulator on the wall clock".to_owned(),
+        };
+        f.debug_struct("Connection")
+            .field("robot", &self.robot.name)
+            .field("on", &on)
+            .finish()
+    }
+}
+
+/// The port of each bus of `robot` at `ports` (the file's beyond them).
+fn resolve(robot: &Robot, ports: &[String]) -> Result<Vec<String>, Error> {
+    if ports.len() > robot.buses.len() {
+        return Err(Error::TooManyPorts {
+            given: ports.len(),
+            buses: robot.buses.len(),
+        });
+    }
+    robot
+        .buses
+        .iter()
+        .enumerate()
+        .map(|(i, bus)| {
+            ports
+                .get(i)
+                .or(bus.port.as_ref())
+                .cloned()
+                .ok_or_else(|| Error::NoPort {
+                    bus: bus.name.clone(),
+                })
+        })
+        .collect()
+}
+
+impl Connection {
+    /// Opens `robot`'s buses at `target` and checks its calibration.
+    pub(crate) fn open(robot: &Robot, target: Target) -> Result<Connection, Error> {
+        let ports = match target {
+            Target::RobotFile => resolve(robot, &[])?,
+            Target::Ports(p) => resolve(robot, &p)?,
+            Target::VirtualSimulator | Target::Simulator => {
+                let sim = SimRobot::builder(robot).build()?;
+                let buses = if target == Target::Simulator {
+                    Buses::Wall(sim)
+                } else {
+                    Buses::Virtual(sim)
+                };
+                return Ok(Connection {
+                    robot: robot.clone(),
+                    buses,
+                    slow: Vec::new(),
+                });
+            }
+        };
+        let mut buses = Vec::with_capacity(ports.len());
+        let mut slow = Vec::new();
+        for (cfg, port) in robot.buses.iter().zip(&ports) {
+            let bus = open_bus(cfg, port, Allowance::Run)?;
+            if let Some(timer) = slow_adapter(bus.transport()) {
+                slow.push(SlowAdapter {
+                    bus: cfg.name.clone(),
+                    timer,
+                });
+            }
+            buses.push(bus);
+        }
+        prepare_servos(robot, &mut buses)?;
+        Ok(Connection {
+            robot: robot.clone(),
+            buses: Buses::Serial(buses),
+            slow,
+        })
+    }
+
+    /// The robot connected to.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// Whether the buses are the built-in simulator's.
+    pub fn is_simulated(&self) -> bool {
+        !matches!(self.buses, Buses::Serial(_))
+    }
+
+    /// The buses whose FTDI adapter's latency timer slows every reply down
+    /// (empty on the simulator and on other adapters).
+    pub fn slow_adapters(&self) -> &[SlowAdapter] {
+        &self.slow
+    }
+
+    /// The serial buses, to read or write registers between runs (`None` on
+    /// the built-in simulator).
+    pub fn serial_buses(&mut self) -> Option<&mut [SerialBus]> {
+        match &mut self.buses {
+            Buses::Serial(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The options a run takes by default on this robot: the robot file's
+    /// lead when it gives one, a slow approach to the path's start, and
+    /// 300 ms of holding the final position (as the command line plays).
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            lead: self.robot.lead.map_or_else(Lead::default, Lead::Fixed),
+            settle: std::time::Duration::from_millis(300),
+            ..RunOptions::default()
+        }
+    }
+
+    /// Hands the buses to a run.
+    pub(crate) fn into_buses(self) -> (Robot, RunBuses) {
+        let clock = system_clock();
+        let buses = match self.buses {
+            Buses::Serial(b) => RunBuses::Serial(b),
+            Buses::Virtual(sim) => RunBuses::Virtual(sim.driver_buses()),
+            Buses::Wall(sim) => RunBuses::Wall(sim.wall_buses(&clock)),
+        };
+        (self.robot, buses)
+    }
+}
+
+/// The buses a run takes, by kind.
+pub(crate) enum RunBuses {
+    Serial(Vec<SerialBus>),
+    Virtual(Vec<servobus_driver::Bus<servobus_sim::SimBus, servobus_driver::ManualClock>>),
+    Wall(
+        Vec<
+            servobus_driver::Bus<
+                servobus_sim::WallBus<servobus_driver::SystemClock>,
+                servobus_driver::SystemClock,
+            >,
+        >,
+    ),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn so101() -> Robot {
+        let path = servobus_config::builtin::robot_path_or_name("so101".as_ref());
+        servobus_config::load_robot(&path).expect("the built-in arm loads")
+    }
+
+    #[test]
+    fn given_ports_come_first_and_the_robot_file_gives_the_rest() {
+        let mut robot = so101();
+        assert_eq!(robot.buses.len(), 1, "the arm has one bus");
+        robot.buses[0].port = Some("/dev/file".into());
+        assert_eq!(resolve(&robot, &[]).expect("the file's"), ["/dev/file"]);
+        let given = ["/dev/given".to_owned()];
+        assert_eq!(resolve(&robot, &given).expect("given"), ["/dev/given"]);
+    }
+
+    #[test]
+    fn a_bus_without_a_port_and_too_many_ports_are_refused() {
+        let mut robot = so101();
+        robot.buses[0].port = None;
+        match resolve(&robot, &[]) {
+            Err(Error::NoPort { bus }) => assert_eq!(bus, robot.buses[0].name),
+            other => panic!("expected NoPort, got {other:?}"),
+        }
+        let two = ["/dev/a".to_owned(), "/dev/b".to_owned()];
+        assert!(matches!(
+            resolve(&robot, &two),
+            Err(Error::TooManyPorts { given: 2, buses: 1 })
+        ));
+    }
+}

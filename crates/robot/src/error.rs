@@ -1,0 +1,55 @@
+//! Why opening, connecting to or playing a robot failed.
+
+use servobus_config::ConfigError;
+use servobus_runtime::calibrate::Refusal;
+use servobus_runtime::sim::SimRobotError;
+use servobus_runtime::RunError;
+
+use crate::link::OpenError;
+
+/// Why a robot could not be opened, connected to or played.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A robot, motion or calibration file is invalid or cannot be read
+    /// (the error names the file, line, column and field).
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A port cannot be opened.
+    #[error(transparent)]
+    Open(#[from] OpenError),
+    /// A bus has no port: neither the target nor the robot file gives one.
+    #[error("bus `{bus}` has no port: give one, or name it in the robot file's `port:`")]
+    NoPort {
+        /// The bus.
+        bus: String,
+    },
+    /// More ports than the robot has buses.
+    #[error("{given} ports for a robot of {buses} buses")]
+    TooManyPorts {
+        /// Ports given.
+        given: usize,
+        /// Buses of the robot.
+        buses: usize,
+    },
+    /// The robot's servos cannot be simulated.
+    #[error(transparent)]
+    Simulator(#[from] SimRobotError),
+    /// The servos do not match the robot's calibration: nothing was read
+    /// through it and nothing moved.
+    #[error("refused: {0}")]
+    Refused(#[from] Refusal),
+    /// The run could not start, a command could not reach it, or a bus
+    /// thread failed.
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// A motion file names its robot by path; a robot given as text has
+    /// none, so its motions are planned by the caller
+    /// ([`Robot::plan`](crate::Robot::plan) of a motion loaded for a robot
+    /// file).
+    #[error("the robot `{robot}` was given as text: load its motions with a robot file")]
+    NoRobotFile {
+        /// The robot's name.
+        robot: String,
+    },
+}

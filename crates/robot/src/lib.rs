@@ -1,0 +1,211 @@
+//! servobus-robot: the library a program drives a robot with.
+//!
+//! What the `servobus` command line does with a robot, a Rust program does
+//! here (and the coming Python bindings will sit on it): open a robot file
+//! (a path, a built-in name or a YAML text), connect to its buses — the
+//! serial ports of the robot file, ports given by the program, or the
+//! built-in simulator — with the calibration checked before anything is
+//! read or moved, then plan and play motions with telemetry and commands
+//! (stop, pause, resume, torque off) and a report at the end. A robot
+//! opens, plays and stops the same way on the simulator and on a port.
+//!
+//! It carries no command line, terminal interface or plotting: its errors
+//! are typed ([`Error`]) and name no command-line flag; a slow adapter is
+//! data ([`Connection::slow_adapters`]), not a printed warning.
+//!
+//! ```no_run
+//! use servobus_robot::{Robot, Target};
+//!
+//! let robot = Robot::open("so101")?; // a built-in name, or a robot file
+//! let motion = robot.motion("arm-wave")?;
+//! // `Target::Ports(vec!["/dev/ttyACM0".into()])` for real servos (or a
+//! // `servobus sim` pty); the built-in simulator in virtual time here.
+//! let connection = robot.connect(Target::VirtualSimulator)?;
+//! let options = connection.options();
+//! let run = connection.play(&motion, options)?;
+//! let report = run.join()?;
+//! println!("{} cycles, {} timeouts", report.cycles, report.timeouts);
+//! # Ok::<(), servobus_robot::Error>(())
+//! ```
+//!
+//! `examples/play_motion.rs` of the servobus repository is this, with a
+//! `--port` argument:
+//!
+//! ```sh
+//! cargo run --release --example play_motion -- configs/motions/arm-wave.yaml --port /dev/ttyACM0
+//! cargo run --release --example play_motion -- arm-wave   # the built-in simulator
+//! ```
+
+mod connect;
+mod error;
+pub mod link;
+mod run;
+
+use std::path::{Path, PathBuf};
+
+pub use connect::{Connection, SlowAdapter, Target};
+pub use error::Error;
+pub use run::{Play, Run};
+
+/// The robot, motion and calibration files ([`servobus_config`]).
+pub use servobus_config as config;
+pub use servobus_config::Motion;
+pub use servobus_runtime::calibrate::Refusal;
+pub use servobus_runtime::{
+    Command, Finish, Lead, Report, RunError, RunOptions, Telemetry,
+};
+pub use servobus_trajectory::Trajectory;
+
+/// How a robot is loaded; see [`Robot::options`].
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// The calibration file to apply instead of the one the robot file
+    /// names.
+    pub calibration: Option<PathBuf>,
+    /// Accept a default rate that does not fit every bus (a run then gives
+    /// its own rate).
+    pub any_rate: bool,
+}
+
+impl LoadOptions {
+    /// Applies the calibration file `path` instead of the one the robot
+    /// file names.
+    #[must_use]
+    pub fn calibration(mut self, path: impl Into<PathBuf>) -> Self {
+        self.calibration = Some(path.into());
+        self
+    }
+
+    /// Accepts a default rate that does not fit every bus.
+    #[must_use]
+    pub fn any_rate(mut self) -> Self {
+        self.any_rate = true;
+        self
+    }
+
+    /// Opens the robot `name_or_path`: an existing robot file, or else a
+    /// built-in robot's name (`so101`).
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the file, line, column and field of the
+    /// first problem in the robot or calibration file.
+    pub fn open(self, name_or_path: impl AsRef<Path>) -> Result<Robot, Error> {
+        let path = servobus_config::builtin::robot_path_or_name(name_or_path.as_ref());
+        let cal = self.calibration.as_deref();
+        let config = if self.any_rate {
+            servobus_config::load_robot_any_rate_calibrated(&path, cal)?
+        } else {
+            servobus_config::load_robot_calibrated(&path, cal)?
+        };
+        Ok(Robot {
+            config,
+            options: self,
+            from_text: false,
+        })
+    }
+
+    /// Opens a robot file given as `text` (errors call it `<text>`; a
+    /// calibration file it names is relative to the current directory).
+    ///
+    /// # Errors
+    /// As [`LoadOptions::open`].
+    pub fn from_yaml(self, text: &str) -> Result<Robot, Error> {
+        let config = servobus_config::load_robot_text(
+            Path::new("<text>"),
+            text,
+            self.calibration.as_deref(),
+            self.any_rate,
+        )?;
+        Ok(Robot {
+            config,
+            options: self,
+            from_text: true,
+        })
+    }
+}
+
+/// A robot: its buses, servos and joint limits (with its calibration
+/// applied), ready to [`connect`](Robot::connect).
+#[derive(Debug, Clone)]
+pub struct Robot {
+    config: servobus_config::Robot,
+    options: LoadOptions,
+    from_text: bool,
+}
+
+impl Robot {
+    /// The options of loading a robot: `Robot::options().calibration(path).open("so101")`.
+    pub fn options() -> LoadOptions {
+        LoadOptions::default()
+    }
+
+    /// Opens the robot `name_or_path` (a robot file, or a built-in name)
+    /// with the calibration it names; see [`LoadOptions::open`].
+    ///
+    /// # Errors
+    /// As [`LoadOptions::open`].
+    pub fn open(name_or_path: impl AsRef<Path>) -> Result<Robot, Error> {
+        LoadOptions::default().open(name_or_path)
+    }
+
+    /// Opens a robot file given as a YAML `text`; see [`LoadOptions::from_yaml`].
+    ///
+    /// # Errors
+    /// As [`LoadOptions::open`].
+    pub fn from_yaml(text: &str) -> Result<Robot, Error> {
+        LoadOptions::default().from_yaml(text)
+    }
+
+    /// The robot as its file describes it, calibration applied.
+    pub fn config(&self) -> &servobus_config::Robot {
+        &self.config
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &str {
+        &self.config.name
+    }
+
+    /// Loads the motion `name_or_path` (a motion file, or a built-in name)
+    /// for this robot, whatever robot the motion file names, with this
+    /// robot's calibration.
+    ///
+    /// # Errors
+    /// [`Error::Config`] for an invalid motion (or a calibration file the
+    /// robot names that does not exist: motions are kept within the
+    /// calibrated limits); [`Error::NoRobotFile`] for a robot given as text.
+    pub fn motion(&self, name_or_path: impl AsRef<Path>) -> Result<Motion, Error> {
+        if self.from_text {
+            return Err(Error::NoRobotFile {
+                robot: self.config.name.clone(),
+            });
+        }
+        let path = servobus_config::builtin::motion_path_or_name(name_or_path.as_ref());
+        let (motion, _) = servobus_config::load_motion_calibrated(
+            &path,
+            Some(&self.config.path),
+            self.options.calibration.as_deref(),
+        )?;
+        Ok(motion)
+    }
+
+    /// Plans `motion`'s path for this robot: jerk-limited, within the
+    /// joint limits.
+    ///
+    /// # Errors
+    /// [`Error::Config`] when the path cannot be planned.
+    pub fn plan(&self, motion: &Motion) -> Result<Trajectory, Error> {
+        Ok(servobus_config::plan_motion(motion, &self.config)?)
+    }
+
+    /// Connects to the robot's buses at `target`; see [`Connection`].
+    ///
+    /// # Errors
+    /// [`Error::NoPort`], [`Error::TooManyPorts`], [`Error::Open`] when the
+    /// buses cannot be opened; [`Error::Refused`] when the servos do not
+    /// match the calibration; [`Error::Simulator`] when the robot cannot be
+    /// simulated.
+    pub fn connect(&self, target: Target) -> Result<Connection, Error> {
+        Connection::open(&self.config, target)
+    }
+}

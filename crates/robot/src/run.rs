@@ -1,0 +1,149 @@
+//! Playing a path on a connection: a run in progress, its telemetry and
+//! commands, and its report.
+
+use std::time::Duration;
+
+use crossbeam_channel::Receiver;
+use servobus_config::Motion;
+use servobus_runtime::{
+    spawn, spawn_virtual, Command, Report, RunOptions, Runner, Telemetry,
+};
+use servobus_trajectory::Trajectory;
+
+use crate::connect::{Connection, RunBuses};
+use crate::Error;
+
+/// What to play: a planned path, or a motion (planned when played, at its
+/// own rate and in its own units unless the options give them).
+#[derive(Debug, Clone)]
+pub enum Play {
+    /// A planned path.
+    Trajectory(Trajectory),
+    /// A motion of the robot.
+    Motion(Motion),
+}
+
+impl From<Trajectory> for Play {
+    fn from(t: Trajectory) -> Self {
+        Play::Trajectory(t)
+    }
+}
+
+impl From<Motion> for Play {
+    fn from(m: Motion) -> Self {
+        Play::Motion(m)
+    }
+}
+
+impl From<&Motion> for Play {
+    fn from(m: &Motion) -> Self {
+        Play::Motion(m.clone())
+    }
+}
+
+impl Connection {
+    /// Plays `what` on the buses with `options` (see
+    /// [`Connection::options`] for the robot's defaults): on the simulator
+    /// in virtual time on a thread of its own, otherwise one thread per bus
+    /// on the wall clock. The run has started when this returns; the
+    /// connection's buses are the run's until it ends.
+    ///
+    /// # Errors
+    /// [`Error::Config`] when a motion's path cannot be planned;
+    /// [`Error::Run`] when the run cannot start (a servo does not answer, a
+    /// rate that does not fit a bus).
+    pub fn play(self, what: impl Into<Play>, mut options: RunOptions) -> Result<Run, Error> {
+        let trajectory = match what.into() {
+            Play::Trajectory(t) => t,
+            Play::Motion(motion) => {
+                options.units = options.units.or(Some(motion.units));
+                options.rate_hz = options.rate_hz.or(Some(motion.rate_hz(&self.robot)));
+                servobus_config::plan_motion(&motion, &self.robot)?
+            }
+        };
+        let (robot, buses) = self.into_buses();
+        let runner = match buses {
+            RunBuses::Serial(b) => spawn(&robot, trajectory, b, options)?,
+            RunBuses::Virtual(b) => spawn_virtual(&robot, trajectory, b, options)?,
+            RunBuses::Wall(b) => spawn(&robot, trajectory, b, options)?,
+        };
+        Ok(Run { runner })
+    }
+}
+
+/// A run in progress: its telemetry, commands to it, and its report at the
+/// end ([`Run::join`]).
+#[derive(Debug)]
+pub struct Run {
+    runner: Runner,
+}
+
+impl Run {
+    /// The run's telemetry: samples while it runs, then how it finished.
+    /// The channel disconnects once the run has ended and every message has
+    /// been read.
+    pub fn telemetry(&self) -> Receiver<Telemetry> {
+        self.runner.telemetry()
+    }
+
+    /// Sends `command` to the run (it takes effect on every bus in the same
+    /// cycle).
+    ///
+    /// # Errors
+    /// [`Error::Run`] when the run has already ended.
+    pub fn send(&self, command: Command) -> Result<(), Error> {
+        Ok(self.runner.send(command)?)
+    }
+
+    /// Stops every joint along a jerk-limited path, holds, and ends the run.
+    ///
+    /// # Errors
+    /// As [`Run::send`].
+    pub fn stop(&self) -> Result<(), Error> {
+        self.send(Command::Stop)
+    }
+
+    /// Slows the path down to a standstill along it (the joints hold on the path).
+    ///
+    /// # Errors
+    /// As [`Run::send`].
+    pub fn pause(&self) -> Result<(), Error> {
+        self.send(Command::Pause)
+    }
+
+    /// Resumes a paused path.
+    ///
+    /// # Errors
+    /// As [`Run::send`].
+    pub fn resume(&self) -> Result<(), Error> {
+        self.send(Command::Resume)
+    }
+
+    /// Turns the torque off on every servo and ends the run.
+    ///
+    /// # Errors
+    /// As [`Run::send`].
+    pub fn torque_off(&self) -> Result<(), Error> {
+        self.send(Command::TorqueOff)
+    }
+
+    /// How long the approach to the path's start takes (zero when the
+    /// joints were there already): the path begins that long after the
+    /// first cycle.
+    pub fn approach(&self) -> Duration {
+        self.runner.approach()
+    }
+
+    /// Whether the run has ended.
+    pub fn is_finished(&self) -> bool {
+        self.runner.is_finished()
+    }
+
+    /// Waits for the end of the run and returns its report.
+    ///
+    /// # Errors
+    /// [`Error::Run`] when a bus thread failed.
+    pub fn join(self) -> Result<Report, Error> {
+        Ok(self.runner.join()?)
+    }
+}

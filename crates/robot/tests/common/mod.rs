@@ -1,0 +1,58 @@
+//! A simulated bus on a pseudo-terminal for the tests, served on a thread.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use servobus_robot::config::Robot;
+use servobus_runtime::sim::{Mounting, SimRobot};
+use servobus_sim::PtyServer;
+
+/// A file of the repository.
+pub fn repo(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+}
+
+/// The first bus of `robot` served on a pty (the servos mounted as
+/// `mounting` says, or bare shafts), until dropped.
+pub struct Pty {
+    /// The terminal to open.
+    pub path: String,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Pty {
+    /// Serves `robot`'s first bus.
+    pub fn serve(robot: &Robot, mounting: Option<Mounting>) -> Pty {
+        let mut builder = SimRobot::builder(robot);
+        if let Some(m) = mounting {
+            builder = builder.mounting(m);
+        }
+        let servos = builder.servos(&robot.buses[0]).expect("the servos simulate");
+        let mut server = PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
+        let path = server.path().to_string_lossy().into_owned();
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&stop);
+        let thread = std::thread::spawn(move || {
+            server.serve(&flag).expect("the pty serves");
+        });
+        Pty {
+            path,
+            stop,
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for Pty {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! A robot opened by name or from text plays on the built-in simulator, in
+//! virtual time and on the wall clock, and stops on command.
+
+mod common;
+
+use std::time::Duration;
+
+use servobus_robot::{Error, Finish, Robot, Target, Telemetry};
+
+#[test]
+fn a_built_in_robot_plays_arm_wave_in_virtual_time_to_the_end() {
+    let robot = Robot::open("so101").expect("the built-in arm opens by name");
+    assert_eq!(robot.name(), "so101");
+    let motion = robot.motion("arm-wave").expect("the built-in motion loads");
+    let connection = robot.connect(Target::VirtualSimulator).expect("connects");
+    assert!(connection.is_simulated());
+    assert!(connection.slow_adapters().is_empty());
+    let options = connection.options();
+    let run = connection.play(&motion, options).expect("the run starts");
+    let report = run.join().expect("a report");
+    assert_eq!(report.finish, Finish::Completed);
+    assert_eq!(report.timeouts, 0);
+    assert_eq!(report.joints.len(), 6, "one report per joint of the arm");
+    assert!(report.cycles > 100, "{} cycles", report.cycles);
+    // At its planned rate, nothing missed, and within the runtime's stated
+    // tracking bound of 0.5 deg RMS on the simulator.
+    assert_eq!(report.achieved_rate_hz, report.planned_rate_hz);
+    assert_eq!((report.overruns, report.missed_replies), (0, 0));
+    assert!(report.worst_rms_error() < 0.5, "{}", report.worst_rms_error());
+}
+
+#[test]
+fn a_robot_given_as_text_opens_and_plays_a_planned_path() {
+    let text = std::fs::read_to_string(common::repo("configs/robots/so101.yaml"))
+        .expect("the arm's robot file");
+    let robot = Robot::from_yaml(&text).expect("the text is a robot file");
+    assert_eq!(robot.name(), "so101");
+    let by_file = Robot::open(common::repo("configs/robots/so101.yaml")).expect("by path");
+    let motion = by_file.motion("arm-wave").expect("the motion");
+    let path = robot.plan(&motion).expect("plans for the robot given as text");
+    let connection = robot.connect(Target::VirtualSimulator).expect("connects");
+    let options = connection.options();
+    let report = connection.play(path, options).expect("starts").join().expect("a report");
+    assert_eq!(report.finish, Finish::Completed);
+    assert_eq!(report.timeouts, 0);
+    // Its motions need a robot file to name.
+    assert!(matches!(
+        robot.motion("arm-wave"),
+        Err(Error::NoRobotFile { robot }) if robot == "so101"
+    ));
+}
+
+#[test]
+fn a_bad_text_is_a_located_configuration_error() {
+    let err = Robot::from_yaml("name: x\nbuses: 3\n").expect_err("not a robot file");
+    let Error::Config(config) = err else {
+        panic!("expected a configuration error, got {err:?}");
+    };
+    assert_eq!(config.file(), std::path::Path::new("<text>"));
+    assert!(config.position().is_some(), "{config}");
+}
+
+#[test]
+fn a_run_on_the_wall_clock_simulator_stops_on_command() {
+    let robot = Robot::open("so101").expect("opens");
+    let motion = robot.motion("arm-wave").expect("the motion");
+    let connection = robot.connect(Target::Simulator).expect("connects");
+    let options = connection.options();
+    let run = connection.play(&motion, options).expect("starts");
+    let telemetry = run.telemetry();
+    // Some cycles, then stop (however slow the machine).
+    let mut cycles = 0;
+    while cycles < 20 {
+        match telemetry.recv_timeout(Duration::from_secs(30)) {
+            Ok(Telemetry::Cycle(_)) => cycles += 1,
+            Ok(_) => {}
+            Err(e) => panic!("the run sends telemetry: {e}"),
+        }
+    }
+    run.stop().expect("the run takes the command");
+    let report = run.join().expect("a report");
+    assert_eq!(report.finish, Finish::Stopped);
+}

@@ -1,59 +1,108 @@
-//! Play a motion file on the simulated SO-101 arm from library code.
-//!
-//! The same steps as `servobus play --fast`: load and validate the motion
-//! and its robot, plan the path, build one simulated bus per robot bus in
-//! virtual time, run, and print the report.
+//! Play a motion file on a robot through the facade library
+//! (`servobus-robot`): on real servos or a `servobus sim` pty with
+//! `--port`, otherwise on the built-in simulator in virtual time.
 //!
 //! ```sh
-//! cargo run --example play_motion -- configs/motions/arm-wave.yaml
-//! cargo run --example play_motion -- hexapod-dance   # a built-in name
+//! cargo run --release --example play_motion -- configs/motions/arm-wave.yaml --port /dev/ttyACM0
+//! cargo run --release --example play_motion -- hexapod-dance   # a built-in name, simulated
 //! ```
+//!
+//! Exit code: 0 when the motion played to its end, 1 when the run ended
+//! otherwise or failed, 2 for a bad argument, file or port.
 
-use std::path::Path;
 use std::process::ExitCode;
 
-mod common;
+use servobus_robot::{Error, Finish, Report, Robot, Target};
 
-use common::Outcome;
-use servobus_runtime::config::{load_motion, plan_motion};
-use servobus_runtime::{RunOptions, VirtualRun};
-
-const USAGE: &str = "usage: play_motion [MOTION]\n\
+const USAGE: &str = "usage: play_motion [MOTION] [--port PORT]\n\
     Plays MOTION (a motion file or a built-in name; default arm-wave) on the\n\
-    simulated robot in virtual time and prints the tracking errors.";
+    robot it names: on PORT (real servos or `servobus sim`), else on the\n\
+    built-in simulator in virtual time. Prints the run's report.";
 
 fn main() -> ExitCode {
-    common::run_motion(USAGE, "arm-wave", play)
+    if std::env::args().any(|a| a == "--help" || a == "-h") {
+        println!("{USAGE}");
+        return ExitCode::SUCCESS;
+    }
+    let Some((motion, target)) = parse(std::env::args().skip(1)) else {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    };
+    match play(&motion, target) {
+        Ok(report) => {
+            print_report(&report);
+            ExitCode::from(u8::from(report.finish != Finish::Completed))
+        }
+        Err(e) => {
+            eprintln!("error: {}", said(&e));
+            let input = matches!(e, Error::Config(_) | Error::Open(_) | Error::NoPort { .. });
+            ExitCode::from(if input { 2 } else { 1 })
+        }
+    }
 }
 
-fn play(arg: &str, path: &Path) -> Outcome {
-    // Every error names the file, line and column; nothing moves before both
-    // files are valid.
-    let (motion, robot) = load_motion(path, None)?;
-    let path_plan = plan_motion(&motion, &robot)?;
-    println!("{arg} on {}: {:.2} s", robot.name, path_plan.duration());
+/// Opens the motion and its robot, connects, plays to the end.
+fn play(motion: &str, target: Target) -> Result<Report, Error> {
+    let (robot, motion) = Robot::of_motion(motion)?;
+    let connection = robot.connect(target)?;
+    for slow in connection.slow_adapters() {
+        eprintln!("warning: {slow}");
+    }
+    let options = connection.options();
+    connection.play(&motion, options)?.join()
+}
 
-    // One simulated bus per robot bus, each servo at its joint's rest
-    // position. Each bus has its own virtual clock: the runtime moves them
-    // in step.
-    let buses = servobus_runtime::sim::virtual_buses(&robot)?;
+/// MOTION and `--port PORT` in any order; `None` for a bad command line.
+fn parse(mut args: impl Iterator<Item = String>) -> Option<(String, Target)> {
+    let (mut motion, mut target) = (None, Target::VirtualSimulator);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--port" => target = Target::Ports(vec![args.next()?]),
+            a if a.starts_with('-') || motion.is_some() => return None,
+            _ => motion = Some(arg),
+        }
+    }
+    Some((motion.unwrap_or_else(|| "arm-wave".into()), target))
+}
 
-    let options = RunOptions {
-        units: Some(motion.units),
-        rate_hz: Some(motion.rate_hz(&robot)),
-        ..RunOptions::default()
-    };
-    let report = VirtualRun::new(&robot, path_plan, buses, options)?.run();
+/// `e` and its causes, each said once.
+fn said(e: &Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = std::error::Error::source(e);
+    while let Some(c) = cause {
+        let said = c.to_string();
+        let part = said.strip_prefix("I/O error: ").unwrap_or(&said);
+        // A cause that begins by repeating the end of the text adds the rest.
+        let repeated = part
+            .match_indices(": ")
+            .map(|(i, _)| i)
+            .find(|&i| text.ends_with(&part[..i]));
+        match repeated {
+            _ if text.contains(part) => {}
+            Some(i) => text.push_str(&part[i..]),
+            None => text = format!("{text}: {part}"),
+        }
+        cause = c.source();
+    }
+    text
+}
 
+fn print_report(report: &Report) {
     println!(
-        "{} cycles at {:.1} Hz; tracking error ({}):",
-        report.cycles, report.achieved_rate_hz, report.units
+        "{:?} after {} cycles at {:.1} Hz ({:.2} s); {} timeouts, {} retries, {} overruns",
+        report.finish,
+        report.cycles,
+        report.achieved_rate_hz,
+        report.duration_s,
+        report.timeouts,
+        report.retries,
+        report.overruns
     );
+    println!("tracking error ({}):", report.units);
     for joint in &report.joints {
         println!(
-            "  {:<14} rms {:.3}  max {:.3} {}",
-            joint.name, joint.rms_error, joint.max_error, report.units
+            "  {:<14} rms {:.3}  max {:.3}",
+            joint.name, joint.rms_error, joint.max_error
         );
     }
-    Ok(())
 }

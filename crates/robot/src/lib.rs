@@ -51,9 +51,7 @@ pub use run::{Play, Run};
 pub use servobus_config as config;
 pub use servobus_config::Motion;
 pub use servobus_runtime::calibrate::Refusal;
-pub use servobus_runtime::{
-    Command, Finish, Lead, Report, RunError, RunOptions, Telemetry,
-};
+pub use servobus_runtime::{Command, Finish, Lead, Report, RunError, RunOptions, Telemetry};
 pub use servobus_trajectory::Trajectory;
 
 /// How a robot is loaded; see [`Robot::options`].
@@ -102,6 +100,25 @@ impl LoadOptions {
             options: self,
             from_text: false,
         })
+    }
+
+    /// Loads the motion `name_or_path` (a motion file, or a built-in name)
+    /// and opens the robot it names, both validated in full.
+    ///
+    /// # Errors
+    /// As [`LoadOptions::open`], for either file (and a calibration file the
+    /// robot names that does not exist: motions are kept within the
+    /// calibrated limits).
+    pub fn motion(self, name_or_path: impl AsRef<Path>) -> Result<(Robot, Motion), Error> {
+        let path = servobus_config::builtin::motion_path_or_name(name_or_path.as_ref());
+        let (motion, config) =
+            servobus_config::load_motion_calibrated(&path, None, self.calibration.as_deref())?;
+        let robot = Robot {
+            config,
+            options: self,
+            from_text: false,
+        };
+        Ok((robot, motion))
     }
 
     /// Opens a robot file given as `text` (errors call it `<text>`; a
@@ -154,6 +171,15 @@ impl Robot {
     /// As [`LoadOptions::open`].
     pub fn from_yaml(text: &str) -> Result<Robot, Error> {
         LoadOptions::default().from_yaml(text)
+    }
+
+    /// Loads the motion `name_or_path` and opens the robot it names; see
+    /// [`LoadOptions::motion`].
+    ///
+    /// # Errors
+    /// As [`LoadOptions::motion`].
+    pub fn of_motion(name_or_path: impl AsRef<Path>) -> Result<(Robot, Motion), Error> {
+        LoadOptions::default().motion(name_or_path)
     }
 
     /// The robot as its file describes it, calibration applied.

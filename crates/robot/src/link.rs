@@ -74,7 +74,11 @@ pub enum Allowance {
 impl Allowance {
     /// The adapter latency the deadlines allow on `transport`, whose robot
     /// file gives `configured`.
-    pub fn latency(self, configured: Duration, transport: &SerialTransport<SystemClock>) -> Duration {
+    pub fn latency(
+        self,
+        configured: Duration,
+        transport: &SerialTransport<SystemClock>,
+    ) -> Duration {
         let floor = match self {
             Allowance::Run if transport.is_pty() => transport.assumed_latency(),
             Allowance::Run => Duration::ZERO,

@@ -5,9 +5,7 @@ use std::time::Duration;
 
 use crossbeam_channel::Receiver;
 use servobus_config::Motion;
-use servobus_runtime::{
-    spawn, spawn_virtual, Command, Report, RunOptions, Runner, Telemetry,
-};
+use servobus_runtime::{spawn, spawn_virtual, Command, Report, RunOptions, Runner, Telemetry};
 use servobus_trajectory::Trajectory;
 
 use crate::connect::{Connection, RunBuses};

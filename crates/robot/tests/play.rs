@@ -26,7 +26,11 @@ fn a_built_in_robot_plays_arm_wave_in_virtual_time_to_the_end() {
     // tracking bound of 0.5 deg RMS on the simulator.
     assert_eq!(report.achieved_rate_hz, report.planned_rate_hz);
     assert_eq!((report.overruns, report.missed_replies), (0, 0));
-    assert!(report.worst_rms_error() < 0.5, "{}", report.worst_rms_error());
+    assert!(
+        report.worst_rms_error() < 0.5,
+        "{}",
+        report.worst_rms_error()
+    );
 }
 
 #[test]
@@ -37,10 +41,16 @@ fn a_robot_given_as_text_opens_and_plays_a_planned_path() {
     assert_eq!(robot.name(), "so101");
     let by_file = Robot::open(common::repo("configs/robots/so101.yaml")).expect("by path");
     let motion = by_file.motion("arm-wave").expect("the motion");
-    let path = robot.plan(&motion).expect("plans for the robot given as text");
+    let path = robot
+        .plan(&motion)
+        .expect("plans for the robot given as text");
     let connection = robot.connect(Target::VirtualSimulator).expect("connects");
     let options = connection.options();
-    let report = connection.play(path, options).expect("starts").join().expect("a report");
+    let report = connection
+        .play(path, options)
+        .expect("starts")
+        .join()
+        .expect("a report");
     assert_eq!(report.finish, Finish::Completed);
     assert_eq!(report.timeouts, 0);
     // Its motions need a robot file to name.

@@ -18,7 +18,11 @@ fn arm_wave_plays_to_the_end_on_a_pty() {
         .expect("connects on the pty");
     assert!(!connection.is_simulated());
     let options = connection.options();
-    let report = connection.play(&motion, options).expect("starts").join().expect("a report");
+    let report = connection
+        .play(&motion, options)
+        .expect("starts")
+        .join()
+        .expect("a report");
     assert_eq!(report.finish, Finish::Completed);
     assert_eq!(report.joints.len(), 6);
     assert!(report.cycles > 100, "{} cycles", report.cycles);

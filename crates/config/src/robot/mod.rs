@@ -324,7 +324,12 @@ pub fn load_robot_text(
     let (robot, source, named) = design_of(source, Path::new(""))?;
     let (robot, source) = with_calibration(robot, source, named, calibration)?;
     if !any_rate {
-        check_rate(&robot, &source, robot.rate_hz, &FieldPath::root().key("rate"))?;
+        check_rate(
+            &robot,
+            &source,
+            robot.rate_hz,
+            &FieldPath::root().key("rate"),
+        )?;
     }
     Ok(robot)
 }
@@ -338,10 +343,7 @@ fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigEr
 /// (relative to `dir`).
 fn design_of(source: Source, dir: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
     let raw: RawRobot = source.parse()?;
-    let named = raw
-        .calibration
-        .as_ref()
-        .map(|rel| dir.join(rel));
+    let named = raw.calibration.as_ref().map(|rel| dir.join(rel));
     let robot = validate::robot(raw, &source)?;
     check_servo_range(&robot, &source)?;
     Ok((robot, source, named))

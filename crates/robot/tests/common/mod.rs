@@ -13,7 +13,9 @@ use servobus_sim::PtyServer;
 
 /// A file of the repository.
 pub fn repo(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
 }
 
 /// The first bus of `robot` served on a pty (the servos mounted as
@@ -32,7 +34,9 @@ impl Pty {
         if let Some(m) = mounting {
             builder = builder.mounting(m);
         }
-        let servos = builder.servos(&robot.buses[0]).expect("the servos simulate");
+        let servos = builder
+            .servos(&robot.buses[0])
+            .expect("the servos simulate");
         let mut server = PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
         let path = server.path().to_string_lossy().into_owned();
         let stop = Arc::new(AtomicBool::new(false));

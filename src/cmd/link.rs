@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 use servobus_driver::{SerialTransport, Series, SystemClock};
-use servobus_robot::link;
-use servobus_runtime::config::BusConfig;
+use servobus_robot::{link, Connection, Target};
+use servobus_runtime::config::{BusConfig, Robot};
 
 pub(crate) use servobus_robot::link::{
     bus_ports, every_port, system_clock, Allowance, Ports, SerialBus,
@@ -61,4 +61,28 @@ pub(crate) fn open_plain_bus(
     let bus = link::open_plain_bus(port, baud, series, latency)?;
     warn_slow_adapter(bus.transport());
     Ok(bus)
+}
+
+/// Connects to `robot`'s buses on `ports` through the library (each opened
+/// for a run, the calibration checked), saying a slow FTDI adapter on
+/// stderr and what to run when the servos do not match the calibration.
+///
+/// # Errors
+/// When a port cannot be opened or the servos are refused.
+pub(crate) fn connect(robot: &Robot, ports: &[String]) -> anyhow::Result<Connection> {
+    let target = Target::Ports(ports.to_vec());
+    let connection = servobus_robot::Robot::from(robot.clone())
+        .connect(target)
+        .map_err(|e| match e {
+            servobus_robot::Error::Refused { port, refusal, .. } => {
+                super::calibrate::refused(robot, &refusal, &port)
+            }
+            e => e.into(),
+        })?;
+    for slow in connection.slow_adapters() {
+        if let Some(warning) = slow.timer.warning() {
+            eprintln!("warning: {warning}");
+        }
+    }
+    Ok(connection)
 }

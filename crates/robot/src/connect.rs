@@ -5,7 +5,7 @@ use std::fmt;
 
 use servobus_config::Robot;
 use servobus_driver::FtdiLatency;
-use servobus_runtime::calibrate::prepare_servos;
+use servobus_runtime::calibrate::prepare_bus;
 use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Lead, RunOptions};
 
@@ -56,8 +56,9 @@ enum Buses {
 }
 
 /// A robot's buses, open and checked: on serial ports, the servos found
-/// match the robot's calibration (each calibrated servo in its play frame),
-/// as before every run of the command line. Play on it with
+/// match the robot's calibration, each calibrated servo in its play frame
+/// (the runtime's `prepare_bus`, bus by bus), as before every run of the
+/// command line. Play on it with
 /// [`Connection::play`].
 ///
 /// The built-in simulator's servos are the robot file's design; as on the
@@ -138,7 +139,13 @@ impl Connection {
             }
             buses.push(bus);
         }
-        prepare_servos(robot, &mut buses)?;
+        for (index, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {
+            prepare_bus(robot, index, bus).map_err(|refusal| Error::Refused {
+                bus: robot.buses[index].name.clone(),
+                port,
+                refusal,
+            })?;
+        }
         Ok(Connection {
             robot: robot.clone(),
             buses: Buses::Serial(buses),

@@ -35,10 +35,18 @@ pub enum Error {
     /// The robot's servos cannot be simulated.
     #[error(transparent)]
     Simulator(#[from] SimRobotError),
-    /// The servos do not match the robot's calibration: nothing was read
-    /// through it and nothing moved.
-    #[error("refused: {0}")]
-    Refused(#[from] Refusal),
+    /// The servos of a bus do not match the robot's calibration: nothing
+    /// was read through it and nothing moved.
+    #[error("{refusal}")]
+    Refused {
+        /// The bus.
+        bus: String,
+        /// Its port.
+        port: String,
+        /// What does not match.
+        #[source]
+        refusal: Refusal,
+    },
     /// The run could not start, a command could not reach it, or a bus
     /// thread failed.
     #[error(transparent)]

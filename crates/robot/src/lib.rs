@@ -141,6 +141,18 @@ impl LoadOptions {
     }
 }
 
+impl From<servobus_config::Robot> for Robot {
+    /// A robot loaded through [`servobus_config`] (its motions load from
+    /// its file, with the calibration it names).
+    fn from(config: servobus_config::Robot) -> Self {
+        Robot {
+            config,
+            options: LoadOptions::default(),
+            from_text: false,
+        }
+    }
+}
+
 /// A robot: its buses, servos and joint limits (with its calibration
 /// applied), ready to [`connect`](Robot::connect).
 #[derive(Debug, Clone)]

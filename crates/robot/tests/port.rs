@@ -53,7 +53,8 @@ fn another_arm_s_servos_are_refused_by_connect() {
     let robot = calibrated_arm();
     let pty = Pty::serve(robot.config(), None);
     match robot.connect(Target::Ports(vec![pty.path.clone()])) {
-        Err(Error::Refused(refusal)) => {
+        Err(Error::Refused { bus, port, refusal }) => {
+            assert_eq!((bus.as_str(), port), ("arm", pty.path.clone()));
             // Its joints are far from where the calibrated arm's can be.
             let Refusal::Position { deg, range, .. } = refusal else {
                 panic!("expected a joint outside its calibrated range: {refusal}");

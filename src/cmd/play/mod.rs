@@ -23,7 +23,7 @@ use servobus_runtime::{
 };
 use servobus_trajectory::Trajectory;
 
-use super::link::{every_port, open_bus, Allowance, Ports};
+use super::link::{every_port, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
 
 // `run` below is the order of events; each step's details live by concern:
@@ -184,14 +184,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 .wall_buses(&clock);
             spawn(&robot, trajectory, buses, options)?
         }
-        Backend::Hardware(ports) => {
-            let mut buses = Vec::new();
-            for (bus, port) in robot.buses.iter().zip(ports) {
-                buses.push(open_bus(bus, port, Allowance::Run)?);
-            }
-            super::calibrate::check_buses(&robot, &mut buses, ports)?;
-            spawn(&robot, trajectory, buses, options)?
-        }
+        Backend::Hardware(ports) => super::link::connect(&robot, ports)?
+            .play(trajectory, options)?
+            .into_runner(),
     };
 
     install_ctrl_c(&runner);

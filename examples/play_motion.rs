@@ -7,12 +7,12 @@
 //! cargo run --release --example play_motion -- hexapod-dance   # a built-in name, simulated
 //! ```
 //!
-//! Exit code: 0 when the motion played to its end, 1 when the run ended
-//! otherwise or failed, 2 for a bad argument, file or port.
+//! Exit code: 0 when the motion played to its end, 1 when it did not or
+//! could not start (the error said in words), 2 for a bad command line.
 
 use std::process::ExitCode;
 
-use servobus_robot::{Error, Finish, Report, Robot, Target};
+use servobus_robot::{Error, Finish, Motion, Report, Robot, Target};
 
 const USAGE: &str = "usage: play_motion [MOTION] [--port PORT]\n\
     Plays MOTION (a motion file or a built-in name; default arm-wave) on the\n\
@@ -35,8 +35,7 @@ fn main() -> ExitCode {
         }
         Err(e) => {
             eprintln!("error: {}", said(&e));
-            let input = matches!(e, Error::Config(_) | Error::Open(_) | Error::NoPort { .. });
-            ExitCode::from(if input { 2 } else { 1 })
+            ExitCode::FAILURE
         }
     }
 }
@@ -44,6 +43,12 @@ fn main() -> ExitCode {
 /// Opens the motion and its robot, connects, plays to the end.
 fn play(motion: &str, target: Target) -> Result<Report, Error> {
     let (robot, motion) = Robot::of_motion(motion)?;
+    let seconds = robot.plan(&motion)?.duration();
+    println!(
+        "{} on {}: {seconds:.2} s",
+        motion_name(&motion),
+        robot.name()
+    );
     let connection = robot.connect(target)?;
     for slow in connection.slow_adapters() {
         eprintln!("warning: {slow}");
@@ -87,10 +92,22 @@ fn said(e: &Error) -> String {
     text
 }
 
+/// The motion's file name without `.yaml` (`arm-wave`).
+fn motion_name(motion: &Motion) -> String {
+    let stem = motion.path.file_stem().unwrap_or(motion.path.as_os_str());
+    stem.to_string_lossy().into_owned()
+}
+
 fn print_report(report: &Report) {
+    let finish = match report.finish {
+        Finish::Completed => "played to its end",
+        Finish::Stopped => "stopped",
+        Finish::TorqueOff => "ended with the torque off",
+        Finish::Fault => "ended by a fault",
+        _ => "abandoned",
+    };
     println!(
-        "{:?} after {} cycles at {:.1} Hz ({:.2} s); {} timeouts, {} retries, {} overruns",
-        report.finish,
+        "{finish} after {} cycles at {:.1} Hz ({:.2} s); {} timeouts, {} retries, {} overruns",
         report.cycles,
         report.achieved_rate_hz,
         report.duration_s,
@@ -101,8 +118,8 @@ fn print_report(report: &Report) {
     println!("tracking error ({}):", report.units);
     for joint in &report.joints {
         println!(
-            "  {:<14} rms {:.3}  max {:.3}",
-            joint.name, joint.rms_error, joint.max_error
+            "  {:<14} rms {:.3}  max {:.3} {}",
+            joint.name, joint.rms_error, joint.max_error, report.units
         );
     }
 }

@@ -143,7 +143,7 @@ impl Connection {
             prepare_bus(robot, index, bus).map_err(|refusal| Error::Refused {
                 bus: robot.buses[index].name.clone(),
                 port,
-                refusal,
+                refusal: Box::new(refusal),
             })?;
         }
         Ok(Connection {

@@ -45,7 +45,7 @@ pub enum Error {
         port: String,
         /// What does not match.
         #[source]
-        refusal: Refusal,
+        refusal: Box<Refusal>,
     },
     /// The run could not start, a command could not reach it, or a bus
     /// thread failed.

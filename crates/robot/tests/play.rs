@@ -3,9 +3,7 @@
 
 mod common;
 
-use std::time::Duration;
-
-use servobus_robot::{Error, Finish, Robot, Target, Telemetry};
+use servobus_robot::{Error, Finish, Robot, Target};
 
 #[test]
 fn a_built_in_robot_plays_arm_wave_in_virtual_time_to_the_end() {
@@ -73,21 +71,22 @@ fn a_bad_text_is_a_located_configuration_error() {
 #[test]
 fn a_run_on_the_wall_clock_simulator_stops_on_command() {
     let robot = Robot::open("so101").expect("opens");
-    let motion = robot.motion("arm-wave").expect("the motion");
     let connection = robot.connect(Target::Simulator).expect("connects");
-    let options = connection.options();
-    let run = connection.play(&motion, options).expect("starts");
-    let telemetry = run.telemetry();
-    // Some cycles, then stop (however slow the machine).
-    let mut cycles = 0;
-    while cycles < 20 {
-        match telemetry.recv_timeout(Duration::from_secs(30)) {
-            Ok(Telemetry::Cycle(_)) => cycles += 1,
-            Ok(_) => {}
-            Err(e) => panic!("the run sends telemetry: {e}"),
-        }
-    }
-    run.stop().expect("the run takes the command");
-    let report = run.join().expect("a report");
+    let report = common::stopped_after_some_cycles(&robot, connection);
     assert_eq!(report.finish, Finish::Stopped);
+}
+
+#[test]
+fn a_run_held_at_its_start_turns_the_torque_off_on_command() {
+    let robot = Robot::open("so101").expect("opens");
+    let motion = robot.motion("arm-wave").expect("the motion");
+    let connection = robot.connect(Target::VirtualSimulator).expect("connects");
+    let options = servobus_robot::RunOptions {
+        autoplay: false,
+        ..connection.options()
+    };
+    let run = connection.play(&motion, options).expect("starts");
+    run.torque_off().expect("the waiting run takes the command");
+    let report = run.join().expect("a report");
+    assert_eq!(report.finish, Finish::TorqueOff);
 }

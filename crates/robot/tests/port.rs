@@ -28,6 +28,17 @@ fn arm_wave_plays_to_the_end_on_a_pty() {
     assert!(report.cycles > 100, "{} cycles", report.cycles);
 }
 
+#[test]
+fn a_run_on_a_pty_stops_on_command() {
+    let robot = Robot::open("so101").expect("opens");
+    let pty = Pty::serve(robot.config(), None);
+    let connection = robot
+        .connect(Target::Ports(vec![pty.path.clone()]))
+        .expect("connects on the pty");
+    let report = common::stopped_after_some_cycles(&robot, connection);
+    assert_eq!(report.finish, Finish::Stopped);
+}
+
 /// The SO-101 with the calibration taken on the simulator mounted as
 /// `configs/sim/so101-mounting.yaml`.
 fn calibrated_arm() -> Robot {
@@ -56,7 +67,7 @@ fn another_arm_s_servos_are_refused_by_connect() {
         Err(Error::Refused { bus, port, refusal }) => {
             assert_eq!((bus.as_str(), port), ("arm", pty.path.clone()));
             // Its joints are far from where the calibrated arm's can be.
-            let Refusal::Position { deg, range, .. } = refusal else {
+            let Refusal::Position { deg, range, .. } = *refusal else {
                 panic!("expected a joint outside its calibrated range: {refusal}");
             };
             assert!(deg < range.0 || deg > range.1, "{deg} outside {range:?}");

@@ -7,7 +7,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use servobus_robot::config::Robot;
+use std::time::Duration;
+
+use servobus_robot::{Connection, Report, Robot, Telemetry};
 use servobus_runtime::sim::{Mounting, SimRobot};
 use servobus_sim::PtyServer;
 
@@ -29,7 +31,7 @@ pub struct Pty {
 
 impl Pty {
     /// Serves `robot`'s first bus.
-    pub fn serve(robot: &Robot, mounting: Option<Mounting>) -> Pty {
+    pub fn serve(robot: &servobus_robot::config::Robot, mounting: Option<Mounting>) -> Pty {
         let mut builder = SimRobot::builder(robot);
         if let Some(m) = mounting {
             builder = builder.mounting(m);
@@ -59,4 +61,23 @@ impl Drop for Pty {
             let _ = t.join();
         }
     }
+}
+
+/// Plays arm-wave on `connection`, stops it after 20 cycles (however slow
+/// the machine), and returns the report.
+pub fn stopped_after_some_cycles(robot: &Robot, connection: Connection) -> Report {
+    let motion = robot.motion("arm-wave").expect("the motion");
+    let options = connection.options();
+    let run = connection.play(&motion, options).expect("starts");
+    let telemetry = run.telemetry();
+    let mut cycles = 0;
+    while cycles < 20 {
+        match telemetry.recv_timeout(Duration::from_secs(30)) {
+            Ok(Telemetry::Cycle(_)) => cycles += 1,
+            Ok(_) => {}
+            Err(e) => panic!("the run sends telemetry: {e}"),
+        }
+    }
+    run.stop().expect("the run takes the command");
+    run.join().expect("a report")
 }

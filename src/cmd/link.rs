@@ -1,25 +1,25 @@
 //! Reaching a robot's servos from the command line: the library's
-//! ([`servobus_robot::link`]), with a slow FTDI adapter said on stderr.
+//! ([`servobus_robot::ports`]), with a slow FTDI adapter said on stderr.
 
 use std::time::Duration;
 
 use servobus_driver::{SerialTransport, Series, SystemClock};
-use servobus_robot::{link, Connection, Target};
+use servobus_robot::{ports, Connection, Target};
 use servobus_runtime::config::{BusConfig, Robot};
 
-pub(crate) use servobus_robot::link::{
+pub(crate) use servobus_robot::ports::{
     bus_ports, every_port, system_clock, Allowance, Ports, SerialBus,
 };
 
 /// Warns when the port is an FTDI adapter whose latency timer slows every
 /// reply down.
 fn warn_slow_adapter(transport: &SerialTransport<SystemClock>) {
-    if let Some(warning) = link::slow_adapter(transport).and_then(|f| f.warning()) {
+    if let Some(warning) = ports::slow_adapter(transport).and_then(|f| f.warning()) {
         eprintln!("warning: {warning}");
     }
 }
 
-/// Opens the bus `cfg` of a robot on `port` ([`link::open_bus`]); says
+/// Opens the bus `cfg` of a robot on `port` ([`ports::open_bus`]); says
 /// nothing about the adapter.
 ///
 /// # Errors
@@ -29,7 +29,7 @@ pub(crate) fn open_bus_quietly(
     port: &str,
     allowance: Allowance,
 ) -> anyhow::Result<SerialBus> {
-    Ok(link::open_bus(cfg, port, allowance)?)
+    Ok(ports::open_bus(cfg, port, allowance)?)
 }
 
 /// [`open_bus_quietly`], warning about a slow FTDI adapter.
@@ -46,7 +46,7 @@ pub(crate) fn open_bus(
     Ok(bus)
 }
 
-/// A bus on `port` without a robot file ([`link::open_plain_bus`], the
+/// A bus on `port` without a robot file ([`ports::open_plain_bus`], the
 /// latency given by `--latency-us` or else the port's assumed one), warning
 /// about a slow FTDI adapter.
 ///
@@ -58,7 +58,7 @@ pub(crate) fn open_plain_bus(
     series: Series,
     latency: Option<Duration>,
 ) -> anyhow::Result<SerialBus> {
-    let bus = link::open_plain_bus(port, baud, series, latency)?;
+    let bus = ports::open_plain_bus(port, baud, series, latency)?;
     warn_slow_adapter(bus.transport());
     Ok(bus)
 }

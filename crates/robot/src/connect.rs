@@ -2,6 +2,7 @@
 //! with the calibration checked before anything is read or moved.
 
 use std::fmt;
+use std::time::Duration;
 
 use servobus_config::Robot;
 use servobus_driver::FtdiLatency;
@@ -9,8 +10,17 @@ use servobus_runtime::calibrate::prepare_bus;
 use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Lead, RunOptions};
 
-use crate::link::{open_bus, slow_adapter, system_clock, Allowance, SerialBus};
+use crate::ports::{open_bus, slow_adapter, system_clock, Allowance, SerialBus};
 use crate::Error;
+
+/// How long a run holds (and tracks) the final position after the path, by
+/// default: long enough for the servos to settle, so that the report
+/// includes it.
+pub const SETTLE: Duration = Duration::from_millis(300);
+
+/// The fraction of the joint limits a run approaches the path's start at,
+/// by default (slowly: the joints may be anywhere).
+pub const APPROACH: f64 = 0.25;
 
 /// Where a robot's buses are.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -178,13 +188,15 @@ impl Connection {
         }
     }
 
-    /// The options a run takes by default on this robot: the robot file's
-    /// lead when it gives one, a slow approach to the path's start, and
-    /// 300 ms of holding the final position (as the command line plays).
+    /// The options a run takes by default on this robot (as the command
+    /// line plays): the robot file's lead when it gives one, the approach
+    /// to the path's start at [`APPROACH`], and [`SETTLE`] of holding the
+    /// final position.
     pub fn options(&self) -> RunOptions {
         RunOptions {
             lead: self.robot.lead.map_or_else(Lead::default, Lead::Fixed),
-            settle: std::time::Duration::from_millis(300),
+            approach: Some(APPROACH),
+            settle: SETTLE,
             ..RunOptions::default()
         }
     }

@@ -5,7 +5,7 @@ use servobus_runtime::calibrate::Refusal;
 use servobus_runtime::sim::SimRobotError;
 use servobus_runtime::RunError;
 
-use crate::link::OpenError;
+use crate::ports::OpenError;
 
 /// Why a robot could not be opened, connected to or played.
 #[derive(Debug, thiserror::Error)]

@@ -38,12 +38,12 @@
 
 mod connect;
 mod error;
-pub mod link;
+pub mod ports;
 mod run;
 
 use std::path::{Path, PathBuf};
 
-pub use connect::{Connection, SlowAdapter, Target};
+pub use connect::{Connection, SlowAdapter, Target, APPROACH, SETTLE};
 pub use error::Error;
 pub use run::{Play, Run};
 

@@ -4,11 +4,11 @@
 use super::*;
 
 /// How long the final position is held (and tracked) after the path.
-pub(super) const SETTLE: Duration = Duration::from_millis(300);
+pub(super) const SETTLE: Duration = servobus_robot::SETTLE;
 
 /// The fraction of the limits the runtime's approach moves at (its
 /// `RunOptions::approach`).
-pub(super) const APPROACH: f64 = 0.25;
+pub(super) const APPROACH: f64 = servobus_robot::APPROACH;
 
 /// What the live view and the plot show besides the telemetry.
 pub(super) struct Shown {

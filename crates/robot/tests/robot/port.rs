@@ -2,9 +2,7 @@
 //! built-in simulator, and `connect` refuses servos that do not match its
 //! calibration before anything is read through it or moves.
 
-mod common;
-
-use common::{repo, Pty};
+use crate::common::{self, repo, Pty};
 use servobus_robot::{Error, Finish, Refusal, Robot, Target};
 use servobus_runtime::sim::Mounting;
 

@@ -1,8 +1,7 @@
 //! A robot opened by name or from text plays on the built-in simulator, in
 //! virtual time and on the wall clock, and stops on command.
 
-mod common;
-
+use crate::common;
 use servobus_robot::{Error, Finish, Robot, Target};
 
 #[test]

@@ -1,12 +1,10 @@
-//! A simulated bus on a pseudo-terminal for the tests, served on a thread.
-
-#![allow(dead_code)]
+//! What the tests share: the repository's files, a simulated bus on a
+//! pseudo-terminal served on a thread, a run stopped on command.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-
 use std::time::Duration;
 
 use servobus_robot::{Connection, Report, Robot, Telemetry};

@@ -1,0 +1,6 @@
+//! The facade's tests: a robot opened, connected and played on the built-in
+//! simulator and on a pty, and the calibration check of `connect`.
+
+mod common;
+mod play;
+mod port;

@@ -190,13 +190,7 @@ pub fn load_robot_calibrated(
     calibration: Option<&Path>,
 ) -> Result<Robot, ConfigError> {
     let (robot, source) = load_calibrated(path, calibration)?;
-    check_rate(
-        &robot,
-        &source,
-        robot.rate_hz,
-        &FieldPath::root().key("rate"),
-    )?;
-    Ok(robot)
+    rate_fits(robot, &source)
 }
 
 /// Like [`load_robot_calibrated`], for a robot about to play a motion or
@@ -209,13 +203,7 @@ pub fn load_robot_calibrated(
 pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
     let (robot, source) = load_calibrated(path, calibration)?;
     require_calibration(&robot, &source)?;
-    check_rate(
-        &robot,
-        &source,
-        robot.rate_hz,
-        &FieldPath::root().key("rate"),
-    )?;
-    Ok(robot)
+    rate_fits(robot, &source)
 }
 
 /// Refuses a robot whose robot file (`source`) names a calibration file
@@ -323,14 +311,20 @@ pub fn load_robot_text(
     };
     let (robot, source, named) = design_of(source, Path::new(""))?;
     let (robot, source) = with_calibration(robot, source, named, calibration)?;
-    if !any_rate {
-        check_rate(
-            &robot,
-            &source,
-            robot.rate_hz,
-            &FieldPath::root().key("rate"),
-        )?;
+    if any_rate {
+        return Ok(robot);
     }
+    rate_fits(robot, &source)
+}
+
+/// `robot` when its default rate fits every bus (its file's `rate:`).
+fn rate_fits(robot: Robot, source: &Source) -> Result<Robot, ConfigError> {
+    check_rate(
+        &robot,
+        source,
+        robot.rate_hz,
+        &FieldPath::root().key("rate"),
+    )?;
     Ok(robot)
 }
 

@@ -1,0 +1,249 @@
+//! Following a moving target one control cycle at a time.
+//!
+//! [`Follower::step`] moves a joint's commanded state `dt` seconds toward a
+//! target that moves at a constant speed. It plans, in the frame of the
+//! target (position error, speed error, acceleration), the time-optimal
+//! jerk-limited way to rest on the target, the same plan as
+//! [`retarget`](crate::retarget) of one joint, and integrates it exactly
+//! over `dt`, switches inside the cycle included. While the target stays
+//! the same (moving at its constant speed) the plan is kept, so the
+//! commanded motion follows one smooth profile; when the target changes,
+//! the new plan starts from the state reached, with position, velocity and
+//! acceleration continuous.
+//!
+//! Limits: the jerk stays within `max_jerk`, the acceleration within
+//! `max_acceleration`, the speed within `max_velocity` (the target's own
+//! speed is capped at [`TARGET_SPEED_SHARE`] of it, and the speed relative
+//! to the target at the rest). Nothing is allocated.
+
+use crate::online::plan1;
+use crate::profile::Phases;
+use crate::{JointLimits, JointState};
+
+/// The largest share of `max_velocity` a target's speed is taken at: the
+/// rest is left for catching up with it.
+pub const TARGET_SPEED_SHARE: f64 = 0.9;
+
+/// Where one joint should go: a position and the speed at which that
+/// position moves (0 for a fixed target).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Goal {
+    /// The target position now.
+    pub position: f64,
+    /// The target's speed, units/s.
+    pub velocity: f64,
+}
+
+impl Goal {
+    /// A target at rest at `position`.
+    pub fn at(position: f64) -> Self {
+        Goal {
+            position,
+            velocity: 0.0,
+        }
+    }
+}
+
+/// Goals closer than this (in position, and in speed per second) to the
+/// one a plan was made for keep the plan.
+const SAME_GOAL: f64 = 1e-9;
+
+/// A plan in the target's frame, made at `tau = 0`.
+#[derive(Debug, Clone, Copy)]
+struct Plan {
+    /// The goal it was made for, at `tau = 0`.
+    goal: Goal,
+    /// The state relative to the goal at `tau = 0`.
+    err: JointState,
+    pre: Phases,
+    main: Phases,
+    dir: f64,
+    /// Time since the plan was made.
+    tau: f64,
+}
+
+impl Plan {
+    fn new(lim: &JointLimits, state: &JointState, goal: Goal) -> Plan {
+        let vt = goal.velocity;
+        // The error frame: the target stands still at 0; the speed left
+        // for the error keeps the sum within the joint's limit.
+        let rel = relative(lim, vt);
+        let err = JointState {
+            position: state.position - goal.position,
+            velocity: state.velocity - vt,
+            acceleration: state.acceleration,
+        };
+        let p = plan1(&err, 0.0, &rel);
+        let mut main = Phases::new();
+        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
+            p.seg.phases(&rel, p.fastest, &mut main);
+        }
+        Plan {
+            goal,
+            err,
+            pre: p.pre,
+            main,
+            dir: p.dir,
+            tau: 0.0,
+        }
+    }
+
+    /// Whether `goal` (now) is the goal this plan follows.
+    fn follows(&self, goal: Goal) -> bool {
+        let here = self.goal.position + self.goal.velocity * self.tau;
+        (goal.position - here).abs() <= SAME_GOAL * (1.0 + here.abs())
+            && (goal.velocity - self.goal.velocity).abs() <= SAME_GOAL
+    }
+
+    /// The joint's state at `tau`.
+    fn at(&self, finite: bool) -> JointState {
+        let (t1, p, v, a) = self.pre.advance(&self.err, 1.0, finite, self.tau);
+        let mut end = JointState {
+            position: p,
+            velocity: v,
+            acceleration: a,
+        };
+        if t1 < self.tau && self.main.n > 0 {
+            let from = JointState {
+                acceleration: 0.0,
+                ..end
+            };
+            let (t2, p, v, a) = self.main.advance(&from, self.dir, finite, self.tau - t1);
+            end = JointState {
+                position: p,
+                velocity: v,
+                acceleration: a,
+            };
+            if t1 + t2 < self.tau {
+                end = JointState::default();
+            }
+        } else if t1 < self.tau && self.main.n == 0 {
+            end.acceleration = 0.0;
+            end.velocity = 0.0;
+        }
+        let vt = self.goal.velocity;
+        JointState {
+            position: self.goal.position + vt * self.tau + end.position,
+            velocity: vt + end.velocity,
+            acceleration: end.acceleration,
+        }
+    }
+}
+
+/// The limits of motion relative to a target moving at `vt`.
+fn relative(lim: &JointLimits, vt: f64) -> JointLimits {
+    JointLimits {
+        max_velocity: lim.max_velocity - vt.abs(),
+        ..*lim
+    }
+}
+
+/// One joint's commanded state following a goal, cycle by cycle (see the
+/// module documentation). It keeps the plan it made while the goal stays
+/// the same (a moving goal included), so that its motion is one smooth
+/// profile, and plans anew from the state reached when the goal changes.
+#[derive(Debug, Clone, Copy)]
+pub struct Follower {
+    state: JointState,
+    plan: Option<Plan>,
+}
+
+impl Follower {
+    /// A follower at `state`.
+    pub fn new(state: JointState) -> Self {
+        Follower { state, plan: None }
+    }
+
+    /// The commanded state.
+    pub fn state(&self) -> JointState {
+        self.state
+    }
+
+    /// Moves the state `dt` seconds along the jerk-limited way to `goal`
+    /// and returns it. The goal's speed is capped at
+    /// [`TARGET_SPEED_SHARE`] of `max_velocity`. Limits are assumed valid;
+    /// a goal that is not finite, or `dt <= 0`, leaves the state unchanged.
+    pub fn step(&mut self, lim: &JointLimits, goal: Goal, dt: f64) -> JointState {
+        if !(dt > 0.0 && goal.position.is_finite() && goal.velocity.is_finite()) {
+            return self.state;
+        }
+        let cap = TARGET_SPEED_SHARE * lim.max_velocity;
+        let goal = Goal {
+            position: goal.position,
+            velocity: goal.velocity.clamp(-cap, cap),
+        };
+        let finite = lim.max_jerk.is_some();
+        let plan = match &mut self.plan {
+            Some(p) if p.follows(goal) => p,
+            slot => slot.insert(Plan::new(lim, &self.state, goal)),
+        };
+        plan.tau += dt;
+        self.state = plan.at(finite);
+        self.state
+    }
+}
+
+/// [`Follower::step`] for every joint.
+pub fn follow_steps(limits: &[JointLimits], followers: &mut [Follower], goals: &[Goal], dt: f64) {
+    for ((lim, f), g) in limits.iter().zip(followers.iter_mut()).zip(goals) {
+        f.step(lim, *g, dt);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lim() -> JointLimits {
+        JointLimits::new(2.0, 10.0, Some(100.0))
+    }
+
+    /// Steps to a fixed goal; returns every state.
+    fn run(from: JointState, goal: Goal, dt: f64, n: usize) -> Vec<JointState> {
+        let mut f = Follower::new(from);
+        (0..n).map(|_| f.step(&lim(), goal, dt)).collect()
+    }
+
+    #[test]
+    fn a_step_is_reached_at_rest_within_the_limits() {
+        let dt = 0.005;
+        let states = run(JointState::at_rest(0.0), Goal::at(1.0), dt, 400);
+        let last = states[states.len() - 1];
+        assert!((last.position - 1.0).abs() < 1e-9, "{last:?}");
+        assert!(last.velocity.abs() < 1e-9 && last.acceleration.abs() < 1e-9);
+        for w in states.windows(2) {
+            assert!(w[1].velocity.abs() <= 2.0 + 1e-9);
+            assert!(w[1].acceleration.abs() <= 10.0 + 1e-9);
+            let jerk = (w[1].acceleration - w[0].acceleration) / dt;
+            assert!(jerk.abs() <= 100.0 + 1e-6, "{jerk}");
+        }
+        // Never beyond the target.
+        assert!(states.iter().all(|s| s.position <= 1.0 + 1e-9));
+    }
+
+    #[test]
+    fn a_moving_target_is_caught_and_followed_at_its_speed() {
+        let dt = 0.005;
+        let mut f = Follower::new(JointState::at_rest(0.0));
+        let mut s = f.state();
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let goal = Goal {
+                position: 0.2 + 0.5 * t,
+                velocity: 0.5,
+            };
+            s = f.step(&lim(), goal, dt);
+        }
+        // After the step the target is at 0.2 + 0.5 * 2.0.
+        assert!((s.position - 1.2).abs() < 1e-6, "{s:?}");
+        assert!((s.velocity - 0.5).abs() < 1e-6, "{s:?}");
+    }
+
+    #[test]
+    fn bad_input_changes_nothing() {
+        let mut f = Follower::new(JointState::at_rest(0.3));
+        f.step(&lim(), Goal::at(f64::NAN), 0.01);
+        f.step(&lim(), Goal::at(1.0), 0.0);
+        assert_eq!(f.state(), JointState::at_rest(0.3));
+    }
+}

@@ -16,7 +16,7 @@
 //! speed is capped at [`TARGET_SPEED_SHARE`] of it, and the speed relative
 //! to the target at the rest). Nothing is allocated.
 
-use crate::online::plan1;
+use crate::online::{plan1, stop_phases};
 use crate::profile::Phases;
 use crate::{JointLimits, JointState};
 
@@ -181,6 +181,15 @@ impl Follower {
         self.state = plan.at(finite);
         self.state
     }
+}
+
+/// Where the quickest jerk-limited stop from `state` ends (the stop of
+/// [`stop`](crate::stop)).
+pub fn stop_position(lim: &JointLimits, state: &JointState) -> f64 {
+    let mut ph = Phases::new();
+    stop_phases(state.velocity, state.acceleration, lim, &mut ph);
+    ph.advance(state, 1.0, lim.max_jerk.is_some(), f64::INFINITY)
+        .1
 }
 
 /// [`Follower::step`] for every joint.

@@ -107,6 +107,8 @@ pub fn benches(c: &mut Criterion) {
             let goals: [Goal; JOINTS] = std::array::from_fn(|j| Goal {
                 position: target[j] + 0.01 * flip,
                 velocity: 0.1 * flip,
+                acceleration: 0.5 * flip,
+                horizon: 0.033,
             });
             follow_steps(black_box(&limits), &mut followers, black_box(&goals), 0.005);
             followers[0].state().position

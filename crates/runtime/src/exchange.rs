@@ -189,29 +189,29 @@ impl Mailbox {
                     self.pending.push(op);
                 }
                 loop {
-                let soonest = k + COMMAND_DELAY_CYCLES;
-                let op = match user.try_recv() {
-                    Ok(order) => Stamped {
-                        cycle: order.at.unwrap_or(0).max(soonest),
-                        op: Op::Command(order.command),
-                    },
-                    // Only once every command sent has taken effect can the
-                    // run know it will never play.
-                    Err(TryRecvError::Disconnected) if *open => {
-                        *open = false;
-                        Stamped {
-                            cycle: soonest.max(*latest),
-                            op: Op::Abandon,
+                    let soonest = k + COMMAND_DELAY_CYCLES;
+                    let op = match user.try_recv() {
+                        Ok(order) => Stamped {
+                            cycle: order.at.unwrap_or(0).max(soonest),
+                            op: Op::Command(order.command),
+                        },
+                        // Only once every command sent has taken effect can the
+                        // run know it will never play.
+                        Err(TryRecvError::Disconnected) if *open => {
+                            *open = false;
+                            Stamped {
+                                cycle: soonest.max(*latest),
+                                op: Op::Abandon,
+                            }
                         }
+                        Err(_) => break,
+                    };
+                    *latest = (*latest).max(op.cycle);
+                    for f in forwards.iter() {
+                        // A follower that stopped reading has ended its run.
+                        let _ = f.try_send(op.clone());
                     }
-                    Err(_) => break,
-                };
-                *latest = (*latest).max(op.cycle);
-                for f in forwards.iter() {
-                    // A follower that stopped reading has ended its run.
-                    let _ = f.try_send(op.clone());
-                }
-                self.pending.push(op);
+                    self.pending.push(op);
                 }
             }
             Inbox::Follower(rx) => {

@@ -2,10 +2,15 @@
 //! joint takes a jerk-limited step ([`servobus_trajectory::Follower`])
 //! toward its newest target.
 //!
-//! - A moving target is followed with bounded lag: its speed is estimated
-//!   from the stamps of its last two targets (or taken as given), and it is
-//!   extrapolated at that speed over at most one target interval, never
-//!   past a joint limit.
+//! - A moving target is followed with bounded lag: its speed and
+//!   acceleration are estimated from the stamps of its last three targets
+//!   (the speed may be given instead), and it is extrapolated so over at
+//!   most one target interval (the
+//!   longest of the last [`INTERVALS`], so that a target a little late
+//!   does not count as the end of the motion), never past a joint limit.
+//!   Once the extrapolation ends the joint goes to rest there, or, when it
+//!   cannot stop before, where its quickest stop ends: it never turns back
+//!   for a target that stopped abruptly.
 //! - The stamps are put on the run's clock by the smallest delay seen
 //!   between a stamp and its arrival (relaxed by 1 ms per target, so that
 //!   a drifting sender clock is followed).
@@ -27,6 +32,10 @@ const HISTORY: usize = 64;
 
 /// Stamp differences outside this range give no speed estimate, s.
 const INTERVAL: (f64, f64) = (0.001, 0.5);
+
+/// How many recent target intervals the extrapolation horizon is the
+/// longest of.
+const INTERVALS: usize = 4;
 
 /// What the following of live targets did ([`Telemetry::Live`](crate::Telemetry::Live)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -52,12 +61,20 @@ enum Mode {
 struct JointTarget {
     position: f64,
     velocity: f64,
+    acceleration: f64,
+    /// The speed between the last two targets (at their midpoint).
+    mean_velocity: Option<f64>,
     /// The stamp, on the run's clock (s).
     at: f64,
     /// How long the target may be extrapolated, s.
     interval: f64,
+    /// The last intervals between targets, s (0: none).
+    recent: [f64; INTERVALS],
     /// The sender's stamp of the last target.
     stamp: Option<f64>,
+    /// Where the joint rests once the extrapolation has ended (chosen
+    /// then, kept until the next target).
+    rest: Option<f64>,
 }
 
 /// See the module documentation.
@@ -95,9 +112,13 @@ impl LivePath {
             .map(|s| JointTarget {
                 position: s.position,
                 velocity: 0.0,
+                acceleration: 0.0,
+                mean_velocity: None,
                 at: x,
                 interval: 0.0,
+                recent: [0.0; INTERVALS],
                 stamp: None,
+                rest: None,
             })
             .collect();
         let mut states = vec![JointState::default(); HISTORY * n];
@@ -139,18 +160,43 @@ impl LivePath {
             let Some((q, v)) = *new else { continue };
             let dt = jt.stamp.map(|s| t.stamp - s);
             let interval = dt.filter(|d| *d > INTERVAL.0 && *d < INTERVAL.1);
-            let velocity = match (v, interval) {
-                (Some(v), _) => v,
-                (None, Some(d)) => (q - jt.position) / d,
-                (None, None) => 0.0,
+            // The speed over the last interval, and its change from the one
+            // before (between the intervals' midpoints).
+            let mean = interval.map(|d| (q - jt.position) / d);
+            let accel = match (mean, jt.mean_velocity, interval) {
+                (Some(m), Some(m0), Some(d)) => (m - m0) / (0.5 * (d + jt.recent[0])),
+                _ => 0.0,
+            };
+            let cap = lim.max_acceleration;
+            let accel = if accel.is_finite() {
+                accel.clamp(-cap, cap)
+            } else {
+                0.0
+            };
+            let velocity = match (v, mean, interval) {
+                (Some(v), _, _) => v,
+                (None, Some(m), Some(d)) => m + 0.5 * d * accel,
+                _ => 0.0,
             };
             let cap = lim.max_velocity;
+            let mut recent = jt.recent;
+            recent.rotate_right(1);
+            recent[0] = interval.unwrap_or(0.0);
+            let longest = recent.iter().copied().fold(0.0, f64::max);
             *jt = JointTarget {
                 position: q,
                 velocity: velocity.clamp(-cap, cap),
+                acceleration: if v.is_some() { 0.0 } else { accel },
+                mean_velocity: mean,
                 at,
-                interval: interval.unwrap_or(if v.is_some() { INTERVAL.0 * 50.0 } else { 0.0 }),
+                interval: if interval.is_some() || v.is_some() {
+                    longest.max(if v.is_some() { 0.05 } else { 0.0 })
+                } else {
+                    0.0
+                },
+                recent,
                 stamp: Some(t.stamp),
+                rest: None,
             };
         }
         self.arrived = now;
@@ -185,24 +231,39 @@ impl LivePath {
     }
 
     /// The goal of joint `j` at time `x`.
-    fn goal(&self, j: usize, x: f64) -> Goal {
+    fn goal(&mut self, j: usize, x: f64) -> Goal {
         if self.mode != Mode::Following {
             return Goal::at(self.stops[j]);
         }
-        let t = &self.targets[j];
-        let lim = &self.limits[j];
-        let ahead = (x - t.at).clamp(0.0, t.interval);
-        let moving = x - t.at < t.interval && t.velocity != 0.0;
-        let q = t.position + t.velocity * ahead;
-        let clamped = q.clamp(lim.min_position, lim.max_position);
-        Goal {
-            position: clamped,
-            velocity: if moving && clamped == q {
-                t.velocity
-            } else {
-                0.0
-            },
+        let t = self.targets[j];
+        let lim = self.limits[j];
+        if let Some(rest) = t.rest {
+            return Goal::at(rest);
         }
+        let ahead = (x - t.at).clamp(0.0, t.interval);
+        let moving = x - t.at < t.interval && (t.velocity != 0.0 || t.acceleration != 0.0);
+        let q = t.position + ahead * (t.velocity + 0.5 * ahead * t.acceleration);
+        let clamped = q.clamp(lim.min_position, lim.max_position);
+        if moving && clamped == q {
+            return Goal {
+                position: q,
+                velocity: t.velocity + ahead * t.acceleration,
+                acceleration: t.acceleration,
+                horizon: t.interval - ahead,
+            };
+        }
+        // At rest at the end of the extrapolation, unless the joint cannot
+        // stop before it: then where its quickest stop ends.
+        let s = self.followers[j].state();
+        let stop = stop_position(&lim, &s);
+        let beyond = (stop - clamped) * s.velocity > 0.0;
+        let rest = if beyond {
+            stop.clamp(lim.min_position, lim.max_position)
+        } else {
+            clamped
+        };
+        self.targets[j].rest = Some(rest);
+        Goal::at(rest)
     }
 
     /// The commanded state at `x` (advancing every joint to it; `now` is the
@@ -215,8 +276,10 @@ impl LivePath {
         }
         let dt = x - self.last;
         if dt > 0.0 {
+            // The goal at the start of the step: the follower plans from
+            // there.
             for j in 0..self.followers.len() {
-                let g = self.goal(j, x);
+                let g = self.goal(j, self.last);
                 self.followers[j].step(&self.limits[j], g, dt);
             }
             self.last = x;

@@ -14,7 +14,7 @@ use servobus_driver::{Bus, BusSettings, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_trajectory::Trajectory;
 
-use crate::busloop::{BusLoop, LoopConfig, Outcome};
+use crate::busloop::{reachable, BusLoop, LoopConfig, Outcome};
 use crate::config::{joint_limits, BusConfig, Robot, Units};
 use crate::error::RunError;
 use crate::exchange::{inboxes, CommandSender, FaultBoard, Mailbox};
@@ -131,11 +131,21 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
     for l in &loops {
         l.present(&mut present);
     }
-    let limits = joint_limits(robot);
+    // Live targets are kept where goals are sent as they are: within the
+    // ticks inside each joint's limits.
+    let plain = joint_limits(robot);
+    let limits: Vec<_> = plain
+        .iter()
+        .zip(robot.joints())
+        .map(|(l, j)| {
+            let (lo, hi) = reachable(j, robot.units);
+            l.with_positions(lo.max(l.min_position), hi.min(l.max_position))
+        })
+        .collect();
     let timeout = o.target_timeout.as_secs_f64();
     let mut timeline = match trajectory {
         Some(trajectory) => Timeline::new(
-            limits.clone(),
+            plain,
             Arc::new(trajectory),
             &present,
             o.approach,
@@ -144,7 +154,7 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         )?,
         None => Timeline::live(limits.clone(), &present, timeout),
     };
-    timeline.set_target_timeout(timeout);
+    timeline.set_live(timeout, limits.clone());
     let approach = timeline.approach();
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();

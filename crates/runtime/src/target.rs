@@ -220,10 +220,12 @@ impl TargetSender {
             Joints::All(p) => p.into_iter().enumerate().collect(),
             Joints::Named(named) => named
                 .into_iter()
-                .map(|(name, q)| match self.names.iter().position(|x| *x == name) {
-                    Some(i) => Ok((i, q)),
-                    None => Err(TargetError::UnknownJoint(name)),
-                })
+                .map(
+                    |(name, q)| match self.names.iter().position(|x| *x == name) {
+                        Some(i) => Ok((i, q)),
+                        None => Err(TargetError::UnknownJoint(name)),
+                    },
+                )
                 .collect::<Result<_, _>>()?,
         };
         if let Some(v) = &target.velocities {

@@ -20,8 +20,8 @@ use crate::options::RunOptions;
 use crate::pacer::Pacer;
 use crate::report::Report;
 use crate::rt::RtOptions;
-use crate::target::{Counters, TargetSender};
 use crate::run::{assemble, prepare, Ending};
+use crate::target::{Counters, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 use crate::virtual_run::VirtualRun;
 
@@ -122,9 +122,7 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
 }
 
 /// A [`VirtualRun`] on a thread of its own, ending once stopped.
-fn on_thread<T: Transport + Send + 'static>(
-    run: VirtualRun<T>,
-) -> Result<Runner, RunError> {
+fn on_thread<T: Transport + Send + 'static>(run: VirtualRun<T>) -> Result<Runner, RunError> {
     let commands = run.commands();
     let targets = run.targets();
     let telemetry = run.telemetry();

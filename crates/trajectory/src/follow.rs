@@ -1,9 +1,9 @@
 //! Following a moving target one control cycle at a time.
 //!
 //! [`Follower::step`] moves a joint's commanded state `dt` seconds toward a
-//! target that moves at a constant speed. It plans, in the frame of the
-//! target (position error, speed error, acceleration), the time-optimal
-//! jerk-limited way to rest on the target, the same plan as
+//! target that moves at a constant speed or acceleration. It plans, in the
+//! frame of the target (position, speed and acceleration error), the
+//! time-optimal jerk-limited way to rest on the target, the same plan as
 //! [`retarget`](crate::retarget) of one joint, and integrates it exactly
 //! over `dt`, switches inside the cycle included. While the target stays
 //! the same (moving at its constant speed) the plan is kept, so the
@@ -12,9 +12,11 @@
 //! acceleration continuous.
 //!
 //! Limits: the jerk stays within `max_jerk`, the acceleration within
-//! `max_acceleration`, the speed within `max_velocity` (the target's own
-//! speed is capped at [`TARGET_SPEED_SHARE`] of it, and the speed relative
-//! to the target at the rest). Nothing is allocated.
+//! `max_acceleration`, the speed within `max_velocity`: the target's own
+//! speed over the goal's horizon is capped at [`TARGET_SPEED_SHARE`] of the
+//! speed limit and its acceleration at [`TARGET_SPEED_SHARE`] of the
+//! acceleration limit, and the plan relative to the target keeps to what
+//! is left. Nothing is allocated.
 
 use crate::online::{plan1, stop_phases};
 use crate::profile::Phases;
@@ -24,14 +26,19 @@ use crate::{JointLimits, JointState};
 /// rest is left for catching up with it.
 pub const TARGET_SPEED_SHARE: f64 = 0.9;
 
-/// Where one joint should go: a position and the speed at which that
-/// position moves (0 for a fixed target).
+/// Where one joint should go: a position and how it moves on (0 for a
+/// fixed target): its speed and acceleration now, valid for `horizon` s.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Goal {
     /// The target position now.
     pub position: f64,
     /// The target's speed, units/s.
     pub velocity: f64,
+    /// The target's acceleration, units/s^2.
+    pub acceleration: f64,
+    /// How long the target keeps moving so, s (the speed limit is kept
+    /// over that time).
+    pub horizon: f64,
 }
 
 impl Goal {
@@ -39,7 +46,17 @@ impl Goal {
     pub fn at(position: f64) -> Self {
         Goal {
             position,
-            velocity: 0.0,
+            ..Goal::default()
+        }
+    }
+
+    /// The goal `tau` seconds on.
+    fn after(&self, tau: f64) -> Goal {
+        Goal {
+            position: self.position + tau * (self.velocity + 0.5 * tau * self.acceleration),
+            velocity: self.velocity + tau * self.acceleration,
+            acceleration: self.acceleration,
+            horizon: self.horizon - tau,
         }
     }
 }
@@ -64,14 +81,14 @@ struct Plan {
 
 impl Plan {
     fn new(lim: &JointLimits, state: &JointState, goal: Goal) -> Plan {
-        let vt = goal.velocity;
-        // The error frame: the target stands still at 0; the speed left
-        // for the error keeps the sum within the joint's limit.
-        let rel = relative(lim, vt);
+        // The error frame: the target stands still at 0; the speed and
+        // acceleration left for the error keep the sums within the joint's
+        // limits.
+        let rel = relative(lim, &goal);
         let err = JointState {
             position: state.position - goal.position,
-            velocity: state.velocity - vt,
-            acceleration: state.acceleration,
+            velocity: state.velocity - goal.velocity,
+            acceleration: state.acceleration - goal.acceleration,
         };
         let p = plan1(&err, 0.0, &rel);
         let mut main = Phases::new();
@@ -90,9 +107,10 @@ impl Plan {
 
     /// Whether `goal` (now) is the goal this plan follows.
     fn follows(&self, goal: Goal) -> bool {
-        let here = self.goal.position + self.goal.velocity * self.tau;
-        (goal.position - here).abs() <= SAME_GOAL * (1.0 + here.abs())
-            && (goal.velocity - self.goal.velocity).abs() <= SAME_GOAL
+        let here = self.goal.after(self.tau);
+        (goal.position - here.position).abs() <= SAME_GOAL * (1.0 + here.position.abs())
+            && (goal.velocity - here.velocity).abs() <= SAME_GOAL * (1.0 + here.velocity.abs())
+            && goal.acceleration == here.acceleration
     }
 
     /// The joint's state at `tau`.
@@ -121,19 +139,22 @@ impl Plan {
             end.acceleration = 0.0;
             end.velocity = 0.0;
         }
-        let vt = self.goal.velocity;
+        let g = self.goal.after(self.tau);
         JointState {
-            position: self.goal.position + vt * self.tau + end.position,
-            velocity: vt + end.velocity,
-            acceleration: end.acceleration,
+            position: g.position + end.position,
+            velocity: g.velocity + end.velocity,
+            acceleration: g.acceleration + end.acceleration,
         }
     }
 }
 
-/// The limits of motion relative to a target moving at `vt`.
-fn relative(lim: &JointLimits, vt: f64) -> JointLimits {
+/// The limits of motion relative to `goal` (capped as [`Follower::step`]
+/// does): what the goal's own motion leaves over its horizon.
+fn relative(lim: &JointLimits, goal: &Goal) -> JointLimits {
+    let end = goal.velocity + goal.acceleration * goal.horizon.max(0.0);
     JointLimits {
-        max_velocity: lim.max_velocity - vt.abs(),
+        max_velocity: lim.max_velocity - goal.velocity.abs().max(end.abs()),
+        max_acceleration: lim.max_acceleration - goal.acceleration.abs(),
         ..*lim
     }
 }
@@ -164,14 +185,14 @@ impl Follower {
     /// [`TARGET_SPEED_SHARE`] of `max_velocity`. Limits are assumed valid;
     /// a goal that is not finite, or `dt <= 0`, leaves the state unchanged.
     pub fn step(&mut self, lim: &JointLimits, goal: Goal, dt: f64) -> JointState {
-        if !(dt > 0.0 && goal.position.is_finite() && goal.velocity.is_finite()) {
+        let finite_goal = goal.position.is_finite()
+            && goal.velocity.is_finite()
+            && goal.acceleration.is_finite()
+            && !goal.horizon.is_nan();
+        if !(dt > 0.0 && finite_goal) {
             return self.state;
         }
-        let cap = TARGET_SPEED_SHARE * lim.max_velocity;
-        let goal = Goal {
-            position: goal.position,
-            velocity: goal.velocity.clamp(-cap, cap),
-        };
+        let goal = capped(lim, goal);
         let finite = lim.max_jerk.is_some();
         let plan = match &mut self.plan {
             Some(p) if p.follows(goal) => p,
@@ -180,6 +201,28 @@ impl Follower {
         plan.tau += dt;
         self.state = plan.at(finite);
         self.state
+    }
+}
+
+/// `goal` with its acceleration and its speed over its horizon capped at
+/// [`TARGET_SPEED_SHARE`] of the limits.
+fn capped(lim: &JointLimits, goal: Goal) -> Goal {
+    let acap = TARGET_SPEED_SHARE * lim.max_acceleration;
+    let vcap = TARGET_SPEED_SHARE * lim.max_velocity;
+    let a = goal.acceleration.clamp(-acap, acap);
+    let v = goal.velocity.clamp(-vcap, vcap);
+    let h = goal.horizon.max(0.0);
+    // The speed at the end of the horizon within the cap too.
+    let a = if h > 0.0 {
+        a.clamp((-vcap - v) / h, (vcap - v) / h)
+    } else {
+        0.0
+    };
+    Goal {
+        position: goal.position,
+        velocity: v,
+        acceleration: a,
+        horizon: h,
     }
 }
 
@@ -240,6 +283,8 @@ mod tests {
             let goal = Goal {
                 position: 0.2 + 0.5 * t,
                 velocity: 0.5,
+                acceleration: 0.0,
+                horizon: 1.0,
             };
             s = f.step(&lim(), goal, dt);
         }

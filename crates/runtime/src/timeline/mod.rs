@@ -144,6 +144,8 @@ pub(crate) struct Timeline {
     now: f64,
     /// How long live targets may fail to come before the joints stop, s.
     target_timeout: f64,
+    /// The limits live targets are followed within.
+    live_limits: Vec<JointLimits>,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -194,7 +196,9 @@ impl Timeline {
             approach: Duration::ZERO,
             now: 0.0,
             target_timeout: DEFAULT_TARGET_TIMEOUT,
+            live_limits: Vec::new(),
         };
+        tl.live_limits = tl.limits.clone();
         let mut start = vec![JointState::default(); n];
         main.sample(0.0, &mut start);
         let target: Vec<f64> = start.iter().map(|s| s.position).collect();
@@ -248,6 +252,7 @@ impl Timeline {
         let n = limits.len();
         let path = LivePath::new(limits.clone(), &from, 0.0, target_timeout);
         Timeline {
+            live_limits: limits.clone(),
             limits,
             segments: vec![Segment::new(0.0, Kind::Live, Path::Live(Box::new(path)))],
             pending: None,
@@ -261,9 +266,14 @@ impl Timeline {
         }
     }
 
-    /// Sets how long live targets may fail to come before the joints stop.
-    pub fn set_target_timeout(&mut self, seconds: f64) {
-        self.target_timeout = seconds;
+    /// Sets how long live targets may fail to come before the joints stop,
+    /// and the limits they are followed within (those of the path, or
+    /// narrower).
+    pub fn set_live(&mut self, timeout: f64, limits: Vec<JointLimits>) {
+        self.target_timeout = timeout;
+        if limits.len() == self.limits.len() {
+            self.live_limits = limits;
+        }
     }
 
     /// Sets the time of the cycle being run.
@@ -289,7 +299,7 @@ impl Timeline {
         }
         let st = self.state_at_horizon();
         let x = self.horizon;
-        let mut live = LivePath::new(self.limits.clone(), &st, x, self.target_timeout);
+        let mut live = LivePath::new(self.live_limits.clone(), &st, x, self.target_timeout);
         live.target(target, now);
         self.pending = None;
         self.push(Segment::new(x, Kind::Live, Path::Live(Box::new(live))));

@@ -76,5 +76,4 @@ mod tests {
         assert_eq!(v_end, 0.0);
         assert!((tau_end - 1.25).abs() < 1e-12, "{tau_end}");
     }
-
 }

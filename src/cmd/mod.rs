@@ -25,6 +25,7 @@ mod monitor;
 mod plan;
 mod play;
 mod sim;
+mod stream;
 mod teach;
 
 const EXIT_STATUS: &str = "\
@@ -87,6 +88,8 @@ enum Command {
     Doctor(doctor::Args),
     /// Watch every servo live: position, load, voltage, temperature, flags.
     Monitor(monitor::Args),
+    /// Follow joint targets given as JSON lines on stdin, smoothly (jerk limited).
+    Stream(stream::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -144,6 +147,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Teach(args) => teach::run(args),
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
+        Command::Stream(args) => stream::run(args),
     }
 }
 

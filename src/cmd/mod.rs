@@ -18,6 +18,7 @@ mod decode;
 mod docs;
 mod doctor;
 pub mod exit;
+mod follow;
 mod init;
 mod link;
 mod list;
@@ -90,6 +91,8 @@ enum Command {
     Monitor(monitor::Args),
     /// Follow joint targets given as JSON lines on stdin, smoothly (jerk limited).
     Stream(stream::Args),
+    /// A leader arm moved by hand drives a follower arm (both simulated without ports).
+    Follow(follow::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -148,6 +151,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
         Command::Stream(args) => stream::run(args),
+        Command::Follow(args) => follow::run(args),
     }
 }
 

@@ -50,6 +50,9 @@ pub(crate) struct Lane<T: Transport, C: Clock> {
     period: Duration,
     /// Why this lane's run ended, once it has.
     pub finish: Option<Finish>,
+    /// When the oldest target applied this cycle was taken (for the
+    /// latency to the goals on the wire).
+    taken: Option<std::time::Instant>,
 }
 
 impl<T: Transport, C: Clock> Lane<T, C> {
@@ -78,6 +81,7 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             settle: settle.as_secs_f64(),
             period,
             finish: None,
+            taken: None,
         }
     }
 
@@ -135,6 +139,9 @@ impl<T: Transport, C: Clock> Lane<T, C> {
         let lead = l.lead_at(t);
         self.timeline.sample_cmd(t + lead, &mut self.cmd);
         let mut gone = l.write(&self.cmd).err();
+        if let Some(taken) = self.taken.take() {
+            self.counters.latency(taken.elapsed());
+        }
         let x = match l.read() {
             Ok(x) => x,
             Err(e) => {
@@ -177,6 +184,9 @@ impl<T: Transport, C: Clock> Lane<T, C> {
                 Op::Target(target) => {
                     if self.timeline.target(&target, t) && self.bus.index == 0 {
                         self.counters.add(Count::Followed);
+                        if let Some(taken) = target.taken {
+                            self.taken = Some(self.taken.map_or(taken, |o| o.min(taken)));
+                        }
                     }
                     continue;
                 }

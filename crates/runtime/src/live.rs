@@ -3,11 +3,14 @@
 //! toward its newest target.
 //!
 //! - A moving target is followed with bounded lag: its speed and
-//!   acceleration are estimated from the stamps of its last three targets
-//!   (the speed may be given instead), and it is extrapolated so over at
-//!   most one target interval (the
-//!   longest of the last [`INTERVALS`], so that a target a little late
-//!   does not count as the end of the motion), never past a joint limit.
+//!   acceleration are estimated from three of its targets by their stamps,
+//!   the newest and the ones about [`SPAN`] and half of it before (so that
+//!   a fast stream of noisy readings, a leader arm's, gives steady
+//!   estimates; a 30 Hz stream uses its last three), or the speed is taken
+//!   as given. The target is extrapolated so over at most one target
+//!   interval (the longest of the last [`INTERVALS`], with half of it
+//!   again as margin for jitter, so that a target a little late does not
+//!   count as the end of the motion), never past a joint limit.
 //!   Once the extrapolation ends the joint goes to rest there, or, when it
 //!   cannot stop before, where its quickest stop ends: it never turns back
 //!   for a target that stopped abruptly.
@@ -37,6 +40,13 @@ const INTERVAL: (f64, f64) = (0.001, 0.5);
 /// longest of.
 const INTERVALS: usize = 4;
 
+/// The least time the speed and acceleration of a target are estimated
+/// over, s.
+const SPAN: f64 = 0.04;
+
+/// How many past targets a joint keeps for the estimates.
+const KEPT: usize = 16;
+
 /// What the following of live targets did ([`Telemetry::Live`](crate::Telemetry::Live)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -62,8 +72,10 @@ struct JointTarget {
     position: f64,
     velocity: f64,
     acceleration: f64,
-    /// The speed between the last two targets (at their midpoint).
-    mean_velocity: Option<f64>,
+    /// The last targets' `(stamp, position)`, newest first.
+    history: [(f64, f64); KEPT],
+    /// How many of `history` are filled.
+    kept: usize,
     /// The stamp, on the run's clock (s).
     at: f64,
     /// How long the target may be extrapolated, s.
@@ -75,6 +87,38 @@ struct JointTarget {
     /// Where the joint rests once the extrapolation has ended (chosen
     /// then, kept until the next target).
     rest: Option<f64>,
+}
+
+/// The speed at the newest of `history` (`(stamp, position)`, newest
+/// first) and the acceleration: the parabola through the newest, the
+/// newest at least [`SPAN`] older (else the oldest) and the one nearest the
+/// middle of the two; a straight line with two targets; nothing with one.
+fn estimate(history: &[(f64, f64)]) -> (f64, f64) {
+    let Some(&(s2, q2)) = history.first() else {
+        return (0.0, 0.0);
+    };
+    let Some(i0) = (1..history.len())
+        .find(|&i| s2 - history[i].0 >= SPAN)
+        .or_else(|| history.len().checked_sub(1).filter(|&i| i > 0))
+    else {
+        return (0.0, 0.0);
+    };
+    let (s0, q0) = history[i0];
+    if i0 == 1 {
+        return ((q2 - q0) / (s2 - s0), 0.0);
+    }
+    let mid = 0.5 * (s0 + s2);
+    let i1 = (1..i0)
+        .min_by(|&a, &b| {
+            (history[a].0 - mid)
+                .abs()
+                .total_cmp(&(history[b].0 - mid).abs())
+        })
+        .unwrap_or(1);
+    let (s1, q1) = history[i1];
+    let (d1, d2) = ((q1 - q0) / (s1 - s0), (q2 - q1) / (s2 - s1));
+    let a = 2.0 * (d2 - d1) / (s2 - s0);
+    (d2 + 0.5 * a * (s2 - s1), a)
 }
 
 /// See the module documentation.
@@ -113,7 +157,8 @@ impl LivePath {
                 position: s.position,
                 velocity: 0.0,
                 acceleration: 0.0,
-                mean_velocity: None,
+                history: [(0.0, 0.0); KEPT],
+                kept: 0,
                 at: x,
                 interval: 0.0,
                 recent: [0.0; INTERVALS],
@@ -160,23 +205,25 @@ impl LivePath {
             let Some((q, v)) = *new else { continue };
             let dt = jt.stamp.map(|s| t.stamp - s);
             let interval = dt.filter(|d| *d > INTERVAL.0 && *d < INTERVAL.1);
-            // The speed over the last interval, and its change from the one
-            // before (between the intervals' midpoints).
-            let mean = interval.map(|d| (q - jt.position) / d);
-            let accel = match (mean, jt.mean_velocity, interval) {
-                (Some(m), Some(m0), Some(d)) => (m - m0) / (0.5 * (d + jt.recent[0])),
-                _ => 0.0,
+            let mut history = jt.history;
+            let kept = if interval.is_some() {
+                history.rotate_right(1);
+                (jt.kept + 1).min(KEPT)
+            } else {
+                1
             };
+            history[0] = (t.stamp, q);
+            let (mean, accel) = estimate(&history[..kept]);
             let cap = lim.max_acceleration;
             let accel = if accel.is_finite() {
                 accel.clamp(-cap, cap)
             } else {
                 0.0
             };
-            let velocity = match (v, mean, interval) {
-                (Some(v), _, _) => v,
-                (None, Some(m), Some(d)) => m + 0.5 * d * accel,
-                _ => 0.0,
+            let velocity = match v {
+                Some(v) => v,
+                None if mean.is_finite() => mean,
+                None => 0.0,
             };
             let cap = lim.max_velocity;
             let mut recent = jt.recent;
@@ -187,10 +234,11 @@ impl LivePath {
                 position: q,
                 velocity: velocity.clamp(-cap, cap),
                 acceleration: if v.is_some() { 0.0 } else { accel },
-                mean_velocity: mean,
+                history,
+                kept,
                 at,
                 interval: if interval.is_some() || v.is_some() {
-                    longest.max(if v.is_some() { 0.05 } else { 0.0 })
+                    (1.5 * longest).max(if v.is_some() { 0.05 } else { 0.0 })
                 } else {
                     0.0
                 },

@@ -9,11 +9,15 @@
 //! channel; the loop takes every target waiting at the start of a cycle.
 
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use crossbeam_channel::Sender;
 use serde::Serialize;
 use servobus_trajectory::JointLimits;
+
+use crate::report::Quantiles;
+use crate::stats::Histogram;
 
 /// The joints of a target.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,6 +36,7 @@ pub struct Target {
     stamp: f64,
     joints: Joints,
     velocities: Option<Vec<f64>>,
+    taken: Option<Instant>,
 }
 
 impl Target {
@@ -41,6 +46,7 @@ impl Target {
             stamp,
             joints: Joints::All(positions),
             velocities: None,
+            taken: None,
         }
     }
 
@@ -50,6 +56,7 @@ impl Target {
             stamp,
             joints: Joints::Named(joints),
             velocities: None,
+            taken: None,
         }
     }
 
@@ -57,6 +64,14 @@ impl Target {
     /// order; without them the loop estimates them from the stamps.
     pub fn with_velocities(mut self, velocities: Vec<f64>) -> Self {
         self.velocities = Some(velocities);
+        self
+    }
+
+    /// The moment (on this process's monotonic clock) the positions were
+    /// taken: the run then measures the latency from it to the goals on the
+    /// wire ([`LiveReport::latency_ms`]; meaningful on the real clock).
+    pub fn taken_at(mut self, taken: Instant) -> Self {
+        self.taken = Some(taken);
         self
     }
 }
@@ -93,6 +108,7 @@ pub enum TargetError {
 pub(crate) struct Checked {
     pub stamp: f64,
     pub joints: Vec<Option<(f64, Option<f64>)>>,
+    pub taken: Option<Instant>,
 }
 
 /// The counts of a run's targets.
@@ -104,6 +120,8 @@ pub(crate) struct Counters {
     timeouts: AtomicU64,
     resumes: AtomicU64,
     followed: AtomicU64,
+    /// From a target's taking to the goals on the wire.
+    latency: Mutex<Option<Histogram>>,
 }
 
 /// One of the counters.
@@ -124,6 +142,13 @@ impl Counters {
         n.fetch_add(1, Ordering::Relaxed);
     }
 
+    /// Records the latency of a target.
+    pub fn latency(&self, d: Duration) {
+        let mut h = self.latency.lock().unwrap_or_else(|e| e.into_inner());
+        h.get_or_insert_with(|| Histogram::new(Duration::from_millis(500)))
+            .record(d);
+    }
+
     /// The report's figures, if the run had any target.
     pub fn report(&self) -> Option<LiveReport> {
         let get = |a: &AtomicU64| a.load(Ordering::Relaxed);
@@ -133,6 +158,20 @@ impl Counters {
             refused: get(&self.refused),
             timeouts: get(&self.timeouts),
             resumes: get(&self.resumes),
+            latency_ms: self
+                .latency
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .as_ref()
+                .filter(|h| h.count() > 0)
+                .map(|h| {
+                    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+                    Quantiles {
+                        p50: ms(h.quantile(0.5)),
+                        p99: ms(h.quantile(0.99)),
+                        max: ms(h.max()),
+                    }
+                }),
         };
         (r.received > 0 || get(&self.followed) > 0).then_some(r)
     }
@@ -140,7 +179,7 @@ impl Counters {
 
 /// What happened to a run's live targets (in the [`Report`](crate::Report)
 /// of a run that followed targets).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct LiveReport {
     /// Targets sent (accepted or refused).
     pub received: u64,
@@ -152,6 +191,9 @@ pub struct LiveReport {
     pub timeouts: u64,
     /// Times targets came back after a timeout.
     pub resumes: u64,
+    /// From the taking of a target ([`Target::taken_at`]) to the first
+    /// goals sent after it, ms, when targets said when they were taken.
+    pub latency_ms: Option<Quantiles>,
 }
 
 /// A sender of live targets to a run (cheap to clone).
@@ -181,6 +223,12 @@ impl TargetSender {
     /// The robot's joint names, in its joint order.
     pub fn joint_names(&self) -> &[String] {
         &self.names
+    }
+
+    /// What the run's targets came to so far (the figures of the report's
+    /// [`live`](crate::Report::live)).
+    pub fn so_far(&self) -> Option<LiveReport> {
+        self.counters.report()
     }
 
     /// Checks `target` and sends it, waiting while the channel is full.
@@ -256,6 +304,7 @@ impl TargetSender {
             Checked {
                 stamp: target.stamp,
                 joints,
+                taken: target.taken,
             },
             clamped,
         ))

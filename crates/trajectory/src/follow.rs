@@ -90,10 +90,15 @@ impl Plan {
             velocity: state.velocity - goal.velocity,
             acceleration: state.acceleration - goal.acceleration,
         };
-        let p = plan1(&err, 0.0, &rel);
+        Plan::ramping(&rel, &err, goal).unwrap_or_else(|| Plan::from(&rel, err, goal, 0.0))
+    }
+
+    /// The plan from `err` (relative to `goal` at `tau`).
+    fn from(rel: &JointLimits, err: JointState, goal: Goal, tau: f64) -> Plan {
+        let p = plan1(&err, 0.0, rel);
         let mut main = Phases::new();
         if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
-            p.seg.phases(&rel, p.fastest, &mut main);
+            p.seg.phases(rel, p.fastest, &mut main);
         }
         Plan {
             goal,
@@ -101,8 +106,35 @@ impl Plan {
             pre: p.pre,
             main,
             dir: p.dir,
-            tau: 0.0,
+            tau,
         }
+    }
+
+    /// A joint part way up an acceleration ramp (or down one) may be on its
+    /// way to the target already: the plan made from where that ramp began
+    /// (acceleration 0, `ta = |a| / j` earlier), if it starts with the same
+    /// ramp for at least `ta`, goes on from here without first undoing the
+    /// acceleration (which [`plan1`] would do, and which, planned anew
+    /// every cycle, would never let the joint speed up).
+    fn ramping(rel: &JointLimits, err: &JointState, goal: Goal) -> Option<Plan> {
+        let j = rel.max_jerk?;
+        let ea = err.acceleration;
+        if ea == 0.0 {
+            return None;
+        }
+        let ta = ea.abs() / j;
+        let v0 = err.velocity - 0.5 * ea * ta;
+        let start = JointState {
+            position: err.position - v0 * ta - ea * ta * ta / 6.0,
+            velocity: v0,
+            acceleration: 0.0,
+        };
+        let plan = Plan::from(rel, start, goal.after(-ta), ta);
+        let same = plan.pre.n == 0
+            && plan.main.n > 0
+            && plan.main.jerk[0] * plan.dir * ea > 0.0
+            && plan.main.dt[0] >= ta * (1.0 - 1e-9);
+        same.then_some(plan)
     }
 
     /// Whether `goal` (now) is the goal this plan follows.

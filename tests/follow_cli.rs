@@ -1,6 +1,6 @@
 //! `servobus follow` with both arms simulated: the built-in hand moves the
 //! leader, the follower follows it, the report gives the latency and the
-//! error, and the followed take is saved as a recording `plan`/`play` read.
+//! error, and the followed take is saved as a recording `play` plays.
 
 mod common;
 
@@ -47,7 +47,14 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
         Some("time_s,shoulder_pan,shoulder_lift,elbow_flex,wrist_flex,wrist_roll,gripper")
     );
     assert!(lines.count() > 1000, "six seconds at 200 Hz");
-    // `play` accepts it (planned only: `plan` reads the same recordings).
-    let plan = common::servobus(&["plan", common::arg(&take), "--robot", "so101"]);
-    common::exited(&plan, 0);
+    // `play` plays it (in virtual time).
+    let play = common::servobus(&[
+        "play",
+        common::arg(&take),
+        "--robot",
+        "so101",
+        "--fast",
+        "--json",
+    ]);
+    common::exited(&play, 0);
 }

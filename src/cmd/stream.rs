@@ -118,8 +118,11 @@ pub(crate) fn start_live(
     }
 }
 
-/// Why a line is not a target.
-fn parse_line(line: &str, units: Units) -> Result<(Option<f64>, Vec<(String, f64)>), String> {
+/// A target line: its `t`, if given, and its joints' angles (rad).
+type Parsed = (Option<f64>, Vec<(String, f64)>);
+
+/// The target of a line, or why it is not one.
+fn parse_line(line: &str, units: Units) -> Result<Parsed, String> {
     let value: serde_json::Value =
         serde_json::from_str(line).map_err(|e| format!("not JSON: {e}"))?;
     let obj = value

@@ -114,6 +114,21 @@ pub fn benches(c: &mut Criterion) {
             followers[0].state().position
         })
     });
+    // The same cycle with the goal held (the plan is kept): most cycles of
+    // a 30 Hz stream followed at 200 Hz.
+    let goals: [Goal; JOINTS] = std::array::from_fn(|j| Goal {
+        position: target[j],
+        velocity: 0.0,
+        acceleration: 0.0,
+        horizon: 0.033,
+    });
+    let mut held: Vec<Follower> = state.iter().map(|s| Follower::new(*s)).collect();
+    c.bench_function("trajectory/follow_hold_18", |b| {
+        b.iter(|| {
+            follow_steps(black_box(&limits), &mut held, black_box(&goals), 1e-9);
+            held[0].state().position
+        })
+    });
     c.bench_function("trajectory/stop_18", |b| {
         b.iter(|| stop(black_box(&limits), black_box(&state)).map(|t| t.duration()))
     });

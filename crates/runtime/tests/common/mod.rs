@@ -118,6 +118,8 @@ pub struct Recorded {
     pub rows: Vec<(u64, usize, f64, f64, Option<f64>)>,
     /// Faults published.
     pub faults: Vec<servobus_runtime::Fault>,
+    /// Live-target events published, with their time (s).
+    pub live: Vec<(servobus_runtime::LiveEvent, f64)>,
 }
 
 /// Steps `run` until it ends or `max` cycles pass, calling `each(cycle)`
@@ -132,6 +134,7 @@ pub fn record<T: servobus_driver::Transport>(
     let mut rec = Recorded {
         rows: Vec::new(),
         faults: Vec::new(),
+        live: Vec::new(),
     };
     let drain = |rec: &mut Recorded| {
         while let Ok(m) = rx.try_recv() {
@@ -143,6 +146,7 @@ pub fn record<T: servobus_driver::Transport>(
                     }
                 }
                 Telemetry::Fault(f) => rec.faults.push(f),
+                Telemetry::Live { event, time_s } => rec.live.push((event, time_s)),
                 _ => {}
             }
         }

@@ -18,6 +18,7 @@ mod decode;
 mod docs;
 mod doctor;
 pub mod exit;
+mod fk;
 mod init;
 mod link;
 mod list;
@@ -87,6 +88,10 @@ enum Command {
     Doctor(doctor::Args),
     /// Watch every servo live: position, load, voltage, temperature, flags.
     Monitor(monitor::Args),
+    /// Print where a pose puts every joint frame and named frame (mm, roll/pitch/yaw).
+    Fk(fk::FkArgs),
+    /// Find the joint angles that put a named frame at a point, or say why there are none.
+    Ik(fk::IkArgs),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -144,6 +149,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Teach(args) => teach::run(args),
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
+        Command::Fk(args) => fk::fk(args),
+        Command::Ik(args) => fk::ik(args),
     }
 }
 

@@ -68,7 +68,6 @@ pub struct ArmIk {
 struct Search {
     q: Angles,
     e: Residual,
-    jac: Jacobian,
 }
 
 impl ArmIk {
@@ -139,21 +138,51 @@ impl ArmIk {
             let v = if v.is_finite() { v } else { 0.0 };
             start[k] = v.clamp(self.limits[k].0, self.limits[k].1);
         }
-        let first = self.search(target, start);
-        if converged(&first.e) {
-            return self.write(&first.q, out);
-        }
-        // The previous angles led nowhere: start again from spread-out
-        // poses (the first joint turned towards the target or away from
-        // it, the next three bent either way) before giving a reason.
         let toward = target.xyz.y.atan2(target.xyz.x);
-        for m in 0..RESTARTS {
-            let s = self.search(target, self.restart(m, toward));
-            if converged(&s.e) {
-                return self.write(&s.q, out);
+        for bounded in [true, false] {
+            let first = self.search(target, start, bounded);
+            let mut found = converged(&first.e).then_some(first.q);
+            // The previous angles led nowhere: start again from spread-out
+            // poses (the first joint turned towards the target or away from
+            // it, the next three bent either way).
+            for m in 0..RESTARTS {
+                if found.is_some() {
+                    break;
+                }
+                let s = self.search(target, self.restart(m, toward), bounded);
+                found = converged(&s.e).then_some(s.q);
+            }
+            match (found, bounded) {
+                (Some(q), true) => return self.write(&q, out),
+                // Only answers beyond the limits: name the joint furthest out.
+                (Some(q), false) => return Err(self.beyond(&q)),
+                (None, false) => return Err(self.reason(&first)),
+                (None, true) => {}
             }
         }
-        Err(self.reason(&first))
+        Err(IkError::Singular {
+            what: "no answer found",
+        })
+    }
+
+    /// The joint of `q` (an answer without limits) furthest beyond its
+    /// limits.
+    fn beyond(&self, q: &Angles) -> IkError {
+        let mut worst = (0, 0.0, 0.0);
+        for (k, &(lo, hi)) in self.limits.iter().enumerate() {
+            let a = wrap_into(q[k], lo, hi);
+            let out = (lo - a).max(a - hi);
+            if out > worst.1 {
+                worst = (k, out, a);
+            }
+        }
+        let (k, _, angle) = worst;
+        IkError::JointLimit {
+            joint: self.names[k].clone(),
+            angle,
+            min: self.limits[k].0,
+            max: self.limits[k].1,
+        }
     }
 
     fn write(&self, q: &Angles, out: &mut [f64]) -> Result<(), IkError> {
@@ -184,12 +213,13 @@ impl ArmIk {
                 }
                 _ => mid,
             };
-            q[k] = wrap_into(q[k], lo, hi);
+            q[k] = wrap_into(q[k], lo, hi).clamp(lo, hi);
         }
         q
     }
 
-    fn search(&self, target: &ArmTarget, mut q: Angles) -> Search {
+    /// Levenberg-Marquardt from `q`, inside the limits when `bounded`.
+    fn search(&self, target: &ArmTarget, mut q: Angles, bounded: bool) -> Search {
         let n = self.joints.len();
         let mut jac = Jacobian::zeros();
         let mut e = self.residual(target, &q, &mut jac);
@@ -211,7 +241,10 @@ impl ArmIk {
             }
             let mut trial = q;
             for k in 0..n {
-                trial[k] = (q[k] + dq[k]).clamp(self.limits[k].0, self.limits[k].1);
+                trial[k] = q[k] + dq[k];
+                if bounded {
+                    trial[k] = trial[k].clamp(self.limits[k].0, self.limits[k].1);
+                }
             }
             let te = self.residual(target, &trial, &mut trial_jac);
             if te.norm_squared() < e.norm_squared() {
@@ -226,7 +259,7 @@ impl ArmIk {
                 }
             }
         }
-        Search { q, e, jac }
+        Search { q, e }
     }
 
     /// The weighted residual (position mm; orientation rad x
@@ -287,22 +320,8 @@ impl ArmIk {
         Residual::new(ep.x, ep.y, ep.z, eo.x, eo.y, eo.z)
     }
 
-    /// Why a search that did not converge failed.
+    /// Why a search without limits that did not converge failed.
     fn reason(&self, s: &Search) -> IkError {
-        let grad = s.jac.transpose() * s.e;
-        for k in 0..self.joints.len() {
-            let (lo, hi) = self.limits[k];
-            let pushed_low = s.q[k] <= lo + 1e-9 && grad[k] < 0.0;
-            let pushed_high = s.q[k] >= hi - 1e-9 && grad[k] > 0.0;
-            if pushed_low || pushed_high {
-                return IkError::JointLimit {
-                    joint: self.names[k].clone(),
-                    angle: s.q[k],
-                    min: lo,
-                    max: hi,
-                };
-            }
-        }
         let short = s.e.fixed_rows::<3>(0).norm();
         if short > POS_TOL {
             return IkError::Unreachable { short };
@@ -327,12 +346,19 @@ fn converged(e: &Residual) -> bool {
     e.fixed_rows::<3>(0).norm() < POS_TOL && e.fixed_rows::<3>(3).norm() < ROT_TOL * ROT_WEIGHT_MM
 }
 
-/// `a`, or `a` a turn either way, whichever lies in `[lo, hi]`; else `a`
-/// clamped.
+/// `a`, or `a` a turn either way, whichever lies in `[lo, hi]`; else the
+/// one of them nearest the range.
 fn wrap_into(a: f64, lo: f64, hi: f64) -> f64 {
     let turn = 2.0 * std::f64::consts::PI;
+    let a = a.rem_euclid(turn);
+    let a = if a > std::f64::consts::PI {
+        a - turn
+    } else {
+        a
+    };
+    let outside = |v: f64| (lo - v).max(v - hi).max(0.0);
     [a, a - turn, a + turn]
         .into_iter()
-        .find(|v| (lo..=hi).contains(v))
-        .unwrap_or(a.clamp(lo, hi))
+        .min_by(|x, y| outside(*x).total_cmp(&outside(*y)))
+        .unwrap_or(a)
 }

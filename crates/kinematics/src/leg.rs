@@ -34,6 +34,11 @@ pub struct LegIk {
     /// Femur to tibia, tibia to foot, in their (x, z) planes.
     v1: Vector2<f64>,
     v2: Vector2<f64>,
+    /// Their lengths and directions (rad from x towards z).
+    l1: f64,
+    l2: f64,
+    b1: f64,
+    b2: f64,
 }
 
 fn sign_of(component: f64) -> Option<f64> {
@@ -50,14 +55,18 @@ fn rot(v: Vector2<f64>, phi: f64) -> Vector2<f64> {
     Vector2::new(v.x * c - v.y * s, v.x * s + v.y * c)
 }
 
-/// `a` wrapped into (-pi, pi].
-fn wrap(a: f64) -> f64 {
-    let w = a.rem_euclid(2.0 * PI);
-    if w > PI {
-        w - 2.0 * PI
-    } else {
-        w
+/// `a` wrapped into (-pi, pi] (a few turns at most: sums of angles).
+fn wrap(mut a: f64) -> f64 {
+    if !a.is_finite() {
+        return a;
     }
+    while a > PI {
+        a -= 2.0 * PI;
+    }
+    while a <= -PI {
+        a += 2.0 * PI;
+    }
+    a
 }
 
 impl LegIk {
@@ -105,6 +114,10 @@ impl LegIk {
             femur_at,
             s2,
             s3,
+            l1: v1.norm(),
+            l2: v2.norm(),
+            b1: v1.y.atan2(v1.x),
+            b2: v2.y.atan2(v2.x),
             v1,
             v2,
         })
@@ -117,7 +130,8 @@ impl LegIk {
 
     /// Coxa, femur and tibia angles (radians) that put the foot at `target`
     /// (base frame, mm). Of the two knee solutions inside the limits, the
-    /// one nearer `previous` (so a move never flips the knee). Allocates
+    /// one nearer `previous` (so a move never flips the knee); reaching
+    /// back past the coxa axis only when reaching out has none. Allocates
     /// nothing.
     ///
     /// # Errors
@@ -135,12 +149,16 @@ impl LegIk {
         // The leg may reach out over its foot or back past its coxa axis.
         let ahead = p.y.atan2(p.x);
         let sides = [(ahead, r), (wrap(ahead + PI), -r)];
-        let (l1, l2) = (self.v1.norm(), self.v2.norm());
+        let (l1, l2, b1, b2) = (self.l1, self.l2, self.b1, self.b2);
         let mut best: Option<([f64; 3], f64)> = None;
         let mut violation: Option<(usize, f64)> = None;
         let mut short = f64::INFINITY;
         let mut singular = false;
         for (yaw, reach) in sides {
+            // Reach back past the coxa axis only when reaching out cannot.
+            if best.is_some() {
+                break;
+            }
             let t = Vector2::new(reach, p.z) - self.femur_at;
             let d = t.norm();
             let miss = (d - (l1 + l2)).max((l1 - l2).abs() - d);
@@ -154,11 +172,11 @@ impl LegIk {
             }
             let cos_g = ((d * d - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)).clamp(-1.0, 1.0);
             let gamma = cos_g.acos();
-            let (b1, b2) = (self.v1.y.atan2(self.v1.x), self.v2.y.atan2(self.v2.x));
+            let toward = t.y.atan2(t.x);
             for g in [gamma, -gamma] {
                 let alpha = g - b2 + b1;
                 let w = self.v1 + rot(self.v2, alpha);
-                let phi = t.y.atan2(t.x) - w.y.atan2(w.x);
+                let phi = toward - w.y.atan2(w.x);
                 let q = [
                     wrap(yaw * self.s1),
                     wrap(phi) * self.s2,

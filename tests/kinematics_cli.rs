@@ -269,3 +269,44 @@ fn the_two_hexapods_share_one_geometry() {
     ]);
     assert_eq!(a, b);
 }
+
+/// A motion for the SO-101: home, a tool keyframe (gripper opened in the
+/// same keyframe), a joint keyframe, and `last` as the last keyframe.
+fn arm_motion(name: &str, last: &str) -> std::path::PathBuf {
+    let text = format!(
+        "units: deg\nkeyframes:\n  - pose: {{shoulder_lift: -90, elbow_flex: 90}}\n  - tool: {{xyz: [250, 50, 120], pitch: 30, roll: 0}}\n    pose: {{gripper: 40}}\n  - pose: {{shoulder_pan: 10}}\n  - {last}\n"
+    );
+    temp_file("kinematics_cli", name, &text)
+}
+
+#[test]
+fn tool_keyframes_become_joint_keyframes_at_load() {
+    let motion = arm_motion("tool.yaml", "tool: {xyz: [200, -80, 60], pitch: 60}");
+    let robot = common::repo("configs/robots/so101.yaml");
+    let (m, r) = servobus_runtime::config::load_motion(&motion, Some(&robot)).expect("loads");
+    let model = r.geometry().expect("geometry");
+    let tool = model.frame_index("tool").expect("tool");
+    let mut poses = servobus_kinematics::Poses::new(&model);
+    for (k, want) in [(1, [250.0, 50.0, 120.0]), (3, [200.0, -80.0, 60.0])] {
+        let q: Vec<f64> = m.keyframes[k]
+            .positions
+            .iter()
+            .map(|d| d.to_radians())
+            .collect();
+        model.forward(&q, &mut poses);
+        let at = poses.frame(tool).expect("tool").translation.vector;
+        close([at.x, at.y, at.z], want, 0.01);
+    }
+    let gripper = r.joint_index("gripper").expect("gripper");
+    assert_eq!(m.keyframes[1].positions[gripper], 40.0);
+    let plan = servobus(&["plan", arg(&motion), "--robot", "so101", "--json"]);
+    exited(&plan, 0);
+}
+
+#[test]
+fn an_unreachable_tool_keyframe_is_refused_at_its_line() {
+    let motion = arm_motion("far.yaml", "tool: {xyz: [600, 0, 149.1]}");
+    let out = servobus(&["plan", arg(&motion), "--robot", "so101"]);
+    let (_, e) = exited(&out, 2);
+    says(&e, &[":7:", "keyframes[3].tool", "unreachable", "159.3"]);
+}

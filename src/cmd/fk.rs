@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use serde::Serialize;
 use servobus_kinematics::{ArmIk, ArmTarget, IkError, LegIk, Model, Point3, Poses};
-use servobus_runtime::config::{load_robot_any_rate, Robot, Units};
+use servobus_runtime::config::{ik_reason, load_robot_any_rate, Robot, Units};
 
 use super::exit::{input, PROBLEM};
 
@@ -196,25 +196,6 @@ fn solve(
         .map(|()| arm.joints().iter().copied().zip(out).collect()))
 }
 
-/// Why there is no answer, in the robot file's units.
-fn reason(robot: &Robot, e: &IkError) -> String {
-    let u = robot.units;
-    match e {
-        IkError::JointLimit {
-            joint,
-            angle,
-            min,
-            max,
-        } => format!(
-            "joint `{joint}` would have to go to {:.1} {u}, outside its limits [{:.1}, {:.1}]",
-            u.from_rad(*angle),
-            u.from_rad(*min),
-            u.from_rad(*max)
-        ),
-        other => other.to_string(),
-    }
-}
-
 /// Runs `servobus ik`.
 pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
     let (robot, model) = geometry(&args.robot)?;
@@ -247,7 +228,7 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            out.error = Some(reason(&robot, e));
+            out.error = Some(ik_reason(e, robot.units));
             match e {
                 IkError::Unreachable { short } => out.short_mm = Some(*short),
                 IkError::JointLimit { joint, .. } => out.joint = Some(joint.clone()),

@@ -33,6 +33,7 @@ mod motion;
 mod robot;
 pub mod seam;
 mod syntax;
+mod tool;
 mod trajectory;
 mod units;
 
@@ -53,5 +54,6 @@ pub use robot::{
     load_robot, load_robot_any_rate, load_robot_any_rate_calibrated, load_robot_calibrated,
     load_robot_design, BusConfig, JointConfig, Robot, RobotCalibration,
 };
+pub use tool::{ik_reason, TOOL_FRAME};
 pub use trajectory::{joint_limits, plan_input, plan_motion};
 pub use units::Units;

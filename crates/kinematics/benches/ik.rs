@@ -87,6 +87,16 @@ fn so101(c: &mut Criterion) {
     c.bench_function("kinematics/ik_so101_pose_from_home", |b| {
         b.iter(|| black_box(ik.solve(black_box(&step), &home, &mut out)).ok());
     });
+    // Out of reach: every restart is tried, with and without limits,
+    // before the answer is no (the worst case).
+    let far = ArmTarget {
+        xyz: Point3::new(600.0, 0.0, 149.1),
+        pitch: None,
+        roll: None,
+    };
+    c.bench_function("kinematics/ik_so101_unreachable", |b| {
+        b.iter(|| black_box(ik.solve(black_box(&far), &previous, &mut out)).err());
+    });
 }
 
 criterion_group!(benches, legs, so101);

@@ -32,8 +32,12 @@ const MAX_STEP: f64 = 0.3;
 const LAMBDA_START: f64 = 1.0;
 const LAMBDA_MIN: f64 = 1e-6;
 const LAMBDA_MAX: f64 = 1e8;
-/// Restart poses tried when the previous angles lead nowhere.
-const RESTARTS: usize = 54;
+/// Restart poses tried when the previous angles lead nowhere: a grid of
+/// [`GRID`], then points spread over the joints' ranges.
+const RESTARTS: usize = 118;
+const GRID: usize = 54;
+/// One Halton base per joint.
+const PRIMES: [usize; MAX_DOF] = [2, 3, 5, 7, 11, 13, 17];
 
 type Jacobian = SMatrix<f64, 6, MAX_DOF>;
 type Angles = SVector<f64, MAX_DOF>;
@@ -62,6 +66,9 @@ pub struct ArmIk {
     limits: Vec<(f64, f64)>,
     /// The frame on the last joint's link.
     tool: Isometry3<f64>,
+    /// No target farther than this from the first joint's origin can be
+    /// reached: the sum of the chain's link lengths, mm.
+    reach: f64,
 }
 
 /// How one start of the search ended.
@@ -97,6 +104,12 @@ impl ArmIk {
             axes: chain.iter().map(|j| j.axis).collect(),
             limits: chain.iter().map(|j| j.limits).collect(),
             tool: model.frames[f].origin,
+            reach: chain
+                .iter()
+                .skip(1)
+                .map(|j| j.origin.translation.vector.norm())
+                .sum::<f64>()
+                + model.frames[f].origin.translation.vector.norm(),
             joints,
         })
     }
@@ -139,6 +152,11 @@ impl ArmIk {
             start[k] = v.clamp(self.limits[k].0, self.limits[k].1);
         }
         let toward = target.xyz.y.atan2(target.xyz.x);
+        let base = self.origins[0].translation.vector;
+        if (target.xyz.coords - base).norm() > self.reach {
+            // Farther than the links laid end to end: no restart can help.
+            return Err(self.reason(&self.search(target, start, false)));
+        }
         for bounded in [true, false] {
             let first = self.search(target, start, bounded);
             let mut found = converged(&first.e).then_some(first.q);
@@ -154,8 +172,21 @@ impl ArmIk {
             }
             match (found, bounded) {
                 (Some(q), true) => return self.write(&q, out),
-                // Only answers beyond the limits: name the joint furthest out.
-                (Some(q), false) => return Err(self.beyond(&q)),
+                // An answer found without limits: inside them once each
+                // angle is taken a turn round if need be, or else name the
+                // joint furthest out.
+                (Some(q), false) => {
+                    let mut wrapped = q;
+                    for (k, &(lo, hi)) in self.limits.iter().enumerate() {
+                        wrapped[k] = wrap_into(q[k], lo, hi);
+                    }
+                    let inside = (0..self.joints.len()).all(|k| within(wrapped[k], self.limits[k]));
+                    return if inside {
+                        self.write(&wrapped, out)
+                    } else {
+                        Err(self.beyond(&wrapped))
+                    };
+                }
                 (None, false) => return Err(self.reason(&first)),
                 (None, true) => {}
             }
@@ -170,7 +201,7 @@ impl ArmIk {
     fn beyond(&self, q: &Angles) -> IkError {
         let mut worst = (0, 0.0, 0.0);
         for (k, &(lo, hi)) in self.limits.iter().enumerate() {
-            let a = wrap_into(q[k], lo, hi);
+            let a = q[k];
             let out = (lo - a).max(a - hi);
             if out > worst.1 {
                 worst = (k, out, a);
@@ -192,12 +223,25 @@ impl ArmIk {
         Ok(())
     }
 
-    /// Restart pose `m` of [`RESTARTS`]: bit 0 turns the first joint
-    /// towards the target (`toward`, rad about the base's z) or away from
-    /// it; the rest, read in base 3, put each of the next three joints at
-    /// its middle or 0.6 of its half-range either side.
+    /// Restart pose `m` of [`RESTARTS`]. The first [`GRID`]: bit 0 turns
+    /// the first joint towards the target (`toward`, rad about the base's
+    /// z) or away from it; the rest, read in base 3, put each of the next
+    /// three joints at its middle or 0.6 of its half-range either side.
+    /// Then points of a Halton sequence spread over the whole range of
+    /// every joint.
     fn restart(&self, m: usize, toward: f64) -> Angles {
         let mut q = Angles::zeros();
+        if m >= GRID {
+            for (k, &(lo, hi)) in self.limits.iter().enumerate() {
+                let (lo, hi) = if lo.is_finite() && hi.is_finite() {
+                    (lo, hi)
+                } else {
+                    (-std::f64::consts::PI, std::f64::consts::PI)
+                };
+                q[k] = lo + (hi - lo) * halton(m - GRID + 1, PRIMES[k]);
+            }
+            return q;
+        }
         for (k, &(lo, hi)) in self.limits.iter().enumerate() {
             let (mid, half) = if lo.is_finite() && hi.is_finite() {
                 (0.5 * (lo + hi), 0.5 * (hi - lo))
@@ -361,4 +405,16 @@ fn wrap_into(a: f64, lo: f64, hi: f64) -> f64 {
         .into_iter()
         .min_by(|x, y| outside(*x).total_cmp(&outside(*y)))
         .unwrap_or(a)
+}
+
+/// Element `i` of the Halton sequence in `base`, in [0, 1).
+fn halton(mut i: usize, base: usize) -> f64 {
+    let mut f = 1.0;
+    let mut r = 0.0;
+    while i > 0 {
+        f /= base as f64;
+        r += f * (i % base) as f64;
+        i /= base;
+    }
+    r
 }

@@ -131,7 +131,11 @@ impl ArmIk {
 
     /// Angles of the chain (radians, base first, into `out`) that put the
     /// frame at `target`, starting from `previous` (the chain's current or
-    /// last commanded angles). Allocates nothing.
+    /// last commanded angles). Allocates nothing. From a `previous` near
+    /// the answer (a step of a move) the answer stays on its branch; when
+    /// the search from `previous` finds nothing, it starts again from poses
+    /// spread over the joints' ranges, and that answer may lie on another
+    /// branch (a caller moving in steps should check the step's size).
     ///
     /// # Errors
     /// [`IkError::JointLimit`] naming a joint the answer would push past a

@@ -18,8 +18,10 @@
 //!   closed form, choosing the knee solution nearest the previous one.
 //! - [`ArmIk`] solves an arm chain up to [`MAX_DOF`] joints by damped
 //!   least squares inside the joint limits, from the previous solution (no
-//!   elbow or wrist flips): the position of a frame and, if asked, its
-//!   pitch and roll (what a 5-DOF arm like the SO-101 can choose).
+//!   elbow or wrist flips), restarting from poses spread over the joints'
+//!   ranges when that leads nowhere: the position of a frame and, if
+//!   asked, its pitch and roll (what a 5-DOF arm like the SO-101 can
+//!   choose).
 //!
 //! Angles are radians and lengths millimetres throughout; the caller
 //! converts the robot file's angle unit. Failures are typed ([`IkError`]):

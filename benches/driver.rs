@@ -15,9 +15,17 @@ use servobus_protocol::registers::Series;
 /// Takes every frame and answers nothing (a SYNC WRITE waits for no reply).
 struct Sink {
     bytes: u64,
+    clock: ManualClock,
 }
 
 impl Transport for Sink {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        &self.clock
+    }
+    fn baud(&self) -> u32 {
+        1_000_000
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.bytes += bytes.len() as u64;
         Ok(())
@@ -37,8 +45,14 @@ pub fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("driver/sync_write");
     let ids: [u8; 64] = core::array::from_fn(|i| i as u8 + 1);
     let data: [u8; 64 * 7] = core::array::from_fn(|i| i as u8);
-    let settings = BusSettings::new(Series::Sts, 1_000_000);
-    let mut bus = Bus::new(Sink { bytes: 0 }, ManualClock::new(), settings);
+    let settings = BusSettings::new(Series::Sts);
+    let mut bus = Bus::new(
+        Sink {
+            bytes: 0,
+            clock: ManualClock::new(),
+        },
+        settings,
+    );
     for n in [18usize, 64] {
         g.bench_function(BenchmarkId::new("L7", n), |b| {
             b.iter(|| {

@@ -5,6 +5,8 @@
 //! and the built-in simulator lives in [`servobus_runtime::sim`].
 #![warn(missing_docs)]
 
-pub mod builtin;
+/// The shipped robots, motions and simulator examples, by name (the
+/// configuration crate's table).
+pub use servobus_config::builtin;
 pub mod doctor;
 pub mod monitor;

@@ -64,15 +64,23 @@ fn a_lerobot_file_goes_through_calibrate_and_comes_back_identical() {
 }
 
 #[test]
-fn play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
+fn plan_play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
     let dir = scratch("calib-missing");
     let robot = robot_naming(&dir, "arm.calibration.yaml");
     let sim = Sim::start(&dir);
     let (port, robot) = (sim.port(), arg(&robot));
     let before = sim.read("2", "present_position");
     let wave = "configs/motions/arm-wave.yaml";
+    // play refuses the robot as it loads it (an input error: exit 2).
     let out = servobus(&["play", wave, "--port", port, "--robot", robot]);
-    assert_refused(&out, "does not exist");
+    let (_, err) = exited(&out, 2);
+    says(
+        &err,
+        &[
+            "arm.calibration.yaml does not exist",
+            "servobus calibrate --robot",
+        ],
+    );
     let out = servobus(&[
         "bench",
         "--seconds",
@@ -86,8 +94,21 @@ fn play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
     // Torque was never switched on, and the joint is where it was.
     assert_eq!(sim.read("2", "torque_enable"), 0);
     assert_eq!(sim.read("2", "present_position"), before);
-    // On the built-in simulator (no port) the same robot still plays.
-    servobus_ok(&["plan", wave, "--robot", robot]);
+    // Nor is it planned, or played on the built-in simulator: its limits
+    // are the calibration's.
+    for args in [
+        &["plan", wave, "--robot", robot][..],
+        &["play", wave, "--fast", "--robot", robot],
+    ] {
+        let (_, err) = exited(&servobus(args), 2);
+        says(
+            &err,
+            &[
+                "calibration: the calibration file",
+                "arm.calibration.yaml does not exist",
+            ],
+        );
+    }
     sim.stop();
 }
 

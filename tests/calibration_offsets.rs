@@ -17,14 +17,7 @@ use common::{arg, read_truth, repo, scratch, stdout, write_file, Sim};
 
 /// The pose the hand holds, deg, in the robot's joint order.
 const HELD: [f64; 6] = [45.0, 60.0, 60.0, 20.0, 90.0, 30.0];
-const NAMES: [&str; 6] = [
-    "shoulder_pan",
-    "shoulder_lift",
-    "elbow_flex",
-    "wrist_flex",
-    "wrist_roll",
-    "gripper",
-];
+const NAMES: [&str; 6] = common::SO101_JOINTS;
 
 /// How far a first reading may be from the truth, deg.
 const WITHIN_DEG: f64 = 0.5;

@@ -164,14 +164,7 @@ fn the_first_arm_walkthrough_runs_on_its_simulator_twin() {
     let motion: serde_yaml::Value =
         serde_yaml::from_str(&std::fs::read_to_string(&taught).expect("taught.yaml"))
             .expect("YAML");
-    let names = [
-        "shoulder_pan",
-        "shoulder_lift",
-        "elbow_flex",
-        "wrist_flex",
-        "wrist_roll",
-        "gripper",
-    ];
+    let names = common::SO101_JOINTS;
     let poses: Vec<Vec<f64>> = motion["keyframes"]
         .as_sequence()
         .expect("keyframes")

@@ -131,11 +131,17 @@ fn installed_binary_works_from_an_empty_directory() {
         ],
     );
     sim.wait_for(false, "serving", |l| l.starts_with("serving 6 servos on"));
-    let scan = run(&bin, &sim_dir, &["scan", "--port", common::arg(&link)]);
+    // One servo answers (a full scan on a loaded machine may see a late
+    // reply as a clash; the bus tools' own tests cover scanning).
+    let ping = run(
+        &bin,
+        &sim_dir,
+        &["ping", "--port", common::arg(&link), "--id", "1"],
+    );
     assert!(
-        String::from_utf8_lossy(&scan.stdout).contains("STS3215"),
-        "scan: {}",
-        String::from_utf8_lossy(&scan.stdout)
+        String::from_utf8_lossy(&ping.stdout).contains("servo 1 answered"),
+        "ping: {}",
+        String::from_utf8_lossy(&ping.stdout)
     );
     sim.interrupt();
     let (status, _, err) = sim.finish();

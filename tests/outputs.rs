@@ -288,39 +288,27 @@ fn a_directory_no_file_can_be_created_in_refuses_before_the_run() {
 #[test]
 fn a_failed_teach_leaves_no_motion_file() {
     let dir = empty("outputs-teach");
-    let out = servobus_in(
-        &dir,
-        &[
-            "teach",
-            "--robot",
-            arg(&repo(SO101)),
-            "--port",
-            "/nonexistent/ttyACM0",
-            "--yes",
-            "-o",
-            "t.yaml",
-        ],
-    );
-    exited(&out, 2);
-    assert!(names(&dir).is_empty(), "{:?}", names(&dir));
-
-    std::fs::write(dir.join("t.yaml"), "yesterday's take\n").expect("old take");
-    exited(
-        &servobus_in(
+    let robot = repo(SO101);
+    let teach = || {
+        servobus_in(
             &dir,
             &[
                 "teach",
                 "--robot",
-                arg(&repo(SO101)),
+                arg(&robot),
                 "--port",
                 "/nonexistent/ttyACM0",
                 "--yes",
                 "-o",
                 "t.yaml",
             ],
-        ),
-        2,
-    );
+        )
+    };
+    exited(&teach(), 2);
+    assert!(names(&dir).is_empty(), "{:?}", names(&dir));
+
+    std::fs::write(dir.join("t.yaml"), "yesterday's take\n").expect("old take");
+    exited(&teach(), 2);
     assert_eq!(names(&dir), ["t.yaml"]);
     assert_eq!(
         std::fs::read_to_string(dir.join("t.yaml")).expect("read"),

@@ -28,7 +28,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::Clock;
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, RateRemedy, Robot};
+use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 use servobus_runtime::stats::Histogram;
 use servobus_sim::PtyServer;
 
@@ -162,7 +162,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     for bus in &mut robot.buses {
         bus.round_robin |= args.round_robin;
         if let Err(why) = bus.check_rate(robot.rate_hz) {
-            let why = why.with_remedy(RateRemedy::Flag);
+            let why = super::rate_advice(&why);
             return Err(super::exit::input(format!(
                 "robot `{}`, bus `{}`: its rate {}",
                 robot.name, bus.name, why

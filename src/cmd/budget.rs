@@ -15,7 +15,7 @@ pub struct Args {
     #[arg(long, value_parser = super::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::rate_arg)]
     pub rate: Option<f64>,
     /// Print one JSON object.
     #[arg(long)]
@@ -58,12 +58,8 @@ struct Budget {
 /// Runs `servobus budget`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot_any_rate(&args.robot)?;
+    // Both checked: `--rate` by its parser, the robot's rate by the loader.
     let rate = args.rate.unwrap_or(robot.rate_hz);
-    if !(rate.is_finite() && rate > 0.0) {
-        return Err(super::exit::input(format!(
-            "--rate must be a positive number of Hz, got {rate}"
-        )));
-    }
     let mut out = Budget { buses: Vec::new() };
     let mut text = String::new();
     // The rate fits when every bus reads every servo each cycle, or runs a

@@ -39,7 +39,7 @@ pub struct PortArgs {
     pub port: String,
     /// The adapter's latency per transaction, in microseconds (default: the
     /// FTDI latency timer when the adapter is an FTDI one, else 1000).
-    #[arg(long, value_name = "US")]
+    #[arg(long, value_name = "US", value_parser = super::latency_us_arg)]
     pub latency_us: Option<u64>,
 }
 
@@ -52,8 +52,8 @@ pub struct ScanArgs {
     /// Port and latency.
     #[command(flatten)]
     pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
+    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
     pub baud: u32,
     /// Try every baud rate of the servo baud table.
     #[arg(long, conflicts_with = "baud")]
@@ -69,8 +69,8 @@ pub struct ServoArgs {
     /// Port and latency.
     #[command(flatten)]
     pub port: PortArgs,
-    /// Baud rate.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
+    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
     pub baud: u32,
     /// Servo ID (for set-id: the servo's current ID).
     #[arg(long)]
@@ -184,17 +184,11 @@ impl Found {
     }
 }
 
-/// The model behind a model-number register, trying both byte orders.
+/// The model behind a model-number register, trying both byte orders, and
+/// its number (read little-endian when no model has it).
 fn model_of(bytes: [u8; 2]) -> (u16, Option<&'static Model>) {
-    let le = u16::from_le_bytes(bytes);
-    if let Some(m) = registers::model_by_number(le) {
-        return (le, Some(m));
-    }
-    let be = u16::from_be_bytes(bytes);
-    match registers::model_by_number(be) {
-        Some(m) => (be, Some(m)),
-        None => (le, None),
-    }
+    let model = registers::model_by_register(bytes);
+    (model.map_or(u16::from_le_bytes(bytes), |m| m.number), model)
 }
 
 /// Identifies servo `id` and switches the bus to its series.
@@ -223,7 +217,7 @@ fn identify(bus: &mut SerialBus, id: u8) -> Result<Found, BusError> {
         };
     Ok(Found {
         id,
-        baud: bus.settings().link.baud,
+        baud: bus.baud(),
         model,
         model_number,
         firmware: (head[0], head[1]),
@@ -380,15 +374,8 @@ fn sort_answer(
 /// Moves the port and the bus's deadlines to `baud` (nothing when already
 /// there).
 fn switch_baud(bus: &mut SerialBus, baud: u32, port: &str) -> anyhow::Result<()> {
-    if bus.settings().link.baud != baud {
-        bus.transport_mut()
-            .set_baud(baud)
-            .with_context(|| format!("cannot set {port} to {baud} baud"))?;
-        let mut s = *bus.settings();
-        s.link.baud = baud;
-        bus.set_settings(s);
-    }
-    Ok(())
+    bus.set_baud(baud)
+        .with_context(|| format!("cannot set {port} to {baud} baud"))
 }
 
 /// Measures the latency on servo `first` and, when it exceeds the one the

@@ -7,7 +7,7 @@
 use std::process::ExitCode;
 
 use anyhow::Context;
-use servobus::doctor::{self, BaudSwitch, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
+use servobus::doctor::{self, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot};
 
@@ -123,7 +123,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
 
 /// Examines the robot's bus `index` through `bus` and, with `--fix`,
 /// applies the fixes and examines it again.
-fn check<T: Transport + BaudSwitch, C: Clock>(
+fn check<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     (robot, index): (&Robot, usize),
     target: Target,

@@ -98,12 +98,7 @@ pub(crate) fn open_bus_quietly(
         .with_context(|| format!("bus `{}`: cannot open {port}", cfg.name))?;
     transport.set_busy_poll(cfg.busy_poll);
     let latency = allowance.latency(cfg.latency, &transport);
-    let clock = *transport.clock();
-    Ok(Bus::new(
-        transport,
-        clock,
-        bus_settings(cfg).with_latency(latency),
-    ))
+    Ok(Bus::new(transport, bus_settings(cfg).with_latency(latency)))
 }
 
 /// [`open_bus_quietly`], warning about a slow FTDI adapter.
@@ -136,9 +131,8 @@ pub(crate) fn open_plain_bus(
     let transport = open_port(port, baud).with_context(|| format!("cannot open {port}"))?;
     warn_slow_adapter(&transport);
     let latency = latency.unwrap_or_else(|| Allowance::Assumed.latency(Duration::ZERO, &transport));
-    let clock = *transport.clock();
-    let settings = BusSettings::new(series, baud).with_latency(latency);
-    Ok(Bus::new(transport, clock, settings))
+    let settings = BusSettings::new(series).with_latency(latency);
+    Ok(Bus::new(transport, settings))
 }
 
 /// The port of each bus of `robot`: `port` (the command line's `--port`)

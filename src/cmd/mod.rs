@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use servobus_runtime::config::limits;
 
 mod bench;
 mod budget;
@@ -191,6 +192,17 @@ pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible>
     Ok(servobus::builtin::motion_path_or_name(arg.as_ref()))
 }
 
+/// A rate that does not fit a bus, with the library's advice and this
+/// command line's own switch for a round-robin read.
+pub(crate) fn rate_advice(why: &servobus_runtime::config::RateError) -> String {
+    let flag = if why.round_robin_helps() {
+        " (for one run: --round-robin)"
+    } else {
+        ""
+    };
+    format!("{}{flag}", why.with_advice())
+}
+
 /// Parses a simulator mounting argument: a file, or a built-in's name.
 pub(crate) fn mounting_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     use servobus::builtin::{path_or_name, Kind};
@@ -201,6 +213,35 @@ pub(crate) fn mounting_arg(arg: &str) -> Result<PathBuf, std::convert::Infallibl
 pub(crate) fn hand_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     use servobus::builtin::{path_or_name, Kind};
     Ok(path_or_name(Kind::Hand, arg.as_ref()))
+}
+
+/// Parses a control rate (`--rate`): a number of Hz within the range
+/// servobus runs ([`limits::check_rate_hz`]).
+pub(crate) fn rate_arg(arg: &str) -> Result<f64, String> {
+    let rate: f64 = arg
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a number of Hz"))?;
+    limits::check_rate_hz(rate).map_err(|e| e.to_string())
+}
+
+/// Parses a baud rate (`--baud`): one the servos can be set to
+/// ([`limits::check_baud`]).
+pub(crate) fn baud_arg(arg: &str) -> Result<u32, String> {
+    let baud: u32 = arg
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a baud rate"))?;
+    limits::check_baud(baud).map_err(|e| e.to_string())
+}
+
+/// Parses an adapter latency (`--latency-us`), at most
+/// [`limits::MAX_LATENCY`].
+pub(crate) fn latency_us_arg(arg: &str) -> Result<u64, String> {
+    let us: u64 = arg
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a whole number of microseconds"))?;
+    limits::check_latency_us(us)
+        .map(|_| us)
+        .map_err(|e| e.to_string())
 }
 
 /// Fails at once, before anything moves, when the file `path` given with

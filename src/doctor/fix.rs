@@ -10,8 +10,8 @@ use servobus_protocol::registers::addr;
 use servobus_protocol::registers::Series;
 use servobus_runtime::calibrate::{prepare_bus, Refusal};
 
-use super::probe::{switch, MAX_RETURN_DELAY};
-use super::{Action, BaudSwitch, Finding, Fixing};
+use super::probe::MAX_RETURN_DELAY;
+use super::{Action, Finding, Fixing};
 
 /// What became of one fix.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -34,7 +34,7 @@ pub struct FixOutcome {
 ///
 /// # Errors
 /// Only when the transport fails; a fix that fails is an outcome.
-pub fn apply<T: Transport + BaudSwitch, C: Clock>(
+pub fn apply<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     findings: &[Finding],
     how: &Fixing<'_>,
@@ -188,7 +188,7 @@ fn store_offset<T: Transport, C: Clock>(
 /// The bus's; [`BusError::Verify`] when the servo does not hold the index
 /// at the new rate; [`BusError::InvalidRequest`] for an index outside the
 /// baud table.
-pub fn change_baud<T: Transport + BaudSwitch, C: Clock>(
+pub fn change_baud<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     id: u8,
     baud: u32,
@@ -198,7 +198,7 @@ pub fn change_baud<T: Transport + BaudSwitch, C: Clock>(
         "baud-rate index outside the table",
     ))?;
     let lock = bus.settings().series.map().lock_address;
-    switch(bus, baud)?;
+    bus.set_baud(baud)?;
     let unlocked = bus.write(id, lock, &[0]);
     let written = unlocked.and_then(|_| match bus.write(id, addr::BAUD_RATE, &[index]) {
         // The servo may switch before its reply leaves: the read-back at
@@ -206,7 +206,7 @@ pub fn change_baud<T: Transport + BaudSwitch, C: Clock>(
         Err(e) if e.is_retryable() => Ok(None),
         other => other,
     });
-    switch(bus, home)?;
+    bus.set_baud(home)?;
     written?;
     let mut back = [0u8; 1];
     let verified = bus.read(id, addr::BAUD_RATE, &mut back).and_then(|_| {
@@ -223,9 +223,9 @@ pub fn change_baud<T: Transport + BaudSwitch, C: Clock>(
     });
     // Lock again at whichever rate the servo now hears.
     if bus.write(id, lock, &[1]).is_err() {
-        switch(bus, baud)?;
+        bus.set_baud(baud)?;
         let _ = bus.write(id, lock, &[1]);
-        switch(bus, home)?;
+        bus.set_baud(home)?;
     }
     verified
 }

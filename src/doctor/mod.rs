@@ -19,10 +19,8 @@ mod fix;
 mod probe;
 
 use serde::Serialize;
-use servobus_driver::{SerialTransport, TransportError};
 use servobus_protocol::registers::{Register, Series};
 use servobus_runtime::config::Robot;
-use servobus_sim::SimBus;
 
 pub use checks::{rated_voltage_dv, ServoState};
 pub use fix::{apply, change_baud, FixOutcome};
@@ -190,28 +188,5 @@ pub fn exit_status(findings: &[Finding]) -> u8 {
         Some(Severity::Error) => 2,
         Some(Severity::Warning) => 1,
         _ => 0,
-    }
-}
-
-/// A transport whose baud rate can change (to look for servos at other
-/// rates).
-pub trait BaudSwitch {
-    /// Switches to `baud`.
-    ///
-    /// # Errors
-    /// The transport's, when the rate cannot be set.
-    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError>;
-}
-
-impl BaudSwitch for SimBus {
-    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError> {
-        self.set_baud(baud);
-        Ok(())
-    }
-}
-
-impl<C: servobus_driver::Clock> BaudSwitch for SerialTransport<C> {
-    fn switch_baud(&mut self, baud: u32) -> Result<(), TransportError> {
-        self.set_baud(baud)
     }
 }

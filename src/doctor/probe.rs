@@ -13,7 +13,7 @@ use servobus_runtime::config::{BusConfig, JointConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, BaudSwitch, Finding, Severity, Step};
+use super::{Action, Finding, Severity, Step};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -143,7 +143,7 @@ impl Ctx<'_> {
 /// # Errors
 /// Only when the transport fails ([`BusError::Transport`]); servos that do
 /// not answer are findings, not errors.
-pub fn examine<T: Transport + BaudSwitch, C: Clock>(
+pub fn examine<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     robot: &Robot,
     cfg: &BusConfig,
@@ -162,7 +162,7 @@ pub fn examine<T: Transport + BaudSwitch, C: Clock>(
     result
 }
 
-fn examine_inner<T: Transport + BaudSwitch, C: Clock>(
+fn examine_inner<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     ctx: &Ctx<'_>,
     kind: &PortKind,
@@ -389,7 +389,7 @@ fn read_state<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<Ser
 /// Looks for the `missing` servos at every other baud rate of the servo
 /// table; those found are taken out of `missing`. The transport is back at
 /// the bus's rate afterwards.
-fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
+fn find_at_other_bauds<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     ctx: &Ctx<'_>,
     base: BusSettings,
@@ -404,10 +404,8 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
         .filter_map(registers::baud_rate)
         .filter(|&b| b != home);
     for baud in rates {
-        switch(bus, baud)?;
-        let mut s = base.with_retries(1);
-        s.link.baud = baud;
-        bus.set_settings(s);
+        bus.set_baud(baud)?;
+        bus.set_settings(base.with_retries(1));
         let mut found = Vec::new();
         for &id in missing.iter() {
             if answers(bus, id)? {
@@ -436,19 +434,5 @@ fn find_at_other_bauds<T: Transport + BaudSwitch, C: Clock>(
             findings.push(f);
         }
     }
-    switch(bus, home)
-}
-
-/// Moves the transport and the bus's deadlines to `baud`.
-pub(crate) fn switch<T: Transport + BaudSwitch, C: Clock>(
-    bus: &mut Bus<T, C>,
-    baud: u32,
-) -> Result<(), BusError> {
-    bus.transport_mut()
-        .switch_baud(baud)
-        .map_err(BusError::Transport)?;
-    let mut s = *bus.settings();
-    s.link.baud = baud;
-    bus.set_settings(s);
-    Ok(())
+    bus.set_baud(home)
 }

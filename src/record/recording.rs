@@ -2,8 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::Context;
-use servobus_runtime::config::Units;
+use servobus_runtime::config::{limits, ConfigError, Units};
 
 /// A recorded path read back for `servobus play`: sample times and every
 /// robot joint's position, in radians.
@@ -24,9 +23,18 @@ pub fn read_recording(
     path: &Path,
     robot: &servobus_runtime::config::Robot,
 ) -> anyhow::Result<Recording> {
-    let mut reader = csv::Reader::from_path(path)
-        .with_context(|| format!("cannot read the recording {}", path.display()))?;
-    let header: Vec<String> = reader.headers()?.iter().map(str::to_owned).collect();
+    let bytes = limits::read_capped(path, limits::MAX_RECORDING_BYTES)?;
+    // Every refusal is an input error (exit 2) at its place in the file.
+    let refuse = |line: usize, column: usize, what: String| {
+        ConfigError::invalid(path, line, column, "", what)
+    };
+    let mut reader = csv::Reader::from_reader(bytes.as_slice());
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| refuse(1, 1, e.to_string()))?
+        .iter()
+        .map(str::to_owned)
+        .collect();
     let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
     let rest: Vec<f64> = robot
         .joints()
@@ -35,9 +43,23 @@ pub fn read_recording(
     // Per robot joint, its (time, rad) series.
     let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); names.len()];
     let col = |n: &str| header.iter().position(|h| h == n);
-    let bad = |row: usize, what: &str| anyhow::anyhow!("{}: row {row}: {what}", path.display());
+    let bad = |line: usize, what: &str| refuse(line, 1, what.to_owned());
+    // The number in column `c` of a row at `line`; `None` when empty.
+    let number = |row: &csv::StringRecord, line: usize, c: usize| {
+        let Some(text) = row.get(c).map(str::trim).filter(|s| !s.is_empty()) else {
+            return Ok(None);
+        };
+        text.parse::<f64>().map(Some).map_err(|_| {
+            let name = header.get(c).map_or("", String::as_str);
+            refuse(
+                line,
+                c + 1,
+                format!("`{text}` in column `{name}` is not a number"),
+            )
+        })
+    };
     let Some(time_col) = col("time_s") else {
-        anyhow::bail!("{}: no `time_s` column", path.display());
+        return Err(refuse(1, 1, "no `time_s` column".to_owned()).into());
     };
     if let Some(joint_col) = col("joint") {
         let unit_of = |prefix: &str| {
@@ -47,24 +69,23 @@ pub fn read_recording(
             })
         };
         let (Some((cmd, units)), measured) = (unit_of("commanded_"), unit_of("measured_")) else {
-            anyhow::bail!(
-                "{}: a `play --log` file needs a commanded_<unit> column",
-                path.display()
-            );
+            let what = "a `play --log` file needs a commanded_<unit> column";
+            return Err(refuse(1, 1, what.to_owned()).into());
         };
         for (i, row) in reader.records().enumerate() {
-            let row = row?;
-            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
-            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            let row = row.map_err(|e| refuse(i + 2, 1, e.to_string()))?;
+            check_rows(path, i)?;
+            let num = |c: usize| number(&row, i + 2, c);
+            let t = num(time_col)?.ok_or_else(|| bad(i + 2, "no time"))?;
             let Some(j) = row
                 .get(joint_col)
                 .and_then(|n| names.iter().position(|x| *x == n))
             else {
                 continue;
             };
-            let value = match measured.and_then(|(c, _)| num(c)) {
-                Some(v) => v?,
-                None => num(cmd).ok_or_else(|| bad(i + 2, "no position"))??,
+            let value = match measured.map(|(c, _)| num(c)).transpose()?.flatten() {
+                Some(v) => v,
+                None => num(cmd)?.ok_or_else(|| bad(i + 2, "no position"))?,
             };
             series[j].push((t, units.to_rad(value)));
         }
@@ -79,20 +100,21 @@ pub fn read_recording(
             })
             .collect();
         if cols.iter().all(Option::is_none) {
-            anyhow::bail!(
-                "{}: no column names a joint of {} (joints: {})",
-                path.display(),
+            let what = format!(
+                "no column names a joint of {} (joints: {})",
                 robot.name,
                 names.join(", ")
             );
+            return Err(refuse(1, 1, what).into());
         }
         for (i, row) in reader.records().enumerate() {
-            let row = row?;
-            let num = |c: usize| row.get(c).filter(|s| !s.is_empty()).map(str::parse::<f64>);
-            let t = num(time_col).ok_or_else(|| bad(i + 2, "no time"))??;
+            let row = row.map_err(|e| refuse(i + 2, 1, e.to_string()))?;
+            check_rows(path, i)?;
+            let num = |c: usize| number(&row, i + 2, c);
+            let t = num(time_col)?.ok_or_else(|| bad(i + 2, "no time"))?;
             for (j, c) in cols.iter().enumerate() {
                 if let Some((c, u)) = c {
-                    let v = num(*c).ok_or_else(|| bad(i + 2, "a position is missing"))??;
+                    let v = num(*c)?.ok_or_else(|| bad(i + 2, "a position is missing"))?;
                     series[j].push((t, u.to_rad(v)));
                 }
             }
@@ -111,7 +133,7 @@ pub fn read_recording(
         }
     }
     if times.len() < 2 {
-        anyhow::bail!("{}: fewer than two samples", path.display());
+        return Err(refuse(1, 1, "fewer than two samples".to_owned()).into());
     }
     let mut samples = vec![Vec::with_capacity(names.len()); times.len()];
     for (j, s) in series.iter().enumerate() {
@@ -130,6 +152,16 @@ pub fn read_recording(
         samples,
         missing,
     })
+}
+
+/// Refuses row `index` (0-based, after the header) past
+/// [`limits::MAX_RECORDING_ROWS`].
+fn check_rows(path: &Path, index: usize) -> Result<(), ConfigError> {
+    if index < limits::MAX_RECORDING_ROWS {
+        return Ok(());
+    }
+    let e = limits::LimitError::Rows;
+    Err(ConfigError::invalid(path, index + 2, 1, "", e.to_string()))
 }
 
 /// The series at `t`, linearly interpolated (held beyond its ends).

@@ -37,6 +37,16 @@ pub fn joint_names(path: &str) -> Vec<String> {
     names.collect()
 }
 
+/// The SO-101's joints, in its robot file's order.
+pub const SO101_JOINTS: [&str; 6] = [
+    "shoulder_pan",
+    "shoulder_lift",
+    "elbow_flex",
+    "wrist_flex",
+    "wrist_roll",
+    "gripper",
+];
+
 /// A path as the `&str` a command line takes.
 pub fn arg(path: &Path) -> &str {
     path.to_str().expect("a UTF-8 path")

@@ -35,7 +35,7 @@ pub fn virtual_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, Manual
     let sim = SimBus::new(clock.clone(), cfg.baud)
         .with_servos(servos)
         .with_faults(faults);
-    let bus = Bus::new(sim.clone(), clock, bus_settings(cfg));
+    let bus = Bus::new(sim.clone(), bus_settings(cfg));
     (sim, bus)
 }
 

@@ -91,11 +91,7 @@ fn simulated(args: &Args) -> Servos<SimBus, ManualClock> {
             .with_position(1024 + 400 * i as i32)
     });
     let sim = SimBus::new(clock.clone(), args.baud).with_servos(servos);
-    Servos::new(Bus::new(
-        sim,
-        clock,
-        BusSettings::new(Series::Sts, args.baud),
-    ))
+    Servos::new(Bus::new(sim, BusSettings::new(Series::Sts)))
 }
 
 /// Degrees per step of servo `id`, from the model it reports.

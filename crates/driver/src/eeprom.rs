@@ -51,7 +51,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             .and_then(|at| data.get(at).copied())
             .unwrap_or(id);
         if new_id > servobus_protocol::MAX_ID {
-            return Err(BusError::InvalidRequest("new ID above 253"));
+            return Err(BusError::IdOutOfRange { id: new_id });
         }
         self.write(id, lock, &[0])?;
         match self.write_verify(id, new_id, address, data) {

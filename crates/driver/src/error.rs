@@ -2,7 +2,9 @@
 
 use std::time::Duration;
 
+use servobus_protocol::registers::Series;
 use servobus_protocol::{EncodeError, StatusFlags};
+use servobus_timing::StatusLevel;
 
 use crate::TransportError;
 
@@ -72,11 +74,72 @@ pub enum BusError {
     /// The request could not be encoded (an ID out of range, too much data).
     #[error("cannot encode the request: {0}")]
     Encode(#[from] EncodeError),
-    /// A value does not fit its register (e.g. an offset beyond +-2047).
+    /// A value does not fit its register (e.g. an offset beyond +-2047), or
+    /// bytes read do not decode as one.
     #[error(transparent)]
     Value(servobus_protocol::registers::ValueError),
-    /// The arguments make no sense (e.g. a SYNC WRITE whose data is not a
-    /// whole number of blocks, or a repeated ID in a SYNC READ).
+    /// A servo is named twice in a request that takes each servo once (a
+    /// SYNC READ or SYNC WRITE). Nothing is sent.
+    #[error("servo {id} appears twice in one request")]
+    DuplicateId {
+        /// The repeated ID.
+        id: u8,
+    },
+    /// An ID above the highest a servo can have (253) where a servo's ID is
+    /// needed (a SYNC READ, a new ID). Nothing is sent.
+    #[error("ID {id} is above 253, the highest a servo can have")]
+    IdOutOfRange {
+        /// The ID given.
+        id: u8,
+    },
+    /// A write to a register the servos only let be read.
+    #[error("register {address} is read-only")]
+    ReadOnly {
+        /// Its address.
+        address: u8,
+    },
+    /// A register the bus's series does not have at that address with that
+    /// layout (e.g. the signed STS position on SCS servos).
+    #[error("register {address} is not one of the {series:?} servos' registers")]
+    WrongSeries {
+        /// The register's address.
+        address: u8,
+        /// The bus's series.
+        series: Series,
+    },
+    /// A caller's buffer does not hold one result per servo of the request.
+    #[error("the buffer holds {actual} results for a request of {expected} servos")]
+    BufferLength {
+        /// Results the request has (one per servo).
+        expected: usize,
+        /// Room in the buffer.
+        actual: usize,
+    },
+    /// The servos' status level sends no reply to a request that needs one.
+    #[error("the servos' status level ({level:?}) sends no reply to this request")]
+    NotAnswered {
+        /// The status level of the bus's settings.
+        level: StatusLevel,
+    },
+    /// A servo's model-number register holds no known model, in either
+    /// series' byte order.
+    #[error("servo {id} reports model number {number}, which is not a known model")]
+    UnknownModel {
+        /// The servo.
+        id: u8,
+        /// Its model-number register as read (in the bus's byte order, or
+        /// little-endian while the series is being found out).
+        number: u16,
+    },
+    /// No servo answered a PING at the bus's baud rate.
+    #[error("no servo answers at {baud} baud")]
+    NoServo {
+        /// The rate asked at.
+        baud: u32,
+    },
+    /// The arguments make no sense in another way than the variants above
+    /// name (e.g. a SYNC WRITE whose data is not a whole number of blocks,
+    /// a SYNC READ of no servos).
     #[error("invalid request: {0}")]
     InvalidRequest(&'static str),
     /// The transport failed for another reason than a timeout: the port is

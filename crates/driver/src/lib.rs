@@ -56,24 +56,42 @@
 //! # Ok::<(), servobus_driver::BusError>(())
 //! ```
 //!
+//! [`Servos::open`] finds out which servos are on the port (a PING and a
+//! read of the model number of the first servo that answers) and reads
+//! STS/SMS or SCS registers accordingly; [`Servos::open_series`] takes the
+//! series instead. [`Servos::sync_read_into`] fills a buffer of the
+//! caller's, so a control loop reads without allocating.
+//!
 //! The example `positions` does this on a real port (`--port`) or on
 //! simulated servos (`--sim`):
 //! `cargo run -p servobus-driver --example positions -- --sim --nudge 100`.
 //!
 //! # The byte-level bus
 //!
+//! A [`Bus`] is built from a [`Transport`] and [`BusSettings`], each fact
+//! once: the transport owns the clock its deadlines are measured on and
+//! the baud rate (a [`SerialTransport`] is opened at a rate on a clock, the
+//! simulator's bus is made at one on its [`ManualClock`]); the settings
+//! carry the rest (series, latency, return delay, retries).
+//! [`Bus::set_baud`] is the one way to change the rate: it moves the port
+//! and every deadline together.
+//!
 //! A bus over a transport that answers like one servo with ID 1 (a real
-//! program would use [`SerialTransport`] and [`SystemClock`], or the
-//! simulator's bus and a [`ManualClock`]):
+//! program would use [`SerialTransport`] on a [`SystemClock`], or the
+//! simulator's bus):
 //!
 //! ```
 //! use std::time::Duration;
 //! use servobus_driver::{Bus, BusSettings, ManualClock, Transport, TransportError};
 //! use servobus_protocol::{encode, parse_frame, registers::Series, StatusFlags};
 //!
-//! /// Answers every READ of servo 1 with the bytes 0x00 0x08 (2048).
-//! struct OneServo { pending: Vec<u8> }
+//! /// Answers every READ of servo 1 with the bytes 0x00 0x08 (2048), at
+//! /// 1 Mbps, with deadlines on `clock`.
+//! struct OneServo { pending: Vec<u8>, clock: ManualClock }
 //! impl Transport for OneServo {
+//!     type Clock = ManualClock;
+//!     fn clock(&self) -> &ManualClock { &self.clock }
+//!     fn baud(&self) -> u32 { 1_000_000 }
 //!     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
 //!         if let Ok((p, _)) = parse_frame(bytes) {
 //!             let mut buf = [0u8; 16];
@@ -95,8 +113,10 @@
 //!     }
 //! }
 //!
-//! let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
-//! let mut bus = Bus::new(OneServo { pending: Vec::new() }, ManualClock::new(), settings);
+//! let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
+//! // The clock and the baud rate come from the transport; the settings
+//! // carry the rest.
+//! let mut bus = Bus::new(OneServo { pending: Vec::new(), clock: ManualClock::new() }, settings);
 //! let mut position = [0u8; 2];
 //! let flags = bus.read(1, 56, &mut position)?;
 //! assert!(flags.is_ok());
@@ -126,7 +146,9 @@ pub use bus::{Bus, LatencyMeasurement};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]
-pub use serial::{ftdi_latency_timer, FtdiLatency, OpenError, OpenProblem, SerialTransport};
+pub use serial::{
+    ftdi_latency_timer, FtdiLatency, Holder, NotSerial, OpenError, OpenProblem, SerialTransport,
+};
 pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError};
 pub use servobus_timing::StatusLevel;
 pub use servos::Servos;
@@ -138,5 +160,5 @@ pub use servobus_protocol::registers;
 pub use servobus_protocol::registers::{Reg, Series};
 pub use servobus_protocol::StatusFlags;
 pub use servobus_timing::Link;
-pub use stats::{Counters, RttStats};
+pub use stats::{BusCounters, RttStats};
 pub use sync::{Missing, MissingReason, SyncRead, SyncReply, PATIENCE, PATIENT_TRIES};

@@ -28,13 +28,15 @@ use serialport::{ClearBuffer, DataBits, FlowControl, Parity, SerialPort, StopBit
 use crate::{Clock, Transport, TransportError};
 
 mod open_error;
-pub use open_error::{OpenError, OpenProblem};
+pub use open_error::{Holder, NotSerial, OpenError, OpenProblem};
 
 /// A serial port (or pseudo-terminal) as a [`Transport`], with deadlines on
 /// the time base of `C`.
 pub struct SerialTransport<C: Clock> {
     port: Box<dyn SerialPort>,
     clock: C,
+    /// The rate the port was last set to.
+    baud: u32,
     path: String,
     ftdi: Option<FtdiLatency>,
     busy_poll: bool,
@@ -44,6 +46,7 @@ impl<C: Clock> std::fmt::Debug for SerialTransport<C> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SerialTransport")
             .field("path", &self.path)
+            .field("baud", &self.baud)
             .field("ftdi", &self.ftdi)
             .field("busy_poll", &self.busy_poll)
             .finish_non_exhaustive()
@@ -85,6 +88,7 @@ impl<C: Clock> SerialTransport<C> {
         Ok(SerialTransport {
             port,
             clock,
+            baud,
             path: path.to_owned(),
             ftdi,
             busy_poll: false,
@@ -113,19 +117,6 @@ impl<C: Clock> SerialTransport<C> {
     /// Linux.
     pub fn ftdi_latency(&self) -> Option<&FtdiLatency> {
         self.ftdi.as_ref()
-    }
-
-    /// Changes the baud rate.
-    ///
-    /// # Errors
-    /// [`TransportError::Io`] when the port refuses it.
-    pub fn set_baud(&mut self, baud: u32) -> Result<(), TransportError> {
-        self.port.set_baud_rate(baud).map_err(serial_error)
-    }
-
-    /// The clock deadlines are measured on.
-    pub fn clock(&self) -> &C {
-        &self.clock
     }
 
     /// Whether the port is (a link to) a pseudo-terminal: a simulator such
@@ -253,6 +244,35 @@ fn io_error(e: io::Error) -> TransportError {
 }
 
 impl<C: Clock> Transport for SerialTransport<C> {
+    type Clock = C;
+
+    fn clock(&self) -> &C {
+        &self.clock
+    }
+
+    fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// Sets the port to `baud` (a bus changes its rate through
+    /// [`Bus::set_baud`](crate::Bus::set_baud), which calls this).
+    fn set_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        match self.port.set_baud_rate(baud) {
+            Ok(()) => {
+                self.baud = baud;
+                Ok(())
+            }
+            // The driver refusing the rate is not a broken port.
+            Err(e) if matches!(e.kind(), serialport::ErrorKind::InvalidInput) => {
+                Err(TransportError::BaudRefused {
+                    requested: baud,
+                    current: self.baud,
+                })
+            }
+            Err(e) => Err(serial_error(e)),
+        }
+    }
+
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         // Not a reply deadline: a liveness bound for a port that stopped
         // draining (a frame takes at most 27 ms on the wire even at 9600

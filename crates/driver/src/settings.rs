@@ -25,18 +25,25 @@ macro_rules! builders {
 /// use servobus_driver::BusSettings;
 /// use servobus_protocol::registers::Series;
 ///
-/// let s = BusSettings::new(Series::Sts, 1_000_000)
+/// let s = BusSettings::new(Series::Sts)
 ///     .with_latency(Duration::from_millis(1))
 ///     .with_retries(2);
-/// assert_eq!(s.link.baud, 1_000_000);
+/// assert_eq!(s.link.latency, Duration::from_millis(1));
 /// ```
+///
+/// The baud rate is not a setting: it belongs to the transport (given once,
+/// when the port or the simulator is opened), and the
+/// [`Bus`](crate::Bus) writes it into [`BusSettings::link`] when it is
+/// built and whenever the rate or the settings change.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct BusSettings {
     /// The servo family: register layout and byte order of this bus.
     pub series: Series,
-    /// Baud rate, adapter latency, turnaround and margin: every reply
-    /// deadline is derived from it.
+    /// Adapter latency, turnaround and margin, and the transport's baud
+    /// rate: every reply deadline is derived from it. The baud rate here is
+    /// the bus's to keep (a [`Bus`](crate::Bus) sets it from its transport);
+    /// one written here is overwritten.
     pub link: Link,
     /// The servos' return delay (register 7; 2 us per unit).
     pub return_delay: Duration,
@@ -59,12 +66,13 @@ pub struct BusSettings {
 }
 
 impl BusSettings {
-    /// Settings for a bus of `series` servos at `baud`: no adapter latency,
-    /// return delay 0, one retry, every instruction answered, echo skipped.
-    pub fn new(series: Series, baud: u32) -> Self {
+    /// Settings for a bus of `series` servos: no adapter latency, return
+    /// delay 0, one retry, every instruction answered, echo skipped. The
+    /// link's baud rate is the transport's, filled in by the bus.
+    pub fn new(series: Series) -> Self {
         BusSettings {
             series,
-            link: Link::new(baud),
+            link: Link::new(Self::UNPLACED_BAUD),
             return_delay: Duration::ZERO,
             retries: 1,
             replies: StatusLevel::All,
@@ -73,7 +81,15 @@ impl BusSettings {
         }
     }
 
+    /// The link's baud rate in settings not yet given to a bus (a bus
+    /// replaces it with its transport's): the servos' fastest rate, index 0
+    /// of their baud table and their factory setting, so that a deadline
+    /// computed from loose settings is still a plausible one.
+    pub const UNPLACED_BAUD: u32 = servobus_protocol::registers::MAX_SERVO_BAUD;
+
     builders! {
+        /// The same settings for servos of another series.
+        with_series(series: Series);
         /// The same settings with the adapter latency set.
         with_latency(link.latency: Duration);
         /// The same settings with the servos' return delay set.
@@ -86,7 +102,8 @@ impl BusSettings {
         with_echo(echo: bool);
         /// The same settings with strict status on or off.
         with_strict_status(strict_status: bool);
-        /// The same settings with the whole link replaced.
+        /// The same settings with the whole link replaced (its baud rate
+        /// is the bus's to set, as for [`BusSettings::link`]).
         with_link(link: Link);
     }
 }

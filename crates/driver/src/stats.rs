@@ -85,7 +85,7 @@ fn nanos(ns: u128) -> Duration {
 /// that servo (a SYNC READ of six servos is one bus transaction and one
 /// transaction for each of the six).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Counters {
+pub struct BusCounters {
     /// Transactions started (retries not included).
     pub transactions: u64,
     /// Requests sent again after a failure (each re-ask counts one).
@@ -110,9 +110,9 @@ pub struct Counters {
     pub rtt: RttStats,
 }
 
-impl Counters {
+impl BusCounters {
     /// Adds another set of counters into this one.
-    pub fn merge(&mut self, other: &Counters) {
+    pub fn merge(&mut self, other: &BusCounters) {
         self.transactions += other.transactions;
         self.retries += other.retries;
         self.timeouts += other.timeouts;

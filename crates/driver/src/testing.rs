@@ -37,6 +37,13 @@ impl Scripted {
 }
 
 impl Transport for Scripted {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        &self.clock
+    }
+    fn baud(&self) -> u32 {
+        1_000_000
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         let now = self.clock.now();
         self.sent.push(bytes.to_vec());
@@ -86,11 +93,8 @@ fn status(id: u8, flags: u8, params: &[u8]) -> Vec<u8> {
 
 fn bus(responder: Responder) -> (Bus<Scripted, ManualClock>, ManualClock) {
     let clock = ManualClock::new();
-    let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
-    (
-        Bus::new(Scripted::new(&clock, responder), clock.clone(), settings),
-        clock,
-    )
+    let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
+    (Bus::new(Scripted::new(&clock, responder), settings), clock)
 }
 
 #[test]

@@ -5,7 +5,10 @@
 use std::time::Duration;
 
 use servobus_alloc_count::{allocations, Counting};
-use servobus_driver::{Bus, BusSettings, Clock, ManualClock, Transport, TransportError};
+use servobus_driver::registers::sts;
+use servobus_driver::{
+    Bus, BusSettings, Clock, ManualClock, Missing, MissingReason, Servos, Transport, TransportError,
+};
 use servobus_protocol::registers::Series;
 use servobus_protocol::{encode, parse_frame, Instruction, StatusFlags};
 
@@ -25,6 +28,13 @@ struct FixedServos {
 }
 
 impl Transport for FixedServos {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        &self.clock
+    }
+    fn baud(&self) -> u32 {
+        1_000_000
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.clock
             .advance(Duration::from_micros(10) * bytes.len() as u32);
@@ -80,8 +90,8 @@ fn fixed_bus() -> (Bus<FixedServos, ManualClock>, ManualClock) {
         sent: [0; 4000],
         frames: 0,
     };
-    let settings = BusSettings::new(Series::Sts, 1_000_000).with_latency(Duration::from_millis(1));
-    (Bus::new(transport, clock.clone(), settings), clock)
+    let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
+    (Bus::new(transport, settings), clock)
 }
 
 #[test]
@@ -141,4 +151,30 @@ fn a_sync_write_of_several_frames_does_not_allocate_even_the_first_time() {
         assert_eq!(cycle, [8 + 31 * 8, 8 + 31 * 8, 8 + 2 * 8]);
     }
     assert_eq!(bus.counters().transactions, 3000);
+}
+
+#[test]
+fn typed_sync_read_into_a_callers_buffer_does_not_allocate() {
+    let (bus, _clock) = fixed_bus();
+    let mut servos = Servos::new(bus);
+    let ids: [u8; 6] = [1, 2, 3, 4, 5, 6];
+    let mut positions: [Result<i16, Missing>; 6] = [Ok(0); 6];
+    // The bus's SYNC READ storage is made with room for any control loop's
+    // request, so even the first call is counted.
+    let before = allocations();
+    for _ in 0..1000 {
+        servos
+            .sync_read_into(sts::PRESENT_POSITION, &ids, &mut positions)
+            .expect("sync read");
+    }
+    let allocated = allocations() - before;
+    assert_eq!(allocated, 0, "sync_read_into allocated {allocated} times");
+    // Each servo answers its ID as the low byte; servo 4 is silent.
+    for (id, p) in (1i16..).zip(&positions) {
+        match p {
+            Ok(steps) => assert_eq!(*steps, id),
+            Err(m) => assert_eq!((m.id, m.reason), (4, MissingReason::NoReply)),
+        }
+    }
+    assert!(positions[3].is_err());
 }

@@ -22,8 +22,8 @@ fn a_sync_read_after_a_long_sync_write_gets_its_replies_in_time() {
     let wall = ManualClock::new();
     // No adapter latency allowed: the deadlines are the wire, the
     // turnarounds and the margin alone.
-    let settings = BusSettings::new(Series::Sts, BAUD).with_retries(0);
-    let mut bus = Bus::new(WallBus::new(sim, wall.clone()), wall.clone(), settings);
+    let settings = BusSettings::new(Series::Sts).with_retries(0);
+    let mut bus = Bus::new(WallBus::new(sim, wall.clone()), settings);
     // 18 servos x (ID + 6 bytes of goal position, time and speed) + 8
     // bytes of frame: 134 bytes, 1.34 ms on the wire at 1 Mbaud, far more
     // than any margin of the read's deadline.

@@ -100,8 +100,8 @@ fn soak_sync_write_sync_read_with_lossy_replies() {
             .with_return_delay(Duration::ZERO)
             .with_position(i32::from(home(id)))
     }));
-    let settings = BusSettings::new(Series::Sts, BAUD).with_latency(Duration::from_millis(1));
-    let mut bus = Bus::new(sim.clone(), clock, settings);
+    let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
+    let mut bus = Bus::new(sim.clone(), settings);
 
     // Torque on, every goal at the servo's own position: they hold still.
     let mut goals = Vec::with_capacity(2 * ids.len());

@@ -1,7 +1,9 @@
 //! servobus-io: the two traits every servobus bus runs on, and the atomic
 //! file writer every servobus output goes through.
 //!
-//! - [`Transport`]: the bytes of a half-duplex serial bus, with deadlines.
+//! - [`Transport`]: the bytes of a half-duplex serial bus, with deadlines,
+//!   and the two facts a bus's reply deadlines are built on, which it owns:
+//!   its [`Clock`] and its baud rate (changed through it, never beside it).
 //! - [`Clock`]: time, passed in, so that the same code runs in wall-clock
 //!   time ([`SystemClock`]) and in virtual time ([`ManualClock`]).
 //! - [`AtomicFile`] and [`write_atomic`]: an output file (log, plot,

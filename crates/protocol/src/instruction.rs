@@ -94,7 +94,10 @@ impl StatusFlags {
     pub const KNOWN: u8 =
         Self::VOLTAGE | Self::ANGLE_SENSOR | Self::OVERHEAT | Self::OVERCURRENT | Self::OVERLOAD;
 
-    const NAMES: [(u8, &'static str); 5] = [
+    /// Each known flag's bit and its one name, in bit order: what
+    /// [`StatusFlags::names`] and `Display` print, and what every other
+    /// place that names a flag should take.
+    pub const NAMES: [(u8, &'static str); 5] = [
         (Self::VOLTAGE, "voltage"),
         (Self::ANGLE_SENSOR, "angle sensor"),
         (Self::OVERHEAT, "overheat"),

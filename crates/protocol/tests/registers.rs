@@ -267,6 +267,26 @@ fn models() {
 }
 
 #[test]
+fn a_model_register_is_read_in_either_byte_order() {
+    // STS3215 = 777 = 0x0309, little-endian on the wire: 09 03.
+    assert_eq!(
+        registers::model_by_register([0x09, 0x03]).map(|m| m.name),
+        Some("STS3215")
+    );
+    // SCS0009 = 1284 = 0x0504, big-endian on the wire: 05 04.
+    assert_eq!(
+        registers::model_by_register([0x05, 0x04]).map(|m| m.name),
+        Some("SCS0009")
+    );
+    assert!(registers::model_by_register([0, 0]).is_none());
+    // No model's number, byte-swapped, is another model's.
+    for m in &MODELS {
+        let swapped = m.number.swap_bytes();
+        assert!(model_by_number(swapped).is_none(), "{}", m.name);
+    }
+}
+
+#[test]
 fn baud_table() {
     assert_eq!(baud_rate(0), Some(1_000_000));
     assert_eq!(baud_rate(5), Some(76_800));

@@ -17,7 +17,7 @@ pub enum RunError {
         /// The bus.
         bus: String,
         /// The planner's reason.
-        source: servobus_timing::PlanError,
+        source: servobus_timing::CycleError,
     },
     /// A bus failed while setting up (reading the start positions, enabling
     /// torque).

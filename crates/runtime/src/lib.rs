@@ -15,10 +15,12 @@
 #![warn(missing_docs)]
 
 pub mod calibrate;
-pub mod config;
+/// The robot, motion and calibration files (the `servobus-config` crate).
+pub use servobus_config as config;
 
 pub mod pacer;
 pub mod rt;
+#[cfg(feature = "sim")]
 pub mod sim;
 pub mod stats;
 pub mod teach;

@@ -41,7 +41,7 @@ pub fn bus_settings(config: &BusConfig) -> BusSettings {
         .joints
         .first()
         .map_or(Series::Sts, |j| j.model.series);
-    BusSettings::new(series, config.baud)
+    BusSettings::new(series)
         .with_latency(config.latency)
         .with_return_delay(config.return_delay)
 }

@@ -43,7 +43,7 @@ use crate::telemetry::{Finish, Telemetry};
 ///     let clock = ManualClock::new();
 ///     let sim = SimBus::new(clock.clone(), b.baud)
 ///         .with_servos(b.joints.iter().map(|j| SimServo::sts3215(j.id)));
-///     Bus::new(sim, clock, bus_settings(b))
+///     Bus::new(sim, bus_settings(b))
 /// }).collect();
 /// let report = VirtualRun::new(&robot, path, buses, RunOptions::default())?.run();
 /// println!("{} cycles at {} Hz", report.cycles, report.achieved_rate_hz);

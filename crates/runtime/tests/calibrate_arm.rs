@@ -101,7 +101,7 @@ fn arm(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, SimBus) {
                 .with_byte(addr::OFFSET + 1, hi)
         }),
     );
-    (vec![Bus::new(sim.clone(), clock, bus_settings(bus))], sim)
+    (vec![Bus::new(sim.clone(), bus_settings(bus))], sim)
 }
 
 /// A hand following keyframes of physical angles (linear between them),

@@ -96,7 +96,7 @@ fn body(
         })
         .collect();
     let sim = SimBus::new(clock.clone(), bus.baud).with_servos(servos);
-    (vec![Bus::new(sim.clone(), clock, bus_settings(bus))], sim)
+    (vec![Bus::new(sim.clone(), bus_settings(bus))], sim)
 }
 
 /// The body's physical angles, robot joint order.

@@ -23,6 +23,13 @@ struct Inspect {
 }
 
 impl Transport for Inspect {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        self.inner.clock()
+    }
+    fn baud(&self) -> u32 {
+        self.inner.baud()
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         if let Ok((p, _)) = parse_frame(bytes) {
             let params = p.params();
@@ -67,9 +74,8 @@ proptest! {
             .zip(&sims)
             .map(|(b, sim)| {
                 let settings = *b.settings();
-                let (_, clock) = b.into_parts();
                 let t = Inspect { inner: sim.clone(), goals: Arc::clone(&goals) };
-                Bus::new(t, clock, settings)
+                Bus::new(t, settings)
             })
             .collect();
         // Random poses scaled beyond the joint limits (joint ranges are

@@ -38,6 +38,13 @@ struct Scripted {
 const STARTUP_GOAL_FRAMES: u64 = 1;
 
 impl Transport for Scripted {
+    type Clock = ManualClock;
+    fn clock(&self) -> &ManualClock {
+        self.sim.clock()
+    }
+    fn baud(&self) -> u32 {
+        self.sim.baud()
+    }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         let goals = parse_frame(bytes).is_ok_and(|(p, _)| {
             p.instruction() == Some(Instruction::SyncWrite)
@@ -126,14 +133,13 @@ impl Scenario {
             .enumerate()
             .map(|(i, (b, sim))| {
                 let settings = *b.settings();
-                let (_, clock) = b.into_parts();
                 let t = Scripted {
                     sim: sim.clone(),
                     goal_frames: 0,
                     inject: self.inject.filter(|s| s.0 == i).map(|s| (s.1, s.2)),
                     gate: if i == 0 { gate.take() } else { None },
                 };
-                Bus::new(t, clock, settings)
+                Bus::new(t, settings)
             })
             .collect();
         (buses, sims, open)

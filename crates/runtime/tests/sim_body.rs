@@ -211,3 +211,19 @@ fn bad_body_files_are_refused_with_file_line_and_field() {
         assert!(e.to_string().contains(".yaml:"), "{e}");
     }
 }
+
+#[test]
+fn every_built_in_mounting_and_hand_loads_for_its_robot() {
+    use servobus_runtime::config::builtin::{self, Kind};
+    let so101 = common::robot("so101.yaml");
+    let mut loaded = 0;
+    for b in builtin::all() {
+        match b.kind {
+            Kind::Mounting => drop(Mounting::load(&b.path(), &so101).expect("mounting loads")),
+            Kind::Hand => drop(Hand::load(&b.path(), &so101).expect("hand loads")),
+            Kind::Robot | Kind::Motion => continue,
+        }
+        loaded += 1;
+    }
+    assert!(loaded >= 3, "the so101's mounting and hands: {loaded}");
+}

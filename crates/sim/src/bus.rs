@@ -234,6 +234,29 @@ fn unplugged() -> TransportError {
 }
 
 impl Transport for SimBus {
+    type Clock = ManualClock;
+
+    fn clock(&self) -> &ManualClock {
+        &self.clock
+    }
+
+    fn baud(&self) -> u32 {
+        SimBus::baud(self)
+    }
+
+    /// Any positive rate: the servos whose baud-rate register selects
+    /// another one stop hearing the bus (see [`SimBus::set_baud`]).
+    fn set_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        if baud == 0 {
+            return Err(TransportError::BaudRefused {
+                requested: baud,
+                current: SimBus::baud(self),
+            });
+        }
+        SimBus::set_baud(self, baud);
+        Ok(())
+    }
+
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         let now = self.clock.now();
         let end = {

@@ -24,8 +24,9 @@ use servobus_io::{Clock, Transport, TransportError};
 use crate::SimBus;
 
 /// A simulated bus whose bytes arrive on the wall clock `C`; see the module
-/// docs. Give the driver's `Bus` the same clock instance, so that its reply
-/// deadlines and this bus's wire times are measured from one epoch.
+/// docs. It is the transport's clock ([`Transport::clock`]), so a driver's
+/// `Bus` built on it measures its reply deadlines from the same epoch as
+/// this bus's wire times.
 #[derive(Debug, Clone)]
 pub struct WallBus<C> {
     sim: SimBus,
@@ -52,6 +53,22 @@ impl<C: Clock> WallBus<C> {
 }
 
 impl<C: Clock> Transport for WallBus<C> {
+    /// The wall clock: the client's deadlines are on its time base.
+    type Clock = C;
+
+    fn clock(&self) -> &C {
+        &self.wall
+    }
+
+    fn baud(&self) -> u32 {
+        self.sim.baud()
+    }
+
+    fn set_baud(&mut self, baud: u32) -> Result<(), TransportError> {
+        self.catch_up();
+        Transport::set_baud(&mut self.sim, baud)
+    }
+
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         // Like an adapter, the write returns once the bytes are queued; the
         // wire time is spent by whoever waits for the reply.

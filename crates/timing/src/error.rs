@@ -7,7 +7,7 @@ use crate::{Block, Change};
 /// Why [`plan`](crate::plan) found no plan.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[non_exhaustive]
-pub enum PlanError {
+pub enum CycleError {
     /// The bus has no servos.
     #[error("the bus has no servos")]
     NoServos,

@@ -74,5 +74,5 @@ pub use pack::{
     pack_sync_write, servos_per_frame, sync_write_bytes, sync_write_chunks, sync_write_frames,
     Chunk, PackError, Packed,
 };
-pub use plan::{plan, Plan, PlanError, RoundRobin, MAX_READ_LEN, MAX_SERVOS};
+pub use plan::{plan, CycleError, Plan, RoundRobin, MAX_READ_LEN, MAX_SERVOS};
 pub use servobus_protocol::registers::StatusLevel;

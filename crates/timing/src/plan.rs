@@ -6,7 +6,7 @@ use core::ops::Range;
 use servobus_protocol::MAX_ID;
 
 use crate::cost::{CycleCost, CycleSpec, Servo};
-pub use crate::error::PlanError;
+pub use crate::error::CycleError;
 use crate::fix::{Change, Fixes};
 use crate::{servos_per_frame, Block, Link};
 
@@ -193,14 +193,14 @@ impl Plan {
 /// assert_eq!(p.bytes_per_cycle(), 26 + 14 + 48);
 /// assert_eq!(p.cycle_time_us(), 880.0);
 /// assert!(p.is_feasible());
-/// # Ok::<(), servobus_timing::PlanError>(())
+/// # Ok::<(), servobus_timing::CycleError>(())
 /// ```
 ///
 /// # Errors
-/// [`PlanError::NoServos`], [`PlanError::TooManyServos`],
-/// [`PlanError::InvalidId`], [`PlanError::DuplicateId`],
-/// [`PlanError::InvalidRate`], [`PlanError::InvalidBlock`], or
-/// [`PlanError::Infeasible`] when no round-robin subset fits either (it names
+/// [`CycleError::NoServos`], [`CycleError::TooManyServos`],
+/// [`CycleError::InvalidId`], [`CycleError::DuplicateId`],
+/// [`CycleError::InvalidRate`], [`CycleError::InvalidBlock`], or
+/// [`CycleError::Infeasible`] when no round-robin subset fits either (it names
 /// the cheapest change that would make the full cycle fit).
 pub fn plan(
     link: &Link,
@@ -208,36 +208,36 @@ pub fn plan(
     write: Option<Block>,
     read: Option<Block>,
     rate_hz: f64,
-) -> Result<Plan, PlanError> {
+) -> Result<Plan, CycleError> {
     let count = servos.len();
     if count == 0 {
-        return Err(PlanError::NoServos);
+        return Err(CycleError::NoServos);
     }
     if count > MAX_SERVOS {
-        return Err(PlanError::TooManyServos { count });
+        return Err(CycleError::TooManyServos { count });
     }
     if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(PlanError::InvalidRate { rate_hz });
+        return Err(CycleError::InvalidRate { rate_hz });
     }
     if let Some(block) = write {
         if !block.is_valid() || servos_per_frame(block.len) == 0 {
-            return Err(PlanError::InvalidBlock { block });
+            return Err(CycleError::InvalidBlock { block });
         }
     }
     if let Some(block) = read {
         if !block.is_valid() || block.len > MAX_READ_LEN {
-            return Err(PlanError::InvalidBlock { block });
+            return Err(CycleError::InvalidBlock { block });
         }
     }
     let mut ids = [0u8; MAX_SERVOS];
     let mut seen = [0u64; 4];
     for (slot, s) in ids.iter_mut().zip(servos) {
         if s.id > MAX_ID {
-            return Err(PlanError::InvalidId { id: s.id });
+            return Err(CycleError::InvalidId { id: s.id });
         }
         let (word, bit) = (usize::from(s.id / 64), 1u64 << (s.id % 64));
         if seen[word] & bit != 0 {
-            return Err(PlanError::DuplicateId { id: s.id });
+            return Err(CycleError::DuplicateId { id: s.id });
         }
         seen[word] |= bit;
         *slot = s.id;
@@ -277,7 +277,7 @@ pub fn plan(
                 let fix = fixes.cheapest().unwrap_or(Change::LowerRate {
                     rate_hz: full.fastest_rate_hz(),
                 });
-                return Err(PlanError::Infeasible {
+                return Err(CycleError::Infeasible {
                     rate_hz,
                     min_cycle_time,
                     fix,

@@ -7,7 +7,7 @@
 
 use core::time::Duration;
 
-use servobus_timing::{plan, Block, Change, Link, Plan, PlanError, Servo};
+use servobus_timing::{plan, Block, Change, CycleError, Link, Plan, Servo};
 
 const US: fn(u64) -> Duration = Duration::from_micros;
 
@@ -36,7 +36,7 @@ const PRESENT: Option<Block> = Some(Block::PRESENT_POSITION);
 
 /// An SO-101 arm: six STS servos with return delay 0, sent goal positions
 /// and asked `read` at `rate_hz` over `link`.
-fn so101(link: &Link, read: Option<Block>, rate_hz: f64) -> Result<Plan, PlanError> {
+fn so101(link: &Link, read: Option<Block>, rate_hz: f64) -> Result<Plan, CycleError> {
     plan(link, &sts(6, Duration::ZERO), POS, read, rate_hz)
 }
 
@@ -208,7 +208,7 @@ fn ftdi_at_its_default_latency_timer_is_refused_with_the_fix() {
     let err = so101(&ftdi, PRESENT, 200.0).unwrap_err();
     assert_eq!(
         err,
-        PlanError::Infeasible {
+        CycleError::Infeasible {
             rate_hz: 200.0,
             min_cycle_time: US(16430),
             fix: Change::LowerLatency { latency: US(4120) },
@@ -267,14 +267,17 @@ fn a_mixed_bus_uses_sync_read_where_it_can() {
 fn bad_input_is_refused() {
     let l = link(Duration::ZERO);
     let two = sts(2, Duration::ZERO);
-    assert_eq!(plan(&l, &[], POS, PRESENT, 100.0), Err(PlanError::NoServos));
+    assert_eq!(
+        plan(&l, &[], POS, PRESENT, 100.0),
+        Err(CycleError::NoServos)
+    );
     assert_eq!(
         plan(&l, &two, POS, PRESENT, 0.0),
-        Err(PlanError::InvalidRate { rate_hz: 0.0 })
+        Err(CycleError::InvalidRate { rate_hz: 0.0 })
     );
     assert!(matches!(
         plan(&l, &two, POS, PRESENT, f64::NAN),
-        Err(PlanError::InvalidRate { .. })
+        Err(CycleError::InvalidRate { .. })
     ));
     assert_eq!(
         plan(
@@ -284,20 +287,20 @@ fn bad_input_is_refused() {
             PRESENT,
             1.0
         ),
-        Err(PlanError::DuplicateId { id: 1 })
+        Err(CycleError::DuplicateId { id: 1 })
     );
     assert_eq!(
         plan(&l, &[Servo::sts(254, Duration::ZERO)], POS, PRESENT, 1.0),
-        Err(PlanError::InvalidId { id: 254 })
+        Err(CycleError::InvalidId { id: 254 })
     );
     let bad = Block::new(250, 10);
     assert_eq!(
         plan(&l, &two, Some(bad), PRESENT, 1.0),
-        Err(PlanError::InvalidBlock { block: bad })
+        Err(CycleError::InvalidBlock { block: bad })
     );
     assert_eq!(
         plan(&l, &two, POS, Some(Block::new(0, 254)), 1.0),
-        Err(PlanError::InvalidBlock {
+        Err(CycleError::InvalidBlock {
             block: Block::new(0, 254)
         })
     );

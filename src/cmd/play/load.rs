@@ -97,7 +97,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
                 args.motion.display()
             )));
         };
-        let robot = servobus_runtime::config::load_robot_calibrated(
+        let robot = servobus_runtime::config::load_robot_to_play(
             robot_path,
             args.hardware.calibration.as_deref(),
         )?;
@@ -109,20 +109,13 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
             args.hardware.calibration.as_deref(),
         )?
     };
-    let rate_hz = match args.rate {
-        Some(rate) if !(rate.is_finite() && rate > 0.0) => {
-            return Err(crate::cmd::exit::input(format!(
-                "--rate {rate}: give a positive rate in Hz"
-            )))
-        }
-        Some(rate) => rate,
-        None => motion.rate_hz(&robot),
-    };
+    // `--rate` is checked by its parser, the files' rates by the loaders.
+    let rate_hz = args.rate.unwrap_or_else(|| motion.rate_hz(&robot));
     for bus in &mut robot.buses {
         bus.round_robin |= args.round_robin;
         bus.busy_poll |= args.busy_poll;
         if let Err(why) = bus.check_rate(rate_hz) {
-            let why = why.with_remedy(RateRemedy::Flag);
+            let why = crate::cmd::rate_advice(&why);
             return Err(crate::cmd::exit::input(format!(
                 "bus `{}`: {why}",
                 bus.name
@@ -131,10 +124,18 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
     }
     if !recorded {
         let trajectory = plan_motion(&motion, &robot)?;
+        check_motion_length(&motion, &trajectory, rate_hz)?;
         return Ok((motion, robot, trajectory, None, rate_hz));
     }
     // A recording that cannot be read is a bad input file (exit 2).
     let rec = read_recording(&args.motion, &robot).map_err(crate::cmd::exit::invalid)?;
+    let span_s = rec.times[rec.times.len() - 1] - rec.times[0];
+    if let Err(e) = limits::check_recording(span_s, rate_hz, robot.joint_count()) {
+        return Err(crate::cmd::exit::input(format!(
+            "{}: the recording is too long to play: {e}",
+            args.motion.display()
+        )));
+    }
     let limits = servobus_runtime::config::joint_limits(&robot);
     let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
         .map_err(|e| {

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
 use servobus_runtime::config::{
-    load_motion_calibrated, plan_motion, Motion, RateRemedy, Robot, Units,
+    check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
@@ -54,7 +54,7 @@ pub struct Args {
     #[command(flatten)]
     pub hardware: super::HardwareArgs,
     /// Control rate in Hz (default: the motion's, else the robot's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::rate_arg)]
     pub rate: Option<f64>,
     /// Allow a rate above the maximum by reading servos round-robin (a
     /// subset each cycle), as `round_robin: true` on every bus.

@@ -18,9 +18,9 @@ pub(crate) use transact::Expect;
 
 use crate::io::Io;
 use crate::settings::BusSettings;
-use crate::stats::Counters;
+use crate::stats::BusCounters;
 use crate::sync::SyncStore;
-use crate::{BusError, Clock, Transport};
+use crate::{BusError, Clock, Transport, TransportError};
 
 /// A client for one bus of Feetech servos over a [`Transport`], with time
 /// from a [`Clock`].
@@ -42,8 +42,8 @@ pub struct Bus<T: Transport, C: Clock> {
     pub(crate) reply_len: usize,
     /// Round trip of the last successful single-servo transaction.
     pub(crate) last_rtt: Duration,
-    pub(crate) counters: Counters,
-    pub(crate) servos: Box<[Counters; 256]>,
+    pub(crate) counters: BusCounters,
+    pub(crate) servos: Box<[BusCounters; 256]>,
     pub(crate) sync: SyncStore,
 }
 
@@ -56,9 +56,19 @@ impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
     }
 }
 
-impl<T: Transport, C: Clock> Bus<T, C> {
-    /// A bus over `transport`, timed by `clock`.
-    pub fn new(transport: T, clock: C, settings: BusSettings) -> Self {
+impl<T: Transport> Bus<T, T::Clock> {
+    /// A bus over `transport`, with `settings` for everything else.
+    ///
+    /// The transport owns the clock and the baud rate: the bus times its
+    /// deadlines on a clone of [`Transport::clock`] and derives them at
+    /// [`Transport::baud`] (which it writes into its settings' link, so
+    /// that [`Bus::settings`] reads the rate in use). Change the rate with
+    /// [`Bus::set_baud`], which moves the transport and the deadlines
+    /// together.
+    pub fn new(transport: T, settings: BusSettings) -> Self {
+        let clock = transport.clock().clone();
+        let mut settings = settings;
+        settings.link.baud = transport.baud();
         let mut io = Io::new(transport, clock);
         io.echo = settings.echo;
         Bus {
@@ -67,22 +77,56 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             reply: [0; MAX_PARAMS],
             reply_len: 0,
             last_rtt: Duration::ZERO,
-            counters: Counters::default(),
-            servos: Box::new([Counters::default(); 256]),
+            counters: BusCounters::default(),
+            servos: Box::new([BusCounters::default(); 256]),
             sync: SyncStore::new(),
         }
     }
+}
 
-    /// The settings in use.
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// The settings in use; their link's baud rate is the transport's.
     pub fn settings(&self) -> &BusSettings {
         &self.settings
     }
 
     /// Changes the settings (e.g. the latency after [`Bus::measure_latency`],
-    /// or the baud rate after reopening the transport).
+    /// or the series once a servo's model is known). The baud rate is not
+    /// one of them: the link keeps the transport's rate whatever `settings`
+    /// says (see [`Bus::set_baud`]), so settings saved before a switch can
+    /// be put back after it.
     pub fn set_settings(&mut self, settings: BusSettings) {
         self.io.echo = settings.echo;
         self.settings = settings;
+        self.settings.link.baud = self.io.transport.baud();
+    }
+
+    /// The baud rate in use (the transport's).
+    pub fn baud(&self) -> u32 {
+        self.settings.link.baud
+    }
+
+    /// Moves the transport to `baud` and derives every deadline from then
+    /// on at that rate: the one way to change a bus's rate. Nothing happens
+    /// when the bus is already at `baud`.
+    ///
+    /// # Errors
+    /// [`BusError::Transport`] when the transport refuses the rate (a rate
+    /// of 0, a port that cannot run at it); the bus stays at its rate.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), BusError> {
+        let current = self.io.transport.baud();
+        if baud == current && baud == self.settings.link.baud {
+            return Ok(());
+        }
+        if baud == 0 {
+            return Err(BusError::Transport(TransportError::BaudRefused {
+                requested: baud,
+                current,
+            }));
+        }
+        self.io.transport.set_baud(baud)?;
+        self.settings.link.baud = self.io.transport.baud();
+        Ok(())
     }
 
     /// When a request sent now starts on the wire: now, or once the
@@ -103,7 +147,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         &self.io.transport
     }
 
-    /// The transport, mutably (e.g. to change its baud rate).
+    /// The transport, mutably (e.g. to turn busy polling on). Change its
+    /// baud rate with [`Bus::set_baud`], not here.
     pub fn transport_mut(&mut self) -> &mut T {
         &mut self.io.transport
     }
@@ -119,19 +164,19 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     }
 
     /// Counters of the whole bus.
-    pub fn counters(&self) -> &Counters {
+    pub fn counters(&self) -> &BusCounters {
         &self.counters
     }
 
     /// Counters of servo `id` (broadcast requests are counted under 254).
-    pub fn servo_counters(&self, id: u8) -> &Counters {
+    pub fn servo_counters(&self, id: u8) -> &BusCounters {
         &self.servos[usize::from(id)]
     }
 
     /// Sets every counter back to zero.
     pub fn reset_counters(&mut self) {
-        self.counters = Counters::default();
-        self.servos.fill(Counters::default());
+        self.counters = BusCounters::default();
+        self.servos.fill(BusCounters::default());
     }
 
     /// The data bytes of the last single-servo reply.
@@ -178,9 +223,9 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         if expect.reply {
             Ok(expect)
         } else {
-            Err(BusError::InvalidRequest(
-                "the servos' status level does not answer this request",
-            ))
+            Err(BusError::NotAnswered {
+                level: self.settings.replies,
+            })
         }
     }
 }

@@ -159,7 +159,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         let flags = self.read(id, register.address, bytes)?;
         let value = register
             .decode(bytes, self.settings.series.byte_order())
-            .map_err(|_| BusError::InvalidRequest("register value cannot be decoded"))?;
+            .map_err(BusError::Value)?;
         Ok((value, flags))
     }
 
@@ -168,8 +168,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     /// [`Bus::write_eeprom`]; a RAM register with a plain WRITE.
     ///
     /// # Errors
-    /// [`BusError::InvalidRequest`] for a read-only register or a value that
-    /// does not fit; otherwise as [`Bus::write`] / [`Bus::write_eeprom`].
+    /// [`BusError::ReadOnly`] for a read-only register, [`BusError::Value`]
+    /// for a value that does not fit; otherwise as [`Bus::write`] / [`Bus::write_eeprom`].
     pub fn write_register(
         &mut self,
         id: u8,
@@ -182,10 +182,12 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             .ok_or(BusError::InvalidRequest("register wider than 4 bytes"))?;
         register
             .encode(value, self.settings.series.byte_order(), bytes)
-            .map_err(|_| BusError::InvalidRequest("value out of the register's range"))?;
+            .map_err(BusError::Value)?;
         let bytes = &buf[..usize::from(register.size)];
         match register.access {
-            Access::ReadOnly => Err(BusError::InvalidRequest("register is read-only")),
+            Access::ReadOnly => Err(BusError::ReadOnly {
+                address: register.address,
+            }),
             Access::Ram => self.write(id, register.address, bytes),
             Access::Eeprom => self
                 .write_eeprom(id, register.address, bytes)

@@ -37,17 +37,59 @@ pub enum OpenProblem {
     },
     /// Another program has the port open.
     Busy {
-        /// The programs holding it (`minicom (pid 1234)`), when they can be found.
-        holders: Vec<String>,
+        /// The programs holding it, when they can be found.
+        holders: Vec<Holder>,
     },
-    /// The path is there but is no serial port (a regular file, a
-    /// directory, a device that is not a terminal).
+    /// The path is there but is no serial port.
     NotSerial {
-        /// What it is instead, e.g. `a regular file`.
-        what: String,
+        /// What it is instead.
+        what: NotSerial,
     },
     /// Anything else, in the operating system's words.
     Other(String),
+}
+
+/// A program that has a port open.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Holder {
+    /// Its process ID.
+    pub pid: u32,
+    /// Its name (`/proc/PID/comm`), when it can be read.
+    pub name: Option<String>,
+}
+
+impl fmt::Display for Holder {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.name {
+            Some(name) => write!(f, "{name} (pid {})", self.pid),
+            None => write!(f, "pid {}", self.pid),
+        }
+    }
+}
+
+/// What a path given as a port is, when it is no serial port.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum NotSerial {
+    /// A directory.
+    Directory,
+    /// A regular file.
+    RegularFile,
+    /// Something else that is no character device (a socket, a pipe).
+    NotCharDevice,
+    /// A character device that is not a terminal (`/dev/null`).
+    NotTerminal,
+}
+
+impl fmt::Display for NotSerial {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            NotSerial::Directory => "a directory",
+            NotSerial::RegularFile => "a regular file",
+            NotSerial::NotCharDevice => "not a character device",
+            NotSerial::NotTerminal => "a device that is not a terminal",
+        })
+    }
 }
 
 impl OpenError {
@@ -76,7 +118,7 @@ impl OpenError {
                 }
             } else if lower.contains("typewriter") || lower.contains("inappropriate ioctl") {
                 OpenProblem::NotSerial {
-                    what: "a device that is not a terminal".into(),
+                    what: NotSerial::NotTerminal,
                 }
             } else if kind == io::ErrorKind::NotFound || lower.contains("no such device") {
                 OpenProblem::NotFound {
@@ -143,11 +185,16 @@ impl fmt::Display for OpenError {
             OpenProblem::Busy { holders } if holders.is_empty() => {
                 f.write_str("the port is busy: another program has it open; close it and retry")
             }
-            OpenProblem::Busy { holders } => write!(
-                f,
-                "the port is busy: {} has it open; close it and retry",
-                holders.join(", ")
-            ),
+            OpenProblem::Busy { holders } => {
+                f.write_str("the port is busy: ")?;
+                for (i, holder) in holders.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{holder}")?;
+                }
+                f.write_str(" has it open; close it and retry")
+            }
             OpenProblem::NotSerial { what } => {
                 write!(
                     f,
@@ -192,21 +239,21 @@ fn present_ports() -> Vec<String> {
     ports
 }
 
-/// What `path` is when it is no character device (`a directory`, `a
-/// regular file`); `None` for a device, or when it cannot be told.
-fn not_a_device(path: &Path) -> Option<String> {
+/// What `path` is when it is no character device; `None` for a device, or
+/// when it cannot be told.
+fn not_a_device(path: &Path) -> Option<NotSerial> {
     let meta = std::fs::metadata(path).ok()?;
     if meta.is_dir() {
-        return Some("a directory".into());
+        return Some(NotSerial::Directory);
     }
     if meta.is_file() {
-        return Some("a regular file".into());
+        return Some(NotSerial::RegularFile);
     }
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;
         if !meta.file_type().is_char_device() {
-            return Some("not a character device".into());
+            return Some(NotSerial::NotCharDevice);
         }
     }
     None
@@ -224,7 +271,7 @@ fn plain_os_text(text: &str) -> String {
 /// (from `/proc/locks`) when there is one, else every program with it open
 /// (from the `/proc/*/fd` links). Linux only (and only processes the user
 /// may inspect); none elsewhere.
-fn holders(path: &Path) -> Vec<String> {
+fn holders(path: &Path) -> Vec<Holder> {
     let lockers = lock_holders(path);
     if !lockers.is_empty() {
         return lockers;
@@ -238,10 +285,7 @@ fn holders(path: &Path) -> Vec<String> {
     let mut found = Vec::new();
     for entry in procs.flatten() {
         let name = entry.file_name();
-        let Some(pid) = name
-            .to_str()
-            .filter(|s| s.bytes().all(|b| b.is_ascii_digit()))
-        else {
+        let Some(pid) = name.to_str().and_then(|s| s.parse::<u32>().ok()) else {
             continue;
         };
         let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
@@ -250,27 +294,27 @@ fn holders(path: &Path) -> Vec<String> {
         let holds = fds
             .flatten()
             .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|link| link == target));
-        if holds && pid != std::process::id().to_string() {
-            found.push(process_name(pid));
+        if holds && pid != std::process::id() {
+            found.push(holder(pid));
         }
     }
     found
 }
 
-/// `name (pid N)` for the process `pid`.
-fn process_name(pid: &str) -> String {
-    let comm = std::fs::read_to_string(Path::new("/proc").join(pid).join("comm"));
-    let comm = comm.unwrap_or_default();
-    match comm.trim() {
-        "" => format!("pid {pid}"),
-        name => format!("{name} (pid {pid})"),
-    }
+/// The process `pid`, named when its name can be read.
+fn holder(pid: u32) -> Holder {
+    let comm = std::fs::read_to_string(Path::new("/proc").join(pid.to_string()).join("comm"));
+    let name = comm
+        .ok()
+        .map(|c| c.trim().to_owned())
+        .filter(|c| !c.is_empty());
+    Holder { pid, name }
 }
 
 /// The processes holding a `flock` on `path`, from `/proc/locks`, whose
 /// lines read `1: FLOCK ADVISORY WRITE <pid> <major>:<minor>:<inode> 0 EOF`
 /// (major and minor of the file system's device, in hex).
-fn lock_holders(path: &Path) -> Vec<String> {
+fn lock_holders(path: &Path) -> Vec<Holder> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
@@ -281,7 +325,7 @@ fn lock_holders(path: &Path) -> Vec<String> {
             return Vec::new();
         };
         let (major, minor) = split_dev(meta.dev());
-        let me = std::process::id().to_string();
+        let me = std::process::id();
         let mut found = Vec::new();
         for line in locks.lines() {
             let fields: Vec<&str> = line.split_whitespace().collect();
@@ -299,8 +343,9 @@ fn lock_holders(path: &Path) -> Vec<String> {
             let same = u64::from_str_radix(maj, 16).ok() == Some(major)
                 && u64::from_str_radix(min, 16).ok() == Some(minor)
                 && ino.parse::<u64>().ok() == Some(meta.ino());
-            if same && *pid != me {
-                found.push(process_name(pid));
+            match pid.parse::<u32>() {
+                Ok(pid) if same && pid != me => found.push(holder(pid)),
+                _ => {}
             }
         }
         found.dedup();
@@ -354,6 +399,30 @@ mod tests {
     }
 
     #[test]
+    fn the_holders_of_a_busy_port_are_named_with_their_pids() {
+        let busy = OpenError {
+            path: "/dev/ttyACM0".into(),
+            problem: OpenProblem::Busy {
+                holders: vec![
+                    Holder {
+                        pid: 1234,
+                        name: Some("minicom".into()),
+                    },
+                    Holder {
+                        pid: 99,
+                        name: None,
+                    },
+                ],
+            },
+        };
+        assert_eq!(
+            busy.to_string(),
+            "cannot open /dev/ttyACM0: the port is busy: minicom (pid 1234), pid 99 has it \
+             open; close it and retry"
+        );
+    }
+
+    #[test]
     fn a_missing_path_is_not_found() {
         let e = OpenError::classify("/dev/servobus-none", io::ErrorKind::Other, false, "x");
         assert!(matches!(e.problem, OpenProblem::NotFound { .. }), "{e:?}");
@@ -385,7 +454,7 @@ mod tests {
         assert_eq!(
             e.problem,
             OpenProblem::NotSerial {
-                what: "a directory".into()
+                what: NotSerial::Directory
             }
         );
         let e = OpenError::classify("/dev/null", io::ErrorKind::Other, false, "Not a typewriter");

@@ -8,7 +8,7 @@ use servobus_timing::Transaction;
 
 use super::results::{MissingReason, Slot, SyncRead, SyncStore};
 use crate::io::Sink;
-use crate::stats::Counters;
+use crate::stats::BusCounters;
 use crate::{Bus, BusError, Clock, Transport};
 
 /// Added to every reply timeout by [`Bus::sync_read_patiently`].
@@ -19,7 +19,7 @@ pub const PATIENT_TRIES: u8 = 3;
 /// Collects the replies of one SYNC READ round.
 struct Round<'a> {
     store: &'a mut SyncStore,
-    servos: &'a mut [Counters; 256],
+    servos: &'a mut [BusCounters; 256],
     start: Duration,
     /// Replies this round is waiting for.
     outstanding: usize,
@@ -100,8 +100,9 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     ///
     /// # Errors
     /// Only for the request as a whole: [`BusError::InvalidRequest`] (no IDs,
-    /// a repeated ID, `len` 0), [`BusError::Transport`]. Missing servos are
-    /// not errors.
+    /// `len` 0), [`BusError::DuplicateId`], [`BusError::IdOutOfRange`],
+    /// [`BusError::NotAnswered`], [`BusError::Transport`]. Missing servos
+    /// are not errors.
     pub fn sync_read(
         &mut self,
         address: u8,
@@ -216,9 +217,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             let each = s.link.deadline(tx, s.return_delay, s.replies);
             each.map(|d| d * u32::try_from(servos).unwrap_or(u32::MAX))
         };
-        deadline.ok_or(BusError::InvalidRequest(
-            "the servos' status level does not answer reads",
-        ))
+        deadline.ok_or(BusError::NotAnswered { level: s.replies })
     }
 
     /// Asks every servo in `sync.pending` once.

@@ -102,9 +102,9 @@ impl SyncStore {
         self.len = len;
         for (i, &id) in ids.iter().enumerate() {
             let problem = if id > servobus_protocol::MAX_ID {
-                Some("SYNC READ of an ID above 253")
+                Some(BusError::IdOutOfRange { id })
             } else if self.index[usize::from(id)] != NO_SLOT {
-                Some("an ID appears twice in a SYNC READ")
+                Some(BusError::DuplicateId { id })
             } else {
                 None
             };
@@ -118,7 +118,7 @@ impl SyncStore {
                 self.attempts.clear();
                 self.data.clear();
                 self.pending.clear();
-                return Err(BusError::InvalidRequest(problem));
+                return Err(problem);
             }
             // `i < 254` because the IDs are distinct and at most 253.
             self.index[usize::from(id)] = i as u8;

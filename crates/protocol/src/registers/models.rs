@@ -131,6 +131,16 @@ pub fn model_by_number(number: u16) -> Option<&'static Model> {
     MODELS.iter().find(|m| m.number == number)
 }
 
+/// The model whose model-number register (address 3) holds `bytes`, read
+/// before the series is known: the two bytes are tried in the byte order of
+/// STS/SMS servos (little-endian) and of SCS servos (big-endian), since the
+/// order is part of what is being found out. No known model's number reads
+/// as another's in the other order.
+pub fn model_by_register(bytes: [u8; 2]) -> Option<&'static Model> {
+    model_by_number(u16::from_le_bytes(bytes))
+        .or_else(|| model_by_number(u16::from_be_bytes(bytes)))
+}
+
 /// The model called `name`, ignoring ASCII case and `-`, `_`, space
 /// (`sts3215`, `STS-3215`).
 pub fn model_by_name(name: &str) -> Option<&'static Model> {

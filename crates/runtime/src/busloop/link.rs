@@ -293,7 +293,7 @@ mod tests {
 
     #[test]
     fn a_roomy_cycle_waits_longer_than_learned_and_a_tight_one_does_not() {
-        let settings = BusSettings::new(servobus_protocol::registers::Series::Sts, 1_000_000);
+        let settings = BusSettings::new(servobus_protocol::registers::Series::Sts);
         // Six positions by SYNC READ at 1 Mbps, return delay 0: a request of
         // 14 bytes and 6 replies of 8, 620 us on the wire, plus 6
         // turnarounds of 50 us: 920 us that no adapter can shorten.

@@ -51,17 +51,19 @@ pub(crate) fn register(model: &Model, name: &'static str) -> Result<&'static Reg
 /// Reads `joint`'s servo: model, firmware and homing offset.
 ///
 /// # Errors
-/// The bus error of the first read that failed; [`BusError::InvalidRequest`]
+/// The bus error of the first read that failed; [`BusError::UnknownModel`]
 /// for a model number servobus does not know.
 pub fn identify<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     joint: &JointConfig,
 ) -> Result<FoundServo, BusError> {
     let (number, _) = bus.read_register(joint.id, register(joint.model, "model_number")?)?;
-    let model = u16::try_from(number)
-        .ok()
-        .and_then(model_by_number)
-        .ok_or(BusError::InvalidRequest("unknown model number"))?;
+    // A two-byte unsigned register: it always fits.
+    let number = u16::try_from(number).unwrap_or(u16::MAX);
+    let model = model_by_number(number).ok_or(BusError::UnknownModel {
+        id: joint.id,
+        number,
+    })?;
     let mut fw = [0u8; 2];
     bus.read(joint.id, addr::FIRMWARE_MAJOR, &mut fw)?;
     let homing_offset = match model.map().get("offset") {
@@ -297,7 +299,7 @@ fn session_offset<T: Transport, C: Clock>(
     bus.write(joint.id, lock, &[1])?;
     let mut bytes = [0u8; 2];
     reg.encode(offset, joint.model.series.byte_order(), &mut bytes)
-        .map_err(|_| BusError::InvalidRequest("homing offset beyond +-2047"))?;
+        .map_err(BusError::Value)?;
     bus.write(joint.id, reg.address, &bytes)?;
     let (back, _) = bus.read_register(joint.id, reg)?;
     if back != offset {

@@ -37,6 +37,9 @@ const RANDOM_STOP_MARGIN_DEG: f64 = 5.0;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a joint's mounting: a mapping with `zero_tick:` and optional `direction:`, `stops:`"
+)]
 struct RawMount {
     zero_tick: f64,
     #[serde(default = "positive")]
@@ -218,12 +221,14 @@ pub struct Hand {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a hand file: a mapping with `keyframes:`")]
 struct RawHand {
     keyframes: Vec<RawKey>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(expecting = "a hand keyframe: a mapping with `at:` and `pose:`")]
 struct RawKey {
     at: f64,
     pose: BTreeMap<String, f64>,

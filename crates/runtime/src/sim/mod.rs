@@ -180,7 +180,7 @@ impl SimRobot {
     /// Driver buses on the simulated buses (each on its bus's own clock,
     /// with the robot file's settings), ready for [`crate::VirtualRun`].
     pub fn driver_buses(&self) -> Vec<Bus<SimBus, ManualClock>> {
-        self.buses_on(|sim| (sim.clone(), sim.clock().clone()))
+        self.buses_on(SimBus::clone)
     }
 
     /// Driver buses on the simulated buses paced by the wall clock `clock`
@@ -188,19 +188,16 @@ impl SimRobot {
     /// the robot file's settings, ready for [`crate::spawn`]. Give the run
     /// the same clock.
     pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>, C>> {
-        self.buses_on(|sim| (WallBus::new(sim.clone(), clock.clone()), clock.clone()))
+        self.buses_on(|sim| WallBus::new(sim.clone(), clock.clone()))
     }
 
-    /// One driver bus per simulated bus, on the transport and clock `on`
-    /// makes of it, with the robot file's settings.
-    fn buses_on<T: Transport, C: Clock>(&self, on: impl Fn(&SimBus) -> (T, C)) -> Vec<Bus<T, C>> {
+    /// One driver bus per simulated bus, on the transport `on` makes of it
+    /// (and that transport's clock), with the robot file's settings.
+    fn buses_on<T: Transport>(&self, on: impl Fn(&SimBus) -> T) -> Vec<Bus<T, T::Clock>> {
         self.buses
             .iter()
             .zip(&self.settings)
-            .map(|(sim, settings)| {
-                let (transport, clock) = on(sim);
-                Bus::new(transport, clock, *settings)
-            })
+            .map(|(sim, settings)| Bus::new(on(sim), *settings))
             .collect()
     }
 

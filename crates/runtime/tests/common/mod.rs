@@ -1,7 +1,6 @@
 //! Shared helpers of the runtime's tests: robots and simulated buses.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use servobus_driver::{Bus, ManualClock};
@@ -11,27 +10,12 @@ use servobus_runtime::RunOptions;
 use servobus_sim::SimBus;
 use servobus_trajectory::{JointState, Trajectory};
 
-/// A file under the workspace's `configs/`.
-pub fn config(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../configs")
-        .join(rel)
-}
-
-/// The path of file `name` in `dir`, a folder of its own under Cargo's
-/// temporary directory for tests (made if missing).
-pub fn temp_path(dir: &str, name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d.join(name)
-}
-
-/// Writes `text` to [`temp_path`]`(dir, name)` and returns the path.
-pub fn temp_file(dir: &str, name: &str, text: &str) -> PathBuf {
-    let p = temp_path(dir, name);
-    std::fs::write(&p, text).expect("temp file");
-    p
-}
+// The shipped files and scratch files, as the configuration's tests have
+// them.
+#[path = "../../../config/tests/common/mod.rs"]
+mod files;
+#[allow(unused_imports)] // not every test uses every helper
+pub use files::{config, temp_file, temp_path};
 
 /// A robot file under `configs/robots/`.
 pub fn robot(name: &str) -> Robot {

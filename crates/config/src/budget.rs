@@ -1,0 +1,153 @@
+//! Whether a control rate fits a bus, from servobus-timing's cycle plan.
+
+use core::fmt;
+
+use servobus_timing::{plan, Block, Change, CycleError, Plan, Servo};
+
+use super::BusConfig;
+
+impl BusConfig {
+    /// The servos of this bus as the timing planner sees them, in joint order.
+    pub fn timing_servos(&self) -> Vec<Servo> {
+        self.joints
+            .iter()
+            .map(|j| Servo::new(j.id, self.return_delay, j.model.series.has_sync_read()))
+            .collect()
+    }
+
+    /// The plan of this bus's control cycle at `rate_hz`: goal positions
+    /// written to every servo (SYNC WRITE), present positions read back (SYNC
+    /// READ, or one READ per servo without it). When the full cycle does not
+    /// fit, the plan reads a round-robin subset each cycle and lists what
+    /// would make it fit.
+    ///
+    /// # Errors
+    ///
+    /// [`CycleError`] when not even the round-robin cycle fits (it names the
+    /// cheapest change that would), or the rate is not positive.
+    pub fn plan(&self, rate_hz: f64) -> Result<Plan, CycleError> {
+        plan(
+            &self.link(),
+            &self.timing_servos(),
+            Some(Block::GOAL_POSITION),
+            Some(Block::PRESENT_POSITION),
+            rate_hz,
+        )
+    }
+
+    /// The fastest whole rate at which every servo is read every cycle, Hz
+    /// (the one figure `budget`, `play` and `bench` all print), or `None`
+    /// when the bus cannot be planned at all.
+    pub fn fastest_rate_hz(&self) -> Option<f64> {
+        // The full cycle's cost does not depend on the rate.
+        self.plan(f64::MIN_POSITIVE)
+            .ok()
+            .map(|p| p.fastest_rate_hz())
+    }
+
+    /// The plan at `rate_hz` if it may run on this bus: the full cycle fits,
+    /// or it does not but the bus allows reading servos round-robin
+    /// ([`round_robin`](BusConfig::round_robin)) and a round-robin cycle fits.
+    ///
+    /// # Errors
+    ///
+    /// [`RateError`], which names the fastest rate that fits.
+    pub fn check_rate(&self, rate_hz: f64) -> Result<Plan, RateError> {
+        match self.plan(rate_hz) {
+            Ok(p) if p.read_every() == 1 || self.round_robin => Ok(p),
+            Ok(p) => Err(RateError::AboveMaximum {
+                rate_hz,
+                fastest_hz: p.fastest_rate_hz(),
+                read_every: p.read_every(),
+            }),
+            Err(source) => Err(RateError::Unplannable {
+                source,
+                fastest_hz: self.fastest_rate_hz(),
+            }),
+        }
+    }
+}
+
+/// Why a control rate may not run on a bus.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RateError {
+    /// The full cycle (every servo read every cycle) does not fit, and the
+    /// bus does not allow reading servos round-robin.
+    #[error(
+        "{rate_hz} Hz is above the maximum rate of {fastest_hz} Hz: the full cycle does not fit \
+         (it would read each servo only every {read_every} cycles)"
+    )]
+    AboveMaximum {
+        /// The rate asked for.
+        rate_hz: f64,
+        /// The fastest whole rate at which the full cycle fits.
+        fastest_hz: f64,
+        /// How often each servo would be read at `rate_hz`.
+        read_every: usize,
+    },
+    /// Not even a round-robin cycle fits (or the bus cannot be planned).
+    #[error("{source}")]
+    Unplannable {
+        /// The planner's reason.
+        source: CycleError,
+        /// The fastest whole rate at which the full cycle fits, if any.
+        fastest_hz: Option<f64>,
+    },
+}
+
+impl RateError {
+    /// The fastest whole rate that fits the full cycle, if the bus has one.
+    pub fn fastest_hz(&self) -> Option<f64> {
+        match *self {
+            RateError::AboveMaximum { fastest_hz, .. } => Some(fastest_hz),
+            RateError::Unplannable { fastest_hz, .. } => fastest_hz,
+        }
+    }
+
+    /// The error with its advice: the fastest rate that fits, and (where it
+    /// helps) reading the bus's servos round-robin, said in the robot file's
+    /// terms. A program that has its own switch for it adds that itself
+    /// ([`RateError::round_robin_helps`]).
+    pub fn with_advice(&self) -> impl fmt::Display + '_ {
+        Advised(self)
+    }
+
+    /// Whether reading the bus's servos round-robin (one per cycle instead
+    /// of all) would let the rate fit.
+    pub fn round_robin_helps(&self) -> bool {
+        matches!(self, RateError::AboveMaximum { .. })
+    }
+}
+
+struct Advised<'a>(&'a RateError);
+
+impl fmt::Display for Advised<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Advised(error) = *self;
+        write!(f, "{error}")?;
+        let Some(fastest) = error.fastest_hz() else {
+            return Ok(());
+        };
+        if let RateError::Unplannable {
+            source:
+                CycleError::Infeasible {
+                    fix: Change::LowerRate { .. },
+                    ..
+                },
+            ..
+        } = error
+        {
+            // The planner's advice already is that rate.
+            return Ok(());
+        }
+        write!(f, "; the fastest rate that fits is {fastest} Hz")?;
+        if error.round_robin_helps() {
+            f.write_str(
+                ", or set `round_robin: true` on the bus in the robot file to read servos \
+                 round-robin",
+            )?;
+        }
+        Ok(())
+    }
+}

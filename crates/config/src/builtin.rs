@@ -1,0 +1,277 @@
+//! The robots, motions and simulator examples (mountings, hands) shipped in
+//! `configs/`, compiled into every program built on this crate, so that an
+//! installed `servobus` (or a Python program) finds them from any directory
+//! and by name. No registration: the table is this module's.
+//!
+//! A command-line argument that names a robot, motion, mounting or hand goes
+//! through [`path_or_name`] (or [`robot_path_or_name`],
+//! [`motion_path_or_name`]): an existing file wins;
+//! otherwise a built-in name (`so101`, `arm-wave`) becomes the built-in file's
+//! path (`<built-in>/robots/so101.yaml`), which the loaders of
+//! this crate read like any file. A built-in motion's
+//! `robot: ../robots/so101.yaml` thus resolves to the built-in robot.
+
+use std::path::{Path, PathBuf};
+
+use crate::files::{builtin_path, BuiltinFile};
+
+/// What a built-in file describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A robot file (`configs/robots/`).
+    Robot,
+    /// A motion file (`configs/motions/`).
+    Motion,
+    /// How the simulator's servo horns sit on their joints
+    /// (`configs/sim/*-mounting.yaml`, for `servobus sim --mounting`).
+    Mounting,
+    /// A hand that moves the simulator's torque-off joints
+    /// (`configs/sim/*-hand.yaml`, for `servobus sim --hand`).
+    Hand,
+}
+
+impl Kind {
+    /// Every kind, in the order `servobus list` shows them.
+    pub const ALL: [Kind; 4] = [Kind::Robot, Kind::Motion, Kind::Mounting, Kind::Hand];
+
+    /// The kind of the shipped file `rel` (`sim/so101-hand.yaml`).
+    fn of(rel: &str) -> Kind {
+        match rel.split_once('/') {
+            Some(("robots", _)) => Kind::Robot,
+            Some(("sim", file)) if file.ends_with("-hand.yaml") => Kind::Hand,
+            Some(("sim", _)) => Kind::Mounting,
+            _ => Kind::Motion,
+        }
+    }
+}
+
+macro_rules! shipped {
+    ($dir:literal, $name:literal) => {
+        BuiltinFile {
+            path: concat!($dir, "/", $name, ".yaml"),
+            text: include_str!(concat!("../../../configs/", $dir, "/", $name, ".yaml")),
+        }
+    };
+}
+
+static FILES: [BuiltinFile; 12] = [
+    shipped!("robots", "so101"),
+    shipped!("robots", "hexapod"),
+    shipped!("robots", "hexapod-2bus"),
+    shipped!("robots", "scs-mini"),
+    shipped!("motions", "arm-wave"),
+    shipped!("motions", "arm-pick-place"),
+    shipped!("motions", "hexapod-dance"),
+    shipped!("motions", "hexapod-tripod"),
+    shipped!("motions", "scs-mini-nod"),
+    shipped!("sim", "so101-mounting"),
+    shipped!("sim", "so101-hand"),
+    shipped!("sim", "so101-first-arm-hand"),
+];
+
+/// One built-in robot or motion.
+#[derive(Debug, Clone, Copy)]
+pub struct Builtin {
+    /// Its name on the command line (`so101`, `arm-wave`).
+    pub name: &'static str,
+    /// Robot, motion, mounting or hand.
+    pub kind: Kind,
+    /// The file's text.
+    pub text: &'static str,
+    rel: &'static str,
+}
+
+impl Builtin {
+    /// The path the configuration loaders read it under.
+    pub fn path(&self) -> PathBuf {
+        builtin_path(self.rel)
+    }
+
+    /// The first sentence of its leading comment (what it is), at most
+    /// about 70 characters, cut at a word.
+    pub fn summary(&self) -> String {
+        let comment: Vec<&str> = self
+            .text
+            .lines()
+            .map_while(|l| l.strip_prefix('#'))
+            .map(str::trim)
+            .take_while(|l| !l.is_empty())
+            .collect();
+        let text = comment.join(" ");
+        // Up to the first full stop or colon: the name of the thing.
+        let end = [text.find(". "), text.find(": ")]
+            .into_iter()
+            .flatten()
+            .min();
+        let sentence = match end {
+            Some(i) => &text[..i],
+            None => text.trim_end_matches(['.', ':']),
+        };
+        if sentence.len() <= 72 {
+            return sentence.to_owned();
+        }
+        let cut = sentence[..72].rfind(' ').unwrap_or(72);
+        format!("{}...", &sentence[..cut])
+    }
+}
+
+/// The text of the shipped file `rel` (`robots/so101.yaml`).
+pub(crate) fn text(rel: &str) -> Option<&'static str> {
+    FILES.iter().find(|f| f.path == rel).map(|f| f.text)
+}
+
+/// Every built-in file, robots first, then motions, mountings and hands.
+pub fn all() -> impl Iterator<Item = Builtin> {
+    FILES.iter().filter_map(|f| {
+        let (_, file) = f.path.split_once('/')?;
+        let name = file.strip_suffix(".yaml")?;
+        Some(Builtin {
+            name,
+            kind: Kind::of(f.path),
+            text: f.text,
+            rel: f.path,
+        })
+    })
+}
+
+/// The built-in of `kind` called `name` (with or without `.yaml`).
+pub fn find(kind: Kind, name: &str) -> Option<Builtin> {
+    let name = name.strip_suffix(".yaml").unwrap_or(name);
+    all().find(|b| b.kind == kind && b.name == name)
+}
+
+/// The names of the built-ins of `kind`, comma-separated (for messages).
+pub fn names(kind: Kind) -> String {
+    all()
+        .filter(|b| b.kind == kind)
+        .map(|b| b.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The robot file to load for a `--robot` argument: `arg` itself when it is
+/// an existing file (or not a built-in name), else the built-in robot of
+/// that name.
+pub fn robot_path_or_name(arg: &Path) -> PathBuf {
+    path_or_name(Kind::Robot, arg)
+}
+
+/// The motion file to load for a motion argument: `arg` itself when it is an
+/// existing file (or not a built-in name), else the built-in motion of that
+/// name.
+pub fn motion_path_or_name(arg: &Path) -> PathBuf {
+    path_or_name(Kind::Motion, arg)
+}
+
+/// The file to load for an argument that takes a file or a built-in of
+/// `kind`: `arg` itself when it is an existing file (or not a built-in
+/// name), else the built-in of that name.
+pub fn path_or_name(kind: Kind, arg: &Path) -> PathBuf {
+    if arg.exists() {
+        return arg.to_owned();
+    }
+    match arg.to_str().and_then(|s| find(kind, s)) {
+        Some(b) => b.path(),
+        None => arg.to_owned(),
+    }
+}
+
+/// The name of the built-in file at `path` (`so101` for
+/// `<built-in>/robots/so101.yaml`), when it is one.
+pub fn builtin_name(path: &Path) -> Option<&'static str> {
+    all().find(|b| b.path() == path).map(|b| b.name)
+}
+
+/// `path` as a command line takes it: a built-in file's name, any other
+/// file's path.
+pub fn argument(path: &Path) -> String {
+    builtin_name(path).map_or_else(|| path.display().to_string(), str::to_owned)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{load_motion, load_robot};
+
+    #[test]
+    fn every_shipped_file_is_built_in_and_loads() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
+        let mut on_disk = 0;
+        for sub in ["robots", "motions", "sim"] {
+            for entry in std::fs::read_dir(dir.join(sub)).expect("configs dir") {
+                let path = entry.expect("entry").path();
+                let name = path.file_stem().and_then(|s| s.to_str()).expect("name");
+                let b = all()
+                    .find(|b| b.name == name)
+                    .unwrap_or_else(|| panic!("{name} is not built in"));
+                assert_eq!(b.text, std::fs::read_to_string(&path).expect("read"));
+                on_disk += 1;
+            }
+        }
+        assert_eq!(on_disk, all().count());
+        // (The simulator's mountings and hands load in the runtime's
+        // `sim_body` tests.)
+        for b in all() {
+            match b.kind {
+                Kind::Robot => drop(load_robot(&b.path()).expect("robot loads")),
+                Kind::Motion => drop(load_motion(&b.path(), None).expect("motion loads")),
+                Kind::Mounting | Kind::Hand => {}
+            }
+        }
+        assert_eq!(
+            find(Kind::Mounting, "so101-mounting").map(|b| b.kind),
+            Some(Kind::Mounting)
+        );
+        assert_eq!(
+            find(Kind::Hand, "so101-hand").map(|b| b.kind),
+            Some(Kind::Hand)
+        );
+    }
+
+    #[test]
+    fn a_builtin_motion_uses_the_builtin_robot() {
+        let (motion, robot) = load_motion(&motion_path_or_name(Path::new("arm-wave")), None)
+            .expect("built-in motion");
+        assert_eq!(robot.name, "so101");
+        assert!(
+            motion.robot_path.starts_with("<built-in>"),
+            "{:?}",
+            motion.robot_path
+        );
+    }
+
+    #[test]
+    fn summaries_are_one_short_sentence() {
+        for b in all() {
+            let s = b.summary();
+            assert!(!s.is_empty() && s.len() <= 75, "{}: {s:?}", b.name);
+            let full_stop = s.ends_with('.') && !s.ends_with("...");
+            assert!(!full_stop && !s.contains(". "), "{}: {s:?}", b.name);
+        }
+        let arm = find(Kind::Robot, "so101").expect("so101");
+        assert_eq!(arm.summary(), "SO-101-style 6-joint arm");
+    }
+
+    #[test]
+    fn names_resolve_and_paths_stay() {
+        // The command-line test `a_file_named_like_a_builtin_wins` runs
+        // this with a file called `so101` in the working directory.
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robots/so101.yaml");
+        assert_eq!(robot_path_or_name(&file), file);
+        assert!(robot_path_or_name(Path::new("so101")).starts_with("<built-in>"));
+        assert_eq!(robot_path_or_name(Path::new("nope")), Path::new("nope"));
+    }
+
+    #[test]
+    fn a_builtin_is_named_by_its_name_and_a_file_by_its_path() {
+        assert_eq!(argument(&robot_path_or_name(Path::new("so101"))), "so101");
+        assert_eq!(argument(Path::new("arm/robot.yaml")), "arm/robot.yaml");
+        let hand = path_or_name(Kind::Hand, Path::new("so101-hand"));
+        assert_eq!(argument(&hand), "so101-hand");
+        // A built-in of another kind is not found under that name.
+        assert_eq!(
+            path_or_name(Kind::Mounting, Path::new("so101-hand")),
+            Path::new("so101-hand")
+        );
+    }
+}

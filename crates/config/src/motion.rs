@@ -1,0 +1,476 @@
+//! Motion files: poses, keyframes, timing and repetition.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::de::{self, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer};
+
+use super::error::{ConfigError, Source};
+use super::limits::{check_duration, check_segments};
+use super::locate::FieldPath;
+use super::robot::{self, Robot};
+use super::Units;
+
+/// A choreography, resolved against its robot: every keyframe holds a
+/// position for every joint of the robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    /// The motion file.
+    pub path: PathBuf,
+    /// The robot file used (the motion's `robot:`, or the override).
+    pub robot_path: PathBuf,
+    /// The unit of every angle in this motion's keyframes (`deg` unless the
+    /// file says otherwise, whatever the robot's unit).
+    pub units: Units,
+    /// The motion's own control rate, Hz, if it sets one.
+    pub rate_hz: Option<f64>,
+    /// Joint names in the robot's joint order (the order of
+    /// [`Keyframe::positions`]).
+    pub joints: Vec<String>,
+    /// The keyframes of one repetition; the first is the start (t = 0).
+    pub keyframes: Vec<Keyframe>,
+    /// How many times the keyframes are played (at least 1). Between
+    /// repetitions the path moves from the last keyframe back to the first
+    /// (untimed) unless they are equal; `at` times count from the arrival at
+    /// the repetition's first keyframe.
+    pub repeat: u32,
+    /// What the planner does when a timed segment would exceed a limit.
+    pub on_limit: OnLimit,
+    /// The path shape between timed keyframes.
+    pub interpolation: Interpolation,
+}
+
+/// One keyframe, every joint resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Keyframe {
+    /// Time from the start of the repetition, s; `None`: as soon as the
+    /// limits allow.
+    pub at: Option<f64>,
+    /// The pose's name when the keyframe names one.
+    pub pose: Option<String>,
+    /// Position of every robot joint (robot joint order), in the motion's units.
+    pub positions: Vec<f64>,
+    /// 1-based line of the keyframe in the motion file.
+    pub line: usize,
+    /// 1-based column of the keyframe in the motion file.
+    pub column: usize,
+}
+
+/// What to do when timed keyframes ask more than a joint's limits allow.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[serde(expecting = "`error` or `stretch`")]
+pub enum OnLimit {
+    /// Refuse the motion, naming the keyframe, joint, peak and limit.
+    #[default]
+    Error,
+    /// Stretch the timing of the offending segments until the limits hold.
+    Stretch,
+}
+
+/// The path shape through timed keyframes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[serde(expecting = "`shape_preserving`, `spline`, `monotone` or `quintic`")]
+pub enum Interpolation {
+    /// Shape-preserving, jerk-limited segments (the default): every joint
+    /// stays within the range of the two keyframes around each segment and
+    /// passes a keyframe where it turns back at zero speed; a motion that
+    /// could stop at every keyframe on time is always accepted.
+    #[default]
+    #[serde(alias = "shape-preserving")]
+    ShapePreserving,
+    /// C2 cubic spline (`spline` or `cubic`), at rest at both ends; the
+    /// smoothest, but it may overshoot the keyframes and is refused where
+    /// it breaks a limit.
+    #[serde(alias = "spline")]
+    Cubic,
+    /// Monotone cubic: never overshoots between keyframes.
+    Monotone,
+    /// Quintic (minimum-jerk) segments, at rest at every keyframe.
+    #[serde(alias = "minimum_jerk", alias = "min_jerk")]
+    Quintic,
+}
+
+impl Interpolation {
+    /// The name a motion file uses for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Interpolation::ShapePreserving => "shape_preserving",
+            Interpolation::Cubic => "spline",
+            Interpolation::Monotone => "monotone",
+            Interpolation::Quintic => "quintic",
+        }
+    }
+}
+
+impl Motion {
+    /// The path shape used: the interpolation's name when a keyframe after
+    /// the first has a time, else `untimed` (time-optimal pass-through).
+    pub fn path_shape(&self) -> &'static str {
+        if self.keyframes.iter().skip(1).any(|k| k.at.is_some()) {
+            self.interpolation.name()
+        } else {
+            "untimed"
+        }
+    }
+
+    /// The control rate to use: the motion's, else the robot's.
+    pub fn rate_hz(&self, robot: &Robot) -> f64 {
+        self.rate_hz.unwrap_or(robot.rate_hz)
+    }
+
+    /// Where keyframe `index` sits, as `file:line:column`.
+    pub fn keyframe_location(&self, index: usize) -> String {
+        match self.keyframes.get(index) {
+            Some(k) => format!("{}:{}:{}", self.path.display(), k.line, k.column),
+            None => self.path.display().to_string(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a motion file: a mapping with `keyframes:` and optional `robot:`, `poses:`, `repeat:`, ..."
+)]
+struct RawMotion {
+    #[serde(default)]
+    robot: Option<String>,
+    #[serde(default)]
+    units: Units,
+    #[serde(default)]
+    rate: Option<f64>,
+    #[serde(default)]
+    poses: PoseList,
+    keyframes: Vec<RawKeyframe>,
+    #[serde(default = "one")]
+    repeat: i64,
+    #[serde(default)]
+    on_limit: OnLimit,
+    #[serde(default)]
+    interpolation: Interpolation,
+}
+
+fn one() -> i64 {
+    1
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(expecting = "a keyframe: a mapping with `pose:` and optional `at:`")]
+struct RawKeyframe {
+    #[serde(default)]
+    at: Option<f64>,
+    #[serde(default)]
+    pose: Option<PoseRef>,
+    #[serde(default)]
+    tool: Option<super::tool::ToolPose>,
+}
+
+/// `name: value` pairs in file order (a map would lose the order, and errors
+/// should name the first bad entry as written).
+#[derive(Default)]
+struct PairList<T>(Vec<(String, T)>);
+
+type PoseMap = PairList<f64>;
+type PoseList = PairList<PoseMap>;
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for PairList<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
+            type Value = PairList<T>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a mapping of names to values")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut v: Vec<(String, T)> = Vec::new();
+                while let Some(k) = map.next_key::<String>()? {
+                    if v.iter().any(|(n, _)| *n == k) {
+                        return Err(de::Error::custom(format!("`{k}` is given twice")));
+                    }
+                    v.push((k, map.next_value()?));
+                }
+                Ok(PairList(v))
+            }
+        }
+        d.deserialize_map(V(std::marker::PhantomData))
+    }
+}
+
+/// A keyframe's pose: a pose's name, or a map of joint positions.
+enum PoseRef {
+    Name(String),
+    Map(PoseMap),
+}
+
+impl<'de> Deserialize<'de> for PoseRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = PoseRef;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a pose name or a map of joint positions")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<PoseRef, E> {
+                Ok(PoseRef::Name(v.to_owned()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<PoseRef, A::Error> {
+                PoseMap::deserialize(de::value::MapAccessDeserializer::new(map)).map(PoseRef::Map)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Loads a motion file and its robot, and validates both together.
+///
+/// The robot is the motion's `robot:` path, taken relative to the motion
+/// file, unless `robot_override` is given. Joints a keyframe does not name
+/// keep their previous value; in the first keyframe they start at their
+/// `home` (or 0 clamped into the limits). A keyframe's `tool: {xyz, pitch,
+/// roll}` puts the robot's `tool` frame there by inverse kinematics from
+/// the pose before it (after the keyframe's own `pose`, if it has one).
+///
+/// # Errors
+///
+/// [`ConfigError`] naming the file, line, column and field of the first
+/// problem in either file: syntax, unknown fields, an unknown pose or joint,
+/// a keyframe outside a joint's limits, a tool pose the arm cannot take
+/// (unreachable, a limit, a singularity), times that do not increase, or a
+/// rate the robot's buses cannot carry.
+pub fn load_motion(
+    path: &Path,
+    robot_override: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
+    load_motion_calibrated(path, robot_override, None)
+}
+
+/// Like [`load_motion`], with the calibration file `calibration` instead of
+/// the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_motion`] and [`load_robot_calibrated`](super::load_robot_calibrated).
+pub fn load_motion_calibrated(
+    path: &Path,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
+    let src = Source::read(path)?;
+    let raw: RawMotion = src.parse()?;
+    let root = FieldPath::root();
+    let robot_path = match (robot_override, &raw.robot) {
+        (Some(p), _) => p.to_owned(),
+        (None, Some(rel)) => super::files::tidy(path.parent().unwrap_or(Path::new("")).join(rel)),
+        (None, None) => {
+            return Err(src.error(&root, "no robot: add `robot: FILE` (relative to this file)"))
+        }
+    };
+    let (robot, robot_src) =
+        robot::load_calibrated(&robot_path, calibration).map_err(|e| match e {
+            // The robot the motion names cannot be read: point at the
+            // `robot:` line, which is what to fix. (Another file that cannot
+            // be read, a calibration, speaks for itself.)
+            ConfigError::Read { ref path, .. } | ConfigError::TooLarge { ref path, .. }
+                if robot_override.is_none() && *path == robot_path =>
+            {
+                src.error(
+                    &root.key("robot"),
+                    format!(
+                        "{e}; fix this `robot:` (it is relative to this motion file) or pass \
+                         --robot"
+                    ),
+                )
+            }
+            e => e,
+        })?;
+    robot::require_calibration(&robot, &robot_src)?;
+    match raw.rate {
+        Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
+        None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,
+    }
+    if raw.repeat < 1 {
+        return Err(src.error(
+            &root.key("repeat"),
+            format!("must be at least 1, got {}", raw.repeat),
+        ));
+    }
+    let repeat = u64::try_from(raw.repeat).unwrap_or(u64::MAX);
+    if let Err(e) = check_segments(raw.keyframes.len(), repeat, robot.joint_count()) {
+        return Err(src.error(&root.key("repeat"), e.to_string()));
+    }
+    // At most MAX_PLANNED_SEGMENTS: it fits.
+    let repeat = u32::try_from(repeat).unwrap_or(u32::MAX);
+    let resolver = Resolver {
+        src: &src,
+        robot: &robot,
+        units: raw.units,
+    };
+    for (name, pose) in &raw.poses.0 {
+        resolver.check_pose(pose, &root.key("poses").key(name), None)?;
+    }
+    if raw.keyframes.is_empty() {
+        return Err(src.error(
+            &root.key("keyframes"),
+            "a motion needs at least one keyframe",
+        ));
+    }
+    let mut current: Vec<f64> = robot
+        .joints()
+        .map(|j| robot.units.convert(j.rest(), raw.units))
+        .collect();
+    let mut keyframes = Vec::with_capacity(raw.keyframes.len());
+    let mut last_at: Option<(usize, f64)> = None;
+    for (i, rk) in raw.keyframes.iter().enumerate() {
+        let kp = root.key("keyframes").index(i);
+        if let Some(at) = rk.at {
+            if !(at.is_finite() && at >= 0.0) {
+                return Err(src.error(&kp.key("at"), format!("must be a time >= 0 s, got {at}")));
+            }
+            if let Err(e) = check_duration(at) {
+                return Err(src.error(&kp.key("at"), e.to_string()));
+            }
+            if i == 0 && at != 0.0 {
+                return Err(src.error(
+                    &kp.key("at"),
+                    format!("the first keyframe is the start, at 0 s; got {at}"),
+                ));
+            }
+            if let Some((j, prev)) = last_at {
+                if at <= prev {
+                    return Err(src.error(
+                        &kp.key("at"),
+                        format!("{at} s is not after keyframe {j} at {prev} s"),
+                    ));
+                }
+            }
+            last_at = Some((i, at));
+        }
+        let (pose_name, pairs) = match &rk.pose {
+            None if rk.tool.is_none() => {
+                return Err(src.error(&kp, "a keyframe needs a `pose` or a `tool`"))
+            }
+            None => (None, None),
+            Some(PoseRef::Name(name)) => {
+                let Some((_, pose)) = raw.poses.0.iter().find(|(n, _)| n == name) else {
+                    let known: Vec<&str> = raw.poses.0.iter().map(|(n, _)| n.as_str()).collect();
+                    return Err(src.error(
+                        &kp.key("pose"),
+                        format!("unknown pose `{name}` (poses: {})", list(&known)),
+                    ));
+                };
+                (Some(name.clone()), Some(pose))
+            }
+            Some(PoseRef::Map(map)) => {
+                resolver.check_pose(map, &kp.key("pose"), Some(i))?;
+                (None, Some(map))
+            }
+        };
+        for (joint, value) in pairs.iter().flat_map(|p| &p.0) {
+            if let Some(ix) = robot.joint_index(joint) {
+                current[ix] = *value;
+            }
+        }
+        // A tool pose moves the arm's joints there, from this pose.
+        if let Some(tool) = &rk.tool {
+            super::tool::resolve(&robot, raw.units, tool, &mut current)
+                .map_err(|why| src.error(&kp.key("tool"), format!("keyframe {i}: {why}")))?;
+        }
+        let (line, column) = src.position(&kp);
+        keyframes.push(Keyframe {
+            at: rk.at,
+            pose: pose_name,
+            positions: current.clone(),
+            line,
+            column,
+        });
+    }
+    let motion = Motion {
+        path: path.to_owned(),
+        robot_path,
+        units: raw.units,
+        rate_hz: raw.rate,
+        joints: robot.joints().map(|j| j.name.clone()).collect(),
+        keyframes,
+        repeat,
+        on_limit: raw.on_limit,
+        interpolation: raw.interpolation,
+    };
+    Ok((motion, robot))
+}
+
+fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none defined".to_owned()
+    } else {
+        names.join(", ")
+    }
+}
+
+struct Resolver<'a> {
+    src: &'a Source,
+    robot: &'a Robot,
+    units: Units,
+}
+
+impl Resolver<'_> {
+    /// Every joint named exists and every value is inside its joint's limits.
+    fn check_pose(
+        &self,
+        pose: &PoseMap,
+        at: &FieldPath,
+        keyframe: Option<usize>,
+    ) -> Result<(), ConfigError> {
+        let which = keyframe.map_or(String::new(), |k| format!("keyframe {k}: "));
+        for (name, value) in &pose.0 {
+            let field = at.key(name);
+            let Some(joint) = self.robot.joint(name) else {
+                let known: Vec<&str> = self.robot.joints().map(|j| j.name.as_str()).collect();
+                return Err(self.src.key_error(
+                    &field,
+                    format!(
+                        "{which}robot `{}` has no joint `{name}` (joints: {})",
+                        self.robot.name,
+                        list(&known)
+                    ),
+                ));
+            };
+            if !value.is_finite() {
+                return Err(self.src.error(&field, "must be a finite number"));
+            }
+            let v = self.units.convert(*value, self.robot.units);
+            // A hair of tolerance so a limit written in the other unit
+            // (90 deg vs 1.5708 rad) still counts as inside.
+            let tol = 1e-9 * (1.0 + v.abs());
+            if v < joint.min - tol || v > joint.max + tol {
+                let (min, max) = (
+                    self.robot.units.convert(joint.min, self.units),
+                    self.robot.units.convert(joint.max, self.units),
+                );
+                let [lo, hi] = super::limit_origins(joint, self.robot.units);
+                let origin = if v < joint.min { lo } else { hi };
+                return Err(self.src.error(
+                    &field,
+                    format!(
+                        "{which}{value} {} is outside the limits of joint `{name}` \
+                         [{}, {}] {} (the {} limit comes from {origin})",
+                        self.units,
+                        round(min),
+                        round(max),
+                        self.units,
+                        if v < joint.min { "lower" } else { "upper" },
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `x` to two decimals, as a limit is said in a message (a calibrated limit
+/// is measured: 96.92578125 says nothing 96.93 does not).
+fn round(x: f64) -> f64 {
+    (x * 100.0).round() / 100.0
+}

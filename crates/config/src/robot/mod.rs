@@ -1,0 +1,321 @@
+//! Robot files: buses, servos and joint limits.
+//!
+//! Parts: the types and loaders here, `raw` (the file's shape as serde
+//! reads it) and `validate` (from that shape to a [`Robot`], every problem
+//! located in the file).
+
+mod raw;
+mod validate;
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use servobus_protocol::registers::Model;
+
+use super::calibration::JointCalibration;
+use super::error::{ConfigError, Source};
+use super::locate::FieldPath;
+use super::Units;
+use raw::RawRobot;
+pub(crate) use validate::{check_rate, check_servo_range};
+
+/// A robot: its buses and the joints on each, as read from a robot file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Robot {
+    /// The robot's name.
+    pub name: String,
+    /// The unit of every angle in [`JointConfig`].
+    pub units: Units,
+    /// Default control rate in Hz (a motion may override it).
+    pub rate_hz: f64,
+    /// Lag compensation: command the path this far ahead (`lead_ms` in the
+    /// file). `None`: identify it while the joints move ([`Lead::Auto`](servobus_runtime::Lead::Auto)).
+    pub lead: Option<Duration>,
+    /// The serial buses, each with its joints.
+    pub buses: Vec<BusConfig>,
+    /// The file it was loaded from (empty for robots built in code).
+    pub path: PathBuf,
+    /// The calibration of the physical robot, if the robot file names one
+    /// (`calibration: FILE`) or one was given (`--calibration`).
+    pub calibration: RobotCalibration,
+    /// The pose a person holds the robot in while calibrating, per joint in
+    /// the robot's joint order and units (`calibration_pose`; default 0).
+    pub calibration_pose: Vec<f64>,
+    /// The robot's geometry (`kinematics:`), checked against its joints;
+    /// joint limits unset ([`Robot::geometry`] sets them).
+    pub kinematics: Option<servobus_kinematics::Model>,
+}
+
+/// Whether a robot's angles go through a calibration.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum RobotCalibration {
+    /// None asked for: angles are measured from each servo's middle tick
+    /// with the robot file's `offset` and `inverted`.
+    #[default]
+    None,
+    /// The robot file names a calibration file that does not exist yet.
+    /// The simulator serves such a robot as designed (to be calibrated),
+    /// but nothing plans or plays it: [`load_motion`](super::load_motion)
+    /// and [`load_robot_to_play`] refuse it, naming the file, and real
+    /// servos are refused before they move.
+    Missing(PathBuf),
+    /// Loaded and applied: every joint maps through its calibration (held
+    /// in [`JointConfig::calibration`]) and its limits are clipped to the
+    /// measured range.
+    Applied {
+        /// The calibration file.
+        path: PathBuf,
+    },
+}
+
+/// One serial bus and the servos on it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BusConfig {
+    /// The bus's name (unique within the robot).
+    pub name: String,
+    /// Serial port; `None` runs on the simulator unless `--port` is given.
+    pub port: Option<String>,
+    /// Baud rate, bits per second.
+    pub baud: u32,
+    /// The adapter's latency per transaction (0 with `latency_us: auto`
+    /// until the run measures it).
+    pub latency: Duration,
+    /// `latency_us: auto` (the default): the run measures the adapter at
+    /// start-up and keeps its reply deadlines just above what the link
+    /// does. A number in the robot file wins.
+    pub latency_auto: bool,
+    /// The servos' return delay (register 7).
+    pub return_delay: Duration,
+    /// Wait for replies by polling the port without blocking (`busy_poll`
+    /// in the robot file; default false): the control thread keeps its core
+    /// and sees each reply without the kernel's wake-up latency.
+    pub busy_poll: bool,
+    /// Allow reading servos round-robin (`round_robin` in the robot file;
+    /// default false): at a rate the full cycle does not fit, each cycle
+    /// reads a subset of the servos. Without it such a rate is refused.
+    pub round_robin: bool,
+    /// The joints, in the order they are written and read each cycle.
+    pub joints: Vec<JointConfig>,
+}
+
+/// One joint: a servo, its limits and how its angle maps to the servo's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointConfig {
+    /// The joint's name (unique within the robot).
+    pub name: String,
+    /// Servo ID on its bus (0..=253).
+    pub id: u8,
+    /// The servo model, which gives the resolution and register map.
+    pub model: &'static Model,
+    /// Lowest position, in the robot's units.
+    pub min: f64,
+    /// Highest position, in the robot's units.
+    pub max: f64,
+    /// Velocity limit, units/s.
+    pub max_velocity: f64,
+    /// Acceleration limit, units/s^2.
+    pub max_acceleration: f64,
+    /// Jerk limit, units/s^3 (`None`: acceleration may step).
+    pub max_jerk: Option<f64>,
+    /// Servo angle (from the middle of its range) at joint position 0, units.
+    pub offset: f64,
+    /// The joint turns the opposite way to the servo.
+    pub inverted: bool,
+    /// Rest position, units.
+    pub home: Option<f64>,
+    /// The joint's calibration, when the robot has one: it replaces
+    /// `offset` and `inverted` in the mapping to ticks.
+    pub calibration: Option<JointCalibration>,
+}
+
+impl Robot {
+    /// Every joint of every bus, in bus order then joint order. This order
+    /// is the robot's joint order: keyframe vectors and trajectories use it.
+    pub fn joints(&self) -> impl Iterator<Item = &JointConfig> + '_ {
+        self.buses.iter().flat_map(|b| b.joints.iter())
+    }
+
+    /// Number of joints over all buses.
+    pub fn joint_count(&self) -> usize {
+        self.buses.iter().map(|b| b.joints.len()).sum()
+    }
+
+    /// Index (in the robot's joint order) of the joint called `name`.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints().position(|j| j.name == name)
+    }
+
+    /// The joint called `name`.
+    pub fn joint(&self, name: &str) -> Option<&JointConfig> {
+        self.joints().find(|j| j.name == name)
+    }
+
+    /// The robot's geometry with every joint's current limits (radians),
+    /// ready for forward and inverse kinematics; `None` without a
+    /// `kinematics:` section.
+    pub fn geometry(&self) -> Option<servobus_kinematics::Model> {
+        let mut model = self.kinematics.clone()?;
+        for (i, j) in self.joints().enumerate() {
+            model.set_limits(i, self.units.to_rad(j.min), self.units.to_rad(j.max));
+        }
+        Some(model)
+    }
+}
+
+impl BusConfig {
+    /// The timing model of this bus's link.
+    pub fn link(&self) -> servobus_timing::Link {
+        servobus_timing::Link::new(self.baud).with_latency(self.latency)
+    }
+}
+
+impl JointConfig {
+    /// The rest position: `home`, or 0 clamped into the limits.
+    pub fn rest(&self) -> f64 {
+        self.home
+            .unwrap_or_else(|| 0.0f64.clamp(self.min, self.max))
+    }
+}
+
+/// Loads and validates a robot file, including that its default rate fits
+/// every bus.
+///
+/// # Errors
+///
+/// [`ConfigError::Read`] when the file cannot be read; otherwise
+/// [`ConfigError::Invalid`] naming the file, line, column and field of the
+/// first problem: YAML syntax, an unknown or missing field, a duplicate ID or
+/// joint name, an ID above 253, an unknown model, `min >= max`, a
+/// non-positive limit, a limit outside the servo's range, or a rate the bus
+/// cannot carry (the error says which rate would fit).
+pub fn load_robot(path: &Path) -> Result<Robot, ConfigError> {
+    load_robot_calibrated(path, None)
+}
+
+/// Like [`load_robot`], with the calibration file `calibration` instead of
+/// the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_robot`], and the errors of [`load_calibration`](super::load_calibration) and of
+/// applying it: a joint it lacks, another servo ID or model, a measured
+/// range that leaves nothing of the joint's limits.
+pub fn load_robot_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    let (robot, source) = load_calibrated(path, calibration)?;
+    check_rate(
+        &robot,
+        &source,
+        robot.rate_hz,
+        &FieldPath::root().key("rate"),
+    )?;
+    Ok(robot)
+}
+
+/// Like [`load_robot_calibrated`], for a robot about to play a motion or
+/// a recording: a calibration file the robot file names must exist, since
+/// the calibrated limits are what the path is kept within.
+///
+/// # Errors
+/// As [`load_robot_calibrated`], and [`ConfigError::Invalid`] at the robot
+/// file's `calibration:` when that file does not exist.
+pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
+    let (robot, source) = load_calibrated(path, calibration)?;
+    require_calibration(&robot, &source)?;
+    check_rate(
+        &robot,
+        &source,
+        robot.rate_hz,
+        &FieldPath::root().key("rate"),
+    )?;
+    Ok(robot)
+}
+
+/// Refuses a robot whose robot file (`source`) names a calibration file
+/// that does not exist.
+pub(crate) fn require_calibration(robot: &Robot, source: &Source) -> Result<(), ConfigError> {
+    let RobotCalibration::Missing(file) = &robot.calibration else {
+        return Ok(());
+    };
+    Err(source.error(
+        &FieldPath::root().key("calibration"),
+        format!(
+            "the calibration file {} does not exist; motions are planned and played within \
+             the calibrated limits: calibrate first (`servobus calibrate --robot {} -o {}`), \
+             or remove `calibration:` to use the robot as designed",
+            file.display(),
+            source.path.display(),
+            file.display()
+        ),
+    ))
+}
+
+/// Like [`load_robot`], but accepts a default rate that does not fit (for
+/// `servobus budget`, which reports what would fit instead).
+///
+/// # Errors
+///
+/// As [`load_robot`], less the rate check.
+pub fn load_robot_any_rate(path: &Path) -> Result<Robot, ConfigError> {
+    load(path).map(|(robot, _)| robot)
+}
+
+/// [`load_robot_any_rate`] with the calibration file `calibration` instead
+/// of the one the robot file names (`--calibration`).
+///
+/// # Errors
+/// As [`load_robot_calibrated`], less the rate check.
+pub fn load_robot_any_rate_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    load_calibrated(path, calibration).map(|(robot, _)| robot)
+}
+
+/// The robot as designed, without any calibration applied (what
+/// `servobus calibrate` starts from), and the calibration file the robot
+/// file names, if it names one.
+///
+/// # Errors
+/// As [`load_robot_any_rate`].
+pub fn load_robot_design(path: &Path) -> Result<(Robot, Option<PathBuf>), ConfigError> {
+    let (robot, _, named) = load_design(path)?;
+    Ok((robot, named))
+}
+
+pub(crate) fn load(path: &Path) -> Result<(Robot, Source), ConfigError> {
+    load_calibrated(path, None)
+}
+
+/// Loads a robot file and applies its calibration (or `calibration`, which
+/// takes precedence over the file's `calibration:`).
+pub(crate) fn load_calibrated(
+    path: &Path,
+    calibration: Option<&Path>,
+) -> Result<(Robot, Source), ConfigError> {
+    let (robot, source, named) = load_design(path)?;
+    let robot = match calibration.map(Path::to_owned).or(named) {
+        Some(file) if calibration.is_some() || file.exists() => {
+            super::calibrated::apply(robot, &file)?
+        }
+        Some(file) => Robot {
+            calibration: RobotCalibration::Missing(file),
+            ..robot
+        },
+        None => robot,
+    };
+    Ok((robot, source))
+}
+
+fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
+    let source = Source::read(path)?;
+    let raw: RawRobot = source.parse()?;
+    let named = raw
+        .calibration
+        .as_ref()
+        .map(|rel| path.parent().unwrap_or(Path::new("")).join(rel));
+    let robot = validate::robot(raw, &source)?;
+    check_servo_range(&robot, &source)?;
+    Ok((robot, source, named))
+}

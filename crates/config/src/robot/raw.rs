@@ -1,0 +1,118 @@
+//! The shape of a robot file as serde reads it, before validation.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use std::fmt;
+
+use serde::de::{self, Visitor};
+use serde::{Deserialize, Deserializer};
+
+use crate::Units;
+
+/// A robot file, field for field ([`Robot`](super::Robot) says what each
+/// means); absent optional fields take their defaults here.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a robot file: a mapping with `name:`, `buses:` and optional `units:`, `rate:`, ..."
+)]
+pub(super) struct RawRobot {
+    pub name: String,
+    #[serde(default)]
+    pub units: Units,
+    #[serde(default = "default_rate")]
+    pub rate: f64,
+    #[serde(default)]
+    pub lead_ms: Option<f64>,
+    #[serde(default)]
+    pub calibration: Option<PathBuf>,
+    #[serde(default)]
+    pub calibration_pose: HashMap<String, f64>,
+    pub buses: Vec<RawBus>,
+    #[serde(default)]
+    pub kinematics: Option<servobus_kinematics::Spec>,
+}
+
+fn default_rate() -> f64 {
+    100.0
+}
+
+/// `latency_us`: a number of microseconds, or `auto`.
+#[derive(Default)]
+pub(super) enum LatencySpec {
+    Micros(u64),
+    #[default]
+    Auto,
+    Word(String),
+}
+
+impl<'de> Deserialize<'de> for LatencySpec {
+    // By hand rather than `untagged`: serde's untagged enums lose the
+    // position of the value and say `untagged enum LatencySpec`.
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = LatencySpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number of microseconds or `auto`")
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<LatencySpec, E> {
+                Ok(LatencySpec::Micros(v))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<LatencySpec, E> {
+                Ok(LatencySpec::Word(v.to_owned()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+fn default_baud() -> u32 {
+    1_000_000
+}
+
+/// One entry of `buses` ([`BusConfig`](super::BusConfig)).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(expecting = "a bus: a mapping with `name:`, `joints:` and optional `baud:`, `port:`, ...")]
+pub(super) struct RawBus {
+    pub name: String,
+    #[serde(default)]
+    pub port: Option<String>,
+    #[serde(default = "default_baud")]
+    pub baud: u32,
+    #[serde(default)]
+    pub latency_us: LatencySpec,
+    #[serde(default)]
+    pub return_delay_us: u64,
+    #[serde(default)]
+    pub busy_poll: bool,
+    #[serde(default)]
+    pub round_robin: bool,
+    pub joints: Vec<RawJoint>,
+}
+
+/// One entry of a bus's `joints` ([`JointConfig`](super::JointConfig)).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:`, `max_velocity:`, `max_acceleration:`, ..."
+)]
+pub(super) struct RawJoint {
+    pub name: String,
+    pub id: i64,
+    pub model: String,
+    pub min: f64,
+    pub max: f64,
+    pub max_velocity: f64,
+    pub max_acceleration: f64,
+    #[serde(default)]
+    pub max_jerk: Option<f64>,
+    #[serde(default)]
+    pub offset: f64,
+    #[serde(default)]
+    pub inverted: bool,
+    #[serde(default)]
+    pub home: Option<f64>,
+}

@@ -1,0 +1,312 @@
+//! From a robot file's raw shape to a [`Robot`]: every field checked, every
+//! problem reported at its place in the file.
+
+use std::collections::{HashMap, HashSet};
+use std::time::Duration;
+
+use servobus_protocol::registers::{model_by_name, MODELS};
+use servobus_protocol::MAX_ID;
+
+use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
+use super::{BusConfig, JointConfig, Robot, RobotCalibration};
+use crate::error::{ConfigError, Source};
+use crate::limits::{check_baud, check_latency_us, check_rate_hz};
+use crate::locate::FieldPath;
+
+/// The largest lag-compensation lead a robot file may set, ms.
+const MAX_LEAD_MS: f64 = 500.0;
+
+/// The largest return delay register 7 can hold (255 x 2 us).
+const MAX_RETURN_DELAY_US: u64 = 510;
+
+/// Checks that `rate_hz` fits every bus of `robot`; the error points at `field`.
+pub(crate) fn check_rate(
+    robot: &Robot,
+    source: &Source,
+    rate_hz: f64,
+    field: &FieldPath,
+) -> Result<(), ConfigError> {
+    if let Err(e) = check_rate_hz(rate_hz) {
+        return Err(source.error(field, e.to_string()));
+    }
+    for bus in &robot.buses {
+        if let Err(why) = bus.check_rate(rate_hz) {
+            return Err(source.error(field, format!("bus `{}`: {}", bus.name, why.with_advice())));
+        }
+    }
+    Ok(())
+}
+
+fn positive(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+/// The robot `raw` describes, checked field by field.
+pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
+    let root = FieldPath::root();
+    if raw.name.trim().is_empty() {
+        return Err(src.error(&root.key("name"), "must not be empty"));
+    }
+    if let Err(e) = check_rate_hz(raw.rate) {
+        return Err(src.error(&root.key("rate"), e.to_string()));
+    }
+    let lead = match raw.lead_ms {
+        None => None,
+        Some(ms) if ms.is_finite() && (0.0..=MAX_LEAD_MS).contains(&ms) => {
+            Some(Duration::from_secs_f64(ms / 1e3))
+        }
+        Some(ms) => {
+            return Err(src.error(
+                &root.key("lead_ms"),
+                format!("must be between 0 and {MAX_LEAD_MS} ms, got {ms}"),
+            ))
+        }
+    };
+    if raw.buses.is_empty() {
+        return Err(src.error(&root.key("buses"), "a robot needs at least one bus"));
+    }
+    let pose = raw.calibration_pose;
+    let mut bus_names = HashSet::new();
+    let mut joint_names: HashMap<String, FieldPath> = HashMap::new();
+    let mut buses = Vec::with_capacity(raw.buses.len());
+    for (bi, rb) in raw.buses.into_iter().enumerate() {
+        let bp = root.key("buses").index(bi);
+        if !bus_names.insert(rb.name.clone()) {
+            return Err(src.error(
+                &bp.key("name"),
+                format!("bus name `{}` is used twice", rb.name),
+            ));
+        }
+        buses.push(bus(rb, &bp, &mut joint_names, src)?);
+    }
+    let mut robot = Robot {
+        name: raw.name,
+        units: raw.units,
+        rate_hz: raw.rate,
+        lead,
+        buses,
+        path: src.path.clone(),
+        calibration: RobotCalibration::None,
+        calibration_pose: Vec::new(),
+        kinematics: None,
+    };
+    robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
+    if let Some(spec) = &raw.kinematics {
+        robot.kinematics = Some(kinematics(&robot, spec, src)?);
+    }
+    Ok(robot)
+}
+
+/// The `kinematics:` section checked against the robot's joints; a problem
+/// is reported at its entry and field.
+fn kinematics(
+    robot: &Robot,
+    spec: &servobus_kinematics::Spec,
+    src: &Source,
+) -> Result<servobus_kinematics::Model, ConfigError> {
+    let names = robot.joints().map(|j| j.name.as_str());
+    servobus_kinematics::Model::new(spec, names, robot.units.to_rad(1.0)).map_err(|e| {
+        let (section, entry, field) = e.location();
+        let mut at = FieldPath::root().key("kinematics").key(section.key());
+        let Some(entry) = entry else {
+            return src.error(&at, e.to_string());
+        };
+        at = at.key(entry);
+        match field {
+            Some(field) => src.error(&at.key(field), e.to_string()),
+            None => src.key_error(&at, e.to_string()),
+        }
+    })
+}
+
+/// One bus of the robot at `bp`, its joints' names also checked against
+/// every other bus's (`joint_names`: where each name was first used).
+fn bus(
+    rb: RawBus,
+    bp: &FieldPath,
+    joint_names: &mut HashMap<String, FieldPath>,
+    src: &Source,
+) -> Result<BusConfig, ConfigError> {
+    if let Err(e) = check_baud(rb.baud) {
+        return Err(src.error(&bp.key("baud"), e.to_string()));
+    }
+    if rb.return_delay_us > MAX_RETURN_DELAY_US || rb.return_delay_us % 2 != 0 {
+        return Err(src.error(
+            &bp.key("return_delay_us"),
+            format!(
+                "must be an even number of microseconds from 0 to {MAX_RETURN_DELAY_US} \
+                 (register 7 counts 2 us), got {}",
+                rb.return_delay_us
+            ),
+        ));
+    }
+    if rb.joints.is_empty() {
+        return Err(src.error(&bp.key("joints"), "a bus needs at least one joint"));
+    }
+    let mut ids: HashMap<u8, usize> = HashMap::new();
+    let mut joints = Vec::with_capacity(rb.joints.len());
+    for (ji, rj) in rb.joints.into_iter().enumerate() {
+        let jp = bp.key("joints").index(ji);
+        let joint = validate_joint(rj, &jp, src)?;
+        if let Some(first) = ids.insert(joint.id, ji) {
+            return Err(src.error(
+                &jp.key("id"),
+                format!(
+                    "ID {} is already used on bus `{}` by joint {}",
+                    joint.id, rb.name, first
+                ),
+            ));
+        }
+        if let Some(prev) = joint_names.insert(joint.name.clone(), jp.clone()) {
+            return Err(src.error(
+                &jp.key("name"),
+                format!("joint name `{}` is already used at {prev}", joint.name),
+            ));
+        }
+        joints.push(joint);
+    }
+    let (latency, latency_auto) = match rb.latency_us {
+        LatencySpec::Micros(us) => match check_latency_us(us) {
+            Ok(latency) => (latency, false),
+            Err(e) => return Err(src.error(&bp.key("latency_us"), e.to_string())),
+        },
+        LatencySpec::Auto => (Duration::ZERO, true),
+        LatencySpec::Word(w) if w == "auto" => (Duration::ZERO, true),
+        LatencySpec::Word(w) => {
+            return Err(src.error(
+                &bp.key("latency_us"),
+                format!("must be a number of microseconds or `auto`, got `{w}`"),
+            ))
+        }
+    };
+    Ok(BusConfig {
+        name: rb.name,
+        port: rb.port,
+        baud: rb.baud,
+        latency,
+        latency_auto,
+        return_delay: Duration::from_micros(rb.return_delay_us),
+        busy_poll: rb.busy_poll,
+        round_robin: rb.round_robin,
+        joints,
+    })
+}
+
+fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointConfig, ConfigError> {
+    if rj.name.trim().is_empty() {
+        return Err(src.error(&jp.key("name"), "must not be empty"));
+    }
+    let id = match u8::try_from(rj.id) {
+        Ok(id) if id <= MAX_ID => id,
+        _ => {
+            return Err(src.error(
+                &jp.key("id"),
+                format!("servo IDs go from 0 to {MAX_ID}, got {}", rj.id),
+            ))
+        }
+    };
+    let Some(model) = model_by_name(&rj.model) else {
+        let known: Vec<&str> = MODELS.iter().map(|m| m.name).collect();
+        return Err(src.error(
+            &jp.key("model"),
+            format!("unknown model `{}` (known: {})", rj.model, known.join(", ")),
+        ));
+    };
+    for (field, v) in [("min", rj.min), ("max", rj.max), ("offset", rj.offset)] {
+        if !v.is_finite() {
+            return Err(src.error(&jp.key(field), "must be a finite number"));
+        }
+    }
+    if rj.min >= rj.max {
+        return Err(src.error(
+            &jp.key("max"),
+            format!("max ({}) must be greater than min ({})", rj.max, rj.min),
+        ));
+    }
+    for (field, v) in [
+        ("max_velocity", Some(rj.max_velocity)),
+        ("max_acceleration", Some(rj.max_acceleration)),
+        ("max_jerk", rj.max_jerk),
+    ] {
+        if let Some(v) = v {
+            if !positive(v) {
+                return Err(src.error(&jp.key(field), format!("must be positive, got {v}")));
+            }
+        }
+    }
+    let joint = JointConfig {
+        name: rj.name,
+        id,
+        model,
+        min: rj.min,
+        max: rj.max,
+        max_velocity: rj.max_velocity,
+        max_acceleration: rj.max_acceleration,
+        max_jerk: rj.max_jerk,
+        offset: rj.offset,
+        inverted: rj.inverted,
+        home: rj.home,
+        calibration: None,
+    };
+    if let Some(home) = joint.home {
+        if !(home >= joint.min && home <= joint.max) {
+            return Err(src.error(
+                &jp.key("home"),
+                format!("home {home} is outside [{}, {}]", joint.min, joint.max),
+            ));
+        }
+    }
+    Ok(joint)
+}
+
+/// The calibration pose in joint order: every joint named exists and its
+/// angle is inside its limits; unnamed joints are at 0.
+fn calibration_pose(
+    robot: &Robot,
+    pose: &HashMap<String, f64>,
+    src: &Source,
+) -> Result<Vec<f64>, ConfigError> {
+    let field = FieldPath::root().key("calibration_pose");
+    for (name, &v) in pose {
+        let Some(joint) = robot.joint(name) else {
+            return Err(src.key_error(&field.key(name), format!("no joint `{name}`")));
+        };
+        if !(v >= joint.min && v <= joint.max) {
+            return Err(src.error(
+                &field.key(name),
+                format!("{v} is outside [{}, {}]", joint.min, joint.max),
+            ));
+        }
+    }
+    Ok(robot
+        .joints()
+        .map(|j| pose.get(&j.name).copied().unwrap_or(0.0))
+        .collect())
+}
+
+/// Checks that both limits of every joint land inside the servo's tick range
+/// (needs the robot's units, so it runs after the joint is built).
+pub(crate) fn check_servo_range(robot: &Robot, src: &Source) -> Result<(), ConfigError> {
+    let root = FieldPath::root();
+    for (bi, bus) in robot.buses.iter().enumerate() {
+        for (ji, joint) in bus.joints.iter().enumerate() {
+            let map = crate::JointMap::new(joint, robot.units);
+            let jp = root.key("buses").index(bi).key("joints").index(ji);
+            for (field, v) in [("min", joint.min), ("max", joint.max)] {
+                let t = map.raw_ticks(robot.units.to_rad(v));
+                if t < 0.0 || t > f64::from(joint.model.max_position()) {
+                    let (lo, hi) = map.servo_range(robot.units);
+                    return Err(src.error(
+                        &jp.key(field),
+                        format!(
+                            "{v} {} is beyond what the {} can reach here: with offset {} \
+                             and inverted {}, positions go from {lo:.1} to {hi:.1}",
+                            robot.units, joint.model.name, joint.offset, joint.inverted
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}

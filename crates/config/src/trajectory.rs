@@ -1,0 +1,188 @@
+//! From a validated motion to a trajectory: units to radians, keyframe
+//! times, repeat and options, and planner errors located in the motion file.
+
+use servobus_trajectory::{
+    self as traj, JointLimits, PlanError, PlanOptions, Quantity, TimedShape, Trajectory,
+};
+
+use super::limits::check_length;
+use super::{ConfigError, Interpolation, Motion, OnLimit, Robot, Units};
+
+/// Per-joint limits of `robot` in radians, in the robot's joint order.
+pub fn joint_limits(robot: &Robot) -> Vec<JointLimits> {
+    let u = robot.units;
+    robot
+        .joints()
+        .map(|j| {
+            JointLimits::new(
+                u.to_rad(j.max_velocity),
+                u.to_rad(j.max_acceleration),
+                j.max_jerk.map(|x| u.to_rad(x)),
+            )
+            .with_positions(u.to_rad(j.min), u.to_rad(j.max))
+        })
+        .collect()
+}
+
+/// The trajectory planner's keyframes and options for `motion`, in radians.
+pub fn plan_input(motion: &Motion) -> (Vec<traj::Keyframe>, PlanOptions) {
+    let u = motion.units;
+    let keyframes = motion
+        .keyframes
+        .iter()
+        .map(|k| {
+            let kf =
+                traj::Keyframe::new(k.positions.iter().map(|&p| u.to_rad(p)).collect::<Vec<_>>());
+            match k.at {
+                Some(at) => kf.at(at),
+                None => kf,
+            }
+        })
+        .collect();
+    let options = PlanOptions {
+        shape: match motion.interpolation {
+            Interpolation::ShapePreserving => TimedShape::ShapePreserving,
+            Interpolation::Cubic => TimedShape::Cubic,
+            Interpolation::Monotone => TimedShape::Monotone,
+            Interpolation::Quintic => TimedShape::MinimumJerk,
+        },
+        on_limit: match motion.on_limit {
+            OnLimit::Error => traj::OnLimit::Error,
+            OnLimit::Stretch => traj::OnLimit::Stretch,
+        },
+        repeat: motion.repeat,
+        ..PlanOptions::default()
+    };
+    (keyframes, options)
+}
+
+/// Plans `motion` on `robot`: the path the scheduler samples, in radians.
+///
+/// # Errors
+///
+/// [`ConfigError::Invalid`] at the offending keyframe of the motion file
+/// when the planner refuses: which joint, which quantity, the peak the
+/// timing asks for and the limit, in the motion's units.
+pub fn plan_motion(motion: &Motion, robot: &Robot) -> Result<Trajectory, ConfigError> {
+    let limits = joint_limits(robot);
+    let (keyframes, options) = plan_input(motion);
+    let trajectory =
+        traj::plan(&limits, &keyframes, &options).map_err(|e| locate_plan_error(motion, &e))?;
+    check_motion_length(motion, &trajectory, motion.rate_hz(robot))?;
+    Ok(trajectory)
+}
+
+/// Checks that `trajectory`, planned from `motion`, played at `rate_hz`
+/// is within [`MAX_MOTION_DURATION_S`](super::limits::MAX_MOTION_DURATION_S)
+/// and [`MAX_MOTION_CYCLES`](super::limits::MAX_MOTION_CYCLES) (`play
+/// --rate` checks again at its own rate).
+///
+/// # Errors
+/// [`ConfigError::Invalid`] at the first keyframe the motion reaches past
+/// a limit, saying the limit.
+pub fn check_motion_length(
+    motion: &Motion,
+    trajectory: &Trajectory,
+    rate_hz: f64,
+) -> Result<(), ConfigError> {
+    let Err(e) = check_length(trajectory.duration(), rate_hz) else {
+        return Ok(());
+    };
+    let keyframe = trajectory
+        .segments()
+        .iter()
+        .find(|s| check_length(s.end, rate_hz).is_err())
+        .map_or(0, |s| s.keyframe);
+    let (line, column) = motion
+        .keyframes
+        .get(keyframe)
+        .map_or((1, 1), |k| (k.line, k.column));
+    Err(ConfigError::invalid(
+        &motion.path,
+        line,
+        column,
+        format!("keyframes[{keyframe}]"),
+        format!("the motion is too long: {e}"),
+    ))
+}
+
+/// `value` (rad-based, divided by s^order) in the motion's units.
+fn in_units(units: Units, rad: f64) -> f64 {
+    units.from_rad(rad)
+}
+
+fn quantity_unit(units: Units, q: Quantity) -> String {
+    match q {
+        Quantity::Position => units.name().to_owned(),
+        Quantity::Velocity => format!("{units}/s"),
+        Quantity::Acceleration => format!("{units}/s^2"),
+        Quantity::Jerk => format!("{units}/s^3"),
+        _ => units.name().to_owned(),
+    }
+}
+
+/// Turns a planner error into one pointing at the keyframe in the motion file.
+fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
+    let joint_name = |j: usize| motion.joints.get(j).map_or("?", String::as_str);
+    let at_keyframe = |k: usize, field: String, reason: String| {
+        let (line, column) = motion
+            .keyframes
+            .get(k)
+            .map_or((1, 1), |kf| (kf.line, kf.column));
+        ConfigError::invalid(&motion.path, line, column, field, reason)
+    };
+    let u = motion.units;
+    match *e {
+        PlanError::LimitExceeded {
+            keyframe,
+            joint,
+            quantity,
+            peak,
+            limit,
+        } => {
+            let unit = quantity_unit(u, quantity);
+            let hint = if quantity == Quantity::Position {
+                "; the spline overshoots: add a keyframe, or leave `interpolation` out for the \
+                 default shape-preserving path"
+            } else {
+                "; give the segment more time, or set `on_limit: stretch`"
+            };
+            at_keyframe(
+                keyframe,
+                format!("keyframes[{keyframe}]"),
+                format!(
+                    "joint `{}`: the segment arriving here needs a peak {quantity} of {:.4} {unit}, \
+                     above the limit {:.4} {unit}{hint}",
+                    joint_name(joint),
+                    in_units(u, peak),
+                    in_units(u, limit),
+                ),
+            )
+        }
+        PlanError::TooSoon {
+            keyframe,
+            needed,
+            available,
+        } => at_keyframe(
+            keyframe,
+            format!("keyframes[{keyframe}].at"),
+            format!(
+                "reaching this keyframe takes at least {needed:.3} s within the limits, but its \
+                 time leaves {available:.3} s; move `at` later or set `on_limit: stretch`"
+            ),
+        ),
+        PlanError::OutOfRange {
+            keyframe, joint, ..
+        }
+        | PlanError::NotFinite { keyframe, joint } => at_keyframe(
+            keyframe,
+            format!("keyframes[{keyframe}].pose.{}", joint_name(joint)),
+            e.to_string(),
+        ),
+        PlanError::WrongJointCount { keyframe, .. }
+        | PlanError::TimeNotIncreasing { keyframe, .. } => {
+            at_keyframe(keyframe, format!("keyframes[{keyframe}]"), e.to_string())
+        }
+        _ => at_keyframe(0, String::new(), format!("cannot plan: {e}")),
+    }
+}

@@ -116,6 +116,12 @@ fn frame_pose(units: Units, pose: &servobus_kinematics::Isometry3<f64>) -> Frame
     }
 }
 
+/// `v` as printed with `decimals`, without a sign on a rounded zero.
+fn shown(v: f64, decimals: i32) -> f64 {
+    let scale = 10f64.powi(decimals);
+    (v * scale).round() / scale + 0.0
+}
+
 /// Runs `servobus fk`.
 pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
     let (robot, model) = geometry(&args.robot)?;
@@ -144,7 +150,12 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
         for (name, f) in rows {
             println!(
                 "{name:<22} {:>9.2} {:>9.2} {:>9.2}   {:>8.2} {:>8.2} {:>8.2} {u}",
-                f.xyz[0], f.xyz[1], f.xyz[2], f.rpy[0], f.rpy[1], f.rpy[2]
+                shown(f.xyz[0], 2),
+                shown(f.xyz[1], 2),
+                shown(f.xyz[2], 2),
+                shown(f.rpy[0], 2),
+                shown(f.rpy[1], 2),
+                shown(f.rpy[2], 2)
             );
         }
     }
@@ -241,7 +252,7 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string(&out)?);
     } else if let Some(joints) = &out.joints {
         for (name, angle) in joints {
-            println!("{name:<22} {:>9.3} {}", angle + 0.0, robot.units);
+            println!("{name:<22} {:>9.3} {}", shown(*angle, 3), robot.units);
         }
     } else if let Some(e) = &out.error {
         println!("no joint angles put `{}` there: {e}", args.frame);

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use serde::Serialize;
-use servobus_kinematics::{ArmIk, ArmTarget, IkError, LegIk, Model, Point3, Poses};
+use servobus_kinematics::{ArmIk, ArmTarget, Geometry, IkError, LegIk, Point3, Poses};
 use servobus_runtime::config::{ik_reason, load_robot_any_rate, Robot, Units};
 
 use super::exit::{input, PROBLEM};
@@ -71,7 +71,7 @@ struct FkOut {
 }
 
 /// The robot file and its geometry with the joint limits set.
-fn geometry(path: &std::path::Path) -> anyhow::Result<(Robot, Model)> {
+fn geometry(path: &std::path::Path) -> anyhow::Result<(Robot, Geometry)> {
     let robot = load_robot_any_rate(path)?;
     let model = robot.geometry().ok_or_else(|| {
         input(format!(
@@ -181,7 +181,7 @@ struct IkOut {
 /// orientation is asked for, the arm solver otherwise.
 fn solve(
     robot: &Robot,
-    model: &Model,
+    model: &Geometry,
     frame: &str,
     target: &ArmTarget,
 ) -> anyhow::Result<Result<Vec<(usize, f64)>, IkError>> {

@@ -11,8 +11,8 @@
 use nalgebra::{Isometry3, Matrix6, Point3, SMatrix, SVector, Unit, UnitQuaternion, Vector3};
 
 use crate::error::IkError;
+use crate::geometry::Geometry;
 use crate::leg::within;
-use crate::model::Model;
 
 /// The most joints an arm chain may have.
 pub const MAX_DOF: usize = 7;
@@ -55,7 +55,7 @@ pub struct ArmTarget {
     pub roll: Option<f64>,
 }
 
-/// The solver for one arm frame, built once from the model.
+/// The solver for one arm frame, built once from the geometry.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ArmIk {
     frame: String,
@@ -83,7 +83,7 @@ impl ArmIk {
     /// # Errors
     /// [`IkError::UnknownFrame`]; [`IkError::Unsupported`] for a frame on
     /// the base or behind more than [`MAX_DOF`] joints.
-    pub fn new(model: &Model, frame: &str) -> Result<Self, IkError> {
+    pub fn new(model: &Geometry, frame: &str) -> Result<Self, IkError> {
         let f = model
             .frame_index(frame)
             .ok_or_else(|| IkError::UnknownFrame {
@@ -96,7 +96,8 @@ impl ArmIk {
                 why: "an arm frame sits behind 1 to 7 joints",
             });
         }
-        let chain: Vec<&crate::model::Joint> = joints.iter().map(|&i| &model.joints[i]).collect();
+        let chain: Vec<&crate::geometry::Joint> =
+            joints.iter().map(|&i| &model.joints[i]).collect();
         Ok(ArmIk {
             frame: frame.to_owned(),
             names: chain.iter().map(|j| j.name.clone()).collect(),

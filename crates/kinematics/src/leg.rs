@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use nalgebra::{Isometry3, Point3, Vector2};
 
 use crate::error::IkError;
-use crate::model::Model;
+use crate::geometry::Geometry;
 
 /// How close to 1 a unit component must be to count as aligned with it.
 const ALIGNED: f64 = 1e-9;
@@ -15,7 +15,7 @@ const ALIGNED: f64 = 1e-9;
 /// axis, a target counts as at a singularity.
 const SINGULAR_MM: f64 = 1e-3;
 
-/// A leg's closed-form solver, built once from the model.
+/// A leg's closed-form solver, built once from the geometry.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LegIk {
     /// Coxa, femur, tibia (robot order indices).
@@ -76,7 +76,7 @@ impl LegIk {
     /// [`IkError::UnknownFrame`]; [`IkError::Unsupported`] when the chain
     /// to it is not coxa (on the base, about z), femur and tibia (about y,
     /// offsets in the x-z plane, no rotation between them).
-    pub fn new(model: &Model, foot: &str) -> Result<Self, IkError> {
+    pub fn new(model: &Geometry, foot: &str) -> Result<Self, IkError> {
         let unsupported = |why| IkError::Unsupported {
             frame: foot.to_owned(),
             why,

@@ -10,7 +10,7 @@
 //! `parent * translate(xyz) * rotate(rpy) * rotate(axis, angle)`, so the
 //! geometry's zero pose is the robot file's zero.
 //!
-//! - [`Model`] checks a spec against the robot's joints (typed
+//! - [`Geometry`] checks a spec against the robot's joints (typed
 //!   [`SpecError`]s that name the entry) and computes forward kinematics of
 //!   every joint frame and named frame into a reused [`Poses`] buffer,
 //!   allocating nothing.
@@ -30,13 +30,13 @@
 
 mod arm;
 mod error;
+mod geometry;
 mod leg;
-mod model;
 mod spec;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
+pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;
-pub use model::{Model, Poses};
 pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};

@@ -43,7 +43,7 @@ pub struct Robot {
     pub calibration_pose: Vec<f64>,
     /// The robot's geometry (`kinematics:`), checked against its joints;
     /// joint limits unset ([`Robot::geometry`] sets them).
-    pub kinematics: Option<servobus_kinematics::Model>,
+    pub kinematics: Option<servobus_kinematics::Geometry>,
 }
 
 /// Whether a robot's angles go through a calibration.
@@ -153,7 +153,7 @@ impl Robot {
     /// The robot's geometry with every joint's current limits (radians),
     /// ready for forward and inverse kinematics; `None` without a
     /// `kinematics:` section.
-    pub fn geometry(&self) -> Option<servobus_kinematics::Model> {
+    pub fn geometry(&self) -> Option<servobus_kinematics::Geometry> {
         let mut model = self.kinematics.clone()?;
         for (i, j) in self.joints().enumerate() {
             model.set_limits(i, self.units.to_rad(j.min), self.units.to_rad(j.max));

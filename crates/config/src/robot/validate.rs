@@ -103,9 +103,9 @@ fn kinematics(
     robot: &Robot,
     spec: &servobus_kinematics::Spec,
     src: &Source,
-) -> Result<servobus_kinematics::Model, ConfigError> {
+) -> Result<servobus_kinematics::Geometry, ConfigError> {
     let names = robot.joints().map(|j| j.name.as_str());
-    servobus_kinematics::Model::new(spec, names, robot.units.to_rad(1.0)).map_err(|e| {
+    servobus_kinematics::Geometry::new(spec, names, robot.units.to_rad(1.0)).map_err(|e| {
         let (section, entry, field) = e.location();
         let mut at = FieldPath::root().key("kinematics").key(section.key());
         let Some(entry) = entry else {

@@ -2,11 +2,11 @@
 //! crate does not depend on the config loader).
 
 use serde_yaml::Value;
-use servobus_kinematics::{Model, Spec};
+use servobus_kinematics::{Geometry, Spec};
 
 /// A shipped robot: its model (limits set, radians) and joint names.
 pub struct Shipped {
-    pub model: Model,
+    pub model: Geometry,
     pub names: Vec<String>,
 }
 
@@ -29,7 +29,7 @@ pub fn shipped(name: &str) -> Shipped {
             limits.push((lim("min"), lim("max")));
         }
     }
-    let mut model = Model::new(&spec, names.iter().map(String::as_str), 1f64.to_radians())
+    let mut model = Geometry::new(&spec, names.iter().map(String::as_str), 1f64.to_radians())
         .expect("valid geometry");
     for (i, (lo, hi)) in limits.into_iter().enumerate() {
         model.set_limits(i, lo, hi);

@@ -1,10 +1,10 @@
 //! A geometry is checked into a tree with typed errors naming the entry.
 
-use servobus_kinematics::{Model, Section, Spec, SpecError};
+use servobus_kinematics::{Geometry, Section, Spec, SpecError};
 
-fn check(yaml: &str, joints: &[&str]) -> Result<Model, SpecError> {
+fn check(yaml: &str, joints: &[&str]) -> Result<Geometry, SpecError> {
     let spec: Spec = serde_yaml::from_str(yaml).expect("the spec's shape");
-    Model::new(&spec, joints.iter().copied(), 1.0)
+    Geometry::new(&spec, joints.iter().copied(), 1.0)
 }
 
 const TWO: &[&str] = &["a", "b"];
@@ -77,7 +77,7 @@ fn rpy_is_converted_from_the_file_unit() {
         "joints:\n  a: {parent: base, xyz: [0,0,0], rpy: [0, 0, 90], axis: [0,0,1]}\nframes:\n  f: {parent: a, xyz: [10,0,0]}\n",
     )
     .expect("shape");
-    let model = Model::new(&spec, ["a"], 1f64.to_radians()).expect("valid");
+    let model = Geometry::new(&spec, ["a"], 1f64.to_radians()).expect("valid");
     let mut p = servobus_kinematics::Poses::new(&model);
     model.forward(&[0.0], &mut p);
     let at = p.frame(0).expect("f").translation.vector;

@@ -10,7 +10,7 @@ use crate::spec::{Section, Spec, SpecError, BASE};
 /// How far an axis's length may be from 1.
 const AXIS_TOLERANCE: f64 = 1e-6;
 
-/// One joint of a [`Model`].
+/// One joint of a [`Geometry`].
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Joint {
     pub(crate) name: String,
@@ -23,7 +23,7 @@ pub(crate) struct Joint {
     pub(crate) limits: (f64, f64),
 }
 
-/// One named frame of a [`Model`].
+/// One named frame of a [`Geometry`].
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Frame {
     pub(crate) name: String,
@@ -33,9 +33,9 @@ pub(crate) struct Frame {
 
 /// A robot's geometry, checked: joints in the robot's joint order, each
 /// with its parent, origin, axis and limits (radians; unlimited until
-/// [`Model::set_limits`]), and the named frames.
+/// [`Geometry::set_limits`]), and the named frames.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Model {
+pub struct Geometry {
     pub(crate) joints: Vec<Joint>,
     /// Joint indices, every parent before its children.
     order: Vec<usize>,
@@ -43,7 +43,7 @@ pub struct Model {
 }
 
 /// The pose of every joint frame and named frame (in the base frame, mm),
-/// filled by [`Model::forward`] without allocating.
+/// filled by [`Geometry::forward`] without allocating.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Poses {
     joints: Vec<Isometry3<f64>>,
@@ -51,11 +51,11 @@ pub struct Poses {
 }
 
 impl Poses {
-    /// A buffer for `model`'s poses.
-    pub fn new(model: &Model) -> Self {
+    /// A buffer for `geometry`'s poses.
+    pub fn new(geometry: &Geometry) -> Self {
         Poses {
-            joints: vec![Isometry3::identity(); model.joints.len()],
-            frames: vec![Isometry3::identity(); model.frames.len()],
+            joints: vec![Isometry3::identity(); geometry.joints.len()],
+            frames: vec![Isometry3::identity(); geometry.frames.len()],
         }
     }
 
@@ -64,7 +64,7 @@ impl Poses {
         self.joints.get(i)
     }
 
-    /// Named frame `i` ([`Model::frame_index`]).
+    /// Named frame `i` ([`Geometry::frame_index`]).
     pub fn frame(&self, i: usize) -> Option<&Isometry3<f64>> {
         self.frames.get(i)
     }
@@ -82,7 +82,7 @@ pub(crate) fn origin(xyz: [f64; 3], rpy: [f64; 3]) -> Isometry3<f64> {
     )
 }
 
-impl Model {
+impl Geometry {
     /// Checks `spec` against the robot's joints (`joint_names`, in the
     /// robot's order) and builds the tree. `angle_to_rad` converts the
     /// file's angle unit (the `rpy` fields) to radians: 1 for radians,
@@ -179,7 +179,7 @@ impl Model {
                 origin: origin(fs.xyz, fs.rpy.map(|a| a * angle_to_rad)),
             });
         }
-        Ok(Model {
+        Ok(Geometry {
             joints,
             order,
             frames,
@@ -237,7 +237,7 @@ impl Model {
 
     /// Forward kinematics: the pose of every joint frame and named frame at
     /// joint angles `q` (radians, robot order; missing angles count as 0),
-    /// into `out` (from [`Poses::new`] for this model). Allocates nothing.
+    /// into `out` (from [`Poses::new`] for this geometry). Allocates nothing.
     pub fn forward(&self, q: &[f64], out: &mut Poses) {
         for &i in &self.order {
             let local = self.local(i, q.get(i).copied().unwrap_or(0.0));

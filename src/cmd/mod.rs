@@ -19,6 +19,7 @@ mod decode;
 mod docs;
 mod doctor;
 pub mod exit;
+mod fk;
 mod follow;
 mod init;
 mod link;
@@ -94,6 +95,10 @@ enum Command {
     Stream(stream::Args),
     /// A leader arm moved by hand drives a follower arm (both simulated without ports).
     Follow(follow::Args),
+    /// Print where a pose puts every joint frame and named frame (mm, roll/pitch/yaw).
+    Fk(fk::FkArgs),
+    /// Find the joint angles that put a named frame at a point, or say why there are none.
+    Ik(fk::IkArgs),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -153,6 +158,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Monitor(args) => monitor::run(args),
         Command::Stream(args) => stream::run(args),
         Command::Follow(args) => follow::run(args),
+        Command::Fk(args) => fk::fk(args),
+        Command::Ik(args) => fk::ik(args),
     }
 }
 

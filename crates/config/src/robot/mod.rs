@@ -41,6 +41,9 @@ pub struct Robot {
     /// The pose a person holds the robot in while calibrating, per joint in
     /// the robot's joint order and units (`calibration_pose`; default 0).
     pub calibration_pose: Vec<f64>,
+    /// The robot's geometry (`kinematics:`), checked against its joints;
+    /// joint limits unset ([`Robot::geometry`] sets them).
+    pub kinematics: Option<servobus_kinematics::Geometry>,
 }
 
 /// Whether a robot's angles go through a calibration.
@@ -145,6 +148,17 @@ impl Robot {
     /// The joint called `name`.
     pub fn joint(&self, name: &str) -> Option<&JointConfig> {
         self.joints().find(|j| j.name == name)
+    }
+
+    /// The robot's geometry with every joint's current limits (radians),
+    /// ready for forward and inverse kinematics; `None` without a
+    /// `kinematics:` section.
+    pub fn geometry(&self) -> Option<servobus_kinematics::Geometry> {
+        let mut model = self.kinematics.clone()?;
+        for (i, j) in self.joints().enumerate() {
+            model.set_limits(i, self.units.to_rad(j.min), self.units.to_rad(j.max));
+        }
+        Some(model)
     }
 }
 

@@ -12,16 +12,7 @@ use servobus_runtime::config::{JointMap, Robot};
 use servobus_runtime::{Command, Lead, LiveEvent, RunOptions, Target, TargetError, VirtualRun};
 use servobus_sim::SimBus;
 
-/// The SO-101's limits by hand (configs/robots/so101.yaml): velocity,
-/// acceleration, jerk in deg/s, deg/s^2, deg/s^3.
-const LIMITS: [(f64, f64, f64); 6] = [
-    (180.0, 900.0, 9000.0),
-    (150.0, 700.0, 7000.0),
-    (180.0, 900.0, 9000.0),
-    (240.0, 1200.0, 12000.0),
-    (270.0, 1500.0, 15000.0),
-    (240.0, 1500.0, 15000.0),
-];
+use common::SO101_LIMITS as LIMITS;
 
 const PERIOD: f64 = 0.005;
 

@@ -203,14 +203,7 @@ pub fn load_robot_calibrated(
     path: &Path,
     calibration: Option<&Path>,
 ) -> Result<Robot, ConfigError> {
-    let (robot, source) = load_calibrated(path, calibration)?;
-    check_rate(
-        &robot,
-        &source,
-        robot.rate_hz,
-        &FieldPath::root().key("rate"),
-    )?;
-    Ok(robot)
+    load_with_rate(path, calibration, false)
 }
 
 /// Like [`load_robot_calibrated`], for a robot about to play a motion or
@@ -221,8 +214,21 @@ pub fn load_robot_calibrated(
 /// As [`load_robot_calibrated`], and [`ConfigError::Invalid`] at the robot
 /// file's `calibration:` when that file does not exist.
 pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
+    load_with_rate(path, calibration, true)
+}
+
+/// The robot at `path` with `calibration` (or its own) applied, its
+/// calibration file required to exist when `required`, and its rate checked
+/// against every bus.
+fn load_with_rate(
+    path: &Path,
+    calibration: Option<&Path>,
+    required: bool,
+) -> Result<Robot, ConfigError> {
     let (robot, source) = load_calibrated(path, calibration)?;
-    require_calibration(&robot, &source)?;
+    if required {
+        require_calibration(&robot, &source)?;
+    }
     check_rate(
         &robot,
         &source,

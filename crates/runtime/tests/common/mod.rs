@@ -17,6 +17,17 @@ mod files;
 #[allow(unused_imports)] // not every test uses every helper
 pub use files::{config, temp_file, temp_path};
 
+/// The SO-101's limits by hand (configs/robots/so101.yaml): velocity,
+/// acceleration, jerk in deg/s, deg/s^2, deg/s^3, in its joint order.
+pub const SO101_LIMITS: [(f64, f64, f64); 6] = [
+    (180.0, 900.0, 9000.0),
+    (150.0, 700.0, 7000.0),
+    (180.0, 900.0, 9000.0),
+    (240.0, 1200.0, 12000.0),
+    (270.0, 1500.0, 15000.0),
+    (240.0, 1500.0, 15000.0),
+];
+
 /// A robot file under `configs/robots/`.
 pub fn robot(name: &str) -> Robot {
     load_robot(&config(&format!("robots/{name}"))).expect("robot file loads")

@@ -1,11 +1,13 @@
 //! Benches of servobus-trajectory: sampling 18 joints (target <= 100 ns),
 //! planning 18 joints x 100 untimed keyframes (<= 1 ms), the same keyframes
 //! timed (with room to spare, and too close together so that most segments
-//! are stretched), retargeting 18 joints from a moving state (<= 30 us).
+//! are stretched), retargeting 18 joints from a moving state (<= 30 us),
+//! one cycle of following a new goal for 18 joints (<= 2 us).
 
 use criterion::{black_box, Criterion};
 use servobus_trajectory::{
-    plan, retarget, stop, JointLimits, JointState, Keyframe, OnLimit, PlanOptions,
+    follow_steps, plan, retarget, stop, Follower, Goal, JointLimits, JointState, Keyframe, OnLimit,
+    PlanOptions,
 };
 
 const JOINTS: usize = 18;
@@ -93,6 +95,38 @@ pub fn benches(c: &mut Criterion) {
     c.bench_function("trajectory/retarget_18", |b| {
         b.iter(|| {
             retarget(black_box(&limits), black_box(&state), black_box(target)).map(|t| t.duration())
+        })
+    });
+    // One cycle of following for 18 joints, each with a new goal (the
+    // costly case: every joint plans anew from a moving state).
+    let mut followers: Vec<Follower> = state.iter().map(|s| Follower::new(*s)).collect();
+    let mut flip = 1.0;
+    c.bench_function("trajectory/follow_step_18", |b| {
+        b.iter(|| {
+            flip = -flip;
+            let goals: [Goal; JOINTS] = std::array::from_fn(|j| Goal {
+                position: target[j] + 0.01 * flip,
+                velocity: 0.1 * flip,
+                acceleration: 0.5 * flip,
+                horizon: 0.033,
+            });
+            follow_steps(black_box(&limits), &mut followers, black_box(&goals), 0.005);
+            followers[0].state().position
+        })
+    });
+    // The same cycle with the goal held (the plan is kept): most cycles of
+    // a 30 Hz stream followed at 200 Hz.
+    let goals: [Goal; JOINTS] = std::array::from_fn(|j| Goal {
+        position: target[j],
+        velocity: 0.0,
+        acceleration: 0.0,
+        horizon: 0.033,
+    });
+    let mut held: Vec<Follower> = state.iter().map(|s| Follower::new(*s)).collect();
+    c.bench_function("trajectory/follow_hold_18", |b| {
+        b.iter(|| {
+            follow_steps(black_box(&limits), &mut held, black_box(&goals), 1e-9);
+            held[0].state().position
         })
     });
     c.bench_function("trajectory/stop_18", |b| {

@@ -433,6 +433,18 @@ pub(crate) fn check_bus<T: Transport, C: Clock>(
     prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
 }
 
+/// [`check_bus`] for every bus.
+pub(crate) fn check_buses<T: Transport, C: Clock>(
+    robot: &Robot,
+    buses: &mut [Bus<T, C>],
+    ports: &[String],
+) -> anyhow::Result<()> {
+    for (i, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {
+        check_bus(robot, i, bus, port)?;
+    }
+    Ok(())
+}
+
 pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
     let file = match &robot.calibration {
         RobotCalibration::Missing(path) | RobotCalibration::Applied { path, .. } => path.clone(),

@@ -19,6 +19,8 @@ mod decode;
 mod docs;
 mod doctor;
 pub mod exit;
+mod fk;
+mod follow;
 mod init;
 mod link;
 mod list;
@@ -26,6 +28,7 @@ mod monitor;
 mod plan;
 mod play;
 mod sim;
+mod stream;
 mod teach;
 
 const EXIT_STATUS: &str = "\
@@ -88,6 +91,14 @@ enum Command {
     Doctor(doctor::Args),
     /// Watch every servo live: position, load, voltage, temperature, flags.
     Monitor(monitor::Args),
+    /// Follow joint targets given as JSON lines on stdin, smoothly (jerk limited).
+    Stream(stream::Args),
+    /// A leader arm moved by hand drives a follower arm (both simulated without ports).
+    Follow(follow::Args),
+    /// Print where a pose puts every joint frame and named frame (mm, roll/pitch/yaw).
+    Fk(fk::FkArgs),
+    /// Find the joint angles that put a named frame at a point, or say why there are none.
+    Ik(fk::IkArgs),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -145,6 +156,10 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Teach(args) => teach::run(args),
         Command::Doctor(args) => doctor::run(args),
         Command::Monitor(args) => monitor::run(args),
+        Command::Stream(args) => stream::run(args),
+        Command::Follow(args) => follow::run(args),
+        Command::Fk(args) => fk::fk(args),
+        Command::Ik(args) => fk::ik(args),
     }
 }
 

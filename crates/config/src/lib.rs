@@ -43,6 +43,7 @@ mod robot;
 pub mod seam;
 mod syntax;
 mod terms;
+mod tool;
 mod trajectory;
 mod units;
 
@@ -64,5 +65,6 @@ pub use robot::{
     load_robot_design, load_robot_text, load_robot_to_play, BusConfig, JointConfig, Robot,
     RobotCalibration,
 };
+pub use tool::{ik_reason, TOOL_FRAME};
 pub use trajectory::{check_motion_length, joint_limits, plan_input, plan_motion};
 pub use units::Units;

@@ -163,7 +163,10 @@ fn one() -> i64 {
 struct RawKeyframe {
     #[serde(default)]
     at: Option<f64>,
-    pose: PoseRef,
+    #[serde(default)]
+    pose: Option<PoseRef>,
+    #[serde(default)]
+    tool: Option<super::tool::ToolPose>,
 }
 
 /// `name: value` pairs in file order (a map would lose the order, and errors
@@ -227,13 +230,16 @@ impl<'de> Deserialize<'de> for PoseRef {
 /// The robot is the motion's `robot:` path, taken relative to the motion
 /// file, unless `robot_override` is given. Joints a keyframe does not name
 /// keep their previous value; in the first keyframe they start at their
-/// `home` (or 0 clamped into the limits).
+/// `home` (or 0 clamped into the limits). A keyframe's `tool: {xyz, pitch,
+/// roll}` puts the robot's `tool` frame there by inverse kinematics from
+/// the pose before it (after the keyframe's own `pose`, if it has one).
 ///
 /// # Errors
 ///
 /// [`ConfigError`] naming the file, line, column and field of the first
 /// problem in either file: syntax, unknown fields, an unknown pose or joint,
-/// a keyframe outside a joint's limits, times that do not increase, or a
+/// a keyframe outside a joint's limits, a tool pose the arm cannot take
+/// (unreachable, a limit, a singularity), times that do not increase, or a
 /// rate the robot's buses cannot carry.
 pub fn load_motion(
     path: &Path,
@@ -343,7 +349,11 @@ pub fn load_motion_calibrated(
             last_at = Some((i, at));
         }
         let (pose_name, pairs) = match &rk.pose {
-            PoseRef::Name(name) => {
+            None if rk.tool.is_none() => {
+                return Err(src.error(&kp, "a keyframe needs a `pose` or a `tool`"))
+            }
+            None => (None, None),
+            Some(PoseRef::Name(name)) => {
                 let Some((_, pose)) = raw.poses.0.iter().find(|(n, _)| n == name) else {
                     let known: Vec<&str> = raw.poses.0.iter().map(|(n, _)| n.as_str()).collect();
                     return Err(src.error(
@@ -351,17 +361,22 @@ pub fn load_motion_calibrated(
                         format!("unknown pose `{name}` (poses: {})", list(&known)),
                     ));
                 };
-                (Some(name.clone()), pose)
+                (Some(name.clone()), Some(pose))
             }
-            PoseRef::Map(map) => {
+            Some(PoseRef::Map(map)) => {
                 resolver.check_pose(map, &kp.key("pose"), Some(i))?;
-                (None, map)
+                (None, Some(map))
             }
         };
-        for (joint, value) in &pairs.0 {
+        for (joint, value) in pairs.iter().flat_map(|p| &p.0) {
             if let Some(ix) = robot.joint_index(joint) {
                 current[ix] = *value;
             }
+        }
+        // A tool pose moves the arm's joints there, from this pose.
+        if let Some(tool) = &rk.tool {
+            super::tool::resolve(&robot, raw.units, tool, &mut current)
+                .map_err(|why| src.error(&kp.key("tool"), format!("keyframe {i}: {why}")))?;
         }
         let (line, column) = src.position(&kp);
         keyframes.push(Keyframe {

@@ -8,13 +8,14 @@
 //! threads alike.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use crossbeam_channel::{bounded, Receiver, SendError, Sender, TryRecvError, TrySendError};
 
 use crate::command::Command;
 use crate::fault::Fault;
 use crate::options::Reaction;
+use crate::target::Checked;
 
 /// How many cycles after the one that receives it a command takes effect:
 /// time enough for every bus thread to have it before its cycle comes.
@@ -31,6 +32,8 @@ pub(crate) struct Order {
 #[derive(Debug, Clone)]
 pub(crate) enum Op {
     Command(Command),
+    /// A live target (see [`crate::target`]).
+    Target(Arc<Checked>),
     /// Every command sender is gone: a run still waiting for
     /// [`Command::Play`] can never start.
     Abandon,
@@ -101,6 +104,9 @@ pub(crate) enum Inbox {
     /// The first lane: the user's orders, stamped here and forwarded.
     Leader {
         user: Receiver<Order>,
+        /// Live targets: they take effect in the cycle that receives them
+        /// on a single bus, [`COMMAND_DELAY_CYCLES`] later on several.
+        targets: Receiver<Checked>,
         forwards: Vec<Sender<Stamped>>,
         /// Whether a user sender may still exist.
         open: bool,
@@ -111,28 +117,35 @@ pub(crate) enum Inbox {
     Follower(Receiver<Stamped>),
 }
 
-/// The user's sender of commands, and the inboxes of `lanes` lanes (the
-/// first one the leader), holding `capacity` commands each.
-pub(crate) fn inboxes(lanes: usize, capacity: usize) -> (CommandSender, Vec<Inbox>) {
+/// The user's sender of commands, the sender of live targets (holding
+/// `targets` of them), and the inboxes of `lanes` lanes (the first one the
+/// leader), holding `capacity` commands each.
+pub(crate) fn inboxes(
+    lanes: usize,
+    capacity: usize,
+    targets: usize,
+) -> (CommandSender, Sender<Checked>, Vec<Inbox>) {
     let capacity = capacity.max(1);
     let (user_tx, user) = bounded(capacity);
+    let (target_tx, target_rx) = bounded(targets.max(1));
     let mut forwards = Vec::new();
     let mut followers = Vec::new();
     for _ in 1..lanes {
-        // Twice the user's channel: a follower reading every cycle always has
-        // room for what the leader forwards (sent without waiting).
-        let (tx, rx) = bounded(capacity * 2);
+        // Twice the user's channels: a follower reading every cycle always
+        // has room for what the leader forwards (sent without waiting).
+        let (tx, rx) = bounded((capacity + targets.max(1)) * 2);
         forwards.push(tx);
         followers.push(Inbox::Follower(rx));
     }
     let leader = Inbox::Leader {
         user,
+        targets: target_rx,
         forwards,
         open: true,
         latest: 0,
     };
     let all = std::iter::once(leader).chain(followers).collect();
-    (CommandSender::new(user_tx), all)
+    (CommandSender::new(user_tx), target_tx, all)
 }
 
 /// One lane's operations, received and waiting for their cycle.
@@ -155,34 +168,52 @@ impl Mailbox {
         match &mut self.inbox {
             Inbox::Leader {
                 user,
+                targets,
                 forwards,
                 open,
                 latest,
-            } => loop {
-                let soonest = k + COMMAND_DELAY_CYCLES;
-                let op = match user.try_recv() {
-                    Ok(order) => Stamped {
-                        cycle: order.at.unwrap_or(0).max(soonest),
-                        op: Op::Command(order.command),
-                    },
-                    // Only once every command sent has taken effect can the
-                    // run know it will never play.
-                    Err(TryRecvError::Disconnected) if *open => {
-                        *open = false;
-                        Stamped {
-                            cycle: soonest.max(*latest),
-                            op: Op::Abandon,
-                        }
-                    }
-                    Err(_) => break,
+            } => {
+                let delay = if forwards.is_empty() {
+                    0
+                } else {
+                    COMMAND_DELAY_CYCLES
                 };
-                *latest = (*latest).max(op.cycle);
-                for f in forwards.iter() {
-                    // A follower that stopped reading has ended its run.
-                    let _ = f.try_send(op.clone());
+                while let Ok(t) = targets.try_recv() {
+                    let op = Stamped {
+                        cycle: k + delay,
+                        op: Op::Target(Arc::new(t)),
+                    };
+                    for f in forwards.iter() {
+                        let _ = f.try_send(op.clone());
+                    }
+                    self.pending.push(op);
                 }
-                self.pending.push(op);
-            },
+                loop {
+                    let soonest = k + COMMAND_DELAY_CYCLES;
+                    let op = match user.try_recv() {
+                        Ok(order) => Stamped {
+                            cycle: order.at.unwrap_or(0).max(soonest),
+                            op: Op::Command(order.command),
+                        },
+                        // Only once every command sent has taken effect can the
+                        // run know it will never play.
+                        Err(TryRecvError::Disconnected) if *open => {
+                            *open = false;
+                            Stamped {
+                                cycle: soonest.max(*latest),
+                                op: Op::Abandon,
+                            }
+                        }
+                        Err(_) => break,
+                    };
+                    *latest = (*latest).max(op.cycle);
+                    for f in forwards.iter() {
+                        // A follower that stopped reading has ended its run.
+                        let _ = f.try_send(op.clone());
+                    }
+                    self.pending.push(op);
+                }
+            }
             Inbox::Follower(rx) => {
                 while let Ok(op) = rx.try_recv() {
                     self.pending.push(op);
@@ -256,7 +287,7 @@ mod tests {
             .map(|op| match op {
                 Op::Command(Command::Play) => "play",
                 Op::Command(Command::Stop) => "stop",
-                Op::Command(_) => "other",
+                Op::Command(_) | Op::Target(_) => "other",
                 Op::Abandon => "abandon",
             })
             .collect()
@@ -264,7 +295,7 @@ mod tests {
 
     #[test]
     fn every_lane_gets_each_command_at_its_stamp_and_the_end_after_the_last() {
-        let (tx, inboxes) = inboxes(2, 4);
+        let (tx, _targets, inboxes) = inboxes(2, 4, 4);
         let mut lanes: Vec<Mailbox> = inboxes.into_iter().map(Mailbox::new).collect();
         tx.send_at(50, Command::Stop).expect("room");
         tx.send_at(10, Command::Play).expect("room");

@@ -22,8 +22,10 @@ use crate::command::Command;
 use crate::error::RunError;
 use crate::exchange::{FaultBoard, Mailbox, Op};
 use crate::fault::Fault;
+use crate::live::LiveEvent;
 use crate::options::Reaction;
 use crate::pacer::Tick;
+use crate::target::{Count, Counters};
 use crate::telemetry::{Finish, Telemetry};
 use crate::timeline::{Kind, Timeline};
 
@@ -35,6 +37,9 @@ pub(crate) struct Lane<T: Transport, C: Clock> {
     timeline: Timeline,
     mail: Mailbox,
     board: Arc<FaultBoard>,
+    /// The counts of live targets (this lane adds the followed, timed out
+    /// and resumed ones when it is the first).
+    counters: Arc<Counters>,
     cmd: Vec<JointState>,
     reference: Vec<JointState>,
     hold: Vec<f64>,
@@ -45,15 +50,20 @@ pub(crate) struct Lane<T: Transport, C: Clock> {
     period: Duration,
     /// Why this lane's run ended, once it has.
     pub finish: Option<Finish>,
+    /// When the oldest target applied this cycle was taken (for the
+    /// latency to the goals on the wire).
+    taken: Option<std::time::Instant>,
 }
 
 impl<T: Transport, C: Clock> Lane<T, C> {
     /// The lane of `bus` on `timeline` (every lane gets a clone).
+    #[allow(clippy::too_many_arguments)] // what a lane shares with the others
     pub fn new(
         bus: BusLoop<T, C>,
         timeline: Timeline,
         mail: Mailbox,
         board: Arc<FaultBoard>,
+        counters: Arc<Counters>,
         joints: usize,
         settle: Duration,
         period: Duration,
@@ -63,6 +73,7 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             timeline,
             mail,
             board,
+            counters,
             cmd: vec![JointState::default(); joints],
             reference: vec![JointState::default(); joints],
             hold: vec![0.0; joints],
@@ -70,6 +81,7 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             settle: settle.as_secs_f64(),
             period,
             finish: None,
+            taken: None,
         }
     }
 
@@ -85,7 +97,8 @@ impl<T: Transport, C: Clock> Lane<T, C> {
     fn run_cycle(&mut self, tick: Tick) -> Option<Finish> {
         let k = tick.index;
         let t = k as f64 * self.period.as_secs_f64();
-        if let Some(end) = self.take_commands(k) {
+        self.timeline.set_now(t);
+        if let Some(end) = self.take_commands(k, t) {
             return Some(end);
         }
         if self.reacted.is_none() {
@@ -102,6 +115,9 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             skipped: 0,
         };
         let (lead, found) = self.bus_cycle(timing, t);
+        if let Some(event) = self.timeline.take_event() {
+            self.live_event(event, t);
+        }
         let end = found.and_then(|f| self.raise(&f));
         self.bus.finish_cycle(lead);
         if end.is_some() {
@@ -123,6 +139,9 @@ impl<T: Transport, C: Clock> Lane<T, C> {
         let lead = l.lead_at(t);
         self.timeline.sample_cmd(t + lead, &mut self.cmd);
         let mut gone = l.write(&self.cmd).err();
+        if let Some(taken) = self.taken.take() {
+            self.counters.latency(taken.elapsed());
+        }
         let x = match l.read() {
             Ok(x) => x,
             Err(e) => {
@@ -131,7 +150,10 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             }
         };
         self.timeline.sample_ref(x, &mut self.reference);
-        let main = matches!(self.timeline.kind_at(x), Some(Kind::Main | Kind::Approach));
+        let main = matches!(
+            self.timeline.kind_at(x),
+            Some(Kind::Main | Kind::Approach | Kind::Live)
+        );
         let found = match gone {
             Some(e) => Some(l.port_gone(&e)),
             None => l.track(&self.reference, main, t),
@@ -139,13 +161,35 @@ impl<T: Transport, C: Clock> Lane<T, C> {
         (lead, found)
     }
 
-    /// Carries out the operations due at cycle `k`.
-    fn take_commands(&mut self, k: u64) -> Option<Finish> {
+    /// Counts and publishes (on the first lane) what the live following
+    /// did in the cycle at `t`.
+    fn live_event(&mut self, event: LiveEvent, t: f64) {
+        if self.bus.index != 0 {
+            return;
+        }
+        self.counters.add(match event {
+            LiveEvent::TimedOut => Count::Timeout,
+            LiveEvent::Resumed => Count::Resume,
+        });
+        self.bus.publish(Telemetry::Live { event, time_s: t });
+    }
+
+    /// Carries out the operations due at cycle `k` (at time `t`).
+    fn take_commands(&mut self, k: u64, t: f64) -> Option<Finish> {
         self.mail.collect(k);
         while let Some(op) = self.mail.next_due(k) {
             let command = match op {
                 Op::Abandon if self.waiting_for_play() => return Some(Finish::Abandoned),
                 Op::Abandon => continue,
+                Op::Target(target) => {
+                    if self.timeline.target(&target, t) && self.bus.index == 0 {
+                        self.counters.add(Count::Followed);
+                        if let Some(taken) = target.taken {
+                            self.taken = Some(self.taken.map_or(taken, |o| o.min(taken)));
+                        }
+                    }
+                    continue;
+                }
                 Op::Command(c) => c,
             };
             match self.apply(command) {

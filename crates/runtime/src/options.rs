@@ -204,6 +204,11 @@ pub struct RunOptions {
     pub command_capacity: usize,
     /// Units of the angles in the report (`None`: the robot's units).
     pub units: Option<Units>,
+    /// How long live targets may fail to come before the joints stop
+    /// (jerk limited) and hold; they resume when targets come back.
+    pub target_timeout: Duration,
+    /// Capacity of the live target channel.
+    pub target_capacity: usize,
 }
 
 impl Default for RunOptions {
@@ -221,6 +226,8 @@ impl Default for RunOptions {
             telemetry_capacity: 4096,
             command_capacity: 16,
             units: None,
+            target_timeout: Duration::from_millis(250),
+            target_capacity: 64,
         }
     }
 }

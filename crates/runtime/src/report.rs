@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use crate::fault::Fault;
+use crate::target::LiveReport;
 use crate::telemetry::Finish;
 
 /// Three figures of a distribution of period errors, us.
@@ -117,6 +118,9 @@ pub struct Report {
     pub fault: Option<Fault>,
     /// What the real-time set-up could not do (core pinning, SCHED_FIFO).
     pub warnings: Vec<String>,
+    /// What happened to live targets, in a run that had any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub live: Option<LiveReport>,
 }
 
 impl Report {

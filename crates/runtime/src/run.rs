@@ -14,7 +14,7 @@ use servobus_driver::{Bus, BusSettings, Clock, Transport};
 use servobus_protocol::registers::Series;
 use servobus_trajectory::Trajectory;
 
-use crate::busloop::{BusLoop, LoopConfig, Outcome};
+use crate::busloop::{reachable, BusLoop, LoopConfig, Outcome};
 use crate::config::{joint_limits, BusConfig, Robot, Units};
 use crate::error::RunError;
 use crate::exchange::{inboxes, CommandSender, FaultBoard, Mailbox};
@@ -23,6 +23,7 @@ use crate::lane::Lane;
 use crate::options::RunOptions;
 use crate::report::{JointReport, Quantiles, Report};
 use crate::stats::Histogram;
+use crate::target::{Counters, LiveReport, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 use crate::timeline::Timeline;
 
@@ -62,13 +63,17 @@ pub(crate) struct Prepared<T: Transport, C: Clock> {
     pub telemetry_tx: Option<Sender<Telemetry>>,
     /// The approach to the path's start, as the timeline planned it.
     pub approach: Duration,
+    /// The sender of live targets.
+    pub targets: TargetSender,
+    /// The counts of live targets, for the report.
+    pub counters: Arc<Counters>,
 }
 
 /// Checks the robot, buses and path against each other and `o`. Returns
 /// the rate and the period.
 fn check(
     robot: &Robot,
-    trajectory: &Trajectory,
+    trajectory: Option<&Trajectory>,
     buses: usize,
     o: &RunOptions,
 ) -> Result<(f64, Duration), RunError> {
@@ -85,7 +90,7 @@ fn check(
             robot.buses.len()
         )));
     }
-    if trajectory.joints() != robot.joint_count() {
+    if let Some(trajectory) = trajectory.filter(|t| t.joints() != robot.joint_count()) {
         return Err(RunError::Invalid(format!(
             "the path has {} joints, robot `{}` {}",
             trajectory.joints(),
@@ -93,19 +98,26 @@ fn check(
             robot.joint_count()
         )));
     }
+    let timeout = o.target_timeout.as_secs_f64();
+    if timeout.is_nan() || timeout <= 0.0 {
+        return Err(RunError::Invalid(
+            "the target timeout must be positive".into(),
+        ));
+    }
     let period = Duration::from_nanos((1e9 / rate_hz).round().max(1.0) as u64);
     Ok((rate_hz, period))
 }
 
-/// Builds the loops, runs their start-up, plans the timeline, and wires the
-/// lanes: the first receives the user's commands and forwards them.
+/// Builds the loops, runs their start-up, plans the timeline (`None`: no
+/// path, hold and follow live targets), and wires the lanes: the first
+/// receives the user's commands and targets and forwards them.
 pub(crate) fn prepare<T: Transport, C: Clock>(
     robot: &Robot,
-    trajectory: Trajectory,
+    trajectory: Option<Trajectory>,
     buses: Vec<Bus<T, C>>,
     o: &RunOptions,
 ) -> Result<Prepared<T, C>, RunError> {
-    let (rate_hz, period) = check(robot, &trajectory, buses.len(), o)?;
+    let (rate_hz, period) = check(robot, trajectory.as_ref(), buses.len(), o)?;
     let units = o.units.unwrap_or(robot.units);
     let (telemetry_tx, telemetry) = bounded(o.telemetry_capacity);
     let telemetry_tx = (o.telemetry_capacity > 0).then_some(telemetry_tx);
@@ -119,19 +131,39 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
     for l in &loops {
         l.present(&mut present);
     }
-    let timeline = Timeline::new(
-        joint_limits(robot),
-        Arc::new(trajectory),
-        &present,
-        o.approach,
-        o.autoplay,
-        APPROACH_TOLERANCE,
-    )?;
+    // Live targets are kept where goals are sent as they are: within the
+    // ticks inside each joint's limits.
+    let plain = joint_limits(robot);
+    let limits: Vec<_> = plain
+        .iter()
+        .zip(robot.joints())
+        .map(|(l, j)| {
+            let (lo, hi) = reachable(j, robot.units);
+            l.with_positions(lo.max(l.min_position), hi.min(l.max_position))
+        })
+        .collect();
+    let timeout = o.target_timeout.as_secs_f64();
+    let mut timeline = match trajectory {
+        Some(trajectory) => Timeline::new(
+            plain,
+            Arc::new(trajectory),
+            &present,
+            o.approach,
+            o.autoplay,
+            APPROACH_TOLERANCE,
+        )?,
+        None => Timeline::live(limits.clone(), &present, timeout),
+    };
+    timeline.set_live(timeout, limits.clone());
     let approach = timeline.approach();
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();
     let start = last.unwrap_or_default() + (period * 5).max(START_GAP);
-    let (commands, inboxes) = inboxes(loops.len(), o.command_capacity);
+    let (commands, target_tx, inboxes) =
+        inboxes(loops.len(), o.command_capacity, o.target_capacity);
+    let counters = Arc::new(Counters::default());
+    let names = robot.joints().map(|j| j.name.clone()).collect();
+    let targets = TargetSender::new(target_tx, names, limits, Arc::clone(&counters));
     let board = Arc::new(FaultBoard::default());
     let lanes = loops
         .into_iter()
@@ -140,8 +172,9 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
             l.start = start;
             let mail = Mailbox::new(inbox);
             let b = Arc::clone(&board);
+            let c = Arc::clone(&counters);
             let n = robot.joint_count();
-            Lane::new(l, timeline.clone(), mail, b, n, o.settle, period)
+            Lane::new(l, timeline.clone(), mail, b, c, n, o.settle, period)
         })
         .collect();
     Ok(Prepared {
@@ -155,6 +188,8 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         telemetry,
         telemetry_tx,
         approach,
+        targets,
+        counters,
     })
 }
 
@@ -205,6 +240,7 @@ pub(crate) struct Ending {
     pub finish: Finish,
     pub fault: Option<Fault>,
     pub warnings: Vec<String>,
+    pub live: Option<LiveReport>,
 }
 
 fn us(d: Duration) -> f64 {
@@ -263,5 +299,6 @@ pub(crate) fn assemble(mut outcomes: Vec<Outcome>, e: Ending) -> Report {
         finish: e.finish,
         fault: e.fault,
         warnings: e.warnings,
+        live: e.live,
     }
 }

@@ -11,6 +11,7 @@ use serde::Serialize;
 use servobus_protocol::StatusFlags;
 
 use crate::fault::Fault;
+pub use crate::live::LiveEvent;
 
 /// Most joints one [`CycleSample`] carries; a bus with more joints sends
 /// several samples per cycle, each with the next joints.
@@ -135,6 +136,13 @@ pub enum Telemetry {
     /// A command could not be carried out (a replacement path with the
     /// wrong joints, say); the run goes on as before.
     Rejected(String),
+    /// The live following stopped for lack of targets, or resumed.
+    Live {
+        /// What happened.
+        event: LiveEvent,
+        /// When: the cycle's time since the start of the run, s.
+        time_s: f64,
+    },
     /// The run ended; the report follows from
     /// [`Runner::join`](crate::Runner::join) or
     /// [`VirtualRun::report`](crate::VirtualRun::report).

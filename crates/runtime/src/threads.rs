@@ -21,6 +21,7 @@ use crate::pacer::Pacer;
 use crate::report::Report;
 use crate::rt::RtOptions;
 use crate::run::{assemble, prepare, Ending};
+use crate::target::{Counters, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 use crate::virtual_run::VirtualRun;
 
@@ -31,6 +32,7 @@ use crate::virtual_run::VirtualRun;
 #[derive(Debug)]
 pub struct Runner {
     commands: CommandSender,
+    targets: TargetSender,
     telemetry: Receiver<Telemetry>,
     handle: JoinHandle<Result<Report, RunError>>,
     approach: Duration,
@@ -40,6 +42,12 @@ impl Runner {
     /// A sender of commands.
     pub fn commands(&self) -> CommandSender {
         self.commands.clone()
+    }
+
+    /// A sender of live targets: the run follows them (a run playing a path
+    /// switches to them at the first).
+    pub fn targets(&self) -> TargetSender {
+        self.targets.clone()
     }
 
     /// Sends a command (waits if the command channel is full).
@@ -110,7 +118,13 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     let run = VirtualRun::new(robot, trajectory, buses, options)?;
+    on_thread(run)
+}
+
+/// A [`VirtualRun`] on a thread of its own, ending once stopped.
+fn on_thread<T: Transport + Send + 'static>(run: VirtualRun<T>) -> Result<Runner, RunError> {
     let commands = run.commands();
+    let targets = run.targets();
     let telemetry = run.telemetry();
     let approach = run.approach();
     let handle = std::thread::Builder::new()
@@ -119,6 +133,7 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
         .map_err(|e| RunError::Thread(e.to_string()))?;
     Ok(Runner {
         commands,
+        targets,
         telemetry,
         handle,
         approach,
@@ -155,6 +170,54 @@ where
     T: Transport + Send + 'static,
     C: Clock,
 {
+    start_threads(robot, Some(trajectory), buses, options)
+}
+
+/// Like [`spawn`], with no path: the joints hold where they are and follow
+/// the live targets sent through [`Runner::targets`] (see
+/// [`VirtualRun::live`]). The run ends on [`Command::Stop`] (a jerk-limited
+/// stop), [`Command::TorqueOff`] or a fault.
+///
+/// # Errors
+///
+/// As [`spawn`].
+pub fn spawn_live<T, C>(
+    robot: &Robot,
+    buses: Vec<Bus<T, C>>,
+    options: RunOptions,
+) -> Result<Runner, RunError>
+where
+    T: Transport + Send + 'static,
+    C: Clock,
+{
+    start_threads(robot, None, buses, options)
+}
+
+/// A live run in virtual time on a thread of its own (the built-in
+/// simulator at full speed); it ends on [`Command::Stop`],
+/// [`Command::TorqueOff`] or a fault.
+///
+/// # Errors
+///
+/// As [`VirtualRun::live`].
+pub fn spawn_virtual_live<T: Transport + Send + 'static>(
+    robot: &Robot,
+    buses: Vec<Bus<T, ManualClock>>,
+    options: RunOptions,
+) -> Result<Runner, RunError> {
+    on_thread(VirtualRun::live(robot, buses, options)?)
+}
+
+fn start_threads<T, C>(
+    robot: &Robot,
+    trajectory: Option<Trajectory>,
+    buses: Vec<Bus<T, C>>,
+    options: RunOptions,
+) -> Result<Runner, RunError>
+where
+    T: Transport + Send + 'static,
+    C: Clock,
+{
     let p = prepare(robot, trajectory, buses, &options)?;
     let mut threads = Vec::with_capacity(p.lanes.len());
     for lane in p.lanes {
@@ -175,6 +238,7 @@ where
         rate_hz: p.rate_hz,
         units: p.units,
         telemetry: p.telemetry_tx,
+        counters: p.counters,
     };
     let supervisor = std::thread::Builder::new()
         .name("servobus-run".into())
@@ -182,6 +246,7 @@ where
         .map_err(|e| RunError::Thread(e.to_string()))?;
     Ok(Runner {
         commands: p.commands,
+        targets: p.targets,
         telemetry: p.telemetry,
         handle: supervisor,
         approach: p.approach,
@@ -194,6 +259,7 @@ struct RunEnd {
     rate_hz: f64,
     units: Units,
     telemetry: Option<Sender<Telemetry>>,
+    counters: Arc<Counters>,
 }
 
 impl RunEnd {
@@ -220,6 +286,7 @@ impl RunEnd {
             finish,
             fault: self.board.first(),
             warnings,
+            live: self.counters.report(),
         };
         Ok(assemble(outcomes, ending))
     }

@@ -18,6 +18,7 @@ use crate::options::RunOptions;
 use crate::pacer::Pacer;
 use crate::report::Report;
 use crate::run::{assemble, prepare, Ending};
+use crate::target::{Counters, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 
 /// A run on buses in virtual time, stepped by the caller: deterministic,
@@ -54,6 +55,8 @@ pub struct VirtualRun<T: Transport> {
     pacers: Vec<Pacer<ManualClock>>,
     board: Arc<FaultBoard>,
     command_tx: Option<CommandSender>,
+    targets: TargetSender,
+    counters: Arc<Counters>,
     telemetry: Receiver<Telemetry>,
     telemetry_tx: Option<crossbeam_channel::Sender<Telemetry>>,
     rate_hz: f64,
@@ -87,6 +90,34 @@ impl<T: Transport> VirtualRun<T> {
         buses: Vec<Bus<T, ManualClock>>,
         options: RunOptions,
     ) -> Result<Self, RunError> {
+        Self::prepared(robot, Some(trajectory), buses, options)
+    }
+
+    /// Prepares a run with no path: the joints hold where they are read at
+    /// start-up and follow the live targets sent through
+    /// [`targets`](Self::targets), each cycle a jerk-limited step toward
+    /// the newest (see [`Target`](crate::Target)). No target for
+    /// [`RunOptions::target_timeout`]: a jerk-limited stop and hold; the
+    /// next target resumes. The run ends on [`Command::Stop`](crate::Command::Stop),
+    /// [`Command::TorqueOff`](crate::Command::TorqueOff) or a fault.
+    ///
+    /// # Errors
+    ///
+    /// As [`new`](Self::new).
+    pub fn live(
+        robot: &Robot,
+        buses: Vec<Bus<T, ManualClock>>,
+        options: RunOptions,
+    ) -> Result<Self, RunError> {
+        Self::prepared(robot, None, buses, options)
+    }
+
+    fn prepared(
+        robot: &Robot,
+        trajectory: Option<Trajectory>,
+        buses: Vec<Bus<T, ManualClock>>,
+        options: RunOptions,
+    ) -> Result<Self, RunError> {
         let p = prepare(robot, trajectory, buses, &options)?;
         // No spinning: a virtual clock only moves when slept on.
         let pacers = p
@@ -99,6 +130,8 @@ impl<T: Transport> VirtualRun<T> {
             pacers,
             board: p.board,
             command_tx: Some(p.commands),
+            targets: p.targets,
+            counters: p.counters,
             telemetry: p.telemetry,
             telemetry_tx: p.telemetry_tx,
             rate_hz: p.rate_hz,
@@ -121,6 +154,14 @@ impl<T: Transport> VirtualRun<T> {
             Some(tx) => tx.clone(),
             None => CommandSender::new(crossbeam_channel::bounded(1).0),
         }
+    }
+
+    /// A sender of live targets. A target received in a step takes effect
+    /// in that step's cycle on a robot of one bus,
+    /// [`COMMAND_DELAY_CYCLES`](crate::COMMAND_DELAY_CYCLES) later on
+    /// several; a run playing a path switches to following at the first.
+    pub fn targets(&self) -> TargetSender {
+        self.targets.clone()
     }
 
     /// A receiver of telemetry (empty when
@@ -199,6 +240,7 @@ impl<T: Transport> VirtualRun<T> {
             finish: self.finish.unwrap_or(Finish::Completed),
             fault: self.fault.clone(),
             warnings: Vec::new(),
+            live: self.counters.report(),
         };
         assemble(self.lanes.iter().map(|l| l.bus.outcome()).collect(), ending)
     }

@@ -92,6 +92,7 @@
 #![warn(missing_docs)]
 
 mod error;
+mod follow;
 mod limits;
 mod online;
 mod piece;
@@ -104,6 +105,7 @@ mod trajectory;
 mod untimed;
 
 pub use error::{PlanError, Quantity};
+pub use follow::{follow_steps, stop_position, Follower, Goal, TARGET_SPEED_SHARE};
 pub use limits::JointLimits;
 pub use online::{retarget, stop};
 pub use plan::{plan, Keyframe, OnLimit, PlanOptions};

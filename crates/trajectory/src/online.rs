@@ -121,18 +121,18 @@ pub(crate) fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64
 }
 
 /// How one joint gets from its state to the target.
-struct Plan1 {
+pub(crate) struct Plan1 {
     /// Phases before the main segment (stop or acceleration ramp-down).
-    pre: Phases,
+    pub pre: Phases,
     /// Duration of `pre`.
-    pre_time: f64,
-    seg: Segment1,
-    fastest: Profile,
+    pub pre_time: f64,
+    pub seg: Segment1,
+    pub fastest: Profile,
     /// Direction of the main segment.
-    dir: f64,
+    pub dir: f64,
 }
 
-fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
+pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
     let j = lim.jerk();
     let finite = j.is_finite();
     let mut pre = Phases::new();
@@ -177,8 +177,7 @@ fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
     }
     // Option B: stop first, then move rest to rest.
     stop_phases(s.velocity, s.acceleration, lim, &mut pre);
-    let mut scratch = Vec::new();
-    let (t, p, _, _) = pre.emit_from(0.0, s, lim, &mut scratch);
+    let (t, p, _, _) = pre.advance(s, 1.0, finite, f64::INFINITY);
     let d = target - p;
     let seg = Segment1 {
         d: d.abs(),

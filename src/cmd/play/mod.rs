@@ -35,9 +35,11 @@ mod setup;
 mod view;
 
 use load::{check_outputs, load};
+pub(crate) use report::write_report;
 use report::{file_name, print_plan, print_report};
 use setup::{backend, sim_pose};
-use view::{follow, install_ctrl_c, Shown, APPROACH, SETTLE};
+pub(crate) use view::install_ctrl_c;
+use view::{follow, Shown, APPROACH, SETTLE};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]

@@ -57,10 +57,21 @@ pub(super) fn print_plan(
     Ok(())
 }
 
-/// Prints the end-of-run report; `identified`: the lead was found while
-/// playing rather than set in the robot file.
+/// Prints the end-of-run report on stdout; `identified`: the lead was
+/// found while playing rather than set in the robot file.
 pub(super) fn print_report(r: &Report, identified: bool) {
-    println!(
+    // Stdout gone (a closed pipe) leaves nothing to tell.
+    let _ = write_report(&mut std::io::stdout().lock(), r, identified);
+}
+
+/// Writes the end-of-run report to `out` (see [`print_report`]).
+pub(crate) fn write_report(
+    out: &mut impl std::io::Write,
+    r: &Report,
+    identified: bool,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
         "{}: {} cycles in {:.2} s, {:.1} Hz achieved of {:.1} Hz requested",
         match r.finish {
             Finish::Completed => "completed",
@@ -73,12 +84,14 @@ pub(super) fn print_report(r: &Report, identified: bool) {
         r.duration_s,
         r.achieved_rate_hz,
         r.planned_rate_hz
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "  period error us: p50 {:.0}  p99 {:.0}  max {:.0};  overruns {}  drift {:.0} us",
         r.period_error_us.p50, r.period_error_us.p99, r.period_error_us.max, r.overruns, r.drift_us
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "  bus utilisation {:.1} %;  timeouts {}  retries {}  missed replies {}  clamps {}  \
          telemetry dropped {}",
         100.0 * r.utilisation,
@@ -87,7 +100,7 @@ pub(super) fn print_report(r: &Report, identified: bool) {
         r.missed_replies,
         r.clamps,
         r.telemetry_dropped
-    );
+    )?;
     for b in &r.buses {
         let how = if b.latency_learned {
             format!(
@@ -97,36 +110,41 @@ pub(super) fn print_report(r: &Report, identified: bool) {
         } else {
             "as the robot file gives it".to_owned()
         };
-        println!(
+        writeln!(
+            out,
             "  bus {} link: latency mean {:.0} us, p99 {:.0} us, {how}; reply deadline {:.0} us",
             b.name, b.latency_us, b.latency_p99_us, b.reply_deadline_us
-        );
+        )?;
     }
     if identified && r.lead_ms > 0.0 {
-        println!(
+        writeln!(
+            out,
             "  lag compensation lead {:.1} ms, identified while moving \
              (`lead_ms: {:.0}` in the robot file applies it from the first cycle)",
             r.lead_ms, r.lead_ms
-        );
+        )?;
     } else {
-        println!("  lag compensation lead {:.1} ms", r.lead_ms);
+        writeln!(out, "  lag compensation lead {:.1} ms", r.lead_ms)?;
     }
     // The name column fits the longest joint name.
     let w = r.joints.iter().map(|j| j.name.len()).fold(16, usize::max);
-    println!(
+    writeln!(
+        out,
         "  {:<w$} {:>10} {:>10}   tracking error ({})",
         "joint", "rms", "max", r.units
-    );
+    )?;
     for j in &r.joints {
-        println!(
+        writeln!(
+            out,
             "  {:<w$} {:>10.3} {:>10.3}",
             j.name, j.rms_error, j.max_error
-        );
+        )?;
     }
     if let Some(fault) = &r.fault {
-        println!("  fault: {fault}");
+        writeln!(out, "  fault: {fault}")?;
     }
     for w in &r.warnings {
-        println!("  warning: {w}");
+        writeln!(out, "  warning: {w}")?;
     }
+    Ok(())
 }

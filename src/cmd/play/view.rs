@@ -24,7 +24,7 @@ pub(super) struct Shown {
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
-pub(super) fn install_ctrl_c(runner: &Runner) {
+pub(crate) fn install_ctrl_c(runner: &Runner) {
     let seen = AtomicU32::new(0);
     let commands = runner.commands();
     let installed = ctrlc::set_handler(move || {

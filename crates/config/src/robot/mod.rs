@@ -41,6 +41,9 @@ pub struct Robot {
     /// The pose a person holds the robot in while calibrating, per joint in
     /// the robot's joint order and units (`calibration_pose`; default 0).
     pub calibration_pose: Vec<f64>,
+    /// The robot's geometry (`kinematics:`), checked against its joints;
+    /// joint limits unset ([`Robot::geometry`] sets them).
+    pub kinematics: Option<servobus_kinematics::Geometry>,
 }
 
 /// Whether a robot's angles go through a calibration.
@@ -146,6 +149,17 @@ impl Robot {
     pub fn joint(&self, name: &str) -> Option<&JointConfig> {
         self.joints().find(|j| j.name == name)
     }
+
+    /// The robot's geometry with every joint's current limits (radians),
+    /// ready for forward and inverse kinematics; `None` without a
+    /// `kinematics:` section.
+    pub fn geometry(&self) -> Option<servobus_kinematics::Geometry> {
+        let mut model = self.kinematics.clone()?;
+        for (i, j) in self.joints().enumerate() {
+            model.set_limits(i, self.units.to_rad(j.min), self.units.to_rad(j.max));
+        }
+        Some(model)
+    }
 }
 
 impl BusConfig {
@@ -189,8 +203,7 @@ pub fn load_robot_calibrated(
     path: &Path,
     calibration: Option<&Path>,
 ) -> Result<Robot, ConfigError> {
-    let (robot, source) = load_calibrated(path, calibration)?;
-    rate_fits(robot, &source)
+    load_with_rate(path, calibration, false)
 }
 
 /// Like [`load_robot_calibrated`], for a robot about to play a motion or
@@ -201,8 +214,21 @@ pub fn load_robot_calibrated(
 /// As [`load_robot_calibrated`], and [`ConfigError::Invalid`] at the robot
 /// file's `calibration:` when that file does not exist.
 pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
+    load_with_rate(path, calibration, true)
+}
+
+/// The robot at `path` with `calibration` (or its own) applied, its
+/// calibration file required to exist when `required`, and its rate checked
+/// against every bus.
+fn load_with_rate(
+    path: &Path,
+    calibration: Option<&Path>,
+    required: bool,
+) -> Result<Robot, ConfigError> {
     let (robot, source) = load_calibrated(path, calibration)?;
-    require_calibration(&robot, &source)?;
+    if required {
+        require_calibration(&robot, &source)?;
+    }
     rate_fits(robot, &source)
 }
 

@@ -30,6 +30,8 @@ pub(super) struct RawRobot {
     #[serde(default)]
     pub calibration_pose: HashMap<String, f64>,
     pub buses: Vec<RawBus>,
+    #[serde(default)]
+    pub kinematics: Option<servobus_kinematics::Spec>,
 }
 
 fn default_rate() -> f64 {

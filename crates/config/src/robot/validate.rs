@@ -88,9 +88,35 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
         path: src.path.clone(),
         calibration: RobotCalibration::None,
         calibration_pose: Vec::new(),
+        kinematics: None,
     };
     robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
+    if let Some(spec) = &raw.kinematics {
+        robot.kinematics = Some(kinematics(&robot, spec, src)?);
+    }
     Ok(robot)
+}
+
+/// The `kinematics:` section checked against the robot's joints; a problem
+/// is reported at its entry and field.
+fn kinematics(
+    robot: &Robot,
+    spec: &servobus_kinematics::Spec,
+    src: &Source,
+) -> Result<servobus_kinematics::Geometry, ConfigError> {
+    let names = robot.joints().map(|j| j.name.as_str());
+    servobus_kinematics::Geometry::new(spec, names, robot.units.to_rad(1.0)).map_err(|e| {
+        let (section, entry, field) = e.location();
+        let mut at = FieldPath::root().key("kinematics").key(section.key());
+        let Some(entry) = entry else {
+            return src.error(&at, e.to_string());
+        };
+        at = at.key(entry);
+        match field {
+            Some(field) => src.error(&at.key(field), e.to_string()),
+            None => src.key_error(&at, e.to_string()),
+        }
+    })
 }
 
 /// One bus of the robot at `bp`, its joints' names also checked against

@@ -29,16 +29,32 @@ pub(crate) struct JointGoal {
     pub clamps: u64,
 }
 
+/// The ticks inside a joint's limits: lowest and highest.
+fn tick_range(map: &JointMap, joint: &JointConfig) -> (i32, i32) {
+    let a = map.raw_ticks(map.min_rad);
+    let b = map.raw_ticks(map.max_rad);
+    let max = i32::try_from(joint.model.max_position()).unwrap_or(i32::MAX);
+    // A small epsilon keeps a limit that falls exactly on a tick (up to
+    // rounding) on that tick.
+    let lo = (a.min(b) - 1e-6).ceil().clamp(0.0, f64::from(max)) as i32;
+    let hi = (a.max(b) + 1e-6).floor().clamp(0.0, f64::from(max)) as i32;
+    (lo, hi)
+}
+
+/// The joint positions (rad) a goal can be sent at as they are: the limits
+/// narrowed to the ticks inside them (a position between those ticks rounds
+/// to one of them or one between).
+pub(crate) fn reachable(joint: &JointConfig, units: Units) -> (f64, f64) {
+    let map = JointMap::new(joint, units);
+    let (lo, hi) = tick_range(&map, joint);
+    let (a, b) = (map.from_ticks(lo), map.from_ticks(hi));
+    (a.min(b), a.max(b))
+}
+
 impl JointGoal {
     fn new(robot_index: usize, joint: &JointConfig, units: Units) -> Self {
         let map = JointMap::new(joint, units);
-        let a = map.raw_ticks(map.min_rad);
-        let b = map.raw_ticks(map.max_rad);
-        let max = i32::try_from(joint.model.max_position()).unwrap_or(i32::MAX);
-        // A small epsilon keeps a limit that falls exactly on a tick (up to
-        // rounding) on that tick.
-        let lo = (a.min(b) - 1e-6).ceil().clamp(0.0, f64::from(max)) as i32;
-        let hi = (a.max(b) + 1e-6).floor().clamp(0.0, f64::from(max)) as i32;
+        let (lo, hi) = tick_range(&map, joint);
         JointGoal {
             robot_index,
             map,

@@ -21,6 +21,7 @@ use servobus_timing::Plan;
 use servobus_trajectory::JointState;
 
 pub(crate) use counters::CycleTiming;
+pub(crate) use goals::reachable;
 
 use counters::Counters;
 use feedback::Feedback;

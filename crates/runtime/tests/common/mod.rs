@@ -17,6 +17,17 @@ mod files;
 #[allow(unused_imports)] // not every test uses every helper
 pub use files::{config, temp_file, temp_path};
 
+/// The SO-101's limits by hand (configs/robots/so101.yaml): velocity,
+/// acceleration, jerk in deg/s, deg/s^2, deg/s^3, in its joint order.
+pub const SO101_LIMITS: [(f64, f64, f64); 6] = [
+    (180.0, 900.0, 9000.0),
+    (150.0, 700.0, 7000.0),
+    (180.0, 900.0, 9000.0),
+    (240.0, 1200.0, 12000.0),
+    (270.0, 1500.0, 15000.0),
+    (240.0, 1500.0, 15000.0),
+];
+
 /// A robot file under `configs/robots/`.
 pub fn robot(name: &str) -> Robot {
     load_robot(&config(&format!("robots/{name}"))).expect("robot file loads")
@@ -118,6 +129,8 @@ pub struct Recorded {
     pub rows: Vec<(u64, usize, f64, f64, Option<f64>)>,
     /// Faults published.
     pub faults: Vec<servobus_runtime::Fault>,
+    /// Live-target events published, with their time (s).
+    pub live: Vec<(servobus_runtime::LiveEvent, f64)>,
 }
 
 /// Steps `run` until it ends or `max` cycles pass, calling `each(cycle)`
@@ -132,6 +145,7 @@ pub fn record<T: servobus_driver::Transport>(
     let mut rec = Recorded {
         rows: Vec::new(),
         faults: Vec::new(),
+        live: Vec::new(),
     };
     let drain = |rec: &mut Recorded| {
         while let Ok(m) = rx.try_recv() {
@@ -143,6 +157,7 @@ pub fn record<T: servobus_driver::Transport>(
                     }
                 }
                 Telemetry::Fault(f) => rec.faults.push(f),
+                Telemetry::Live { event, time_s } => rec.live.push((event, time_s)),
                 _ => {}
             }
         }

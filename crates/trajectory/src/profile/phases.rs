@@ -62,6 +62,38 @@ impl Phases {
         self.emit(t, x.position, x.velocity, x.acceleration, 1.0, finite, out)
     }
 
+    /// Integrates the phases from state `x`, mirrored by `dir`, for at most
+    /// `limit` seconds (allocation-free). Returns the time integrated and
+    /// the state reached.
+    pub fn advance(
+        &self,
+        x: &JointState,
+        dir: f64,
+        finite_jerk: bool,
+        limit: f64,
+    ) -> (f64, f64, f64, f64) {
+        let (mut p, mut v, mut a) = (x.position, x.velocity, x.acceleration);
+        let mut t = 0.0;
+        for k in 0..self.n {
+            if t >= limit {
+                break;
+            }
+            let dt = self.dt[k].min(limit - t);
+            let jk = dir * self.jerk[k];
+            if !finite_jerk {
+                a = dir * self.acc[k];
+            }
+            p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
+            v += dt * (a + 0.5 * dt * jk);
+            a += dt * jk;
+            t += dt;
+            if !finite_jerk && dt == self.dt[k] {
+                a = 0.0;
+            }
+        }
+        (t, p, v, a)
+    }
+
     /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the
     /// whole profile mirrored by `dir` (+1 or -1). Returns the end time and
     /// state. With a finite jerk the acceleration is integrated (continuous);

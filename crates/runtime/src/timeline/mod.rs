@@ -18,66 +18,16 @@ use std::time::Duration;
 use servobus_trajectory::{self as traj, Cursor, JointLimits, JointState, Trajectory};
 
 use crate::error::RunError;
+use crate::live::{LiveEvent, LivePath};
+use crate::target::Checked;
 
-/// Smooth time scale of the main path: `s` ramps from `s0` to `s1` over
-/// `dur` seconds from `r0` with a quintic smoothstep (continuous `s`, `s'`
-/// and `s''`), and path time `tau` is its integral.
-#[derive(Debug, Clone, Copy)]
-struct Scale {
-    r0: f64,
-    tau0: f64,
-    s0: f64,
-    s1: f64,
-    dur: f64,
-}
+mod live;
+mod scale;
 
-impl Scale {
-    fn constant(r0: f64) -> Self {
-        Scale {
-            r0,
-            tau0: 0.0,
-            s0: 1.0,
-            s1: 1.0,
-            dur: 1.0,
-        }
-    }
+use scale::Scale;
 
-    /// `(tau, s, ds/dx)` at time `x`.
-    fn at(&self, x: f64) -> (f64, f64, f64) {
-        let dx = x - self.r0;
-        if dx <= 0.0 {
-            // Before the ramp (the reference lags the commands by the lead):
-            // extrapolate at the starting speed.
-            return (self.tau0 + self.s0 * dx, self.s0, 0.0);
-        }
-        let u = dx / self.dur;
-        let d = self.s1 - self.s0;
-        if u >= 1.0 {
-            let tau = self.tau0 + self.s0 * dx + d * (0.5 * self.dur + (dx - self.dur));
-            return (tau, self.s1, 0.0);
-        }
-        let h = u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
-        let dh = 30.0 * u * u * (1.0 - u) * (1.0 - u);
-        let big_h = u * u * u * u * (2.5 + u * (-3.0 + u));
-        (
-            self.tau0 + self.s0 * dx + d * self.dur * big_h,
-            self.s0 + d * h,
-            d * dh / self.dur,
-        )
-    }
-
-    /// A ramp from the scale at `x` to `target` over `dur`.
-    fn ramp_to(&self, x: f64, target: f64, dur: f64) -> Scale {
-        let (tau, s, _) = self.at(x);
-        Scale {
-            r0: x,
-            tau0: tau,
-            s0: s,
-            s1: target,
-            dur: dur.max(1e-3),
-        }
-    }
-}
+/// The default time live targets may fail to come before the joints stop, s.
+pub(crate) const DEFAULT_TARGET_TIMEOUT: f64 = 0.25;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Kind {
@@ -85,6 +35,8 @@ pub(crate) enum Kind {
     Main,
     Transition,
     Stop,
+    /// Following live targets.
+    Live,
     /// Waiting for `Play` (not final) or a fault reaction (final).
     Hold {
         last: bool,
@@ -98,6 +50,7 @@ enum Path {
     /// Sampled at `tau(x)`.
     Scaled(Arc<Trajectory>, Scale),
     Fixed(Vec<f64>),
+    Live(Box<LivePath>),
 }
 
 #[derive(Debug, Clone)]
@@ -113,7 +66,7 @@ impl Segment {
     fn new(start: f64, kind: Kind, path: Path) -> Self {
         let (cmd, reference) = match &path {
             Path::Plain(t) | Path::Scaled(t, _) => (t.cursor(), t.cursor()),
-            Path::Fixed(_) => (Cursor::default(), Cursor::default()),
+            Path::Fixed(_) | Path::Live(_) => (Cursor::default(), Cursor::default()),
         };
         Segment {
             start,
@@ -124,12 +77,18 @@ impl Segment {
         }
     }
 
-    fn sample(&mut self, x: f64, which: Which, out: &mut [JointState]) {
+    /// The path at `x`; `now` is the cycle's time (live targets time out
+    /// by it).
+    fn sample(&mut self, x: f64, now: f64, which: Which, out: &mut [JointState]) {
         let cursor = match which {
             Which::Cmd => &mut self.cmd,
             Which::Ref => &mut self.reference,
         };
-        match &self.path {
+        match &mut self.path {
+            Path::Live(live) => match which {
+                Which::Cmd => live.sample_cmd(x, now, out),
+                Which::Ref => live.sample_ref(x, out),
+            },
             Path::Plain(t) => t.sample_with(cursor, x - self.start, out),
             Path::Scaled(t, scale) => {
                 let (tau, s, ds) = scale.at(x);
@@ -140,7 +99,7 @@ impl Segment {
                 }
             }
             Path::Fixed(p) => {
-                for (o, &p) in out.iter_mut().zip(p) {
+                for (o, &p) in out.iter_mut().zip(p.iter()) {
                     *o = JointState::at_rest(p);
                 }
             }
@@ -154,7 +113,7 @@ impl Segment {
             (Path::Plain(t), _) => x - self.start >= t.duration(),
             (Path::Scaled(t, scale), _) => scale.at(x).0 >= t.duration(),
             (Path::Fixed(_), Kind::Hold { last }) => last && x >= self.start,
-            (Path::Fixed(_), _) => false,
+            (Path::Fixed(_), _) | (Path::Live(_), _) => false,
         }
     }
 }
@@ -182,6 +141,12 @@ pub(crate) struct Timeline {
     over_since: Option<f64>,
     /// How long the approach to the main path's start takes, as planned.
     approach: Duration,
+    /// The time of the cycle being run (live targets time out by it).
+    now: f64,
+    /// How long live targets may fail to come before the joints stop, s.
+    target_timeout: f64,
+    /// The limits live targets are followed within.
+    live_limits: Vec<JointLimits>,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -230,7 +195,11 @@ impl Timeline {
             scratch: vec![JointState::default(); n],
             over_since: None,
             approach: Duration::ZERO,
+            now: 0.0,
+            target_timeout: DEFAULT_TARGET_TIMEOUT,
+            live_limits: Vec::new(),
         };
+        tl.live_limits = tl.limits.clone();
         let mut start = vec![JointState::default(); n];
         main.sample(0.0, &mut start);
         let target: Vec<f64> = start.iter().map(|s| s.position).collect();
@@ -295,15 +264,17 @@ impl Timeline {
     /// The commanded state at `x` (advances the horizon).
     pub fn sample_cmd(&mut self, x: f64, out: &mut [JointState]) {
         self.horizon = self.horizon.max(x);
+        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, Which::Cmd, out);
+            s.sample(x, now, Which::Cmd, out);
         }
     }
 
     /// The reference (where the joints should be) at `x`.
     pub fn sample_ref(&mut self, x: f64, out: &mut [JointState]) {
+        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, Which::Ref, out);
+            s.sample(x, now, Which::Ref, out);
         }
     }
 
@@ -363,8 +334,9 @@ impl Timeline {
     fn state_at_horizon(&mut self) -> Vec<JointState> {
         let x = self.horizon;
         let mut st = std::mem::take(&mut self.scratch);
+        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, Which::Cmd, &mut st);
+            s.sample(x, now, Which::Cmd, &mut st);
         }
         let out = st.clone();
         self.scratch = st;
@@ -397,12 +369,16 @@ impl Timeline {
     }
 
     /// Ramps the main path's time scale to `target` (0: pause, 1: resume).
+    /// Following live targets, 0 stops and holds, anything else follows
+    /// again.
     pub fn set_speed(&mut self, target: f64) {
         let x = self.horizon;
         let ramp = self.ramp;
         if let Some(seg) = self.segments.last_mut() {
-            if let Path::Scaled(_, scale) = &mut seg.path {
-                *scale = scale.ramp_to(x.max(seg.start), target, ramp);
+            match &mut seg.path {
+                Path::Scaled(_, scale) => *scale = scale.ramp_to(x.max(seg.start), target, ramp),
+                Path::Live(live) => live.pause(target == 0.0),
+                _ => {}
             }
         }
         self.over_since = None;
@@ -471,19 +447,6 @@ impl Timeline {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_time_scale_integrates_its_ramp() {
-        let s = Scale::constant(1.0).ramp_to(2.0, 0.0, 0.5);
-        assert_eq!(s.at(2.0), (1.0, 1.0, 0.0));
-        let (tau, v, dv) = s.at(2.25);
-        assert!((v - 0.5).abs() < 1e-12 && dv < 0.0);
-        // Midway through a symmetric ramp the integral is 0.25 * (1 + 0.5) - ...
-        assert!(tau > 1.125 && tau < 1.25, "{tau}");
-        let (tau_end, v_end, _) = s.at(3.0);
-        assert_eq!(v_end, 0.0);
-        assert!((tau_end - 1.25).abs() < 1e-12, "{tau_end}");
-    }
 
     #[test]
     fn the_approach_is_when_the_main_path_begins() {

@@ -1,0 +1,42 @@
+//! Robot geometry on nalgebra: forward and inverse kinematics.
+//!
+//! servobus plays motions written in joint angles; this crate gives a robot
+//! its shape so that motions can also be written in space. A robot file's
+//! `kinematics:` section ([`Spec`]) names, for every joint, its parent
+//! (`base` or another joint), where its axis sits on the parent's link
+//! (`xyz` in mm, `rpy` roll-pitch-yaw about fixed x, y, z) and the `axis`
+//! it turns about; named frames (`tool`, `foot_<leg>`) are fixed to a
+//! joint's link. A joint's frame is
+//! `parent * translate(xyz) * rotate(rpy) * rotate(axis, angle)`, so the
+//! geometry's zero pose is the robot file's zero.
+//!
+//! - [`Geometry`] checks a spec against the robot's joints (typed
+//!   [`SpecError`]s that name the entry) and computes forward kinematics of
+//!   every joint frame and named frame into a reused [`Poses`] buffer,
+//!   allocating nothing.
+//! - [`LegIk`] solves a 3-DOF leg (coxa yaw, femur and tibia pitch) in
+//!   closed form, choosing the knee solution nearest the previous one.
+//! - [`ArmIk`] solves an arm chain up to [`MAX_DOF`] joints by damped
+//!   least squares inside the joint limits, from the previous solution (no
+//!   elbow or wrist flips), restarting from poses spread over the joints'
+//!   ranges when that leads nowhere: the position of a frame and, if
+//!   asked, its pitch and roll (what a 5-DOF arm like the SO-101 can
+//!   choose).
+//!
+//! Angles are radians and lengths millimetres throughout; the caller
+//! converts the robot file's angle unit. Failures are typed ([`IkError`]):
+//! unreachable (with the distance short), a joint limit (naming the joint),
+//! near a singularity.
+
+mod arm;
+mod error;
+mod geometry;
+mod leg;
+mod spec;
+
+pub use arm::{ArmIk, ArmTarget, MAX_DOF};
+pub use error::IkError;
+pub use geometry::{Geometry, Poses};
+pub use leg::LegIk;
+pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};

@@ -1,0 +1,10 @@
+//! Tests of the kinematics crate on the shipped robots' geometry.
+
+mod fk;
+mod ik_arm;
+mod ik_leg;
+mod robots;
+mod spec;
+
+#[global_allocator]
+static GLOBAL: servobus_alloc_count::Counting = servobus_alloc_count::Counting;

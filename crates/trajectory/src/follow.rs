@@ -1,0 +1,335 @@
+//! Following a moving target one control cycle at a time.
+//!
+//! [`Follower::step`] moves a joint's commanded state `dt` seconds toward a
+//! target that moves at a constant speed or acceleration. It plans, in the
+//! frame of the target (position, speed and acceleration error), the
+//! time-optimal jerk-limited way to rest on the target, the same plan as
+//! [`retarget`](crate::retarget) of one joint, and integrates it exactly
+//! over `dt`, switches inside the cycle included. While the target stays
+//! the same (moving at its constant speed) the plan is kept, so the
+//! commanded motion follows one smooth profile; when the target changes,
+//! the new plan starts from the state reached, with position, velocity and
+//! acceleration continuous.
+//!
+//! Limits: the jerk stays within `max_jerk`, the acceleration within
+//! `max_acceleration`, the speed within `max_velocity`: the target's own
+//! speed over the goal's horizon is capped at [`TARGET_SPEED_SHARE`] of the
+//! speed limit and its acceleration at [`TARGET_SPEED_SHARE`] of the
+//! acceleration limit, and the plan relative to the target keeps to what
+//! is left. Nothing is allocated.
+
+use crate::online::{plan1, stop_phases};
+use crate::profile::Phases;
+use crate::{JointLimits, JointState};
+
+/// The largest share of `max_velocity` a target's speed is taken at: the
+/// rest is left for catching up with it.
+pub const TARGET_SPEED_SHARE: f64 = 0.9;
+
+/// Where one joint should go: a position and how it moves on (0 for a
+/// fixed target): its speed and acceleration now, valid for `horizon` s.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Goal {
+    /// The target position now.
+    pub position: f64,
+    /// The target's speed, units/s.
+    pub velocity: f64,
+    /// The target's acceleration, units/s^2.
+    pub acceleration: f64,
+    /// How long the target keeps moving so, s (the speed limit is kept
+    /// over that time).
+    pub horizon: f64,
+}
+
+impl Goal {
+    /// A target at rest at `position`.
+    pub fn at(position: f64) -> Self {
+        Goal {
+            position,
+            ..Goal::default()
+        }
+    }
+
+    /// The goal `tau` seconds on.
+    fn after(&self, tau: f64) -> Goal {
+        Goal {
+            position: self.position + tau * (self.velocity + 0.5 * tau * self.acceleration),
+            velocity: self.velocity + tau * self.acceleration,
+            acceleration: self.acceleration,
+            horizon: self.horizon - tau,
+        }
+    }
+}
+
+/// Goals closer than this (in position, and in speed per second) to the
+/// one a plan was made for keep the plan.
+const SAME_GOAL: f64 = 1e-9;
+
+/// A plan in the target's frame, made at `tau = 0`.
+#[derive(Debug, Clone, Copy)]
+struct Plan {
+    /// The goal it was made for, at `tau = 0`.
+    goal: Goal,
+    /// The state relative to the goal at `tau = 0`.
+    err: JointState,
+    pre: Phases,
+    main: Phases,
+    dir: f64,
+    /// Time since the plan was made.
+    tau: f64,
+}
+
+impl Plan {
+    fn new(lim: &JointLimits, state: &JointState, goal: Goal) -> Plan {
+        // The error frame: the target stands still at 0; the speed and
+        // acceleration left for the error keep the sums within the joint's
+        // limits.
+        let rel = relative(lim, &goal);
+        let err = JointState {
+            position: state.position - goal.position,
+            velocity: state.velocity - goal.velocity,
+            acceleration: state.acceleration - goal.acceleration,
+        };
+        Plan::ramping(&rel, &err, goal).unwrap_or_else(|| Plan::from(&rel, err, goal, 0.0))
+    }
+
+    /// The plan from `err` (relative to `goal` at `tau`).
+    fn from(rel: &JointLimits, err: JointState, goal: Goal, tau: f64) -> Plan {
+        let p = plan1(&err, 0.0, rel);
+        let mut main = Phases::new();
+        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
+            p.seg.phases(rel, p.fastest, &mut main);
+        }
+        Plan {
+            goal,
+            err,
+            pre: p.pre,
+            main,
+            dir: p.dir,
+            tau,
+        }
+    }
+
+    /// A joint part way up an acceleration ramp (or down one) may be on its
+    /// way to the target already: the plan made from where that ramp began
+    /// (acceleration 0, `ta = |a| / j` earlier), if it starts with the same
+    /// ramp for at least `ta`, goes on from here without first undoing the
+    /// acceleration (which [`plan1`] would do, and which, planned anew
+    /// every cycle, would never let the joint speed up).
+    fn ramping(rel: &JointLimits, err: &JointState, goal: Goal) -> Option<Plan> {
+        let j = rel.max_jerk?;
+        let ea = err.acceleration;
+        if ea == 0.0 {
+            return None;
+        }
+        let ta = ea.abs() / j;
+        let v0 = err.velocity - 0.5 * ea * ta;
+        let start = JointState {
+            position: err.position - v0 * ta - ea * ta * ta / 6.0,
+            velocity: v0,
+            acceleration: 0.0,
+        };
+        let plan = Plan::from(rel, start, goal.after(-ta), ta);
+        let same = plan.pre.n == 0
+            && plan.main.n > 0
+            && plan.main.jerk[0] * plan.dir * ea > 0.0
+            && plan.main.dt[0] >= ta * (1.0 - 1e-9);
+        same.then_some(plan)
+    }
+
+    /// Whether `goal` (now) is the goal this plan follows.
+    fn follows(&self, goal: Goal) -> bool {
+        let here = self.goal.after(self.tau);
+        (goal.position - here.position).abs() <= SAME_GOAL * (1.0 + here.position.abs())
+            && (goal.velocity - here.velocity).abs() <= SAME_GOAL * (1.0 + here.velocity.abs())
+            && goal.acceleration == here.acceleration
+    }
+
+    /// The joint's state at `tau`.
+    fn at(&self, finite: bool) -> JointState {
+        let (t1, p, v, a) = self.pre.advance(&self.err, 1.0, finite, self.tau);
+        let mut end = JointState {
+            position: p,
+            velocity: v,
+            acceleration: a,
+        };
+        if t1 < self.tau && self.main.n > 0 {
+            let from = JointState {
+                acceleration: 0.0,
+                ..end
+            };
+            let (t2, p, v, a) = self.main.advance(&from, self.dir, finite, self.tau - t1);
+            end = JointState {
+                position: p,
+                velocity: v,
+                acceleration: a,
+            };
+            if t1 + t2 < self.tau {
+                end = JointState::default();
+            }
+        } else if t1 < self.tau && self.main.n == 0 {
+            end.acceleration = 0.0;
+            end.velocity = 0.0;
+        }
+        let g = self.goal.after(self.tau);
+        JointState {
+            position: g.position + end.position,
+            velocity: g.velocity + end.velocity,
+            acceleration: g.acceleration + end.acceleration,
+        }
+    }
+}
+
+/// The limits of motion relative to `goal` (capped as [`Follower::step`]
+/// does): what the goal's own motion leaves over its horizon.
+fn relative(lim: &JointLimits, goal: &Goal) -> JointLimits {
+    let end = goal.velocity + goal.acceleration * goal.horizon.max(0.0);
+    JointLimits {
+        max_velocity: lim.max_velocity - goal.velocity.abs().max(end.abs()),
+        max_acceleration: lim.max_acceleration - goal.acceleration.abs(),
+        ..*lim
+    }
+}
+
+/// One joint's commanded state following a goal, cycle by cycle (see the
+/// module documentation). It keeps the plan it made while the goal stays
+/// the same (a moving goal included), so that its motion is one smooth
+/// profile, and plans anew from the state reached when the goal changes.
+#[derive(Debug, Clone, Copy)]
+pub struct Follower {
+    state: JointState,
+    plan: Option<Plan>,
+}
+
+impl Follower {
+    /// A follower at `state`.
+    pub fn new(state: JointState) -> Self {
+        Follower { state, plan: None }
+    }
+
+    /// The commanded state.
+    pub fn state(&self) -> JointState {
+        self.state
+    }
+
+    /// Moves the state `dt` seconds along the jerk-limited way to `goal`
+    /// and returns it. The goal's speed is capped at
+    /// [`TARGET_SPEED_SHARE`] of `max_velocity`. Limits are assumed valid;
+    /// a goal that is not finite, or `dt <= 0`, leaves the state unchanged.
+    pub fn step(&mut self, lim: &JointLimits, goal: Goal, dt: f64) -> JointState {
+        let finite_goal = goal.position.is_finite()
+            && goal.velocity.is_finite()
+            && goal.acceleration.is_finite()
+            && !goal.horizon.is_nan();
+        if !(dt > 0.0 && finite_goal) {
+            return self.state;
+        }
+        let goal = capped(lim, goal);
+        let finite = lim.max_jerk.is_some();
+        let plan = match &mut self.plan {
+            Some(p) if p.follows(goal) => p,
+            slot => slot.insert(Plan::new(lim, &self.state, goal)),
+        };
+        plan.tau += dt;
+        self.state = plan.at(finite);
+        self.state
+    }
+}
+
+/// `goal` with its acceleration and its speed over its horizon capped at
+/// [`TARGET_SPEED_SHARE`] of the limits.
+fn capped(lim: &JointLimits, goal: Goal) -> Goal {
+    let acap = TARGET_SPEED_SHARE * lim.max_acceleration;
+    let vcap = TARGET_SPEED_SHARE * lim.max_velocity;
+    let a = goal.acceleration.clamp(-acap, acap);
+    let v = goal.velocity.clamp(-vcap, vcap);
+    let h = goal.horizon.max(0.0);
+    // The speed at the end of the horizon within the cap too.
+    let a = if h > 0.0 {
+        a.clamp((-vcap - v) / h, (vcap - v) / h)
+    } else {
+        0.0
+    };
+    Goal {
+        position: goal.position,
+        velocity: v,
+        acceleration: a,
+        horizon: h,
+    }
+}
+
+/// Where the quickest jerk-limited stop from `state` ends (the stop of
+/// [`stop`](crate::stop)).
+pub fn stop_position(lim: &JointLimits, state: &JointState) -> f64 {
+    let mut ph = Phases::new();
+    stop_phases(state.velocity, state.acceleration, lim, &mut ph);
+    ph.advance(state, 1.0, lim.max_jerk.is_some(), f64::INFINITY)
+        .1
+}
+
+/// [`Follower::step`] for every joint.
+pub fn follow_steps(limits: &[JointLimits], followers: &mut [Follower], goals: &[Goal], dt: f64) {
+    for ((lim, f), g) in limits.iter().zip(followers.iter_mut()).zip(goals) {
+        f.step(lim, *g, dt);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lim() -> JointLimits {
+        JointLimits::new(2.0, 10.0, Some(100.0))
+    }
+
+    /// Steps to a fixed goal; returns every state.
+    fn run(from: JointState, goal: Goal, dt: f64, n: usize) -> Vec<JointState> {
+        let mut f = Follower::new(from);
+        (0..n).map(|_| f.step(&lim(), goal, dt)).collect()
+    }
+
+    #[test]
+    fn a_step_is_reached_at_rest_within_the_limits() {
+        let dt = 0.005;
+        let states = run(JointState::at_rest(0.0), Goal::at(1.0), dt, 400);
+        let last = states[states.len() - 1];
+        assert!((last.position - 1.0).abs() < 1e-9, "{last:?}");
+        assert!(last.velocity.abs() < 1e-9 && last.acceleration.abs() < 1e-9);
+        for w in states.windows(2) {
+            assert!(w[1].velocity.abs() <= 2.0 + 1e-9);
+            assert!(w[1].acceleration.abs() <= 10.0 + 1e-9);
+            let jerk = (w[1].acceleration - w[0].acceleration) / dt;
+            assert!(jerk.abs() <= 100.0 + 1e-6, "{jerk}");
+        }
+        // Never beyond the target.
+        assert!(states.iter().all(|s| s.position <= 1.0 + 1e-9));
+    }
+
+    #[test]
+    fn a_moving_target_is_caught_and_followed_at_its_speed() {
+        let dt = 0.005;
+        let mut f = Follower::new(JointState::at_rest(0.0));
+        let mut s = f.state();
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let goal = Goal {
+                position: 0.2 + 0.5 * t,
+                velocity: 0.5,
+                acceleration: 0.0,
+                horizon: 1.0,
+            };
+            s = f.step(&lim(), goal, dt);
+        }
+        // After the step the target is at 0.2 + 0.5 * 2.0.
+        assert!((s.position - 1.2).abs() < 1e-6, "{s:?}");
+        assert!((s.velocity - 0.5).abs() < 1e-6, "{s:?}");
+    }
+
+    #[test]
+    fn bad_input_changes_nothing() {
+        let mut f = Follower::new(JointState::at_rest(0.3));
+        f.step(&lim(), Goal::at(f64::NAN), 0.01);
+        f.step(&lim(), Goal::at(1.0), 0.0);
+        assert_eq!(f.state(), JointState::at_rest(0.3));
+    }
+}

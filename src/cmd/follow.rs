@@ -1,0 +1,451 @@
+//! `servobus follow`: a leader arm, moved by hand with its torque off,
+//! drives a follower arm. Every follower period the leader's positions are
+//! read through its own calibration, matched to the follower's joints by
+//! name and sent to the follower's loop as live targets (a jerk-limited
+//! step toward the newest each cycle). The leader is never written to.
+//!
+//! Without ports both arms are simulated, the leader moved by a scripted
+//! hand (`--leader-hand`), so the whole command runs without hardware. A
+//! live line shows the rates, the latency and the error; the report gives
+//! the latency from a leader reading to the follower's goals on the wire
+//! (p50, p99) and the follower's error against the leader.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use servobus_driver::{Bus, Clock, Transport};
+use servobus_runtime::config::{load_robot_calibrated, JointMap, Robot};
+use servobus_runtime::sim::{Hand, SimRobot};
+use servobus_runtime::{
+    Command, CycleSample, Finish, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
+};
+
+use super::link::{every_port, open_bus, Allowance, Ports};
+use crate::record::{CsvLog, PlotData};
+
+/// Arguments of `servobus follow`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The follower: robot file or built-in name, its port and calibration.
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
+    /// Serial port of the leader arm (absent: a simulated leader).
+    #[arg(long)]
+    pub leader: Option<String>,
+    /// The leader's robot file (default: the follower's).
+    #[arg(long, value_parser = super::robot_arg)]
+    pub leader_robot: Option<PathBuf>,
+    /// The leader's calibration file (default: its robot file's).
+    #[arg(long)]
+    pub leader_calibration: Option<PathBuf>,
+    /// A scripted hand moving the simulated leader (`servobus sim --hand`
+    /// format; built-in: so101-hand).
+    #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg, conflicts_with = "leader")]
+    pub leader_hand: Option<PathBuf>,
+    /// Stop after this many seconds (default: run until Ctrl-C).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Write one CSV row per cycle and joint of the follower (as play's).
+    #[arg(long)]
+    pub log: Option<PathBuf>,
+    /// Draw the follower's commanded vs measured positions (.svg or .png).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Save the follower's commanded path as a recording `time_s,<joint>...`
+    /// in degrees, which `servobus play TAKE.csv --robot ...` plays.
+    #[arg(long, value_name = "TAKE.csv")]
+    pub record: Option<PathBuf>,
+    /// Print the report as one JSON object (no live line).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Errors of the follower against the leader are counted from this time
+/// on, s (the follower first catches up with wherever the leader is).
+const ERRORS_FROM: f64 = 0.5;
+
+/// The highest rate the leader is read at, Hz.
+const LEADER_HZ: f64 = 50.0;
+
+/// One leader joint that drives a follower joint.
+struct LeaderJoint {
+    name: String,
+    bus: usize,
+    id: u8,
+    map: JointMap,
+    /// The follower's joint index.
+    to: usize,
+}
+
+/// The leader arm: read only.
+struct Leader<T: Transport, C: Clock> {
+    buses: Vec<Bus<T, C>>,
+    joints: Vec<LeaderJoint>,
+}
+
+impl<T: Transport, C: Clock> Leader<T, C> {
+    fn new(leader: &Robot, follower: &Robot, buses: Vec<Bus<T, C>>) -> anyhow::Result<Self> {
+        let mut joints = Vec::new();
+        for (b, bus) in leader.buses.iter().enumerate() {
+            for j in &bus.joints {
+                if let Some(to) = follower.joints().position(|f| f.name == j.name) {
+                    joints.push(LeaderJoint {
+                        name: j.name.clone(),
+                        bus: b,
+                        id: j.id,
+                        map: JointMap::new(j, leader.units),
+                        to,
+                    });
+                }
+            }
+        }
+        if joints.is_empty() {
+            return Err(super::exit::input(format!(
+                "the leader {} and the follower {} have no joint name in common",
+                leader.name, follower.name
+            )));
+        }
+        Ok(Leader { buses, joints })
+    }
+
+    /// Every matched joint's angle now (rad), in `out` by follower index.
+    fn read(&mut self, out: &mut [Option<f64>]) -> anyhow::Result<()> {
+        for j in &self.joints {
+            let bus = &mut self.buses[j.bus];
+            let reg = bus
+                .settings()
+                .series
+                .map()
+                .get("present_position")
+                .context("the leader's servos have no present position register")?;
+            let (ticks, _) = bus
+                .read_register(j.id, reg)
+                .with_context(|| format!("reading the leader's {} (ID {})", j.name, j.id))?;
+            out[j.to] = Some(j.map.from_ticks(ticks));
+        }
+        Ok(())
+    }
+}
+
+/// Runs `servobus follow`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    for (flag, path) in [
+        ("--log", &args.log),
+        ("--plot", &args.plot),
+        ("--record", &args.record),
+    ] {
+        if let Some(path) = path {
+            super::check_writable(flag, path)?;
+        }
+    }
+    if let Some(s) = args.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(super::exit::input(format!(
+            "--seconds {s}: give a positive time"
+        )));
+    }
+    let robot =
+        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
+    let leader_path = args.leader_robot.as_ref().unwrap_or(&args.robot.path);
+    let leader_robot = load_robot_calibrated(leader_path, args.leader_calibration.as_deref())?;
+    let options = RunOptions {
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        approach: None,
+        ..RunOptions::default()
+    };
+    match &args.leader {
+        Some(port) => {
+            let mut buses = Vec::new();
+            let ports = match every_port(&leader_robot, Some(port)) {
+                Ports::Every(ports) => ports,
+                _ => {
+                    return Err(super::exit::input(
+                        "--leader sets the leader's first bus; give the others a `port:` in its robot file",
+                    ))
+                }
+            };
+            for (bus, port) in leader_robot.buses.iter().zip(&ports) {
+                buses.push(open_bus(bus, port, Allowance::Assumed)?);
+            }
+            // Angles go through the leader's calibration: its servos must
+            // match it.
+            super::calibrate::check_buses(&leader_robot, &mut buses, &ports)?;
+            let leader = Leader::new(&leader_robot, &robot, buses)?;
+            drive(&args, &robot, leader, options)
+        }
+        None => {
+            let clock = super::link::system_clock();
+            let mut sim = SimRobot::builder(&leader_robot);
+            if let Some(path) = &args.leader_hand {
+                sim = sim.hand(Hand::load(path, &leader_robot)?);
+            }
+            let buses = sim.build()?.wall_buses(&clock);
+            let leader = Leader::new(&leader_robot, &robot, buses)?;
+            drive(&args, &robot, leader, options)
+        }
+    }
+}
+
+/// What the follower's telemetry gives while following.
+struct Seen {
+    log: Option<CsvLog>,
+    plot: Option<PlotData>,
+    /// `time_s` and commanded angles (robot units) per cycle, for --record.
+    take: Vec<(f64, Vec<f64>)>,
+    measured: Vec<Option<f64>>,
+    commanded: Vec<f64>,
+    cycles: u64,
+    faults: Vec<String>,
+}
+
+impl Seen {
+    fn sample(&mut self, s: &CycleSample, record: bool) {
+        if let Some(log) = &mut self.log {
+            log.record(s);
+        }
+        if let Some(plot) = &mut self.plot {
+            plot.record(s);
+        }
+        for j in s.joints() {
+            if let Some(m) = self.measured.get_mut(j.joint) {
+                *m = j.measured;
+            }
+            if let Some(c) = self.commanded.get_mut(j.joint) {
+                *c = j.commanded;
+            }
+        }
+        self.cycles += 1;
+        if record {
+            self.take.push((s.time_s, self.commanded.clone()));
+        }
+    }
+}
+
+/// Follows `leader` with the follower `robot` until Ctrl-C, `--seconds`,
+/// or the follower's run ends.
+fn drive<T: Transport, C: Clock>(
+    args: &Args,
+    robot: &Robot,
+    mut leader: Leader<T, C>,
+    options: RunOptions,
+) -> anyhow::Result<ExitCode> {
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let units = robot.units;
+    // The leader is read at the follower's rate up to LEADER_HZ: faster
+    // readings add mostly their tick noise to the targets' speed and
+    // acceleration estimates (measured on the simulator: 100 Hz follows
+    // worse than 50 Hz).
+    let rate = options.rate_hz.unwrap_or(robot.rate_hz).min(LEADER_HZ);
+    let period = Duration::from_secs_f64(1.0 / rate);
+    let log = match &args.log {
+        Some(path) => Some(CsvLog::create(path, names.clone(), &units.to_string())?),
+        None => None,
+    };
+    let bus_of = robot
+        .buses
+        .iter()
+        .flat_map(|b| b.joints.iter().map(|_| b.name.clone()))
+        .collect();
+    let mut seen = Seen {
+        log,
+        plot: args
+            .plot
+            .as_ref()
+            .map(|_| PlotData::new(names.clone(), bus_of)),
+        take: Vec::new(),
+        measured: vec![None; names.len()],
+        commanded: vec![0.0; names.len()],
+        cycles: 0,
+        faults: Vec::new(),
+    };
+    let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
+    super::play::install_ctrl_c(&runner);
+    let targets = runner.targets();
+    let telemetry = runner.telemetry();
+    let started = Instant::now();
+    let mut errors = vec![(0.0f64, 0.0f64, 0u64); names.len()];
+    let mut pose: Vec<Option<f64>> = vec![None; names.len()];
+    let mut next = started;
+    let mut reads = 0u64;
+    let mut shown = started;
+    loop {
+        let now = Instant::now();
+        let t = now.duration_since(started).as_secs_f64();
+        if runner.is_finished() || args.seconds.is_some_and(|s| t >= s) {
+            break;
+        }
+        leader.read(&mut pose)?;
+        let taken = Instant::now();
+        reads += 1;
+        let joints = names
+            .iter()
+            .zip(&pose)
+            .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
+            .collect();
+        let stamp = taken.duration_since(started).as_secs_f64();
+        send(&targets, Target::named(stamp, joints).taken_at(taken))?;
+        while let Ok(m) = telemetry.try_recv() {
+            take_message(&mut seen, m, args.record.is_some());
+        }
+        if t >= ERRORS_FROM {
+            for ((e, p), m) in errors.iter_mut().zip(&pose).zip(&seen.measured) {
+                if let (Some(p), Some(m)) = (p, m) {
+                    let d = units.from_rad(*p) - m;
+                    *e = (e.0 + d * d, e.1.max(d.abs()), e.2 + 1);
+                }
+            }
+        }
+        if !args.json && now.duration_since(shown) >= Duration::from_millis(500) {
+            shown = now;
+            live_line(&targets, t, reads, seen.cycles, &errors, units.to_string());
+        }
+        next += period;
+        let after = Instant::now();
+        if next > after {
+            std::thread::sleep(next - after);
+        } else {
+            next = after;
+        }
+    }
+    if !args.json {
+        eprintln!();
+    }
+    // The follower stops (jerk limited) and the run ends.
+    let _ = runner.commands().send(Command::Stop);
+    for m in telemetry.iter() {
+        if matches!(m, Telemetry::Finished(_)) {
+            break;
+        }
+        take_message(&mut seen, m, args.record.is_some());
+    }
+    let report = runner.join()?;
+    finish(args, robot, &report, seen, &errors)
+}
+
+fn send(targets: &TargetSender, target: Target) -> anyhow::Result<()> {
+    match targets.send(target) {
+        Ok(_) | Err(servobus_runtime::TargetError::Ended) => Ok(()),
+        Err(e) => Err(anyhow::anyhow!("the leader's reading was refused: {e}")),
+    }
+}
+
+fn take_message(seen: &mut Seen, m: Telemetry, record: bool) {
+    match m {
+        Telemetry::Cycle(s) => seen.sample(&s, record),
+        Telemetry::Fault(f) => {
+            eprintln!("fault: {f}");
+            seen.faults.push(f.to_string());
+        }
+        _ => {}
+    }
+}
+
+/// The live line on stderr: rates, latency so far, worst error.
+fn live_line(
+    targets: &TargetSender,
+    t: f64,
+    reads: u64,
+    cycles: u64,
+    errors: &[(f64, f64, u64)],
+    units: String,
+) {
+    let latency = targets.so_far().and_then(|l| l.latency_ms).map_or_else(
+        || "-".to_owned(),
+        |q| format!("{:.1} ms (p99 {:.1})", q.p50, q.p99),
+    );
+    let worst = errors.iter().map(|e| e.1).fold(0.0, f64::max);
+    let mut err = std::io::stderr().lock();
+    let _ = write!(
+        err,
+        "\r{t:6.1} s  leader {:.0} Hz  follower {:.0} Hz  latency {latency}  error max {worst:.2} {units}   ",
+        reads as f64 / t.max(1e-3),
+        cycles as f64 / t.max(1e-3),
+    );
+}
+
+/// The outputs and the report; exit 0 once stopped, 1 after a fault.
+fn finish(
+    args: &Args,
+    robot: &Robot,
+    report: &Report,
+    seen: Seen,
+    errors: &[(f64, f64, u64)],
+) -> anyhow::Result<ExitCode> {
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let units = robot.units;
+    if let Some(log) = seen.log {
+        log.finish()?;
+    }
+    if let (Some(plot), Some(path)) = (&seen.plot, &args.plot) {
+        let title = format!("{} following its leader", robot.name);
+        plot.draw(path, &title, &units.to_string())?;
+    }
+    if let Some(path) = &args.record {
+        let mut text = format!("time_s,{}\n", names.join(","));
+        for (t, row) in &seen.take {
+            let cells: Vec<String> = row
+                .iter()
+                .map(|a| format!("{:.4}", units.to_rad(*a).to_degrees()))
+                .collect();
+            text += &format!("{t:.4},{}\n", cells.join(","));
+        }
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let joints: Vec<serde_json::Value> = names
+        .iter()
+        .zip(errors)
+        .map(|(n, (sq, max, k))| {
+            let rms = if *k > 0 { (sq / *k as f64).sqrt() } else { 0.0 };
+            serde_json::json!({"name": n, "rms_error": rms, "max_error": max})
+        })
+        .collect();
+    let latency = report.live.and_then(|l| l.latency_ms);
+    let follow = serde_json::json!({
+        "latency_ms": latency,
+        "period_ms": 1e3 / report.planned_rate_hz,
+        "errors_from_s": ERRORS_FROM,
+        "joints": joints,
+    });
+    if args.json {
+        let mut value = serde_json::to_value(report)?;
+        if let Some(obj) = value.as_object_mut() {
+            obj.insert("follow".into(), follow);
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        let mut out = std::io::stdout().lock();
+        super::play::write_report(&mut out, report, false)?;
+        if let Some(q) = latency {
+            writeln!(
+                out,
+                "  latency leader reading -> follower goal: p50 {:.1} ms  p99 {:.1} ms  max {:.1} ms",
+                q.p50, q.p99, q.max
+            )?;
+        }
+        writeln!(out, "  follower vs leader after {ERRORS_FROM} s ({units}):")?;
+        for j in &joints {
+            writeln!(
+                out,
+                "    {:<16} rms {:>8.3}  max {:>8.3}",
+                j["name"].as_str().unwrap_or("?"),
+                j["rms_error"].as_f64().unwrap_or(0.0),
+                j["max_error"].as_f64().unwrap_or(0.0)
+            )?;
+        }
+        for (flag, path) in [
+            ("log", &args.log),
+            ("plot", &args.plot),
+            ("recording", &args.record),
+        ] {
+            if let Some(path) = path {
+                writeln!(out, "{flag}: {}", path.display())?;
+            }
+        }
+    }
+    Ok(match report.finish {
+        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
+        _ => ExitCode::FAILURE,
+    })
+}

@@ -30,6 +30,7 @@ use servobus_driver::Clock;
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
 use servobus_runtime::stats::Histogram;
+use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance, SerialBus};
@@ -60,25 +61,6 @@ pub struct Args {
     /// round-robin when it plays), as `round_robin: true` on every bus.
     #[arg(long)]
     pub round_robin: bool,
-}
-
-/// Three figures of a distribution, us.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-struct Quantiles {
-    p50: f64,
-    p99: f64,
-    max: f64,
-}
-
-impl Quantiles {
-    fn of(h: &Histogram) -> Self {
-        let us = |d: Duration| d.as_secs_f64() * 1e6;
-        Quantiles {
-            p50: us(h.quantile(0.5)),
-            p99: us(h.quantile(0.99)),
-            max: us(h.max()),
-        }
-    }
 }
 
 /// One servo's round trip, us.
@@ -366,8 +348,8 @@ fn measure(
         achieved_rate_hz: achieved,
         planned_rate_hz: plan.max_rate_hz(),
         wire_limited_rate_hz: plan.wire_limited_rate_hz(),
-        period_us: Quantiles::of(&periods),
-        period_error_us: Quantiles::of(&errors),
+        period_us: Quantiles::of(&periods, Duration::from_micros(1)),
+        period_error_us: Quantiles::of(&errors, Duration::from_micros(1)),
         overruns,
         floor_rate_hz: 0.0,
         floor_ratio: 0.0,

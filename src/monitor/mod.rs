@@ -34,18 +34,10 @@ const LATENCY_WINDOW: usize = 512;
 /// The span the read rate and the bus utilisation are averaged over.
 const RATE_WINDOW: Duration = Duration::from_secs(1);
 
-/// The status flags by name, in the order they are shown.
-pub const FLAG_NAMES: [(u8, &str); 5] = [
-    (StatusFlags::VOLTAGE, "voltage"),
-    (StatusFlags::ANGLE_SENSOR, "angle"),
-    (StatusFlags::OVERHEAT, "overheat"),
-    (StatusFlags::OVERCURRENT, "over-current"),
-    (StatusFlags::OVERLOAD, "overload"),
-];
-
-/// The names of the flags set in `flags`.
+/// The names of the flags set in `flags` (the protocol's names,
+/// [`StatusFlags::NAMES`], in their order).
 pub fn flag_names(flags: StatusFlags) -> Vec<&'static str> {
-    FLAG_NAMES
+    StatusFlags::NAMES
         .iter()
         .filter(|(bit, _)| flags.contains(*bit))
         .map(|(_, name)| *name)
@@ -412,13 +404,8 @@ pub fn torque_off<T: Transport, C: Clock>(bus: &mut Bus<T, C>, ids: &[u8]) -> Re
     bus.sync_write(addr::TORQUE_ENABLE, ids, &zeros)
 }
 
-/// The 99th percentile of `samples` (nearest rank).
+/// The 99th percentile of `samples` (the runtime's one definition).
 fn p99(samples: &VecDeque<f64>) -> Option<f64> {
-    if samples.is_empty() {
-        return None;
-    }
     let mut v: Vec<f64> = samples.iter().copied().collect();
-    v.sort_by(f64::total_cmp);
-    let rank = ((0.99 * v.len() as f64).ceil() as usize).clamp(1, v.len());
-    Some(v[rank - 1])
+    servobus_runtime::stats::p99(&mut v, f64::total_cmp)
 }

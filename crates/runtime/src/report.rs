@@ -7,7 +7,8 @@ use crate::fault::Fault;
 use crate::target::LiveReport;
 use crate::telemetry::Finish;
 
-/// Three figures of a distribution of period errors, us.
+/// Three figures of a distribution (of period errors, latencies, ...), in
+/// the unit the report gives them in (us, ms).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Quantiles {
     /// Median.
@@ -16,6 +17,21 @@ pub struct Quantiles {
     pub p99: f64,
     /// Largest.
     pub max: f64,
+}
+
+impl Quantiles {
+    /// The median, 99th percentile and largest of `histogram`, each
+    /// duration given in units of `unit` (`Duration::from_micros(1)` for
+    /// figures in us).
+    pub fn of(histogram: &crate::stats::Histogram, unit: std::time::Duration) -> Quantiles {
+        let per = unit.as_secs_f64();
+        let f = |d: std::time::Duration| d.as_secs_f64() / per;
+        Quantiles {
+            p50: f(histogram.quantile(0.5)),
+            p99: f(histogram.quantile(0.99)),
+            max: f(histogram.max()),
+        }
+    }
 }
 
 /// One joint's tracking error over the run, in the report's units.

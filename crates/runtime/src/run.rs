@@ -275,11 +275,7 @@ pub(crate) fn assemble(mut outcomes: Vec<Outcome>, e: Ending) -> Report {
         cycles: first.map_or(0, |o| o.cycles),
         achieved_rate_hz: achieved,
         planned_rate_hz: e.rate_hz,
-        period_error_us: Quantiles {
-            p50: us(hist.quantile(0.5)),
-            p99: us(hist.quantile(0.99)),
-            max: us(hist.max()),
-        },
+        period_error_us: Quantiles::of(&hist, Duration::from_micros(1)),
         overruns: sum(|o| o.bus.overruns),
         timeouts: sum(|o| o.bus.timeouts),
         retries: sum(|o| o.bus.retries),

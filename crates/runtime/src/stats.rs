@@ -1,5 +1,6 @@
 //! Allocation-free statistics for the control loop: a histogram of
-//! microsecond values with percentiles, and running RMS/max.
+//! microsecond values with percentiles, running RMS/max, and the one
+//! definition of a 99th percentile over a window of samples ([`p99`]).
 
 use std::time::Duration;
 
@@ -113,6 +114,19 @@ impl Histogram {
     }
 }
 
+/// The 99th percentile of `values` by nearest rank (the value at rank
+/// ceil(0.99 n), 1-based), ordered by `cmp`; `values` is reordered, nothing
+/// is allocated. `None` when empty. Every p99 servobus shows over a window
+/// of samples (the link's lateness, the monitor's reply times) is this one.
+pub fn p99<T: Copy>(values: &mut [T], cmp: impl FnMut(&T, &T) -> std::cmp::Ordering) -> Option<T> {
+    if values.is_empty() {
+        return None;
+    }
+    let n = values.len();
+    let rank = ((n * 99).div_ceil(100)).clamp(1, n);
+    Some(*values.select_nth_unstable_by(rank - 1, cmp).1)
+}
+
 /// Running root-mean-square and maximum of absolute values.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RunningError {
@@ -153,6 +167,18 @@ impl RunningError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_99th_percentile_is_the_nearest_rank() {
+        // 1..=200: rank ceil(198) = 198.
+        let mut v: Vec<u32> = (1..=200).rev().collect();
+        assert_eq!(p99(&mut v, u32::cmp), Some(198));
+        // 1..=10: rank ceil(9.9) = 10, the largest.
+        let mut v: Vec<f64> = (1..=10).map(f64::from).collect();
+        assert_eq!(p99(&mut v, f64::total_cmp), Some(10.0));
+        let mut none: [f64; 0] = [];
+        assert_eq!(p99(&mut none, f64::total_cmp), None);
+    }
 
     #[test]
     fn quantiles_of_a_known_distribution() {

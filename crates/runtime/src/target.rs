@@ -164,14 +164,7 @@ impl Counters {
                 .unwrap_or_else(|e| e.into_inner())
                 .as_ref()
                 .filter(|h| h.count() > 0)
-                .map(|h| {
-                    let ms = |d: Duration| d.as_secs_f64() * 1e3;
-                    Quantiles {
-                        p50: ms(h.quantile(0.5)),
-                        p99: ms(h.quantile(0.99)),
-                        max: ms(h.max()),
-                    }
-                }),
+                .map(|h| Quantiles::of(h, Duration::from_millis(1))),
         };
         (r.received > 0 || get(&self.followed) > 0).then_some(r)
     }

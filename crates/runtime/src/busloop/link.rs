@@ -122,7 +122,7 @@ impl LinkLearner {
     fn p99_now(&mut self) -> Duration {
         self.scratch.clear();
         self.scratch.extend_from_slice(&self.window);
-        percentile_99(&mut self.scratch)
+        crate::stats::p99(&mut self.scratch, Duration::cmp).unwrap_or(Duration::ZERO)
     }
 
     /// The largest lateness of the last [`RECENT`] reads.
@@ -142,15 +142,6 @@ impl LinkLearner {
             self.total / u32::try_from(self.count).unwrap_or(u32::MAX)
         }
     }
-}
-
-/// The 99th percentile of `values` (reordered; 0 when empty).
-fn percentile_99(values: &mut [Duration]) -> Duration {
-    if values.is_empty() {
-        return Duration::ZERO;
-    }
-    let i = (values.len() - 1) * 99 / 100;
-    *values.select_nth_unstable(i).1
 }
 
 /// What the start-up measurement of the adapter did.
@@ -283,10 +274,12 @@ mod tests {
             let lateness = Duration::from_micros(us);
             learner.on_time(lateness);
             seen.push(lateness);
-            // By hand: sort the last 256 and take index 255 * 99 / 100 = 252.
+            // By hand, nearest rank: sort the last 256 and take rank
+            // ceil(0.99 x 256) = 254, index 253 (fewer reads: ceil(0.99 n)).
             let mut last: Vec<_> = seen[seen.len().saturating_sub(WINDOW)..].to_vec();
             last.sort();
-            let want = last[(last.len() - 1) * 99 / 100];
+            let rank = (last.len() * 99).div_ceil(100);
+            let want = last[rank - 1];
             assert_eq!(learner.p99(), want, "after {} reads", i + 1);
         }
     }

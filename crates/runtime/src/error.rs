@@ -8,9 +8,61 @@ use servobus_driver::BusError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RunError {
-    /// The robot, buses and path do not fit together.
-    #[error("invalid run: {0}")]
-    Invalid(String),
+    /// The control rate is not a positive number of Hz.
+    #[error("the rate must be a positive number of Hz, got {rate_hz} Hz")]
+    Rate {
+        /// The rate given.
+        rate_hz: f64,
+    },
+    /// The live targets' timeout is not a positive time.
+    #[error("the target timeout must be positive")]
+    TargetTimeout,
+    /// Another number of buses than the robot has.
+    #[error("robot `{robot}` has {expected} buses, {given} given")]
+    BusCount {
+        /// The robot.
+        robot: String,
+        /// Its buses.
+        expected: usize,
+        /// The buses given.
+        given: usize,
+    },
+    /// A path for another number of joints than the robot has.
+    #[error("the path has {given} joints, robot `{robot}` {expected}")]
+    JointCount {
+        /// The robot.
+        robot: String,
+        /// Its joints.
+        expected: usize,
+        /// The path's joints.
+        given: usize,
+    },
+    /// A replacing path ([`Command::Replace`](crate::Command::Replace)) for
+    /// another number of joints than the robot has.
+    #[error("the new path has {given} joints, the robot {expected}")]
+    NewPathJoints {
+        /// The robot's joints.
+        expected: usize,
+        /// The new path's.
+        given: usize,
+    },
+    /// A joint's servo is of another series than its bus talks.
+    #[error("bus `{bus}`: joint `{joint}` is a {model} ({joint_series:?} series) but the bus talks {bus_series:?}")]
+    Series {
+        /// The bus.
+        bus: String,
+        /// The joint.
+        joint: String,
+        /// Its servo's model.
+        model: &'static str,
+        /// The model's series.
+        joint_series: servobus_protocol::registers::Series,
+        /// The bus's.
+        bus_series: servobus_protocol::registers::Series,
+    },
+    /// The series' register map lacks the goal or present position.
+    #[error("the {0:?} register map has no goal or present position")]
+    NoPositionRegisters(servobus_protocol::registers::Series),
     /// The rate does not fit a bus.
     #[error("bus `{bus}`: {source}")]
     Plan {
@@ -50,9 +102,18 @@ pub enum RunError {
         /// The planner's reason.
         source: servobus_trajectory::PlanError,
     },
-    /// A bus thread could not be started or panicked.
-    #[error("bus thread: {0}")]
-    Thread(String),
+    /// A thread of the run could not be started.
+    #[error("cannot start a thread of the run: {0}")]
+    Spawn(#[source] std::io::Error),
+    /// A thread of the run panicked (`what`: which).
+    #[error("{what} panicked")]
+    Panicked {
+        /// Which thread.
+        what: &'static str,
+    },
+    /// The run has ended: it takes no more commands or targets.
+    #[error("the run has ended")]
+    Ended,
 }
 
 /// The serial port of a bus failed while running (unplugged adapter, closed

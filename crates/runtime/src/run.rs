@@ -79,30 +79,25 @@ fn check(
 ) -> Result<(f64, Duration), RunError> {
     let rate_hz = o.rate_hz.unwrap_or(robot.rate_hz);
     if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(RunError::Invalid(format!(
-            "the rate must be positive, got {rate_hz} Hz"
-        )));
+        return Err(RunError::Rate { rate_hz });
     }
     if buses == 0 || buses != robot.buses.len() {
-        return Err(RunError::Invalid(format!(
-            "robot `{}` has {} buses, {buses} given",
-            robot.name,
-            robot.buses.len()
-        )));
+        return Err(RunError::BusCount {
+            robot: robot.name.clone(),
+            expected: robot.buses.len(),
+            given: buses,
+        });
     }
     if let Some(trajectory) = trajectory.filter(|t| t.joints() != robot.joint_count()) {
-        return Err(RunError::Invalid(format!(
-            "the path has {} joints, robot `{}` {}",
-            trajectory.joints(),
-            robot.name,
-            robot.joint_count()
-        )));
+        return Err(RunError::JointCount {
+            robot: robot.name.clone(),
+            expected: robot.joint_count(),
+            given: trajectory.joints(),
+        });
     }
     let timeout = o.target_timeout.as_secs_f64();
     if timeout.is_nan() || timeout <= 0.0 {
-        return Err(RunError::Invalid(
-            "the target timeout must be positive".into(),
-        ));
+        return Err(RunError::TargetTimeout);
     }
     let period = Duration::from_nanos((1e9 / rate_hz).round().max(1.0) as u64);
     Ok((rate_hz, period))

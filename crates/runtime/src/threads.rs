@@ -54,11 +54,9 @@ impl Runner {
     ///
     /// # Errors
     ///
-    /// [`RunError::Thread`] when the run has already ended.
+    /// [`RunError::Ended`] when the run has already ended.
     pub fn send(&self, command: Command) -> Result<(), RunError> {
-        self.commands
-            .send(command)
-            .map_err(|_| RunError::Thread("the run has ended".into()))
+        self.commands.send(command).map_err(|_| RunError::Ended)
     }
 
     /// Sends a command to take effect in cycle `cycle` on every bus (see
@@ -66,11 +64,11 @@ impl Runner {
     ///
     /// # Errors
     ///
-    /// [`RunError::Thread`] when the run has already ended.
+    /// [`RunError::Ended`] when the run has already ended.
     pub fn send_at(&self, cycle: u64, command: Command) -> Result<(), RunError> {
         self.commands
             .send_at(cycle, command)
-            .map_err(|_| RunError::Thread("the run has ended".into()))
+            .map_err(|_| RunError::Ended)
     }
 
     /// A receiver of telemetry.
@@ -96,12 +94,12 @@ impl Runner {
     ///
     /// # Errors
     ///
-    /// [`RunError::Thread`] when a bus thread panicked.
+    /// [`RunError::Panicked`] when a thread of the run panicked.
     pub fn join(self) -> Result<Report, RunError> {
         drop(self.commands);
-        self.handle
-            .join()
-            .map_err(|_| RunError::Thread("the run's thread panicked".into()))?
+        self.handle.join().map_err(|_| RunError::Panicked {
+            what: "the run's thread",
+        })?
     }
 }
 
@@ -130,7 +128,7 @@ fn on_thread<T: Transport + Send + 'static>(run: VirtualRun<T>) -> Result<Runner
     let handle = std::thread::Builder::new()
         .name("servobus-virtual".into())
         .spawn(move || Ok(run.run()))
-        .map_err(|e| RunError::Thread(e.to_string()))?;
+        .map_err(RunError::Spawn)?;
     Ok(Runner {
         commands,
         targets,
@@ -159,7 +157,7 @@ type LaneEnd = (Outcome, Finish, Vec<String>);
 ///
 /// # Errors
 ///
-/// As [`VirtualRun::new`]; [`RunError::Thread`] when a thread cannot start.
+/// As [`VirtualRun::new`]; [`RunError::Spawn`] when a thread cannot start.
 pub fn spawn<T, C>(
     robot: &Robot,
     trajectory: Trajectory,
@@ -230,7 +228,7 @@ where
         let handle = std::thread::Builder::new()
             .name(format!("servobus-{}", lane.bus.name))
             .spawn(move || drive(lane, pacer, rt))
-            .map_err(|e| RunError::Thread(e.to_string()))?;
+            .map_err(RunError::Spawn)?;
         threads.push(handle);
     }
     let end = RunEnd {
@@ -243,7 +241,7 @@ where
     let supervisor = std::thread::Builder::new()
         .name("servobus-run".into())
         .spawn(move || end.supervise(threads))
-        .map_err(|e| RunError::Thread(e.to_string()))?;
+        .map_err(RunError::Spawn)?;
     Ok(Runner {
         commands: p.commands,
         targets: p.targets,
@@ -269,7 +267,9 @@ impl RunEnd {
             .into_iter()
             .map(|t| t.join())
             .collect::<Result<Vec<LaneEnd>, _>>()
-            .map_err(|_| RunError::Thread("a bus thread panicked".into()))?;
+            .map_err(|_| RunError::Panicked {
+                what: "a bus thread",
+            })?;
         let finish = overall(ends.iter().map(|e| e.1));
         if let Some(tx) = &self.telemetry {
             let _ = tx.try_send(Telemetry::Finished(finish));

@@ -79,7 +79,7 @@ impl<T: Transport> VirtualRun<T> {
     ///
     /// # Errors
     ///
-    /// [`RunError::Invalid`] when the buses or the path do not match the
+    /// [`RunError::BusCount`] or [`RunError::JointCount`] when the buses or the path do not match the
     /// robot, [`RunError::Plan`] when the rate does not fit a bus,
     /// [`RunError::NoServo`] / [`RunError::Startup`] when a servo does not
     /// answer at start-up, [`RunError::Trajectory`] when the approach

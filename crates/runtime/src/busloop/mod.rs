@@ -90,7 +90,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     /// # Errors
     ///
     /// [`RunError::Plan`] when the rate does not fit the bus,
-    /// [`RunError::Invalid`] when a joint's servo is not of the bus's series.
+    /// [`RunError::Series`] when a joint's servo is not of the bus's series.
     pub fn new(c: LoopConfig<'_>, bus: Bus<T, C>) -> Result<Self, RunError> {
         let config = c.bus;
         let plan = config.plan(c.rate_hz).map_err(|source| RunError::Plan {
@@ -99,18 +99,19 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         })?;
         let series = bus.settings().series;
         if let Some(j) = config.joints.iter().find(|j| j.model.series != series) {
-            return Err(RunError::Invalid(format!(
-                "bus `{}`: joint `{}` is a {} ({:?} series) but the bus talks {:?}",
-                config.name, j.name, j.model.name, j.model.series, series
-            )));
+            return Err(RunError::Series {
+                bus: config.name.clone(),
+                joint: j.name.clone(),
+                model: j.model.name,
+                joint_series: j.model.series,
+                bus_series: series,
+            });
         }
         let map = series.map();
         let (Some(goal_reg), Some(pos_reg)) =
             (map.at(addr::GOAL_POSITION), map.at(addr::PRESENT_POSITION))
         else {
-            return Err(RunError::Invalid(format!(
-                "the {series:?} register map has no goal or present position"
-            )));
+            return Err(RunError::NoPositionRegisters(series));
         };
         let order = series.byte_order();
         let every = u32::try_from(plan.read_every()).unwrap_or(u32::MAX);

@@ -413,10 +413,10 @@ impl Timeline {
     pub fn replace(&mut self, main: Arc<Trajectory>) -> Result<(), RunError> {
         let n = self.limits.len();
         if main.joints() != n {
-            return Err(RunError::Invalid(format!(
-                "the new path has {} joints, the robot {n}",
-                main.joints()
-            )));
+            return Err(RunError::NewPathJoints {
+                expected: n,
+                given: main.joints(),
+            });
         }
         let st = self.state_at_horizon();
         let mut start = vec![JointState::default(); n];

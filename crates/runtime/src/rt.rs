@@ -59,7 +59,7 @@ pub fn apply(options: RtOptions) -> RtReport {
 }
 
 #[cfg(target_os = "linux")]
-fn set_fifo(priority: i32) -> Result<(), String> {
+fn set_fifo(priority: i32) -> std::io::Result<()> {
     let param = libc::sched_param {
         sched_priority: priority.clamp(1, 99),
     };
@@ -69,7 +69,7 @@ fn set_fifo(priority: i32) -> Result<(), String> {
     if rc == 0 {
         Ok(())
     } else {
-        Err(std::io::Error::last_os_error().to_string())
+        Err(std::io::Error::last_os_error())
     }
 }
 
@@ -88,8 +88,11 @@ fn set_low_timer_slack() -> bool {
 }
 
 #[cfg(not(target_os = "linux"))]
-fn set_fifo(_priority: i32) -> Result<(), String> {
-    Err("SCHED_FIFO is only supported on Linux".into())
+fn set_fifo(_priority: i32) -> std::io::Result<()> {
+    Err(std::io::Error::new(
+        std::io::ErrorKind::Unsupported,
+        "SCHED_FIFO is only supported on Linux",
+    ))
 }
 
 #[cfg(test)]

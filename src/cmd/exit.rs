@@ -43,6 +43,17 @@ pub fn invalid(err: anyhow::Error) -> anyhow::Error {
     Invalid(err.into()).into()
 }
 
+/// The exit code of a run that ended as `finish`: 0 when it completed or
+/// was stopped as asked, 1 when a fault (or torque off) ended it.
+pub fn of_finish(finish: servobus_runtime::Finish) -> ExitCode {
+    match finish {
+        servobus_runtime::Finish::Completed | servobus_runtime::Finish::Stopped => {
+            ExitCode::SUCCESS
+        }
+        _ => ExitCode::from(PROBLEM),
+    }
+}
+
 /// Prints `err` (each cause once) and returns its exit code.
 pub fn report(err: &anyhow::Error) -> ExitCode {
     eprintln!("error: {}", message(err));

@@ -20,7 +20,7 @@ use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::config::{load_robot_calibrated, JointMap, Robot};
 use servobus_runtime::sim::{Hand, SimRobot};
 use servobus_runtime::{
-    Command, CycleSample, Finish, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
+    Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
 };
 
 use super::link::{every_port, open_bus, Allowance, Ports};
@@ -391,7 +391,8 @@ fn finish(
                 .collect();
             text += &format!("{t:.4},{}\n", cells.join(","));
         }
-        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+        // Whole or not at all, as every output.
+        servobus_io::write_atomic(path, text.as_bytes())?;
     }
     let joints: Vec<serde_json::Value> = names
         .iter()
@@ -444,8 +445,5 @@ fn finish(
             }
         }
     }
-    Ok(match report.finish {
-        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
-        _ => ExitCode::FAILURE,
-    })
+    Ok(super::exit::of_finish(report.finish))
 }

@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use servobus_runtime::config::{load_robot_calibrated, Robot, Units};
 use servobus_runtime::{
-    spawn_live, Command, Finish, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender,
+    spawn_live, Command, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender,
     Telemetry,
 };
 
@@ -265,8 +265,5 @@ fn finish(report: &Report, json: bool) -> anyhow::Result<ExitCode> {
             )?;
         }
     }
-    Ok(match report.finish {
-        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
-        _ => ExitCode::FAILURE,
-    })
+    Ok(super::exit::of_finish(report.finish))
 }

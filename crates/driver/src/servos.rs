@@ -220,8 +220,8 @@ impl<T: Transport, C: Clock> Servos<T, C> {
     }
 
     /// As [`Servos::sync_read`], into `out` (one result per servo of `ids`,
-    /// in their order) instead of a new vector: after the bus's first SYNC
-    /// READ of this many servos, no call allocates.
+    /// in their order) instead of a new vector: no call allocates (the
+    /// counting-allocator test holds it from the first call).
     ///
     /// ```
     /// # use std::time::Duration;

@@ -106,7 +106,7 @@ pub(crate) enum Inbox {
         user: Receiver<Order>,
         /// Live targets: they take effect in the cycle that receives them
         /// on a single bus, [`COMMAND_DELAY_CYCLES`] later on several.
-        targets: Receiver<Checked>,
+        targets: Receiver<Arc<Checked>>,
         forwards: Vec<Sender<Stamped>>,
         /// Whether a user sender may still exist.
         open: bool,
@@ -124,7 +124,7 @@ pub(crate) fn inboxes(
     lanes: usize,
     capacity: usize,
     targets: usize,
-) -> (CommandSender, Sender<Checked>, Vec<Inbox>) {
+) -> (CommandSender, Sender<Arc<Checked>>, Vec<Inbox>) {
     let capacity = capacity.max(1);
     let (user_tx, user) = bounded(capacity);
     let (target_tx, target_rx) = bounded(targets.max(1));
@@ -181,7 +181,7 @@ impl Mailbox {
                 while let Ok(t) = targets.try_recv() {
                     let op = Stamped {
                         cycle: k + delay,
-                        op: Op::Target(Arc::new(t)),
+                        op: Op::Target(t),
                     };
                     for f in forwards.iter() {
                         let _ = f.try_send(op.clone());

@@ -283,7 +283,9 @@ impl LivePath {
         if self.mode != Mode::Following {
             return Goal::at(self.stops[j]);
         }
-        let t = self.targets[j];
+        // The few numbers the goal needs, not a copy of the target and its
+        // history.
+        let t = &self.targets[j];
         let lim = self.limits[j];
         if let Some(rest) = t.rest {
             return Goal::at(rest);

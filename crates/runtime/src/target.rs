@@ -111,8 +111,11 @@ pub(crate) struct Checked {
     pub taken: Option<Instant>,
 }
 
+/// The longest target latency the report's histogram holds.
+const LATENCY_SPAN: Duration = Duration::from_millis(500);
+
 /// The counts of a run's targets.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(crate) struct Counters {
     received: AtomicU64,
     clamped: AtomicU64,
@@ -120,8 +123,23 @@ pub(crate) struct Counters {
     timeouts: AtomicU64,
     resumes: AtomicU64,
     followed: AtomicU64,
-    /// From a target's taking to the goals on the wire.
-    latency: Mutex<Option<Histogram>>,
+    /// From a target's taking to the goals on the wire. Made with the
+    /// counters, before the run starts: the loop only records into it.
+    latency: Mutex<Histogram>,
+}
+
+impl Default for Counters {
+    fn default() -> Self {
+        Counters {
+            received: AtomicU64::default(),
+            clamped: AtomicU64::default(),
+            refused: AtomicU64::default(),
+            timeouts: AtomicU64::default(),
+            resumes: AtomicU64::default(),
+            followed: AtomicU64::default(),
+            latency: Mutex::new(Histogram::new(LATENCY_SPAN)),
+        }
+    }
 }
 
 /// One of the counters.
@@ -142,11 +160,12 @@ impl Counters {
         n.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// Records the latency of a target.
+    /// Records the latency of a target, from the control loop: it never
+    /// waits for the lock (a report being read then costs one sample).
     pub fn latency(&self, d: Duration) {
-        let mut h = self.latency.lock().unwrap_or_else(|e| e.into_inner());
-        h.get_or_insert_with(|| Histogram::new(Duration::from_millis(500)))
-            .record(d);
+        if let Ok(mut h) = self.latency.try_lock() {
+            h.record(d);
+        }
     }
 
     /// The report's figures, if the run had any target.
@@ -158,11 +177,7 @@ impl Counters {
             refused: get(&self.refused),
             timeouts: get(&self.timeouts),
             resumes: get(&self.resumes),
-            latency_ms: self
-                .latency
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .as_ref()
+            latency_ms: Some(&*self.latency.lock().unwrap_or_else(|e| e.into_inner()))
                 .filter(|h| h.count() > 0)
                 .map(|h| Quantiles::of(h, Duration::from_millis(1))),
         };
@@ -192,7 +207,7 @@ pub struct LiveReport {
 /// A sender of live targets to a run (cheap to clone).
 #[derive(Debug, Clone)]
 pub struct TargetSender {
-    tx: Sender<Checked>,
+    tx: Sender<Arc<Checked>>,
     names: Arc<Vec<String>>,
     limits: Arc<Vec<JointLimits>>,
     counters: Arc<Counters>,
@@ -200,7 +215,7 @@ pub struct TargetSender {
 
 impl TargetSender {
     pub(crate) fn new(
-        tx: Sender<Checked>,
+        tx: Sender<Arc<Checked>>,
         names: Vec<String>,
         limits: Vec<JointLimits>,
         counters: Arc<Counters>,
@@ -240,7 +255,11 @@ impl TargetSender {
         if clamped > 0 {
             self.counters.clamped.fetch_add(1, Ordering::Relaxed);
         }
-        self.tx.send(checked).map_err(|_| TargetError::Ended)?;
+        // Wrapped here, on the sender's thread: the control loop only
+        // passes the pointer on.
+        self.tx
+            .send(Arc::new(checked))
+            .map_err(|_| TargetError::Ended)?;
         Ok(clamped)
     }
 

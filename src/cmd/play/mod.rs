@@ -269,10 +269,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(e) = last {
         return Err(e);
     }
-    Ok(match report.finish {
-        Finish::Completed | Finish::Stopped => ExitCode::SUCCESS,
-        _ => ExitCode::FAILURE,
-    })
+    Ok(super::exit::of_finish(report.finish))
 }
 
 fn names_of(robot: &Robot) -> Vec<String> {

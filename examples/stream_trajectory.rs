@@ -8,7 +8,7 @@
 //! cargo run --example stream_trajectory
 //! ```
 
-use servobus_runtime::config::{joint_limits, load_robot};
+use servobus_runtime::config::{joint_limits, load_robot, RobotOptions};
 use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{RunOptions, VirtualRun};
 use servobus_trajectory::{plan, Keyframe, PlanOptions};
@@ -25,7 +25,10 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let robot = load_robot(&servobus::builtin::robot_path_or_name("so101".as_ref()))?;
+    let robot = load_robot(
+        &servobus::builtin::robot_path_or_name("so101".as_ref()),
+        &RobotOptions::default(),
+    )?;
     let deg = |d: f64| d.to_radians();
 
     // shoulder_pan, shoulder_lift, elbow_flex, wrist_flex, wrist_roll, gripper

@@ -178,7 +178,7 @@ fn lerobot_python() -> Option<std::ffi::OsString> {
 #[test]
 fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     use servobus_runtime::calibrate::{lerobot_value, NormMode};
-    use servobus_runtime::config::{load_robot_calibrated, JointMap};
+    use servobus_runtime::config::{load_robot, JointMap, RobotOptions};
     let Some(python) = lerobot_python() else {
         return;
     };
@@ -259,7 +259,11 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
         "{said}{}",
         String::from_utf8_lossy(&check.stderr)
     );
-    let robot = load_robot_calibrated(&repo(SO101), Some(&cal)).expect("calibration applies");
+    let robot = load_robot(
+        &repo(SO101),
+        &RobotOptions::default().calibration(Some(&cal)),
+    )
+    .expect("calibration applies");
     let lines: Vec<&str> = said.lines().filter(|l| !l.starts_with("OK")).collect();
     assert_eq!(lines.len(), 6, "one line per motor: {said}");
     for line in lines {

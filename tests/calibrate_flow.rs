@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use common::{
     arg, edited, read_truth, repo, scratch, servobus, servobus_ok, stdout, write_file, Sim,
 };
-use servobus_runtime::config::{load_motion, load_robot, Robot};
+use servobus_runtime::config::{load_motion, load_robot, Robot, RobotOptions};
 
 /// The two flows run one after the other: each is a simulator and a client
 /// in wall-clock time, and two at once on a small machine starve both.
@@ -101,7 +101,7 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
         "so101.yaml",
         &edited("configs/robots/so101.yaml", &edits),
     );
-    let robot = load_robot(&robot_file).expect("so101");
+    let robot = load_robot(&robot_file, &RobotOptions::default()).expect("so101");
     // The shipped badly fitted arm: the lift's range crosses the seam, the
     // elbow and wrist are reversed. The hand sweeps to the stops (the roll
     // has none: a little past its limits).
@@ -208,7 +208,7 @@ fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("calib-flow-hexapod");
     let robot_file = repo("configs/robots/hexapod.yaml");
-    let robot = load_robot(&robot_file).expect("hexapod");
+    let robot = load_robot(&robot_file, &RobotOptions::default()).expect("hexapod");
     // The random unit's stops are 5 deg past the limits; the hand goes 4.
     let ends: Vec<(f64, f64)> = robot.joints().map(|j| (j.min - 4.0, j.max + 4.0)).collect();
     let start: Vec<f64> = robot.joints().map(|j| j.rest()).collect();
@@ -223,8 +223,11 @@ fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
     assert!(said.contains("across the seam"), "{said}");
     sim.stop();
     // Each joint's measured range is where the hand took it.
-    let robot = servobus_runtime::config::load_robot_calibrated(&robot_file, Some(&cal))
-        .expect("the calibration applies");
+    let robot = servobus_runtime::config::load_robot(
+        &robot_file,
+        &RobotOptions::default().calibration(Some(&cal)),
+    )
+    .expect("the calibration applies");
     for (j, &(lo, hi)) in robot.joints().zip(&ends) {
         let c = j.calibration.as_ref().expect("calibrated");
         let (a, b) = c.range_deg(j.model);

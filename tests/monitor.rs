@@ -12,7 +12,7 @@ use ratatui::Terminal;
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot};
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
 use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
 use servobus_sim::{Faults, SimBus};
 
@@ -21,7 +21,11 @@ use common::virtual_bus;
 const PERIOD: Duration = Duration::from_millis(50);
 
 fn robot(file: &str) -> Robot {
-    load_robot(&common::repo(&format!("configs/robots/{file}"))).expect("robot")
+    load_robot(
+        &common::repo(&format!("configs/robots/{file}")),
+        &RobotOptions::default(),
+    )
+    .expect("robot")
 }
 
 /// Polls `n` times, at the next multiples of [`PERIOD`] of virtual time.

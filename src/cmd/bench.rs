@@ -28,7 +28,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_driver::Clock;
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot_any_rate_calibrated, BusConfig, Robot};
+use servobus_runtime::config::{load_robot, BusConfig, Robot, RobotOptions};
 use servobus_runtime::stats::Histogram;
 use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
@@ -138,7 +138,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .robot
         .clone()
         .unwrap_or_else(|| servobus::builtin::robot_path_or_name("so101".as_ref()));
-    let mut robot = load_robot_any_rate_calibrated(&path, args.hardware.calibration.as_deref())?;
+    let mut robot = load_robot(
+        &path,
+        &RobotOptions::default()
+            .calibration(args.hardware.calibration.as_deref())
+            .any_rate(),
+    )?;
     // The robot's rate must fit as it would for `play`: bench measures the
     // cycle that rate would run.
     for bus in &mut robot.buses {

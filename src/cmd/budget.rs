@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use serde::Serialize;
-use servobus_runtime::config::{load_robot_any_rate, BusConfig};
+use servobus_runtime::config::{load_robot, BusConfig, RobotOptions};
 use servobus_timing::{floor_rate_hz, Change, Plan};
 
 /// Arguments of `servobus budget`.
@@ -57,7 +57,7 @@ struct Budget {
 
 /// Runs `servobus budget`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_any_rate(&args.robot)?;
+    let robot = load_robot(&args.robot, &RobotOptions::default().any_rate())?;
     // Both checked: `--rate` by its parser, the robot's rate by the loader.
     let rate = args.rate.unwrap_or(robot.rate_hz);
     let mut out = Budget { buses: Vec::new() };

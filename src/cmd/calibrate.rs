@@ -21,8 +21,7 @@ use servobus_runtime::calibrate::{
     Operator, ProcedureOptions, Refusal, Step, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
-    load_calibration, load_robot_calibrated, load_robot_design, save_calibration, utc_now,
-    Calibration, Robot, RobotCalibration,
+    load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
 
 use super::link::{every_port, open_bus, Allowance, Ports, SerialBus};
@@ -64,7 +63,8 @@ pub struct Args {
 
 /// Runs `servobus calibrate`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let (design, named) = load_robot_design(&args.robot.path)?;
+    let design = load_robot(&args.robot.path, &RobotOptions::design())?;
+    let named = design.calibration.file().map(Path::to_owned);
     let output = args
         .output
         .clone()
@@ -124,7 +124,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // at the path untouched.
     save_calibration(&cal, &output)?;
     // Applying it now shows at once a calibration the robot cannot use.
-    let robot = load_robot_calibrated(&args.robot.path, Some(&output))?;
+    let robot = load_robot(
+        &args.robot.path,
+        &RobotOptions::default().calibration(Some(&output)),
+    )?;
     print_summary(&robot, &output);
     if named.as_deref() != Some(output.as_path()) {
         println!("to use it: {}", how_to_use(&args.robot.path, &output));
@@ -446,10 +449,10 @@ pub(crate) fn check_buses<T: Transport, C: Clock>(
 }
 
 pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
-    let file = match &robot.calibration {
-        RobotCalibration::Missing(path) | RobotCalibration::Applied { path, .. } => path.clone(),
-        RobotCalibration::None => PathBuf::from(format!("{}.calibration.yaml", robot.name)),
-    };
+    let file = robot.calibration.file().map_or_else(
+        || PathBuf::from(format!("{}.calibration.yaml", robot.name)),
+        Path::to_owned,
+    );
     anyhow::anyhow!(
         "{refusal}\nnothing was moved. Calibrate this robot first:\n  servobus calibrate --robot {} --port {port} -o {}",
         robot.path.display(),

@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use servobus::doctor::{self, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 use super::link::{bus_ports, open_bus_quietly, Allowance};
 
@@ -76,9 +76,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot_any_rate_calibrated(
+    let robot = load_robot(
         &args.robot.path,
-        args.robot.hardware.calibration.as_deref(),
+        &RobotOptions::default()
+            .calibration(args.robot.hardware.calibration.as_deref())
+            .any_rate(),
     )?;
     let ports = bus_ports(&robot, args.robot.hardware.port.as_deref());
     let mut outcomes = Vec::new();

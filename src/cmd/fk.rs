@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use serde::Serialize;
 use servobus_kinematics::{ArmIk, ArmTarget, Geometry, IkError, LegIk, Point3, Poses};
-use servobus_runtime::config::{ik_reason, load_robot_any_rate, Robot, Units};
+use servobus_runtime::config::{ik_reason, load_robot, Robot, RobotOptions, Units};
 
 use super::exit::{input, PROBLEM};
 
@@ -72,7 +72,7 @@ struct FkOut {
 
 /// The robot file and its geometry with the joint limits set.
 fn geometry(path: &std::path::Path) -> anyhow::Result<(Robot, Geometry)> {
-    let robot = load_robot_any_rate(path)?;
+    let robot = load_robot(path, &RobotOptions::default().any_rate())?;
     let model = robot.geometry().ok_or_else(|| {
         input(format!(
             "robot `{}` ({}) has no `kinematics:` section",

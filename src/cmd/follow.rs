@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_runtime::config::{load_robot_calibrated, JointMap, Robot};
+use servobus_runtime::config::{load_robot, JointMap, Robot, RobotOptions};
 use servobus_runtime::sim::{Hand, SimRobot};
 use servobus_runtime::{
     Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
@@ -146,10 +146,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "--seconds {s}: give a positive time"
         )));
     }
-    let robot =
-        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
+    let robot = load_robot(
+        &args.robot.path,
+        &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
+    )?;
     let leader_path = args.leader_robot.as_ref().unwrap_or(&args.robot.path);
-    let leader_robot = load_robot_calibrated(leader_path, args.leader_calibration.as_deref())?;
+    let leader_robot = load_robot(
+        leader_path,
+        &RobotOptions::default().calibration(args.leader_calibration.as_deref()),
+    )?;
     let options = RunOptions {
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
         approach: None,

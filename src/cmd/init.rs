@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use servobus_io::AtomicFile;
-use servobus_runtime::config::{load_robot, Robot};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 use super::exit::input;
 
@@ -31,7 +31,7 @@ pub struct Args {
 
 /// Runs `servobus init`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot(&args.robot)?;
+    let robot = load_robot(&args.robot, &RobotOptions::default())?;
     let robot_text = robot_text(&args.robot)?;
     let files = [
         (args.dir.join("robot.yaml"), robot_text),

@@ -13,7 +13,7 @@ use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
-use servobus_runtime::config::{load_robot_any_rate_calibrated, Robot, Units};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
 use servobus_runtime::{Command, Runner, Telemetry};
 use std::io::IsTerminal;
 
@@ -68,9 +68,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         )));
     }
     let robot = match &args.robot {
-        Some(path) => Some(load_robot_any_rate_calibrated(
+        Some(path) => Some(load_robot(
             path,
-            args.hardware.calibration.as_deref(),
+            &RobotOptions::default()
+                .calibration(args.hardware.calibration.as_deref())
+                .any_rate(),
         )?),
         None => None,
     };

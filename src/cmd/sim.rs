@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use servobus_io::AtomicFile;
-use servobus_runtime::config::{load_robot, Robot};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
@@ -78,7 +78,7 @@ const TRUTH_FLUSH: std::time::Duration = std::time::Duration::from_millis(100);
 
 /// Runs `servobus sim`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot = load_robot(&args.robot)?;
+    let robot = load_robot(&args.robot, &RobotOptions::default())?;
     let mut faults = match &args.faults {
         Some(spec) => spec
             .parse::<Faults>()

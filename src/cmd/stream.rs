@@ -15,7 +15,7 @@ use std::io::{BufRead, Write};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use servobus_runtime::config::{load_robot_calibrated, Robot, Units};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
 use servobus_runtime::{
     spawn_live, Command, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender,
     Telemetry,
@@ -55,8 +55,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             args.timeout
         )));
     }
-    let robot =
-        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
+    let robot = load_robot(
+        &args.robot.path,
+        &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
+    )?;
     let options = RunOptions {
         rate_hz: args.rate,
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
-use servobus_runtime::config::{load_robot_calibrated, LimitOrigin, Robot};
+use servobus_runtime::config::{load_robot, LimitOrigin, Robot, RobotOptions};
 use servobus_runtime::teach::{
     self, check_pose, distance, motion_yaml, StillCapture, Taught, TeachError, Teacher, TimedPose,
 };
@@ -63,8 +63,10 @@ pub struct Args {
 
 /// Runs `servobus teach`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let robot =
-        load_robot_calibrated(&args.robot.path, args.robot.hardware.calibration.as_deref())?;
+    let robot = load_robot(
+        &args.robot.path,
+        &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
+    )?;
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(super::exit::input(
             "--tolerance must be a positive number of degrees",

@@ -186,7 +186,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
             f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
             out.push(f);
         }
-        RobotCalibration::None => {
+        RobotCalibration::None | RobotCalibration::Unapplied(_) => {
             let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
             f.problem = "no calibration: joint angles count from each servo's middle tick \
                          with the robot file's offset and inverted"

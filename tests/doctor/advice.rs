@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use servobus::doctor::{self, PortKind, Severity, Step};
 use servobus_protocol::registers::addr;
-use servobus_runtime::config::{load_robot, JointCalibration};
+use servobus_runtime::config::{load_robot, JointCalibration, RobotOptions};
 use servobus_sim::Faults;
 
 use super::{about, must, show, Arm, PORT};
@@ -154,7 +154,7 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
 #[test]
 fn a_builtin_robot_is_named_by_its_name_in_every_command() {
     let path = servobus::builtin::robot_path_or_name(Path::new("so101"));
-    let robot = load_robot(&path).expect("built-in so101");
+    let robot = load_robot(&path, &RobotOptions::default()).expect("built-in so101");
     let mut arm = Arm::of(robot, Faults::none());
     arm.robot.buses[0].joints[0].calibration = Some(across_the_seam());
     // A slow adapter where the robot file says 0 us: a file to edit.

@@ -13,7 +13,7 @@ use std::time::Duration;
 use servobus::doctor::{self, Finding, PortKind, Severity, Target};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
-use servobus_runtime::config::{load_robot, Robot};
+use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 use servobus_sim::{Faults, SimBus};
 
 const PORT: &str = "/dev/ttyACM0";
@@ -34,7 +34,11 @@ fn target() -> Target {
 impl Arm {
     /// The arm as `servobus sim` serves it, with `faults`.
     fn factory(faults: Faults) -> Arm {
-        let robot = load_robot(&common::repo("configs/robots/so101.yaml")).expect("robot");
+        let robot = load_robot(
+            &common::repo("configs/robots/so101.yaml"),
+            &RobotOptions::default(),
+        )
+        .expect("robot");
         Arm::of(robot, faults)
     }
 

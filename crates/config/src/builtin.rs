@@ -191,7 +191,7 @@ pub fn argument(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{load_motion, load_robot};
+    use crate::{load_motion, load_robot, RobotOptions};
 
     #[test]
     fn every_shipped_file_is_built_in_and_loads() {
@@ -213,7 +213,9 @@ mod tests {
         // `sim_body` tests.)
         for b in all() {
             match b.kind {
-                Kind::Robot => drop(load_robot(&b.path()).expect("robot loads")),
+                Kind::Robot => {
+                    drop(load_robot(&b.path(), &RobotOptions::default()).expect("robot loads"))
+                }
                 Kind::Motion => drop(load_motion(&b.path(), None).expect("motion loads")),
                 Kind::Mounting | Kind::Hand => {}
             }

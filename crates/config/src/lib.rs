@@ -61,9 +61,8 @@ pub use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
 pub use robot::{
-    load_robot, load_robot_any_rate, load_robot_any_rate_calibrated, load_robot_calibrated,
-    load_robot_design, load_robot_text, load_robot_to_play, BusConfig, JointConfig, Robot,
-    RobotCalibration,
+    load_robot, BusConfig, CalibrationChoice, JointConfig, Robot, RobotCalibration, RobotOptions,
+    RobotSource,
 };
 pub use tool::{ik_reason, TOOL_FRAME};
 pub use trajectory::{check_motion_length, joint_limits, plan_input, plan_motion};

@@ -252,7 +252,7 @@ pub fn load_motion(
 /// the one the robot file names (`--calibration`).
 ///
 /// # Errors
-/// As [`load_motion`] and [`load_robot_calibrated`](super::load_robot_calibrated).
+/// As [`load_motion`] and [`load_robot`](super::load_robot).
 pub fn load_motion_calibrated(
     path: &Path,
     robot_override: Option<&Path>,

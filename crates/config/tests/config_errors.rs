@@ -6,7 +6,7 @@ mod config_check;
 
 use std::path::{Path, PathBuf};
 
-use servobus_config::{load_motion, load_robot, ConfigError};
+use servobus_config::{load_motion, load_robot, ConfigError, RobotOptions};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
@@ -41,7 +41,7 @@ buses:
 fn robot_error(test: &str, from: &str, to: &str) -> (PathBuf, ConfigError) {
     assert!(ROBOT.contains(from), "{from}");
     let p = write(test, "robot.yaml", &ROBOT.replacen(from, to, 1));
-    let e = load_robot(&p).expect_err("the robot must be refused");
+    let e = load_robot(&p, &RobotOptions::default()).expect_err("the robot must be refused");
     (p, e)
 }
 
@@ -63,7 +63,7 @@ fn expect(e: &ConfigError, file: &Path, line: usize, column: usize, field: &str,
 #[test]
 fn the_valid_robot_loads() {
     let p = write("valid", "robot.yaml", ROBOT);
-    let r = load_robot(&p).expect("valid");
+    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
     assert_eq!(r.joint_count(), 2);
     assert_eq!(r.path, p);
 }
@@ -182,7 +182,7 @@ fn unknown_model_lists_the_known_ones() {
 #[test]
 fn syntax_errors_have_a_position() {
     let p = write("syntax", "robot.yaml", "name: x\nbuses: [\n");
-    let e = load_robot(&p).expect_err("broken YAML");
+    let e = load_robot(&p, &RobotOptions::default()).expect_err("broken YAML");
     let (line, _) = e.position().expect("located");
     assert!(line >= 2, "{e}");
     assert!(e.to_string().starts_with(&format!("{}:", p.display())));
@@ -197,7 +197,11 @@ fn a_rate_the_bus_cannot_carry_says_what_fits() {
 
 #[test]
 fn a_missing_file_is_a_read_error() {
-    let e = load_robot(Path::new("/nonexistent/robot.yaml")).expect_err("missing");
+    let e = load_robot(
+        Path::new("/nonexistent/robot.yaml"),
+        &RobotOptions::default(),
+    )
+    .expect_err("missing");
     assert!(matches!(e, ConfigError::Read { .. }));
     assert_eq!(e.position(), None);
 }
@@ -302,14 +306,18 @@ fn a_motion_without_robot_asks_for_one() {
 
 #[test]
 fn the_lag_compensation_lead_is_read_and_checked() {
-    let r = load_robot(&write("no_lead", "robot.yaml", ROBOT)).expect("valid");
+    let r = load_robot(
+        &write("no_lead", "robot.yaml", ROBOT),
+        &RobotOptions::default(),
+    )
+    .expect("valid");
     assert_eq!(r.lead, None, "absent: identified at run time");
     let p = write(
         "lead",
         "robot.yaml",
         &ROBOT.replacen("rate: 100", "rate: 100\nlead_ms: 12.5", 1),
     );
-    let r = load_robot(&p).expect("valid");
+    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
     assert_eq!(r.lead, Some(std::time::Duration::from_micros(12_500)));
     let (p, e) = robot_error("bad_lead", "rate: 100", "rate: 100\nlead_ms: -3");
     expect(
@@ -324,14 +332,18 @@ fn the_lag_compensation_lead_is_read_and_checked() {
 
 #[test]
 fn busy_polling_is_off_unless_the_robot_file_asks() {
-    let r = load_robot(&write("no_busy", "robot.yaml", ROBOT)).expect("valid");
+    let r = load_robot(
+        &write("no_busy", "robot.yaml", ROBOT),
+        &RobotOptions::default(),
+    )
+    .expect("valid");
     assert!(r.buses.iter().all(|b| !b.busy_poll));
     let p = write(
         "busy",
         "robot.yaml",
         &ROBOT.replacen("baud: 1000000", "baud: 1000000\n    busy_poll: true", 1),
     );
-    let r = load_robot(&p).expect("valid");
+    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
     assert!(r.buses[0].busy_poll);
 }
 
@@ -397,7 +409,7 @@ fn limits_and_type_errors_speak_in_the_files_terms() {
         "must be positive, got -1e308",
     );
     let list = write("list", "robot.yaml", "- name: x\n");
-    let text = load_robot(&list)
+    let text = load_robot(&list, &RobotOptions::default())
         .expect_err("a list is not a robot")
         .to_string();
     let said = format!(

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use servobus_config::{load_motion, load_robot, plan_motion, Units};
+use servobus_config::{load_motion, load_robot, plan_motion, RobotOptions, Units};
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")
@@ -40,7 +40,7 @@ fn shipped(kind: &str, expected: usize) -> Vec<(PathBuf, serde_yaml::Value)> {
 #[test]
 fn every_robot_file_validates() {
     for (f, raw) in shipped("robots", 4) {
-        let robot = load_robot(&f).unwrap_or_else(|e| panic!("{e}"));
+        let robot = load_robot(&f, &RobotOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         // The loader must keep every bus, joint, ID and limit as written
         // (all in degrees).
         assert_eq!(robot.name, raw["name"].as_str().expect("name"));
@@ -95,7 +95,11 @@ fn every_motion_file_validates_against_its_robot() {
 
 #[test]
 fn shipped_robots_have_the_documented_shape() {
-    let so101 = load_robot(&configs().join("robots/so101.yaml")).expect("so101 loads");
+    let so101 = load_robot(
+        &configs().join("robots/so101.yaml"),
+        &RobotOptions::default(),
+    )
+    .expect("so101 loads");
     assert_eq!(so101.units, Units::Deg);
     assert_eq!(so101.buses.len(), 1);
     let ids: Vec<u8> = so101.joints().map(|j| j.id).collect();
@@ -103,15 +107,27 @@ fn shipped_robots_have_the_documented_shape() {
     assert!(so101.joints().all(|j| j.model.name == "STS3215"));
     assert_eq!(so101.buses[0].baud, 1_000_000);
 
-    let hex = load_robot(&configs().join("robots/hexapod.yaml")).expect("hexapod loads");
+    let hex = load_robot(
+        &configs().join("robots/hexapod.yaml"),
+        &RobotOptions::default(),
+    )
+    .expect("hexapod loads");
     assert_eq!((hex.buses.len(), hex.joint_count()), (1, 18));
-    let hex2 = load_robot(&configs().join("robots/hexapod-2bus.yaml")).expect("2-bus loads");
+    let hex2 = load_robot(
+        &configs().join("robots/hexapod-2bus.yaml"),
+        &RobotOptions::default(),
+    )
+    .expect("2-bus loads");
     assert_eq!(hex2.buses.len(), 2);
     assert_eq!(hex2.joint_count(), 18);
     let names: Vec<&str> = hex.joints().map(|j| j.name.as_str()).collect();
     let names2: Vec<&str> = hex2.joints().map(|j| j.name.as_str()).collect();
     assert_eq!(names, names2, "the two hexapods have the same joints");
 
-    let scs = load_robot(&configs().join("robots/scs-mini.yaml")).expect("scs-mini loads");
+    let scs = load_robot(
+        &configs().join("robots/scs-mini.yaml"),
+        &RobotOptions::default(),
+    )
+    .expect("scs-mini loads");
     assert!(scs.joints().all(|j| !j.model.series.has_sync_read()));
 }

@@ -233,7 +233,8 @@ mod tests {
 
     fn so101() -> Robot {
         let path = servobus_config::builtin::robot_path_or_name("so101".as_ref());
-        servobus_config::load_robot(&path).expect("the built-in arm loads")
+        servobus_config::load_robot(&path, &servobus_config::RobotOptions::default())
+            .expect("the built-in arm loads")
     }
 
     #[test]

@@ -81,6 +81,15 @@ impl LoadOptions {
         self
     }
 
+    /// These options as the configuration loader takes them.
+    fn config_options(&self) -> servobus_config::RobotOptions {
+        servobus_config::RobotOptions {
+            any_rate: self.any_rate,
+            ..Default::default()
+        }
+        .calibration(self.calibration.as_deref())
+    }
+
     /// Opens the robot `name_or_path`: an existing robot file, or else a
     /// built-in robot's name (`so101`).
     ///
@@ -89,12 +98,7 @@ impl LoadOptions {
     /// first problem in the robot or calibration file.
     pub fn open(self, name_or_path: impl AsRef<Path>) -> Result<Robot, Error> {
         let path = servobus_config::builtin::robot_path_or_name(name_or_path.as_ref());
-        let cal = self.calibration.as_deref();
-        let config = if self.any_rate {
-            servobus_config::load_robot_any_rate_calibrated(&path, cal)?
-        } else {
-            servobus_config::load_robot_calibrated(&path, cal)?
-        };
+        let config = servobus_config::load_robot(&path, &self.config_options())?;
         Ok(Robot {
             config,
             options: self,
@@ -127,12 +131,11 @@ impl LoadOptions {
     /// # Errors
     /// As [`LoadOptions::open`].
     pub fn from_yaml(self, text: &str) -> Result<Robot, Error> {
-        let config = servobus_config::load_robot_text(
-            Path::new("<text>"),
+        let source = servobus_config::RobotSource::Text {
+            name: Path::new("<text>"),
             text,
-            self.calibration.as_deref(),
-            self.any_rate,
-        )?;
+        };
+        let config = servobus_config::load_robot(source, &self.config_options())?;
         Ok(Robot {
             config,
             options: self,

@@ -198,12 +198,13 @@ pub fn every_port<'a>(robot: &'a Robot, port: Option<&str>) -> Ports<'a> {
 mod tests {
     use super::*;
     use servobus_config::builtin;
-    use servobus_config::load_robot_any_rate;
+    use servobus_config::{load_robot, RobotOptions};
     use servobus_driver::Link;
 
     fn two_buses(ports: [Option<&str>; 2]) -> Robot {
         let path = builtin::robot_path_or_name("hexapod-2bus".as_ref());
-        let mut robot = load_robot_any_rate(&path).expect("the built-in two-bus hexapod loads");
+        let mut robot = load_robot(&path, &RobotOptions::default().any_rate())
+            .expect("the built-in two-bus hexapod loads");
         assert!(robot.buses.len() >= 2, "two buses");
         robot.buses.truncate(2);
         for (bus, port) in robot.buses.iter_mut().zip(ports) {

@@ -14,7 +14,7 @@ use std::time::Duration;
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_runtime::calibrate::{calibrate, prepare_servos, LiveJoint, Operator, Step};
 use servobus_runtime::config::{
-    load_robot, load_robot_calibrated, save_calibration, Calibration, JointMap, Robot,
+    load_robot, save_calibration, Calibration, JointMap, Robot, RobotOptions,
 };
 use servobus_runtime::sim::Mounting;
 use servobus_runtime::{bus_settings, Finish};
@@ -166,7 +166,11 @@ fn play_calibrated(
 ) -> calib_play::Played {
     let path = common::temp_path("calibrate_body", name);
     save_calibration(cal, &path).expect("saves");
-    let robot = load_robot_calibrated(robot_file, Some(&path)).expect("applies");
+    let robot = load_robot(
+        robot_file,
+        &RobotOptions::default().calibration(Some(&path)),
+    )
+    .expect("applies");
     // Before moving, the servos are checked and those across the seam get
     // their session offset; from then on readings are physical angles.
     prepare_servos(&robot, &mut buses).expect("the servos are the calibrated ones");
@@ -212,7 +216,7 @@ fn arm_start() -> Vec<f64> {
 #[test]
 fn a_randomly_fitted_arm_is_calibrated_by_hand_then_plays_within_a_degree() {
     let robot_file = common::config("robots/so101.yaml");
-    let design = load_robot(&robot_file).expect("so101");
+    let design = load_robot(&robot_file, &RobotOptions::default()).expect("so101");
     let mounts = random_mounts(&design, 7);
     let (cal, buses, sim) = calibrate_body(&design, &mounts, &arm_start());
     let crossing: Vec<&str> = cal
@@ -274,7 +278,7 @@ fn a_randomly_fitted_arm_is_calibrated_by_hand_then_plays_within_a_degree() {
 #[test]
 fn a_randomly_fitted_hexapod_calibrates_and_plays() {
     let robot_file = common::config("robots/hexapod.yaml");
-    let design = load_robot(&robot_file).expect("hexapod");
+    let design = load_robot(&robot_file, &RobotOptions::default()).expect("hexapod");
     let mounts = random_mounts(&design, 11);
     // Legs wherever they were left: a spread of angles inside the limits.
     let start: Vec<f64> = design

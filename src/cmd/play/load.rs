@@ -97,9 +97,11 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
                 args.motion.display()
             )));
         };
-        let robot = servobus_runtime::config::load_robot_to_play(
+        let robot = servobus_runtime::config::load_robot(
             robot_path,
-            args.hardware.calibration.as_deref(),
+            &servobus_runtime::config::RobotOptions::default()
+                .calibration(args.hardware.calibration.as_deref())
+                .to_play(),
         )?;
         (recording_motion(&args.motion, &robot), robot)
     } else {

@@ -16,7 +16,7 @@
 use std::path::{Path, PathBuf};
 
 use servobus_config::{
-    limits, load_calibration, load_motion, load_robot, plan_motion, ConfigError,
+    limits, load_calibration, load_motion, load_robot, plan_motion, ConfigError, RobotOptions,
 };
 
 /// Inputs longer than this are not tried (the fuzz target's size cap):
@@ -75,7 +75,10 @@ impl Workspace {
         let feature = |load: &str, outcome| feature(load, outcome, &text);
         let wave = self.dir.join("motions/arm-wave.yaml");
         vec![
-            feature("robot", load_robot(&robot).map(|_| ())),
+            feature(
+                "robot",
+                load_robot(&robot, &RobotOptions::default()).map(|_| ()),
+            ),
             feature("motion", load_and_plan(&motion, None)),
             feature("robot-of-wave", load_and_plan(&wave, Some(&robot))),
             feature("calibration", load_calibration(&robot).map(|_| ())),

@@ -56,8 +56,8 @@ pub enum RobotCalibration {
     /// The robot file names a calibration file that does not exist yet.
     /// The simulator serves such a robot as designed (to be calibrated),
     /// but nothing plans or plays it: [`load_motion`](super::load_motion)
-    /// and [`load_robot_to_play`] refuse it, naming the file, and real
-    /// servos are refused before they move.
+    /// and [`load_robot`] with [`RobotOptions::to_play`] refuse it, naming
+    /// the file, and real servos are refused before they move.
     Missing(PathBuf),
     /// Loaded and applied: every joint maps through its calibration (held
     /// in [`JointConfig::calibration`]) and its limits are clipped to the
@@ -66,6 +66,23 @@ pub enum RobotCalibration {
         /// The calibration file.
         path: PathBuf,
     },
+    /// Loaded as designed ([`CalibrationChoice::Design`]): the robot file
+    /// names this calibration file (which may or may not exist), and it was
+    /// not applied.
+    Unapplied(PathBuf),
+}
+
+impl RobotCalibration {
+    /// The calibration file: the one applied, or the one the robot file
+    /// names; `None` when there is neither.
+    pub fn file(&self) -> Option<&Path> {
+        match self {
+            RobotCalibration::None => None,
+            RobotCalibration::Missing(path)
+            | RobotCalibration::Applied { path }
+            | RobotCalibration::Unapplied(path) => Some(path),
+        }
+    }
 }
 
 /// One serial bus and the servos on it.
@@ -177,57 +194,167 @@ impl JointConfig {
     }
 }
 
-/// Loads and validates a robot file, including that its default rate fits
-/// every bus.
-///
-/// # Errors
-///
-/// [`ConfigError::Read`] when the file cannot be read; otherwise
-/// [`ConfigError::Invalid`] naming the file, line, column and field of the
-/// first problem: YAML syntax, an unknown or missing field, a duplicate ID or
-/// joint name, an ID above 253, an unknown model, `min >= max`, a
-/// non-positive limit, a limit outside the servo's range, or a rate the bus
-/// cannot carry (the error says which rate would fit).
-pub fn load_robot(path: &Path) -> Result<Robot, ConfigError> {
-    load_robot_calibrated(path, None)
+/// Where a robot file's text comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RobotSource<'a> {
+    /// A robot file on disk, or a built-in file's path
+    /// (`<built-in>/robots/so101.yaml`, as
+    /// [`robot_path_or_name`](crate::builtin::robot_path_or_name) gives).
+    Path(&'a Path),
+    /// A built-in robot, by name (`so101`, with or without `.yaml`).
+    Builtin(&'a str),
+    /// A robot file given as its text, called `name` in errors; a
+    /// calibration file it names is relative to the current directory.
+    Text {
+        /// What errors call the text (`<text>`).
+        name: &'a Path,
+        /// The YAML text.
+        text: &'a str,
+    },
 }
 
-/// Like [`load_robot`], with the calibration file `calibration` instead of
-/// the one the robot file names (`--calibration`).
+impl<'a> From<&'a Path> for RobotSource<'a> {
+    fn from(path: &'a Path) -> Self {
+        RobotSource::Path(path)
+    }
+}
+
+impl<'a> From<&'a PathBuf> for RobotSource<'a> {
+    fn from(path: &'a PathBuf) -> Self {
+        RobotSource::Path(path)
+    }
+}
+
+/// Which calibration a robot is loaded with.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum CalibrationChoice {
+    /// The file the robot file names (`calibration:`), if it names one. A
+    /// named file that does not exist yet leaves the robot
+    /// [`RobotCalibration::Missing`].
+    #[default]
+    Named,
+    /// This file instead of the one the robot file names (`--calibration`).
+    File(PathBuf),
+    /// None: the robot as designed (what calibrating starts from). The file
+    /// the robot file names, if any, is kept in
+    /// [`RobotCalibration::Unapplied`].
+    Design,
+}
+
+/// How [`load_robot`] loads a robot. The default: the calibration the robot
+/// file names, its default rate checked against every bus.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RobotOptions {
+    /// The calibration applied.
+    pub calibration: CalibrationChoice,
+    /// Accept a default rate that does not fit every bus (for a report of
+    /// what would fit, or a run that gives its own rate).
+    pub any_rate: bool,
+    /// The robot is about to play a motion or a recording: a calibration
+    /// file the robot file names must exist, since the calibrated limits
+    /// are what the path is kept within.
+    pub to_play: bool,
+}
+
+impl RobotOptions {
+    /// The calibration file `file` instead of the one the robot file names,
+    /// when given; the named one when `None`.
+    #[must_use]
+    pub fn calibration(mut self, file: Option<&Path>) -> Self {
+        self.calibration = file.map_or(CalibrationChoice::Named, |f| {
+            CalibrationChoice::File(f.to_owned())
+        });
+        self
+    }
+
+    /// The robot as designed, no calibration applied, any rate accepted.
+    #[must_use]
+    pub fn design() -> Self {
+        RobotOptions {
+            calibration: CalibrationChoice::Design,
+            any_rate: true,
+            to_play: false,
+        }
+    }
+
+    /// Accepts a default rate that does not fit every bus.
+    #[must_use]
+    pub fn any_rate(mut self) -> Self {
+        self.any_rate = true;
+        self
+    }
+
+    /// Requires a calibration file the robot file names to exist.
+    #[must_use]
+    pub fn to_play(mut self) -> Self {
+        self.to_play = true;
+        self
+    }
+}
+
+/// Loads and validates a robot from `source` as `options` say: the one
+/// entry point for robots, whatever they are read from.
+///
+/// ```no_run
+/// use std::path::Path;
+/// use servobus_config::{load_robot, RobotOptions, RobotSource};
+///
+/// let arm = load_robot(Path::new("configs/robots/so101.yaml"), &RobotOptions::default())?;
+/// let built_in = load_robot(RobotSource::Builtin("so101"), &RobotOptions::default().any_rate())?;
+/// let design = load_robot(&arm.path, &RobotOptions::design())?;
+/// # Ok::<(), servobus_config::ConfigError>(())
+/// ```
 ///
 /// # Errors
-/// As [`load_robot`], and the errors of [`load_calibration`](super::load_calibration) and of
-/// applying it: a joint it lacks, another servo ID or model, a measured
-/// range that leaves nothing of the joint's limits.
-pub fn load_robot_calibrated(
-    path: &Path,
-    calibration: Option<&Path>,
+///
+/// [`ConfigError::Read`] when the file cannot be read (or no built-in robot
+/// has the name); otherwise [`ConfigError::Invalid`] naming the file, line,
+/// column and field of the first problem: YAML syntax, an unknown or missing
+/// field, a duplicate ID or joint name, an ID above 253, an unknown model,
+/// `min >= max`, a non-positive limit, a limit outside the servo's range, a
+/// rate the bus cannot carry (the error says which rate would fit; not with
+/// [`RobotOptions::any_rate`]); the errors of
+/// [`load_calibration`](super::load_calibration) and of applying it (a joint
+/// it lacks, another servo ID or model, a measured range that leaves nothing
+/// of the joint's limits); with [`RobotOptions::to_play`], a calibration file
+/// the robot file names that does not exist.
+pub fn load_robot<'a>(
+    source: impl Into<RobotSource<'a>>,
+    options: &RobotOptions,
 ) -> Result<Robot, ConfigError> {
-    load_with_rate(path, calibration, false)
-}
-
-/// Like [`load_robot_calibrated`], for a robot about to play a motion or
-/// a recording: a calibration file the robot file names must exist, since
-/// the calibrated limits are what the path is kept within.
-///
-/// # Errors
-/// As [`load_robot_calibrated`], and [`ConfigError::Invalid`] at the robot
-/// file's `calibration:` when that file does not exist.
-pub fn load_robot_to_play(path: &Path, calibration: Option<&Path>) -> Result<Robot, ConfigError> {
-    load_with_rate(path, calibration, true)
-}
-
-/// The robot at `path` with `calibration` (or its own) applied, its
-/// calibration file required to exist when `required`, and its rate checked
-/// against every bus.
-fn load_with_rate(
-    path: &Path,
-    calibration: Option<&Path>,
-    required: bool,
-) -> Result<Robot, ConfigError> {
-    let (robot, source) = load_calibrated(path, calibration)?;
-    if required {
+    let (robot, source, named) = match source.into() {
+        RobotSource::Path(path) => load_design(path)?,
+        RobotSource::Builtin(name) => {
+            let name = name.strip_suffix(".yaml").unwrap_or(name);
+            load_design(&super::builtin_path(&format!("robots/{name}.yaml")))?
+        }
+        RobotSource::Text { name, text } => {
+            let source = Source {
+                path: name.to_owned(),
+                text: text.to_owned(),
+            };
+            design_of(source, Path::new(""))?
+        }
+    };
+    let (robot, source) = match &options.calibration {
+        CalibrationChoice::Named => with_calibration(robot, source, named, None)?,
+        CalibrationChoice::File(file) => {
+            with_calibration(robot, source, named, Some(file.as_path()))?
+        }
+        CalibrationChoice::Design => {
+            let calibration = named.map_or(RobotCalibration::None, RobotCalibration::Unapplied);
+            let robot = Robot {
+                calibration,
+                ..robot
+            };
+            (robot, source)
+        }
+    };
+    if options.to_play {
         require_calibration(&robot, &source)?;
+    }
+    if options.any_rate {
+        return Ok(robot);
     }
     rate_fits(robot, &source)
 }
@@ -249,43 +376,6 @@ pub(crate) fn require_calibration(robot: &Robot, source: &Source) -> Result<(), 
             file.display()
         ),
     ))
-}
-
-/// Like [`load_robot`], but accepts a default rate that does not fit (for
-/// `servobus budget`, which reports what would fit instead).
-///
-/// # Errors
-///
-/// As [`load_robot`], less the rate check.
-pub fn load_robot_any_rate(path: &Path) -> Result<Robot, ConfigError> {
-    load(path).map(|(robot, _)| robot)
-}
-
-/// [`load_robot_any_rate`] with the calibration file `calibration` instead
-/// of the one the robot file names (`--calibration`).
-///
-/// # Errors
-/// As [`load_robot_calibrated`], less the rate check.
-pub fn load_robot_any_rate_calibrated(
-    path: &Path,
-    calibration: Option<&Path>,
-) -> Result<Robot, ConfigError> {
-    load_calibrated(path, calibration).map(|(robot, _)| robot)
-}
-
-/// The robot as designed, without any calibration applied (what
-/// `servobus calibrate` starts from), and the calibration file the robot
-/// file names, if it names one.
-///
-/// # Errors
-/// As [`load_robot_any_rate`].
-pub fn load_robot_design(path: &Path) -> Result<(Robot, Option<PathBuf>), ConfigError> {
-    let (robot, _, named) = load_design(path)?;
-    Ok((robot, named))
-}
-
-pub(crate) fn load(path: &Path) -> Result<(Robot, Source), ConfigError> {
-    load_calibrated(path, None)
 }
 
 /// Loads a robot file and applies its calibration (or `calibration`, which
@@ -316,31 +406,6 @@ fn with_calibration(
         None => robot,
     };
     Ok((robot, source))
-}
-
-/// Loads a robot file given as `text`, called `name` in errors, with the
-/// calibration file `calibration` (or the one the text names, relative to
-/// the current directory), checking that its default rate fits every bus
-/// unless `any_rate` (as [`load_robot_any_rate_calibrated`]).
-///
-/// # Errors
-/// As [`load_robot_calibrated`], with `name` as the file.
-pub fn load_robot_text(
-    name: &Path,
-    text: &str,
-    calibration: Option<&Path>,
-    any_rate: bool,
-) -> Result<Robot, ConfigError> {
-    let source = Source {
-        path: name.to_owned(),
-        text: text.to_owned(),
-    };
-    let (robot, source, named) = design_of(source, Path::new(""))?;
-    let (robot, source) = with_calibration(robot, source, named, calibration)?;
-    if any_rate {
-        return Ok(robot);
-    }
-    rate_fits(robot, &source)
 }
 
 /// `robot` when its default rate fits every bus (its file's `rate:`).

@@ -192,7 +192,7 @@ pub fn prepare_servos<T: Transport, C: Clock>(
     buses: &mut [Bus<T, C>],
 ) -> Result<(), Refusal> {
     match &robot.calibration {
-        RobotCalibration::None => return Ok(()),
+        RobotCalibration::None | RobotCalibration::Unapplied(_) => return Ok(()),
         RobotCalibration::Missing(path) => return Err(Refusal::Missing { path: path.clone() }),
         RobotCalibration::Applied { .. } => {}
     }

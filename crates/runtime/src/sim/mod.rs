@@ -7,11 +7,11 @@
 //! examples and the tests all build their simulator here.
 //!
 //! ```
-//! use servobus_runtime::config::load_robot;
+//! use servobus_runtime::config::{load_robot, RobotOptions};
 //! use servobus_runtime::sim::SimRobot;
 //!
 //! # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
-//! let robot = load_robot(&dir.join("so101.yaml"))?;
+//! let robot = load_robot(&dir.join("so101.yaml"), &RobotOptions::default())?;
 //! let sim = SimRobot::builder(&robot).build()?;
 //! // One driver bus per robot bus, in virtual time, ready for `VirtualRun`.
 //! let buses = sim.driver_buses();
@@ -123,7 +123,7 @@ pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus, ManualClock>>, Sim
 /// use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
 ///
 /// # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
-/// let robot = load_robot(&dir.join("so101.yaml"))?;
+/// let robot = load_robot(&dir.join("so101.yaml"), &RobotOptions::default())?;
 /// let truth = new_truth(&robot);
 /// // Joint 0 (shoulder_pan) turned by hand from 0 to 45 deg in the first second.
 /// let hand = Hand::from_keyframes(&robot, &[(0.0, vec![(0, 0.0)]), (1.0, vec![(0, 45.0)])]);

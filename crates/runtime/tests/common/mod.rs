@@ -4,7 +4,9 @@
 use std::time::Duration;
 
 use servobus_driver::{Bus, ManualClock};
-use servobus_runtime::config::{load_motion, load_robot, plan_motion, JointMap, Robot};
+use servobus_runtime::config::{
+    load_motion, load_robot, plan_motion, JointMap, Robot, RobotOptions,
+};
 use servobus_runtime::sim::SimRobot;
 use servobus_runtime::RunOptions;
 use servobus_sim::SimBus;
@@ -30,7 +32,8 @@ pub const SO101_LIMITS: [(f64, f64, f64); 6] = [
 
 /// A robot file under `configs/robots/`.
 pub fn robot(name: &str) -> Robot {
-    load_robot(&config(&format!("robots/{name}"))).expect("robot file loads")
+    load_robot(&config(&format!("robots/{name}")), &RobotOptions::default())
+        .expect("robot file loads")
 }
 
 /// A motion under `configs/motions/`, planned, with its robot.

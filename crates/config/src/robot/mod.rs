@@ -5,6 +5,8 @@
 //! located in the file).
 
 mod raw;
+#[cfg(test)]
+mod tests;
 mod validate;
 
 use std::path::{Path, PathBuf};

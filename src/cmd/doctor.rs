@@ -243,7 +243,7 @@ fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Res
                         "id": fx.id,
                         "command": fx.command,
                         "ok": fx.result.is_ok(),
-                        "error": fx.result.as_ref().err(),
+                        "error": fx.result.as_ref().err().map(ToString::to_string),
                     })
                 })
                 .collect();

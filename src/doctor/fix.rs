@@ -13,8 +13,21 @@ use servobus_runtime::calibrate::{prepare_bus, Refusal};
 use super::probe::MAX_RETURN_DELAY;
 use super::{Action, Finding, Fixing};
 
+/// Why a fix failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FixError {
+    /// The write, or its check, failed on the bus.
+    #[error(transparent)]
+    Bus(#[from] BusError),
+    /// Play's calibration check refused the robot, so the session's homing
+    /// offsets were not set.
+    #[error(transparent)]
+    Refused(Refusal),
+}
+
 /// What became of one fix.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug)]
 pub struct FixOutcome {
     /// The servo.
     pub id: u8,
@@ -22,7 +35,7 @@ pub struct FixOutcome {
     /// offset what was set.
     pub command: String,
     /// `Err` with the reason when it failed.
-    pub result: Result<(), String>,
+    pub result: Result<(), FixError>,
 }
 
 /// Applies the fix of every fixable finding of the bus `how.bus`, servos at
@@ -100,7 +113,7 @@ pub fn apply<T: Transport, C: Clock>(
                         out.push(FixOutcome {
                             id,
                             command: done(f, how),
-                            result: Err(why),
+                            result: Err(FixError::Refused(why)),
                         });
                         continue;
                     }
@@ -116,7 +129,7 @@ pub fn apply<T: Transport, C: Clock>(
             r => out.push(FixOutcome {
                 id,
                 command: done(f, how),
-                result: r.map_err(|e| e.to_string()),
+                result: r.map_err(FixError::Bus),
             }),
         }
     }
@@ -142,8 +155,8 @@ fn done(f: &Finding, how: &Fixing<'_>) -> String {
 enum SessionError {
     /// The bus failed.
     Bus(BusError),
-    /// Play's checks refused the robot (the reason).
-    Refused(String),
+    /// Play's checks refused the robot.
+    Refused(Refusal),
 }
 
 /// Sets the homing offsets of the bus's calibrated servos for the session,
@@ -157,7 +170,7 @@ fn session_offsets<T: Transport, C: Clock>(
             source: BusError::Transport(e),
             ..
         } => SessionError::Bus(BusError::Transport(e)),
-        other => SessionError::Refused(other.to_string()),
+        other => SessionError::Refused(other),
     })
 }
 

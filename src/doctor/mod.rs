@@ -23,7 +23,7 @@ use servobus_protocol::registers::{Register, Series};
 use servobus_runtime::config::Robot;
 
 pub use checks::{rated_voltage_dv, ServoState};
-pub use fix::{apply, change_baud, FixOutcome};
+pub use fix::{apply, change_baud, FixError, FixOutcome};
 pub use probe::fix_all_command;
 pub use probe::{examine, Examined, PortKind, Target};
 

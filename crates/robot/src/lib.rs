@@ -51,7 +51,9 @@ pub use run::{Play, Run};
 pub use servobus_config as config;
 pub use servobus_config::Motion;
 pub use servobus_runtime::calibrate::Refusal;
-pub use servobus_runtime::{Command, Finish, Lead, Report, RunError, RunOptions, Telemetry};
+pub use servobus_runtime::{
+    Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Telemetry,
+};
 pub use servobus_trajectory::Trajectory;
 
 /// How a robot is loaded; see [`Robot::options`].

@@ -200,7 +200,7 @@ impl<T: Transport, C: Clock> Lane<T, C> {
                 Ok(None) => {}
                 // Every lane rejects it alike; the first one says so.
                 Err(why) if self.bus.index == 0 => {
-                    self.bus.publish(Telemetry::Rejected(why.to_string()));
+                    self.bus.publish(Telemetry::Rejected(why.into()));
                 }
                 Err(_) => {}
             }

@@ -53,6 +53,8 @@ pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
 pub use report::{BusReport, JointReport, Quantiles, Report};
 pub use run::bus_settings;
 pub use target::{LiveReport, Target, TargetError, TargetSender};
-pub use telemetry::{CycleSample, Finish, JointSample, LiveEvent, Telemetry, SAMPLE_JOINTS};
+pub use telemetry::{
+    CycleSample, Finish, JointSample, LiveEvent, Rejection, Telemetry, SAMPLE_JOINTS,
+};
 pub use threads::{spawn, spawn_live, spawn_virtual, spawn_virtual_live, Runner};
 pub use virtual_run::VirtualRun;

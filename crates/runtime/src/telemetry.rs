@@ -121,6 +121,46 @@ pub enum Finish {
     Abandoned,
 }
 
+/// Why a command ([`Command`](crate::Command)) was not carried out.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Rejection {
+    /// A replacing path ([`Command::Replace`](crate::Command::Replace)) for
+    /// another number of joints than the robot has.
+    #[error("the new path has {given} joints, the robot {expected}")]
+    NewPathJoints {
+        /// The robot's joints.
+        expected: usize,
+        /// The new path's.
+        given: usize,
+    },
+    /// The transition the command asks for (a stop, a replacement) cannot
+    /// be planned.
+    #[error("cannot plan the {what}: {source}")]
+    Trajectory {
+        /// Which transition.
+        what: &'static str,
+        /// The planner's reason.
+        source: servobus_trajectory::PlanError,
+    },
+    /// Another failure of the run, as its message (no command fails so
+    /// today: this keeps a future one from being lost).
+    #[error("{0}")]
+    Other(String),
+}
+
+impl From<crate::RunError> for Rejection {
+    fn from(error: crate::RunError) -> Self {
+        match error {
+            crate::RunError::NewPathJoints { expected, given } => {
+                Rejection::NewPathJoints { expected, given }
+            }
+            crate::RunError::Trajectory { what, source } => Rejection::Trajectory { what, source },
+            other => Rejection::Other(other.to_string()),
+        }
+    }
+}
+
 /// A telemetry message.
 // The cycle sample is the message sent every cycle and is kept inline on
 // purpose: boxing it would allocate in the loop.
@@ -135,7 +175,7 @@ pub enum Telemetry {
     Fault(Fault),
     /// A command could not be carried out (a replacement path with the
     /// wrong joints, say); the run goes on as before.
-    Rejected(String),
+    Rejected(Rejection),
     /// The live following stopped for lack of targets, or resumed.
     Live {
         /// What happened.

@@ -89,3 +89,47 @@ fn a_run_held_at_its_start_turns_the_torque_off_on_command() {
     let report = run.join().expect("a report");
     assert_eq!(report.finish, Finish::TorqueOff);
 }
+
+#[test]
+fn a_new_path_for_another_robot_is_rejected_with_its_joint_counts() {
+    use servobus_robot::{Command, Rejection, Telemetry};
+    use std::time::Duration;
+
+    let mini = Robot::open("scs-mini").expect("the built-in SCS robot opens");
+    let nod = mini.motion("scs-mini-nod").expect("its motion");
+    let four_joints = mini.plan(&nod).expect("plans");
+
+    let arm = Robot::open("so101").expect("opens");
+    let motion = arm.motion("arm-wave").expect("the motion");
+    // On the wall clock: the telemetry is read as fast as it comes, so the
+    // rejection is not dropped from a full channel.
+    let connection = arm.connect(Target::Simulator).expect("connects");
+    let options = connection.options();
+    let run = connection.play(&motion, options).expect("starts");
+    let telemetry = run.telemetry();
+    run.send(Command::replace(four_joints))
+        .expect("the run takes the command");
+    let rejection = loop {
+        match telemetry.recv_timeout(Duration::from_secs(30)) {
+            Ok(Telemetry::Rejected(why)) => break why,
+            Ok(Telemetry::Finished(finish)) => panic!("ended ({finish:?}) without a rejection"),
+            Ok(_) => {}
+            Err(e) => panic!("the run sends telemetry: {e}"),
+        }
+    };
+    assert_eq!(
+        rejection,
+        Rejection::NewPathJoints {
+            expected: 6,
+            given: 4
+        }
+    );
+    assert_eq!(
+        rejection.to_string(),
+        "the new path has 4 joints, the robot 6"
+    );
+    // The run goes on as before, and stops on command.
+    run.stop().expect("the run takes the command");
+    let report = run.join().expect("a report");
+    assert_eq!(report.finish, Finish::Stopped);
+}

@@ -159,7 +159,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let duration = Duration::from_secs_f64(args.seconds);
 
     let mut runs = Vec::new();
-    let ports = bus_ports(&robot, args.hardware.port.as_deref());
+    let ports = bus_ports(&robot, args.hardware.port.as_slice());
     for ((index, bus), port) in robot.buses.iter().enumerate().zip(ports) {
         let robot = robot.clone();
         let mut bus = bus.clone();

@@ -151,15 +151,10 @@ fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
 /// An input error naming the first bus without a port, when only some have
 /// one.
 fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
-    match every_port(robot, args.robot.hardware.port.as_deref()) {
+    match every_port(robot, args.robot.hardware.port.as_slice()) {
         Ports::None => Ok(None),
         Ports::Every(ports) => Ok(Some(ports)),
-        Ports::Missing(bus) => Err(super::exit::input(format!(
-            "bus `{}` of {} has no port: every bus of the robot needs one (`port:` in the \
-             robot file; --port sets the first bus's)",
-            bus.name,
-            robot.path.display()
-        ))),
+        Ports::Missing(bus) => Err(super::link::no_port(robot, &bus.name, None)),
     }
 }
 

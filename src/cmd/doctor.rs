@@ -82,7 +82,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
             .calibration(args.robot.hardware.calibration.as_deref())
             .any_rate(),
     )?;
-    let ports = bus_ports(&robot, args.robot.hardware.port.as_deref());
+    let ports = bus_ports(&robot, args.robot.hardware.port.as_slice());
     let mut outcomes = Vec::new();
     if ports.iter().all(Option::is_none) {
         let buses = servobus_runtime::sim::virtual_buses(&robot)?;

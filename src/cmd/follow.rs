@@ -163,7 +163,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match &args.leader {
         Some(port) => {
             let mut buses = Vec::new();
-            let ports = match every_port(&leader_robot, Some(port)) {
+            let ports = match every_port(&leader_robot, &[port]) {
                 Ports::Every(ports) => ports,
                 _ => {
                     return Err(super::exit::input(

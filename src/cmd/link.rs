@@ -63,6 +63,17 @@ pub(crate) fn open_plain_bus(
     Ok(bus)
 }
 
+/// The command line's one message for `robot`'s bus `bus` that has no port
+/// (an input error), with the command's own `hint` after it, if any.
+pub(crate) fn no_port(robot: &Robot, bus: &str, hint: Option<&str>) -> anyhow::Error {
+    let hint = hint.map_or(String::new(), |h| format!("; {h}"));
+    super::exit::input(format!(
+        "bus `{bus}` has no port: give --port (it sets the first bus's), and every other bus \
+         a `port:` in the robot file {}{hint}",
+        robot.path.display()
+    ))
+}
+
 /// Connects to `robot`'s buses on `ports` through the library (each opened
 /// for a run, the calibration checked), saying a slow FTDI adapter on
 /// stderr and what to run when the servos do not match the calibration.
@@ -77,6 +88,7 @@ pub(crate) fn connect(robot: &Robot, ports: &[String]) -> anyhow::Result<Connect
             servobus_robot::Error::Refused { port, refusal, .. } => {
                 super::calibrate::refused(robot, &refusal, &port)
             }
+            servobus_robot::Error::NoPort { bus } => no_port(robot, &bus, None),
             e => e.into(),
         })?;
     for slow in connection.slow_adapters() {

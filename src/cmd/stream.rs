@@ -92,7 +92,7 @@ pub(crate) fn start_live(
     port: Option<&str>,
     options: RunOptions,
 ) -> anyhow::Result<Runner> {
-    match every_port(robot, port) {
+    match every_port(robot, port.as_slice()) {
         Ports::None => {
             let clock = super::link::system_clock();
             let rest: Vec<f64> = robot.joints().map(|j| j.rest()).collect();
@@ -111,12 +111,7 @@ pub(crate) fn start_live(
             super::calibrate::check_buses(robot, &mut buses, &ports)?;
             Ok(spawn_live(robot, buses, options)?)
         }
-        Ports::Missing(bus) => Err(super::exit::input(format!(
-            "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
-             (--port sets only the first bus's)",
-            bus.name,
-            robot.path.display()
-        ))),
+        Ports::Missing(bus) => Err(super::link::no_port(robot, &bus.name, None)),
     }
 }
 

@@ -14,7 +14,7 @@ use servobus_runtime::teach::{
     self, check_pose, distance, motion_yaml, StillCapture, Taught, TeachError, Teacher, TimedPose,
 };
 
-use super::link::{bus_ports, open_bus, Allowance, SerialBus};
+use super::link::{bus_ports, every_port, open_bus, Allowance, SerialBus};
 
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;
@@ -86,7 +86,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // read: a taught angle is the angle `play` moves to.
     let mut teacher = Teacher::new(&robot, buses, &args.hold).map_err(|e| match e {
         TeachError::Refused(refusal) => {
-            let port = bus_ports(&robot, port).into_iter().flatten().next();
+            let port = bus_ports(&robot, port.as_slice())
+                .into_iter()
+                .flatten()
+                .next();
             super::calibrate::refused(&robot, &refusal, port.as_deref().unwrap_or("PORT"))
         }
         e => e.into(),
@@ -194,14 +197,19 @@ fn how_to_stop(args: &Args, interactive: bool) -> String {
 /// The buses of `robot`: `port` for the first, the robot file's for the rest.
 fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus>> {
     let mut buses = Vec::new();
-    for (bus, path) in robot.buses.iter().zip(bus_ports(robot, port)) {
-        let Some(path) = path else {
-            return Err(super::exit::input(format!(
-                "bus `{}` has no port: give --port (a robot, or `servobus sim --robot {} --hand H.yaml --link L`)",
-                bus.name,
-                robot.path.display()
-            )));
-        };
+    let ports = every_port(robot, port.as_slice())
+        .required(robot)
+        .map_err(|e| match e {
+            servobus_robot::Error::NoPort { bus } => {
+                let sim = format!(
+                    "a simulated robot: `servobus sim --robot {} --hand H.yaml --link L`",
+                    robot.path.display()
+                );
+                super::link::no_port(robot, &bus, Some(&sim))
+            }
+            e => e.into(),
+        })?;
+    for (bus, path) in robot.buses.iter().zip(ports) {
         let mut opened = open_bus(bus, &path, Allowance::Assumed)?;
         opened.set_settings(opened.settings().with_retries(RETRIES));
         buses.push(opened);

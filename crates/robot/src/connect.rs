@@ -10,7 +10,7 @@ use servobus_runtime::calibrate::prepare_bus;
 use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Lead, RunOptions};
 
-use crate::ports::{open_bus, slow_adapter, system_clock, Allowance, SerialBus};
+use crate::ports::{every_port, open_bus, slow_adapter, system_clock, Allowance, SerialBus};
 use crate::Error;
 
 /// How long a run holds (and tracks) the final position after the path, by
@@ -101,20 +101,7 @@ fn resolve(robot: &Robot, ports: &[String]) -> Result<Vec<String>, Error> {
             buses: robot.buses.len(),
         });
     }
-    robot
-        .buses
-        .iter()
-        .enumerate()
-        .map(|(i, bus)| {
-            ports
-                .get(i)
-                .or(bus.port.as_ref())
-                .cloned()
-                .ok_or_else(|| Error::NoPort {
-                    bus: bus.name.clone(),
-                })
-        })
-        .collect()
+    every_port(robot, ports).required(robot)
 }
 
 impl Connection {

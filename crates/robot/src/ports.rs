@@ -152,17 +152,17 @@ pub fn open_plain_bus(
     Ok(Bus::new(transport, settings))
 }
 
-/// The port of each bus of `robot`: `port` (an override, the command
-/// line's port) for the first, the robot file's `port:` for the others and
-/// for the first without an override.
-pub fn bus_ports(robot: &Robot, port: Option<&str>) -> Vec<Option<String>> {
+/// The port of each bus of `robot`: `overrides[i]` (a port the program
+/// gives, the command line's `--port` for the first bus) for bus `i`, the
+/// robot file's `port:` for the buses past them.
+pub fn bus_ports<S: AsRef<str>>(robot: &Robot, overrides: &[S]) -> Vec<Option<String>> {
     robot
         .buses
         .iter()
         .enumerate()
-        .map(|(i, bus)| match (i, port) {
-            (0, Some(p)) => Some(p.to_owned()),
-            _ => bus.port.clone(),
+        .map(|(i, bus)| match overrides.get(i) {
+            Some(p) => Some(p.as_ref().to_owned()),
+            None => bus.port.clone(),
         })
         .collect()
 }
@@ -178,9 +178,30 @@ pub enum Ports<'a> {
     Missing(&'a BusConfig),
 }
 
+impl Ports<'_> {
+    /// Every bus's port, or [`Error::NoPort`](crate::Error::NoPort) naming
+    /// the first bus without one (the first bus of `robot` when none has
+    /// one).
+    ///
+    /// # Errors
+    /// [`Error::NoPort`](crate::Error::NoPort).
+    pub fn required(self, robot: &Robot) -> Result<Vec<String>, crate::Error> {
+        let bus = match self {
+            Ports::Every(ports) => return Ok(ports),
+            Ports::Missing(bus) => bus.name.clone(),
+            Ports::None => robot
+                .buses
+                .first()
+                .map(|b| b.name.clone())
+                .unwrap_or_default(),
+        };
+        Err(crate::Error::NoPort { bus })
+    }
+}
+
 /// [`bus_ports`] taken together: none, every one, or the first bus missing.
-pub fn every_port<'a>(robot: &'a Robot, port: Option<&str>) -> Ports<'a> {
-    let ports = bus_ports(robot, port);
+pub fn every_port<'a, S: AsRef<str>>(robot: &'a Robot, overrides: &[S]) -> Ports<'a> {
+    let ports = bus_ports(robot, overrides);
     if ports.iter().all(Option::is_none) {
         return Ports::None;
     }
@@ -254,11 +275,11 @@ mod tests {
     fn the_override_is_the_first_bus_s_port_and_the_file_gives_the_rest() {
         let robot = two_buses([Some("/dev/a"), Some("/dev/b")]);
         assert_eq!(
-            bus_ports(&robot, Some("/dev/x")),
+            bus_ports(&robot, &["/dev/x"]),
             [Some("/dev/x".to_owned()), Some("/dev/b".to_owned())]
         );
         assert_eq!(
-            every_port(&robot, None),
+            every_port::<&str>(&robot, &[]),
             Ports::Every(vec!["/dev/a".into(), "/dev/b".into()])
         );
     }
@@ -266,15 +287,24 @@ mod tests {
     #[test]
     fn no_port_anywhere_is_the_simulator_and_a_partial_set_names_the_bus_without() {
         let robot = two_buses([None, None]);
-        assert_eq!(every_port(&robot, None), Ports::None);
-        let Ports::Missing(bus) = every_port(&robot, Some("/dev/x")) else {
+        assert_eq!(every_port::<&str>(&robot, &[]), Ports::None);
+        assert!(matches!(
+            every_port::<&str>(&robot, &[]).required(&robot),
+            Err(crate::Error::NoPort { bus }) if bus == robot.buses[0].name
+        ));
+        let Ports::Missing(bus) = every_port(&robot, &["/dev/x"]) else {
             panic!("the second bus has no port");
         };
         assert_eq!(bus.name, robot.buses[1].name);
         let robot = two_buses([None, Some("/dev/b")]);
-        let Ports::Missing(bus) = every_port(&robot, None) else {
+        let Ports::Missing(bus) = every_port::<&str>(&robot, &[]) else {
             panic!("the first bus has no port");
         };
         assert_eq!(bus.name, robot.buses[0].name);
+        let both = every_port(&robot, &["/dev/a", "/dev/c"]);
+        assert_eq!(
+            both.required(&robot).ok(),
+            Some(vec!["/dev/a".to_owned(), "/dev/c".to_owned()])
+        );
     }
 }

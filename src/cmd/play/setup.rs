@@ -37,14 +37,9 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     if args.fast {
         return Ok(Backend::Fast);
     }
-    match every_port(robot, args.hardware.port.as_deref()) {
+    match every_port(robot, args.hardware.port.as_slice()) {
         Ports::None => Ok(Backend::Simulated),
         Ports::Every(ports) => Ok(Backend::Hardware(ports)),
-        Ports::Missing(bus) => Err(crate::cmd::exit::input(format!(
-            "bus `{}` of {} has no port: give every bus a `port:` in the robot file \
-             (--port sets only the first bus's)",
-            bus.name,
-            robot.path.display()
-        ))),
+        Ports::Missing(bus) => Err(crate::cmd::link::no_port(robot, &bus.name, None)),
     }
 }

@@ -74,14 +74,14 @@ pub(crate) fn no_port(robot: &Robot, bus: &str, hint: Option<&str>) -> anyhow::E
     ))
 }
 
-/// Connects to `robot`'s buses on `ports` through the library (each opened
-/// for a run, the calibration checked), saying a slow FTDI adapter on
-/// stderr and what to run when the servos do not match the calibration.
+/// Connects to `robot`'s buses at `target` through the library (on ports,
+/// each opened for a run and the calibration checked), saying a slow FTDI
+/// adapter on stderr and what to run when the servos do not match the
+/// calibration.
 ///
 /// # Errors
 /// When a port cannot be opened or the servos are refused.
-pub(crate) fn connect(robot: &Robot, ports: &[String]) -> anyhow::Result<Connection> {
-    let target = Target::Ports(ports.to_vec());
+pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connection> {
     let connection = servobus_robot::Robot::from(robot.clone())
         .connect(target)
         .map_err(|e| match e {

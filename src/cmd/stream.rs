@@ -17,11 +17,10 @@ use std::time::Instant;
 
 use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
 use servobus_runtime::{
-    spawn_live, Command, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender,
-    Telemetry,
+    Command, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender, Telemetry,
 };
 
-use super::link::{every_port, open_bus, Allowance, Ports};
+use super::link::{every_port, Ports};
 
 /// Arguments of `servobus stream`.
 #[derive(Debug, clap::Args)]
@@ -85,34 +84,21 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     finish(&report, args.json)
 }
 
-/// Starts a live run of `robot`: on its ports (`port` for the first bus),
-/// through its calibration, or on the built-in simulator in real time.
+/// Starts a live run of `robot` through the library's connection: on its
+/// ports (`port` for the first bus), through its calibration, or on the
+/// built-in simulator in real time.
 pub(crate) fn start_live(
     robot: &Robot,
     port: Option<&str>,
     options: RunOptions,
 ) -> anyhow::Result<Runner> {
-    match every_port(robot, port.as_slice()) {
-        Ports::None => {
-            let clock = super::link::system_clock();
-            let rest: Vec<f64> = robot.joints().map(|j| j.rest()).collect();
-            let buses = servobus_runtime::sim::SimRobot::builder(robot)
-                .pose(&rest)
-                .build()?
-                .wall_buses(&clock);
-            Ok(spawn_live(robot, buses, options)?)
-        }
-        Ports::Every(ports) => {
-            let mut buses = Vec::new();
-            for (bus, port) in robot.buses.iter().zip(&ports) {
-                buses.push(open_bus(bus, port, Allowance::Run)?);
-            }
-            // Angles go through the calibration: the servos must match it.
-            super::calibrate::check_buses(robot, &mut buses, &ports)?;
-            Ok(spawn_live(robot, buses, options)?)
-        }
-        Ports::Missing(bus) => Err(super::link::no_port(robot, &bus.name, None)),
-    }
+    let target = match every_port(robot, port.as_slice()) {
+        Ports::None => servobus_robot::Target::Simulator,
+        Ports::Every(ports) => servobus_robot::Target::Ports(ports),
+        Ports::Missing(bus) => return Err(super::link::no_port(robot, &bus.name, None)),
+    };
+    let connection = super::link::connect(robot, target)?;
+    Ok(connection.live(options)?.into_runner())
 }
 
 /// A target line: its `t`, if given, and its joints' angles (rad).

@@ -52,7 +52,8 @@ pub use servobus_config as config;
 pub use servobus_config::Motion;
 pub use servobus_runtime::calibrate::Refusal;
 pub use servobus_runtime::{
-    Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Telemetry,
+    Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Target as LiveTarget,
+    TargetSender, Telemetry,
 };
 pub use servobus_trajectory::Trajectory;
 

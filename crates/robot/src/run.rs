@@ -5,7 +5,10 @@ use std::time::Duration;
 
 use crossbeam_channel::Receiver;
 use servobus_config::Motion;
-use servobus_runtime::{spawn, spawn_virtual, Command, Report, RunOptions, Runner, Telemetry};
+use servobus_runtime::{
+    spawn, spawn_live, spawn_virtual, spawn_virtual_live, Command, Report, RunOptions, Runner,
+    TargetSender, Telemetry,
+};
 use servobus_trajectory::Trajectory;
 
 use crate::connect::{Connection, RunBuses};
@@ -67,6 +70,25 @@ impl Connection {
         };
         Ok(Run { runner })
     }
+
+    /// Starts a live run with `options`: no path, the joints follow the
+    /// targets sent through [`Run::targets`] (a jerk-limited step toward
+    /// the newest every cycle), and stop and hold when none comes for
+    /// `options.target_timeout`. On the simulator in virtual time on a
+    /// thread of its own, otherwise one thread per bus on the wall clock.
+    ///
+    /// # Errors
+    /// [`Error::Run`] when the run cannot start (a servo does not answer, a
+    /// rate that does not fit a bus).
+    pub fn live(self, options: RunOptions) -> Result<Run, Error> {
+        let (robot, buses) = self.into_buses();
+        let runner = match buses {
+            RunBuses::Serial(b) => spawn_live(&robot, b, options)?,
+            RunBuses::Virtual(b) => spawn_virtual_live(&robot, b, options)?,
+            RunBuses::Wall(b) => spawn_live(&robot, b, options)?,
+        };
+        Ok(Run { runner })
+    }
 }
 
 /// A run in progress: its telemetry, commands to it, and its report at the
@@ -82,6 +104,11 @@ impl Run {
     /// been read.
     pub fn telemetry(&self) -> Receiver<Telemetry> {
         self.runner.telemetry()
+    }
+
+    /// Where a live run ([`Connection::live`]) takes its targets.
+    pub fn targets(&self) -> TargetSender {
+        self.runner.targets()
     }
 
     /// Sends `command` to the run (it takes effect on every bus in the same

@@ -186,9 +186,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 .wall_buses(&clock);
             spawn(&robot, trajectory, buses, options)?
         }
-        Backend::Hardware(ports) => super::link::connect(&robot, ports)?
-            .play(trajectory, options)?
-            .into_runner(),
+        Backend::Hardware(ports) => {
+            super::link::connect(&robot, servobus_robot::Target::Ports(ports.to_vec()))?
+                .play(trajectory, options)?
+                .into_runner()
+        }
     };
 
     install_ctrl_c(&runner);

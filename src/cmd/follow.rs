@@ -19,6 +19,7 @@ use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::config::{load_robot, JointMap, Robot, RobotOptions};
 use servobus_runtime::sim::{Hand, SimRobot};
+use servobus_runtime::teach::read_angle;
 use servobus_runtime::{
     Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
 };
@@ -114,17 +115,9 @@ impl<T: Transport, C: Clock> Leader<T, C> {
     /// Every matched joint's angle now (rad), in `out` by follower index.
     fn read(&mut self, out: &mut [Option<f64>]) -> anyhow::Result<()> {
         for j in &self.joints {
-            let bus = &mut self.buses[j.bus];
-            let reg = bus
-                .settings()
-                .series
-                .map()
-                .get("present_position")
-                .context("the leader's servos have no present position register")?;
-            let (ticks, _) = bus
-                .read_register(j.id, reg)
+            let angle = read_angle(&mut self.buses[j.bus], j.id, &j.map)
                 .with_context(|| format!("reading the leader's {} (ID {})", j.name, j.id))?;
-            out[j.to] = Some(j.map.from_ticks(ticks));
+            out[j.to] = Some(angle);
         }
         Ok(())
     }

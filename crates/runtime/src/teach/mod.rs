@@ -186,14 +186,9 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
     pub fn pose(&mut self) -> Result<Vec<f64>, TeachError> {
         let mut pose = Vec::with_capacity(self.joints.len());
         for j in &self.joints {
-            let bus = &mut self.buses[j.bus];
-            let reg = bus.settings().series.map().get("present_position");
-            let ticks = match reg {
-                Some(r) => bus.read_register(j.id, r).map(|v| v.0),
-                None => Err(BusError::InvalidRequest("no present position register")),
-            }
-            .map_err(|e| Self::bus_error(j, e))?;
-            pose.push(self.units.from_rad(j.map.from_ticks(ticks)));
+            let angle = read_angle(&mut self.buses[j.bus], j.id, &j.map)
+                .map_err(|e| Self::bus_error(j, e))?;
+            pose.push(self.units.from_rad(angle));
         }
         Ok(pose)
     }
@@ -217,6 +212,28 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
     pub fn joint_names(&self) -> Vec<String> {
         self.joints.iter().map(|j| j.name.clone()).collect()
     }
+}
+
+/// The angle (radians) of the joint that `map` maps, read from the present
+/// position of its servo `id` on `bus`: what a pose of [`Teacher::pose`] or
+/// a leader arm's reading is made of.
+///
+/// # Errors
+/// The bus's; [`BusError::InvalidRequest`] when the bus's series has no
+/// present position register.
+pub fn read_angle<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    id: u8,
+    map: &JointMap,
+) -> Result<f64, BusError> {
+    let register = bus
+        .settings()
+        .series
+        .map()
+        .get("present_position")
+        .ok_or(BusError::InvalidRequest("no present position register"))?;
+    let (ticks, _) = bus.read_register(id, register)?;
+    Ok(map.from_ticks(ticks))
 }
 
 /// Below this change, degrees, a robot under a person's hand counts as

@@ -72,16 +72,25 @@ fn a_text_is_named_in_its_errors_and_the_rate_check_is_an_option() {
     assert!(e.to_string().starts_with("<text>:4:"), "{e}");
 }
 
+/// A calibration file that does not exist, as a robot file names it.
+const ABSENT: &str = "/nonexistent/servobus-test/one.calibration.yaml";
+
+/// The one-joint robot naming [`ABSENT`], loaded with `options`: its
+/// calibration and the text.
+fn naming_absent(options: &RobotOptions) -> (RobotCalibration, String) {
+    let named = text(100, Some(ABSENT));
+    let robot = load_robot(from_text(&named), options).expect("loads");
+    assert_eq!(robot.calibration.file(), Some(Path::new(ABSENT)));
+    (robot.calibration, named)
+}
+
 #[test]
 fn a_named_calibration_that_does_not_exist_is_missing_and_refused_to_play() {
-    let file = "/nonexistent/servobus-test/one.calibration.yaml";
-    let named = text(100, Some(file));
-    let robot = load_robot(from_text(&named), &RobotOptions::default()).expect("loads");
+    let (calibration, named) = naming_absent(&RobotOptions::default());
     assert_eq!(
-        robot.calibration,
-        RobotCalibration::Missing(PathBuf::from(file))
+        calibration,
+        RobotCalibration::Missing(PathBuf::from(ABSENT))
     );
-    assert_eq!(robot.calibration.file(), Some(Path::new(file)));
 
     let e = load_robot(from_text(&named), &RobotOptions::default().to_play())
         .expect_err("a missing calibration is refused to play");
@@ -97,12 +106,10 @@ fn a_named_calibration_that_does_not_exist_is_missing_and_refused_to_play() {
 
 #[test]
 fn a_design_load_keeps_the_named_file_unapplied() {
-    let file = "/nonexistent/servobus-test/one.calibration.yaml";
-    let named = text(100, Some(file));
-    let robot = load_robot(from_text(&named), &RobotOptions::design()).expect("loads");
+    let (calibration, named) = naming_absent(&RobotOptions::design());
     assert_eq!(
-        robot.calibration,
-        RobotCalibration::Unapplied(PathBuf::from(file))
+        calibration,
+        RobotCalibration::Unapplied(PathBuf::from(ABSENT))
     );
     // As designed: nothing applied, even to play.
     let to_play = RobotOptions {

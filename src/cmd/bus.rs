@@ -15,21 +15,11 @@ use super::exit::input;
 
 mod regs;
 pub use regs::{list as registers, read, set_id, write};
-use servobus_driver::BusError;
 
 use super::link::{open_plain_bus, SerialBus};
-use servobus_protocol::registers::{self, addr, Model, Series};
+use servobus_protocol::registers::{addr, Series};
 use servobus_protocol::MAX_ID;
-
-/// The longest latency any adapter is waited for while measuring it (an
-/// FTDI latency timer goes up to 255 ms).
-const LATENCY_CEILING: Duration = Duration::from_millis(300);
-/// PINGs the bus tools measure an adapter's latency with: few enough to
-/// stay quick, enough that one lucky reply does not set the figure.
-const LATENCY_PINGS: u32 = 3;
-/// The measured latency's worst case is allowed this many times over in
-/// the deadlines: room for the spikes a USB adapter shows now and then.
-const LATENCY_HEADROOM: u32 = 2;
+use servobus_robot::scan::{self, adapt_latency, identify, table_bauds, Found, Scan, ScanError};
 
 /// Options every bus tool shares.
 #[derive(Debug, clap::Args)]
@@ -137,17 +127,6 @@ fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Resu
     Ok(bus)
 }
 
-/// Measures the adapter's latency with servo `id` and widens the bus's
-/// deadlines to [`LATENCY_HEADROOM`] times it when the assumed latency is
-/// too short. Used by the single-servo tools, which can afford the PINGs.
-fn adapt_latency(bus: &mut SerialBus, id: u8) -> Result<(), BusError> {
-    let m = bus.measure_latency(id, LATENCY_PINGS, LATENCY_CEILING)?;
-    if m.max * LATENCY_HEADROOM > bus.settings().link.latency {
-        bus.set_latency(m.max * LATENCY_HEADROOM);
-    }
-    Ok(())
-}
-
 fn check_id(id: u8) -> anyhow::Result<()> {
     if id > MAX_ID {
         return Err(input(format!("ID {id} is not a servo ID (0..={MAX_ID})")));
@@ -155,119 +134,32 @@ fn check_id(id: u8) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// What one scan found about a servo.
-#[derive(Debug, Clone)]
-struct Found {
-    id: u8,
-    baud: u32,
-    model: Option<&'static Model>,
-    model_number: u16,
-    firmware: (u8, u8),
-    position: Option<i32>,
-    voltage_v: Option<f64>,
-    temperature_c: Option<u8>,
-}
-
-impl Found {
-    /// A servo that answered PING but not the reads that identify it.
-    fn unknown(id: u8, baud: u32) -> Found {
-        Found {
-            id,
-            baud,
-            model: None,
-            model_number: 0,
-            firmware: (0, 0),
-            position: None,
-            voltage_v: None,
-            temperature_c: None,
-        }
-    }
-}
-
-/// The model behind a model-number register, trying both byte orders, and
-/// its number (read little-endian when no model has it).
-fn model_of(bytes: [u8; 2]) -> (u16, Option<&'static Model>) {
-    let model = registers::model_by_register(bytes);
-    (model.map_or(u16::from_le_bytes(bytes), |m| m.number), model)
-}
-
-/// Identifies servo `id` and switches the bus to its series.
-fn identify(bus: &mut SerialBus, id: u8) -> Result<Found, BusError> {
-    let mut head = [0u8; 5];
-    bus.read(id, addr::FIRMWARE_MAJOR, &mut head)?;
-    let (model_number, model) = model_of([head[3], head[4]]);
-    let series = model.map_or(Series::Sts, |m| m.series);
-    let mut settings = *bus.settings();
-    settings.series = series;
-    bus.set_settings(settings);
-    let mut state = [0u8; 8];
-    let (position, voltage_v, temperature_c) =
-        match bus.read(id, addr::PRESENT_POSITION, &mut state) {
-            Ok(_) => {
-                let map = series.map();
-                let pos = map
-                    .at(addr::PRESENT_POSITION)
-                    .and_then(|r| r.decode(&state[..2], series.byte_order()).ok());
-                (pos, Some(f64::from(state[6]) / 10.0), Some(state[7]))
-            }
-            Err(e) if e.is_retryable() && !matches!(e, BusError::Corrupt { .. }) => {
-                (None, None, None)
-            }
-            Err(e) => return Err(e),
-        };
-    Ok(Found {
-        id,
-        baud: bus.baud(),
-        model,
-        model_number,
-        firmware: (head[0], head[1]),
-        position,
-        voltage_v,
-        temperature_c,
-    })
-}
-
 /// Runs `servobus scan`.
 pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     let bauds: Vec<u32> = if args.all_bauds {
-        (0..8).filter_map(registers::baud_rate).collect()
+        table_bauds()
     } else {
         vec![args.baud]
     };
     let mut bus = open(&args.port, bauds[0], Series::Sts, 0)?;
-    let mut found = Vec::new();
-    let mut collisions: Vec<(u8, u32)> = Vec::new();
     let started = std::time::Instant::now();
-    for &baud in &bauds {
-        switch_baud(&mut bus, baud, &args.port.port)?;
-        for id in 0..=MAX_ID {
-            let mut s = *bus.settings();
-            s.series = Series::Sts;
-            bus.set_settings(s);
-            // Absent IDs are asked once: that is what makes the scan fast.
-            s.retries = 0;
-            bus.set_settings(s);
-            let answered = bus.ping(id);
-            s.retries = 1;
-            bus.set_settings(s);
-            let result = match answered {
-                Ok(_) => match identify(&mut bus, id) {
-                    Err(e) if e.is_timeout() => Ok(Found::unknown(id, baud)),
-                    other => other,
-                },
-                Err(e) => Err(e),
-            };
-            sort_answer(result, (id, baud), &mut found, &mut collisions)?;
-        }
+    let learn = args.port.latency_us.is_none();
+    let scanned = scan::scan(&mut bus, &bauds, learn).map_err(|e| match e {
+        ScanError::Baud { baud, source } => anyhow::Error::new(source)
+            .context(format!("cannot set {} to {baud} baud", args.port.port)),
+        e => e.into(),
+    })?;
+    if let Some(slow) = scanned.slow {
+        eprintln!(
+            "warning: the adapter's latency is about {} us, more than the {} us assumed: \
+             asking silent IDs again (pass --latency-us to skip this)",
+            slow.measured.as_micros(),
+            slow.assumed.as_micros()
+        );
     }
-    // If the adapter turned out slower than assumed, servos may have been
-    // missed: measure it on a servo that answered and ask the silent IDs
-    // again with deadlines that fit.
-    if args.port.latency_us.is_none() {
-        if let Some(first) = found.first().map(|f| (f.id, f.baud)) {
-            rescan_if_slow(&mut bus, first, &mut found, &mut collisions)?;
-        }
-    }
+    let Scan {
+        found, collisions, ..
+    } = scanned;
     let elapsed = started.elapsed();
     if args.json {
         let servos: Vec<_> = found
@@ -349,75 +241,6 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(super::exit::PROBLEM));
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// Files what asking servo `id` at `baud` gave: a servo found, a collision,
-/// or silence; any other error ends the scan.
-fn sort_answer(
-    result: Result<Found, BusError>,
-    (id, baud): (u8, u32),
-    found: &mut Vec<Found>,
-    collisions: &mut Vec<(u8, u32)>,
-) -> anyhow::Result<()> {
-    match result {
-        Ok(f) => found.push(f),
-        // Two servos answering at once garble each other's replies.
-        Err(BusError::Corrupt { .. }) | Err(BusError::WrongLength { .. }) => {
-            collisions.push((id, baud))
-        }
-        Err(BusError::Timeout { .. }) | Err(BusError::WrongId { .. }) => {}
-        Err(e) => return Err(e).context(format!("scan stopped at ID {id}")),
-    }
-    Ok(())
-}
-
-/// Moves the port and the bus's deadlines to `baud` (nothing when already
-/// there).
-fn switch_baud(bus: &mut SerialBus, baud: u32, port: &str) -> anyhow::Result<()> {
-    bus.set_baud(baud)
-        .with_context(|| format!("cannot set {port} to {baud} baud"))
-}
-
-/// Measures the latency on servo `first` and, when it exceeds the one the
-/// scan assumed, asks every silent ID again at that baud rate.
-fn rescan_if_slow(
-    bus: &mut SerialBus,
-    (first, baud): (u8, u32),
-    found: &mut Vec<Found>,
-    collisions: &mut Vec<(u8, u32)>,
-) -> anyhow::Result<()> {
-    let assumed = bus.settings().link.latency;
-    switch_baud(bus, baud, "the port")?;
-    let Ok(m) = bus.measure_latency(first, LATENCY_PINGS, LATENCY_CEILING) else {
-        return Ok(());
-    };
-    // Occasional spikes are what retries are for; a typical latency above
-    // the assumed one means the first pass could not hear anyone.
-    if m.mean <= assumed {
-        return Ok(());
-    }
-    eprintln!(
-        "warning: the adapter's latency is about {} us, more than the {} us assumed: \
-         asking silent IDs again (pass --latency-us to skip this)",
-        m.mean.as_micros(),
-        assumed.as_micros()
-    );
-    bus.set_latency(m.max * LATENCY_HEADROOM);
-    for id in 0..=MAX_ID {
-        let known =
-            found.iter().any(|f| f.id == id && f.baud == baud) || collisions.contains(&(id, baud));
-        if known {
-            continue;
-        }
-        let mut s = *bus.settings();
-        s.series = Series::Sts;
-        s.retries = 1;
-        bus.set_settings(s);
-        let result = bus.ping(id).and_then(|_| identify(bus, id));
-        sort_answer(result, (id, baud), found, collisions)?;
-    }
-    found.sort_by_key(|f| (f.baud, f.id));
-    Ok(())
 }
 
 /// Runs `servobus ping`.

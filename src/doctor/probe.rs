@@ -400,8 +400,8 @@ fn find_at_other_bauds<T: Transport, C: Clock>(
     let Some(index) = registers::baud_index(home) else {
         return Ok(());
     };
-    let rates = (0..8)
-        .filter_map(registers::baud_rate)
+    let rates = servobus_robot::scan::table_bauds()
+        .into_iter()
         .filter(|&b| b != home);
     for baud in rates {
         bus.set_baud(baud)?;

@@ -40,6 +40,7 @@ mod connect;
 mod error;
 pub mod ports;
 mod run;
+pub mod scan;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,70 @@
+//! A scan on the simulator in virtual time: each servo at its own baud
+//! rate, its model and firmware read, and an adapter slower than assumed
+//! caught.
+
+use std::time::Duration;
+
+use servobus_driver::{Bus, BusSettings, ManualClock};
+use servobus_protocol::registers::{addr, Series};
+use servobus_robot::scan::{scan, table_bauds, ScanError, SlowLink};
+use servobus_sim::{SimBus, SimServo};
+
+/// An STS3215 that answers at once (no return delay).
+fn sts(id: u8) -> SimServo {
+    SimServo::sts3215(id).with_return_delay(Duration::ZERO)
+}
+
+fn bus(sim: &SimBus) -> Bus<SimBus, ManualClock> {
+    Bus::new(sim.clone(), BusSettings::new(Series::Sts))
+}
+
+#[test]
+fn each_servo_is_found_at_its_own_baud_rate_and_identified() -> Result<(), ScanError> {
+    // Servo 2's baud-rate register holds index 4: 115200 baud.
+    let sim = SimBus::new(ManualClock::new(), 1_000_000).with_servos([
+        sts(1).with_position(1000),
+        sts(2).with_byte(addr::BAUD_RATE, 4),
+        SimServo::scs0009(7),
+    ]);
+    let mut bus = bus(&sim);
+    let found = scan(&mut bus, &[1_000_000, 115_200], false)?;
+    let at: Vec<(u8, u32)> = found.found.iter().map(|f| (f.id, f.baud)).collect();
+    assert_eq!(at, [(1, 1_000_000), (7, 1_000_000), (2, 115_200)]);
+    assert!(found.collisions.is_empty());
+    assert_eq!(found.slow, None);
+    let first = &found.found[0];
+    assert_eq!(first.model.map(|m| m.name), Some("STS3215"));
+    assert_eq!(first.position, Some(1000));
+    assert_eq!(found.found[1].model.map(|m| m.name), Some("SCS0009"));
+    // The port is left at the last rate asked.
+    assert_eq!(sim.baud(), 115_200);
+    Ok(())
+}
+
+#[test]
+fn the_table_has_eight_rates_fastest_first() {
+    assert_eq!(
+        table_bauds(),
+        [1_000_000, 500_000, 250_000, 128_000, 115_200, 76_800, 57_600, 38_400]
+    );
+}
+
+#[test]
+fn an_adapter_slower_than_assumed_is_reported_and_the_silent_ids_asked_again(
+) -> Result<(), ScanError> {
+    // 150 us of adapter latency each way; the bus assumes none, and its
+    // margin lets the first pass hear the servo anyway.
+    let sim = SimBus::new(ManualClock::new(), 1_000_000)
+        .with_latency(Duration::from_micros(150))
+        .with_servos([sts(3)]);
+    let mut bus = bus(&sim);
+    let found = scan(&mut bus, &[1_000_000], true)?;
+    let Some(SlowLink { measured, assumed }) = found.slow else {
+        panic!("the slow adapter is reported: {found:?}");
+    };
+    assert_eq!(assumed, Duration::ZERO);
+    assert!(measured >= Duration::from_micros(150), "{measured:?}");
+    assert_eq!(found.found.len(), 1);
+    assert_eq!(found.found[0].id, 3);
+    Ok(())
+}

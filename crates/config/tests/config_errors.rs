@@ -9,6 +9,11 @@ use std::path::{Path, PathBuf};
 use servobus_config::{load_motion, load_robot, ConfigError, RobotOptions};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
+/// The robot file at `path`, which must be valid.
+fn valid(path: &Path) -> servobus_config::Robot {
+    load_robot(path, &RobotOptions::default()).expect("valid")
+}
+
 fn write(dir: &str, name: &str, text: &str) -> PathBuf {
     common::temp_file(&format!("config_errors/{dir}"), name, text)
 }
@@ -63,7 +68,7 @@ fn expect(e: &ConfigError, file: &Path, line: usize, column: usize, field: &str,
 #[test]
 fn the_valid_robot_loads() {
     let p = write("valid", "robot.yaml", ROBOT);
-    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
+    let r = valid(&p);
     assert_eq!(r.joint_count(), 2);
     assert_eq!(r.path, p);
 }
@@ -306,18 +311,14 @@ fn a_motion_without_robot_asks_for_one() {
 
 #[test]
 fn the_lag_compensation_lead_is_read_and_checked() {
-    let r = load_robot(
-        &write("no_lead", "robot.yaml", ROBOT),
-        &RobotOptions::default(),
-    )
-    .expect("valid");
+    let r = valid(&write("no_lead", "robot.yaml", ROBOT));
     assert_eq!(r.lead, None, "absent: identified at run time");
     let p = write(
         "lead",
         "robot.yaml",
         &ROBOT.replacen("rate: 100", "rate: 100\nlead_ms: 12.5", 1),
     );
-    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
+    let r = valid(&p);
     assert_eq!(r.lead, Some(std::time::Duration::from_micros(12_500)));
     let (p, e) = robot_error("bad_lead", "rate: 100", "rate: 100\nlead_ms: -3");
     expect(
@@ -332,18 +333,14 @@ fn the_lag_compensation_lead_is_read_and_checked() {
 
 #[test]
 fn busy_polling_is_off_unless_the_robot_file_asks() {
-    let r = load_robot(
-        &write("no_busy", "robot.yaml", ROBOT),
-        &RobotOptions::default(),
-    )
-    .expect("valid");
+    let r = valid(&write("no_busy", "robot.yaml", ROBOT));
     assert!(r.buses.iter().all(|b| !b.busy_poll));
     let p = write(
         "busy",
         "robot.yaml",
         &ROBOT.replacen("baud: 1000000", "baud: 1000000\n    busy_poll: true", 1),
     );
-    let r = load_robot(&p, &RobotOptions::default()).expect("valid");
+    let r = valid(&p);
     assert!(r.buses[0].busy_poll);
 }
 

@@ -20,9 +20,7 @@ use servobus_protocol::registers::sign_magnitude;
 use servobus_runtime::calibrate::{
     calibrate, prepare_servos, write_homing, LiveJoint, Operator, Step,
 };
-use servobus_runtime::config::{
-    load_robot, save_calibration, Calibration, JointMap, Robot, RobotOptions,
-};
+use servobus_runtime::config::{save_calibration, Calibration, JointMap, Robot};
 use servobus_runtime::{bus_settings, Finish};
 use servobus_sim::{addr, SimBus, SimServo};
 
@@ -206,11 +204,7 @@ fn measured_arm() -> (
     PathBuf,
     Calibration,
 ) {
-    let design = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let design = common::robot("so101.yaml");
     let (mut buses, sim) = arm(&design);
     let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
     for (&id, m) in ids.iter().zip(mounts()) {
@@ -232,11 +226,7 @@ fn measured_arm() -> (
     );
     let path = common::temp_path("calibrate_arm", "so101.calibration.yaml");
     save_calibration(&cal, &path).expect("saves");
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default().calibration(Some(&path)),
-    )
-    .expect("calibration applies");
+    let robot = common::calibrated("so101.yaml", &path);
     (robot, buses, sim, path, cal)
 }
 
@@ -348,11 +338,7 @@ fn the_calibrated_arm_plays_where_it_is_told_and_the_uncalibrated_one_misses() {
     );
 
     // The same arm, the same motion, without the calibration.
-    let design = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let design = common::robot("so101.yaml");
     let (buses, sim) = arm(&design);
     for (j, m) in design.joints().zip(mounts()) {
         place(&sim, j.id, m, 0.0);
@@ -451,11 +437,7 @@ fn write_servos_stores_centring_offsets_and_plays_the_same() {
     assert!(cal.joints.iter().all(|c| !c.crosses_seam()));
     let path = common::temp_path("calibrate_arm", "so101-written.calibration.yaml");
     save_calibration(&cal, &path).expect("saves");
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default().calibration(Some(&path)),
-    )
-    .expect("applies");
+    let robot = common::calibrated("so101.yaml", &path);
     prepare_servos(&robot, &mut buses).expect("servos match");
     for joint in robot.joints() {
         assert_eq!(sim.register(joint.id, addr::LOCK), Some(1));
@@ -471,11 +453,7 @@ fn write_servos_stores_centring_offsets_and_plays_the_same() {
 
 #[test]
 fn a_person_pressing_enter_ends_each_step_instead_of_stillness() {
-    let design = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let design = common::robot("so101.yaml");
     let (mut buses, sim) = arm(&design);
     let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
     let last = script().last().expect("keys").0;

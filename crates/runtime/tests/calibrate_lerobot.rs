@@ -16,9 +16,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use servobus_runtime::calibrate::{from_lerobot, lerobot_value, to_lerobot, NormMode};
-use servobus_runtime::config::{
-    load_calibration, load_robot, save_calibration, JointMap, RobotOptions,
-};
+use servobus_runtime::config::{load_calibration, save_calibration, JointMap};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -46,11 +44,7 @@ fn lerobot_m100(val: f64, min: f64, max: f64, drive_mode: bool) -> f64 {
 
 #[test]
 fn a_lerobot_file_imported_then_exported_is_identical() {
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let robot = common::robot("so101.yaml");
     let json = std::fs::read_to_string(data("so101-lerobot.json")).expect("fixture");
     let cal = from_lerobot(&robot, &json, "imported").expect("imports");
     // Through a servobus calibration file and back.
@@ -63,11 +57,7 @@ fn a_lerobot_file_imported_then_exported_is_identical() {
 
 #[test]
 fn a_seam_crossing_range_is_exported_in_its_centred_frame() {
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let robot = common::robot("so101.yaml");
     let json = std::fs::read_to_string(data("so101-lerobot.json")).expect("fixture");
     let mut cal = from_lerobot(&robot, &json, "imported").expect("imports");
     // A range measured across the seam without an offset: 3900..4296.
@@ -86,19 +76,11 @@ fn a_seam_crossing_range_is_exported_in_its_centred_frame() {
 fn the_same_raw_positions_give_lerobots_degrees_and_range_values() {
     let json = std::fs::read_to_string(data("so101-lerobot.json")).expect("fixture");
     let motors: serde_json::Value = serde_json::from_str(&json).expect("json");
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default(),
-    )
-    .expect("so101");
+    let robot = common::robot("so101.yaml");
     let cal = from_lerobot(&robot, &json, "imported").expect("imports");
     let path = temp("so101-deg.calibration.yaml");
     save_calibration(&cal, &path).expect("saves");
-    let robot = load_robot(
-        &common::config("robots/so101.yaml"),
-        &RobotOptions::default().calibration(Some(&path)),
-    )
-    .expect("applies");
+    let robot = common::calibrated("so101.yaml", &path);
     let mut checked = 0;
     for (joint, jc) in robot.joints().zip(&cal.joints) {
         let m = &motors[&joint.name];

@@ -75,22 +75,19 @@ fn a_text_is_named_in_its_errors_and_the_rate_check_is_an_option() {
 /// A calibration file that does not exist, as a robot file names it.
 const ABSENT: &str = "/nonexistent/servobus-test/one.calibration.yaml";
 
-/// The one-joint robot naming [`ABSENT`], loaded with `options`: its
-/// calibration and the text.
-fn naming_absent(options: &RobotOptions) -> (RobotCalibration, String) {
+/// The one-joint robot naming [`ABSENT`], loaded with `options`, whose
+/// calibration must be `expected` of that file; its text.
+fn naming_absent(options: &RobotOptions, expected: fn(PathBuf) -> RobotCalibration) -> String {
     let named = text(100, Some(ABSENT));
     let robot = load_robot(from_text(&named), options).expect("loads");
     assert_eq!(robot.calibration.file(), Some(Path::new(ABSENT)));
-    (robot.calibration, named)
+    assert_eq!(robot.calibration, expected(PathBuf::from(ABSENT)));
+    named
 }
 
 #[test]
 fn a_named_calibration_that_does_not_exist_is_missing_and_refused_to_play() {
-    let (calibration, named) = naming_absent(&RobotOptions::default());
-    assert_eq!(
-        calibration,
-        RobotCalibration::Missing(PathBuf::from(ABSENT))
-    );
+    let named = naming_absent(&RobotOptions::default(), RobotCalibration::Missing);
 
     let e = load_robot(from_text(&named), &RobotOptions::default().to_play())
         .expect_err("a missing calibration is refused to play");
@@ -106,11 +103,7 @@ fn a_named_calibration_that_does_not_exist_is_missing_and_refused_to_play() {
 
 #[test]
 fn a_design_load_keeps_the_named_file_unapplied() {
-    let (calibration, named) = naming_absent(&RobotOptions::design());
-    assert_eq!(
-        calibration,
-        RobotCalibration::Unapplied(PathBuf::from(ABSENT))
-    );
+    let named = naming_absent(&RobotOptions::design(), RobotCalibration::Unapplied);
     // As designed: nothing applied, even to play.
     let to_play = RobotOptions {
         to_play: true,

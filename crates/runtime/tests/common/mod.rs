@@ -36,6 +36,13 @@ pub fn robot(name: &str) -> Robot {
         .expect("robot file loads")
 }
 
+/// A robot file under `configs/robots/` with the calibration file
+/// `calibration` applied.
+pub fn calibrated(name: &str, calibration: &std::path::Path) -> Robot {
+    let options = RobotOptions::default().calibration(Some(calibration));
+    load_robot(&config(&format!("robots/{name}")), &options).expect("the calibration applies")
+}
+
 /// A motion under `configs/motions/`, planned, with its robot.
 pub fn motion(name: &str) -> (Trajectory, Robot) {
     planned(&format!("motions/{name}"), None)

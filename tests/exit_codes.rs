@@ -22,6 +22,7 @@ fn each_input_error_exits_2_with_one_line() {
     let missing = dir.join("none.json");
     let robot = "configs/robots/so101.yaml";
     let sim = Sim::start(&dir);
+    let from_lerobot = |file| vec!["calibrate", "--robot", robot, "--from-lerobot", arg(file)];
     let cases: Vec<(Vec<&str>, &[&str])> = vec![
         (vec!["calibrate", "--robot", robot], &["give --port"]),
         (
@@ -36,23 +37,11 @@ fn each_input_error_exits_2_with_one_line() {
             &["--write-servos needs", "--port"],
         ),
         (
-            vec![
-                "calibrate",
-                "--robot",
-                robot,
-                "--from-lerobot",
-                arg(&missing),
-            ],
+            from_lerobot(&missing),
             &["cannot read", "none.json", "no such file"],
         ),
         (
-            vec![
-                "calibrate",
-                "--robot",
-                robot,
-                "--from-lerobot",
-                arg(&bad_json),
-            ],
+            from_lerobot(&bad_json),
             &["bad.json", "not a LeRobot calibration file"],
         ),
         (

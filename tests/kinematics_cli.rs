@@ -12,6 +12,19 @@ fn xyz(v: &serde_json::Value) -> [f64; 3] {
     [0, 1, 2].map(|i| a[i].as_f64().expect("a number"))
 }
 
+/// `servobus ik` placing `frame` of `robot` at `xyz`, with `more` arguments.
+fn ik(robot: &str, frame: &str, xyz: &str, more: &[&str]) -> std::process::Output {
+    let args = ["ik", "--robot", robot, "--frame", frame, "--xyz", xyz];
+    servobus(&[&args[..], more].concat())
+}
+
+/// [`ik`], which must succeed: its JSON.
+fn ik_json(robot: &str, frame: &str, xyz: &str, more: &[&str]) -> serde_json::Value {
+    let out = ik(robot, frame, xyz, more);
+    exited(&out, 0);
+    json(&out)
+}
+
 fn close(got: [f64; 3], want: [f64; 3], tol: f64) {
     let d = (0..3)
         .map(|i| (got[i] - want[i]).powi(2))
@@ -66,20 +79,12 @@ fn fk_pose_is_in_the_robot_file_s_units() {
 
 #[test]
 fn ik_answers_put_the_tool_where_asked() {
-    let v = servobus_json(&[
-        "ik",
-        "--robot",
+    let v = ik_json(
         "so101",
-        "--frame",
         "tool",
-        "--xyz",
         "250,50,120",
-        "--pitch",
-        "30",
-        "--roll",
-        "10",
-        "--json",
-    ]);
+        &["--pitch", "30", "--roll", "10", "--json"],
+    );
     let joints = v["joints"].as_object().expect("joints");
     let pose: Vec<String> = joints.iter().map(|(k, a)| format!("{k}: {a}")).collect();
     let pose = format!("{{{}}}", pose.join(", "));
@@ -96,16 +101,7 @@ fn ik_answers_put_the_tool_where_asked() {
 #[test]
 fn ik_places_a_hexapod_foot_with_negative_coordinates() {
     // Middle right hip at (0, -90, 0); 200 out and 40 down from it.
-    let v = servobus_json(&[
-        "ik",
-        "--robot",
-        "hexapod",
-        "--frame",
-        "foot_middle_right",
-        "--xyz",
-        "0,-290,-40",
-        "--json",
-    ]);
+    let v = ik_json("hexapod", "foot_middle_right", "0,-290,-40", &["--json"]);
     let j = &v["joints"];
     assert!(num(j, "middle_right_coxa").abs() < 1e-9, "{j}");
     let pose = format!(
@@ -125,28 +121,11 @@ fn ik_places_a_hexapod_foot_with_negative_coordinates() {
 fn ik_out_of_reach_exits_1_with_the_distance_short() {
     // Straight ahead at the lift axis's height: 569.6 from it, the arm
     // reaches 116.03 + 135.0 + 159.2.
-    let out = servobus(&[
-        "ik",
-        "--robot",
-        "so101",
-        "--frame",
-        "tool",
-        "--xyz",
-        "600,0,149.1",
-        "--json",
-    ]);
+    let out = ik("so101", "tool", "600,0,149.1", &["--json"]);
     let (_, _) = exited(&out, 1);
     let v = json(&out);
     assert!((num(&v, "short_mm") - 159.37).abs() < 0.5, "{v}");
-    let text = servobus(&[
-        "ik",
-        "--robot",
-        "so101",
-        "--frame",
-        "tool",
-        "--xyz",
-        "600,0,149.1",
-    ]);
+    let text = ik("so101", "tool", "600,0,149.1", &[]);
     let (o, _) = exited(&text, 1);
     says(&o, &["unreachable", "159.3"]);
 }
@@ -155,20 +134,12 @@ fn ik_out_of_reach_exits_1_with_the_distance_short() {
 fn ik_beyond_a_limit_names_the_joint() {
     // Roll 170 deg needs wrist_roll at -170 (its axis points back); its
     // limits are +-160.
-    let out = servobus(&[
-        "ik",
-        "--robot",
+    let out = ik(
         "so101",
-        "--frame",
         "tool",
-        "--xyz",
         "352.5,0,266.9",
-        "--pitch",
-        "0",
-        "--roll",
-        "170",
-        "--json",
-    ]);
+        &["--pitch", "0", "--roll", "170", "--json"],
+    );
     exited(&out, 1);
     assert_eq!(json(&out)["joint"], "wrist_roll");
 }

@@ -18,17 +18,30 @@ const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
 
 /// The names in `dir`, sorted (temporaries, which start with `.`, included).
 fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .expect("the directory lists")
-        .map(|e| {
-            e.expect("an entry")
+    let entries = std::fs::read_dir(dir).expect("the directory lists");
+    let mut names = Vec::new();
+    for entry in entries {
+        names.push(
+            entry
+                .expect("an entry")
                 .file_name()
                 .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
+                .into_owned(),
+        );
+    }
     names.sort();
     names
+}
+
+/// `servobus play` of arm-wave in `dir` with `args`, logging and plotting
+/// to `(log, plot)`.
+fn play_logged(dir: &Path, args: &[&str], (log, plot): (&str, &str)) -> std::process::Output {
+    let wave = repo(WAVE);
+    let head = ["play", arg(&wave)];
+    servobus_in(
+        dir,
+        &[&head[..], args, &["--log", log, "--plot", plot]].concat(),
+    )
 }
 
 /// A fresh, empty scratch directory.
@@ -65,36 +78,20 @@ fn untouched(dir: &Path, (log, plot): &(Vec<u8>, Vec<u8>)) {
 fn a_play_refused_for_its_port_leaves_the_log_and_plot_as_they_were() {
     let dir = empty("outputs-port");
     let old = yesterday(&dir);
-    let out = servobus_in(
+    let out = play_logged(
         &dir,
-        &[
-            "play",
-            arg(&repo(WAVE)),
-            "--port",
-            "/nonexistent/ttyACM0",
-            "--log",
-            "prev.csv",
-            "--plot",
-            "prev.svg",
-        ],
+        &["--port", "/nonexistent/ttyACM0"],
+        ("prev.csv", "prev.svg"),
     );
     let (_, err) = exited(&out, 2);
     says(&err, &["/nonexistent/ttyACM0"]);
     untouched(&dir, &old);
 
     // A new log and plot are not created either, not even empty.
-    let out = servobus_in(
+    let out = play_logged(
         &dir,
-        &[
-            "play",
-            arg(&repo(WAVE)),
-            "--port",
-            "/nonexistent/ttyACM0",
-            "--log",
-            "new.csv",
-            "--plot",
-            "new.png",
-        ],
+        &["--port", "/nonexistent/ttyACM0"],
+        ("new.csv", "new.png"),
     );
     exited(&out, 2);
     untouched(&dir, &old);
@@ -118,21 +115,8 @@ fn a_play_refused_for_its_calibration_leaves_the_log_and_plot_as_they_were() {
     let sim_dir = empty("outputs-calibration-sim");
     let sim = Sim::start(&sim_dir);
     let old = yesterday(&dir);
-    let out = servobus_in(
-        &dir,
-        &[
-            "play",
-            arg(&repo(WAVE)),
-            "--port",
-            sim.port(),
-            "--calibration",
-            arg(&cal),
-            "--log",
-            "prev.csv",
-            "--plot",
-            "prev.svg",
-        ],
-    );
+    let on_sim = ["--port", sim.port(), "--calibration", arg(&cal)];
+    let out = play_logged(&dir, &on_sim, ("prev.csv", "prev.svg"));
     let (_, err) = exited(&out, 1);
     says(&err, &["nothing was moved"]);
     untouched(&dir, &old);
@@ -143,18 +127,7 @@ fn a_play_refused_for_its_calibration_leaves_the_log_and_plot_as_they_were() {
 fn a_completed_play_replaces_the_log_and_plot() {
     let dir = empty("outputs-done");
     yesterday(&dir);
-    let out = servobus_in(
-        &dir,
-        &[
-            "play",
-            arg(&repo(WAVE)),
-            "--fast",
-            "--log",
-            "prev.csv",
-            "--plot",
-            "prev.svg",
-        ],
-    );
+    let out = play_logged(&dir, &["--fast"], ("prev.csv", "prev.svg"));
     let (text, _) = exited(&out, 0);
     says(&text, &["log: prev.csv", "plot: prev.svg"]);
     assert_eq!(names(&dir), ["prev.csv", "prev.svg"]);

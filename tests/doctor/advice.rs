@@ -16,16 +16,22 @@ use super::{about, must, show, Arm, PORT};
 /// shoulder_pan (servo 1, at tick 2048 with homing offset 0) calibrated
 /// with offset 0 over ticks 2000..4600: a range across the seam.
 fn across_the_seam() -> JointCalibration {
+    shoulder_pan("3.10", 0, [2000, 4600])
+}
+
+/// shoulder_pan (servo 1, an STS3215 posed at tick 2048) calibrated on
+/// `firmware` with `homing_offset` over the ticks `range`.
+fn shoulder_pan(firmware: &str, homing_offset: i32, range: [i64; 2]) -> JointCalibration {
     JointCalibration {
         name: "shoulder_pan".into(),
         id: 1,
         model: "STS3215".into(),
-        firmware: Some("3.10".into()),
-        homing_offset: 0,
+        firmware: Some(firmware.into()),
+        homing_offset,
         pose_deg: 0.0,
         pose_tick: 2048.0,
         direction: 1,
-        range: [2000, 4600],
+        range,
     }
 }
 
@@ -263,17 +269,7 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
     let mut arm = Arm::tuned(Faults::none());
     // The calibration of shoulder_pan was taken with homing offset 100 on
     // firmware 3.9; the servo holds 0 and reports 3.10.
-    arm.robot.buses[0].joints[0].calibration = Some(JointCalibration {
-        name: "shoulder_pan".into(),
-        id: 1,
-        model: "STS3215".into(),
-        firmware: Some("3.9".into()),
-        homing_offset: 100,
-        pose_deg: 0.0,
-        pose_tick: 2048.0,
-        direction: 1,
-        range: [600, 3500],
-    });
+    arm.robot.buses[0].joints[0].calibration = Some(shoulder_pan("3.9", 100, [600, 3500]));
     let findings = arm.examine();
     let offset = must(&findings, 1, Some("offset"));
     assert_eq!(

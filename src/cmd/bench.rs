@@ -26,14 +26,12 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use serde::Serialize;
-use servobus_driver::Clock;
-use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot, BusConfig, Robot, RobotOptions};
-use servobus_runtime::stats::Histogram;
 use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
 
-use super::link::{bus_ports, open_bus, Allowance, SerialBus};
+use super::link::{bus_ports, open_bus, Allowance};
+use servobus_robot::bench::{measure, BenchError, BusBench};
 
 mod floor;
 
@@ -61,44 +59,6 @@ pub struct Args {
     /// round-robin when it plays), as `round_robin: true` on every bus.
     #[arg(long)]
     pub round_robin: bool,
-}
-
-/// One servo's round trip, us.
-#[derive(Debug, Clone, Serialize)]
-struct ServoRtt {
-    id: u8,
-    joint: String,
-    replies: u64,
-    rtt_mean_us: f64,
-    rtt_max_us: f64,
-    timeouts: u64,
-}
-
-/// One bus's figures.
-#[derive(Debug, Clone, Serialize)]
-struct BusBench {
-    name: String,
-    servos: usize,
-    backend: String,
-    busy_poll: bool,
-    cycles: u64,
-    achieved_rate_hz: f64,
-    planned_rate_hz: f64,
-    wire_limited_rate_hz: f64,
-    period_us: Quantiles,
-    period_error_us: Quantiles,
-    /// Cycles whose period exceeded the planned cycle time.
-    overruns: u64,
-    /// The pty's own request/reply floor for this cycle, mean rate (on the
-    /// simulator only; 0 on a serial port).
-    floor_rate_hz: f64,
-    /// Achieved over floor rate (0 without a floor).
-    floor_ratio: f64,
-    timeouts: u64,
-    retries: u64,
-    missed_replies: u64,
-    checksum_errors: u64,
-    servo_rtt: Vec<ServoRtt>,
 }
 
 /// The whole report: the slowest bus's figures at the top level (the ones
@@ -191,15 +151,6 @@ fn bench_bus(
     port: Option<String>,
     duration: Duration,
 ) -> anyhow::Result<BusBench> {
-    let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
-    let Some(first) = bus.joints.first() else {
-        bail!("bus `{}` has no joints", bus.name);
-    };
-    let series = first.model.series;
-    let plan = bus
-        .plan(1.0)
-        .with_context(|| format!("bus `{}`: cannot plan its cycle", bus.name))?;
-
     // The simulator (when no port is given) serves until `stop`.
     let stop = Arc::new(AtomicBool::new(false));
     let (path, server, backend) = match &port {
@@ -221,7 +172,12 @@ fn bench_bus(
         if let Some(port) = &port {
             super::calibrate::check_bus(robot, index, &mut servo_bus, port)?;
         }
-        measure(&mut servo_bus, bus, &ids, series, duration, &plan)
+        measure(&mut servo_bus, bus, duration).map_err(|e| match e {
+            e @ BenchError::Missing { .. } => {
+                anyhow::anyhow!("{e}; check the port and `servobus scan`")
+            }
+            e => e.into(),
+        })
     });
     stop.store(true, Ordering::SeqCst);
     if let Some(handle) = server {
@@ -239,136 +195,6 @@ fn bench_bus(
         bench.floor_ratio = bench.achieved_rate_hz / bench.floor_rate_hz.max(f64::MIN_POSITIVE);
     }
     Ok(bench)
-}
-
-fn measure(
-    servo_bus: &mut SerialBus,
-    bus: &BusConfig,
-    ids: &[u8],
-    series: servobus_protocol::registers::Series,
-    duration: Duration,
-    plan: &servobus_timing::Plan,
-) -> anyhow::Result<BusBench> {
-    let clock = *servo_bus.clock();
-    // Hold every servo where it is: the goals are the present positions,
-    // in the layout of this bus's series.
-    let order = series.byte_order();
-    let pos = series
-        .map()
-        .at(addr::PRESENT_POSITION)
-        .context("register map has no present position")?;
-    let len = usize::from(pos.size);
-    let mut goals = vec![0u8; ids.len() * len];
-    // The first read is not timed: a loaded machine or a slow adapter gets
-    // a patient timeout and a few tries before a servo counts as absent.
-    let read = servo_bus
-        .sync_read_patiently(pos.address, pos.size, ids)
-        .with_context(|| format!("bus `{}`: first read", bus.name))?;
-    for (i, reply) in read.iter().enumerate() {
-        match reply {
-            Ok(r) => goals[i * len..(i + 1) * len].copy_from_slice(r.data),
-            Err(missing) => bail!(
-                "bus `{}`: servo {} does not answer ({}) after {} tries; \
-                 check the port and `servobus scan`",
-                bus.name,
-                missing.id,
-                missing.reason,
-                servobus_driver::PATIENT_TRIES
-            ),
-        }
-    }
-    // Present and goal position share the layout, so the bytes read are
-    // valid goals as they are; decoding them checks that they are.
-    for chunk in goals.chunks_exact(len) {
-        pos.decode(chunk, order)
-            .context("a servo reported an impossible position")?;
-    }
-    servo_bus.reset_counters();
-
-    let mut periods = Histogram::new(Duration::from_millis(100));
-    let mut errors = Histogram::new(Duration::from_millis(100));
-    let mut period_list = Vec::with_capacity(1 << 16);
-    let start = clock.now();
-    let end = start + duration;
-    let mut last = start;
-    let mut cycles = 0u64;
-    let mut missed = 0u64;
-    while clock.now() < end {
-        servo_bus
-            .sync_write(addr::GOAL_POSITION, ids, &goals)
-            .with_context(|| format!("bus `{}`: SYNC WRITE", bus.name))?;
-        let read = servo_bus
-            .sync_read(pos.address, pos.size, ids)
-            .with_context(|| format!("bus `{}`: SYNC READ", bus.name))?;
-        missed += read.missing() as u64;
-        let now = clock.now();
-        let period = now - last;
-        last = now;
-        cycles += 1;
-        periods.record(period);
-        period_list.push(period);
-    }
-    let elapsed = last - start;
-    let achieved = if elapsed.is_zero() {
-        0.0
-    } else {
-        cycles as f64 / elapsed.as_secs_f64()
-    };
-    // Period error: each cycle's period against the mean period.
-    let mean = if cycles == 0 {
-        Duration::ZERO
-    } else {
-        elapsed / u32::try_from(cycles).unwrap_or(u32::MAX)
-    };
-    for p in &period_list {
-        errors.record(if *p > mean { *p - mean } else { mean - *p });
-    }
-    // An overrun: a cycle that took longer than the plan says a full cycle
-    // takes (the period it would have at the maximum rate).
-    let overruns = overruns(&period_list, plan.full_cycle().cycle_time);
-
-    let counters = *servo_bus.counters();
-    let servo_rtt = bus
-        .joints
-        .iter()
-        .map(|j| {
-            let c = servo_bus.servo_counters(j.id);
-            let us = |d: Option<Duration>| d.map_or(0.0, |d| d.as_secs_f64() * 1e6);
-            ServoRtt {
-                id: j.id,
-                joint: j.name.clone(),
-                replies: c.rtt.count,
-                rtt_mean_us: us(c.rtt.mean()),
-                rtt_max_us: us(c.rtt.max()),
-                timeouts: c.timeouts,
-            }
-        })
-        .collect();
-    Ok(BusBench {
-        name: bus.name.clone(),
-        servos: ids.len(),
-        backend: String::new(),
-        busy_poll: bus.busy_poll,
-        cycles,
-        achieved_rate_hz: achieved,
-        planned_rate_hz: plan.max_rate_hz(),
-        wire_limited_rate_hz: plan.wire_limited_rate_hz(),
-        period_us: Quantiles::of(&periods, Duration::from_micros(1)),
-        period_error_us: Quantiles::of(&errors, Duration::from_micros(1)),
-        overruns,
-        floor_rate_hz: 0.0,
-        floor_ratio: 0.0,
-        timeouts: counters.timeouts,
-        retries: counters.retries,
-        missed_replies: missed,
-        checksum_errors: counters.checksum_errors,
-        servo_rtt,
-    })
-}
-
-/// Cycles whose period exceeded `planned`, the planned full cycle time.
-fn overruns(periods: &[Duration], planned: Duration) -> u64 {
-    periods.iter().filter(|p| **p > planned).count() as u64
 }
 
 fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
@@ -449,19 +275,5 @@ fn print_text(r: &BenchReport) {
                 s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
             );
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_overrun_is_a_period_longer_than_the_planned_cycle() {
-        let us = Duration::from_micros;
-        let periods = [us(900), us(1180), us(1181), us(5000)];
-        assert_eq!(overruns(&periods, us(1180)), 2);
-        assert_eq!(overruns(&periods, us(5000)), 0);
-        assert_eq!(overruns(&[], us(1)), 0);
     }
 }

@@ -36,6 +36,7 @@
 //! cargo run --release --example play_motion -- arm-wave   # the built-in simulator
 //! ```
 
+pub mod bench;
 mod connect;
 mod error;
 pub mod ports;

@@ -1,6 +1,7 @@
 //! The facade's tests: a robot opened, connected and played on the built-in
 //! simulator and on a pty, and the calibration check of `connect`.
 
+mod bench;
 mod common;
 mod play;
 mod port;

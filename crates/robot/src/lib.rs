@@ -39,6 +39,7 @@
 pub mod bench;
 mod connect;
 mod error;
+pub mod monitor;
 pub mod ports;
 mod run;
 pub mod scan;

@@ -7,7 +7,7 @@
 
 use std::collections::VecDeque;
 
-use servobus_runtime::config::{Robot, Units};
+use servobus_config::{Robot, Units};
 use servobus_runtime::CycleSample;
 
 use super::{flag_names, Frame, Row, Watched};

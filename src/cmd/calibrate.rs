@@ -17,8 +17,8 @@ use std::time::Duration;
 use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
-    calibrate, from_lerobot, prepare_bus, to_lerobot, write_frame, write_homing, LiveJoint,
-    Operator, ProcedureOptions, Refusal, Step, PATIENCE, PATIENT_RETRIES,
+    calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, LiveJoint, Operator,
+    ProcedureOptions, Refusal, Step, Store, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
@@ -177,25 +177,11 @@ fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calib
         taken: utc_now(),
         ..ProcedureOptions::default()
     };
-    let mut cal = calibrate(robot, &mut buses, &mut operator, &options)?;
-    if args.write_servos {
-        let mut i = 0;
-        for (bus, config) in buses.iter_mut().zip(&robot.buses) {
-            for joint in &config.joints {
-                let Some(jc) = cal.joints.get_mut(i) else {
-                    break;
-                };
-                *jc = write_homing(bus, joint, jc)
-                    .with_context(|| format!("joint `{}`: writing the EEPROM", joint.name))?;
-                println!(
-                    "servo {} ({}): Homing_Offset {}, limits {}..{} (unlocked, written, verified, locked)",
-                    joint.id, joint.name, jc.homing_offset, jc.range[0], jc.range[1]
-                );
-                i += 1;
-            }
-        }
+    let cal = calibrate(robot, &mut buses, &mut operator, &options)?;
+    if !args.write_servos {
+        return Ok(cal);
     }
-    Ok(cal)
+    store(robot, &mut buses, cal, Store::Centred)
 }
 
 /// Stores an imported calibration in the servos as LeRobot does: each
@@ -203,22 +189,25 @@ fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calib
 fn write_imported(
     robot: &Robot,
     ports: &[String],
-    mut cal: Calibration,
+    cal: Calibration,
 ) -> anyhow::Result<Calibration> {
     let mut buses = open(robot, ports)?;
-    let mut joints = cal.joints.iter_mut();
-    for (bus, config) in buses.iter_mut().zip(&robot.buses) {
-        for joint in &config.joints {
-            let Some(jc) = joints.next() else { break };
-            *jc = write_frame(bus, joint, jc, jc.play_frame())
-                .with_context(|| format!("joint `{}`: writing the EEPROM", joint.name))?;
-            println!(
-                "servo {} ({}): Homing_Offset {}, limits {}..{} (unlocked, written, verified, locked)",
-                joint.id, joint.name, jc.homing_offset, jc.range[0], jc.range[1]
-            );
-        }
-    }
-    Ok(cal)
+    store(robot, &mut buses, cal, Store::PlayFrame)
+}
+
+/// [`store_in_servos`], saying each servo as it is stored.
+fn store(
+    robot: &Robot,
+    buses: &mut [SerialBus],
+    cal: Calibration,
+    how: Store,
+) -> anyhow::Result<Calibration> {
+    Ok(store_in_servos(robot, buses, cal, how, |joint, jc| {
+        println!(
+            "servo {} ({}): Homing_Offset {}, limits {}..{} (unlocked, written, verified, locked)",
+            joint.id, joint.name, jc.homing_offset, jc.range[0], jc.range[1]
+        );
+    })?)
 }
 
 /// How to name the calibration at `output` for the robot file at `robot`:

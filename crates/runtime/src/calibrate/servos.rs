@@ -105,6 +105,65 @@ pub fn torque_off<T: Transport, C: Clock>(
     Ok(())
 }
 
+/// What [`store_in_servos`] writes to each servo's EEPROM.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Store {
+    /// The homing offset that centres the measured range on the turn
+    /// ([`write_homing`]): after a calibration measured here.
+    Centred,
+    /// The joint's play frame ([`write_frame`] of
+    /// [`JointCalibration::play_frame`]), as LeRobot stores an imported
+    /// calibration.
+    PlayFrame,
+}
+
+/// A servo whose EEPROM could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("joint `{joint}`: writing the EEPROM")]
+pub struct StoreError {
+    /// The joint.
+    pub joint: String,
+    /// The failed step's bus error.
+    #[source]
+    pub source: BusError,
+}
+
+/// Stores `cal` in the EEPROM of every servo of `robot` on `buses` (one
+/// per robot bus, in order) as `how` says, joint by joint in the robot's
+/// joint order, and returns the calibration in the frames written.
+/// `written` is told each joint and its calibration once it is stored
+/// (unlocked, written, verified, locked).
+///
+/// # Errors
+/// [`StoreError`] for the first joint that could not be written; the ones
+/// before it are stored.
+pub fn store_in_servos<T: Transport, C: Clock>(
+    robot: &Robot,
+    buses: &mut [Bus<T, C>],
+    mut cal: crate::config::Calibration,
+    how: Store,
+    mut written: impl FnMut(&JointConfig, &JointCalibration),
+) -> Result<crate::config::Calibration, StoreError> {
+    let mut stored = cal.joints.iter_mut();
+    for (bus, config) in buses.iter_mut().zip(&robot.buses) {
+        for joint in &config.joints {
+            let Some(jc) = stored.next() else {
+                return Ok(cal);
+            };
+            let result = match how {
+                Store::Centred => write_homing(bus, joint, jc),
+                Store::PlayFrame => write_frame(bus, joint, jc, jc.play_frame()),
+            };
+            *jc = result.map_err(|source| StoreError {
+                joint: joint.name.clone(),
+                source,
+            })?;
+            written(joint, jc);
+        }
+    }
+    Ok(cal)
+}
+
 /// Writes to `joint`'s servo's EEPROM (unlock, write, verify, lock) the
 /// homing offset that centres its measured range on the turn, and position
 /// limits at that range, and returns the calibration in the new frame. A

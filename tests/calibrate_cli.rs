@@ -306,3 +306,59 @@ fn calibrate_names_the_bus_that_has_no_port() {
     let (_, err) = exited(&out, 2);
     says(&err, &["bus `right`", "has no port"]);
 }
+
+/// An imported calibration stored with `--write-servos`: one line per
+/// servo, in the robot's joint order, and each servo's EEPROM holds the
+/// homing offset and limits its line says.
+#[test]
+fn an_import_written_to_the_servos_says_each_servo_and_they_hold_it() {
+    let dir = scratch("calib-import-write");
+    let sim = Sim::start(&dir);
+    let cal = dir.join("arm.calibration.yaml");
+    let out = servobus_ok(&[
+        "calibrate",
+        "--robot",
+        SO101,
+        "--port",
+        sim.port(),
+        "--from-lerobot",
+        arg(&repo(LEROBOT)),
+        "--write-servos",
+        "-o",
+        arg(&cal),
+    ]);
+    let text = stdout(&out);
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.ends_with("(unlocked, written, verified, locked)"))
+        .collect();
+    let heads: Vec<&str> = lines
+        .iter()
+        .filter_map(|l| l.split_once(": ").map(|(head, _)| head))
+        .collect();
+    assert_eq!(
+        heads,
+        [
+            "servo 1 (shoulder_pan)",
+            "servo 2 (shoulder_lift)",
+            "servo 3 (elbow_flex)",
+            "servo 4 (wrist_flex)",
+            "servo 5 (wrist_roll)",
+            "servo 6 (gripper)"
+        ],
+        "{text}"
+    );
+    for (id, line) in (1..=6).zip(&lines) {
+        let said = format!(
+            "Homing_Offset {}, limits {}..{} ",
+            sim.read(&id.to_string(), "offset"),
+            sim.read(&id.to_string(), "min_angle_limit"),
+            sim.read(&id.to_string(), "max_angle_limit")
+        );
+        assert!(
+            line.contains(&said),
+            "servo {id}: `{line}` against `{said}`"
+        );
+    }
+    sim.stop();
+}

@@ -11,7 +11,7 @@ use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
 use servobus_runtime::config::{load_robot, LimitOrigin, Robot, RobotOptions};
 use servobus_runtime::teach::{
-    self, check_pose, distance, motion_yaml, StillCapture, Taught, TeachError, Teacher, TimedPose,
+    check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
 
 use super::link::{bus_ports, every_port, open_bus, Allowance, SerialBus};
@@ -114,7 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Nothing is lost: what was captured (inside the limits) is written even
     // after an error.
     let taught = match &taken {
-        Ok(t) | Err((t, _)) => t.taught(&robot, &args),
+        Ok(t) | Err((t, _)) => t.taught(&robot, args.continuous, args.tolerance),
     };
     let taught = match (taught, taken) {
         (Ok(Some(taught)), taken) => (taught, taken),
@@ -229,41 +229,6 @@ fn stdin_lines() -> mpsc::Receiver<String> {
         }
     });
     rx
-}
-
-/// What a take captured.
-#[derive(Default)]
-struct Take {
-    /// The pose the take started from.
-    start: Option<Vec<f64>>,
-    /// Pose-and-pause keyframes, at the time each was captured.
-    poses: Vec<TimedPose>,
-    /// The recorded path (continuous).
-    samples: Vec<TimedPose>,
-}
-
-impl Take {
-    /// The motion to write, if anything was captured.
-    fn taught(&self, robot: &Robot, args: &Args) -> Result<Option<Taught>, TeachError> {
-        let Some(start) = &self.start else {
-            return Ok(None);
-        };
-        let deg = |d: f64| robot.units.from_rad(d.to_radians());
-        if args.continuous {
-            if self.samples.is_empty() {
-                return Ok(None);
-            }
-            Taught::continuous(
-                robot,
-                &self.samples,
-                deg(args.tolerance),
-                deg(teach::STILL_DEG),
-            )
-            .map(Some)
-        } else {
-            Ok(Some(Taught::paced(robot, start, &self.poses)))
-        }
-    }
 }
 
 type Taken = Result<Take, (Take, anyhow::Error)>;

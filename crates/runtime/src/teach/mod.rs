@@ -29,7 +29,10 @@ use servobus_protocol::registers::addr;
 
 use crate::config::{JointMap, Robot, Units};
 
+mod take;
 mod taught;
+
+pub use take::Take;
 
 pub use taught::{
     check_pose, merge_identical, motion_yaml, reduce, trim_idle, Reduced, Taught, TimedPose,

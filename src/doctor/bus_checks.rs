@@ -8,7 +8,7 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx, PortKind};
-use super::{Finding, Severity, Step};
+use super::{Finding, FixCommand, Severity, Step};
 
 /// How far the measured latency may exceed the robot file's before it is
 /// worth a warning (scheduling noise of the host).
@@ -102,7 +102,9 @@ pub(crate) fn latency<T: Transport, C: Clock>(
                 "the FTDI adapter's latency timer is {} ms: every reply waits that long",
                 ftdi.latency.as_millis()
             );
-            f.run(format!("echo 1 | sudo tee {}", ftdi.sysfs_path.display()));
+            f.run(FixCommand::FtdiLatency {
+                sysfs: ftdi.sysfs_path.clone(),
+            });
             out.push(f);
         }
     }

@@ -6,7 +6,7 @@ use servobus_runtime::config::{JointConfig, RobotCalibration};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx};
-use super::{Action, Finding, Severity, Step};
+use super::{Action, Finding, FixCommand, Severity, Step};
 
 impl Ctx<'_> {
     /// The servo against the joint's calibration: the homing offset the
@@ -110,17 +110,16 @@ impl Ctx<'_> {
 
     /// `servobus calibrate` for this robot and port, with where the
     /// calibration goes.
-    pub(crate) fn calibrate_command(&self) -> String {
-        let out = match &self.robot.calibration {
+    pub(crate) fn calibrate_command(&self) -> FixCommand {
+        let output = match &self.robot.calibration {
             RobotCalibration::Missing(path) => path.display().to_string(),
             _ => "calibration.yaml".into(),
         };
-        format!(
-            "servobus calibrate --robot {} {} -o {out}",
-            self.robot_arg(),
-            // calibrate takes the baud rate from the robot file.
-            self.target.port_args(super::probe::TOOLS_DEFAULT_BAUD)
-        )
+        FixCommand::Calibrate {
+            robot: self.robot_arg(),
+            port: self.target.port.clone(),
+            output,
+        }
     }
 
     /// What to do to change the robot file: edit it, or for a built-in

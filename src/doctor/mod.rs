@@ -15,6 +15,7 @@
 mod bus_checks;
 mod calibration;
 mod checks;
+mod command;
 mod fix;
 mod probe;
 
@@ -23,6 +24,7 @@ use servobus_protocol::registers::{Register, Series};
 use servobus_runtime::config::Robot;
 
 pub use checks::{rated_voltage_dv, ServoState};
+pub use command::{FixCommand, NewId};
 pub use fix::{apply, change_baud, FixError, FixOutcome};
 pub use probe::fix_all_command;
 pub use probe::{examine, Examined, PortKind, Target};
@@ -157,6 +159,10 @@ pub struct Finding {
     /// `None` when the fix is done by hand or the command has a part to
     /// fill in (`<PORT>` on the built-in simulator).
     pub command: Option<String>,
+    /// The command that fixes it, as data (rendered in `fix` and
+    /// `command`).
+    #[serde(skip)]
+    pub fix_command: Option<FixCommand>,
     /// What `--fix` does about it, if anything.
     #[serde(skip)]
     pub action: Option<Action>,
@@ -169,15 +175,17 @@ impl Finding {
     }
 
     /// Sets the fix to `command` alone.
-    pub(crate) fn run(&mut self, command: String) {
+    pub(crate) fn run(&mut self, command: FixCommand) {
         self.run_in("{}", command);
     }
 
     /// Sets the fix to `text` around `command` (`{}` in `text` marks where).
-    pub(crate) fn run_in(&mut self, text: &str, command: String) {
-        self.fix = text.replacen("{}", &command, 1);
+    pub(crate) fn run_in(&mut self, text: &str, command: FixCommand) {
+        let line = command.to_string();
+        self.fix = text.replacen("{}", &line, 1);
         // A placeholder (`<PORT>`) is for the user to fill in.
-        self.command = (!command.contains('<')).then_some(command);
+        self.command = (!line.contains('<')).then_some(line);
+        self.fix_command = Some(command);
     }
 }
 

@@ -13,7 +13,7 @@ use servobus_runtime::config::{BusConfig, JointConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, Finding, Severity, Step};
+use super::{Action, Finding, FixCommand, NewId, Severity, Step};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -30,57 +30,46 @@ pub struct Target {
     pub baud: u32,
 }
 
-/// The baud rate the bus tools assume without `--baud`.
-pub(crate) const TOOLS_DEFAULT_BAUD: u32 = 1_000_000;
-
 impl Target {
-    pub(crate) fn port_args(&self, baud: u32) -> String {
-        let port = self.port.as_deref().unwrap_or("<PORT>");
-        if baud == TOOLS_DEFAULT_BAUD {
-            format!("--port {port}")
-        } else {
-            format!("--port {port} --baud {baud}")
+    /// `servobus write` of `value` into `register` of servo `id`.
+    pub fn write_command(&self, id: u8, register: &str, value: i32) -> FixCommand {
+        self.write_command_at(self.baud, id, register, value)
+    }
+
+    fn write_command_at(&self, baud: u32, id: u8, register: &str, value: i32) -> FixCommand {
+        FixCommand::Write {
+            port: self.port.clone(),
+            baud,
+            id,
+            register: register.to_owned(),
+            value,
         }
     }
 
-    /// `servobus write` of `value` into `register` of servo `id`.
-    pub fn write_command(&self, id: u8, register: &str, value: i32) -> String {
-        format!(
-            "servobus write {} --id {id} {register} {value}",
-            self.port_args(self.baud)
-        )
-    }
-
-    fn write_command_at(&self, baud: u32, id: u8, register: &str, value: i32) -> String {
-        format!(
-            "servobus write {} --id {id} {register} {value}",
-            self.port_args(baud)
-        )
-    }
-
-    fn set_id_command(&self, id: u8, new_id: &str) -> String {
-        format!(
-            "servobus set-id {} --id {id} {new_id}",
-            self.port_args(self.baud)
-        )
+    fn set_id_command(&self, id: u8, new_id: NewId) -> FixCommand {
+        FixCommand::SetId {
+            port: self.port.clone(),
+            baud: self.baud,
+            id,
+            new_id,
+        }
     }
 
     /// `servobus doctor --fix` for the robot `robot` (as the command line
     /// names it) on this port, storing homing offsets in EEPROM when
     /// `write_servos`.
-    pub fn fix_all_command(&self, robot: &str, write_servos: bool) -> String {
-        format!(
-            "servobus doctor --robot {robot} {} --fix{}",
-            // doctor takes the baud rate from the robot file.
-            self.port_args(TOOLS_DEFAULT_BAUD),
-            if write_servos { " --write-servos" } else { "" }
-        )
+    pub fn fix_all_command(&self, robot: &str, write_servos: bool) -> FixCommand {
+        FixCommand::DoctorFix {
+            robot: robot.to_owned(),
+            port: self.port.clone(),
+            write_servos,
+        }
     }
 }
 
 /// `servobus doctor --fix` for `robot` on `target` (see
 /// [`Target::fix_all_command`]); the robot named as on the command line.
-pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> String {
+pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> FixCommand {
     target.fix_all_command(&crate::builtin::argument(&robot.path), write_servos)
 }
 
@@ -261,14 +250,13 @@ fn examine_inner<T: Transport, C: Clock>(
         match extras.first() {
             Some(&extra) => f.run_in(
                 &format!("if servo {extra} is joint `{joint}`'s, give it its ID: {{}}"),
-                target.set_id_command(extra, &id.to_string()),
+                target.set_id_command(extra, NewId::Id(id)),
             ),
             None => f.run_in(
                 "check its cable, power and ID: {}",
-                format!(
-                    "servobus scan {} --all-bauds",
-                    target.port_args(TOOLS_DEFAULT_BAUD)
-                ),
+                FixCommand::ScanAllBauds {
+                    port: target.port.clone(),
+                },
             ),
         };
         findings.push(f);
@@ -278,7 +266,7 @@ fn examine_inner<T: Transport, C: Clock>(
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
         f.fix = format!(
             "give it the ID of its joint ({}), or {}",
-            target.set_id_command(id, "<ID>"),
+            target.set_id_command(id, NewId::OfItsJoint),
             ctx.edit_robot_file(&format!("add a joint with ID {id}"))
         );
         findings.push(f);
@@ -337,6 +325,7 @@ pub(crate) fn finding(
         problem: String::new(),
         fix: String::new(),
         command: None,
+        fix_command: None,
         action: None,
     }
 }
@@ -345,7 +334,7 @@ pub(crate) fn finding(
 /// does not answer (its ID and joint), which most likely is one of them.
 fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Finding {
     let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), Some("id"));
-    let set_id = |to: &str| ctx.target.set_id_command(id, to);
+    let set_id = |to: NewId| ctx.target.set_id_command(id, to);
     match silent {
         Some((want, joint)) => {
             f.problem = format!(
@@ -357,7 +346,7 @@ fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Findi
                 "unplug every servo but joint `{}`'s (one servo on the bus), run `{}`, then plug \
                  the others back in",
                 joint.name,
-                set_id(&want.to_string())
+                set_id(NewId::Id(want))
             );
         }
         None => {
@@ -366,7 +355,7 @@ fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Findi
             );
             f.fix = format!(
                 "connect them one at a time and give all but one a free ID: {}",
-                set_id("<NEW_ID>")
+                set_id(NewId::Free)
             );
         }
     }

@@ -24,6 +24,26 @@ fn import_lerobot(from: &Path, to: &Path) {
     ]);
 }
 
+/// `servobus calibrate` of the SO-101 on `port`, importing the LeRobot
+/// fixture into `to` and storing it in the servos (`--write-servos`), with
+/// `more` arguments; it must succeed.
+fn import_to_servos(port: &str, to: &Path, more: &[&str]) -> Output {
+    let lerobot = repo(LEROBOT);
+    let args = [
+        "calibrate",
+        "--robot",
+        SO101,
+        "--port",
+        port,
+        "--from-lerobot",
+        arg(&lerobot),
+        "--write-servos",
+        "-o",
+        arg(to),
+    ];
+    servobus_ok(&[&args[..], more].concat())
+}
+
 /// The SO-101 robot file, copied to `dir` with `calibration: FILE` added.
 fn robot_naming(dir: &Path, calibration: &str) -> PathBuf {
     let text = std::fs::read_to_string(repo(SO101)).expect("so101");
@@ -187,20 +207,7 @@ fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     let port = sim.port();
     let cal = dir.join("arm.calibration.yaml");
     let json = dir.join("arm.json");
-    let out = servobus_ok(&[
-        "calibrate",
-        "--robot",
-        SO101,
-        "--port",
-        port,
-        "--from-lerobot",
-        arg(&repo(LEROBOT)),
-        "--write-servos",
-        "-o",
-        arg(&cal),
-        "--to-lerobot",
-        arg(&json),
-    ]);
+    let out = import_to_servos(port, &cal, &["--to-lerobot", arg(&json)]);
     let text = stdout(&out);
     assert_eq!(
         text.matches("(unlocked, written, verified, locked)")
@@ -315,18 +322,7 @@ fn an_import_written_to_the_servos_says_each_servo_and_they_hold_it() {
     let dir = scratch("calib-import-write");
     let sim = Sim::start(&dir);
     let cal = dir.join("arm.calibration.yaml");
-    let out = servobus_ok(&[
-        "calibrate",
-        "--robot",
-        SO101,
-        "--port",
-        sim.port(),
-        "--from-lerobot",
-        arg(&repo(LEROBOT)),
-        "--write-servos",
-        "-o",
-        arg(&cal),
-    ]);
+    let out = import_to_servos(sim.port(), &cal, &[]);
     let text = stdout(&out);
     let lines: Vec<&str> = text
         .lines()

@@ -12,7 +12,7 @@ use servobus_runtime::bus_settings;
 use servobus_runtime::config::Robot;
 use servobus_sim::{Faults, SimBus};
 
-use super::{arg, repo, stderr, stdout, write_file, BIN};
+use super::{arg, repo, stdout, write_file, BIN};
 
 /// A truth file's header and rows (the time, then every joint's angle).
 pub fn read_truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -131,9 +131,15 @@ impl Sim {
     /// wall-clock time and its process may be scheduled milliseconds late
     /// on a loaded machine; nothing here measures time.
     pub fn run(&self, args: &[&str]) -> Output {
+        self.on_port(args, &["--latency-us", "10000"])
+    }
+
+    /// `servobus ARGS --port PORT MORE` against this simulator.
+    fn on_port(&self, args: &[&str], more: &[&str]) -> Output {
         Command::new(BIN)
             .args(args)
-            .args(["--port", self.port(), "--latency-us", "10000"])
+            .args(["--port", self.port()])
+            .args(more)
             .current_dir(repo(""))
             .output()
             .expect("run servobus")
@@ -142,34 +148,17 @@ impl Sim {
     /// Runs `servobus ARGS --port PORT` against this simulator: a robot
     /// command, whose deadlines come from the robot file.
     pub fn robot_command(&self, args: &[&str]) -> Output {
-        Command::new(BIN)
-            .args(args)
-            .args(["--port", self.port()])
-            .current_dir(repo(""))
-            .output()
-            .expect("run servobus")
+        self.on_port(args, &[])
     }
 
     /// [`Sim::robot_command`], which must succeed: its standard output.
     pub fn robot_ok(&self, args: &[&str]) -> String {
-        let out = self.robot_command(args);
-        assert!(
-            out.status.success(),
-            "servobus {args:?} failed: {}",
-            stderr(&out)
-        );
-        stdout(&out)
+        stdout(&super::succeeded(self.robot_command(args), args))
     }
 
     /// [`Sim::run`], which must succeed: its standard output.
     pub fn ok(&self, args: &[&str]) -> String {
-        let out = self.run(args);
-        assert!(
-            out.status.success(),
-            "servobus {args:?} failed: {}",
-            stderr(&out)
-        );
-        stdout(&out)
+        stdout(&super::succeeded(self.run(args), args))
     }
 
     /// Register `register` of servo `id`, as `servobus read --json` gets it.

@@ -119,7 +119,7 @@ pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus, ManualClock>>, Sim
 /// Build one with [`SimRobot::builder`]; its options give the robot a body:
 ///
 /// ```
-/// use servobus_runtime::config::load_robot;
+/// use servobus_runtime::config::{load_robot, RobotOptions};
 /// use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
 ///
 /// # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");

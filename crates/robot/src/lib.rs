@@ -35,6 +35,12 @@
 //! cargo run --release --example play_motion -- configs/motions/arm-wave.yaml --port /dev/ttyACM0
 //! cargo run --release --example play_motion -- arm-wave   # the built-in simulator
 //! ```
+//!
+//! Live following ([`Connection::live`], targets through
+//! [`Run::targets`]) starts the same way as a path. Beside runs:
+//! [`scan`] finds the servos on a port at every baud rate, [`bench`](mod@bench)
+//! measures how fast a bus's full cycle runs, and [`monitor`] samples what
+//! every servo of a bus is doing.
 
 pub mod bench;
 mod connect;

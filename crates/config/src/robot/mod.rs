@@ -31,7 +31,7 @@ pub struct Robot {
     /// Default control rate in Hz (a motion may override it).
     pub rate_hz: f64,
     /// Lag compensation: command the path this far ahead (`lead_ms` in the
-    /// file). `None`: identify it while the joints move ([`Lead::Auto`](servobus_runtime::Lead::Auto)).
+    /// file). `None`: identify it while the joints move (the runtime's `Lead::Auto`).
     pub lead: Option<Duration>,
     /// The serial buses, each with its joints.
     pub buses: Vec<BusConfig>,

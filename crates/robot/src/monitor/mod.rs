@@ -9,7 +9,7 @@
 //! [`Frame`] is one refresh of every row with the bus summary, for a
 //! program to show (the command line: as a table, or as one JSON line).
 //! `servobus play --monitor` builds the same frames from the runtime's
-//! telemetry ([`Frame::from_telemetry`]).
+//! telemetry ([`TelemetryRows`]).
 
 mod telemetry;
 

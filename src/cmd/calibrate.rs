@@ -24,7 +24,7 @@ use servobus_runtime::config::{
     load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
 
-use super::link::{every_port, open_bus, Allowance, Ports, SerialBus};
+use super::link::{every_port, Allowance, Ports, SerialBus};
 
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
@@ -158,14 +158,10 @@ fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
     }
 }
 
+/// The robot's buses on `ports`, patient: calibrating is not timed.
 fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
-    let mut buses = Vec::new();
-    for (bus, port) in robot.buses.iter().zip(ports) {
-        let mut opened = open_bus(bus, port, Allowance::AtLeast(PATIENCE))?;
-        opened.set_settings(opened.settings().with_retries(PATIENT_RETRIES));
-        buses.push(opened);
-    }
-    Ok(buses)
+    let patient = Allowance::AtLeast(PATIENCE);
+    super::link::open_buses(robot, ports, patient, Some(PATIENT_RETRIES))
 }
 
 fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calibration> {

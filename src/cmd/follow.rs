@@ -24,7 +24,7 @@ use servobus_runtime::{
     Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
 };
 
-use super::link::{every_port, open_bus, Allowance, Ports};
+use super::link::{every_port, Allowance, Ports};
 use crate::record::{CsvLog, PlotData};
 
 /// Arguments of `servobus follow`.
@@ -155,7 +155,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     match &args.leader {
         Some(port) => {
-            let mut buses = Vec::new();
             let ports = match every_port(&leader_robot, &[port]) {
                 Ports::Every(ports) => ports,
                 _ => {
@@ -164,9 +163,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     ))
                 }
             };
-            for (bus, port) in leader_robot.buses.iter().zip(&ports) {
-                buses.push(open_bus(bus, port, Allowance::Assumed)?);
-            }
+            let mut buses =
+                super::link::open_buses(&leader_robot, &ports, Allowance::Assumed, None)?;
             // Angles go through the leader's calibration: its servos must
             // match it.
             super::calibrate::check_buses(&leader_robot, &mut buses, &ports)?;

@@ -46,6 +46,24 @@ pub(crate) fn open_bus(
     Ok(bus)
 }
 
+/// Every bus of `robot` on `ports` ([`ports::open_buses`]), warning about
+/// each slow FTDI adapter.
+///
+/// # Errors
+/// When a port cannot be opened, naming the bus.
+pub(crate) fn open_buses(
+    robot: &Robot,
+    ports: &[String],
+    allowance: Allowance,
+    retries: Option<u8>,
+) -> anyhow::Result<Vec<SerialBus>> {
+    let buses = ports::open_buses(robot, ports, allowance, retries)?;
+    for bus in &buses {
+        warn_slow_adapter(bus.transport());
+    }
+    Ok(buses)
+}
+
 /// A bus on `port` without a robot file ([`ports::open_plain_bus`], the
 /// latency given by `--latency-us` or else the port's assumed one), warning
 /// about a slow FTDI adapter.

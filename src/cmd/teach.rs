@@ -14,7 +14,7 @@ use servobus_runtime::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
 
-use super::link::{bus_ports, every_port, open_bus, Allowance, SerialBus};
+use super::link::{bus_ports, every_port, Allowance, SerialBus};
 
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;
@@ -196,7 +196,6 @@ fn how_to_stop(args: &Args, interactive: bool) -> String {
 
 /// The buses of `robot`: `port` for the first, the robot file's for the rest.
 fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus>> {
-    let mut buses = Vec::new();
     let ports = every_port(robot, port.as_slice())
         .required(robot)
         .map_err(|e| match e {
@@ -209,12 +208,7 @@ fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus
             }
             e => e.into(),
         })?;
-    for (bus, path) in robot.buses.iter().zip(ports) {
-        let mut opened = open_bus(bus, &path, Allowance::Assumed)?;
-        opened.set_settings(opened.settings().with_retries(RETRIES));
-        buses.push(opened);
-    }
-    Ok(buses)
+    super::link::open_buses(robot, &ports, Allowance::Assumed, Some(RETRIES))
 }
 
 /// Lines typed on stdin, read on their own thread.

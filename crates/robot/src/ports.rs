@@ -131,6 +131,29 @@ pub fn open_bus(cfg: &BusConfig, port: &str, allowance: Allowance) -> Result<Ser
     Ok(Bus::new(transport, bus_settings(cfg).with_latency(latency)))
 }
 
+/// Opens every bus of `robot` on `ports` (one per bus, in order; see
+/// [`every_port`]) with `allowance`, and `retries` tries more per
+/// transaction when given (else the robot file's bus settings').
+///
+/// # Errors
+/// [`OpenError::Bus`] for the first port that cannot be opened.
+pub fn open_buses(
+    robot: &Robot,
+    ports: &[String],
+    allowance: Allowance,
+    retries: Option<u8>,
+) -> Result<Vec<SerialBus>, OpenError> {
+    let mut buses = Vec::with_capacity(ports.len());
+    for (cfg, port) in robot.buses.iter().zip(ports) {
+        let mut bus = open_bus(cfg, port, allowance)?;
+        if let Some(retries) = retries {
+            bus.set_settings(bus.settings().with_retries(retries));
+        }
+        buses.push(bus);
+    }
+    Ok(buses)
+}
+
 /// A bus on `port` without a robot file (the bus tools, a monitor that
 /// scans): `baud`, the register layout of `series`, and the adapter
 /// latency given or else the port's assumed one.
@@ -254,6 +277,27 @@ mod tests {
         drop(pty); // opened with exclusive access
         let bus = open_bus(&robot.buses[0], &path, Allowance::Run).expect("a bus");
         assert_eq!(bus.settings().link.latency, long);
+    }
+
+    #[test]
+    fn every_bus_opens_with_the_tries_asked_for_or_its_own() {
+        let mut robot = two_buses([None, None]);
+        robot.buses.truncate(1);
+        let servos = servobus_runtime::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
+        let server = servobus_sim::PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
+        let path = vec![server.path().to_string_lossy().into_owned()];
+        let own = servobus_runtime::bus_settings(&robot.buses[0]).retries;
+        let buses = open_buses(&robot, &path, Allowance::Assumed, None).expect("opens");
+        assert_eq!(buses.len(), 1);
+        assert_eq!(buses[0].settings().retries, own);
+        drop(buses); // opened with exclusive access
+        let buses = open_buses(&robot, &path, Allowance::Assumed, Some(own + 3)).expect("opens");
+        assert_eq!(buses[0].settings().retries, own + 3);
+        let missing = ["/dev/servobus-no-such-port".to_owned()];
+        match open_buses(&robot, &missing, Allowance::Assumed, None) {
+            Err(OpenError::Bus { bus, .. }) => assert_eq!(bus, robot.buses[0].name),
+            other => panic!("expected OpenError::Bus, got {:?}", other.map(|b| b.len())),
+        }
     }
 
     #[test]

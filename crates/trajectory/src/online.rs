@@ -6,7 +6,7 @@
 use crate::error::PlanError;
 use crate::limits::validate_all;
 use crate::piece::Piece;
-use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::profile::{Phases, Profile, Ramp, Segment1};
 use crate::{JointLimits, JointState, Trajectory};
 
 /// The quickest way to rest from speed `v` and acceleration `a`: ramp the
@@ -132,13 +132,51 @@ pub(crate) struct Plan1 {
     pub dir: f64,
 }
 
-pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
+/// How one joint starts toward its target, the phases before the main
+/// segment aside (those are written where the caller keeps them).
+pub(crate) struct Approach1 {
+    /// Duration of the phases before the main segment.
+    pub pre_time: f64,
+    pub seg: Segment1,
+    /// Direction of the main segment.
+    pub dir: f64,
+}
+
+/// Whether a joint at speed `v >= 0` (within `max_velocity`), with no
+/// acceleration, can still come to rest within `dist`: the rest-to-rest
+/// move peaking at `v` covers `v` times its ramp's duration, which grows
+/// with `v`, so this is `v <= rest_peak(dist)` without solving for the
+/// peak (no cube root).
+#[inline]
+fn rests_within(v: f64, dist: f64, lim: &JointLimits) -> bool {
+    v * Ramp::new(v, lim.max_acceleration, lim.jerk()).duration() <= dist
+}
+
+/// The segment of `d` (either sign) from speed `v0` (in its direction) to
+/// rest.
+fn onto(d: f64, v0: f64) -> (Segment1, f64) {
+    let seg = Segment1 {
+        d: d.abs(),
+        v0: v0.abs(),
+        v1: 0.0,
+    };
+    (seg, if d >= 0.0 { 1.0 } else { -1.0 })
+}
+
+/// How one joint goes on toward `target` without reversing: its
+/// acceleration ramped to zero (the phase written to `pre`, cleared
+/// first), then the main segment. `None` when that will not do: the
+/// speed points away from the target, or is too high to stop within a
+/// quarter of the distance.
+pub(crate) fn onward(
+    s: &JointState,
+    target: f64,
+    lim: &JointLimits,
+    pre: &mut Phases,
+) -> Option<Approach1> {
     let j = lim.jerk();
     let finite = j.is_finite();
-    let mut pre = Phases::new();
-    // Option A: ramp the acceleration to zero, then move on to the target
-    // without reversing (needs the speed to point at the target and to be
-    // low enough to stop within a quarter of the distance).
+    pre.n = 0;
     let (ta, a) = if finite {
         (s.acceleration.abs() / j, s.acceleration)
     } else {
@@ -154,42 +192,56 @@ pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
         (s.position, s.velocity)
     };
     let d = target - p1;
-    if v1 == 0.0
+    let on = v1 == 0.0
         || (v1 * d > 0.0
             && v1.abs() <= lim.max_velocity
-            && v1.abs() <= rest_peak(0.5 * d.abs(), lim))
-    {
-        if finite && a != 0.0 {
-            pre.push(ta, jj, 0.0);
-        }
-        let seg = Segment1 {
-            d: d.abs(),
-            v0: v1.abs(),
-            v1: 0.0,
-        };
-        return Plan1 {
-            pre,
-            pre_time: ta,
-            fastest: seg.fastest(lim),
-            seg,
-            dir: if d >= 0.0 { 1.0 } else { -1.0 },
-        };
+            && rests_within(v1.abs(), 0.5 * d.abs(), lim));
+    if !on {
+        return None;
     }
-    // Option B: stop first, then move rest to rest.
-    stop_phases(s.velocity, s.acceleration, lim, &mut pre);
-    let (t, p, _, _) = pre.advance(s, 1.0, finite, f64::INFINITY);
-    let d = target - p;
-    let seg = Segment1 {
-        d: d.abs(),
-        v0: 0.0,
-        v1: 0.0,
-    };
+    if finite && a != 0.0 {
+        pre.push(ta, jj, 0.0);
+    }
+    let (seg, dir) = onto(d, v1);
+    Some(Approach1 {
+        pre_time: ta,
+        seg,
+        dir,
+    })
+}
+
+/// How one joint gets from its state to `target`: [`onward`] when it can,
+/// else it stops as fast as it can and then moves rest to rest. The phases
+/// before the main segment are written to `pre`.
+pub(crate) fn approach(
+    s: &JointState,
+    target: f64,
+    lim: &JointLimits,
+    pre: &mut Phases,
+) -> Approach1 {
+    if let Some(ap) = onward(s, target, lim, pre) {
+        return ap;
+    }
+    pre.n = 0;
+    stop_phases(s.velocity, s.acceleration, lim, pre);
+    let (t, p, _, _) = pre.advance(s, 1.0, lim.max_jerk.is_some(), f64::INFINITY);
+    let (seg, dir) = onto(target - p, 0.0);
+    Approach1 {
+        pre_time: t,
+        seg,
+        dir,
+    }
+}
+
+pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
+    let mut pre = Phases::new();
+    let ap = approach(s, target, lim, &mut pre);
     Plan1 {
         pre,
-        pre_time: t,
-        fastest: seg.fastest(lim),
-        seg,
-        dir: if d >= 0.0 { 1.0 } else { -1.0 },
+        pre_time: ap.pre_time,
+        seg: ap.seg,
+        fastest: ap.seg.fastest(lim),
+        dir: ap.dir,
     }
 }
 

@@ -21,7 +21,7 @@ pub(crate) struct Phases {
 
 impl Phases {
     #[inline]
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Phases {
             n: 0,
             dt: [0.0; 12],

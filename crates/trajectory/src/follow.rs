@@ -158,6 +158,19 @@ impl Plan {
         let Some(ap) = onward(&start, 0.0, rel, &mut self.pre) else {
             return false;
         };
+        // The main segment's first phase must be the ramp toward its
+        // cruise speed, in the direction of `ea`, for at least `ta`: known
+        // not to be before any profile is solved when it must slow down
+        // (a joint within its speed limit that can rest within a quarter
+        // of the distance, as `onward` checked, cruises faster than it
+        // starts), or when even the top speed is too close to reach in
+        // `ta` of jerk.
+        let slower = ap.dir * ea < 0.0 && ap.seg.v0 < rel.max_velocity;
+        let ramp =
+            (rel.max_acceleration / j).min(((rel.max_velocity - ap.seg.v0).max(0.0) / j).sqrt());
+        if slower || ramp < ta * (1.0 - 1e-9) {
+            return false;
+        }
         self.set(rel, &ap, start, goal.after(-ta), ta);
         self.pre.n == 0
             && self.main.n > 0

@@ -171,8 +171,9 @@ impl Segment1 {
             let step = g / dg;
             y -= step;
             // Quadratic convergence: the error left is about the square
-            // of this step, far below rounding.
-            if step <= 1e-13 * y {
+            // of this step, below rounding once the step is 1e-8 of `y`
+            // (the same rule as the stretching search's).
+            if step <= 1e-8 * y {
                 break;
             }
         }

@@ -103,10 +103,11 @@ impl Segment1 {
         if self.d <= 0.0 && vlo <= 0.0 {
             return Ok(0.0);
         }
-        if self.g(vm, acc).1 <= self.d {
-            Ok(vm)
-        } else if self.v0 == 0.0 && self.v1 == 0.0 {
+        if self.v0 == 0.0 && self.v1 == 0.0 {
+            // Rest to rest (`vm` included): no ramp distance to evaluate.
             Ok(rest_peak(self.d, lim))
+        } else if self.g(vm, acc).1 <= self.d {
+            Ok(vm)
         } else if self.g(vlo, acc).1 >= self.d {
             Ok(vlo)
         } else {

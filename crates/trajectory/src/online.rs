@@ -6,7 +6,7 @@
 use crate::error::PlanError;
 use crate::limits::validate_all;
 use crate::piece::Piece;
-use crate::profile::{Phases, Profile, Ramp, Segment1};
+use crate::profile::{Phases, Ramp, Segment1};
 use crate::{JointLimits, JointState, Trajectory};
 
 /// The quickest way to rest from speed `v` and acceleration `a`: ramp the
@@ -120,18 +120,6 @@ pub(crate) fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64
     Trajectory::from_joints(per_joint, hold, duration, Vec::new())
 }
 
-/// How one joint gets from its state to the target.
-pub(crate) struct Plan1 {
-    /// Phases before the main segment (stop or acceleration ramp-down).
-    pub pre: Phases,
-    /// Duration of `pre`.
-    pub pre_time: f64,
-    pub seg: Segment1,
-    pub fastest: Profile,
-    /// Direction of the main segment.
-    pub dir: f64,
-}
-
 /// How one joint starts toward its target, the phases before the main
 /// segment aside (those are written where the caller keeps them).
 pub(crate) struct Approach1 {
@@ -233,18 +221,6 @@ pub(crate) fn approach(
     }
 }
 
-pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
-    let mut pre = Phases::new();
-    let ap = approach(s, target, lim, &mut pre);
-    Plan1 {
-        pre,
-        pre_time: ap.pre_time,
-        seg: ap.seg,
-        fastest: ap.seg.fastest(lim),
-        dir: ap.dir,
-    }
-}
-
 /// Moves every joint from its current state to `target` (at rest), jerk
 /// limited, all joints arriving together, starting at time 0.
 ///
@@ -292,28 +268,28 @@ pub fn retarget(
             });
         }
     }
-    let plans: Vec<Plan1> = current
-        .iter()
-        .zip(target)
-        .zip(limits)
-        .map(|((s, &q), l)| plan1(s, q, l))
-        .collect();
-    let duration = plans
-        .iter()
-        .map(|p| p.pre_time + p.fastest.duration)
-        .fold(0.0, f64::max);
+    // Each joint's first phases go straight into its pieces; what the
+    // main segment needs once the duration is known is kept aside.
     let mut per_joint = Vec::with_capacity(limits.len());
-    for ((p, s), lim) in plans.iter().zip(current).zip(limits) {
-        let finite = lim.max_jerk.is_some();
-        let mut pieces = Vec::with_capacity(p.pre.n + 8);
-        let (t, x, v, _) = p.pre.emit_from(0.0, s, lim, &mut pieces);
-        let prof = p.seg.stretched(lim, p.fastest, duration - p.pre_time);
-        let mut main = Phases::new();
-        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
-            p.seg.phases(lim, prof, &mut main);
-            main.emit(t, x, v, 0.0, p.dir, finite, &mut pieces);
-        }
+    let mut mains = Vec::with_capacity(limits.len());
+    let mut duration: f64 = 0.0;
+    let mut pre = Phases::new();
+    for ((s, &q), lim) in current.iter().zip(target).zip(limits) {
+        let ap = approach(s, q, lim, &mut pre);
+        let fastest = ap.seg.fastest(lim);
+        duration = duration.max(ap.pre_time + fastest.duration);
+        let mut pieces = Vec::with_capacity(pre.n + 8);
+        let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);
         per_joint.push(pieces);
+        mains.push((ap, fastest, t, x, v));
+    }
+    for ((pieces, (ap, fastest, t, x, v)), lim) in per_joint.iter_mut().zip(mains).zip(limits) {
+        if ap.seg.d > 0.0 || ap.seg.v0 > 0.0 {
+            let prof = ap.seg.stretched(lim, fastest, duration - ap.pre_time);
+            let mut main = Phases::new();
+            ap.seg.phases(lim, prof, &mut main);
+            main.emit(t, x, v, 0.0, ap.dir, lim.max_jerk.is_some(), pieces);
+        }
     }
     Ok(finish(per_joint, target, duration))
 }

@@ -18,7 +18,7 @@
 //! acceleration limit, and the plan relative to the target keeps to what
 //! is left. Nothing is allocated.
 
-use crate::online::{approach, onward, stop_phases, Approach1};
+use crate::online::{onward, route, stop_phases, Route1};
 use crate::profile::Phases;
 use crate::{JointLimits, JointState};
 
@@ -113,21 +113,21 @@ impl Plan {
             acceleration: state.acceleration - goal.acceleration,
         };
         if !self.ramping(&rel, &err, goal) {
-            let ap = approach(&err, 0.0, &rel, &mut self.pre);
-            self.set(&rel, &ap, err, goal, 0.0);
+            let way = route(&err, 0.0, &rel, &mut self.pre);
+            self.set(&rel, &way, err, goal, 0.0);
         }
     }
 
     /// Makes this the plan of `err` (relative to `goal` at `tau`) that
-    /// starts with `ap`, whose first phases are already in `pre`.
-    fn set(&mut self, rel: &JointLimits, ap: &Approach1, err: JointState, goal: Goal, tau: f64) {
+    /// starts with `way`, whose first phases are already in `pre`.
+    fn set(&mut self, rel: &JointLimits, way: &Route1, err: JointState, goal: Goal, tau: f64) {
         self.main.n = 0;
-        if ap.seg.d > 0.0 || ap.seg.v0 > 0.0 {
-            ap.seg.phases(rel, ap.seg.fastest(rel), &mut self.main);
+        if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
+            way.seg.phases(rel, way.seg.fastest(rel), &mut self.main);
         }
         self.goal = goal;
         self.err = err;
-        self.dir = ap.dir;
+        self.dir = way.dir;
         self.tau = tau;
     }
 
@@ -135,7 +135,7 @@ impl Plan {
     /// way to the target already: the plan made from where that ramp began
     /// (acceleration 0, `ta = |a| / j` earlier), if it starts with the same
     /// ramp for at least `ta`, goes on from here without first undoing the
-    /// acceleration (which [`approach`] would do, and which, planned anew
+    /// acceleration (which [`route`] would do, and which, planned anew
     /// every cycle, would never let the joint speed up). Returns whether
     /// this became that plan (else it is to be made anew).
     fn ramping(&mut self, rel: &JointLimits, err: &JointState, goal: Goal) -> bool {
@@ -155,7 +155,7 @@ impl Plan {
         };
         // A plan that stops first cannot go on with this ramp: known
         // before any profile is solved.
-        let Some(ap) = onward(&start, 0.0, rel, &mut self.pre) else {
+        let Some(way) = onward(&start, 0.0, rel, &mut self.pre) else {
             return false;
         };
         // The main segment's first phase must be the ramp toward its
@@ -165,13 +165,13 @@ impl Plan {
         // of the distance, as `onward` checked, cruises faster than it
         // starts), or when even the top speed is too close to reach in
         // `ta` of jerk.
-        let slower = ap.dir * ea < 0.0 && ap.seg.v0 < rel.max_velocity;
+        let slower = way.dir * ea < 0.0 && way.seg.v0 < rel.max_velocity;
         let ramp =
-            (rel.max_acceleration / j).min(((rel.max_velocity - ap.seg.v0).max(0.0) / j).sqrt());
+            (rel.max_acceleration / j).min(((rel.max_velocity - way.seg.v0).max(0.0) / j).sqrt());
         if slower || ramp < ta * (1.0 - 1e-9) {
             return false;
         }
-        self.set(rel, &ap, start, goal.after(-ta), ta);
+        self.set(rel, &way, start, goal.after(-ta), ta);
         self.pre.n == 0
             && self.main.n > 0
             && self.main.jerk[0] * self.dir * ea > 0.0

@@ -122,7 +122,7 @@ pub(crate) fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64
 
 /// How one joint starts toward its target, the phases before the main
 /// segment aside (those are written where the caller keeps them).
-pub(crate) struct Approach1 {
+pub(crate) struct Route1 {
     /// Duration of the phases before the main segment.
     pub pre_time: f64,
     pub seg: Segment1,
@@ -161,7 +161,7 @@ pub(crate) fn onward(
     target: f64,
     lim: &JointLimits,
     pre: &mut Phases,
-) -> Option<Approach1> {
+) -> Option<Route1> {
     let j = lim.jerk();
     let finite = j.is_finite();
     pre.n = 0;
@@ -191,7 +191,7 @@ pub(crate) fn onward(
         pre.push(ta, jj, 0.0);
     }
     let (seg, dir) = onto(d, v1);
-    Some(Approach1 {
+    Some(Route1 {
         pre_time: ta,
         seg,
         dir,
@@ -201,20 +201,15 @@ pub(crate) fn onward(
 /// How one joint gets from its state to `target`: [`onward`] when it can,
 /// else it stops as fast as it can and then moves rest to rest. The phases
 /// before the main segment are written to `pre`.
-pub(crate) fn approach(
-    s: &JointState,
-    target: f64,
-    lim: &JointLimits,
-    pre: &mut Phases,
-) -> Approach1 {
-    if let Some(ap) = onward(s, target, lim, pre) {
-        return ap;
+pub(crate) fn route(s: &JointState, target: f64, lim: &JointLimits, pre: &mut Phases) -> Route1 {
+    if let Some(way) = onward(s, target, lim, pre) {
+        return way;
     }
     pre.n = 0;
     stop_phases(s.velocity, s.acceleration, lim, pre);
     let (t, p, _, _) = pre.advance(s, 1.0, lim.max_jerk.is_some(), f64::INFINITY);
     let (seg, dir) = onto(target - p, 0.0);
-    Approach1 {
+    Route1 {
         pre_time: t,
         seg,
         dir,
@@ -275,20 +270,20 @@ pub fn retarget(
     let mut duration: f64 = 0.0;
     let mut pre = Phases::new();
     for ((s, &q), lim) in current.iter().zip(target).zip(limits) {
-        let ap = approach(s, q, lim, &mut pre);
-        let fastest = ap.seg.fastest(lim);
-        duration = duration.max(ap.pre_time + fastest.duration);
+        let way = route(s, q, lim, &mut pre);
+        let fastest = way.seg.fastest(lim);
+        duration = duration.max(way.pre_time + fastest.duration);
         let mut pieces = Vec::with_capacity(pre.n + 8);
         let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);
         per_joint.push(pieces);
-        mains.push((ap, fastest, t, x, v));
+        mains.push((way, fastest, t, x, v));
     }
-    for ((pieces, (ap, fastest, t, x, v)), lim) in per_joint.iter_mut().zip(mains).zip(limits) {
-        if ap.seg.d > 0.0 || ap.seg.v0 > 0.0 {
-            let prof = ap.seg.stretched(lim, fastest, duration - ap.pre_time);
+    for ((pieces, (way, fastest, t, x, v)), lim) in per_joint.iter_mut().zip(mains).zip(limits) {
+        if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
+            let prof = way.seg.stretched(lim, fastest, duration - way.pre_time);
             let mut main = Phases::new();
-            ap.seg.phases(lim, prof, &mut main);
-            main.emit(t, x, v, 0.0, ap.dir, lim.max_jerk.is_some(), pieces);
+            way.seg.phases(lim, prof, &mut main);
+            main.emit(t, x, v, 0.0, way.dir, lim.max_jerk.is_some(), pieces);
         }
     }
     Ok(finish(per_joint, target, duration))

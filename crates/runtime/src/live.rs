@@ -403,7 +403,7 @@ mod tests {
         let mut live = LivePath::new(vec![lim], &[JointState::at_rest(0.0)], 0.0, 1.0);
         // 0.3 rad/s, a target every 40 ms (25 Hz) until 0.48 s, followed
         // at 1 kHz until 0.9 s (before the 1 s timeout).
-        let (speed, interval, period) = (0.3, 0.04, 0.001);
+        let (speed, period) = (0.3, 0.001);
         let mut out = [JointState::default()];
         let mut last = f64::NAN;
         for k in 1..=900u32 {

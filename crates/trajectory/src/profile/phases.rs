@@ -74,7 +74,7 @@ impl Phases {
         limit: f64,
     ) -> (f64, f64, f64, f64) {
         let start = (x.position, x.velocity, x.acceleration);
-        self.integrate(0.0, start, dir, finite_jerk, limit, |_| {})
+        self.integrate::<true>(0.0, start, dir, finite_jerk, limit, |_| {})
     }
 
     /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the
@@ -93,7 +93,7 @@ impl Phases {
         out: &mut Vec<Piece>,
     ) -> (f64, f64, f64, f64) {
         let each = |piece| out.push(piece);
-        let (t, p, v, a) = self.integrate(t, (p, v, a), dir, finite_jerk, f64::INFINITY, each);
+        let (t, p, v, a) = self.integrate::<false>(t, (p, v, a), dir, finite_jerk, 0.0, each);
         // Without a jerk limit the profile ends at rest in acceleration
         // (even with no phase at all).
         (t, p, v, if finite_jerk { a } else { 0.0 })
@@ -101,12 +101,13 @@ impl Phases {
 
     /// The one integration of [`advance`](Self::advance) and
     /// [`emit`](Self::emit): from time `t0` in state `(p, v, a)`, mirrored
-    /// by `dir`, for at most `limit` s, handing `each` the piece of every
-    /// phase begun. Returns the end time and state. Without a jerk limit
-    /// the acceleration of a phase is its `acc`, and zero after a whole
-    /// one.
+    /// by `dir`, for at most `limit` s when `LIMITED` (else to the end:
+    /// the planners' case, with no test per phase), handing `each` the
+    /// piece of every phase begun. Returns the end time and state. Without
+    /// a jerk limit the acceleration of a phase is its `acc`, and zero
+    /// after a whole one.
     #[inline(always)]
-    fn integrate(
+    fn integrate<const LIMITED: bool>(
         &self,
         t0: f64,
         (mut p, mut v, mut a): (f64, f64, f64),
@@ -117,10 +118,13 @@ impl Phases {
     ) -> (f64, f64, f64, f64) {
         let mut t = t0;
         for k in 0..self.n {
-            if t - t0 >= limit {
-                break;
+            let mut dt = self.dt[k];
+            if LIMITED {
+                if t - t0 >= limit {
+                    break;
+                }
+                dt = dt.min(limit - (t - t0));
             }
-            let dt = self.dt[k].min(limit - (t - t0));
             let jk = dir * self.jerk[k];
             if !finite_jerk {
                 a = dir * self.acc[k];
@@ -130,7 +134,7 @@ impl Phases {
             v += dt * (a + 0.5 * dt * jk);
             a += dt * jk;
             t += dt;
-            if !finite_jerk && dt == self.dt[k] {
+            if !finite_jerk && (!LIMITED || dt == self.dt[k]) {
                 a = 0.0;
             }
         }

@@ -97,8 +97,8 @@ impl<T: Transport, C: Clock> Lane<T, C> {
     fn run_cycle(&mut self, tick: Tick) -> Option<Finish> {
         let k = tick.index;
         let t = k as f64 * self.period.as_secs_f64();
-        self.timeline.set_now(t);
-        if let Some(end) = self.take_commands(k, t) {
+        self.timeline.begin_cycle(t);
+        if let Some(end) = self.take_commands(k) {
             return Some(end);
         }
         if self.reacted.is_none() {
@@ -174,15 +174,15 @@ impl<T: Transport, C: Clock> Lane<T, C> {
         self.bus.publish(Telemetry::Live { event, time_s: t });
     }
 
-    /// Carries out the operations due at cycle `k` (at time `t`).
-    fn take_commands(&mut self, k: u64, t: f64) -> Option<Finish> {
+    /// Carries out the operations due at cycle `k`.
+    fn take_commands(&mut self, k: u64) -> Option<Finish> {
         self.mail.collect(k);
         while let Some(op) = self.mail.next_due(k) {
             let command = match op {
                 Op::Abandon if self.waiting_for_play() => return Some(Finish::Abandoned),
                 Op::Abandon => continue,
                 Op::Target(target) => {
-                    if self.timeline.target(&target, t) && self.bus.index == 0 {
+                    if self.timeline.target(&target) && self.bus.index == 0 {
                         self.counters.add(Count::Followed);
                         if let Some(taken) = target.taken {
                             self.taken = Some(self.taken.map_or(taken, |o| o.min(taken)));

@@ -8,9 +8,10 @@
 //!   a fast stream of noisy readings, a leader arm's, gives steady
 //!   estimates; a 30 Hz stream uses its last three), or the speed is taken
 //!   as given. The target is extrapolated so over at most one target
-//!   interval (the longest of the last [`INTERVALS`], with half of it
-//!   again as margin for jitter, so that a target a little late does not
-//!   count as the end of the motion), never past a joint limit.
+//!   interval (the longest of the last [`INTERVALS`], so that a target a
+//!   little late after a short interval does not count as the end of the
+//!   motion; none before two targets have given an interval), never past
+//!   a joint limit.
 //!   Once the extrapolation ends the joint goes to rest there, or, when it
 //!   cannot stop before, where its quickest stop ends: it never turns back
 //!   for a target that stopped abruptly.
@@ -136,6 +137,8 @@ pub(crate) struct LivePath {
     last: f64,
     /// The run's time of the latest target's arrival.
     arrived: f64,
+    /// The time of the cycle being run ([`LivePath::begin_cycle`]).
+    now: f64,
     timeout: f64,
     /// Run time minus sender stamp, smallest seen (relaxed).
     offset: Option<f64>,
@@ -179,6 +182,7 @@ impl LivePath {
             any: false,
             last: x,
             arrived: x,
+            now: x,
             timeout,
             offset: None,
             times,
@@ -237,11 +241,10 @@ impl LivePath {
                 history,
                 kept,
                 at,
-                interval: if interval.is_some() || v.is_some() {
-                    (1.5 * longest).max(if v.is_some() { 0.05 } else { 0.0 })
-                } else {
-                    0.0
-                },
+                // One target interval at most: the longest of the last
+                // few (jitter makes some shorter than the stream's), none
+                // before an interval is known.
+                interval: if interval.is_some() { longest } else { 0.0 },
                 recent,
                 stamp: Some(t.stamp),
                 rest: None,
@@ -316,10 +319,15 @@ impl LivePath {
         Goal::at(rest)
     }
 
-    /// The commanded state at `x` (advancing every joint to it; `now` is the
-    /// cycle's time, for the timeout).
-    pub fn sample_cmd(&mut self, x: f64, now: f64, out: &mut [JointState]) {
-        if self.mode == Mode::Following && now - self.arrived > self.timeout {
+    /// Begins the cycle of time `now`: the timeout is judged by it.
+    pub fn begin_cycle(&mut self, now: f64) {
+        self.now = now;
+    }
+
+    /// The commanded state at `x` (advancing every joint to it; stopping
+    /// first when no target came for the timeout before the cycle's time).
+    pub fn sample_cmd(&mut self, x: f64, out: &mut [JointState]) {
+        if self.mode == Mode::Following && self.now - self.arrived > self.timeout {
             self.set_stops();
             self.mode = Mode::TimedOut;
             self.event = Some(LiveEvent::TimedOut);
@@ -371,5 +379,50 @@ impl LivePath {
                 acceleration: s.acceleration,
             };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A target putting joint 0 at `q` rad, stamped `stamp` s.
+    fn at(stamp: f64, q: f64) -> Checked {
+        Checked {
+            stamp,
+            joints: vec![Some((q, None))],
+            taken: None,
+        }
+    }
+
+    #[test]
+    fn a_moving_target_is_extrapolated_over_one_target_interval_at_most() {
+        // Limits far above the target's motion, so that the joint keeps up
+        // with it and rests where its goal does.
+        let lim = JointLimits::new(10.0, 100.0, Some(10_000.0));
+        let mut live = LivePath::new(vec![lim], &[JointState::at_rest(0.0)], 0.0, 1.0);
+        // 0.3 rad/s, a target every 40 ms (25 Hz) until 0.48 s, followed
+        // at 1 kHz until 0.9 s (before the 1 s timeout).
+        let (speed, period) = (0.3, 0.001);
+        let mut out = [JointState::default()];
+        let mut last = f64::NAN;
+        for k in 1..=900u32 {
+            let now = f64::from(k) * period;
+            live.begin_cycle(now);
+            if k % 40 == 0 && k <= 480 {
+                last = speed * now;
+                live.target(&at(now, last), now);
+            }
+            live.sample_cmd(now, &mut out);
+        }
+        let rest = out[0];
+        assert_eq!((rest.velocity, rest.acceleration), (0.0, 0.0), "{rest:?}");
+        // One interval on: 12 mrad past the last target. The joint may go
+        // on for its quickest stop from 0.3 rad/s, v sqrt(v / j) = 0.3 *
+        // sqrt(0.3 / 10000) = 1.64 mrad, plus one cycle's motion, 0.3 mrad
+        // (by hand). One and a half intervals would be 18 mrad.
+        let past = rest.position - last;
+        assert!(past >= 0.012 - 1e-9, "{past}");
+        assert!(past <= 0.012 + 0.00165 + 0.0003, "{past}");
     }
 }

@@ -9,7 +9,9 @@ use std::time::Duration;
 
 use servobus_alloc_count::{allocations_during, uncounted, Counting};
 use servobus_driver::{Bus, ManualClock, Transport, TransportError};
-use servobus_runtime::{RunOptions, Telemetry, VirtualRun};
+use servobus_runtime::config::{JointMap, Robot};
+use servobus_runtime::{RunOptions, Target, Telemetry, VirtualRun};
+use servobus_sim::SimBus;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -36,32 +38,45 @@ impl<T: Transport> Transport for Uncounted<T> {
     }
 }
 
-fn steady_state_allocations(motion: &str, cycles: u64) -> usize {
-    let (path, robot) = common::motion(motion);
-    let (buses, _) = common::sim_buses(&robot);
-    let buses: Vec<Bus<Uncounted<_>, ManualClock>> = buses
+/// The robot's simulated buses, the simulator's work left out of counts.
+fn uncounted_buses(robot: &Robot) -> Vec<Bus<Uncounted<SimBus>, ManualClock>> {
+    let (buses, _) = common::sim_buses(robot);
+    buses
         .into_iter()
         .map(|b| {
             let settings = *b.settings();
             let (t, _) = b.into_parts();
             Bus::new(Uncounted(t), settings)
         })
-        .collect();
-    let options = RunOptions {
+        .collect()
+}
+
+fn options() -> RunOptions {
+    RunOptions {
         // Keep holding the end long enough for the whole count.
         settle: Duration::from_secs(60),
         telemetry_capacity: 64,
         ..RunOptions::default()
-    };
-    let mut run = VirtualRun::new(&robot, path, buses, options).expect("starts");
+    }
+}
+
+/// The allocations of `cycles` cycles of `run` after 200 of warm-up
+/// (start-up, the approach, the lead identification). `feed(k)` runs
+/// before cycle `k`, uncounted: it stands for another thread's work.
+fn counted_cycles(
+    run: &mut VirtualRun<Uncounted<SimBus>>,
+    cycles: u64,
+    mut feed: impl FnMut(u64),
+) -> usize {
     let telemetry = run.telemetry();
-    // Warm up: start-up, the approach, the lead identification.
     for _ in 0..200 {
+        uncounted(|| feed(run.cycle()));
         assert!(run.step());
     }
     let (count, samples) = allocations_during(|| {
         let mut samples = 0u64;
         for _ in 0..cycles {
+            uncounted(|| feed(run.cycle()));
             assert!(run.step());
             // A consumer reading in the same thread, every few cycles, so
             // that both the full-channel and the sending paths are
@@ -83,6 +98,13 @@ fn steady_state_allocations(motion: &str, cycles: u64) -> usize {
     count
 }
 
+fn steady_state_allocations(motion: &str, cycles: u64) -> usize {
+    let (path, robot) = common::motion(motion);
+    let buses = uncounted_buses(&robot);
+    let mut run = VirtualRun::new(&robot, path, buses, options()).expect("starts");
+    counted_cycles(&mut run, cycles, |_| {})
+}
+
 #[test]
 fn the_arm_loop_allocates_nothing_over_5000_cycles() {
     assert_eq!(steady_state_allocations("arm-wave.yaml", 5_000), 0);
@@ -91,6 +113,40 @@ fn the_arm_loop_allocates_nothing_over_5000_cycles() {
 #[test]
 fn the_18_servo_hexapod_loop_allocates_nothing_over_3000_cycles() {
     assert_eq!(steady_state_allocations("hexapod-tripod.yaml", 3_000), 0);
+}
+
+#[test]
+fn a_live_loop_following_a_30_hz_stream_allocates_nothing_over_3000_cycles() {
+    let robot = common::robot("so101.yaml");
+    let buses = uncounted_buses(&robot);
+    let mut run = VirtualRun::live(&robot, buses, options()).expect("starts");
+    let tx = run.targets();
+    let period = 1.0 / robot.rate_hz;
+    // The middle of each servo's range, where the simulated joints start.
+    let start: Vec<f64> = robot
+        .joints()
+        .map(|j| JointMap::new(j, robot.units).from_ticks(2048))
+        .collect();
+    let mut sent = 0u64;
+    // Every joint sways by up to 0.2 rad around its start, a target about every
+    // 33 ms (stamped with its cycle's time), all run long.
+    let count = counted_cycles(&mut run, 3_000, |k| {
+        let t = k as f64 * period;
+        if t * 30.0 >= sent as f64 {
+            let q = start
+                .iter()
+                .enumerate()
+                .map(|(j, q0)| q0 + 0.2 * (t * (1.0 + 0.2 * j as f64)).sin())
+                .collect();
+            assert_eq!(tx.send(Target::all(t, q)), Ok(0));
+            sent += 1;
+        }
+    });
+    assert_eq!(count, 0);
+    let live = run.report().live.expect("targets counted");
+    // Followed all the way: none refused, the stream never timed out.
+    assert_eq!((live.received, live.refused, live.timeouts), (sent, 0, 0));
+    assert!(sent > 90, "{sent}");
 }
 
 #[test]

@@ -18,7 +18,7 @@
 //! acceleration limit, and the plan relative to the target keeps to what
 //! is left. Nothing is allocated.
 
-use crate::online::{plan1, stop_phases};
+use crate::online::{onward, route, stop_phases, Route1};
 use crate::profile::Phases;
 use crate::{JointLimits, JointState};
 
@@ -80,7 +80,29 @@ struct Plan {
 }
 
 impl Plan {
-    fn new(lim: &JointLimits, state: &JointState, goal: Goal) -> Plan {
+    /// No plan yet (nothing to follow).
+    const NONE: Plan = Plan {
+        goal: Goal {
+            position: 0.0,
+            velocity: 0.0,
+            acceleration: 0.0,
+            horizon: 0.0,
+        },
+        err: JointState {
+            position: 0.0,
+            velocity: 0.0,
+            acceleration: 0.0,
+        },
+        pre: Phases::new(),
+        main: Phases::new(),
+        dir: 1.0,
+        tau: 0.0,
+    };
+
+    /// Makes this the plan from `state` to `goal` (in place: a plan is a
+    /// few hundred bytes, and a cycle that replans every joint should not
+    /// copy them around).
+    fn renew(&mut self, lim: &JointLimits, state: &JointState, goal: Goal) {
         // The error frame: the target stands still at 0; the speed and
         // acceleration left for the error keep the sums within the joint's
         // limits.
@@ -90,37 +112,39 @@ impl Plan {
             velocity: state.velocity - goal.velocity,
             acceleration: state.acceleration - goal.acceleration,
         };
-        Plan::ramping(&rel, &err, goal).unwrap_or_else(|| Plan::from(&rel, err, goal, 0.0))
+        if !self.ramping(&rel, &err, goal) {
+            let way = route(&err, 0.0, &rel, &mut self.pre);
+            self.set(&rel, &way, err, goal, 0.0);
+        }
     }
 
-    /// The plan from `err` (relative to `goal` at `tau`).
-    fn from(rel: &JointLimits, err: JointState, goal: Goal, tau: f64) -> Plan {
-        let p = plan1(&err, 0.0, rel);
-        let mut main = Phases::new();
-        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
-            p.seg.phases(rel, p.fastest, &mut main);
+    /// Makes this the plan of `err` (relative to `goal` at `tau`) that
+    /// starts with `way`, whose first phases are already in `pre`.
+    fn set(&mut self, rel: &JointLimits, way: &Route1, err: JointState, goal: Goal, tau: f64) {
+        self.main.n = 0;
+        if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
+            way.seg.phases(rel, way.seg.fastest(rel), &mut self.main);
         }
-        Plan {
-            goal,
-            err,
-            pre: p.pre,
-            main,
-            dir: p.dir,
-            tau,
-        }
+        self.goal = goal;
+        self.err = err;
+        self.dir = way.dir;
+        self.tau = tau;
     }
 
     /// A joint part way up an acceleration ramp (or down one) may be on its
     /// way to the target already: the plan made from where that ramp began
     /// (acceleration 0, `ta = |a| / j` earlier), if it starts with the same
     /// ramp for at least `ta`, goes on from here without first undoing the
-    /// acceleration (which [`plan1`] would do, and which, planned anew
-    /// every cycle, would never let the joint speed up).
-    fn ramping(rel: &JointLimits, err: &JointState, goal: Goal) -> Option<Plan> {
-        let j = rel.max_jerk?;
+    /// acceleration (which [`route`] would do, and which, planned anew
+    /// every cycle, would never let the joint speed up). Returns whether
+    /// this became that plan (else it is to be made anew).
+    fn ramping(&mut self, rel: &JointLimits, err: &JointState, goal: Goal) -> bool {
+        let Some(j) = rel.max_jerk else {
+            return false;
+        };
         let ea = err.acceleration;
         if ea == 0.0 {
-            return None;
+            return false;
         }
         let ta = ea.abs() / j;
         let v0 = err.velocity - 0.5 * ea * ta;
@@ -129,12 +153,29 @@ impl Plan {
             velocity: v0,
             acceleration: 0.0,
         };
-        let plan = Plan::from(rel, start, goal.after(-ta), ta);
-        let same = plan.pre.n == 0
-            && plan.main.n > 0
-            && plan.main.jerk[0] * plan.dir * ea > 0.0
-            && plan.main.dt[0] >= ta * (1.0 - 1e-9);
-        same.then_some(plan)
+        // A plan that stops first cannot go on with this ramp: known
+        // before any profile is solved.
+        let Some(way) = onward(&start, 0.0, rel, &mut self.pre) else {
+            return false;
+        };
+        // The main segment's first phase must be the ramp toward its
+        // cruise speed, in the direction of `ea`, for at least `ta`: known
+        // not to be before any profile is solved when it must slow down
+        // (a joint within its speed limit that can rest within a quarter
+        // of the distance, as `onward` checked, cruises faster than it
+        // starts), or when even the top speed is too close to reach in
+        // `ta` of jerk.
+        let slower = way.dir * ea < 0.0 && way.seg.v0 < rel.max_velocity;
+        let ramp =
+            (rel.max_acceleration / j).min(((rel.max_velocity - way.seg.v0).max(0.0) / j).sqrt());
+        if slower || ramp < ta * (1.0 - 1e-9) {
+            return false;
+        }
+        self.set(rel, &way, start, goal.after(-ta), ta);
+        self.pre.n == 0
+            && self.main.n > 0
+            && self.main.jerk[0] * self.dir * ea > 0.0
+            && self.main.dt[0] >= ta * (1.0 - 1e-9)
     }
 
     /// Whether `goal` (now) is the goal this plan follows.
@@ -198,13 +239,19 @@ fn relative(lim: &JointLimits, goal: &Goal) -> JointLimits {
 #[derive(Debug, Clone, Copy)]
 pub struct Follower {
     state: JointState,
-    plan: Option<Plan>,
+    plan: Plan,
+    /// Whether `plan` is one (none before the first step).
+    planned: bool,
 }
 
 impl Follower {
     /// A follower at `state`.
     pub fn new(state: JointState) -> Self {
-        Follower { state, plan: None }
+        Follower {
+            state,
+            plan: Plan::NONE,
+            planned: false,
+        }
     }
 
     /// The commanded state.
@@ -226,12 +273,12 @@ impl Follower {
         }
         let goal = capped(lim, goal);
         let finite = lim.max_jerk.is_some();
-        let plan = match &mut self.plan {
-            Some(p) if p.follows(goal) => p,
-            slot => slot.insert(Plan::new(lim, &self.state, goal)),
-        };
-        plan.tau += dt;
-        self.state = plan.at(finite);
+        if !(self.planned && self.plan.follows(goal)) {
+            self.plan.renew(lim, &self.state, goal);
+            self.planned = true;
+        }
+        self.plan.tau += dt;
+        self.state = self.plan.at(finite);
         self.state
     }
 }

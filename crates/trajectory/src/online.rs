@@ -6,7 +6,7 @@
 use crate::error::PlanError;
 use crate::limits::validate_all;
 use crate::piece::Piece;
-use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::profile::{Phases, Ramp, Segment1};
 use crate::{JointLimits, JointState, Trajectory};
 
 /// The quickest way to rest from speed `v` and acceleration `a`: ramp the
@@ -120,25 +120,51 @@ pub(crate) fn finish(mut per_joint: Vec<Vec<Piece>>, hold: &[f64], duration: f64
     Trajectory::from_joints(per_joint, hold, duration, Vec::new())
 }
 
-/// How one joint gets from its state to the target.
-pub(crate) struct Plan1 {
-    /// Phases before the main segment (stop or acceleration ramp-down).
-    pub pre: Phases,
-    /// Duration of `pre`.
+/// How one joint starts toward its target, the phases before the main
+/// segment aside (those are written where the caller keeps them).
+pub(crate) struct Route1 {
+    /// Duration of the phases before the main segment.
     pub pre_time: f64,
     pub seg: Segment1,
-    pub fastest: Profile,
     /// Direction of the main segment.
     pub dir: f64,
 }
 
-pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
+/// Whether a joint at speed `v >= 0` (within `max_velocity`), with no
+/// acceleration, can still come to rest within `dist`: the rest-to-rest
+/// move peaking at `v` covers `v` times its ramp's duration, which grows
+/// with `v`, so this is `v <= rest_peak(dist)` without solving for the
+/// peak (no cube root).
+#[inline]
+fn rests_within(v: f64, dist: f64, lim: &JointLimits) -> bool {
+    v * Ramp::new(v, lim.max_acceleration, lim.jerk()).duration() <= dist
+}
+
+/// The segment of `d` (either sign) from speed `v0` (in its direction) to
+/// rest.
+fn onto(d: f64, v0: f64) -> (Segment1, f64) {
+    let seg = Segment1 {
+        d: d.abs(),
+        v0: v0.abs(),
+        v1: 0.0,
+    };
+    (seg, if d >= 0.0 { 1.0 } else { -1.0 })
+}
+
+/// How one joint goes on toward `target` without reversing: its
+/// acceleration ramped to zero (the phase written to `pre`, cleared
+/// first), then the main segment. `None` when that will not do: the
+/// speed points away from the target, or is too high to stop within a
+/// quarter of the distance.
+pub(crate) fn onward(
+    s: &JointState,
+    target: f64,
+    lim: &JointLimits,
+    pre: &mut Phases,
+) -> Option<Route1> {
     let j = lim.jerk();
     let finite = j.is_finite();
-    let mut pre = Phases::new();
-    // Option A: ramp the acceleration to zero, then move on to the target
-    // without reversing (needs the speed to point at the target and to be
-    // low enough to stop within a quarter of the distance).
+    pre.n = 0;
     let (ta, a) = if finite {
         (s.acceleration.abs() / j, s.acceleration)
     } else {
@@ -154,42 +180,39 @@ pub(crate) fn plan1(s: &JointState, target: f64, lim: &JointLimits) -> Plan1 {
         (s.position, s.velocity)
     };
     let d = target - p1;
-    if v1 == 0.0
+    let on = v1 == 0.0
         || (v1 * d > 0.0
             && v1.abs() <= lim.max_velocity
-            && v1.abs() <= rest_peak(0.5 * d.abs(), lim))
-    {
-        if finite && a != 0.0 {
-            pre.push(ta, jj, 0.0);
-        }
-        let seg = Segment1 {
-            d: d.abs(),
-            v0: v1.abs(),
-            v1: 0.0,
-        };
-        return Plan1 {
-            pre,
-            pre_time: ta,
-            fastest: seg.fastest(lim),
-            seg,
-            dir: if d >= 0.0 { 1.0 } else { -1.0 },
-        };
+            && rests_within(v1.abs(), 0.5 * d.abs(), lim));
+    if !on {
+        return None;
     }
-    // Option B: stop first, then move rest to rest.
-    stop_phases(s.velocity, s.acceleration, lim, &mut pre);
-    let (t, p, _, _) = pre.advance(s, 1.0, finite, f64::INFINITY);
-    let d = target - p;
-    let seg = Segment1 {
-        d: d.abs(),
-        v0: 0.0,
-        v1: 0.0,
-    };
-    Plan1 {
-        pre,
-        pre_time: t,
-        fastest: seg.fastest(lim),
+    if finite && a != 0.0 {
+        pre.push(ta, jj, 0.0);
+    }
+    let (seg, dir) = onto(d, v1);
+    Some(Route1 {
+        pre_time: ta,
         seg,
-        dir: if d >= 0.0 { 1.0 } else { -1.0 },
+        dir,
+    })
+}
+
+/// How one joint gets from its state to `target`: [`onward`] when it can,
+/// else it stops as fast as it can and then moves rest to rest. The phases
+/// before the main segment are written to `pre`.
+pub(crate) fn route(s: &JointState, target: f64, lim: &JointLimits, pre: &mut Phases) -> Route1 {
+    if let Some(way) = onward(s, target, lim, pre) {
+        return way;
+    }
+    pre.n = 0;
+    stop_phases(s.velocity, s.acceleration, lim, pre);
+    let (t, p, _, _) = pre.advance(s, 1.0, lim.max_jerk.is_some(), f64::INFINITY);
+    let (seg, dir) = onto(target - p, 0.0);
+    Route1 {
+        pre_time: t,
+        seg,
+        dir,
     }
 }
 
@@ -240,28 +263,28 @@ pub fn retarget(
             });
         }
     }
-    let plans: Vec<Plan1> = current
-        .iter()
-        .zip(target)
-        .zip(limits)
-        .map(|((s, &q), l)| plan1(s, q, l))
-        .collect();
-    let duration = plans
-        .iter()
-        .map(|p| p.pre_time + p.fastest.duration)
-        .fold(0.0, f64::max);
+    // Each joint's first phases go straight into its pieces; what the
+    // main segment needs once the duration is known is kept aside.
     let mut per_joint = Vec::with_capacity(limits.len());
-    for ((p, s), lim) in plans.iter().zip(current).zip(limits) {
-        let finite = lim.max_jerk.is_some();
-        let mut pieces = Vec::with_capacity(p.pre.n + 8);
-        let (t, x, v, _) = p.pre.emit_from(0.0, s, lim, &mut pieces);
-        let prof = p.seg.stretched(lim, p.fastest, duration - p.pre_time);
-        let mut main = Phases::new();
-        if p.seg.d > 0.0 || p.seg.v0 > 0.0 {
-            p.seg.phases(lim, prof, &mut main);
-            main.emit(t, x, v, 0.0, p.dir, finite, &mut pieces);
-        }
+    let mut mains = Vec::with_capacity(limits.len());
+    let mut duration: f64 = 0.0;
+    let mut pre = Phases::new();
+    for ((s, &q), lim) in current.iter().zip(target).zip(limits) {
+        let way = route(s, q, lim, &mut pre);
+        let fastest = way.seg.fastest(lim);
+        duration = duration.max(way.pre_time + fastest.duration);
+        let mut pieces = Vec::with_capacity(pre.n + 8);
+        let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);
         per_joint.push(pieces);
+        mains.push((way, fastest, t, x, v));
+    }
+    for ((pieces, (way, fastest, t, x, v)), lim) in per_joint.iter_mut().zip(mains).zip(limits) {
+        if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
+            let prof = way.seg.stretched(lim, fastest, duration - way.pre_time);
+            let mut main = Phases::new();
+            way.seg.phases(lim, prof, &mut main);
+            main.emit(t, x, v, 0.0, way.dir, lim.max_jerk.is_some(), pieces);
+        }
     }
     Ok(finish(per_joint, target, duration))
 }

@@ -7,21 +7,12 @@ impl Timeline {
     /// follow live targets once they come.
     pub fn live(limits: Vec<JointLimits>, present: &[f64], target_timeout: f64) -> Self {
         let from: Vec<JointState> = present.iter().map(|&p| JointState::at_rest(p)).collect();
-        let n = limits.len();
         let path = LivePath::new(limits.clone(), &from, 0.0, target_timeout);
-        Timeline {
-            live_limits: limits.clone(),
-            limits,
-            segments: vec![Segment::new(0.0, Kind::Live, Path::Live(Box::new(path)))],
-            pending: None,
-            horizon: 0.0,
-            ramp: 0.05,
-            scratch: vec![JointState::default(); n],
-            over_since: None,
-            approach: Duration::ZERO,
-            now: 0.0,
-            target_timeout,
-        }
+        let mut tl = Timeline::empty(limits);
+        tl.target_timeout = target_timeout;
+        tl.segments
+            .push(Segment::new(0.0, Kind::Live, Path::Live(Box::new(path))));
+        tl
     }
 
     /// Sets how long live targets may fail to come before the joints stop,
@@ -34,16 +25,24 @@ impl Timeline {
         }
     }
 
-    /// Sets the time of the cycle being run.
-    pub fn set_now(&mut self, t: f64) {
+    /// Begins the cycle of time `t` (s since the start of the run): targets
+    /// taken in from now on arrive at `t`, and live following times out by
+    /// it. Called once a cycle, before anything else of the timeline.
+    pub fn begin_cycle(&mut self, t: f64) {
         self.now = t;
+        for seg in &mut self.segments {
+            if let Path::Live(live) = &mut seg.path {
+                live.begin_cycle(t);
+            }
+        }
     }
 
-    /// Follows `target`, arrived in the cycle at `now` (switching from the
-    /// path to live following at the horizon if need be). Returns false
-    /// when the run is ending (stopping or holding for good): the target
-    /// is ignored.
-    pub fn target(&mut self, target: &Checked, now: f64) -> bool {
+    /// Follows `target`, arrived in the cycle begun last (switching from
+    /// the path to live following at the horizon if need be). Returns
+    /// false when the run is ending (stopping or holding for good): the
+    /// target is ignored.
+    pub fn target(&mut self, target: &Checked) -> bool {
+        let now = self.now;
         match self.segments.last_mut() {
             Some(Segment {
                 path: Path::Live(live),
@@ -58,6 +57,7 @@ impl Timeline {
         let st = self.state_at_horizon();
         let x = self.horizon;
         let mut live = LivePath::new(self.live_limits.clone(), &st, x, self.target_timeout);
+        live.begin_cycle(now);
         live.target(target, now);
         self.pending = None;
         self.push(Segment::new(x, Kind::Live, Path::Live(Box::new(live))));

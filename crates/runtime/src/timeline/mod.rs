@@ -77,16 +77,15 @@ impl Segment {
         }
     }
 
-    /// The path at `x`; `now` is the cycle's time (live targets time out
-    /// by it).
-    fn sample(&mut self, x: f64, now: f64, which: Which, out: &mut [JointState]) {
+    /// The path at `x`.
+    fn sample(&mut self, x: f64, which: Which, out: &mut [JointState]) {
         let cursor = match which {
             Which::Cmd => &mut self.cmd,
             Which::Ref => &mut self.reference,
         };
         match &mut self.path {
             Path::Live(live) => match which {
-                Which::Cmd => live.sample_cmd(x, now, out),
+                Which::Cmd => live.sample_cmd(x, out),
                 Which::Ref => live.sample_ref(x, out),
             },
             Path::Plain(t) => t.sample_with(cursor, x - self.start, out),
@@ -141,7 +140,8 @@ pub(crate) struct Timeline {
     over_since: Option<f64>,
     /// How long the approach to the main path's start takes, as planned.
     approach: Duration,
-    /// The time of the cycle being run (live targets time out by it).
+    /// The time of the cycle being run ([`Timeline::begin_cycle`]): live
+    /// targets arrive and time out by it.
     now: f64,
     /// How long live targets may fail to come before the joints stop, s.
     target_timeout: f64,
@@ -164,7 +164,48 @@ fn scaled(limits: &[JointLimits], f: f64) -> Vec<JointLimits> {
         .collect()
 }
 
+/// The shortest pause or resume ramp, s (joints with a high acceleration
+/// for their speed still change speed over a few cycles, not one).
+const MIN_PAUSE_RAMP: f64 = 0.05;
+
+/// The longest pause or resume ramp, s (a slow joint does not make a
+/// pause take longer than this).
+const MAX_PAUSE_RAMP: f64 = 3.0;
+
+/// How long pausing or resuming ramps the path's time scale, s: the
+/// longest the limits allow without asking more than about half of a
+/// joint's acceleration for the slow-down itself (the quintic ramp's
+/// peak slope is 1.875 / duration, so a ramp of `3.75 v / a` slows a joint
+/// at speed `v` by at most `a / 2`), between [`MIN_PAUSE_RAMP`] and
+/// [`MAX_PAUSE_RAMP`].
+fn pause_ramp(limits: &[JointLimits]) -> f64 {
+    limits
+        .iter()
+        .map(|l| 3.75 * l.max_velocity / l.max_acceleration)
+        .fold(MIN_PAUSE_RAMP, f64::max)
+        .min(MAX_PAUSE_RAMP)
+}
+
 impl Timeline {
+    /// The one constructor: no segment yet, the pause ramp of `limits`,
+    /// live targets followed within `limits` with the default timeout.
+    fn empty(limits: Vec<JointLimits>) -> Self {
+        let n = limits.len();
+        Timeline {
+            ramp: pause_ramp(&limits),
+            live_limits: limits.clone(),
+            limits,
+            segments: Vec::with_capacity(8),
+            pending: None,
+            horizon: 0.0,
+            scratch: vec![JointState::default(); n],
+            over_since: None,
+            approach: Duration::ZERO,
+            now: 0.0,
+            target_timeout: DEFAULT_TARGET_TIMEOUT,
+        }
+    }
+
     /// The timeline of a run: from `present` (rad, at rest) to the start of
     /// `main` (an approach at `approach` of the limits, when given and the
     /// joints are more than `tolerance` rad away), then `main` at once or,
@@ -178,28 +219,7 @@ impl Timeline {
         tolerance: f64,
     ) -> Result<Self, RunError> {
         let n = limits.len();
-        // The longest pause ramp the limits allow without asking more than
-        // about half of a joint's acceleration for the slow-down itself
-        // (the quintic ramp's peak slope is 1.875 / duration).
-        let ramp = limits
-            .iter()
-            .map(|l| 3.75 * l.max_velocity / l.max_acceleration)
-            .fold(0.05, f64::max)
-            .min(3.0);
-        let mut tl = Timeline {
-            limits,
-            segments: Vec::with_capacity(8),
-            pending: None,
-            horizon: 0.0,
-            ramp,
-            scratch: vec![JointState::default(); n],
-            over_since: None,
-            approach: Duration::ZERO,
-            now: 0.0,
-            target_timeout: DEFAULT_TARGET_TIMEOUT,
-            live_limits: Vec::new(),
-        };
-        tl.live_limits = tl.limits.clone();
+        let mut tl = Timeline::empty(limits);
         let mut start = vec![JointState::default(); n];
         main.sample(0.0, &mut start);
         let target: Vec<f64> = start.iter().map(|s| s.position).collect();
@@ -264,17 +284,15 @@ impl Timeline {
     /// The commanded state at `x` (advances the horizon).
     pub fn sample_cmd(&mut self, x: f64, out: &mut [JointState]) {
         self.horizon = self.horizon.max(x);
-        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, now, Which::Cmd, out);
+            s.sample(x, Which::Cmd, out);
         }
     }
 
     /// The reference (where the joints should be) at `x`.
     pub fn sample_ref(&mut self, x: f64, out: &mut [JointState]) {
-        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, now, Which::Ref, out);
+            s.sample(x, Which::Ref, out);
         }
     }
 
@@ -334,9 +352,8 @@ impl Timeline {
     fn state_at_horizon(&mut self) -> Vec<JointState> {
         let x = self.horizon;
         let mut st = std::mem::take(&mut self.scratch);
-        let now = self.now;
         if let Some(s) = self.active(x) {
-            s.sample(x, now, Which::Cmd, &mut st);
+            s.sample(x, Which::Cmd, &mut st);
         }
         let out = st.clone();
         self.scratch = st;

@@ -103,10 +103,11 @@ impl Segment1 {
         if self.d <= 0.0 && vlo <= 0.0 {
             return Ok(0.0);
         }
-        if self.g(vm, acc).1 <= self.d {
-            Ok(vm)
-        } else if self.v0 == 0.0 && self.v1 == 0.0 {
+        if self.v0 == 0.0 && self.v1 == 0.0 {
+            // Rest to rest (`vm` included): no ramp distance to evaluate.
             Ok(rest_peak(self.d, lim))
+        } else if self.g(vm, acc).1 <= self.d {
+            Ok(vm)
         } else if self.g(vlo, acc).1 >= self.d {
             Ok(vlo)
         } else {
@@ -171,8 +172,9 @@ impl Segment1 {
             let step = g / dg;
             y -= step;
             // Quadratic convergence: the error left is about the square
-            // of this step, far below rounding.
-            if step <= 1e-13 * y {
+            // of this step, below rounding once the step is 1e-8 of `y`
+            // (the same rule as the stretching search's).
+            if step <= 1e-8 * y {
                 break;
             }
         }

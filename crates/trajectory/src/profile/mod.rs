@@ -37,7 +37,8 @@ mod stretch;
 
 pub(crate) use phases::Phases;
 pub(crate) use ramp::rest_peak;
-use ramp::{leg, Acc, Ramp};
+pub(crate) use ramp::Ramp;
+use ramp::{leg, Acc};
 
 use crate::JointLimits;
 

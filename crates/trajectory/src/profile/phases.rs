@@ -21,7 +21,7 @@ pub(crate) struct Phases {
 
 impl Phases {
     #[inline]
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Phases {
             n: 0,
             dt: [0.0; 12],
@@ -65,6 +65,7 @@ impl Phases {
     /// Integrates the phases from state `x`, mirrored by `dir`, for at most
     /// `limit` seconds (allocation-free). Returns the time integrated and
     /// the state reached.
+    #[inline]
     pub fn advance(
         &self,
         x: &JointState,
@@ -72,26 +73,8 @@ impl Phases {
         finite_jerk: bool,
         limit: f64,
     ) -> (f64, f64, f64, f64) {
-        let (mut p, mut v, mut a) = (x.position, x.velocity, x.acceleration);
-        let mut t = 0.0;
-        for k in 0..self.n {
-            if t >= limit {
-                break;
-            }
-            let dt = self.dt[k].min(limit - t);
-            let jk = dir * self.jerk[k];
-            if !finite_jerk {
-                a = dir * self.acc[k];
-            }
-            p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
-            v += dt * (a + 0.5 * dt * jk);
-            a += dt * jk;
-            t += dt;
-            if !finite_jerk && dt == self.dt[k] {
-                a = 0.0;
-            }
-        }
-        (t, p, v, a)
+        let start = (x.position, x.velocity, x.acceleration);
+        self.integrate::<true>(0.0, start, dir, finite_jerk, limit, |_| {})
     }
 
     /// Appends the pieces, starting at time `t` in state `(p, v, a)`, the
@@ -101,28 +84,59 @@ impl Phases {
     #[allow(clippy::too_many_arguments)] // a state (t, p, v, a) plus options
     pub fn emit(
         &self,
-        mut t: f64,
-        mut p: f64,
-        mut v: f64,
-        mut a: f64,
+        t: f64,
+        p: f64,
+        v: f64,
+        a: f64,
         dir: f64,
         finite_jerk: bool,
         out: &mut Vec<Piece>,
     ) -> (f64, f64, f64, f64) {
+        let each = |piece| out.push(piece);
+        let (t, p, v, a) = self.integrate::<false>(t, (p, v, a), dir, finite_jerk, 0.0, each);
+        // Without a jerk limit the profile ends at rest in acceleration
+        // (even with no phase at all).
+        (t, p, v, if finite_jerk { a } else { 0.0 })
+    }
+
+    /// The one integration of [`advance`](Self::advance) and
+    /// [`emit`](Self::emit): from time `t0` in state `(p, v, a)`, mirrored
+    /// by `dir`, for at most `limit` s when `LIMITED` (else to the end:
+    /// the planners' case, with no test per phase), handing `each` the
+    /// piece of every phase begun. Returns the end time and state. Without
+    /// a jerk limit the acceleration of a phase is its `acc`, and zero
+    /// after a whole one.
+    #[inline(always)]
+    fn integrate<const LIMITED: bool>(
+        &self,
+        t0: f64,
+        (mut p, mut v, mut a): (f64, f64, f64),
+        dir: f64,
+        finite_jerk: bool,
+        limit: f64,
+        mut each: impl FnMut(Piece),
+    ) -> (f64, f64, f64, f64) {
+        let mut t = t0;
         for k in 0..self.n {
-            let dt = self.dt[k];
+            let mut dt = self.dt[k];
+            if LIMITED {
+                if t - t0 >= limit {
+                    break;
+                }
+                dt = dt.min(limit - (t - t0));
+            }
             let jk = dir * self.jerk[k];
             if !finite_jerk {
                 a = dir * self.acc[k];
             }
-            out.push(Piece::jerk(t, dt, p, v, a, jk));
+            each(Piece::jerk(t, dt, p, v, a, jk));
             p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
             v += dt * (a + 0.5 * dt * jk);
             a += dt * jk;
             t += dt;
-        }
-        if !finite_jerk {
-            a = 0.0;
+            if !finite_jerk && (!LIMITED || dt == self.dt[k]) {
+                a = 0.0;
+            }
         }
         (t, p, v, a)
     }

@@ -19,6 +19,11 @@ use servobus_timing::Link;
 
 use crate::{Clock, Transport, TransportError};
 
+/// A write call that returns later than this after it was begun was held up
+/// by the host (descheduled, or blocked on a full queue), not by the wire:
+/// queuing a frame takes microseconds.
+const WRITE_STALL: Duration = Duration::from_micros(100);
+
 /// Receives what the engine finds while waiting.
 pub(crate) trait Sink {
     /// A valid frame that is neither an echo nor a host frame. Returns `true`
@@ -112,8 +117,19 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.base_discarded = stats.discarded_bytes;
         self.base_echoes = stats.echoes;
         self.base_checksum = stats.checksum_errors;
-        let start = self.next_start();
+        let before = self.next_start();
         self.transport.write_all(&self.tx[..self.tx_len])?;
+        // A host descheduled before or during the write sends the request
+        // late: the servo cannot answer before it has heard it, so the
+        // deadline runs from when the bytes left, not from when the thread
+        // meant to send them. A write that returned promptly keeps the
+        // earlier stamp (the transmitter may be busy with the frame before).
+        let after = self.clock.now();
+        let start = if after > before + WRITE_STALL {
+            after
+        } else {
+            before
+        };
         self.line_free = start + wire.wire_time(self.tx_len);
         if self.echo {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);

@@ -19,11 +19,6 @@ use servobus_timing::Link;
 
 use crate::{Clock, Transport, TransportError};
 
-/// A write call that returns later than this after it was begun was held up
-/// by the host (descheduled, or blocked on a full queue), not by the wire:
-/// queuing a frame takes microseconds.
-const WRITE_STALL: Duration = Duration::from_micros(100);
-
 /// Receives what the engine finds while waiting.
 pub(crate) trait Sink {
     /// A valid frame that is neither an echo nor a host frame. Returns `true`
@@ -121,16 +116,14 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.transport.write_all(&self.tx[..self.tx_len])?;
         // A host descheduled before or during the write sends the request
         // late: the servo cannot answer before it has heard it, so the
-        // deadline runs from when the bytes left, not from when the thread
-        // meant to send them. A write that returned promptly keeps the
-        // earlier stamp (the transmitter may be busy with the frame before).
-        let after = self.clock.now();
-        let start = if after > before + WRITE_STALL {
-            after
-        } else {
-            before
-        };
-        self.line_free = start + wire.wire_time(self.tx_len);
+        // deadline runs from when the bytes can have left, not from when the
+        // thread meant to send them. A write returns once its bytes are
+        // queued (or, on a transport that models the wire, once they are
+        // through it): the request started no earlier than its return less its
+        // wire time, and a prompt write keeps the earlier stamp.
+        let wire_time = wire.wire_time(self.tx_len);
+        let start = before.max(self.clock.now().saturating_sub(wire_time));
+        self.line_free = start + wire_time;
         if self.echo {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }

@@ -159,7 +159,10 @@ fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
     bus.transport_mut().stall = Duration::from_millis(5);
     let t0 = clock.now();
     assert!(matches!(bus.ping(9), Err(BusError::Timeout { id: 9, .. })));
-    assert_eq!(clock.now() - t0, Duration::from_micros(2 * (5_000 - 60 + 1_370)));
+    assert_eq!(
+        clock.now() - t0,
+        Duration::from_micros(2 * (5_000 - 60 + 1_370))
+    );
     assert_eq!(bus.counters().timeouts, 2);
 }
 

@@ -112,9 +112,18 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.base_discarded = stats.discarded_bytes;
         self.base_echoes = stats.echoes;
         self.base_checksum = stats.checksum_errors;
-        let start = self.next_start();
+        let before = self.next_start();
         self.transport.write_all(&self.tx[..self.tx_len])?;
-        self.line_free = start + wire.wire_time(self.tx_len);
+        // A host descheduled before or during the write sends the request
+        // late: the servo cannot answer before it has heard it, so the
+        // deadline runs from when the bytes can have left, not from when the
+        // thread meant to send them. A write returns once its bytes are
+        // queued (or, on a transport that models the wire, once they are
+        // through it): the request started no earlier than its return less its
+        // wire time, and a prompt write keeps the earlier stamp.
+        let wire_time = wire.wire_time(self.tx_len);
+        let start = before.max(self.clock.now().saturating_sub(wire_time));
+        self.line_free = start + wire_time;
         if self.echo {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }

@@ -264,16 +264,16 @@ impl<T: Transport, C: Clock> Servos<T, C> {
         Ok(())
     }
 
-    /// Asks servo `id` what it is (a PING, then a read of its model-number
-    /// register, address 3 in both series) and switches the bus to the
+    /// Asks servo `id` what it is (one read of its model-number register,
+    /// address 3 in both series: a servo that is not there is silent to it
+    /// as to a PING, so no PING goes first) and switches the bus to the
     /// model's series, so that the registers of [`sts`](crate::registers::sts)
     /// or [`scs`](crate::registers::scs) read right from then on.
     ///
     /// # Errors
     /// [`BusError::UnknownModel`] when the number is no known model (the
-    /// series is unchanged); as [`Bus::ping`] and [`Bus::read`].
+    /// series is unchanged); as [`Bus::read`].
     pub fn detect_series(&mut self, id: u8) -> Result<&'static Model, BusError> {
-        self.bus.ping(id)?;
         let mut number = [0u8; 2];
         self.bus.read(id, addr::MODEL_NUMBER, &mut number)?;
         let model = model_by_register(number).ok_or(BusError::UnknownModel {

@@ -22,6 +22,9 @@ struct Scripted {
     responder: Responder,
     echo: bool,
     sent: Vec<Vec<u8>>,
+    /// How long each write call holds the thread before the bytes leave (a
+    /// host descheduled while sending).
+    stall: Duration,
 }
 
 impl Scripted {
@@ -32,6 +35,7 @@ impl Scripted {
             responder,
             echo: false,
             sent: Vec::new(),
+            stall: Duration::ZERO,
         }
     }
 }
@@ -45,6 +49,7 @@ impl Transport for Scripted {
         1_000_000
     }
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.clock.advance(self.stall);
         let now = self.clock.now();
         self.sent.push(bytes.to_vec());
         if self.echo {
@@ -133,6 +138,36 @@ fn timeout_is_derived_from_the_link_and_retries_are_bounded() {
         (c.transactions, c.retries, c.timeouts, c.failures),
         (1, 1, 2, 1)
     );
+}
+
+#[test]
+fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
+    let (mut bus, clock) = bus(Box::new(|p| vec![status(p.id(), 0, &[])]));
+    // The thread is descheduled for 5 ms in every write: the servo hears
+    // each request 5 ms after the call began and answers 100 us later,
+    // far past the 1.37 ms deadline counted from the call. Counted from
+    // the write's return less the request's 60 us of wire, it is in time.
+    bus.transport_mut().stall = Duration::from_millis(5);
+    let t0 = clock.now();
+    assert!(bus.ping(4).is_ok());
+    assert_eq!(clock.now() - t0, Duration::from_micros(5_100));
+    assert_eq!(bus.counters().timeouts, 0);
+    // A silent servo still times out on the first try, its deadline
+    // counted from when the request can have left: 5 ms - 60 us + 1.37 ms,
+    // twice.
+    let (mut bus, clock) = bus_silent();
+    bus.transport_mut().stall = Duration::from_millis(5);
+    let t0 = clock.now();
+    assert!(matches!(bus.ping(9), Err(BusError::Timeout { id: 9, .. })));
+    assert_eq!(
+        clock.now() - t0,
+        Duration::from_micros(2 * (5_000 - 60 + 1_370))
+    );
+    assert_eq!(bus.counters().timeouts, 2);
+}
+
+fn bus_silent() -> (Bus<Scripted, ManualClock>, ManualClock) {
+    bus(Box::new(|_| vec![]))
 }
 
 #[test]

@@ -191,6 +191,9 @@ fn the_series_is_found_by_a_ping_and_a_model_read() -> Result<(), BusError> {
     let (sim, _clock) = arm([2]);
     let mut bus = servos(&sim, Series::Scs);
     assert_eq!(bus.detect_series(2)?.name, "STS3215");
+    // One exchange: the model read alone (a PING first would say nothing
+    // more, a silent servo being silent to both).
+    assert_eq!(bus.bus().counters().transactions, 1);
     assert_eq!(bus.bus().settings().series, Series::Sts);
     assert_eq!(bus.read(2, sts::PRESENT_POSITION)?, 1200);
 

@@ -238,6 +238,10 @@ impl Decoder {
     /// bytes taken.
     pub fn decode<'s>(&'s mut self, input: &mut &[u8]) -> Option<Event<'s>> {
         loop {
+            // The common case first: a whole valid frame at the front.
+            if let Some(len) = self.whole_frame() {
+                return Some(self.frame(len));
+            }
             match self.step(false) {
                 Step::NeedMore => {
                     if input.is_empty() {
@@ -279,6 +283,28 @@ impl Decoder {
             Step::NeedMore => None,
             step => Some(self.apply(step)),
         }
+    }
+
+    /// The length of the complete, valid frame at the front of the window,
+    /// if there is one: the fast path of [`Decoder::decode`], which
+    /// [`Decoder::step`] would reach too, through the header scan and the
+    /// typed parse errors.
+    #[inline(always)]
+    fn whole_frame(&self) -> Option<usize> {
+        if self.checksum_skip {
+            return None;
+        }
+        let w = &self.buf[self.start..self.end];
+        let [0xFF, 0xFF, id, length, ..] = *w else {
+            return None;
+        };
+        if id == 0xFF || length < 2 {
+            return None;
+        }
+        let total = crate::FRAME_OVERHEAD + usize::from(length) - 2;
+        let frame = w.get(..total)?;
+        let (&sum, body) = frame[2..].split_last()?;
+        (crate::checksum(body) == sum).then_some(total)
     }
 
     fn fill(&mut self, input: &mut &[u8]) {
@@ -367,24 +393,28 @@ impl Decoder {
                     found,
                 }
             }
-            Step::Frame(len) => {
-                let is_echo = self.echo_len == len
-                    && self.buf[self.start..self.start + len] == self.echo[..len];
-                self.echo_len = 0;
-                let (at, start) = self.consume(len);
-                if is_echo {
-                    self.stats.echoes += 1;
-                    self.stats.echo_bytes += len as u64;
-                    Event::Echo { start, len }
-                } else {
-                    self.stats.packets += 1;
-                    self.stats.packet_bytes += len as u64;
-                    // `consume` may reset the indices, but never moves bytes.
-                    Event::Packet {
-                        packet: Packet::from_valid(&self.buf[at..at + len]),
-                        start,
-                    }
-                }
+            Step::Frame(len) => self.frame(len),
+        }
+    }
+
+    /// Takes the valid frame of `len` bytes at the front of the window.
+    #[inline(always)]
+    fn frame(&mut self, len: usize) -> Event<'_> {
+        let is_echo =
+            self.echo_len == len && self.buf[self.start..self.start + len] == self.echo[..len];
+        self.echo_len = 0;
+        let (at, start) = self.consume(len);
+        if is_echo {
+            self.stats.echoes += 1;
+            self.stats.echo_bytes += len as u64;
+            Event::Echo { start, len }
+        } else {
+            self.stats.packets += 1;
+            self.stats.packet_bytes += len as u64;
+            // `consume` may reset the indices, but never moves bytes.
+            Event::Packet {
+                packet: Packet::from_valid(&self.buf[at..at + len]),
+                start,
             }
         }
     }

@@ -8,9 +8,6 @@
 
 use crate::body::turn_delta;
 
-/// Time constant of the first-order lag between the motion profile and the
-/// shaft: at 1000 ticks/s the shaft trails the profile by about 10 ticks.
-pub(crate) const LAG_S: f64 = 0.010;
 /// Thermal time constant of the motor and case.
 const THERMAL_TAU_S: f64 = 120.0;
 /// Steady temperature rise above ambient at full effort.
@@ -27,6 +24,9 @@ pub(crate) struct Drive {
     pub torque_on: bool,
     /// Operating mode 1: constant speed (wheel) instead of position.
     pub wheel: bool,
+    /// Time constant of the first-order lag between the motion profile and
+    /// the shaft, s: the model's response lag (the protocol crate's fact).
+    pub lag_s: f64,
     /// Target position in sensor ticks (position mode).
     pub target: f64,
     /// Signed speed in wheel mode, ticks/s.
@@ -161,7 +161,7 @@ impl Joint {
                 let err = eq - self.pos;
                 let settled = self.ref_pos == d.target;
                 if !(settled && err.abs() <= d.dead_zone.max(0.5)) {
-                    self.pos += err * (1.0 - (-dt / LAG_S).exp());
+                    self.pos += err * (1.0 - (-dt / d.lag_s).exp());
                 }
             }
             let saturated = demand.abs() > limit && (d.blocked || d.load.abs() > limit);
@@ -223,6 +223,7 @@ mod tests {
         Drive {
             torque_on: true,
             wheel: false,
+            lag_s: 0.010,
             target,
             wheel_speed: 0.0,
             max_speed: 1000.0,

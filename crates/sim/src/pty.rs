@@ -182,6 +182,9 @@ impl PtyServer {
     /// # Errors
     /// [`PtyError::Io`] when the terminal fails.
     pub fn serve(&mut self, stop: &AtomicBool) -> Result<(), PtyError> {
+        if self.pacing {
+            stand_in_for_hardware();
+        }
         let mut buf = [0u8; 4096];
         let mut last_tick = self.clock.now();
         while !stop.load(Ordering::SeqCst) {
@@ -326,6 +329,33 @@ impl Drop for PtyServer {
         }
     }
 }
+
+/// Asks, best effort, that the serving thread be scheduled as the hardware it
+/// stands in for: servos answer on time whatever the host is doing. On a
+/// loaded machine a server at normal priority waits behind every other task
+/// each time it wakes (for a request, then for the reply's time), and its
+/// replies come milliseconds late: reads that a client counts as lost,
+/// though the servo is healthy. So the thread asks for the lowest
+/// real-time priority (SCHED_FIFO 1: above every normal task, below any
+/// real-time one, such as a control thread given `rt` priority) and the
+/// smallest timer slack. It only ever blocks or waits out a reply's wire
+/// time, and the kernel's real-time throttling bounds it anyway. Where the
+/// system refuses (no permission), it serves at normal priority as before.
+#[cfg(target_os = "linux")]
+fn stand_in_for_hardware() {
+    /// `PR_SET_TIMERSLACK` (include/uapi/linux/prctl.h).
+    const PR_SET_TIMERSLACK: libc::c_int = 29;
+    let param = libc::sched_param { sched_priority: 1 };
+    // SAFETY: plain system calls on the calling thread with a valid
+    // `sched_param`; failure leaves the thread as it was.
+    unsafe {
+        let _ = libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param);
+        let _ = libc::prctl(PR_SET_TIMERSLACK, 1 as libc::c_ulong);
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn stand_in_for_hardware() {}
 
 pub(crate) fn read_fd(fd: &OwnedFd, buf: &mut [u8]) -> io::Result<usize> {
     // SAFETY: `buf` is valid for `buf.len()` writable bytes.

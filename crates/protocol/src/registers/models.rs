@@ -14,6 +14,18 @@ use super::{RegisterMap, Series};
 /// a little waiting, not lost replies. Every model uses this one figure.
 pub const REPLY_TURNAROUND: Duration = Duration::from_micros(50);
 
+/// How long a servo's shaft trails a moving goal: the time constant of the
+/// first-order lag between its motion profile and its shaft, which a goal
+/// following a smooth path sees as a delay of this much.
+///
+/// **A prior, not a measurement:** 10 ms is the lag of the STS3215 as the
+/// simulator models it (at 1000 ticks/s the shaft trails the profile by
+/// about 10 ticks), in line with the 10-20 ms lead LeRobot users find on
+/// SO-101 arms. A run starts its lead from it (plus its own loop delay) and
+/// then identifies the real figure from the tracking errors. Every model
+/// uses this one figure until one is measured.
+pub const RESPONSE_LAG: Duration = Duration::from_millis(10);
+
 /// A servo model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Model {
@@ -33,6 +45,9 @@ pub struct Model {
     /// Time from the end of a request to the start of the reply, beyond
     /// the return delay ([`REPLY_TURNAROUND`] for every model).
     pub turnaround: Duration,
+    /// How long the shaft trails a moving goal ([`RESPONSE_LAG`] for every
+    /// model): the simulator's lag, and the prior of a run's lead.
+    pub response_lag: Duration,
 }
 
 impl Model {
@@ -80,6 +95,7 @@ pub const STS3215: Model = Model {
     range_deg: 360.0,
     max_speed: 3400,
     turnaround: REPLY_TURNAROUND,
+    response_lag: RESPONSE_LAG,
 };
 
 /// Feetech STS3250.
@@ -91,6 +107,7 @@ pub const STS3250: Model = Model {
     range_deg: 360.0,
     max_speed: 3400,
     turnaround: REPLY_TURNAROUND,
+    response_lag: RESPONSE_LAG,
 };
 
 /// Feetech SM8512BL.
@@ -102,6 +119,7 @@ pub const SM8512BL: Model = Model {
     range_deg: 360.0,
     max_speed: 3400,
     turnaround: REPLY_TURNAROUND,
+    response_lag: RESPONSE_LAG,
 };
 
 /// Feetech SCS0009.
@@ -113,6 +131,7 @@ pub const SCS0009: Model = Model {
     range_deg: 300.0,
     max_speed: 1500,
     turnaround: REPLY_TURNAROUND,
+    response_lag: RESPONSE_LAG,
 };
 
 /// Feetech SCS15.
@@ -124,6 +143,7 @@ pub const SCS15: Model = Model {
     range_deg: 300.0,
     max_speed: 1000,
     turnaround: REPLY_TURNAROUND,
+    response_lag: RESPONSE_LAG,
 };
 
 /// The model whose model-number register reads `number`.

@@ -56,9 +56,18 @@ enum State {
     },
 }
 
+/// The lag a bus's goals see before anything is identified, s: the
+/// slowest of its servos' response lags (the protocol crate's per-model
+/// fact), plus the loop's own delay, half a `period` on average (a goal is
+/// held for the whole cycle it is written in).
+pub(crate) fn prior_lag(lags: impl Iterator<Item = std::time::Duration>, period: f64) -> f64 {
+    lags.map(|d| d.as_secs_f64()).fold(0.0, f64::max) + period / 2.0
+}
+
 impl LeadEstimator {
-    /// The estimator for `lead`.
-    pub fn new(lead: Lead) -> Self {
+    /// The estimator for `lead`, starting from the lag `prior` (s; see
+    /// [`prior_lag`]) when it identifies the lag.
+    pub fn new(lead: Lead, prior: f64) -> Self {
         LeadEstimator(match lead {
             Lead::None => State::Fixed(0.0),
             Lead::Fixed(d) => State::Fixed(d.as_secs_f64()),
@@ -67,11 +76,14 @@ impl LeadEstimator {
                 sev: 0.0,
                 svv: 0.0,
                 n: 0,
-                // No lead until the first estimate (a finished ramp to 0).
+                // The prior, ramped in over the run's first
+                // [`LEAD_RAMP_S`] (the approach, usually), until the first
+                // estimate: a lead in force at once would put the first
+                // cycles' goals a step ahead of where the servos stand.
                 ramp: Ramp {
                     from: 0.0,
-                    to: 0.0,
-                    x0: f64::NEG_INFINITY,
+                    to: prior.clamp(0.0, max.as_secs_f64()),
+                    x0: 0.0,
                 },
             },
         })
@@ -126,5 +138,30 @@ impl LeadEstimator {
                 };
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::*;
+
+    #[test]
+    fn the_prior_is_the_slowest_servo_plus_half_a_cycle() {
+        let ms = Duration::from_millis;
+        // 10 ms and 8 ms servos at 200 Hz: 10 + 5 / 2 = 12.5 ms.
+        let prior = prior_lag([ms(10), ms(8)].into_iter(), 0.005);
+        assert!((prior - 0.0125).abs() < 1e-12, "{prior}");
+        // It is ramped in from the first cycle, before any reading: half of
+        // it at the ramp's middle (0.25 s), all of it from 0.5 s on.
+        let auto = LeadEstimator::new(Lead::default(), prior);
+        assert_eq!(auto.at(0.0), 0.0);
+        assert!((auto.at(0.25) - 0.00625).abs() < 1e-12);
+        assert!((auto.at(0.5) - 0.0125).abs() < 1e-12);
+        // Bounded by the largest lead allowed, and unused by a fixed lead.
+        let capped = LeadEstimator::new(Lead::Auto { max: ms(5) }, prior);
+        assert!((capped.at(1.0) - 0.005).abs() < 1e-12);
+        assert_eq!(LeadEstimator::new(Lead::None, prior).at(0.0), 0.0);
     }
 }

@@ -138,7 +138,13 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 c.policy,
                 stale_after,
             ),
-            lead: LeadEstimator::new(c.lead),
+            lead: LeadEstimator::new(
+                c.lead,
+                lead::prior_lag(
+                    config.joints.iter().map(|j| j.model.response_lag),
+                    c.period.as_secs_f64(),
+                ),
+            ),
             counters: Counters::new(),
             out: Publisher::new(c.index, c.telemetry),
             timing: CycleTiming {

@@ -178,6 +178,7 @@ impl SimServo {
         Drive {
             torque_on: self.torque_enabled() && !self.unloaded(),
             wheel: mode == 1,
+            lag_s: m.model.response_lag.as_secs_f64(),
             target: self.target(),
             wheel_speed: f64::from(goal_speed).clamp(-m.max_speed(), m.max_speed()),
             max_speed,

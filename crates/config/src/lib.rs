@@ -41,6 +41,7 @@ mod motion;
 mod nesting;
 mod robot;
 pub mod seam;
+mod spatial;
 mod syntax;
 mod terms;
 mod tool;

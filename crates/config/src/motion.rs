@@ -10,6 +10,7 @@ use super::error::{ConfigError, Source};
 use super::limits::{check_duration, check_segments};
 use super::locate::FieldPath;
 use super::robot::{self, Robot};
+use super::spatial::{Context, MoveLimits, PathKind, RawBody, RawWalk};
 use super::Units;
 
 /// A choreography, resolved against its robot: every keyframe holds a
@@ -159,7 +160,9 @@ fn one() -> i64 {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a keyframe: a mapping with `pose:` and optional `at:`")]
+#[serde(
+    expecting = "a keyframe: a mapping with `pose:`, `tool:`, `walk:` or `body:`, and optional `at:`"
+)]
 struct RawKeyframe {
     #[serde(default)]
     at: Option<f64>,
@@ -167,6 +170,20 @@ struct RawKeyframe {
     pose: Option<PoseRef>,
     #[serde(default)]
     tool: Option<super::tool::ToolPose>,
+    #[serde(default)]
+    path: Option<PathKind>,
+    #[serde(default)]
+    max_speed: Option<f64>,
+    #[serde(default)]
+    max_acceleration: Option<f64>,
+    #[serde(default)]
+    max_jerk: Option<f64>,
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    walk: Option<RawWalk>,
+    #[serde(default)]
+    body: Option<RawBody>,
 }
 
 /// `name: value` pairs in file order (a map would lose the order, and errors
@@ -323,6 +340,14 @@ pub fn load_motion_calibrated(
         .collect();
     let mut keyframes = Vec::with_capacity(raw.keyframes.len());
     let mut last_at: Option<(usize, f64)> = None;
+    let mut spatial = Context {
+        src: &src,
+        robot: &robot,
+        units: raw.units,
+        interpolation: raw.interpolation,
+        on_limit: raw.on_limit,
+        body: None,
+    };
     for (i, rk) in raw.keyframes.iter().enumerate() {
         let kp = root.key("keyframes").index(i);
         if let Some(at) = rk.at {
@@ -348,9 +373,10 @@ pub fn load_motion_calibrated(
             }
             last_at = Some((i, at));
         }
+        check_spatial(&src, &kp, i, rk)?;
         let (pose_name, pairs) = match &rk.pose {
-            None if rk.tool.is_none() => {
-                return Err(src.error(&kp, "a keyframe needs a `pose` or a `tool`"))
+            None if rk.tool.is_none() && rk.walk.is_none() && rk.body.is_none() => {
+                return Err(src.error(&kp, "a keyframe needs a `pose`, `tool`, `walk` or `body`"))
             }
             None => (None, None),
             Some(PoseRef::Name(name)) => {
@@ -373,6 +399,28 @@ pub fn load_motion_calibrated(
                 current[ix] = *value;
             }
         }
+        let limits = MoveLimits {
+            max_speed: rk.max_speed,
+            max_acceleration: rk.max_acceleration,
+            max_jerk: rk.max_jerk,
+            tolerance: rk.tolerance,
+        };
+        match (&rk.walk, &rk.body, &rk.tool, rk.path) {
+            (Some(walk), ..) => {
+                spatial.walk(&kp, i, walk, &mut current, &mut keyframes)?;
+                continue;
+            }
+            (_, Some(body), ..) => {
+                spatial.body(&kp, i, body, rk.at, &limits, &mut current, &mut keyframes)?;
+                continue;
+            }
+            (_, _, Some(tool), Some(PathKind::Line)) => {
+                spatial.line(&kp, i, tool, rk.at, &limits, &mut current, &mut keyframes)?;
+                spatial.body = None;
+                continue;
+            }
+            _ => spatial.body = None,
+        }
         // A tool pose moves the arm's joints there, from this pose.
         if let Some(tool) = &rk.tool {
             super::tool::resolve(&robot, raw.units, tool, &mut current)
@@ -387,6 +435,10 @@ pub fn load_motion_calibrated(
             column,
         });
     }
+    // Spatial keyframes add samples: the plan must still fit.
+    if let Err(e) = check_segments(keyframes.len(), u64::from(repeat), robot.joint_count()) {
+        return Err(src.error(&root.key("keyframes"), e.to_string()));
+    }
     let motion = Motion {
         path: path.to_owned(),
         robot_path,
@@ -399,6 +451,41 @@ pub fn load_motion_calibrated(
         interpolation: raw.interpolation,
     };
     Ok((motion, robot))
+}
+
+/// Refuses spatial fields where they mean nothing: a first keyframe that
+/// is not a pose (`walk`, `body`, `path: line` start from one), `walk` or
+/// `body` with other targets, `path: line` without a `tool`, speed limits
+/// without a line or body move.
+fn check_spatial(
+    src: &Source,
+    kp: &FieldPath,
+    i: usize,
+    rk: &RawKeyframe,
+) -> Result<(), ConfigError> {
+    let line = rk.path == Some(PathKind::Line);
+    let moves = rk.walk.is_some() || rk.body.is_some() || line;
+    let why = if i == 0 && moves {
+        Some("the first keyframe is the start: give it a `pose` (walk, body and line start from it)")
+    } else if (rk.walk.is_some() || rk.body.is_some()) && (rk.pose.is_some() || rk.tool.is_some()) {
+        Some("`walk` and `body` keyframes take no `pose` or `tool`")
+    } else if rk.walk.is_some() && (rk.body.is_some() || rk.at.is_some()) {
+        Some("a `walk` takes its time from its segments: no `body` or `at` with it")
+    } else if line && (rk.tool.is_none() || rk.pose.is_some()) {
+        Some("`path: line` needs a `tool` pose and no `pose`")
+    } else if !(line || rk.body.is_some())
+        && (rk.max_speed.is_some() || rk.max_acceleration.is_some() || rk.max_jerk.is_some())
+    {
+        Some("`max_speed`, `max_acceleration` and `max_jerk` belong to `path: line` or `body`")
+    } else if !line && rk.tolerance.is_some() {
+        Some("`tolerance` belongs to `path: line`")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(src.error(kp, format!("keyframe {i}: {why}"))),
+        None => Ok(()),
+    }
 }
 
 fn list(names: &[&str]) -> String {

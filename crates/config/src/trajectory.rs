@@ -27,33 +27,60 @@ pub fn joint_limits(robot: &Robot) -> Vec<JointLimits> {
 /// The trajectory planner's keyframes and options for `motion`, in radians.
 pub fn plan_input(motion: &Motion) -> (Vec<traj::Keyframe>, PlanOptions) {
     let u = motion.units;
-    let keyframes = motion
-        .keyframes
+    let kfs = &motion.keyframes;
+    let place = |k: usize| kfs.get(k).map(|kf| (kf.line, kf.column));
+    let keyframes = kfs
         .iter()
-        .map(|k| {
+        .enumerate()
+        .map(|(i, k)| {
             let kf =
                 traj::Keyframe::new(k.positions.iter().map(|&p| u.to_rad(p)).collect::<Vec<_>>());
-            match k.at {
+            let kf = match k.at {
                 Some(at) => kf.at(at),
                 None => kf,
+            };
+            // Keyframes that share a place in the file are the samples of
+            // one spatial keyframe (a line, a walk, a body move).
+            let here = place(i);
+            let sample = here == place(i + 1) || (i > 0 && here == place(i - 1));
+            if sample {
+                kf.shape(SAMPLE_SHAPE)
+            } else {
+                kf
             }
         })
         .collect();
-    let options = PlanOptions {
-        shape: match motion.interpolation {
+    let options = plan_options(motion.interpolation, motion.on_limit, motion.repeat);
+    (keyframes, options)
+}
+
+/// The interpolation of the dense samples of a spatial keyframe (a tool
+/// line, a walk, a body move; they share the keyframe's line and column):
+/// a C2 spline through them, which follows a smooth path sampled densely
+/// far more closely than segments that could each stop on time.
+pub(crate) const SAMPLE_SHAPE: TimedShape = TimedShape::Cubic;
+
+/// The planner's options for a motion's `interpolation`, `on_limit` and
+/// `repeat`.
+pub(crate) fn plan_options(
+    interpolation: Interpolation,
+    on_limit: OnLimit,
+    repeat: u32,
+) -> PlanOptions {
+    PlanOptions {
+        shape: match interpolation {
             Interpolation::ShapePreserving => TimedShape::ShapePreserving,
             Interpolation::Cubic => TimedShape::Cubic,
             Interpolation::Monotone => TimedShape::Monotone,
             Interpolation::Quintic => TimedShape::MinimumJerk,
         },
-        on_limit: match motion.on_limit {
+        on_limit: match on_limit {
             OnLimit::Error => traj::OnLimit::Error,
             OnLimit::Stretch => traj::OnLimit::Stretch,
         },
-        repeat: motion.repeat,
+        repeat,
         ..PlanOptions::default()
-    };
-    (keyframes, options)
+    }
 }
 
 /// Plans `motion` on `robot`: the path the scheduler samples, in radians.

@@ -56,5 +56,5 @@ pub use legs::{LegError, Legs, PoseSample, FOOT_PREFIX};
 pub use line::{
     sample_line, Held, LineError, LineOptions, LinePlan, LineSample, PoseLine, TURN_WEIGHT_MM,
 };
-pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};

@@ -162,6 +162,13 @@ impl Context<'_> {
         };
         let start = self.radians(current);
         let plan = plan_walk(&legs, &walk, &start).map_err(|e| fail(e.to_string()))?;
+        self.plan_samples(plan.samples.iter().map(|s| (s.t, s.q.as_slice())))
+            .map_err(|e| {
+                fail(format!(
+                    "the legs cannot keep this gait within their limits ({e}); lengthen \
+                     `period`, lower `lift` or slow the segments down"
+                ))
+            })?;
         let t0 = self.arrival(keyframes)?;
         self.push_samples(
             kp,
@@ -248,6 +255,13 @@ impl Context<'_> {
                     e.t,
                     e.leg,
                     ik_reason(&e.reason, self.units)
+                ))
+            })?;
+        self.plan_samples(samples.iter().map(|s| (s.t, s.q.as_slice())))
+            .map_err(|e| {
+                fail(format!(
+                    "the legs cannot follow this body move within their limits ({e}); lower \
+                     `max_speed` or `max_acceleration`"
                 ))
             })?;
         self.push_samples(

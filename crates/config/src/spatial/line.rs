@@ -11,7 +11,6 @@ use crate::error::ConfigError;
 use crate::locate::FieldPath;
 use crate::motion::Keyframe;
 use crate::tool::{ik_reason, ToolPose, TOOL_FRAME};
-use crate::trajectory::{joint_limits, plan_options, SAMPLE_SHAPE};
 
 /// Default distance the tool may stray from a line, mm.
 pub(crate) const DEFAULT_TOLERANCE_MM: f64 = 0.2;
@@ -76,8 +75,6 @@ impl Context<'_> {
             tolerance_mm: tolerance,
             ..LineOptions::default()
         };
-        let robot_limits = joint_limits(self.robot);
-        let plan_opts = plan_options(self.interpolation, self.on_limit, 1);
         for _ in 0..REFINEMENTS {
             let plan = sample_line(
                 &arm,
@@ -107,24 +104,14 @@ impl Context<'_> {
                     (s.t, q)
                 })
                 .collect();
-            let keys: Vec<traj::Keyframe> = poses
-                .iter()
-                .enumerate()
-                .map(|(k, (t, q))| {
-                    let kf = traj::Keyframe::new(q.clone()).at(*t);
-                    if k == 0 {
-                        kf
-                    } else {
-                        kf.shape(SAMPLE_SHAPE)
-                    }
-                })
-                .collect();
-            let path = traj::plan(&robot_limits, &keys, &plan_opts).map_err(|e| {
-                fail(format!(
-                    "the joints cannot follow the line at this speed ({e}); lower `max_speed` or \
-                     `max_acceleration`"
-                ))
-            })?;
+            let path = self
+                .plan_samples(poses.iter().map(|(t, q)| (*t, q.as_slice())))
+                .map_err(|e| {
+                    fail(format!(
+                        "the joints cannot follow the line at this speed ({e}); lower \
+                         `max_speed` or `max_acceleration`"
+                    ))
+                })?;
             let worst = worst_deviation(&arm, &line, &path);
             if worst <= tolerance {
                 self.push_samples(

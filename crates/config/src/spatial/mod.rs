@@ -21,6 +21,7 @@ use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
 use super::motion::{Interpolation, Keyframe, Motion, OnLimit};
 use super::robot::Robot;
+use super::trajectory::{joint_limits, plan_options, SAMPLE_SHAPE};
 use super::Units;
 
 pub(super) use legs::{RawBody, RawWalk};
@@ -134,6 +135,10 @@ impl Context<'_> {
         if let Some(at) = last.at {
             return Ok(at);
         }
+        if keyframes.len() == 1 {
+            // The start.
+            return Ok(0.0);
+        }
         let so_far = Motion {
             path: self.src.path.clone(),
             robot_path: std::path::PathBuf::new(),
@@ -175,6 +180,33 @@ impl Context<'_> {
                 column,
             });
         }
+    }
+
+    /// Plans a spatial keyframe's samples (`(t, every joint in radians)`,
+    /// the first the keyframe before) on their own, as the whole motion
+    /// will plan them: a sample path beyond a joint's limits is refused
+    /// here, with a reason about the move, rather than stretched (which
+    /// would break the move's geometry).
+    ///
+    /// # Errors
+    /// The planner's reason.
+    pub fn plan_samples<'s>(
+        &self,
+        samples: impl Iterator<Item = (f64, &'s [f64])>,
+    ) -> Result<Trajectory, traj::PlanError> {
+        let keys: Vec<traj::Keyframe> = samples
+            .enumerate()
+            .map(|(k, (t, q))| {
+                let kf = traj::Keyframe::new(q.to_vec()).at(t);
+                if k == 0 {
+                    kf
+                } else {
+                    kf.shape(SAMPLE_SHAPE)
+                }
+            })
+            .collect();
+        let options = plan_options(self.interpolation, OnLimit::Error, 1);
+        traj::plan(&joint_limits(self.robot), &keys, &options)
     }
 
     /// The joints of `current` (the motion's units) in radians.

@@ -3,6 +3,7 @@
 //! from forward kinematics of the simulator's true joint angles.
 
 mod line;
+mod scrub;
 mod walk;
 
 use std::path::PathBuf;

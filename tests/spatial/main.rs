@@ -2,6 +2,7 @@
 //! virtual time: the tool of `path: line` moves and the feet of a walk,
 //! from forward kinematics of the simulator's true joint angles.
 
+mod errors;
 mod line;
 mod scrub;
 mod walk;

@@ -65,8 +65,11 @@ impl Context<'_> {
         let end_q = self.radians(&end);
         let end_chain: Vec<f64> = arm.joints().iter().map(|&j| end_q[j]).collect();
         let line = PoseLine::new(arm.frame_pose(&chain), arm.frame_pose(&end_chain));
+        // The pitch always follows the slerp (without it a 5-DOF arm's
+        // answers may wander along its redundancy from sample to sample);
+        // the roll when the keyframe gives one.
         let held = Held {
-            pitch: tool.pitch.is_some(),
+            pitch: true,
             roll: tool.roll.is_some(),
         };
         let t0 = self.arrival(keyframes)?;

@@ -14,7 +14,10 @@ fn refused(name: &str, robot: &str, keyframes: &str) -> String {
     std::fs::create_dir_all(&dir).expect("a scratch directory");
     let path: PathBuf = dir.join(name);
     let robot = config(&format!("robots/{robot}.yaml"));
-    let text = format!("robot: {}\nunits: deg\nkeyframes:\n{keyframes}", robot.display());
+    let text = format!(
+        "robot: {}\nunits: deg\nkeyframes:\n{keyframes}",
+        robot.display()
+    );
     std::fs::write(&path, text).expect("writes");
     let err = load_motion(&path, None).expect_err("refused");
     err.to_string()
@@ -34,7 +37,10 @@ fn a_line_to_the_stretched_arm_is_refused_at_its_keyframe_as_a_singularity() {
              - tool: {{xyz: [440.5, 0, 149.1], pitch: 0}}\n    path: line\n"
         ),
     );
-    assert!(text.contains(":6:11: keyframes[2].tool: keyframe 2:"), "{text}");
+    assert!(
+        text.contains(":6:11: keyframes[2].tool: keyframe 2:"),
+        "{text}"
+    );
     assert!(text.contains("near a singularity"), "{text}");
 }
 
@@ -45,7 +51,10 @@ fn a_line_out_of_reach_is_refused_with_the_distance_short() {
         "so101",
         &format!("{ARM_START}  - tool: {{xyz: [600, 0, 149.1]}}\n    path: line\n"),
     );
-    assert!(text.contains(":5:11: keyframes[1].tool: keyframe 1:"), "{text}");
+    assert!(
+        text.contains(":5:11: keyframes[1].tool: keyframe 1:"),
+        "{text}"
+    );
     assert!(text.contains("out of reach"), "{text}");
 }
 
@@ -56,7 +65,10 @@ fn a_first_keyframe_cannot_be_a_line_or_a_walk() {
         "so101",
         "  - tool: {xyz: [250, 0, 149.1]}\n    path: line\n",
     );
-    assert!(text.contains("keyframes[0]: keyframe 0: the first keyframe is the start"), "{text}");
+    assert!(
+        text.contains("keyframes[0]: keyframe 0: the first keyframe is the start"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -69,7 +81,10 @@ fn a_walk_needs_feet() {
              [{{velocity: [10, 0], duration: 1}}]}}\n"
         ),
     );
-    assert!(text.contains("keyframes[1].walk: keyframe 1: no frame `foot_<leg>`"), "{text}");
+    assert!(
+        text.contains("keyframes[1].walk: keyframe 1: no frame `foot_<leg>`"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -118,9 +118,15 @@ fn stance_feet_do_not_slip_swing_feet_lift_and_the_body_goes_where_told() {
         yaw.to_degrees()
     );
     assert!(worst_slip < 1.0, "stance feet slip {worst_slip} mm");
-    assert!(worst_height < 1.0, "stance feet leave the ground by {worst_height} mm");
+    assert!(
+        worst_height < 1.0,
+        "stance feet leave the ground by {worst_height} mm"
+    );
     assert!(swings > 20, "only {swings} swings");
     // 300 mm forward and 100 mm sideways: 400 mm of path; 90 deg of turn.
     assert!((length - 400.0).abs() < 12.0, "the body went {length} mm");
-    assert!((yaw.to_degrees() - 90.0).abs() < 2.7, "the body turned {yaw} rad");
+    assert!(
+        (yaw.to_degrees() - 90.0).abs() < 2.7,
+        "the body turned {yaw} rad"
+    );
 }

@@ -466,7 +466,9 @@ fn check_spatial(
     let line = rk.path == Some(PathKind::Line);
     let moves = rk.walk.is_some() || rk.body.is_some() || line;
     let why = if i == 0 && moves {
-        Some("the first keyframe is the start: give it a `pose` (walk, body and line start from it)")
+        Some(
+            "the first keyframe is the start: give it a `pose` (walk, body and line start from it)",
+        )
     } else if (rk.walk.is_some() || rk.body.is_some()) && (rk.pose.is_some() || rk.tool.is_some()) {
         Some("`walk` and `body` keyframes take no `pose` or `tool`")
     } else if rk.walk.is_some() && (rk.body.is_some() || rk.at.is_some()) {

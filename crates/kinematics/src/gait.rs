@@ -110,7 +110,9 @@ pub const LOW_MARGIN_MM: f64 = 10.0;
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum WalkError {
     /// Gaits are for six legs, three a side.
-    #[error("a walk needs six legs, three on each side; this robot has {left} left and {right} right")]
+    #[error(
+        "a walk needs six legs, three on each side; this robot has {left} left and {right} right"
+    )]
     Legs {
         /// Feet on the left (y > 0).
         left: usize,
@@ -470,7 +472,8 @@ fn convex_hull(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
     for pass in 0..2 {
         let start = hull.len();
         for &q in &p {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
             {
                 hull.pop();
             }

@@ -107,9 +107,10 @@ impl Context<'_> {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(self
-                    .src
-                    .error(&wp.key(field), format!("must be a positive number, got {v}")))
+                Err(self.src.error(
+                    &wp.key(field),
+                    format!("must be a positive number, got {v}"),
+                ))
             }
         };
         positive("period", raw.period)?;
@@ -212,7 +213,9 @@ impl Context<'_> {
             .chain(&raw.pitch)
             .chain(&raw.yaw);
         if !numbers.into_iter().all(|v| v.is_finite()) {
-            return Err(fail("height, shift, roll, pitch and yaw must be finite numbers".to_owned()));
+            return Err(fail(
+                "height, shift, roll, pitch and yaw must be finite numbers".to_owned(),
+            ));
         }
         let legs = self.legs(&fail)?;
         let start = self.radians(current);

@@ -43,7 +43,10 @@ impl Context<'_> {
         current: &mut Vec<f64>,
         keyframes: &mut Vec<Keyframe>,
     ) -> Result<(), ConfigError> {
-        let fail = |why: String| self.src.error(&kp.key("tool"), format!("keyframe {index}: {why}"));
+        let fail = |why: String| {
+            self.src
+                .error(&kp.key("tool"), format!("keyframe {index}: {why}"))
+        };
         let tolerance = limits.tolerance.unwrap_or(DEFAULT_TOLERANCE_MM);
         if !(tolerance.is_finite() && tolerance > 0.0) {
             return Err(self.src.error(
@@ -51,10 +54,12 @@ impl Context<'_> {
                 format!("must be a positive distance in mm, got {tolerance}"),
             ));
         }
-        let model = self
-            .robot
-            .geometry()
-            .ok_or_else(|| fail(format!("robot `{}` has no `kinematics:` section", self.robot.name)))?;
+        let model = self.robot.geometry().ok_or_else(|| {
+            fail(format!(
+                "robot `{}` has no `kinematics:` section",
+                self.robot.name
+            ))
+        })?;
         let arm = ArmIk::new(&model, TOOL_FRAME).map_err(|e| fail(e.to_string()))?;
         let start_q = self.radians(current);
         let chain: Vec<f64> = arm.joints().iter().map(|&j| start_q[j]).collect();

@@ -82,11 +82,7 @@ impl TimeLaw {
         let v = limits.max_speed.unwrap_or(DEFAULT_SPEED);
         let a = limits.max_acceleration.unwrap_or(DEFAULT_ACCELERATION);
         let j = limits.max_jerk.unwrap_or(a * JERK_PER_ACCELERATION);
-        for (name, x) in [
-            ("max_speed", v),
-            ("max_acceleration", a),
-            ("max_jerk", j),
-        ] {
+        for (name, x) in [("max_speed", v), ("max_acceleration", a), ("max_jerk", j)] {
             if !(x.is_finite() && x > 0.0) {
                 return Err(format!("`{name}` must be a positive number, got {x}"));
             }
@@ -98,13 +94,17 @@ impl TimeLaw {
             Some(d) => end.at(d),
             None => end,
         };
-        let path = traj::plan(&lim, &[traj::Keyframe::new([0.0]), end], &PlanOptions::default())
-            .map_err(|e| match e {
-                traj::PlanError::TooSoon { needed, .. } => format!(
-                    "at these speeds the move takes at least {needed:.3} s, more than `at` leaves"
-                ),
-                e => e.to_string(),
-            })?;
+        let path = traj::plan(
+            &lim,
+            &[traj::Keyframe::new([0.0]), end],
+            &PlanOptions::default(),
+        )
+        .map_err(|e| match e {
+            traj::PlanError::TooSoon { needed, .. } => format!(
+                "at these speeds the move takes at least {needed:.3} s, more than `at` leaves"
+            ),
+            e => e.to_string(),
+        })?;
         Ok(TimeLaw { path, extent })
     }
 

@@ -1,8 +1,8 @@
 //! Tool lines, body moves and walks on the shipped robots' geometry.
 
 use servobus_kinematics::{
-    plan_walk, sample_line, ArmIk, Gait, Held, IkError, Legs, LineOptions, Point3, PoseLine,
-    Poses, Walk, WalkError, WalkSegment,
+    plan_walk, sample_line, ArmIk, Gait, Held, IkError, Legs, LineOptions, Point3, PoseLine, Poses,
+    Walk, WalkError, WalkSegment,
 };
 
 use crate::robots::{pose, shipped, Shipped};
@@ -25,7 +25,11 @@ fn arm_at(s: &Shipped, arm: &ArmIk, xyz: [f64; 3], pitch: f64) -> Vec<f64> {
     };
     let home = pose(
         s,
-        &[("shoulder_lift", -90.0), ("elbow_flex", 90.0), ("wrist_flex", 45.0)],
+        &[
+            ("shoulder_lift", -90.0),
+            ("elbow_flex", 90.0),
+            ("wrist_flex", 45.0),
+        ],
     );
     let previous: Vec<f64> = arm.joints().iter().map(|&j| home[j]).collect();
     let mut out = vec![0.0; previous.len()];
@@ -57,7 +61,12 @@ fn a_line_keeps_joint_steps_within_the_tolerance_of_the_line() {
             let p = arm.frame_pose(q).translation.vector;
             assert!(line.distance_mm(&p.into()) < 1e-3 + f);
         }
-        let mid: Vec<f64> = w[0].q.iter().zip(&w[1].q).map(|(a, b)| 0.5 * (a + b)).collect();
+        let mid: Vec<f64> = w[0]
+            .q
+            .iter()
+            .zip(&w[1].q)
+            .map(|(a, b)| 0.5 * (a + b))
+            .collect();
         let p = arm.frame_pose(&mid).translation.vector;
         assert!(line.distance_mm(&p.into()) <= options.tolerance_mm);
     }

@@ -66,6 +66,7 @@ pub use robot::{
     load_robot_design, load_robot_text, load_robot_to_play, BusConfig, JointConfig, Robot,
     RobotCalibration,
 };
+pub use spatial::{spatial_summary, FeetSummary, SpatialSummary, ToolSummary};
 pub use tool::{ik_reason, TOOL_FRAME};
 pub use trajectory::{check_motion_length, joint_limits, plan_input, plan_motion};
 pub use units::Units;

@@ -432,10 +432,11 @@ impl Margins {
     }
 }
 
-/// The signed distance (mm) from the body's centre to the nearest edge of
-/// the convex hull of the feet on the ground `feet` (x, y): positive
-/// inside; minus infinity with fewer than three feet down.
-fn support_margin(feet: &[Vector2<f64>], body: &Isometry3<f64>) -> f64 {
+/// The stability margin: the signed distance (mm) from the body's centre
+/// (`body`'s origin) to the nearest edge of the convex hull of the feet on
+/// the ground `feet` (x, y, in the same frame as `body`): positive inside;
+/// minus infinity with fewer than three feet down.
+pub fn support_margin(feet: &[Vector2<f64>], body: &Isometry3<f64>) -> f64 {
     if feet.len() < 3 {
         return f64::NEG_INFINITY;
     }

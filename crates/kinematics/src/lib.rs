@@ -49,7 +49,9 @@ mod spec;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
-pub use gait::{plan_walk, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM};
+pub use gait::{
+    plan_walk, support_margin, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM,
+};
 pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;
 pub use legs::{LegError, Legs, PoseSample, FOOT_PREFIX};

@@ -13,6 +13,7 @@
 
 mod legs;
 mod line;
+mod summary;
 
 use serde::Deserialize;
 use servobus_trajectory::{self as traj, JointLimits, JointState, PlanOptions, Trajectory};
@@ -25,6 +26,7 @@ use super::trajectory::{joint_limits, plan_options, SAMPLE_SHAPE};
 use super::Units;
 
 pub(super) use legs::{RawBody, RawWalk};
+pub use summary::{spatial_summary, FeetSummary, SpatialSummary, ToolSummary};
 
 /// How the tool gets to a keyframe's `tool:` pose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -25,6 +25,11 @@ fn spatial(c: &mut Criterion) {
                 black_box(plan_motion(&m, &r).expect("plans"))
             });
         });
+        // The planner's share: the loaded motion's samples planned once.
+        let (m, r) = load_motion(&path, None).expect("loads");
+        c.bench_function(&format!("config/plan_only/{name}"), |b| {
+            b.iter(|| black_box(plan_motion(black_box(&m), &r).expect("plans")));
+        });
     }
 }
 

@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+mod space;
+
 use serde::Serialize;
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
@@ -121,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let spatial = spatial_summary(&motion, &robot, &traj, 1.0 / motion.rate_hz(&robot));
     report.spatial = spatial.as_ref().map(SpatialJson::new);
     if let Some(path) = &args.plot {
-        plot(&motion, &traj, path)?;
+        plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -350,15 +352,27 @@ in space:"
 
 /// Position and velocity of every joint over time, one chart above the
 /// other, drawn as SVG and written to `path` whole.
-fn plot(motion: &Motion, traj: &Trajectory, path: &Path) -> anyhow::Result<()> {
+fn plot(
+    motion: &Motion,
+    traj: &Trajectory,
+    paths: &space::Paths,
+    path: &Path,
+) -> anyhow::Result<()> {
     let mut svg = String::new();
-    draw_plot(motion, traj, &mut svg)?;
+    draw_plot(motion, traj, paths, &mut svg)?;
     servobus_io::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
 
 /// The SVG of [`plot`], drawn into `svg`.
-fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Result<()> {
+/// With `paths` (a tool's or feet's positions), a third row shows them
+/// from above and from the side.
+fn draw_plot(
+    motion: &Motion,
+    traj: &Trajectory,
+    paths: &space::Paths,
+    svg: &mut String,
+) -> anyhow::Result<()> {
     use plotters::prelude::*;
 
     let u = motion.units;
@@ -388,7 +402,9 @@ fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Re
         (lo - pad)..(hi + pad)
     };
 
-    let height = 900u32;
+    let row = 430u32;
+    let rows = if paths.is_empty() { 2 } else { 3 };
+    let height = 40 + row * rows;
     let root = SVGBackend::with_string(svg, (1200, height)).into_drawing_area();
     root.fill(&WHITE)?;
     let title = format!(
@@ -400,7 +416,11 @@ fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Re
         traj.duration()
     );
     let root = root.titled(&title, ("sans-serif", 24))?;
-    let (top, bottom) = root.split_vertically((height - 40) / 2);
+    let (top, rest) = root.split_vertically(row);
+    let (bottom, space_row) = rest.split_vertically(row);
+    if !paths.is_empty() {
+        space::draw(&space_row, paths)?;
+    }
     for (area, series, what, unit) in [
         (&top, &pos, "Position", u.to_string()),
         (&bottom, &vel, "Velocity", format!("{u}/s")),

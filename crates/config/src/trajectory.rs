@@ -148,6 +148,19 @@ fn quantity_unit(units: Units, q: Quantity) -> String {
     }
 }
 
+/// The index in the file of the motion's keyframe `k`: a keyframe in space
+/// is several samples that share its place.
+fn file_index(motion: &Motion, k: usize) -> usize {
+    let place = |kf: &super::Keyframe| (kf.line, kf.column);
+    motion
+        .keyframes
+        .iter()
+        .take(k)
+        .zip(motion.keyframes.iter().skip(1))
+        .filter(|(a, b)| place(a) != place(b))
+        .count()
+}
+
 /// Turns a planner error into one pointing at the keyframe in the motion file.
 fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
     let joint_name = |j: usize| motion.joints.get(j).map_or("?", String::as_str);
@@ -156,6 +169,12 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             .keyframes
             .get(k)
             .map_or((1, 1), |kf| (kf.line, kf.column));
+        // Fields name the file's keyframe, not the sample.
+        let field = field.replacen(
+            &format!("keyframes[{k}]"),
+            &format!("keyframes[{}]", file_index(motion, k)),
+            1,
+        );
         ConfigError::invalid(&motion.path, line, column, field, reason)
     };
     let u = motion.units;

@@ -206,3 +206,70 @@ fn an_arm_has_no_legs() {
         Err(IkError::UnknownFrame { .. })
     ));
 }
+
+/// How many feet are off the ground (above the standing height by more
+/// than 0.01 mm) at each sample of a walk.
+fn lifted_counts(s: &Shipped, legs: &Legs, plan: &servobus_kinematics::WalkPlan) -> Vec<usize> {
+    let mut poses = Poses::new(&s.model);
+    let mut feet = vec![Point3::origin(); legs.len()];
+    plan.samples
+        .iter()
+        .map(|sample| {
+            legs.feet(&sample.q, &mut poses, &mut feet);
+            // Standing: every foot 40 mm below its hip.
+            feet.iter().filter(|p| p.z > -40.0 + 0.01).count()
+        })
+        .collect()
+}
+
+#[test]
+fn each_gait_lifts_as_many_legs_at_once_as_it_should() {
+    let s = shipped("hexapod");
+    let legs = Legs::new(&s.model).expect("six legs");
+    // Tripod: three at once; ripple: one a side; wave: one.
+    for (gait, most) in [(Gait::Tripod, 3), (Gait::Ripple, 2), (Gait::Wave, 1)] {
+        let walk = Walk {
+            gait,
+            stride_mm: None,
+            ..forward(20.0, 6.0)
+        };
+        let plan = plan_walk(&legs, &walk, &standing(&s)).expect("walks");
+        let counts = lifted_counts(&s, &legs, &plan);
+        let top = counts.iter().copied().max().unwrap_or(0);
+        assert_eq!(top, most, "{gait:?}");
+        assert!(plan.min_margin_mm > 0.0, "{gait:?}: {}", plan.min_margin_mm);
+    }
+}
+
+#[test]
+fn a_body_move_keeps_every_foot_where_it_stands() {
+    let s = shipped("hexapod");
+    let legs = Legs::new(&s.model).expect("six legs");
+    let start = standing(&s);
+    let mut poses = Poses::new(&s.model);
+    let mut world = vec![Point3::origin(); legs.len()];
+    legs.feet(&start, &mut poses, &mut world);
+    // Up 20 mm, rolled 8 deg, turned 5 deg.
+    let to = servobus_kinematics::Isometry3::from_parts(
+        servobus_kinematics::Vector3::new(0.0, 0.0, 20.0).into(),
+        servobus_kinematics::UnitQuaternion::from_euler_angles(
+            8f64.to_radians(),
+            0.0,
+            5f64.to_radians(),
+        ),
+    );
+    let line = PoseLine::new(servobus_kinematics::Isometry3::identity(), to);
+    let samples = legs
+        .body_move(&line, &world, &start, 1.0, linear(1.0), 0.02)
+        .expect("reachable");
+    assert_eq!(samples.len(), 51);
+    let mut feet = vec![Point3::origin(); legs.len()];
+    for (k, sample) in samples.iter().enumerate() {
+        legs.feet(&sample.q, &mut poses, &mut feet);
+        let body = line.at(k as f64 / 50.0);
+        for (f, w) in feet.iter().zip(&world) {
+            let seen = body * f;
+            assert!((seen - w).norm() < 1e-6, "sample {k}: {seen} vs {w}");
+        }
+    }
+}

@@ -38,6 +38,7 @@ pub mod limits;
 mod locate;
 mod mapping;
 mod motion;
+mod motion_poses;
 mod nesting;
 mod robot;
 pub mod seam;

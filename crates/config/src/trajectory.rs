@@ -225,8 +225,19 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             format!("keyframes[{keyframe}].pose.{}", joint_name(joint)),
             e.to_string(),
         ),
-        PlanError::WrongJointCount { keyframe, .. }
-        | PlanError::TimeNotIncreasing { keyframe, .. } => {
+        PlanError::TimeNotIncreasing {
+            keyframe,
+            at,
+            previous,
+        } => at_keyframe(
+            keyframe,
+            format!("keyframes[{keyframe}]"),
+            format!(
+                "{at} s is not after the keyframe before it, reached at {previous:.3} s (a tool \
+                 line, walk or body move takes the time its speeds need)"
+            ),
+        ),
+        PlanError::WrongJointCount { keyframe, .. } => {
             at_keyframe(keyframe, format!("keyframes[{keyframe}]"), e.to_string())
         }
         _ => at_keyframe(0, String::new(), format!("cannot plan: {e}")),

@@ -1,7 +1,8 @@
 //! Loading and planning the shipped spatial motions end to end (the
 //! motion file read, the walk or line sampled by inverse kinematics, the
 //! samples checked by planning, then the whole motion planned):
-//! `hexapod-walk-turn` (a 16 s walk) and `arm-line` (three tool lines).
+//! `hexapod-walk-turn` (a 16 s walk), `hexapod-tripod` (two 8 s walks) and
+//! `arm-line` (three tool lines).
 //!
 //! `cargo bench -p servobus-config --bench spatial`
 #![allow(missing_docs)]
@@ -17,7 +18,11 @@ fn motion(name: &str) -> PathBuf {
 }
 
 fn spatial(c: &mut Criterion) {
-    for name in ["hexapod-walk-turn.yaml", "arm-line.yaml"] {
+    for name in [
+        "hexapod-walk-turn.yaml",
+        "hexapod-tripod.yaml",
+        "arm-line.yaml",
+    ] {
         let path = motion(name);
         c.bench_function(&format!("config/load_and_plan/{name}"), |b| {
             b.iter(|| {

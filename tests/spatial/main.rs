@@ -4,6 +4,7 @@
 
 mod errors;
 mod line;
+mod plan;
 mod scrub;
 mod walk;
 

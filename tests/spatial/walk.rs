@@ -1,7 +1,7 @@
 //! `hexapod-walk-turn.yaml`: forward 30 cm, a 90 deg turn to the left,
 //! 10 cm to the right, in a tripod gait with a 25 mm lift.
 
-use servobus_kinematics::{Legs, Point3, Poses, Vector2};
+use servobus_kinematics::{planar_motion, Legs, Point3, Poses, Vector2};
 
 use crate::play;
 
@@ -15,25 +15,6 @@ fn feet(legs: &Legs, rows: &[Vec<f64>]) -> Vec<Vec<Point3<f64>>> {
             f
         })
         .collect()
-}
-
-/// The planar move (rotation, then translation) that takes the points `a`
-/// onto `b` (least squares): the body's move seen from feet that stay put
-/// is its inverse.
-fn planar_fit(a: &[Vector2<f64>], b: &[Vector2<f64>]) -> (f64, Vector2<f64>) {
-    let n = a.len() as f64;
-    let ca = a.iter().sum::<Vector2<f64>>() / n;
-    let cb = b.iter().sum::<Vector2<f64>>() / n;
-    let (mut dot, mut cross) = (0.0f64, 0.0f64);
-    for (p, q) in a.iter().zip(b) {
-        let (p, q) = (p - ca, q - cb);
-        dot += p.dot(&q);
-        cross += p.x * q.y - p.y * q.x;
-    }
-    let angle = cross.atan2(dot);
-    let (s, c) = angle.sin_cos();
-    let rotated = Vector2::new(c * ca.x - s * ca.y, s * ca.x + c * ca.y);
-    (angle, cb - rotated)
 }
 
 #[test]
@@ -100,7 +81,7 @@ fn stance_feet_do_not_slip_swing_feet_lift_and_the_body_goes_where_told() {
                     .map(|&l| Vector2::new(truth[r][l].x, truth[r][l].y))
                     .collect()
             };
-            let (angle, shift) = planar_fit(&flat(k + 1), &flat(k));
+            let (angle, shift) = planar_motion(&flat(k + 1), &flat(k));
             let (s, c) = yaw.sin_cos();
             x += c * shift.x - s * shift.y;
             y += s * shift.x + c * shift.y;

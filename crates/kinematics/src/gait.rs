@@ -461,6 +461,27 @@ pub fn support_margin(feet: &[Vector2<f64>], body: &Isometry3<f64>) -> f64 {
     margin
 }
 
+/// The planar move (a turn about z, rad, then a shift, mm) that takes the
+/// points `a` onto the points `b` (x, y; the same points seen twice) in
+/// the least-squares sense. Seen from a body, feet planted on the ground
+/// move by the inverse of the body's move: with `a` the feet now and `b`
+/// the feet before, it is the body's move, in its frame before.
+pub fn planar_motion(a: &[Vector2<f64>], b: &[Vector2<f64>]) -> (f64, Vector2<f64>) {
+    let n = a.len().min(b.len()).max(1) as f64;
+    let ca = a.iter().sum::<Vector2<f64>>() / n;
+    let cb = b.iter().sum::<Vector2<f64>>() / n;
+    let (mut dot, mut cross) = (0.0f64, 0.0f64);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = (p - ca, q - cb);
+        dot += p.dot(&q);
+        cross += p.x * q.y - p.y * q.x;
+    }
+    let angle = cross.atan2(dot);
+    let (s, c) = angle.sin_cos();
+    let turned = Vector2::new(c * ca.x - s * ca.y, s * ca.x + c * ca.y);
+    (angle, cb - turned)
+}
+
 /// The convex hull of `points`, counter-clockwise (Andrew's monotone
 /// chain).
 fn convex_hull(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {

@@ -50,7 +50,8 @@ mod spec;
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
 pub use gait::{
-    plan_walk, support_margin, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM,
+    plan_walk, planar_motion, support_margin, Gait, Walk, WalkError, WalkPlan, WalkSegment,
+    LOW_MARGIN_MM,
 };
 pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;

@@ -90,6 +90,12 @@ struct SpatialJson {
     /// lifted (mm), and when it first drops under 10 mm (s).
     #[serde(skip_serializing_if = "Option::is_none")]
     max_foot_lift_mm: Option<f64>,
+    /// How far the body travels (mm) and turns (the motion's units), from
+    /// the feet on the ground.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    body_distance_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    body_turn: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     min_stability_margin_mm: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -97,8 +103,14 @@ struct SpatialJson {
 }
 
 impl SpatialJson {
-    fn new(s: &SpatialSummary) -> Self {
+    fn new(s: &SpatialSummary, units: servobus_runtime::config::Units) -> Self {
         SpatialJson {
+            body_distance_mm: s.feet.as_ref().and_then(|f| f.distance_mm),
+            body_turn: s
+                .feet
+                .as_ref()
+                .and_then(|f| f.turn_rad)
+                .map(|t| units.from_rad(t)),
             closest_limit_joint: s.closest_limit.as_ref().map(|(j, _)| j.clone()),
             closest_limit: s.closest_limit.as_ref().map(|(_, g)| *g),
             tool_peak_speed_mm_s: s.tool.as_ref().map(|t| t.peak_speed_mm_s),
@@ -121,7 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let traj = plan_motion(&motion, &robot)?;
     let mut report = summarise(&motion, &robot, &traj);
     let spatial = spatial_summary(&motion, &robot, &traj, 1.0 / motion.rate_hz(&robot));
-    report.spatial = spatial.as_ref().map(SpatialJson::new);
+    report.spatial = spatial.as_ref().map(|s| SpatialJson::new(s, motion.units));
     if let Some(path) = &args.plot {
         plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
     }
@@ -337,6 +349,9 @@ in space:"
             .min_stability_margin_mm
             .map_or("no foot lifted".to_owned(), |m| format!("{m:.1} mm"));
         println!("  feet: highest lift {lift:.1} mm; worst stability margin {margin}");
+        if let (Some(d), Some(t)) = (sp.body_distance_mm, sp.body_turn) {
+            println!("  body: travels {d:.1} mm and turns {t:.1} {u}");
+        }
         if let Some(low) = sp.low_margin_at_s.as_ref().filter(|l| !l.is_empty()) {
             let at: Vec<String> = low.iter().map(|t| format!("{t:.2}")).collect();
             println!(

@@ -4,7 +4,7 @@
 //! rise and the worst stability margin.
 
 use servobus_kinematics::{
-    support_margin, ArmIk, Isometry3, Legs, Point3, Poses, Vector2, LOW_MARGIN_MM,
+    planar_motion, support_margin, ArmIk, Isometry3, Legs, Point3, Poses, Vector2, LOW_MARGIN_MM,
 };
 use servobus_trajectory::{JointState, Trajectory};
 
@@ -55,6 +55,12 @@ pub struct FeetSummary {
     /// three stand (the body's centre to the edge of the polygon of the
     /// feet on the ground), mm; `None` when no foot steps.
     pub min_margin_mm: Option<f64>,
+    /// When feet step (a walk): how far the body travels over the ground
+    /// (mm), from the feet at standing height, which move under the body
+    /// by the inverse of its move; `None` when no foot steps.
+    pub distance_mm: Option<f64>,
+    /// How far the body turns (rad), as `distance_mm`.
+    pub turn_rad: Option<f64>,
     /// The samples (s) at which the margin first drops under 10 mm.
     pub low_margins_s: Vec<f64>,
     /// Each foot's position at each sample (mm, body frame), for plots.
@@ -86,6 +92,8 @@ pub fn spatial_summary(
     let mut margin: Option<f64> = None;
     let mut low = Vec::new();
     let mut in_dip = false;
+    let mut before: Vec<Option<Vector2<f64>>> = vec![None; feet.len()];
+    let (mut distance, mut turn) = (0.0f64, 0.0f64);
     for k in 0..=steps {
         let t = (k as f64 * step_s).min(trajectory.duration());
         trajectory.sample(t, &mut state);
@@ -122,6 +130,23 @@ pub fn spatial_summary(
                 .filter(|p| (p.z - ground).abs() < ON_GROUND_MM)
                 .map(|p| Vector2::new(p.x, p.y))
                 .collect();
+            // The body's move since the last sample, from the feet down
+            // at both.
+            let now: Vec<Option<Vector2<f64>>> = feet
+                .iter()
+                .map(|p| ((p.z - ground).abs() < ON_GROUND_MM).then(|| Vector2::new(p.x, p.y)))
+                .collect();
+            let (a, b): (Vec<_>, Vec<_>) = now
+                .iter()
+                .zip(&before)
+                .filter_map(|(n, b)| n.zip(*b))
+                .unzip();
+            if a.len() >= 3 {
+                let (angle, shift) = planar_motion(&a, &b);
+                distance += shift.norm();
+                turn += angle;
+            }
+            before = now;
             let stepping = feet.iter().any(|p| p.z > ground + STEP_MM);
             if down.len() >= 3 && stepping {
                 for p in &feet {
@@ -154,7 +179,10 @@ pub fn spatial_summary(
             path: tool_path,
         }
     });
+    let walked = lift > STEP_MM;
     let feet = legs.map(|legs| FeetSummary {
+        distance_mm: walked.then_some(distance),
+        turn_rad: walked.then_some(turn),
         max_lift_mm: lift,
         min_margin_mm: margin,
         low_margins_s: low,

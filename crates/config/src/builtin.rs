@@ -54,15 +54,17 @@ macro_rules! shipped {
     };
 }
 
-static FILES: [BuiltinFile; 12] = [
+static FILES: [BuiltinFile; 14] = [
     shipped!("robots", "so101"),
     shipped!("robots", "hexapod"),
     shipped!("robots", "hexapod-2bus"),
     shipped!("robots", "scs-mini"),
     shipped!("motions", "arm-wave"),
     shipped!("motions", "arm-pick-place"),
+    shipped!("motions", "arm-line"),
     shipped!("motions", "hexapod-dance"),
     shipped!("motions", "hexapod-tripod"),
+    shipped!("motions", "hexapod-walk-turn"),
     shipped!("motions", "scs-mini-nod"),
     shipped!("sim", "so101-mounting"),
     shipped!("sim", "so101-hand"),

@@ -38,9 +38,11 @@ pub mod limits;
 mod locate;
 mod mapping;
 mod motion;
+mod motion_poses;
 mod nesting;
 mod robot;
 pub mod seam;
+mod spatial;
 mod syntax;
 mod terms;
 mod tool;
@@ -64,6 +66,7 @@ pub use robot::{
     load_robot, BusConfig, CalibrationChoice, JointConfig, Robot, RobotCalibration, RobotOptions,
     RobotSource,
 };
+pub use spatial::{spatial_summary, FeetSummary, SpatialSummary, ToolSummary};
 pub use tool::{ik_reason, TOOL_FRAME};
 pub use trajectory::{check_motion_length, joint_limits, plan_input, plan_motion};
 pub use units::Units;

@@ -1,15 +1,15 @@
 //! Motion files: poses, keyframes, timing and repetition.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
-use serde::de::{self, MapAccess, Visitor};
-use serde::{Deserialize, Deserializer};
+use serde::Deserialize;
 
 use super::error::{ConfigError, Source};
 use super::limits::{check_duration, check_segments};
 use super::locate::FieldPath;
+use super::motion_poses::{list, PoseList, PoseRef, Resolver};
 use super::robot::{self, Robot};
+use super::spatial::{Context, MoveLimits, PathKind, RawBody, RawWalk};
 use super::Units;
 
 /// A choreography, resolved against its robot: every keyframe holds a
@@ -159,7 +159,9 @@ fn one() -> i64 {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a keyframe: a mapping with `pose:` and optional `at:`")]
+#[serde(
+    expecting = "a keyframe: a mapping with `pose:`, `tool:`, `walk:` or `body:`, and optional `at:`"
+)]
 struct RawKeyframe {
     #[serde(default)]
     at: Option<f64>,
@@ -167,62 +169,20 @@ struct RawKeyframe {
     pose: Option<PoseRef>,
     #[serde(default)]
     tool: Option<super::tool::ToolPose>,
-}
-
-/// `name: value` pairs in file order (a map would lose the order, and errors
-/// should name the first bad entry as written).
-#[derive(Default)]
-struct PairList<T>(Vec<(String, T)>);
-
-type PoseMap = PairList<f64>;
-type PoseList = PairList<PoseMap>;
-
-impl<'de, T: Deserialize<'de>> Deserialize<'de> for PairList<T> {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V<T>(std::marker::PhantomData<T>);
-        impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
-            type Value = PairList<T>;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a mapping of names to values")
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
-                let mut v: Vec<(String, T)> = Vec::new();
-                while let Some(k) = map.next_key::<String>()? {
-                    if v.iter().any(|(n, _)| *n == k) {
-                        return Err(de::Error::custom(format!("`{k}` is given twice")));
-                    }
-                    v.push((k, map.next_value()?));
-                }
-                Ok(PairList(v))
-            }
-        }
-        d.deserialize_map(V(std::marker::PhantomData))
-    }
-}
-
-/// A keyframe's pose: a pose's name, or a map of joint positions.
-enum PoseRef {
-    Name(String),
-    Map(PoseMap),
-}
-
-impl<'de> Deserialize<'de> for PoseRef {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = PoseRef;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a pose name or a map of joint positions")
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<PoseRef, E> {
-                Ok(PoseRef::Name(v.to_owned()))
-            }
-            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<PoseRef, A::Error> {
-                PoseMap::deserialize(de::value::MapAccessDeserializer::new(map)).map(PoseRef::Map)
-            }
-        }
-        d.deserialize_any(V)
-    }
+    #[serde(default)]
+    path: Option<PathKind>,
+    #[serde(default)]
+    max_speed: Option<f64>,
+    #[serde(default)]
+    max_acceleration: Option<f64>,
+    #[serde(default)]
+    max_jerk: Option<f64>,
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    walk: Option<RawWalk>,
+    #[serde(default)]
+    body: Option<RawBody>,
 }
 
 /// Loads a motion file and its robot, and validates both together.
@@ -323,6 +283,14 @@ pub fn load_motion_calibrated(
         .collect();
     let mut keyframes = Vec::with_capacity(raw.keyframes.len());
     let mut last_at: Option<(usize, f64)> = None;
+    let mut spatial = Context {
+        src: &src,
+        robot: &robot,
+        units: raw.units,
+        interpolation: raw.interpolation,
+        on_limit: raw.on_limit,
+        body: None,
+    };
     for (i, rk) in raw.keyframes.iter().enumerate() {
         let kp = root.key("keyframes").index(i);
         if let Some(at) = rk.at {
@@ -348,9 +316,10 @@ pub fn load_motion_calibrated(
             }
             last_at = Some((i, at));
         }
+        check_spatial(&src, &kp, i, rk)?;
         let (pose_name, pairs) = match &rk.pose {
-            None if rk.tool.is_none() => {
-                return Err(src.error(&kp, "a keyframe needs a `pose` or a `tool`"))
+            None if rk.tool.is_none() && rk.walk.is_none() && rk.body.is_none() => {
+                return Err(src.error(&kp, "a keyframe needs a `pose`, `tool`, `walk` or `body`"))
             }
             None => (None, None),
             Some(PoseRef::Name(name)) => {
@@ -373,6 +342,28 @@ pub fn load_motion_calibrated(
                 current[ix] = *value;
             }
         }
+        let limits = MoveLimits {
+            max_speed: rk.max_speed,
+            max_acceleration: rk.max_acceleration,
+            max_jerk: rk.max_jerk,
+            tolerance: rk.tolerance,
+        };
+        match (&rk.walk, &rk.body, &rk.tool, rk.path) {
+            (Some(walk), ..) => {
+                spatial.walk(&kp, i, walk, &mut current, &mut keyframes)?;
+                continue;
+            }
+            (_, Some(body), ..) => {
+                spatial.body(&kp, i, body, rk.at, &limits, &mut current, &mut keyframes)?;
+                continue;
+            }
+            (_, _, Some(tool), Some(PathKind::Line)) => {
+                spatial.line(&kp, i, tool, rk.at, &limits, &mut current, &mut keyframes)?;
+                spatial.body = None;
+                continue;
+            }
+            _ => spatial.body = None,
+        }
         // A tool pose moves the arm's joints there, from this pose.
         if let Some(tool) = &rk.tool {
             super::tool::resolve(&robot, raw.units, tool, &mut current)
@@ -386,6 +377,10 @@ pub fn load_motion_calibrated(
             line,
             column,
         });
+    }
+    // Spatial keyframes add samples: the plan must still fit.
+    if let Err(e) = check_segments(keyframes.len(), u64::from(repeat), robot.joint_count()) {
+        return Err(src.error(&root.key("keyframes"), e.to_string()));
     }
     let motion = Motion {
         path: path.to_owned(),
@@ -401,76 +396,39 @@ pub fn load_motion_calibrated(
     Ok((motion, robot))
 }
 
-fn list(names: &[&str]) -> String {
-    if names.is_empty() {
-        "none defined".to_owned()
+/// Refuses spatial fields where they mean nothing: a first keyframe that
+/// is not a pose (`walk`, `body`, `path: line` start from one), `walk` or
+/// `body` with other targets, `path: line` without a `tool`, speed limits
+/// without a line or body move.
+fn check_spatial(
+    src: &Source,
+    kp: &FieldPath,
+    i: usize,
+    rk: &RawKeyframe,
+) -> Result<(), ConfigError> {
+    let line = rk.path == Some(PathKind::Line);
+    let moves = rk.walk.is_some() || rk.body.is_some() || line;
+    let why = if i == 0 && moves {
+        Some(
+            "the first keyframe is the start: give it a `pose` (walk, body and line start from it)",
+        )
+    } else if (rk.walk.is_some() || rk.body.is_some()) && (rk.pose.is_some() || rk.tool.is_some()) {
+        Some("`walk` and `body` keyframes take no `pose` or `tool`")
+    } else if rk.walk.is_some() && (rk.body.is_some() || rk.at.is_some()) {
+        Some("a `walk` takes its time from its segments: no `body` or `at` with it")
+    } else if line && (rk.tool.is_none() || rk.pose.is_some()) {
+        Some("`path: line` needs a `tool` pose and no `pose`")
+    } else if !(line || rk.body.is_some())
+        && (rk.max_speed.is_some() || rk.max_acceleration.is_some() || rk.max_jerk.is_some())
+    {
+        Some("`max_speed`, `max_acceleration` and `max_jerk` belong to `path: line` or `body`")
+    } else if !line && rk.tolerance.is_some() {
+        Some("`tolerance` belongs to `path: line`")
     } else {
-        names.join(", ")
+        None
+    };
+    match why {
+        Some(why) => Err(src.error(kp, format!("keyframe {i}: {why}"))),
+        None => Ok(()),
     }
-}
-
-struct Resolver<'a> {
-    src: &'a Source,
-    robot: &'a Robot,
-    units: Units,
-}
-
-impl Resolver<'_> {
-    /// Every joint named exists and every value is inside its joint's limits.
-    fn check_pose(
-        &self,
-        pose: &PoseMap,
-        at: &FieldPath,
-        keyframe: Option<usize>,
-    ) -> Result<(), ConfigError> {
-        let which = keyframe.map_or(String::new(), |k| format!("keyframe {k}: "));
-        for (name, value) in &pose.0 {
-            let field = at.key(name);
-            let Some(joint) = self.robot.joint(name) else {
-                let known: Vec<&str> = self.robot.joints().map(|j| j.name.as_str()).collect();
-                return Err(self.src.key_error(
-                    &field,
-                    format!(
-                        "{which}robot `{}` has no joint `{name}` (joints: {})",
-                        self.robot.name,
-                        list(&known)
-                    ),
-                ));
-            };
-            if !value.is_finite() {
-                return Err(self.src.error(&field, "must be a finite number"));
-            }
-            let v = self.units.convert(*value, self.robot.units);
-            // A hair of tolerance so a limit written in the other unit
-            // (90 deg vs 1.5708 rad) still counts as inside.
-            let tol = 1e-9 * (1.0 + v.abs());
-            if v < joint.min - tol || v > joint.max + tol {
-                let (min, max) = (
-                    self.robot.units.convert(joint.min, self.units),
-                    self.robot.units.convert(joint.max, self.units),
-                );
-                let [lo, hi] = super::limit_origins(joint, self.robot.units);
-                let origin = if v < joint.min { lo } else { hi };
-                return Err(self.src.error(
-                    &field,
-                    format!(
-                        "{which}{value} {} is outside the limits of joint `{name}` \
-                         [{}, {}] {} (the {} limit comes from {origin})",
-                        self.units,
-                        round(min),
-                        round(max),
-                        self.units,
-                        if v < joint.min { "lower" } else { "upper" },
-                    ),
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// `x` to two decimals, as a limit is said in a message (a calibrated limit
-/// is measured: 96.92578125 says nothing 96.93 does not).
-fn round(x: f64) -> f64 {
-    (x * 100.0).round() / 100.0
 }

@@ -14,12 +14,12 @@ pub const TOOL_FRAME: &str = "tool";
 /// frame) and, optionally, its pitch and roll (the motion's angle unit).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct ToolPose {
-    xyz: [f64; 3],
+pub(crate) struct ToolPose {
+    pub(crate) xyz: [f64; 3],
     #[serde(default)]
-    pitch: Option<f64>,
+    pub(crate) pitch: Option<f64>,
     #[serde(default)]
-    roll: Option<f64>,
+    pub(crate) roll: Option<f64>,
 }
 
 /// Why inverse kinematics found no angles, in `units`: the distance short,
@@ -49,7 +49,7 @@ pub fn ik_reason(e: &IkError, units: Units) -> String {
 /// # Errors
 /// The reason as text: no geometry, no `tool` frame, a number that is not
 /// finite, or why inverse kinematics found no angles ([`ik_reason`]).
-pub(super) fn resolve(
+pub(crate) fn resolve(
     robot: &Robot,
     units: Units,
     tool: &ToolPose,

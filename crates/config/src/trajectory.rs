@@ -27,33 +27,60 @@ pub fn joint_limits(robot: &Robot) -> Vec<JointLimits> {
 /// The trajectory planner's keyframes and options for `motion`, in radians.
 pub fn plan_input(motion: &Motion) -> (Vec<traj::Keyframe>, PlanOptions) {
     let u = motion.units;
-    let keyframes = motion
-        .keyframes
+    let kfs = &motion.keyframes;
+    let place = |k: usize| kfs.get(k).map(|kf| (kf.line, kf.column));
+    let keyframes = kfs
         .iter()
-        .map(|k| {
+        .enumerate()
+        .map(|(i, k)| {
             let kf =
                 traj::Keyframe::new(k.positions.iter().map(|&p| u.to_rad(p)).collect::<Vec<_>>());
-            match k.at {
+            let kf = match k.at {
                 Some(at) => kf.at(at),
                 None => kf,
+            };
+            // Keyframes that share a place in the file are the samples of
+            // one spatial keyframe (a line, a walk, a body move).
+            let here = place(i);
+            let sample = here == place(i + 1) || (i > 0 && here == place(i - 1));
+            if sample {
+                kf.shape(SAMPLE_SHAPE)
+            } else {
+                kf
             }
         })
         .collect();
-    let options = PlanOptions {
-        shape: match motion.interpolation {
+    let options = plan_options(motion.interpolation, motion.on_limit, motion.repeat);
+    (keyframes, options)
+}
+
+/// The interpolation of the dense samples of a spatial keyframe (a tool
+/// line, a walk, a body move; they share the keyframe's line and column):
+/// a C2 spline through them, which follows a smooth path sampled densely
+/// far more closely than segments that could each stop on time.
+pub(crate) const SAMPLE_SHAPE: TimedShape = TimedShape::Cubic;
+
+/// The planner's options for a motion's `interpolation`, `on_limit` and
+/// `repeat`.
+pub(crate) fn plan_options(
+    interpolation: Interpolation,
+    on_limit: OnLimit,
+    repeat: u32,
+) -> PlanOptions {
+    PlanOptions {
+        shape: match interpolation {
             Interpolation::ShapePreserving => TimedShape::ShapePreserving,
             Interpolation::Cubic => TimedShape::Cubic,
             Interpolation::Monotone => TimedShape::Monotone,
             Interpolation::Quintic => TimedShape::MinimumJerk,
         },
-        on_limit: match motion.on_limit {
+        on_limit: match on_limit {
             OnLimit::Error => traj::OnLimit::Error,
             OnLimit::Stretch => traj::OnLimit::Stretch,
         },
-        repeat: motion.repeat,
+        repeat,
         ..PlanOptions::default()
-    };
-    (keyframes, options)
+    }
 }
 
 /// Plans `motion` on `robot`: the path the scheduler samples, in radians.
@@ -121,6 +148,19 @@ fn quantity_unit(units: Units, q: Quantity) -> String {
     }
 }
 
+/// The index in the file of the motion's keyframe `k`: a keyframe in space
+/// is several samples that share its place.
+fn file_index(motion: &Motion, k: usize) -> usize {
+    let place = |kf: &super::Keyframe| (kf.line, kf.column);
+    motion
+        .keyframes
+        .iter()
+        .take(k)
+        .zip(motion.keyframes.iter().skip(1))
+        .filter(|(a, b)| place(a) != place(b))
+        .count()
+}
+
 /// Turns a planner error into one pointing at the keyframe in the motion file.
 fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
     let joint_name = |j: usize| motion.joints.get(j).map_or("?", String::as_str);
@@ -129,6 +169,12 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             .keyframes
             .get(k)
             .map_or((1, 1), |kf| (kf.line, kf.column));
+        // Fields name the file's keyframe, not the sample.
+        let field = field.replacen(
+            &format!("keyframes[{k}]"),
+            &format!("keyframes[{}]", file_index(motion, k)),
+            1,
+        );
         ConfigError::invalid(&motion.path, line, column, field, reason)
     };
     let u = motion.units;
@@ -179,8 +225,19 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             format!("keyframes[{keyframe}].pose.{}", joint_name(joint)),
             e.to_string(),
         ),
-        PlanError::WrongJointCount { keyframe, .. }
-        | PlanError::TimeNotIncreasing { keyframe, .. } => {
+        PlanError::TimeNotIncreasing {
+            keyframe,
+            at,
+            previous,
+        } => at_keyframe(
+            keyframe,
+            format!("keyframes[{keyframe}]"),
+            format!(
+                "{at} s is not after the keyframe before it, reached at {previous:.3} s (a tool \
+                 line, walk or body move takes the time its speeds need)"
+            ),
+        ),
+        PlanError::WrongJointCount { keyframe, .. } => {
             at_keyframe(keyframe, format!("keyframes[{keyframe}]"), e.to_string())
         }
         _ => at_keyframe(0, String::new(), format!("cannot plan: {e}")),

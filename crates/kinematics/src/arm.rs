@@ -385,6 +385,31 @@ impl ArmIk {
         &self.frame
     }
 
+    /// How far chain angles `q` (radians, base first) are from a singular
+    /// pose: the smallest singular value of the frame position's Jacobian,
+    /// mm per radian. It is the speed (mm/s) at which the frame can move in
+    /// its worst direction for joint speeds of one radian a second in all;
+    /// 0 where a direction cannot be moved at all (the arm stretched
+    /// straight or folded flat, the frame on the first joint's axis).
+    /// Allocates nothing.
+    pub fn dexterity(&self, q: &[f64]) -> f64 {
+        let mut jac = Jacobian::zeros();
+        let mut angles = Angles::zeros();
+        for (k, a) in angles.iter_mut().enumerate().take(self.joints.len()) {
+            *a = q.get(k).copied().unwrap_or(0.0);
+        }
+        let free = ArmTarget {
+            xyz: Point3::origin(),
+            pitch: None,
+            roll: None,
+        };
+        self.residual(&free, &angles, &mut jac);
+        let lin = jac.fixed_rows::<3>(0);
+        // The eigenvalues of J J^T (3 x 3) are the squared singular values.
+        let jjt = lin * lin.transpose();
+        jjt.symmetric_eigenvalues().min().max(0.0).sqrt()
+    }
+
     /// Whether chain angles `q` are inside every joint's limits.
     pub fn within_limits(&self, q: &[f64]) -> bool {
         q.iter().zip(&self.limits).all(|(&v, &l)| within(v, l))

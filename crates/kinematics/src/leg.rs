@@ -11,9 +11,13 @@ use crate::geometry::Geometry;
 
 /// How close to 1 a unit component must be to count as aligned with it.
 const ALIGNED: f64 = 1e-9;
-/// How far inside the stretched or folded boundary, mm, or off the coxa
-/// axis, a target counts as at a singularity.
-const SINGULAR_MM: f64 = 1e-3;
+/// How close to the coxa's axis a foot counts as on it (where the coxa's
+/// angle is undefined), mm.
+const SINGULAR_MM: f64 = 1.0;
+/// How close to straight or folded flat the knee counts as at a
+/// singularity, rad (1 deg: nearer, the joint speeds a foot's move needs
+/// grow without bound).
+const KNEE_MARGIN_RAD: f64 = std::f64::consts::PI / 180.0;
 
 /// A leg's closed-form solver, built once from the geometry.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,8 +140,9 @@ impl LegIk {
     ///
     /// # Errors
     /// [`IkError::Unreachable`] with the distance short,
-    /// [`IkError::Singular`] at the foot on the coxa axis or the leg
-    /// stretched or folded flat, [`IkError::JointLimit`] naming the joint.
+    /// [`IkError::Singular`] at the foot within 1 mm of the coxa axis or the
+    /// knee within 1 deg of straight or folded flat, [`IkError::JointLimit`]
+    /// naming the joint.
     pub fn solve(&self, target: &Point3<f64>, previous: [f64; 3]) -> Result<[f64; 3], IkError> {
         let p = self.hip_inv * target;
         let r = p.x.hypot(p.y);
@@ -166,12 +171,12 @@ impl LegIk {
                 short = short.min(miss);
                 continue;
             }
-            if miss > -SINGULAR_MM {
+            let cos_g = ((d * d - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)).clamp(-1.0, 1.0);
+            let gamma = cos_g.acos();
+            if !(KNEE_MARGIN_RAD..=PI - KNEE_MARGIN_RAD).contains(&gamma) {
                 singular = true;
                 continue;
             }
-            let cos_g = ((d * d - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)).clamp(-1.0, 1.0);
-            let gamma = cos_g.acos();
             let toward = t.y.atan2(t.x);
             for g in [gamma, -gamma] {
                 let alpha = g - b2 + b1;

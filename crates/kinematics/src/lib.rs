@@ -23,6 +23,16 @@
 //!   asked, its pitch and roll (what a 5-DOF arm like the SO-101 can
 //!   choose).
 //!
+//! - [`sample_line`] follows a straight tool move ([`PoseLine`]: the
+//!   position along a segment, the orientation slerped) with arm angles,
+//!   sampled until straight joint moves between samples keep the tool
+//!   within a tolerance of the line, and refuses a line that comes near a
+//!   singular pose ([`ArmIk::dexterity`]) or would flip the arm.
+//! - [`Legs`] finds a legged robot's legs by their `foot_<leg>` frames and
+//!   moves the body with the feet planted ([`Legs::body_move`]);
+//!   [`plan_walk`] walks it with a tripod, ripple or wave [`Gait`] along
+//!   segments of body velocity, stance feet fixed on the ground.
+//!
 //! Angles are radians and lengths millimetres throughout; the caller
 //! converts the robot file's angle unit. Failures are typed ([`IkError`]):
 //! unreachable (with the distance short), a joint limit (naming the joint),
@@ -30,13 +40,24 @@
 
 mod arm;
 mod error;
+mod gait;
 mod geometry;
 mod leg;
+mod legs;
+mod line;
 mod spec;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
+pub use gait::{
+    plan_walk, planar_motion, support_margin, Gait, Walk, WalkError, WalkPlan, WalkSegment,
+    LOW_MARGIN_MM,
+};
 pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;
-pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+pub use legs::{LegError, Legs, PoseSample, FOOT_PREFIX};
+pub use line::{
+    sample_line, Held, LineError, LineOptions, LinePlan, LineSample, PoseLine, TURN_WEIGHT_MM,
+};
+pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};

@@ -35,7 +35,7 @@ fn round_trips_10000_random_reachable_feet_per_leg() {
             let target = Point3::from(poses.frame(foot).expect("foot").translation.vector);
             let got = match ik.solve(&target, home) {
                 Ok(got) => got,
-                // Within a micrometre of a stretched or folded leg.
+                // The knee within a degree of straight or folded flat.
                 Err(IkError::Singular { .. }) => continue,
                 Err(e) => panic!("{leg}: {e} for {q:?}"),
             };
@@ -82,6 +82,24 @@ fn refuses_a_foot_on_the_coxa_axis() {
         ik.solve(&Point3::new(0.0, -90.0, -100.0), [0.0; 3]),
         Err(IkError::Singular { .. })
     ));
+}
+
+#[test]
+fn refuses_a_knee_within_a_degree_of_straight_as_a_singularity() {
+    let s = shipped("hexapod");
+    let ik = LegIk::new(&s.model, "foot_front_left").expect("a leg");
+    // Level with the hip (110, 70), out along y: the femur axis is 45 out,
+    // femur and tibia 80 + 160. At 239.995 from the femur axis the knee is
+    // bent acos((239.995^2 - 80^2 - 160^2) / (2 * 80 * 160)) = 0.79 deg;
+    // at 239 it is 11.1 deg, and solved.
+    assert!(matches!(
+        ik.solve(&Point3::new(110.0, 70.0 + 45.0 + 239.995, 0.0), [0.0; 3]),
+        Err(IkError::Singular { .. })
+    ));
+    let q = ik
+        .solve(&Point3::new(110.0, 70.0 + 45.0 + 239.0, 0.0), [0.0; 3])
+        .expect("bent enough");
+    assert!((q[2].abs().to_degrees() - 11.1).abs() < 0.05, "{q:?}");
 }
 
 #[test]

@@ -4,6 +4,7 @@ mod fk;
 mod ik_arm;
 mod ik_leg;
 mod robots;
+mod spatial;
 mod spec;
 
 #[global_allocator]

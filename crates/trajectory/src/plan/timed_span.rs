@@ -67,10 +67,12 @@ fn check_segment(
     let mut first = None;
     let tol = 1.0 + 1e-9;
     for (j, (ps, lim)) in pieces.iter().zip(limits).enumerate() {
-        for p in ps.iter().filter(|p| {
-            let mid = 0.5 * (p.t0 + p.t1);
-            mid > t0 && mid < t1
-        }) {
+        // A joint's pieces follow each other in time: find the segment's
+        // by bisection rather than scanning them all (a run of n segments
+        // is then checked in n log n, not n^2).
+        let mid = |p: &Piece| 0.5 * (p.t0 + p.t1);
+        let start = ps.partition_point(|p| mid(p) <= t0);
+        for p in ps[start..].iter().take_while(|p| mid(p) < t1) {
             let (lo, hi) = p.range(0);
             let checks = [
                 (Quantity::Velocity, p.peak(1), lim.max_velocity, 1.0),

@@ -4,8 +4,12 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+mod space;
+
 use serde::Serialize;
-use servobus_runtime::config::{load_motion_calibrated, plan_motion, Motion, Robot};
+use servobus_runtime::config::{
+    load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
+};
 use servobus_trajectory::{JointState, Trajectory};
 
 /// Arguments of `servobus plan`.
@@ -63,6 +67,60 @@ struct PlanJson {
     duration_s: f64,
     joints: Vec<JointJson>,
     segments: Vec<SegmentJson>,
+    /// What the motion does in space (robots with geometry).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spatial: Option<SpatialJson>,
+}
+
+/// The spatial figures of `--json`.
+#[derive(Debug, Serialize)]
+struct SpatialJson {
+    /// The joint closest to a limit and how close, in the motion's units.
+    closest_limit_joint: Option<String>,
+    closest_limit: Option<f64>,
+    /// The arm's tool: peak speed (mm/s), path length (mm), and the
+    /// smallest dexterity (mm/rad; 0 at a singular pose).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tool_peak_speed_mm_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tool_path_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    min_dexterity_mm_per_rad: Option<f64>,
+    /// The feet: highest lift (mm), worst stability margin while feet are
+    /// lifted (mm), and when it first drops under 10 mm (s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_foot_lift_mm: Option<f64>,
+    /// How far the body travels (mm) and turns (the motion's units), from
+    /// the feet on the ground.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    body_distance_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    body_turn: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    min_stability_margin_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    low_margin_at_s: Option<Vec<f64>>,
+}
+
+impl SpatialJson {
+    fn new(s: &SpatialSummary, units: servobus_runtime::config::Units) -> Self {
+        SpatialJson {
+            body_distance_mm: s.feet.as_ref().and_then(|f| f.distance_mm),
+            body_turn: s
+                .feet
+                .as_ref()
+                .and_then(|f| f.turn_rad)
+                .map(|t| units.from_rad(t)),
+            closest_limit_joint: s.closest_limit.as_ref().map(|(j, _)| j.clone()),
+            closest_limit: s.closest_limit.as_ref().map(|(_, g)| *g),
+            tool_peak_speed_mm_s: s.tool.as_ref().map(|t| t.peak_speed_mm_s),
+            tool_path_mm: s.tool.as_ref().map(|t| t.path_mm),
+            min_dexterity_mm_per_rad: s.tool.as_ref().map(|t| t.min_dexterity),
+            max_foot_lift_mm: s.feet.as_ref().map(|f| f.max_lift_mm),
+            min_stability_margin_mm: s.feet.as_ref().and_then(|f| f.min_margin_mm),
+            low_margin_at_s: s.feet.as_ref().map(|f| f.low_margins_s.clone()),
+        }
+    }
 }
 
 /// Runs `servobus plan`.
@@ -73,9 +131,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         args.calibration.as_deref(),
     )?;
     let traj = plan_motion(&motion, &robot)?;
-    let report = summarise(&motion, &robot, &traj);
+    let mut report = summarise(&motion, &robot, &traj);
+    let spatial = spatial_summary(&motion, &robot, &traj, 1.0 / motion.rate_hz(&robot));
+    report.spatial = spatial.as_ref().map(|s| SpatialJson::new(s, motion.units));
     if let Some(path) = &args.plot {
-        plot(&motion, &traj, path)?;
+        plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -132,6 +192,7 @@ fn summarise(motion: &Motion, robot: &Robot, traj: &Trajectory) -> PlanJson {
         duration_s: traj.duration(),
         joints,
         segments,
+        spatial: None,
     }
 }
 
@@ -219,8 +280,25 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         .iter()
         .filter_map(|k| k.pose.as_ref().map(String::len))
         .fold("inline pose".len(), usize::max);
-    for s in &r.segments {
-        let kf = motion.keyframes.get(s.keyframe);
+    let place = |k: usize| motion.keyframes.get(k).map(|kf| (kf.line, kf.column));
+    // The samples of one spatial keyframe (a line, a walk, a body move)
+    // share its place in the file: one row for them all.
+    let mut rows: Vec<(usize, usize)> = Vec::new();
+    for (i, seg) in r.segments.iter().enumerate() {
+        if let Some(row) = rows.last_mut() {
+            let prev = &r.segments[row.1];
+            if place(seg.keyframe) == place(prev.keyframe) && seg.repetition == prev.repetition {
+                row.1 = i;
+                continue;
+            }
+        }
+        rows.push((i, i));
+    }
+    for &(first, last) in &rows {
+        let count = last - first + 1;
+        let s = &r.segments[first];
+        let end_s = r.segments[last].end_s;
+        let kf = motion.keyframes.get(r.segments[last].keyframe);
         let what = kf
             .and_then(|k| k.pose.clone())
             .unwrap_or_else(|| "inline pose".to_owned());
@@ -231,32 +309,85 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             String::new()
         };
         let timed = match kf.and_then(|k| k.at) {
+            _ if count > 1 => format!(", {count} samples"),
             Some(at) => format!(", at: {at}"),
             None => String::new(),
         };
+        let what = if count > 1 { "in space" } else { what.as_str() };
         println!(
             "  {:>3} {:<pw$} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
-            s.keyframe,
+            r.segments[last].keyframe,
             what,
             line,
             s.start_s,
-            s.end_s,
-            s.end_s - s.start_s,
+            end_s,
+            end_s - s.start_s,
         );
+    }
+    if let Some(sp) = &r.spatial {
+        print_spatial(sp, u);
+    }
+}
+
+fn print_spatial(sp: &SpatialJson, u: &str) {
+    println!(
+        "
+in space:"
+    );
+    if let (Some(v), Some(len), Some(d)) = (
+        sp.tool_peak_speed_mm_s,
+        sp.tool_path_mm,
+        sp.min_dexterity_mm_per_rad,
+    ) {
+        println!(
+            "  tool: peak speed {v:.1} mm/s, path {len:.1} mm; closest to a singular pose: \
+             dexterity {d:.1} mm/rad"
+        );
+    }
+    if let Some(lift) = sp.max_foot_lift_mm {
+        let margin = sp
+            .min_stability_margin_mm
+            .map_or("no foot lifted".to_owned(), |m| format!("{m:.1} mm"));
+        println!("  feet: highest lift {lift:.1} mm; worst stability margin {margin}");
+        if let (Some(d), Some(t)) = (sp.body_distance_mm, sp.body_turn) {
+            println!("  body: travels {d:.1} mm and turns {t:.1} {u}");
+        }
+        if let Some(low) = sp.low_margin_at_s.as_ref().filter(|l| !l.is_empty()) {
+            let at: Vec<String> = low.iter().map(|t| format!("{t:.2}")).collect();
+            println!(
+                "  warning: the stability margin drops under 10 mm at {} s",
+                at.join(", ")
+            );
+        }
+    }
+    if let (Some(j), Some(g)) = (&sp.closest_limit_joint, sp.closest_limit) {
+        println!("  closest to a limit: `{j}`, {g:.1} {u} from it");
     }
 }
 
 /// Position and velocity of every joint over time, one chart above the
 /// other, drawn as SVG and written to `path` whole.
-fn plot(motion: &Motion, traj: &Trajectory, path: &Path) -> anyhow::Result<()> {
+fn plot(
+    motion: &Motion,
+    traj: &Trajectory,
+    paths: &space::Paths,
+    path: &Path,
+) -> anyhow::Result<()> {
     let mut svg = String::new();
-    draw_plot(motion, traj, &mut svg)?;
+    draw_plot(motion, traj, paths, &mut svg)?;
     servobus_io::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
 
 /// The SVG of [`plot`], drawn into `svg`.
-fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Result<()> {
+/// With `paths` (a tool's or feet's positions), a third row shows them
+/// from above and from the side.
+fn draw_plot(
+    motion: &Motion,
+    traj: &Trajectory,
+    paths: &space::Paths,
+    svg: &mut String,
+) -> anyhow::Result<()> {
     use plotters::prelude::*;
 
     let u = motion.units;
@@ -286,7 +417,9 @@ fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Re
         (lo - pad)..(hi + pad)
     };
 
-    let height = 900u32;
+    let row = 430u32;
+    let rows = if paths.is_empty() { 2 } else { 3 };
+    let height = 40 + row * rows;
     let root = SVGBackend::with_string(svg, (1200, height)).into_drawing_area();
     root.fill(&WHITE)?;
     let title = format!(
@@ -298,7 +431,11 @@ fn draw_plot(motion: &Motion, traj: &Trajectory, svg: &mut String) -> anyhow::Re
         traj.duration()
     );
     let root = root.titled(&title, ("sans-serif", 24))?;
-    let (top, bottom) = root.split_vertically((height - 40) / 2);
+    let (top, rest) = root.split_vertically(row);
+    let (bottom, space_row) = rest.split_vertically(row);
+    if !paths.is_empty() {
+        space::draw(&space_row, paths)?;
+    }
     for (area, series, what, unit) in [
         (&top, &pos, "Position", u.to_string()),
         (&bottom, &vel, "Velocity", format!("{u}/s")),

@@ -1,0 +1,282 @@
+//! `walk:` and `body:` keyframes of a legged robot: a gait along segments
+//! of body velocity, and body poses with the feet planted, each sampled
+//! into timed joint keyframes with every leg solved in closed form.
+
+use serde::Deserialize;
+use servobus_kinematics::{
+    plan_walk, Gait, Isometry3, Legs, Point3, PoseLine, Poses, UnitQuaternion, Vector3, Walk,
+    WalkSegment,
+};
+
+use super::{Context, MoveLimits, TimeLaw};
+use crate::error::ConfigError;
+use crate::locate::FieldPath;
+use crate::motion::Keyframe;
+use crate::tool::ik_reason;
+
+/// Joint samples of walks and body moves come this far apart at most, s.
+pub(crate) const LEG_STEP_S: f64 = 0.02;
+
+/// A keyframe's `walk:`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawWalk {
+    gait: RawGait,
+    #[serde(default)]
+    stride: Option<f64>,
+    lift: f64,
+    period: f64,
+    segments: Vec<RawSegment>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[serde(expecting = "`tripod`, `ripple` or `wave`")]
+enum RawGait {
+    Tripod,
+    Ripple,
+    Wave,
+}
+
+/// One segment of a walk: `{velocity: [vx, vy], turn, duration}`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSegment {
+    #[serde(default)]
+    velocity: [f64; 2],
+    #[serde(default)]
+    turn: f64,
+    duration: f64,
+}
+
+/// A keyframe's `body:`: the body's height above the ground, its shift and
+/// its roll, pitch and yaw, the feet planted.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBody {
+    #[serde(default)]
+    height: Option<f64>,
+    #[serde(default)]
+    shift: Option<[f64; 2]>,
+    #[serde(default)]
+    roll: Option<f64>,
+    #[serde(default)]
+    pitch: Option<f64>,
+    #[serde(default)]
+    yaw: Option<f64>,
+}
+
+/// Where a run of `body:` keyframes counts from: the feet (in the body's
+/// frame before the first of them, which is the ground's frame), the
+/// body's height then, and its pose now.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct BodyState {
+    feet: Vec<Point3<f64>>,
+    height: f64,
+    pose: Isometry3<f64>,
+}
+
+impl Context<'_> {
+    fn legs(&self, fail: &impl Fn(String) -> ConfigError) -> Result<Legs, ConfigError> {
+        let model = self.robot.geometry().ok_or_else(|| {
+            fail(format!(
+                "robot `{}` has no `kinematics:` section",
+                self.robot.name
+            ))
+        })?;
+        Legs::new(&model).map_err(|e| fail(e.to_string()))
+    }
+
+    /// Appends the keyframes of a walk from the last of `keyframes`, and
+    /// sets `current` to where it ends.
+    ///
+    /// # Errors
+    /// At the keyframe's `walk`: numbers out of range, not six legs, a
+    /// stride too short for a segment, a foot a leg cannot reach.
+    pub fn walk(
+        &mut self,
+        kp: &FieldPath,
+        index: usize,
+        raw: &RawWalk,
+        current: &mut Vec<f64>,
+        keyframes: &mut Vec<Keyframe>,
+    ) -> Result<(), ConfigError> {
+        let wp = kp.key("walk");
+        let fail = |why: String| self.src.error(&wp, format!("keyframe {index}: {why}"));
+        let positive = |field: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(self.src.error(
+                    &wp.key(field),
+                    format!("must be a positive number, got {v}"),
+                ))
+            }
+        };
+        positive("period", raw.period)?;
+        if !(raw.lift.is_finite() && raw.lift >= 0.0) {
+            return Err(self.src.error(
+                &wp.key("lift"),
+                format!("must be a height >= 0 mm, got {}", raw.lift),
+            ));
+        }
+        if let Some(stride) = raw.stride {
+            positive("stride", stride)?;
+        }
+        if raw.segments.is_empty() {
+            return Err(self
+                .src
+                .error(&wp.key("segments"), "a walk needs at least one segment"));
+        }
+        let mut segments = Vec::with_capacity(raw.segments.len());
+        for (k, s) in raw.segments.iter().enumerate() {
+            let sp = wp.key("segments").index(k);
+            positive("duration", s.duration).map_err(|_| {
+                self.src.error(
+                    &sp.key("duration"),
+                    format!("must be a positive time in s, got {}", s.duration),
+                )
+            })?;
+            if !(s.velocity.iter().all(|v| v.is_finite()) && s.turn.is_finite()) {
+                return Err(self
+                    .src
+                    .error(&sp, "velocity and turn must be finite numbers"));
+            }
+            segments.push(WalkSegment {
+                velocity_mm_s: s.velocity,
+                turn_rad_s: self.units.to_rad(s.turn),
+                duration_s: s.duration,
+            });
+        }
+        let legs = self.legs(&fail)?;
+        let walk = Walk {
+            gait: match raw.gait {
+                RawGait::Tripod => Gait::Tripod,
+                RawGait::Ripple => Gait::Ripple,
+                RawGait::Wave => Gait::Wave,
+            },
+            stride_mm: raw.stride,
+            lift_mm: raw.lift,
+            period_s: raw.period,
+            segments,
+            step_s: LEG_STEP_S,
+        };
+        let start = self.radians(current);
+        let plan = plan_walk(&legs, &walk, &start).map_err(|e| fail(e.to_string()))?;
+        self.plan_samples(plan.samples.iter().map(|s| (s.t, s.q.as_slice())))
+            .map_err(|e| {
+                fail(format!(
+                    "the legs cannot keep this gait within their limits ({e}); lengthen \
+                     `period`, lower `lift` or slow the segments down"
+                ))
+            })?;
+        let t0 = self.arrival(keyframes)?;
+        self.push_samples(
+            kp,
+            t0,
+            plan.samples.iter().map(|s| (s.t, s.q.as_slice())),
+            keyframes,
+        );
+        if let Some(last) = plan.samples.last() {
+            *current = last.q.iter().map(|&v| self.units.from_rad(v)).collect();
+        }
+        self.body = None;
+        Ok(())
+    }
+
+    /// Appends the keyframes of a body move, the feet planted, from the
+    /// last of `keyframes` (or the body pose of the `body:` keyframe before
+    /// it) to `raw`, and sets `current` to its end.
+    ///
+    /// # Errors
+    /// At the keyframe's `body`: numbers that are not finite, bad limits,
+    /// a foot a leg cannot reach from the new pose.
+    #[allow(clippy::too_many_arguments)]
+    pub fn body(
+        &mut self,
+        kp: &FieldPath,
+        index: usize,
+        raw: &RawBody,
+        at: Option<f64>,
+        limits: &MoveLimits,
+        current: &mut Vec<f64>,
+        keyframes: &mut Vec<Keyframe>,
+    ) -> Result<(), ConfigError> {
+        let bp = kp.key("body");
+        let src = self.src;
+        let fail = |why: String| src.error(&bp, format!("keyframe {index}: {why}"));
+        let numbers = raw
+            .height
+            .iter()
+            .chain(raw.shift.iter().flatten())
+            .chain(&raw.roll)
+            .chain(&raw.pitch)
+            .chain(&raw.yaw);
+        if !numbers.into_iter().all(|v| v.is_finite()) {
+            return Err(fail(
+                "height, shift, roll, pitch and yaw must be finite numbers".to_owned(),
+            ));
+        }
+        let legs = self.legs(&fail)?;
+        let start = self.radians(current);
+        let state = match self.body.take() {
+            Some(s) => s,
+            None => {
+                let mut poses = Poses::new(legs.model());
+                let mut feet = vec![Point3::origin(); legs.len()];
+                legs.feet(&start, &mut poses, &mut feet);
+                let height = -feet.iter().map(|p| p.z).sum::<f64>() / feet.len() as f64;
+                BodyState {
+                    feet,
+                    height,
+                    pose: Isometry3::identity(),
+                }
+            }
+        };
+        let shift = raw.shift.unwrap_or([0.0, 0.0]);
+        let lift = raw.height.map_or(0.0, |h| h - state.height);
+        let angle = |a: Option<f64>| self.units.to_rad(a.unwrap_or(0.0));
+        let to = Isometry3::from_parts(
+            Vector3::new(shift[0], shift[1], lift).into(),
+            UnitQuaternion::from_euler_angles(angle(raw.roll), angle(raw.pitch), angle(raw.yaw)),
+        );
+        let line = PoseLine::new(state.pose, to);
+        let t0 = self.arrival(keyframes)?;
+        let law = TimeLaw::new(line.extent_mm(), limits, at.map(|a| a - t0)).map_err(fail)?;
+        let samples = legs
+            .body_move(
+                &line,
+                &state.feet,
+                &start,
+                law.duration(),
+                |t| law.s_of_t(t),
+                LEG_STEP_S,
+            )
+            .map_err(|e| {
+                fail(format!(
+                    "at {:.2} s into the move, leg `{}`: {}",
+                    e.t,
+                    e.leg,
+                    ik_reason(&e.reason, self.units)
+                ))
+            })?;
+        self.plan_samples(samples.iter().map(|s| (s.t, s.q.as_slice())))
+            .map_err(|e| {
+                fail(format!(
+                    "the legs cannot follow this body move within their limits ({e}); lower \
+                     `max_speed` or `max_acceleration`"
+                ))
+            })?;
+        self.push_samples(
+            kp,
+            t0,
+            samples.iter().map(|s| (s.t, s.q.as_slice())),
+            keyframes,
+        );
+        if let Some(last) = samples.last() {
+            *current = last.q.iter().map(|&v| self.units.from_rad(v)).collect();
+        }
+        self.body = Some(BodyState { pose: to, ..state });
+        Ok(())
+    }
+}

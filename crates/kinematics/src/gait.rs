@@ -1,0 +1,510 @@
+//! Walking: a six-legged gait that carries the body along segments of
+//! body velocity while every stance foot stays where it was put down.
+//!
+//! ```text
+//!  leg phase   0 ........ 1-beta ................. 1
+//!              |  swing   |          stance        |
+//!              lift, swing to the next foothold; planted while the body
+//!              moves over it (beta: the duty factor of the gait)
+//! ```
+//!
+//! The body's velocity (forward, left, turn) blends smoothly from one
+//! segment to the next (a quintic step centred on each change, so the
+//! distance covered is what the segments ask). A swing foot lands where
+//! its neutral place (where it was before the walk, seen from the body)
+//! will be at the middle of its next stance, so stance feet sweep evenly
+//! about their neutral places. After the last segment every leg steps
+//! once more to its neutral place under the stopped body.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector2};
+use thiserror::Error;
+
+use crate::geometry::Poses;
+use crate::legs::{LegError, Legs, PoseSample};
+
+/// A walking gait: which legs swing together.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Gait {
+    /// Two tripods alternate: half the legs on the ground (duty 1/2).
+    Tripod,
+    /// One leg per side at a time, the sides half a cycle apart (duty 2/3).
+    Ripple,
+    /// One leg at a time, rear to front, right then left (duty 5/6).
+    Wave,
+}
+
+impl Gait {
+    /// The fraction of a step period each leg spends on the ground.
+    pub fn duty(self) -> f64 {
+        match self {
+            Gait::Tripod => 0.5,
+            Gait::Ripple => 2.0 / 3.0,
+            Gait::Wave => 5.0 / 6.0,
+        }
+    }
+
+    /// When each leg's swing starts, as a fraction of the period: legs
+    /// `[left front, left middle, left rear, right front, right middle,
+    /// right rear]`.
+    fn offsets(self) -> [f64; 6] {
+        match self {
+            Gait::Tripod => [0.0, 0.5, 0.0, 0.5, 0.0, 0.5],
+            Gait::Ripple => [2.0 / 3.0, 1.0 / 3.0, 0.0, 1.0 / 6.0, 5.0 / 6.0, 0.5],
+            Gait::Wave => [5.0 / 6.0, 4.0 / 6.0, 3.0 / 6.0, 2.0 / 6.0, 1.0 / 6.0, 0.0],
+        }
+    }
+}
+
+/// One segment of a walk: a body velocity held for a time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkSegment {
+    /// Forward and leftward speed of the body, in its own frame, mm/s.
+    pub velocity_mm_s: [f64; 2],
+    /// Turning speed, rad/s (positive: to the left).
+    pub turn_rad_s: f64,
+    /// How long, s.
+    pub duration_s: f64,
+}
+
+/// A walk: the gait and its step, and the body's velocity segments.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Walk {
+    /// Which legs swing together.
+    pub gait: Gait,
+    /// The longest a stance foot may sweep under the body, mm (`None`: as
+    /// far as the legs reach).
+    pub stride_mm: Option<f64>,
+    /// How high a swing foot rises above the ground, mm.
+    pub lift_mm: f64,
+    /// One step cycle (every leg swings once), s.
+    pub period_s: f64,
+    /// The body's velocity, segment after segment.
+    pub segments: Vec<WalkSegment>,
+    /// Samples at most this far apart in time, s.
+    pub step_s: f64,
+}
+
+/// A planned walk: joint samples and what the body and feet do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WalkPlan {
+    /// Every joint at each sample (radians, robot order), from the walk's
+    /// start.
+    pub samples: Vec<PoseSample>,
+    /// Where the body ends, in the frame it started in (x forward, y left;
+    /// mm) and how far it turned (rad).
+    pub end: [f64; 3],
+    /// The length of the body's path, mm.
+    pub distance_mm: f64,
+    /// The smallest distance from the body's centre to the edge of the
+    /// polygon of the feet on the ground, mm (negative: outside).
+    pub min_margin_mm: f64,
+    /// The start of every stretch of time the margin spends under
+    /// [`LOW_MARGIN_MM`]: the time (s) and the lowest margin (mm).
+    pub low_margins: Vec<(f64, f64)>,
+}
+
+/// The stability margin under which a walk is worth a warning, mm.
+pub const LOW_MARGIN_MM: f64 = 10.0;
+
+/// Why a walk cannot be planned.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum WalkError {
+    /// Gaits are for six legs, three a side.
+    #[error(
+        "a walk needs six legs, three on each side; this robot has {left} left and {right} right"
+    )]
+    Legs {
+        /// Feet on the left (y > 0).
+        left: usize,
+        /// Feet on the right.
+        right: usize,
+    },
+    /// A segment asks a stance foot to sweep further than the stride.
+    #[error("segment {segment} needs a stride of {needed_mm:.1} mm, more than the stride {stride_mm:.1} mm (slow it down or shorten the period)")]
+    Stride {
+        /// The segment (0-based).
+        segment: usize,
+        /// The sweep it needs, mm.
+        needed_mm: f64,
+        /// The stride allowed, mm.
+        stride_mm: f64,
+    },
+    /// A leg cannot reach where the walk puts its foot.
+    #[error(transparent)]
+    Leg(#[from] LegError),
+}
+
+/// The body's velocity over the walk, blended between segments.
+struct Profile {
+    /// Start time of each velocity change and the change (vx, vy, w).
+    steps: Vec<(f64, [f64; 3])>,
+    /// Half the width of a blend, s.
+    half: f64,
+    /// When the body has stopped, s.
+    stop: f64,
+}
+
+/// The quintic smooth step: 0 below 0, 1 above 1, zero slope and
+/// curvature at both ends.
+fn smooth(u: f64) -> f64 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
+}
+
+impl Profile {
+    fn new(segments: &[WalkSegment], period: f64) -> Self {
+        let shortest = segments
+            .iter()
+            .map(|s| s.duration_s)
+            .fold(f64::INFINITY, f64::min);
+        let half = (0.5 * period).min(0.5 * shortest);
+        let mut steps = Vec::with_capacity(segments.len() + 1);
+        let mut t = half;
+        let mut prev = [0.0; 3];
+        for s in segments {
+            let v = [s.velocity_mm_s[0], s.velocity_mm_s[1], s.turn_rad_s];
+            steps.push((t, [v[0] - prev[0], v[1] - prev[1], v[2] - prev[2]]));
+            prev = v;
+            t += s.duration_s;
+        }
+        steps.push((t, [-prev[0], -prev[1], -prev[2]]));
+        Profile {
+            steps,
+            half,
+            stop: t + half,
+        }
+    }
+
+    fn velocity(&self, t: f64) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        for (at, dv) in &self.steps {
+            let w = if self.half > 0.0 {
+                smooth((t - at + self.half) / (2.0 * self.half))
+            } else if t >= *at {
+                1.0
+            } else {
+                0.0
+            };
+            for k in 0..3 {
+                v[k] += dv[k] * w;
+            }
+        }
+        v
+    }
+}
+
+/// The body's pose over time, integrated on a fine grid.
+struct BodyPath {
+    dt: f64,
+    /// x, y, yaw at each grid point.
+    at: Vec<[f64; 3]>,
+    length: f64,
+}
+
+impl BodyPath {
+    fn new(profile: &Profile, until: f64) -> Self {
+        let dt = 0.002;
+        let n = (until / dt).ceil() as usize + 1;
+        let mut at = Vec::with_capacity(n + 1);
+        let mut p = [0.0f64; 3];
+        let mut length = 0.0;
+        at.push(p);
+        for k in 0..n {
+            // Midpoint rule: the velocity and heading half a step on.
+            let tm = (k as f64 + 0.5) * dt;
+            let v = profile.velocity(tm);
+            let yaw = p[2] + 0.5 * dt * v[2];
+            let (s, c) = yaw.sin_cos();
+            let dx = (v[0] * c - v[1] * s) * dt;
+            let dy = (v[0] * s + v[1] * c) * dt;
+            length += dx.hypot(dy);
+            p = [p[0] + dx, p[1] + dy, p[2] + v[2] * dt];
+            at.push(p);
+        }
+        BodyPath { dt, at, length }
+    }
+
+    fn pose(&self, t: f64, z: f64) -> Isometry3<f64> {
+        let x = (t / self.dt).max(0.0);
+        let k = (x.floor() as usize).min(self.at.len() - 1);
+        let k1 = (k + 1).min(self.at.len() - 1);
+        let f = (x - k as f64).clamp(0.0, 1.0);
+        let a = self.at[k];
+        let b = self.at[k1];
+        let m = |i: usize| a[i] + (b[i] - a[i]) * f;
+        Isometry3::from_parts(
+            Translation3::new(m(0), m(1), z),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, m(2)),
+        )
+    }
+}
+
+/// One swing of one leg: from `from` to `to` (ground frame) over
+/// `[t0, t1]`.
+#[derive(Clone, Copy)]
+struct Swing {
+    t0: f64,
+    t1: f64,
+    from: Point3<f64>,
+    to: Point3<f64>,
+}
+
+/// Plans `walk` for `legs` from joint angles `start` (radians, robot
+/// order): the feet start where `start` puts them, on the ground.
+///
+/// # Errors
+/// [`WalkError`]: not six legs three a side, a segment whose stance sweep
+/// is longer than the stride, or a leg that cannot reach (with the time).
+pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, WalkError> {
+    let mut poses = Poses::new(legs.model());
+    let mut neutral = vec![Point3::origin(); legs.len()];
+    legs.feet(start, &mut poses, &mut neutral);
+    let order = side_order(&neutral)?;
+    let beta = walk.gait.duty();
+    let period = walk.period_s;
+    check_stride(walk, &neutral, beta)?;
+    // The body stays at its height: the feet's ground is where they are.
+    let profile = Profile::new(&walk.segments, period);
+    let offsets = walk.gait.offsets();
+    // Each leg's swings: windows of its phase that start at or after 0,
+    // until one lands where the stopped body wants the foot.
+    let settle = profile.stop - 0.5 * beta * period;
+    let mut swings: Vec<Vec<(f64, f64)>> = vec![Vec::new(); legs.len()];
+    let mut end = profile.stop;
+    for (slot, &leg) in order.iter().enumerate() {
+        let mut m = 0usize;
+        loop {
+            let t0 = (offsets[slot] + m as f64) * period;
+            let t1 = t0 + (1.0 - beta) * period;
+            swings[leg].push((t0, t1));
+            m += 1;
+            if t1 >= settle {
+                end = end.max(t1);
+                break;
+            }
+        }
+    }
+    let body = BodyPath::new(&profile, end + period);
+    let mut planted = neutral.clone();
+    let mut plans: Vec<Vec<Swing>> = Vec::with_capacity(legs.len());
+    for (leg, windows) in swings.iter().enumerate() {
+        let mut list = Vec::with_capacity(windows.len());
+        for &(t0, t1) in windows {
+            let mid = t1 + 0.5 * beta * period;
+            let to = body.pose(mid, 0.0) * neutral[leg];
+            // A foot already where it should land stays down.
+            if (to - planted[leg]).norm() > 0.5 {
+                list.push(Swing {
+                    t0,
+                    t1,
+                    from: planted[leg],
+                    to,
+                });
+                planted[leg] = to;
+            }
+        }
+        plans.push(list);
+    }
+    let steps = (end / walk.step_s).ceil().max(1.0) as usize;
+    let mut q = start.to_vec();
+    let mut samples = Vec::with_capacity(steps + 1);
+    let mut feet = neutral.clone();
+    let mut margin = Margins::default();
+    for k in 0..=steps {
+        let t = end * k as f64 / steps as f64;
+        let mut on_ground = Vec::with_capacity(legs.len());
+        for (leg, list) in plans.iter().enumerate() {
+            let (p, down) = foot_at(list, &neutral[leg], t, walk.lift_mm);
+            feet[leg] = p;
+            if down {
+                on_ground.push(Vector2::new(p.x, p.y));
+            }
+        }
+        let pose = body.pose(t, 0.0);
+        margin.add(t, support_margin(&on_ground, &pose));
+        legs.place_from(&pose, &feet, t, &mut q)?;
+        samples.push(PoseSample { t, q: q.clone() });
+    }
+    let last = body.pose(end, 0.0);
+    Ok(WalkPlan {
+        samples,
+        end: [
+            last.translation.x,
+            last.translation.y,
+            last.rotation.euler_angles().2,
+        ],
+        distance_mm: body.length,
+        min_margin_mm: margin.min,
+        low_margins: margin.low,
+    })
+}
+
+/// Where a foot with swings `list` is at `t`, and whether it is down.
+fn foot_at(list: &[Swing], start: &Point3<f64>, t: f64, lift: f64) -> (Point3<f64>, bool) {
+    let mut p = *start;
+    for s in list {
+        if t >= s.t1 {
+            p = s.to;
+        } else if t > s.t0 {
+            let u = (t - s.t0) / (s.t1 - s.t0);
+            let h = smooth(u);
+            let mut at = s.from + (s.to - s.from) * h;
+            // 64 u^3 (1-u)^3 rises to 1 at the middle, flat at both ends.
+            at.z += lift * 64.0 * (u * (1.0 - u)).powi(3);
+            return (at, false);
+        } else {
+            break;
+        }
+    }
+    (p, true)
+}
+
+/// The legs as `[left front, middle, rear, right front, middle, rear]`
+/// (indices into `feet`), from where the feet are.
+fn side_order(feet: &[Point3<f64>]) -> Result<[usize; 6], WalkError> {
+    let mut left: Vec<usize> = (0..feet.len()).filter(|&i| feet[i].y > 0.0).collect();
+    let mut right: Vec<usize> = (0..feet.len()).filter(|&i| feet[i].y <= 0.0).collect();
+    if left.len() != 3 || right.len() != 3 {
+        return Err(WalkError::Legs {
+            left: left.len(),
+            right: right.len(),
+        });
+    }
+    left.sort_by(|&a, &b| feet[b].x.total_cmp(&feet[a].x));
+    right.sort_by(|&a, &b| feet[b].x.total_cmp(&feet[a].x));
+    Ok([left[0], left[1], left[2], right[0], right[1], right[2]])
+}
+
+/// Refuses a segment whose stance sweep exceeds the walk's stride.
+fn check_stride(walk: &Walk, neutral: &[Point3<f64>], beta: f64) -> Result<(), WalkError> {
+    let Some(stride) = walk.stride_mm else {
+        return Ok(());
+    };
+    for (i, s) in walk.segments.iter().enumerate() {
+        let needed = neutral
+            .iter()
+            .map(|p| {
+                let vx = s.velocity_mm_s[0] - s.turn_rad_s * p.y;
+                let vy = s.velocity_mm_s[1] + s.turn_rad_s * p.x;
+                vx.hypot(vy) * beta * walk.period_s
+            })
+            .fold(0.0, f64::max);
+        if needed > stride + 1e-9 {
+            return Err(WalkError::Stride {
+                segment: i,
+                needed_mm: needed,
+                stride_mm: stride,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The lowest margin, and the dips under [`LOW_MARGIN_MM`].
+struct Margins {
+    min: f64,
+    low: Vec<(f64, f64)>,
+    in_dip: bool,
+}
+
+impl Default for Margins {
+    fn default() -> Self {
+        Margins {
+            min: f64::INFINITY,
+            low: Vec::new(),
+            in_dip: false,
+        }
+    }
+}
+
+impl Margins {
+    fn add(&mut self, t: f64, m: f64) {
+        self.min = self.min.min(m);
+        if m < LOW_MARGIN_MM {
+            match (self.in_dip, self.low.last_mut()) {
+                (true, Some(last)) => last.1 = last.1.min(m),
+                _ => self.low.push((t, m)),
+            }
+            self.in_dip = true;
+        } else {
+            self.in_dip = false;
+        }
+    }
+}
+
+/// The stability margin: the signed distance (mm) from the body's centre
+/// (`body`'s origin) to the nearest edge of the convex hull of the feet on
+/// the ground `feet` (x, y, in the same frame as `body`): positive inside;
+/// minus infinity with fewer than three feet down.
+pub fn support_margin(feet: &[Vector2<f64>], body: &Isometry3<f64>) -> f64 {
+    if feet.len() < 3 {
+        return f64::NEG_INFINITY;
+    }
+    let c = Vector2::new(body.translation.x, body.translation.y);
+    let hull = convex_hull(feet);
+    if hull.len() < 3 {
+        return f64::NEG_INFINITY;
+    }
+    let mut margin = f64::INFINITY;
+    for k in 0..hull.len() {
+        let a = hull[k];
+        let b = hull[(k + 1) % hull.len()];
+        let e = b - a;
+        let len = e.norm();
+        if len <= 0.0 {
+            continue;
+        }
+        // Counter-clockwise hull: the inside is to the left of each edge.
+        let d = (e.x * (c.y - a.y) - e.y * (c.x - a.x)) / len;
+        margin = margin.min(d);
+    }
+    margin
+}
+
+/// The planar move (a turn about z, rad, then a shift, mm) that takes the
+/// points `a` onto the points `b` (x, y; the same points seen twice) in
+/// the least-squares sense. Seen from a body, feet planted on the ground
+/// move by the inverse of the body's move: with `a` the feet now and `b`
+/// the feet before, it is the body's move, in its frame before.
+pub fn planar_motion(a: &[Vector2<f64>], b: &[Vector2<f64>]) -> (f64, Vector2<f64>) {
+    let n = a.len().min(b.len()).max(1) as f64;
+    let ca = a.iter().sum::<Vector2<f64>>() / n;
+    let cb = b.iter().sum::<Vector2<f64>>() / n;
+    let (mut dot, mut cross) = (0.0f64, 0.0f64);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = (p - ca, q - cb);
+        dot += p.dot(&q);
+        cross += p.x * q.y - p.y * q.x;
+    }
+    let angle = cross.atan2(dot);
+    let (s, c) = angle.sin_cos();
+    let turned = Vector2::new(c * ca.x - s * ca.y, s * ca.x + c * ca.y);
+    (angle, cb - turned)
+}
+
+/// The convex hull of `points`, counter-clockwise (Andrew's monotone
+/// chain).
+fn convex_hull(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    let cross = |o: Vector2<f64>, a: Vector2<f64>, b: Vector2<f64>| {
+        (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x)
+    };
+    let mut hull: Vec<Vector2<f64>> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        for &q in &p {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+        if pass == 0 {
+            p.reverse();
+        }
+    }
+    hull
+}

@@ -1,0 +1,85 @@
+//! `plan --plot`'s views of a motion in space: the tool's path, or every
+//! foot's, seen from above (x, y) and from the side (x, z), in mm.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use servobus_runtime::config::SpatialSummary;
+
+/// Named paths of points (mm, x y z): the tool, or each foot.
+pub(super) type Paths = Vec<(String, Vec<[f64; 3]>)>;
+
+/// The paths a summary has: the tool's, else the feet's.
+pub(super) fn paths(summary: Option<&SpatialSummary>) -> Paths {
+    let Some(s) = summary else {
+        return Vec::new();
+    };
+    if let Some(tool) = &s.tool {
+        return vec![("tool".to_owned(), tool.path.clone())];
+    }
+    s.feet
+        .as_ref()
+        .map(|f| {
+            f.paths
+                .iter()
+                .map(|(leg, p)| (format!("foot_{leg}"), p.clone()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Draws the top and side views of `paths` side by side in `area`.
+pub(super) fn draw<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    paths: &Paths,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (w, _) = area.dim_in_pixel();
+    let (left, right) = area.split_horizontally(w / 2);
+    for (view, (a, b), names) in [
+        (&left, (0usize, 1usize), ("from above", "x (mm)", "y (mm)")),
+        (&right, (0, 2), ("from the side", "x (mm)", "z (mm)")),
+    ] {
+        let range = |k: usize| {
+            let (lo, hi) = paths
+                .iter()
+                .flat_map(|(_, p)| p.iter().map(move |v| v[k]))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            let pad = ((hi - lo) * 0.05).max(1.0);
+            (lo - pad)..(hi + pad)
+        };
+        let mut chart = ChartBuilder::on(view)
+            .caption(format!("Path in space, {}", names.0), ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(range(a), range(b))?;
+        chart
+            .configure_mesh()
+            .x_desc(names.1)
+            .y_desc(names.2)
+            .draw()?;
+        for (i, (name, points)) in paths.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().map(|p| (p[a], p[b])),
+                    color.stroke_width(2),
+                ))?
+                .label(name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    Ok(())
+}

@@ -1,0 +1,105 @@
+"""The robot API: plan, play on the simulator, and a scripted live stream."""
+
+import time
+
+import numpy as np
+import pytest
+
+import servobus
+
+JOINTS = ["shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex", "wrist_roll", "gripper"]
+
+
+def test_a_robot_opens_by_built_in_name():
+    robot = servobus.Robot("so101")
+    assert robot.joints == JOINTS
+    assert robot.units == "deg"
+    assert robot.port is None
+
+
+def test_a_plan_gives_timing_and_peaks_within_the_limits():
+    plan = servobus.Robot("so101").plan("arm-wave")
+    assert plan.duration_s > 1.0
+    pan = plan.joints[0]
+    assert pan.name == "shoulder_pan"
+    # arm-wave moves shoulder_pan from 0 deg to 20 deg and back.
+    assert pan.min_position == pytest.approx(0.0, abs=1e-6)
+    assert pan.max_position == pytest.approx(20.0, abs=1e-6)
+    # The robot file limits shoulder_pan to 180 deg/s and 900 deg/s^2.
+    assert 0 < pan.peak_velocity <= 180.0 + 1e-6
+    assert pan.peak_acceleration <= 900.0 + 1e-6
+    assert plan.segments[-1].end == pytest.approx(plan.duration_s)
+
+
+def test_play_on_the_simulator_returns_a_typed_report_with_arrays():
+    calls = []
+    report = servobus.Robot("so101").play("arm-wave", on_progress=lambda t, d: calls.append((t, d)))
+    assert report.finish == "completed"
+    assert report.joint_names == JOINTS
+    n = len(report.time)
+    assert n == report.cycles
+    assert report.measured.shape == (n, 6)
+    assert report.planned.shape == (n, 6)
+    assert np.all(np.diff(report.time) > 0)
+    # arm-wave ends at rest: 0, -90, 90, 45, 0, 10 deg.
+    assert np.allclose(report.measured[-1], [0, -90, 90, 45, 0, 10], atol=1.0)
+    assert report.worst_rms_error < 5.0
+    assert [j.name for j in report.joints] == JOINTS
+    assert report.units == "deg"
+    assert calls, "on_progress was called"
+
+
+def test_an_exception_in_on_progress_stops_the_run_and_propagates():
+    def boom(t, duration):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        servobus.Robot("so101").play("arm-wave", on_progress=boom)
+
+
+def test_a_robot_file_with_an_error_names_line_and_column():
+    text = "name: broken\nunits: deg\nbuses: 12\n"
+    with pytest.raises(servobus.ConfigError) as caught:
+        servobus.Robot(text)
+    assert caught.value.line == 3
+    assert isinstance(caught.value.column, int)
+
+
+def test_a_missing_robot_file_is_a_config_error():
+    with pytest.raises(servobus.ConfigError) as caught:
+        servobus.Robot("/nonexistent/robot.yaml")
+    assert caught.value.file == "/nonexistent/robot.yaml"
+
+
+def test_a_scripted_stream_moves_the_arm_to_the_targets():
+    robot = servobus.Robot("so101")
+    sent = 0
+    with robot.stream(timeout=0.5) as stream:
+        # 1.5 s of targets at 50 Hz: shoulder_pan to 30 deg, elbow to 60.
+        for _ in range(75):
+            stream.send({"shoulder_pan": 30.0, "elbow_flex": 60.0})
+            sent += 1
+            time.sleep(0.02)
+        state = robot.state()
+    assert state.joints == JOINTS
+    assert state["shoulder_pan"] == pytest.approx(30.0, abs=1.0)
+    assert state["elbow_flex"] == pytest.approx(60.0, abs=1.0)
+    # Joints not named hold where they rested.
+    assert state["shoulder_lift"] == pytest.approx(-90.0, abs=1.0)
+    assert state.faults == []
+    report = stream.report
+    assert report.finish == "stopped"
+    assert report.raw["live"]["received"] == sent
+    assert stream.finished
+
+
+def test_a_stream_refuses_an_unknown_joint():
+    with servobus.Robot("so101").stream() as stream:
+        with pytest.raises(servobus.UsageError):
+            stream.send({"no_such_joint": 1.0})
+
+
+def test_a_target_beyond_the_limits_is_clamped_and_counted():
+    with servobus.Robot("so101").stream() as stream:
+        # shoulder_pan is limited to +-110 deg.
+        assert stream.send({"shoulder_pan": 500.0}) == 1

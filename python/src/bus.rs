@@ -35,6 +35,10 @@ macro_rules! on_bus {
     };
 }
 
+/// A SYNC READ as Python gets it: `(id, value or None)` per servo asked,
+/// and `(id, why, attempts)` per servo missing.
+type SyncReadLists = (Vec<(u8, Option<i32>)>, Vec<(u8, String, u8)>);
+
 /// The highest ID a servo can have.
 const MAX_ID: u8 = 253;
 
@@ -73,7 +77,10 @@ fn series_name(series: Series) -> &'static str {
 /// The register `name` of `series`.
 fn register(series: Series, name: &str) -> Outcome<&'static Register> {
     series.map().get(name).ok_or_else(|| {
-        Failure::usage(format!("no register named `{name}` on {} servos", series_name(series)))
+        Failure::usage(format!(
+            "no register named `{name}` on {} servos",
+            series_name(series)
+        ))
     })
 }
 
@@ -88,7 +95,10 @@ fn servo_id(id: i64) -> Outcome<u8> {
 /// A register value from Python.
 fn value_of(value: i64) -> Outcome<i32> {
     i32::try_from(value).map_err(|_| {
-        Failure::new("LimitError", format!("value {value} does not fit any register"))
+        Failure::new(
+            "LimitError",
+            format!("value {value} does not fit any register"),
+        )
     })
 }
 
@@ -125,7 +135,8 @@ impl Bus {
             )))?,
             None => None,
         };
-        let bus = py.allow_threads(|| open_plain_bus(&port, baud, series, latency))
+        let bus = py
+            .allow_threads(|| open_plain_bus(&port, baud, series, latency))
             .map_err(Failure::from)?;
         Ok(Bus {
             inner: Mutex::new(Some(AnyBus::Serial(bus))),
@@ -222,10 +233,12 @@ impl Bus {
         let reg = self::register(self.series, register)?;
         let value = value_of(value)?;
         Ok(py.allow_threads(|| {
-            self.with(|bus| on_bus!(bus, b => {
-                b.write_register(id, reg, value)?;
-                Ok(())
-            }))
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.write_register(id, reg, value)?;
+                    Ok(())
+                })
+            })
         })?)
     }
 
@@ -233,34 +246,31 @@ impl Bus {
     /// of `(id, value or None)` in the order of `ids`, and a list of
     /// `(id, why, attempts)` for the servos that did not answer. A missing
     /// servo never costs the others' values.
-    fn sync_read(
-        &self,
-        py: Python<'_>,
-        register: &str,
-        ids: Vec<i64>,
-    ) -> PyResult<(Vec<(u8, Option<i32>)>, Vec<(u8, String, u8)>)> {
+    fn sync_read(&self, py: Python<'_>, register: &str, ids: Vec<i64>) -> PyResult<SyncReadLists> {
         let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
         let reg = self::register(self.series, register)?;
         let order = self.series.byte_order();
         Ok(py.allow_threads(|| {
-            self.with(|bus| on_bus!(bus, b => {
-                let read = b.sync_read(reg.address, reg.size, &ids)?;
-                let mut values = Vec::with_capacity(ids.len());
-                let mut missing = Vec::new();
-                for result in read.iter() {
-                    match result {
-                        Ok(reply) => {
-                            let value = reg.decode(reply.data, order).ok();
-                            values.push((reply.id, value));
-                        }
-                        Err(m) => {
-                            values.push((m.id, None));
-                            missing.push((m.id, m.reason.to_string(), m.attempts));
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    let read = b.sync_read(reg.address, reg.size, &ids)?;
+                    let mut values = Vec::with_capacity(ids.len());
+                    let mut missing = Vec::new();
+                    for result in read.iter() {
+                        match result {
+                            Ok(reply) => {
+                                let value = reg.decode(reply.data, order).ok();
+                                values.push((reply.id, value));
+                            }
+                            Err(m) => {
+                                values.push((m.id, None));
+                                missing.push((m.id, m.reason.to_string(), m.attempts));
+                            }
                         }
                     }
-                }
-                Ok((values, missing))
-            }))
+                    Ok((values, missing))
+                })
+            })
         })?)
     }
 
@@ -284,10 +294,12 @@ impl Bus {
             return Ok(());
         }
         Ok(py.allow_threads(|| {
-            self.with(|bus| on_bus!(bus, b => {
-                b.sync_write(reg.address, &ids, &data)?;
-                Ok(())
-            }))
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.sync_write(reg.address, &ids, &data)?;
+                    Ok(())
+                })
+            })
         })?)
     }
 

@@ -73,7 +73,13 @@ impl Samples {
 }
 
 /// A run's report (JSON text) and its samples.
-type Played = (String, Vec<f64>, Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>);
+type Played = (
+    String,
+    Vec<f64>,
+    Vec<Vec<f64>>,
+    Vec<Vec<f64>>,
+    Vec<Vec<f64>>,
+);
 
 impl Robot {
     /// The motion `motion`: a motion file or a built-in name.
@@ -125,7 +131,11 @@ impl Robot {
     /// Its joints' names, in the robot file's order.
     #[getter]
     fn joints(&self) -> Vec<String> {
-        self.robot.config().joints().map(|j| j.name.clone()).collect()
+        self.robot
+            .config()
+            .joints()
+            .map(|j| j.name.clone())
+            .collect()
     }
 
     /// The unit of its angles: `"deg"` or `"rad"`.
@@ -231,12 +241,10 @@ impl Robot {
                 Ok(_) | Err(RecvTimeoutError::Timeout) => {}
             }
             if interrupted.is_none() {
-                let checked = py
-                    .check_signals()
-                    .and_then(|()| match &on_progress {
-                        Some(cb) => progress(py, cb, last_t, duration),
-                        None => Ok(()),
-                    });
+                let checked = py.check_signals().and_then(|()| match &on_progress {
+                    Some(cb) => progress(py, cb, last_t, duration),
+                    None => Ok(()),
+                });
                 if let Err(e) = checked {
                     // A jerk-limited stop; the run ends after it.
                     let _ = run.stop();

@@ -28,7 +28,15 @@ struct State {
 
 /// The state of the joints as Python gets it: `(time, position, velocity,
 /// error, commanded, status flags, faults so far)`.
-type StateTuple = (f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<u16>, Vec<String>);
+type StateTuple = (
+    f64,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<u16>,
+    Vec<String>,
+);
 
 /// A live run of a robot, fed targets from Python.
 #[pyclass(module = "servobus._native", name = "Stream")]
@@ -187,9 +195,7 @@ impl Stream {
         let sent = py.allow_threads(|| self.targets.send(Target::named(stamp, joints)));
         match sent {
             Ok(clamped) => Ok(clamped),
-            Err(TargetError::Ended) => {
-                Err(Failure::new("Error", "the stream has ended").into())
-            }
+            Err(TargetError::Ended) => Err(Failure::new("Error", "the stream has ended").into()),
             Err(e) => Err(Failure::usage(chain(&e)).into()),
         }
     }
@@ -200,7 +206,15 @@ impl Stream {
         let s = self.state.lock().map_err(poisoned)?.clone();
         // Numbers for Python: a list of u8 would become bytes.
         let flags = s.flags.into_iter().map(u16::from).collect();
-        Ok((s.time, s.position, s.velocity, s.error, s.commanded, flags, s.faults))
+        Ok((
+            s.time,
+            s.position,
+            s.velocity,
+            s.error,
+            s.commanded,
+            flags,
+            s.faults,
+        ))
     }
 
     /// Whether the run has ended (a stop, torque off or a fault).

@@ -103,3 +103,13 @@ def test_a_target_beyond_the_limits_is_clamped_and_counted():
     with servobus.Robot("so101").stream() as stream:
         # shoulder_pan is limited to +-110 deg.
         assert stream.send({"shoulder_pan": 500.0}) == 1
+
+
+def test_play_on_a_sim_pty_goes_through_the_port_in_real_time(sim):
+    robot = servobus.Robot("so101", port=sim.port)
+    assert robot.port == sim.port
+    report = robot.play("arm-wave")
+    assert report.finish == "completed"
+    # Through a port the run takes the motion's own time, not less.
+    assert report.duration_s >= servobus.Robot("so101").plan("arm-wave").duration_s
+    assert np.allclose(report.measured[-1], [0, -90, 90, 45, 0, 10], atol=1.0)

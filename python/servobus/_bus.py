@@ -98,7 +98,8 @@ class Bus:
         self._bus.write(id, register, int(value))
 
     def sync_read(self, register: str, ids: Iterable[int]) -> SyncRead:
-        """Reads ``register`` of every servo in ``ids`` with one SYNC READ.
+        """Reads ``register`` of every servo in ``ids`` with one SYNC READ
+        (the servos missing from it are asked once more).
 
         Returns a :class:`SyncRead`: ID to value, None for a servo that did
         not answer, and ``.missing`` saying which and why.

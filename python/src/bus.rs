@@ -242,8 +242,9 @@ impl Bus {
         })?)
     }
 
-    /// Reads `register` of every servo in `ids` with one SYNC READ: a list
-    /// of `(id, value or None)` in the order of `ids`, and a list of
+    /// Reads `register` of every servo in `ids` with one SYNC READ (and
+    /// one more for the servos missing from it, as a READ is retried): a
+    /// list of `(id, value or None)` in the order of `ids`, and a list of
     /// `(id, why, attempts)` for the servos that did not answer. A missing
     /// servo never costs the others' values.
     fn sync_read(&self, py: Python<'_>, register: &str, ids: Vec<i64>) -> PyResult<SyncReadLists> {
@@ -253,7 +254,9 @@ impl Bus {
         Ok(py.allow_threads(|| {
             self.with(|bus| {
                 on_bus!(bus, b => {
-                    let read = b.sync_read(reg.address, reg.size, &ids)?;
+                    // Servos missing from the first round are asked again, as
+                // many times as a READ is retried.
+                let read = b.sync_read_within(reg.address, reg.size, &ids, Duration::MAX)?;
                     let mut values = Vec::with_capacity(ids.len());
                     let mut missing = Vec::new();
                     for result in read.iter() {

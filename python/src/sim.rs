@@ -101,14 +101,19 @@ fn start(
     let port = server.client_path().display().to_string();
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
+    let (ready, started) = crossbeam_channel::bounded(1);
     let thread = std::thread::Builder::new()
         .name("servobus-sim".into())
         .spawn(move || {
+            let _ = ready.send(());
             let served = server.serve(&flag).map_err(|e| chain(&e));
             server.settle();
             served
         })
         .map_err(|e| Failure::new("Error", format!("cannot start the simulator's thread: {e}")))?;
+    // A client's first request is answered in time only once the thread
+    // serves: wait for it to start (a thread that died says so at close).
+    let _ = started.recv_timeout(std::time::Duration::from_secs(5));
     Ok((
         port,
         count,

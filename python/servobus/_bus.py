@@ -112,6 +112,26 @@ class Bus:
         ``values`` maps each servo's ID to its value."""
         self._bus.sync_write(register, [(int(k), int(v)) for k, v in values.items()])
 
+    def read_raw(self, id: int, address: int, length: int) -> int:
+        """``length`` (1, 2 or 4) bytes at ``address`` of servo ``id`` as one
+        unsigned number in the bus's byte order (for control tables of
+        your own)."""
+        return self._bus.read_raw(id, address, length)[0]
+
+    def write_raw(self, id: int, address: int, length: int, value: int) -> None:
+        """Writes the unsigned ``value`` as ``length`` bytes at ``address``
+        of servo ``id`` (a plain WRITE)."""
+        self._bus.write_raw(id, address, length, int(value))
+
+    def sync_read_raw(self, address: int, length: int, ids: Iterable[int]) -> SyncRead:
+        """As :meth:`sync_read`, by address and length: unsigned numbers."""
+        values, missing = self._bus.sync_read_raw(address, length, list(ids))
+        return SyncRead(values, [Missing(*m) for m in missing])
+
+    def sync_write_raw(self, address: int, length: int, values: Mapping[int, int]) -> None:
+        """As :meth:`sync_write`, by address and length: unsigned numbers."""
+        self._bus.sync_write_raw(address, length, [(int(k), int(v)) for k, v in values.items()])
+
     def close(self) -> None:
         """Closes the bus; later calls raise :class:`servobus.Error`."""
         self._bus.close()

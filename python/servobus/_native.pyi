@@ -31,6 +31,16 @@ class Bus:
         """``(id, value or None)`` per servo, and ``(id, why, attempts)`` per missing one."""
     def sync_write(self, register: str, values: List[Tuple[int, int]]) -> None:
         """One SYNC WRITE of ``(id, value)`` pairs."""
+    def read_raw(self, id: int, address: int, length: int) -> Tuple[int, int]:
+        """``(unsigned value, status flags)`` of ``length`` bytes at ``address``."""
+    def write_raw(self, id: int, address: int, length: int, value: int) -> Optional[int]:
+        """A plain WRITE of ``length`` bytes; the reply's status flags."""
+    def sync_read_raw(
+        self, address: int, length: int, ids: List[int]
+    ) -> Tuple[List[Tuple[int, Optional[int]]], List[Tuple[int, str, int]]]:
+        """As ``sync_read``, by address and length."""
+    def sync_write_raw(self, address: int, length: int, values: List[Tuple[int, int]]) -> None:
+        """As ``sync_write``, by address and length."""
     def close(self) -> None:
         """Closes the bus."""
     def __enter__(self) -> "Bus": ...

@@ -5,13 +5,13 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use pyo3::prelude::*;
-use servobus_driver::registers::Register;
+use servobus_driver::registers::{read_uint, write_uint, Register};
 use servobus_driver::{Bus as DriverBus, Series, SystemClock};
 use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
 use servobus_runtime::sim::SimRobot;
 use servobus_sim::WallBus;
 
-use crate::errors::{poisoned, Failure, Outcome};
+use crate::errors::{poisoned, Failure, Field, Outcome};
 use crate::load::load_robot;
 
 /// The in-process simulator's bus, paced by the wall clock.
@@ -38,6 +38,40 @@ macro_rules! on_bus {
 /// A SYNC READ as Python gets it: `(id, value or None)` per servo asked,
 /// and `(id, why, attempts)` per servo missing.
 type SyncReadLists = (Vec<(u8, Option<i32>)>, Vec<(u8, String, u8)>);
+
+/// A raw SYNC READ as Python gets it (unsigned numbers).
+type RawSyncReadLists = (Vec<(u8, Option<u32>)>, Vec<(u8, String, u8)>);
+
+/// A raw access's length: 1, 2 or 4 bytes.
+fn raw_length(length: usize) -> Outcome<usize> {
+    match length {
+        1 | 2 | 4 => Ok(length),
+        _ => Err(Failure::usage(format!(
+            "length {length}: give 1, 2 or 4 bytes"
+        ))),
+    }
+}
+
+/// `value` as `length` bytes in the byte order of `series`.
+fn raw_bytes(value: u32, length: usize, series: Series) -> Outcome<Vec<u8>> {
+    let max = if length == 4 {
+        u32::MAX
+    } else {
+        (1u32 << (8 * length)) - 1
+    };
+    if value > max {
+        return Err(Failure::new(
+            "LimitError",
+            format!("value {value} does not fit {length} byte(s)"),
+        )
+        .with("value", Field::Float(f64::from(value)))
+        .with("min", Field::Float(0.0))
+        .with("max", Field::Float(f64::from(max))));
+    }
+    let mut bytes = vec![0u8; length];
+    write_uint(value, series.byte_order(), &mut bytes);
+    Ok(bytes)
+}
 
 /// The highest ID a servo can have.
 const MAX_ID: u8 = 253;
@@ -300,6 +334,104 @@ impl Bus {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     b.sync_write(reg.address, &ids, &data)?;
+                    Ok(())
+                })
+            })
+        })?)
+    }
+
+    /// Reads `length` (1, 2 or 4) bytes at `address` of servo `id` as one
+    /// unsigned number in the bus's byte order, for clients with control
+    /// tables of their own (LeRobot): `(value, status flags)`.
+    fn read_raw(&self, py: Python<'_>, id: i64, address: u8, length: usize) -> PyResult<(u32, u8)> {
+        let id = servo_id(id)?;
+        let length = raw_length(length)?;
+        let order = self.series.byte_order();
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    let mut buf = [0u8; 4];
+                    let flags = b.read(id, address, &mut buf[..length])?;
+                    Ok((read_uint(&buf[..length], order), flags.0))
+                })
+            })
+        })?)
+    }
+
+    /// Writes `value` as `length` (1, 2 or 4) bytes at `address` of servo
+    /// `id` with a plain WRITE: the reply's status flags, or None when the
+    /// servo sends none.
+    fn write_raw(
+        &self,
+        py: Python<'_>,
+        id: i64,
+        address: u8,
+        length: usize,
+        value: u32,
+    ) -> PyResult<Option<u8>> {
+        let id = servo_id(id)?;
+        let bytes = raw_bytes(value, raw_length(length)?, self.series)?;
+        Ok(py.allow_threads(|| {
+            self.with(|bus| on_bus!(bus, b => Ok(b.write(id, address, &bytes)?.map(|f| f.0))))
+        })?)
+    }
+
+    /// As `sync_read`, by address and length (1, 2 or 4) instead of a
+    /// register name: unsigned numbers in the bus's byte order.
+    fn sync_read_raw(
+        &self,
+        py: Python<'_>,
+        address: u8,
+        length: usize,
+        ids: Vec<i64>,
+    ) -> PyResult<RawSyncReadLists> {
+        let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
+        let length = raw_length(length)?;
+        let order = self.series.byte_order();
+        Ok(py.allow_threads(|| {
+            self.with(|bus| on_bus!(bus, b => {
+                // The length is 1, 2 or 4: it fits a byte.
+                let len = length as u8;
+                let read = b.sync_read_within(address, len, &ids, Duration::MAX)?;
+                let mut values = Vec::with_capacity(ids.len());
+                let mut missing = Vec::new();
+                for result in read.iter() {
+                    match result {
+                        Ok(reply) => values.push((reply.id, Some(read_uint(reply.data, order)))),
+                        Err(m) => {
+                            values.push((m.id, None));
+                            missing.push((m.id, m.reason.to_string(), m.attempts));
+                        }
+                    }
+                }
+                Ok((values, missing))
+            }))
+        })?)
+    }
+
+    /// As `sync_write`, by address and length (1, 2 or 4): `values` are
+    /// `(id, unsigned number)` pairs.
+    fn sync_write_raw(
+        &self,
+        py: Python<'_>,
+        address: u8,
+        length: usize,
+        values: Vec<(i64, u32)>,
+    ) -> PyResult<()> {
+        let length = raw_length(length)?;
+        let mut ids = Vec::with_capacity(values.len());
+        let mut data = Vec::with_capacity(values.len() * length);
+        for (id, value) in values {
+            ids.push(servo_id(id)?);
+            data.extend_from_slice(&raw_bytes(value, length, self.series)?);
+        }
+        if ids.is_empty() {
+            return Ok(());
+        }
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.sync_write(address, &ids, &data)?;
                     Ok(())
                 })
             })

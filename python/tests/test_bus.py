@@ -136,3 +136,17 @@ def test_the_sim_stops_at_the_end_of_its_block():
         assert sim.running
         assert sim.servo_count == 6
     assert not sim.running
+
+
+def test_raw_access_by_address_matches_the_named_registers(bus):
+    # present_position is 2 bytes at address 56; shoulder_pan rests at 2048.
+    assert bus.read_raw(1, 56, 2) == bus.read(1, "present_position")
+    bus.write_raw(2, 42, 2, 1500)  # goal_position
+    assert bus.read(2, "goal_position") == 1500
+    bus.sync_write_raw(42, 2, {1: 2100, 3: 2900})
+    result = bus.sync_read_raw(42, 2, [1, 3])
+    assert dict(result) == {1: 2100, 3: 2900}
+    with pytest.raises(servobus.LimitError):
+        bus.write_raw(1, 42, 2, 70000)
+    with pytest.raises(servobus.UsageError):
+        bus.read_raw(1, 56, 3)

@@ -45,16 +45,42 @@ say "cargo fmt --check and cargo clippy -D warnings in python/"
 (cd python && cargo fmt -- --check && cargo clippy --quiet --all-targets -- -D warnings)
 # maturin's build hook runs the `maturin` command of the venv.
 export PATH="$venv/bin:$PATH"
-# The pinned maturin of the venv builds the package (no isolated build
-# environment to download every run).
+# The pinned maturin of the venv builds the package once, as a wheel (no
+# isolated build environment to download every run) ...
+wheels=$(mktemp -d)
+trap 'rm -rf "$wheels"' EXIT
 say "pip install ./python (target directory $CARGO_TARGET_DIR)"
-if ! "$venv/bin/pip" install -q --disable-pip-version-check --no-build-isolation \
-    --force-reinstall --no-deps ./python >"$venv/install.log" 2>&1; then
+if ! "$venv/bin/pip" wheel -q --disable-pip-version-check --no-build-isolation --no-deps \
+    -w "$wheels" ./python >"$venv/install.log" 2>&1 ||
+    ! "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps \
+        "$wheels"/servobus-*.whl >>"$venv/install.log" 2>&1; then
     cat "$venv/install.log" >&2
     say "FAIL the Python package did not build"
     exit 1
 fi
-# Run from the tests' directory so that `import servobus` is the installed
-# package, not the source tree.
-cd python/tests
-exec "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@" .
+
+# ... and the pytest suite runs from the tests' directory, so that
+# `import servobus` is the installed package, not the source tree.
+(cd python/tests && "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@" .)
+
+# LeRobot's SO-101 follower code path with the so101_servobus robot type, in
+# the pinned LeRobot venv of scripts/python_clients.sh (its Python is given
+# by SERVOBUS_LEROBOT_PYTHON, which `eval "$(scripts/python_clients.sh)"`
+# sets): the same wheel and the pure-Python lerobot_robot_servobus into it.
+lerobot=${SERVOBUS_LEROBOT_PYTHON:-}
+if [ -z "$lerobot" ]; then
+    if [ "${CI:-}" = true ]; then
+        say "FAIL SERVOBUS_LEROBOT_PYTHON is not set: run eval \"\$(bash scripts/python_clients.sh)\" first"
+        exit 1
+    fi
+    say "SKIPPED the LeRobot check: SERVOBUS_LEROBOT_PYTHON is not set (eval \"\$(bash scripts/python_clients.sh)\")"
+    exit 0
+fi
+say "lerobot_robot_servobus against the simulator with $lerobot"
+if ! "$lerobot" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps \
+    "$wheels"/servobus-*.whl ./python/lerobot_robot_servobus >"$venv/lerobot-install.log" 2>&1; then
+    cat "$venv/lerobot-install.log" >&2
+    say "FAIL servobus or lerobot_robot_servobus did not install into LeRobot's venv"
+    exit 1
+fi
+(cd python/lerobot_robot_servobus/tests && "$lerobot" check_so101_servobus.py)

@@ -112,16 +112,18 @@ class Bus:
         ``values`` maps each servo's ID to its value."""
         self._bus.sync_write(register, [(int(k), int(v)) for k, v in values.items()])
 
-    def read_raw(self, id: int, address: int, length: int) -> int:
+    def read_raw(self, id: int, address: int, length: int, status: bool = False):
         """``length`` (1, 2 or 4) bytes at ``address`` of servo ``id`` as one
         unsigned number in the bus's byte order (for control tables of
-        your own)."""
-        return self._bus.read_raw(id, address, length)[0]
+        your own); with ``status``, ``(value, status flags of the reply)``."""
+        value, flags = self._bus.read_raw(id, address, length)
+        return (value, flags) if status else value
 
-    def write_raw(self, id: int, address: int, length: int, value: int) -> None:
+    def write_raw(self, id: int, address: int, length: int, value: int) -> Optional[int]:
         """Writes the unsigned ``value`` as ``length`` bytes at ``address``
-        of servo ``id`` (a plain WRITE)."""
-        self._bus.write_raw(id, address, length, int(value))
+        of servo ``id`` (a plain WRITE): the reply's status flags, or None
+        when the servo sends no reply."""
+        return self._bus.write_raw(id, address, length, int(value))
 
     def sync_read_raw(self, address: int, length: int, ids: Iterable[int]) -> SyncRead:
         """As :meth:`sync_read`, by address and length: unsigned numbers."""

@@ -113,3 +113,22 @@ def test_play_on_a_sim_pty_goes_through_the_port_in_real_time(sim):
     # Through a port the run takes the motion's own time, not less.
     assert report.duration_s >= servobus.Robot("so101").plan("arm-wave").duration_s
     assert np.allclose(report.measured[-1], [0, -90, 90, 45, 0, 10], atol=1.0)
+
+
+def test_ctrl_c_stops_a_real_time_run_early_and_raises_keyboard_interrupt():
+    import _thread
+    import threading
+
+    robot = servobus.Robot("so101")
+    duration = robot.plan("arm-wave").duration_s
+    # SIGINT as Ctrl-C gives it, 0.5 s into the run.
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    start = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            robot.play("arm-wave", real_time=True)
+    finally:
+        timer.cancel()
+    # A jerk-limited stop takes well under the rest of the motion.
+    assert time.monotonic() - start < duration

@@ -104,7 +104,7 @@ class Robot:
         """The plan as JSON text."""
     def play(
         self, motion: str, on_progress: Optional[object] = None, real_time: bool = False
-    ) -> Tuple[str, List[float], List[List[float]], List[List[float]], List[List[float]]]:
-        """``(report JSON, time, commanded, planned, measured)``."""
+    ) -> Tuple[str, List[float], List[List[float]], List[List[float]], List[List[float]], Optional[BaseException]]:
+        """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
     def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
         """Starts the live loop."""

@@ -263,11 +263,18 @@ class Robot:
         On the built-in simulator it runs in virtual time (as fast as the
         computer goes) unless ``real_time``. ``on_progress(t, duration)`` is
         called about 20 times a second. Ctrl-C stops the joints with a
-        jerk-limited stop, then raises ``KeyboardInterrupt``. With ``check``
+        jerk-limited stop, then raises ``KeyboardInterrupt`` (as does an
+        exception raised by ``on_progress``), its ``.report`` the stopped
+        run's. With ``check``
         a run ended by a fault raises :class:`servobus.FaultError`.
         """
-        text, t, cmd, plan, meas = self._robot.play(str(motion), on_progress, real_time)
+        text, t, cmd, plan, meas, stopped_by = self._robot.play(str(motion), on_progress, real_time)
         report = _report(text, self.joints, t, cmd, plan, meas)
+        if stopped_by is not None:
+            # The run stopped (jerk-limited) and its report is kept with
+            # the exception that stopped it.
+            stopped_by.report = report
+            raise stopped_by
         if check and report.finish == "fault":
             raise FaultError(f"the run ended on a fault: {report.fault}", fault=report.fault, report=report)
         return report

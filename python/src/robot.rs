@@ -72,13 +72,15 @@ impl Samples {
     }
 }
 
-/// A run's report (JSON text) and its samples.
+/// A run's report (JSON text), its samples, and the exception that stopped
+/// it early (Ctrl-C's `KeyboardInterrupt`, or one `on_progress` raised).
 type Played = (
     String,
     Vec<f64>,
     Vec<Vec<f64>>,
     Vec<Vec<f64>>,
     Vec<Vec<f64>>,
+    Option<PyObject>,
 );
 
 impl Robot {
@@ -198,10 +200,11 @@ impl Robot {
     }
 
     /// Plays `motion` and returns `(report JSON, time, commanded, planned,
-    /// measured)`. On the simulator in virtual time unless `real_time`.
-    /// `on_progress(t, duration)` is called about 20 times a second; Ctrl-C
-    /// (or an exception in `on_progress`) stops the run with a jerk-limited
-    /// stop, then raises.
+    /// measured, exception or None)`. On the simulator in virtual time
+    /// unless `real_time`. `on_progress(t, duration)` is called about 20
+    /// times a second; Ctrl-C (or an exception in `on_progress`) stops the
+    /// run with a jerk-limited stop, and the exception is returned with the
+    /// report, for the caller to raise.
     #[pyo3(signature = (motion, on_progress=None, real_time=false))]
     fn play(
         &self,
@@ -253,9 +256,6 @@ impl Robot {
             }
         }
         let report = py.allow_threads(|| run.join()).map_err(Failure::from)?;
-        if let Some(e) = interrupted {
-            return Err(e);
-        }
         let json = serde_json::to_string(&report)
             .map_err(|e| Failure::new("Error", format!("the report does not serialise: {e}")))?;
         Ok((
@@ -264,6 +264,7 @@ impl Robot {
             samples.commanded,
             samples.planned,
             samples.measured,
+            interrupted.map(|e| e.into_value(py).into_any()),
         ))
     }
 

@@ -53,8 +53,9 @@ def test_an_exception_in_on_progress_stops_the_run_and_propagates():
     def boom(t, duration):
         raise RuntimeError("stop here")
 
-    with pytest.raises(RuntimeError, match="stop here"):
+    with pytest.raises(RuntimeError, match="stop here") as caught:
         servobus.Robot("so101").play("arm-wave", on_progress=boom)
+    assert caught.value.report.finish == "stopped"
 
 
 def test_a_robot_file_with_an_error_names_line_and_column():
@@ -126,9 +127,28 @@ def test_ctrl_c_stops_a_real_time_run_early_and_raises_keyboard_interrupt():
     start = time.monotonic()
     timer.start()
     try:
-        with pytest.raises(KeyboardInterrupt):
+        with pytest.raises(KeyboardInterrupt) as caught:
             robot.play("arm-wave", real_time=True)
     finally:
         timer.cancel()
+    assert caught.value.report.finish == "stopped"
+    assert caught.value.report.duration_s < duration
     # A jerk-limited stop takes well under the rest of the motion.
     assert time.monotonic() - start < duration
+
+
+def test_a_servo_that_goes_silent_ends_the_run_with_a_fault_error():
+    # Servo 3 (elbow_flex) answers for 1 s, then never again.
+    with servobus.Sim("so101", faults="vanish=3@1") as sim:
+        robot = servobus.Robot("so101", port=sim.port)
+        with pytest.raises(servobus.FaultError) as caught:
+            robot.play("arm-wave")
+    fault = caught.value.fault
+    assert fault["kind"] == "missing"
+    assert fault["servo_id"] == 3
+    assert fault["joint"] == "elbow_flex"
+    assert caught.value.report.finish == "fault"
+    # Without check the report comes back with the fault in it.
+    with servobus.Sim("so101", faults="vanish=3@1") as sim:
+        report = servobus.Robot("so101", port=sim.port).play("arm-wave", check=False)
+    assert report.finish == "fault" and report.fault["servo_id"] == 3

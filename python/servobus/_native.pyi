@@ -108,3 +108,5 @@ class Robot:
         """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
     def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
         """Starts the live loop."""
+    def torque_off(self) -> None:
+        """A broadcast torque off on every bus (nothing on the simulator)."""

@@ -297,11 +297,14 @@ class Robot:
         return self._stream.state()
 
     def torque_off(self) -> Optional[Report]:
-        """Turns the torque off on every servo of the running stream and ends
-        it: its report (None when no stream runs)."""
-        if self._stream is None:
-            return None
-        return self._stream.torque_off()
+        """Turns the torque off on every servo. A running stream ends, and
+        its report is returned; otherwise every bus gets a broadcast torque
+        off (on the built-in simulator there is nothing to turn off) and
+        None is returned."""
+        if self._stream is not None and not self._stream.finished:
+            return self._stream.torque_off()
+        self._robot.torque_off()
+        return None
 
     def __repr__(self) -> str:
         return repr(self._robot)

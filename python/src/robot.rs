@@ -5,6 +5,8 @@ use std::time::Duration;
 
 use crossbeam_channel::RecvTimeoutError;
 use pyo3::prelude::*;
+use servobus_protocol::BROADCAST_ID;
+use servobus_robot::ports::{bus_ports, open_bus, Allowance};
 use servobus_robot::{Motion, Target, Telemetry};
 
 use crate::errors::{Failure, Outcome};
@@ -275,6 +277,42 @@ impl Robot {
     #[pyo3(signature = (rate=None, timeout=0.25))]
     fn stream(&self, py: Python<'_>, rate: Option<f64>, timeout: f64) -> PyResult<Stream> {
         Ok(py.allow_threads(|| Stream::start(&self.robot, self.port.as_deref(), rate, timeout))?)
+    }
+
+    /// Turns the torque off on every servo of every bus of the robot (one
+    /// broadcast WRITE a bus, so a servo that answers nothing is reached
+    /// too). Nothing to do on the built-in simulator: it holds no torque
+    /// outside a run.
+    fn torque_off(&self, py: Python<'_>) -> PyResult<()> {
+        let Some(port) = self.port.as_deref() else {
+            return Ok(());
+        };
+        py.allow_threads(|| -> Outcome<()> {
+            let config = self.robot.config();
+            for (bus, port) in config.buses.iter().zip(bus_ports(config, Some(port))) {
+                let Some(port) = port else {
+                    return Err(Failure::new(
+                        "PortError",
+                        format!(
+                            "bus `{}` has no port: give it a `port:` in the robot file",
+                            bus.name
+                        ),
+                    ));
+                };
+                let mut serial = open_bus(bus, &port, Allowance::Assumed)?;
+                let torque = serial
+                    .settings()
+                    .series
+                    .map()
+                    .get("torque_enable")
+                    .ok_or_else(|| {
+                        Failure::new("Error", "the servos have no torque_enable register")
+                    })?;
+                serial.write(BROADCAST_ID, torque.address, &[0])?;
+            }
+            Ok(())
+        })?;
+        Ok(())
     }
 
     fn __repr__(&self) -> String {

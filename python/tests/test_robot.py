@@ -152,3 +152,20 @@ def test_a_servo_that_goes_silent_ends_the_run_with_a_fault_error():
     with servobus.Sim("so101", faults="vanish=3@1") as sim:
         report = servobus.Robot("so101", port=sim.port).play("arm-wave", check=False)
     assert report.finish == "fault" and report.fault["servo_id"] == 3
+
+
+def test_torque_off_reaches_every_servo_on_the_port(sim):
+    with servobus.Bus(sim.port, latency=0.05) as bus:
+        bus.sync_write("torque_enable", {i: 1 for i in range(1, 7)})
+        assert list(bus.sync_read("torque_enable", range(1, 7)).values()) == [1] * 6
+    assert servobus.Robot("so101", port=sim.port).torque_off() is None
+    with servobus.Bus(sim.port, latency=0.05) as bus:
+        assert list(bus.sync_read("torque_enable", range(1, 7)).values()) == [0] * 6
+
+
+def test_torque_off_ends_a_running_stream_with_its_report():
+    robot = servobus.Robot("so101")
+    stream = robot.stream()
+    report = robot.torque_off()
+    assert report.finish == "torque_off"
+    assert stream.finished

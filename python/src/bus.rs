@@ -7,6 +7,7 @@ use std::time::Duration;
 use pyo3::prelude::*;
 use servobus_driver::registers::{read_uint, write_uint, Register};
 use servobus_driver::{Bus as DriverBus, Series, SystemClock};
+use servobus_protocol::MAX_ID;
 use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
 use servobus_runtime::sim::SimRobot;
 use servobus_sim::WallBus;
@@ -72,9 +73,6 @@ fn raw_bytes(value: u32, length: usize, series: Series) -> Outcome<Vec<u8>> {
     write_uint(value, series.byte_order(), &mut bytes);
     Ok(bytes)
 }
-
-/// The highest ID a servo can have.
-const MAX_ID: u8 = 253;
 
 /// A bus of Feetech servos: `Bus(port, baud=1_000_000, series="sts")`.
 ///

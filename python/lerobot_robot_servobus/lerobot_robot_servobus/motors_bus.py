@@ -14,9 +14,8 @@ from __future__ import annotations
 import scservo_sdk as scs
 import servobus
 from lerobot.motors.feetech import FeetechMotorsBus
+from lerobot.motors.feetech.tables import MODEL_NUMBER
 from lerobot.utils.errors import DeviceNotConnectedError
-
-MODEL_NUMBER = (3, 2)  # address, length: the same on every Feetech model
 
 
 class ServobusMotorsBus(FeetechMotorsBus):

@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
-# Builds servobus's Python package (python/) into a kept virtualenv with
-# `pip install ./python`, then runs its pytest suite (python/tests).
+# Builds servobus's Python package (python/) with pip and the pinned
+# maturin, installs it into a kept virtualenv and runs its pytest suite
+# (python/tests); then, with SERVOBUS_LEROBOT_PYTHON set (LeRobot's venv of
+# scripts/python_clients.sh), installs the same wheel and
+# python/lerobot_robot_servobus there and runs their check against the
+# simulator. fmt and clippy of the extension crate come first.
 #
 # Usage: bash scripts/python_tests.sh [PYTEST_ARGS...]
 # Env:   SERVOBUS_VENVS (default ~/.cache/servobus/venvs): the venv is

@@ -150,3 +150,20 @@ def test_raw_access_by_address_matches_the_named_registers(bus):
         bus.write_raw(1, 42, 2, 70000)
     with pytest.raises(servobus.UsageError):
         bus.read_raw(1, 56, 3)
+
+
+def test_a_mounting_places_the_horns_where_its_file_says():
+    # so101-mounting puts shoulder_pan's zero at tick 1300 and wrist_roll's
+    # at 2048; both joints rest at 0 deg.
+    with servobus.Sim("so101", mounting="so101-mounting") as sim, servobus.Bus(sim.port, latency=SLACK) as bus:
+        result = bus.sync_read("present_position", [1, 5])
+    assert abs(result[1] - 1300) <= 2
+    assert abs(result[5] - 2048) <= 2
+
+
+def test_bad_simulator_options_raise_typed_errors():
+    with pytest.raises(servobus.UsageError):
+        servobus.Sim("so101", faults="nonsense=1")
+    with pytest.raises(servobus.ConfigError) as caught:
+        servobus.Sim("so101", mounting="/nonexistent/mounting.yaml")
+    assert caught.value.file == "/nonexistent/mounting.yaml"

@@ -1,0 +1,112 @@
+"""Type stubs of the extension module ``servobus._native`` (the Rust side;
+the package ``servobus`` wraps it with typed results)."""
+
+from typing import List, Optional, Tuple
+
+__version__: str
+
+class Bus:
+    """A bus of Feetech servos on a serial port, or the in-process simulator."""
+
+    def __init__(
+        self, port: str, baud: int = 1_000_000, series: str = "sts", latency: Optional[float] = None
+    ) -> None: ...
+    @staticmethod
+    def sim(robot: str = "so101") -> "Bus":
+        """An in-process simulated bus with the servos of ``robot``."""
+    @property
+    def series(self) -> str:
+        """``"sts"`` or ``"scs"``."""
+    def ping(self, id: int) -> bool:
+        """PING servo ``id``: True when it answers."""
+    def scan(self, ids: Optional[List[int]] = None) -> List[int]:
+        """The IDs among ``ids`` (default 0..253) that answer a PING."""
+    def read(self, id: int, register: str) -> int:
+        """The value of ``register`` of servo ``id``."""
+    def write(self, id: int, register: str, value: int) -> None:
+        """Writes ``value`` to ``register`` of servo ``id``."""
+    def sync_read(
+        self, register: str, ids: List[int]
+    ) -> Tuple[List[Tuple[int, Optional[int]]], List[Tuple[int, str, int]]]:
+        """``(id, value or None)`` per servo, and ``(id, why, attempts)`` per missing one."""
+    def sync_write(self, register: str, values: List[Tuple[int, int]]) -> None:
+        """One SYNC WRITE of ``(id, value)`` pairs."""
+    def read_raw(self, id: int, address: int, length: int) -> Tuple[int, int]:
+        """``(unsigned value, status flags)`` of ``length`` bytes at ``address``."""
+    def write_raw(self, id: int, address: int, length: int, value: int) -> Optional[int]:
+        """A plain WRITE of ``length`` bytes; the reply's status flags."""
+    def sync_read_raw(
+        self, address: int, length: int, ids: List[int]
+    ) -> Tuple[List[Tuple[int, Optional[int]]], List[Tuple[int, str, int]]]:
+        """As ``sync_read``, by address and length."""
+    def sync_write_raw(self, address: int, length: int, values: List[Tuple[int, int]]) -> None:
+        """As ``sync_write``, by address and length."""
+    def close(self) -> None:
+        """Closes the bus."""
+    def __enter__(self) -> "Bus": ...
+    def __exit__(self, *args: object) -> bool: ...
+
+class Sim:
+    """A robot's simulated servos on a pseudo-terminal, served from a thread."""
+
+    def __init__(
+        self,
+        robot: str = "so101",
+        faults: Optional[str] = None,
+        mounting: Optional[str] = None,
+        hand: Optional[str] = None,
+        pacing: bool = True,
+    ) -> None: ...
+    @property
+    def port(self) -> str:
+        """The path to open as a serial port."""
+    @property
+    def servo_count(self) -> int:
+        """How many servos are served."""
+    @property
+    def running(self) -> bool:
+        """Whether the server is still serving."""
+    def close(self) -> None:
+        """Stops serving."""
+    def __enter__(self) -> "Sim": ...
+    def __exit__(self, *args: object) -> bool: ...
+
+class Stream:
+    """A live run fed targets from Python."""
+
+    def send(self, joints: List[Tuple[str, float]]) -> int:
+        """Sends a target; returns how many angles were clamped."""
+    def state(
+        self,
+    ) -> Tuple[float, List[float], List[float], List[float], List[float], List[int], List[str]]:
+        """``(time, position, velocity, error, commanded, flags, faults)``."""
+    @property
+    def finished(self) -> bool:
+        """Whether the run has ended."""
+    def stop(self) -> Optional[str]:
+        """Stops (jerk-limited); the report as JSON text."""
+    def torque_off(self) -> Optional[str]:
+        """Torque off; the report as JSON text."""
+
+class Robot:
+    """A robot file's robot."""
+
+    def __init__(self, robot: str, port: Optional[str] = None, calibration: Optional[str] = None) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def joints(self) -> List[str]: ...
+    @property
+    def units(self) -> str: ...
+    @property
+    def port(self) -> Optional[str]: ...
+    def plan(self, motion: str) -> str:
+        """The plan as JSON text."""
+    def play(
+        self, motion: str, on_progress: Optional[object] = None, real_time: bool = False
+    ) -> Tuple[str, List[float], List[List[float]], List[List[float]], List[List[float]], Optional[BaseException]]:
+        """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
+    def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
+        """Starts the live loop."""
+    def torque_off(self) -> None:
+        """A broadcast torque off on every bus (nothing on the simulator)."""

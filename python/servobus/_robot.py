@@ -1,0 +1,310 @@
+"""The robot API: :class:`Robot`, its plans, runs, reports and streams."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, List, Mapping, Optional
+
+import numpy as np
+
+from . import _native
+from ._errors import Error, FaultError
+
+
+@dataclass(frozen=True)
+class JointPeaks:
+    """One joint's extremes along a plan, in the robot's units (per second,
+    per second squared ... for the derivatives)."""
+
+    name: str
+    peak_velocity: float
+    peak_acceleration: float
+    peak_jerk: Optional[float]
+    """None where the acceleration jumps (no jerk limit)."""
+    min_position: float
+    max_position: float
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a plan: arrival at keyframe ``keyframe`` of
+    repetition ``cycle``, from ``start`` to ``end`` s."""
+
+    keyframe: int
+    cycle: int
+    start: float
+    end: float
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A motion's plan: its duration (s), segments and per-joint peaks."""
+
+    duration_s: float
+    units: str
+    segments: List[Segment]
+    joints: List[JointPeaks]
+
+
+@dataclass(frozen=True)
+class JointReport:
+    """One joint's tracking over a run, in the report's units."""
+
+    name: str
+    rms_error: float
+    max_error: float
+    readings: int
+    clamps: int
+
+
+@dataclass(frozen=True)
+class Report:
+    """What a run did. The figures of ``servobus play --json``, and the
+    samples as numpy arrays of shape ``(samples, joints)`` (``time`` of
+    shape ``(samples,)``), NaN where a joint had no reading yet."""
+
+    finish: str
+    """Why it ended: ``completed``, ``stopped``, ``torque_off``, ``fault``."""
+    cycles: int
+    achieved_rate_hz: float
+    planned_rate_hz: float
+    overruns: int
+    timeouts: int
+    retries: int
+    missed_replies: int
+    clamps: int
+    duration_s: float
+    units: str
+    joints: List[JointReport]
+    fault: Optional[Dict[str, Any]]
+    warnings: List[str]
+    joint_names: List[str]
+    time: np.ndarray
+    commanded: np.ndarray
+    planned: np.ndarray
+    measured: np.ndarray
+    raw: Dict[str, Any] = field(repr=False)
+    """The whole report as ``servobus play --json`` gives it."""
+
+    @property
+    def worst_rms_error(self) -> float:
+        """The largest RMS tracking error over the joints."""
+        return max((j.rms_error for j in self.joints), default=0.0)
+
+
+def _report(text: str, names: List[str], time=(), commanded=None, planned=None, measured=None) -> Report:
+    raw = json.loads(text)
+    n = len(names)
+
+    def matrix(columns) -> np.ndarray:
+        if not columns:
+            return np.zeros((len(time), n))
+        return np.asarray(columns, dtype=float).T.reshape(len(time), n)
+
+    return Report(
+        finish=raw["finish"],
+        cycles=raw["cycles"],
+        achieved_rate_hz=raw["achieved_rate_hz"],
+        planned_rate_hz=raw["planned_rate_hz"],
+        overruns=raw["overruns"],
+        timeouts=raw["timeouts"],
+        retries=raw["retries"],
+        missed_replies=raw["missed_replies"],
+        clamps=raw["clamps"],
+        duration_s=raw["duration_s"],
+        units=raw["units"],
+        joints=[JointReport(**j) for j in raw["joints"]],
+        fault=raw.get("fault"),
+        warnings=list(raw.get("warnings", [])),
+        joint_names=list(names),
+        time=np.asarray(time, dtype=float),
+        commanded=matrix(commanded),
+        planned=matrix(planned),
+        measured=matrix(measured),
+        raw=raw,
+    )
+
+
+@dataclass(frozen=True)
+class State:
+    """The joints' latest state in a stream, in the robot's units: numpy
+    arrays in the order of ``joints`` (NaN before a first reading)."""
+
+    time: float
+    """Time of the cycle since the stream started, s."""
+    joints: List[str]
+    position: np.ndarray
+    velocity: np.ndarray
+    error: np.ndarray
+    """Commanded path minus measured position at the last reading."""
+    commanded: np.ndarray
+    flags: np.ndarray
+    """Each servo's status byte at its last reply (0: no error)."""
+    faults: List[str]
+
+    def __getitem__(self, joint: str) -> float:
+        """The position of ``joint``."""
+        return float(self.position[self.joints.index(joint)])
+
+
+class Stream:
+    """The live loop of a robot (as ``servobus stream``): the joints hold,
+    then follow every target sent, jerk-limited. A context manager: the
+    joints stop (jerk-limited) at the end of the ``with`` block, and
+    :attr:`report` holds the run's report."""
+
+    def __init__(self, native: _native.Stream, joints: List[str]) -> None:
+        self._stream = native
+        self._joints = joints
+        self.report: Optional[Report] = None
+
+    def send(self, joints: Mapping[str, float]) -> int:
+        """Sends a target: joint name to angle, in the robot's units (joints
+        not named keep their targets). Returns how many angles were beyond
+        the joint limits and clamped."""
+        return self._stream.send([(str(k), float(v)) for k, v in joints.items()])
+
+    def state(self) -> State:
+        """The joints' latest positions, velocities, errors and faults."""
+        t, pos, vel, err, cmd, flags, faults = self._stream.state()
+        return State(
+            time=t,
+            joints=list(self._joints),
+            position=np.asarray(pos, dtype=float),
+            velocity=np.asarray(vel, dtype=float),
+            error=np.asarray(err, dtype=float),
+            commanded=np.asarray(cmd, dtype=float),
+            flags=np.asarray(flags, dtype=np.uint8),
+            faults=list(faults),
+        )
+
+    @property
+    def finished(self) -> bool:
+        """Whether the run has ended (stopped, torque off, or a fault)."""
+        return self._stream.finished
+
+    def _ended(self, text: Optional[str]) -> Optional[Report]:
+        if text is not None:
+            self.report = _report(text, self._joints)
+        return self.report
+
+    def stop(self) -> Optional[Report]:
+        """Stops the joints (jerk-limited) and ends the run: its report."""
+        return self._ended(self._stream.stop())
+
+    def torque_off(self) -> Optional[Report]:
+        """Turns every servo's torque off and ends the run: its report."""
+        return self._ended(self._stream.torque_off())
+
+    def __enter__(self) -> "Stream":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+
+class Robot:
+    """A robot: ``Robot(robot, port=None, calibration=None)``.
+
+    ``robot`` is a robot file, a built-in name (``"so101"``) or YAML text;
+    ``port`` the serial port of its first bus (None: the built-in
+    simulator); ``calibration`` a calibration file to use instead of the
+    one the robot file names. Angles are in the robot's units
+    (:attr:`units`).
+    """
+
+    def __init__(self, robot: str, port: Optional[str] = None, calibration: Optional[str] = None) -> None:
+        self._robot = _native.Robot(str(robot), None if port is None else str(port),
+                                    None if calibration is None else str(calibration))
+        self._stream: Optional[Stream] = None
+
+    @property
+    def name(self) -> str:
+        """The robot's name."""
+        return self._robot.name
+
+    @property
+    def joints(self) -> List[str]:
+        """Its joints' names, in the robot file's order."""
+        return self._robot.joints
+
+    @property
+    def units(self) -> str:
+        """The unit of its angles: ``"deg"`` or ``"rad"``."""
+        return self._robot.units
+
+    @property
+    def port(self) -> Optional[str]:
+        """Its port (None: the built-in simulator)."""
+        return self._robot.port
+
+    def plan(self, motion: str) -> Plan:
+        """Plans ``motion`` (a motion file or a built-in name): its timing and
+        per-joint peaks, without moving anything."""
+        raw = json.loads(self._robot.plan(str(motion)))
+        return Plan(
+            duration_s=raw["duration_s"],
+            units=raw["units"],
+            segments=[Segment(**s) for s in raw["segments"]],
+            joints=[JointPeaks(**j) for j in raw["joints"]],
+        )
+
+    def play(
+        self,
+        motion: str,
+        on_progress: Optional[Callable[[float, float], Any]] = None,
+        *,
+        real_time: bool = False,
+        check: bool = True,
+    ) -> Report:
+        """Plays ``motion`` and returns its :class:`Report`.
+
+        On the built-in simulator it runs in virtual time (as fast as the
+        computer goes) unless ``real_time``. ``on_progress(t, duration)`` is
+        called about 20 times a second. Ctrl-C stops the joints with a
+        jerk-limited stop, then raises ``KeyboardInterrupt`` (as does an
+        exception raised by ``on_progress``), its ``.report`` the stopped
+        run's. With ``check``
+        a run ended by a fault raises :class:`servobus.FaultError`.
+        """
+        text, t, cmd, plan, meas, stopped_by = self._robot.play(str(motion), on_progress, real_time)
+        report = _report(text, self.joints, t, cmd, plan, meas)
+        if stopped_by is not None:
+            # The run stopped (jerk-limited) and its report is kept with
+            # the exception that stopped it.
+            stopped_by.report = report
+            raise stopped_by
+        if check and report.finish == "fault":
+            raise FaultError(f"the run ended on a fault: {report.fault}", fault=report.fault, report=report)
+        return report
+
+    def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
+        """Starts the live loop (as ``servobus stream``) and returns its
+        :class:`Stream`, a context manager. ``rate`` in Hz (default the
+        robot's); after ``timeout`` s without a target the joints stop and
+        hold until targets come back. On the simulator it runs in real time.
+        """
+        if self._stream is not None and not self._stream.finished:
+            raise Error("a stream of this robot is running: stop it first")
+        self._stream = Stream(self._robot.stream(rate, timeout), self.joints)
+        return self._stream
+
+    def state(self) -> State:
+        """The joints' state in the running stream (see :meth:`stream`)."""
+        if self._stream is None:
+            raise Error("no stream is running: start one with robot.stream()")
+        return self._stream.state()
+
+    def torque_off(self) -> Optional[Report]:
+        """Turns the torque off on every servo. A running stream ends, and
+        its report is returned; otherwise every bus gets a broadcast torque
+        off (on the built-in simulator there is nothing to turn off) and
+        None is returned."""
+        if self._stream is not None and not self._stream.finished:
+            return self._stream.torque_off()
+        self._robot.torque_off()
+        return None
+
+    def __repr__(self) -> str:
+        return repr(self._robot)

@@ -1,0 +1,461 @@
+//! `servobus.Bus`: one bus of Feetech servos, on a serial port or on the
+//! in-process simulator, read and written by register name.
+
+use std::sync::Mutex;
+use std::time::Duration;
+
+use pyo3::prelude::*;
+use servobus_driver::registers::{read_uint, write_uint, Register};
+use servobus_driver::{Bus as DriverBus, Series, SystemClock};
+use servobus_protocol::MAX_ID;
+use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
+use servobus_runtime::sim::SimRobot;
+use servobus_sim::WallBus;
+
+use crate::errors::{poisoned, Failure, Field, Outcome};
+use crate::load::load_robot;
+
+/// The in-process simulator's bus, paced by the wall clock.
+type SimDriverBus = DriverBus<WallBus<SystemClock>, SystemClock>;
+
+/// A bus of either kind.
+enum AnyBus {
+    /// A serial port (real servos, or a `servobus sim` pty).
+    Serial(SerialBus),
+    /// The in-process simulator.
+    Sim(SimDriverBus),
+}
+
+/// Runs `$body` with `$b` bound to the driver bus, whatever its kind.
+macro_rules! on_bus {
+    ($bus:expr, $b:ident => $body:expr) => {
+        match $bus {
+            AnyBus::Serial($b) => $body,
+            AnyBus::Sim($b) => $body,
+        }
+    };
+}
+
+/// A SYNC READ as Python gets it: `(id, value or None)` per servo asked,
+/// and `(id, why, attempts)` per servo missing.
+type SyncReadLists = (Vec<(u8, Option<i32>)>, Vec<(u8, String, u8)>);
+
+/// A raw SYNC READ as Python gets it (unsigned numbers).
+type RawSyncReadLists = (Vec<(u8, Option<u32>)>, Vec<(u8, String, u8)>);
+
+/// A raw access's length: 1, 2 or 4 bytes.
+fn raw_length(length: usize) -> Outcome<usize> {
+    match length {
+        1 | 2 | 4 => Ok(length),
+        _ => Err(Failure::usage(format!(
+            "length {length}: give 1, 2 or 4 bytes"
+        ))),
+    }
+}
+
+/// `value` as `length` bytes in the byte order of `series`.
+fn raw_bytes(value: u32, length: usize, series: Series) -> Outcome<Vec<u8>> {
+    let max = if length == 4 {
+        u32::MAX
+    } else {
+        (1u32 << (8 * length)) - 1
+    };
+    if value > max {
+        return Err(Failure::new(
+            "LimitError",
+            format!("value {value} does not fit {length} byte(s)"),
+        )
+        .with("value", Field::Float(f64::from(value)))
+        .with("min", Field::Float(0.0))
+        .with("max", Field::Float(f64::from(max))));
+    }
+    let mut bytes = vec![0u8; length];
+    write_uint(value, series.byte_order(), &mut bytes);
+    Ok(bytes)
+}
+
+/// A bus of Feetech servos: `Bus(port, baud=1_000_000, series="sts")`.
+///
+/// Registers are named as in the servos' control table
+/// (`present_position`, `goal_position`, `torque_enable`, ...); values are
+/// the register's raw units (ticks for positions). Every call releases the
+/// GIL while it waits on the bus.
+#[pyclass(module = "servobus._native", name = "Bus")]
+pub struct Bus {
+    inner: Mutex<Option<AnyBus>>,
+    series: Series,
+    label: String,
+}
+
+/// The series named `name` (`sts`, `sms` or `scs`).
+pub(crate) fn series_of(name: &str) -> Outcome<Series> {
+    match name.to_ascii_lowercase().as_str() {
+        "sts" | "sms" | "sts/sms" => Ok(Series::Sts),
+        "scs" => Ok(Series::Scs),
+        _ => Err(Failure::usage(format!(
+            "series `{name}`: give \"sts\" (STS/SMS) or \"scs\""
+        ))),
+    }
+}
+
+/// The name Python gives `series`.
+fn series_name(series: Series) -> &'static str {
+    match series {
+        Series::Scs => "scs",
+        _ => "sts",
+    }
+}
+
+/// The register `name` of `series`.
+fn register(series: Series, name: &str) -> Outcome<&'static Register> {
+    series.map().get(name).ok_or_else(|| {
+        Failure::usage(format!(
+            "no register named `{name}` on {} servos",
+            series_name(series)
+        ))
+    })
+}
+
+/// A servo ID from Python.
+fn servo_id(id: i64) -> Outcome<u8> {
+    u8::try_from(id)
+        .ok()
+        .filter(|&i| i <= MAX_ID)
+        .ok_or_else(|| Failure::usage(format!("ID {id}: a servo's ID is 0..=253")))
+}
+
+/// A register value from Python.
+fn value_of(value: i64) -> Outcome<i32> {
+    i32::try_from(value).map_err(|_| {
+        Failure::new(
+            "LimitError",
+            format!("value {value} does not fit any register"),
+        )
+    })
+}
+
+impl Bus {
+    /// Runs `f` on the open bus with the lock held (call without the GIL).
+    fn with<R>(&self, f: impl FnOnce(&mut AnyBus) -> Outcome<R>) -> Outcome<R> {
+        let mut guard = self.inner.lock().map_err(poisoned)?;
+        match guard.as_mut() {
+            Some(bus) => f(bus),
+            None => Err(Failure::new("Error", format!("{} is closed", self.label))),
+        }
+    }
+}
+
+#[pymethods]
+impl Bus {
+    /// Opens `port` at `baud` for servos of `series` (`"sts"` for STS/SMS,
+    /// `"scs"`). `latency` (s) is the adapter's reply latency the deadlines
+    /// allow; by default what the port is assumed to need.
+    #[new]
+    #[pyo3(signature = (port, baud=1_000_000, series="sts", latency=None))]
+    fn new(
+        py: Python<'_>,
+        port: String,
+        baud: u32,
+        series: &str,
+        latency: Option<f64>,
+    ) -> PyResult<Self> {
+        let series = series_of(series)?;
+        let latency = match latency {
+            Some(s) if s.is_finite() && s >= 0.0 => Some(Duration::from_secs_f64(s)),
+            Some(s) => Err(Failure::usage(format!(
+                "latency {s}: give seconds, 0 or more"
+            )))?,
+            None => None,
+        };
+        let bus = py
+            .allow_threads(|| open_plain_bus(&port, baud, series, latency))
+            .map_err(Failure::from)?;
+        Ok(Bus {
+            inner: Mutex::new(Some(AnyBus::Serial(bus))),
+            series,
+            label: format!("the bus on {port}"),
+        })
+    }
+
+    /// An in-process simulated bus serving the servos of `robot` (a robot
+    /// file, a built-in name such as `"so101"`, or YAML text); its first
+    /// bus, each shaft at its joint's rest position, in real time.
+    #[staticmethod]
+    #[pyo3(signature = (robot="so101"))]
+    fn sim(py: Python<'_>, robot: &str) -> PyResult<Self> {
+        let bus = py.allow_threads(|| -> Outcome<SimDriverBus> {
+            let robot = load_robot(robot, None)?;
+            let config = robot.config();
+            let sim = SimRobot::builder(config).build()?;
+            sim.wall_buses(&system_clock())
+                .into_iter()
+                .next()
+                .ok_or_else(|| Failure::new("ConfigError", "the robot has no bus"))
+        })?;
+        let series = bus.settings().series;
+        Ok(Bus {
+            inner: Mutex::new(Some(AnyBus::Sim(bus))),
+            series,
+            label: "the simulated bus".to_owned(),
+        })
+    }
+
+    /// The series whose registers the bus reads: `"sts"` or `"scs"`.
+    #[getter]
+    fn series(&self) -> &'static str {
+        series_name(self.series)
+    }
+
+    /// PING servo `id`: True when it answers, False when nothing answered.
+    fn ping(&self, py: Python<'_>, id: i64) -> PyResult<bool> {
+        let id = servo_id(id)?;
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => match b.ping(id) {
+                    Ok(_) => Ok(true),
+                    Err(e) if e.is_timeout() => Ok(false),
+                    Err(e) => Err(e.into()),
+                })
+            })
+        })?)
+    }
+
+    /// The IDs among `ids` (default every ID, 0..=253) that answer a PING,
+    /// in increasing order.
+    #[pyo3(signature = (ids=None))]
+    fn scan(&self, py: Python<'_>, ids: Option<Vec<i64>>) -> PyResult<Vec<u16>> {
+        let ids: Vec<u8> = match ids {
+            Some(ids) => ids.into_iter().map(servo_id).collect::<Outcome<_>>()?,
+            None => (0..=MAX_ID).collect(),
+        };
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                let mut found = Vec::new();
+                for &id in &ids {
+                    on_bus!(bus, b => match b.ping(id) {
+                        Ok(_) => found.push(id),
+                        Err(e) if e.is_timeout() => {}
+                        Err(e) => return Err(e.into()),
+                    });
+                }
+                found.sort_unstable();
+                found.dedup();
+                // Numbers for Python: a list of u8 would become bytes.
+                Ok(found.into_iter().map(u16::from).collect())
+            })
+        })?)
+    }
+
+    /// Reads the register `register` of servo `id`: its value (signed
+    /// registers signed). Raises `TimeoutError` when the servo does not
+    /// answer.
+    fn read(&self, py: Python<'_>, id: i64, register: &str) -> PyResult<i32> {
+        let id = servo_id(id)?;
+        let reg = self::register(self.series, register)?;
+        Ok(py.allow_threads(|| {
+            self.with(|bus| on_bus!(bus, b => Ok(b.read_register(id, reg)?.0)))
+        })?)
+    }
+
+    /// Writes `value` to the register `register` of servo `id` (an EEPROM
+    /// register persistently: unlock, write, verify, lock). Raises
+    /// `LimitError` for a value the register cannot hold.
+    fn write(&self, py: Python<'_>, id: i64, register: &str, value: i64) -> PyResult<()> {
+        let id = servo_id(id)?;
+        let reg = self::register(self.series, register)?;
+        let value = value_of(value)?;
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.write_register(id, reg, value)?;
+                    Ok(())
+                })
+            })
+        })?)
+    }
+
+    /// Reads `register` of every servo in `ids` with one SYNC READ (and
+    /// one more for the servos missing from it, as a READ is retried): a
+    /// list of `(id, value or None)` in the order of `ids`, and a list of
+    /// `(id, why, attempts)` for the servos that did not answer. A missing
+    /// servo never costs the others' values.
+    fn sync_read(&self, py: Python<'_>, register: &str, ids: Vec<i64>) -> PyResult<SyncReadLists> {
+        let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
+        let reg = self::register(self.series, register)?;
+        let order = self.series.byte_order();
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    // Servos missing from the first round are asked again, as
+                // many times as a READ is retried.
+                let read = b.sync_read_within(reg.address, reg.size, &ids, Duration::MAX)?;
+                    let mut values = Vec::with_capacity(ids.len());
+                    let mut missing = Vec::new();
+                    for result in read.iter() {
+                        match result {
+                            Ok(reply) => {
+                                let value = reg.decode(reply.data, order).ok();
+                                values.push((reply.id, value));
+                            }
+                            Err(m) => {
+                                values.push((m.id, None));
+                                missing.push((m.id, m.reason.to_string(), m.attempts));
+                            }
+                        }
+                    }
+                    Ok((values, missing))
+                })
+            })
+        })?)
+    }
+
+    /// Writes `register` of several servos with one SYNC WRITE:
+    /// `values` maps each servo's ID to its value. Nobody answers.
+    fn sync_write(&self, py: Python<'_>, register: &str, values: Vec<(i64, i64)>) -> PyResult<()> {
+        let reg = self::register(self.series, register)?;
+        if !reg.access.is_writable() {
+            return Err(Failure::usage(format!("register `{}` is read-only", reg.name)).into());
+        }
+        let order = self.series.byte_order();
+        let size = usize::from(reg.size);
+        let mut ids = Vec::with_capacity(values.len());
+        let mut data = vec![0u8; values.len() * size];
+        for ((id, value), block) in values.into_iter().zip(data.chunks_mut(size)) {
+            ids.push(servo_id(id)?);
+            reg.encode(value_of(value)?, order, block)
+                .map_err(|e| Failure::from(servobus_driver::BusError::Value(e)))?;
+        }
+        if ids.is_empty() {
+            return Ok(());
+        }
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.sync_write(reg.address, &ids, &data)?;
+                    Ok(())
+                })
+            })
+        })?)
+    }
+
+    /// Reads `length` (1, 2 or 4) bytes at `address` of servo `id` as one
+    /// unsigned number in the bus's byte order, for clients with control
+    /// tables of their own (LeRobot): `(value, status flags)`.
+    fn read_raw(&self, py: Python<'_>, id: i64, address: u8, length: usize) -> PyResult<(u32, u8)> {
+        let id = servo_id(id)?;
+        let length = raw_length(length)?;
+        let order = self.series.byte_order();
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    let mut buf = [0u8; 4];
+                    let flags = b.read(id, address, &mut buf[..length])?;
+                    Ok((read_uint(&buf[..length], order), flags.0))
+                })
+            })
+        })?)
+    }
+
+    /// Writes `value` as `length` (1, 2 or 4) bytes at `address` of servo
+    /// `id` with a plain WRITE: the reply's status flags, or None when the
+    /// servo sends none.
+    fn write_raw(
+        &self,
+        py: Python<'_>,
+        id: i64,
+        address: u8,
+        length: usize,
+        value: u32,
+    ) -> PyResult<Option<u8>> {
+        let id = servo_id(id)?;
+        let bytes = raw_bytes(value, raw_length(length)?, self.series)?;
+        Ok(py.allow_threads(|| {
+            self.with(|bus| on_bus!(bus, b => Ok(b.write(id, address, &bytes)?.map(|f| f.0))))
+        })?)
+    }
+
+    /// As `sync_read`, by address and length (1, 2 or 4) instead of a
+    /// register name: unsigned numbers in the bus's byte order.
+    fn sync_read_raw(
+        &self,
+        py: Python<'_>,
+        address: u8,
+        length: usize,
+        ids: Vec<i64>,
+    ) -> PyResult<RawSyncReadLists> {
+        let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
+        let length = raw_length(length)?;
+        let order = self.series.byte_order();
+        Ok(py.allow_threads(|| {
+            self.with(|bus| on_bus!(bus, b => {
+                // The length is 1, 2 or 4: it fits a byte.
+                let len = length as u8;
+                let read = b.sync_read_within(address, len, &ids, Duration::MAX)?;
+                let mut values = Vec::with_capacity(ids.len());
+                let mut missing = Vec::new();
+                for result in read.iter() {
+                    match result {
+                        Ok(reply) => values.push((reply.id, Some(read_uint(reply.data, order)))),
+                        Err(m) => {
+                            values.push((m.id, None));
+                            missing.push((m.id, m.reason.to_string(), m.attempts));
+                        }
+                    }
+                }
+                Ok((values, missing))
+            }))
+        })?)
+    }
+
+    /// As `sync_write`, by address and length (1, 2 or 4): `values` are
+    /// `(id, unsigned number)` pairs.
+    fn sync_write_raw(
+        &self,
+        py: Python<'_>,
+        address: u8,
+        length: usize,
+        values: Vec<(i64, u32)>,
+    ) -> PyResult<()> {
+        let length = raw_length(length)?;
+        let mut ids = Vec::with_capacity(values.len());
+        let mut data = Vec::with_capacity(values.len() * length);
+        for (id, value) in values {
+            ids.push(servo_id(id)?);
+            data.extend_from_slice(&raw_bytes(value, length, self.series)?);
+        }
+        if ids.is_empty() {
+            return Ok(());
+        }
+        Ok(py.allow_threads(|| {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    b.sync_write(address, &ids, &data)?;
+                    Ok(())
+                })
+            })
+        })?)
+    }
+
+    /// Closes the bus (its port is free for others); later calls raise.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        py.allow_threads(|| -> Outcome<()> {
+            self.inner.lock().map_err(poisoned)?.take();
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close(py)?;
+        Ok(false)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<servobus.Bus: {}>", self.label)
+    }
+}

@@ -1,0 +1,25 @@
+//! servobus's Python extension, `servobus._native`: a typed bus of Feetech
+//! servos, the simulator on a pseudo-terminal, and robots' plans, runs and
+//! live streams. The Python package `servobus` wraps it (typed reports,
+//! numpy arrays, the exception classes under `servobus.Error`); every call
+//! that waits on a bus, a port or a run releases the GIL.
+
+mod bus;
+mod errors;
+mod load;
+mod robot;
+mod sim;
+mod stream;
+
+use pyo3::prelude::*;
+
+/// The module `servobus._native`.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<bus::Bus>()?;
+    m.add_class::<sim::Sim>()?;
+    m.add_class::<robot::Robot>()?;
+    m.add_class::<stream::Stream>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

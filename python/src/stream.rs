@@ -1,0 +1,244 @@
+//! `servobus._native.Stream`: the live loop of `servobus stream`, fed from
+//! Python: targets in, the joints' state out.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use pyo3::prelude::*;
+use servobus_config::Units;
+use servobus_robot::ports::{every_port, open_bus, system_clock, Allowance, Ports};
+use servobus_runtime::calibrate::prepare_bus;
+use servobus_runtime::{
+    spawn_live, Command, Lead, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry,
+};
+
+use crate::errors::{chain, poisoned, Failure, Field, Outcome};
+
+/// The latest state of every joint, in the robot's units.
+#[derive(Debug, Clone, Default)]
+struct State {
+    time: f64,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    error: Vec<f64>,
+    commanded: Vec<f64>,
+    flags: Vec<u8>,
+    faults: Vec<String>,
+}
+
+/// The state of the joints as Python gets it: `(time, position, velocity,
+/// error, commanded, status flags, faults so far)`.
+type StateTuple = (
+    f64,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<u16>,
+    Vec<String>,
+);
+
+/// A live run of a robot, fed targets from Python.
+#[pyclass(module = "servobus._native", name = "Stream")]
+pub struct Stream {
+    runner: Mutex<Option<Runner>>,
+    targets: TargetSender,
+    units: Units,
+    started: Instant,
+    state: Arc<Mutex<State>>,
+    watcher: Mutex<Option<std::thread::JoinHandle<()>>>,
+}
+
+impl Stream {
+    /// Starts the live loop of `robot` on `port` (or the robot file's ports,
+    /// or the built-in simulator in real time when neither gives one).
+    pub(crate) fn start(
+        robot: &servobus_robot::Robot,
+        port: Option<&str>,
+        rate: Option<f64>,
+        timeout: f64,
+    ) -> Outcome<Stream> {
+        if !(timeout.is_finite() && timeout > 0.0) {
+            return Err(Failure::usage(format!(
+                "timeout {timeout}: give a positive number of seconds"
+            )));
+        }
+        let config = robot.config();
+        let options = RunOptions {
+            rate_hz: rate,
+            lead: config.lead.map_or_else(Lead::default, Lead::Fixed),
+            approach: None,
+            target_timeout: Duration::from_secs_f64(timeout),
+            units: Some(config.units),
+            ..RunOptions::default()
+        };
+        let runner = match (port, every_port(config, port)) {
+            (None, _) | (_, Ports::None) => {
+                let rest: Vec<f64> = config.joints().map(|j| j.rest()).collect();
+                let buses = servobus_runtime::sim::SimRobot::builder(config)
+                    .pose(&rest)
+                    .build()?
+                    .wall_buses(&system_clock());
+                spawn_live(config, buses, options)?
+            }
+            (Some(_), Ports::Every(ports)) => {
+                let mut buses = Vec::new();
+                for (bus, port) in config.buses.iter().zip(&ports) {
+                    buses.push(open_bus(bus, port, Allowance::Run)?);
+                }
+                for (index, (bus, port)) in buses.iter_mut().zip(&ports).enumerate() {
+                    prepare_bus(config, index, bus).map_err(|refusal| {
+                        Failure::new("CalibrationError", chain(&refusal))
+                            .with("port", Field::Str(port.clone()))
+                    })?;
+                }
+                spawn_live(config, buses, options)?
+            }
+            (Some(_), Ports::Missing(bus)) => {
+                return Err(Failure::new(
+                    "PortError",
+                    format!(
+                        "bus `{}` has no port: give it a `port:` in the robot file",
+                        bus.name
+                    ),
+                ))
+            }
+        };
+        let n = config.joints().count();
+        let state = Arc::new(Mutex::new(State {
+            position: vec![f64::NAN; n],
+            velocity: vec![f64::NAN; n],
+            error: vec![f64::NAN; n],
+            commanded: vec![f64::NAN; n],
+            flags: vec![0; n],
+            ..State::default()
+        }));
+        let telemetry = runner.telemetry();
+        let shared = Arc::clone(&state);
+        let watcher = std::thread::Builder::new()
+            .name("servobus-py-state".into())
+            .spawn(move || {
+                for message in telemetry.iter() {
+                    let Ok(mut s) = shared.lock() else { return };
+                    match message {
+                        Telemetry::Cycle(c) => {
+                            s.time = c.time_s;
+                            for j in c.joints() {
+                                let k = j.joint;
+                                if k < s.position.len() {
+                                    s.position[k] = j.measured.unwrap_or(f64::NAN);
+                                    s.velocity[k] = j.velocity;
+                                    s.error[k] = j.error;
+                                    s.commanded[k] = j.commanded;
+                                    s.flags[k] = j.flags.0;
+                                }
+                            }
+                        }
+                        Telemetry::Fault(f) => s.faults.push(f.to_string()),
+                        Telemetry::Finished(_) => return,
+                        _ => {}
+                    }
+                }
+            })
+            .map_err(|e| Failure::new("Error", format!("cannot start a thread: {e}")))?;
+        Ok(Stream {
+            targets: runner.targets(),
+            runner: Mutex::new(Some(runner)),
+            units: config.units,
+            started: Instant::now(),
+            state,
+            watcher: Mutex::new(Some(watcher)),
+        })
+    }
+
+    /// Sends `command` to the run, if it still runs.
+    fn command(&self, command: Command) -> Outcome<()> {
+        let runner = self.runner.lock().map_err(poisoned)?;
+        match runner.as_ref() {
+            Some(r) if !r.is_finished() => Ok(r.send(command)?),
+            _ => Ok(()),
+        }
+    }
+
+    /// Ends the run with `command` and returns its report as JSON text
+    /// (None when it was already taken).
+    fn finish(&self, command: Command) -> Outcome<Option<String>> {
+        self.command(command)?;
+        let runner = self.runner.lock().map_err(poisoned)?.take();
+        let Some(runner) = runner else {
+            return Ok(None);
+        };
+        let report = runner.join()?;
+        if let Some(w) = self.watcher.lock().map_err(poisoned)?.take() {
+            let _ = w.join();
+        }
+        serde_json::to_string(&report)
+            .map(Some)
+            .map_err(|e| Failure::new("Error", format!("the report does not serialise: {e}")))
+    }
+}
+
+#[pymethods]
+impl Stream {
+    /// Sends a target: `joints` maps joint names to angles in the robot's
+    /// units (joints not named keep their targets). Returns how many angles
+    /// were beyond the joint limits and clamped. Raises `UsageError` for an
+    /// unknown joint or an angle that is not a number, `Error` once the run
+    /// has ended.
+    fn send(&self, py: Python<'_>, joints: Vec<(String, f64)>) -> PyResult<usize> {
+        let units = self.units;
+        let stamp = self.started.elapsed().as_secs_f64();
+        let joints: Vec<(String, f64)> = joints
+            .into_iter()
+            .map(|(name, a)| (name, units.to_rad(a)))
+            .collect();
+        let sent = py.allow_threads(|| self.targets.send(Target::named(stamp, joints)));
+        match sent {
+            Ok(clamped) => Ok(clamped),
+            Err(TargetError::Ended) => Err(Failure::new("Error", "the stream has ended").into()),
+            Err(e) => Err(Failure::usage(chain(&e)).into()),
+        }
+    }
+
+    /// The joints' latest state: `(time, position, velocity, error,
+    /// commanded, status flags, faults)`, lists in the robot's joint order.
+    fn state(&self) -> PyResult<StateTuple> {
+        let s = self.state.lock().map_err(poisoned)?.clone();
+        // Numbers for Python: a list of u8 would become bytes.
+        let flags = s.flags.into_iter().map(u16::from).collect();
+        Ok((
+            s.time,
+            s.position,
+            s.velocity,
+            s.error,
+            s.commanded,
+            flags,
+            s.faults,
+        ))
+    }
+
+    /// Whether the run has ended (a stop, torque off or a fault).
+    #[getter]
+    fn finished(&self) -> PyResult<bool> {
+        let runner = self.runner.lock().map_err(poisoned)?;
+        Ok(runner.as_ref().map_or(true, Runner::is_finished))
+    }
+
+    /// Stops the joints (jerk limited), ends the run and returns its report
+    /// as JSON text (None when it was already returned).
+    fn stop(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        Ok(py.allow_threads(|| self.finish(Command::Stop))?)
+    }
+
+    /// Turns the torque off on every servo, ends the run and returns its
+    /// report as JSON text (None when it was already returned).
+    fn torque_off(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        Ok(py.allow_threads(|| self.finish(Command::TorqueOff))?)
+    }
+}
+
+impl Drop for Stream {
+    fn drop(&mut self) {
+        let _ = self.finish(Command::Stop);
+    }
+}

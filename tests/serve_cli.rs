@@ -9,7 +9,7 @@ mod common;
 
 use std::process::Command;
 use std::sync::Mutex;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use common::Running;
 use servobus_node::zenoh::{self, Wait};
@@ -210,8 +210,7 @@ fn a_peer_without_credentials_cannot_move_or_stop_the_robot() {
 #[test]
 fn three_robots_start_a_motion_on_the_same_control_cycle() {
     let _one = serial();
-    let rate = 100.0;
-    let period = 1.0 / rate;
+    let period = 1.0 / 100.0;
     let ports: Vec<String> = (0..3).map(|_| endpoint(free_port())).collect();
     let mut robots = Vec::new();
     for (i, ep) in ports.iter().enumerate() {
@@ -228,19 +227,23 @@ fn three_robots_start_a_motion_on_the_same_control_cycle() {
             "arm{i} serves"
         );
     }
-    let at = SystemTime::now() + Duration::from_secs(2);
-    let at_s = at
-        .duration_since(UNIX_EPOCH)
-        .expect("after 1970")
-        .as_secs_f64();
-    conductor
-        .put(
-            "servobus/group/troupe/command",
-            format!("play arm-wave at {at_s:.6}"),
-        )
-        .wait()
-        .expect("play");
-    std::thread::sleep(Duration::from_secs(3));
+    // `play --zenoh-group` tells every member, through the robots' own
+    // endpoints, to start two seconds from now.
+    let mut args = vec![
+        "play",
+        "arm-wave",
+        "--zenoh-group",
+        "troupe",
+        "--start-in",
+        "2s",
+    ];
+    for ep in &ports {
+        args.extend(["--connect", ep.as_str()]);
+    }
+    let told = common::servobus_ok(&args);
+    let said = common::stdout(&told);
+    assert!(said.contains("3 robot(s)"), "{said}");
+    std::thread::sleep(Duration::from_millis(2500));
     conductor
         .put("servobus/group/troupe/command", "stop")
         .wait()

@@ -7,7 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
-use servobus_node::node::{open_session, serve, NodeConfig, RobotInfo};
+use servobus_node::node::{
+    group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
+};
+use servobus_node::zenoh::Wait;
 use servobus_runtime::config::{load_motion_calibrated, load_robot_calibrated, plan_motion};
 use servobus_runtime::{Command, Lead, RunOptions};
 
@@ -191,4 +194,105 @@ impl Drop for Scratch {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.dir);
     }
+}
+
+/// Parses a duration: seconds (`2`, `0.5`), or with a unit (`2s`, `500ms`).
+pub(crate) fn duration_arg(arg: &str) -> Result<Duration, String> {
+    let arg = arg.trim();
+    let (num, scale) = if let Some(n) = arg.strip_suffix("ms") {
+        (n, 1e-3)
+    } else if let Some(n) = arg.strip_suffix('s') {
+        (n, 1.0)
+    } else {
+        (arg, 1.0)
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a duration: give e.g. 2s or 500ms"))?;
+    let secs = v * scale;
+    if !(0.0..=3600.0).contains(&secs) {
+        return Err(format!("`{arg}`: give 0 to 3600 s"));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
+/// `play MOTION --zenoh-group NAME`: tells every robot serving in the
+/// group to play the motion `start_in` from now, on the same control
+/// cycle. A shipped motion goes by name; a file goes as its text (each
+/// robot plans it for itself).
+pub(crate) fn announce(
+    motion: &Path,
+    group: &str,
+    start_in: Duration,
+    connect: &[String],
+) -> anyhow::Result<ExitCode> {
+    let what = match servobus::builtin::builtin_name(motion) {
+        Some(name) => name.to_string(),
+        None => std::fs::read_to_string(motion)
+            .map_err(|e| super::exit::input(format!("{}: {e}", motion.display())))?,
+    };
+    let config = NodeConfig {
+        connect: connect.to_vec(),
+        // A conductor listens nowhere: it only reaches the robots named.
+        listen: vec![],
+        ..NodeConfig::default()
+    };
+    let session = open_conductor(&config)?;
+    // Who serves the group (each robot declares itself while serving).
+    let members: Vec<String> = session
+        .liveliness()
+        .get(group_member_key(group, "*"))
+        .timeout(Duration::from_secs(2))
+        .wait()
+        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?
+        .iter()
+        .filter_map(|r| {
+            r.result().ok().map(|s| {
+                s.key_expr()
+                    .as_str()
+                    .rsplit('/')
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+        })
+        .collect();
+    if members.is_empty() {
+        eprintln!(
+            "no robot serves group `{group}` at the given endpoints (--connect); nothing sent"
+        );
+        return Ok(ExitCode::from(1));
+    }
+    let at = std::time::SystemTime::now() + start_in;
+    let at_s = at
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    session
+        .put(
+            group_command_key(group),
+            format!("play {what} at {at_s:.6}"),
+        )
+        .wait()
+        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?;
+    // Let the put leave before the session closes.
+    std::thread::sleep(Duration::from_millis(300));
+    println!(
+        "group {group}: {} robot(s) ({}) start {} at UNIX {at_s:.3}",
+        members.len(),
+        members.join(", "),
+        servobus::builtin::argument(motion)
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A session for a program that only talks to robots: no listening, no
+/// multicast, connected to `config.connect`.
+fn open_conductor(config: &NodeConfig) -> anyhow::Result<servobus_node::zenoh::Session> {
+    if config.connect.is_empty() {
+        return Err(super::exit::input(
+            "--zenoh-group needs --connect ENDPOINT for each robot (or a router)".to_string(),
+        ));
+    }
+    Ok(servobus_node::node::open_peer(config).map_err(|e| super::exit::input(e.to_string()))?)
 }

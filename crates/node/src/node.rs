@@ -150,6 +150,37 @@ pub fn group_command_key(group: &str) -> String {
     format!("servobus/group/{}/command", crate::key_chunk(group))
 }
 
+/// The liveliness token of a group member: `servobus/group/<group>/members/<robot>`.
+pub fn group_member_key(group: &str, robot: &str) -> String {
+    let robot = if robot == "*" {
+        "*".to_string()
+    } else {
+        crate::key_chunk(robot)
+    };
+    format!("servobus/group/{}/members/{robot}", crate::key_chunk(group))
+}
+
+/// Opens a session for a program that talks to nodes without being one:
+/// peer mode, no multicast, listening only where `config.listen` says
+/// (nowhere by default), connected to `config.connect`.
+///
+/// # Errors
+/// [`NodeError::Config`] or [`NodeError::Zenoh`] as [`open_session`].
+pub fn open_peer(config: &NodeConfig) -> Result<zenoh::Session, NodeError> {
+    let cerr = |e: zenoh::Error| NodeError::Config(e.to_string());
+    let mut z = zenoh::Config::default();
+    z.insert_json5("mode", "\"peer\"").map_err(cerr)?;
+    z.insert_json5("scouting/multicast/enabled", "false")
+        .map_err(cerr)?;
+    let json =
+        |v: &[String]| serde_json::to_string(v).map_err(|e| NodeError::Config(e.to_string()));
+    z.insert_json5("listen/endpoints", &json(&config.listen)?)
+        .map_err(cerr)?;
+    z.insert_json5("connect/endpoints", &json(&config.connect)?)
+        .map_err(cerr)?;
+    zenoh::open(z).wait().map_err(zerr)
+}
+
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
@@ -183,6 +214,16 @@ pub fn serve(
         .declare_token(format!("{base}/alive"))
         .wait()
         .map_err(zerr)?;
+    let _member = match &config.group {
+        Some(g) => Some(
+            session
+                .liveliness()
+                .declare_token(group_member_key(g, &robot.name))
+                .wait()
+                .map_err(zerr)?,
+        ),
+        None => None,
+    };
     let state = session
         .declare_publisher(format!("{base}/state"))
         .encoding(Encoding::APPLICATION_JSON)

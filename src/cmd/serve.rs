@@ -294,5 +294,5 @@ fn open_conductor(config: &NodeConfig) -> anyhow::Result<servobus_node::zenoh::S
             "--zenoh-group needs --connect ENDPOINT for each robot (or a router)".to_string(),
         ));
     }
-    Ok(servobus_node::node::open_peer(config).map_err(|e| super::exit::input(e.to_string()))?)
+    servobus_node::node::open_peer(config).map_err(|e| super::exit::input(e.to_string()))
 }

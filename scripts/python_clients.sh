@@ -5,6 +5,7 @@
 #
 #   SERVOBUS_FEETECH_PYTHON=...   a Python with Feetech's SDK (scservo_sdk)
 #   SERVOBUS_LEROBOT_PYTHON=...   a Python with LeRobot's FeetechMotorsBus
+#   SERVOBUS_ZENOH_PYTHON=...     a Python with eclipse-zenoh and rosbags
 #
 # Usage: eval "$(scripts/python_clients.sh)"
 # Env:   SERVOBUS_VENVS (default ~/.cache/servobus/venvs).
@@ -72,9 +73,15 @@ if [ ! -e "$root/lerobot-0.6.1/.deps-ready" ]; then
     touch "$root/lerobot-0.6.1/.deps-ready"
 fi
 
+# A Zenoh peer and ROS 2's CDR decoder, pinned: the clients of `servobus
+# serve` in tests/serve_cli.rs.
+zenoh_py=$(make_venv zenoh-1.10.1 3.9 'eclipse-zenoh==1.10.1' 'rosbags==0.10.11')
+
 "$feetech" -c 'import scservo_sdk' || { say "FAIL scservo_sdk does not import"; exit 1; }
 "$lerobot" -c "import scservo_sdk, deepdiff, draccus" ||
     { say "FAIL lerobot does not import"; exit 1; }
+"$zenoh_py" -c "import zenoh, rosbags" || { say "FAIL eclipse-zenoh does not import"; exit 1; }
 
 printf 'export SERVOBUS_FEETECH_PYTHON=%q\n' "$feetech"
 printf 'export SERVOBUS_LEROBOT_PYTHON=%q\n' "$lerobot"
+printf 'export SERVOBUS_ZENOH_PYTHON=%q\n' "$zenoh_py"

@@ -27,6 +27,8 @@ mod list;
 mod monitor;
 mod plan;
 mod play;
+#[cfg(feature = "zenoh")]
+mod serve;
 mod sim;
 mod stream;
 mod teach;
@@ -99,6 +101,9 @@ enum Command {
     Fk(fk::FkArgs),
     /// Find the joint angles that put a named frame at a point, or say why there are none.
     Ik(fk::IkArgs),
+    /// Run the robot live as a Zenoh node: state out, targets and commands in (--features zenoh).
+    #[cfg(feature = "zenoh")]
+    Serve(serve::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -160,6 +165,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Follow(args) => follow::run(args),
         Command::Fk(args) => fk::fk(args),
         Command::Ik(args) => fk::ik(args),
+        #[cfg(feature = "zenoh")]
+        Command::Serve(args) => serve::run(args),
     }
 }
 

@@ -104,6 +104,21 @@ pub struct Args {
         conflicts_with = "port"
     )]
     pub sim_pose: Option<Vec<f64>>,
+    /// Tell every robot serving in this Zenoh group (`servobus serve
+    /// --group NAME`) to play the motion together, instead of playing it
+    /// here.
+    #[cfg(feature = "zenoh")]
+    #[arg(long, value_name = "NAME")]
+    pub zenoh_group: Option<String>,
+    /// With --zenoh-group: when the robots start, from now (`2s`, `500ms`).
+    #[cfg(feature = "zenoh")]
+    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = super::serve::duration_arg)]
+    pub start_in: std::time::Duration,
+    /// With --zenoh-group: a robot's endpoint to connect to (repeatable),
+    /// e.g. tcp/127.0.0.1:7447.
+    #[cfg(feature = "zenoh")]
+    #[arg(long, value_name = "ENDPOINT", requires = "zenoh_group")]
+    pub connect: Vec<String>,
 }
 
 /// Where the run happens.
@@ -118,6 +133,10 @@ enum Backend {
 
 /// Runs `servobus play`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    #[cfg(feature = "zenoh")]
+    if let Some(group) = &args.zenoh_group {
+        return super::serve::announce(&args.motion, group, args.start_in, &args.connect);
+    }
     if args.monitor {
         // The live view needs a terminal: without one, refuse before
         // anything is opened or moved.

@@ -1,0 +1,65 @@
+//! servobus as a Zenoh node.
+//!
+//! A robot's loop, run in live mode, becomes a node of a Zenoh network
+//! (peer to peer, no broker). Its keys live under `servobus/<robot>/`:
+//!
+//! | key | direction | what |
+//! |---|---|---|
+//! | `state` | out, every few cycles | [`wire::StateMessage`] as JSON |
+//! | `target` | in | live targets, `{"joints": {"<name>": angle}}` |
+//! | `command` | in | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off` |
+//! | `report` | queryable | the run's report as JSON |
+//! | `alive` | liveliness token | present while the node runs |
+//!
+//! With ROS 2 output on, the node also publishes
+//! `sensor_msgs/msg/JointState` the way rmw_zenoh does ([`ros2`]), so a
+//! ROS 2 machine running rmw_zenoh sees `/<robot>/joint_states`.
+//!
+//! The wire formats ([`wire`], [`ros2`]) build without Zenoh; the session
+//! itself needs the `zenoh` feature.
+
+pub mod ros2;
+pub mod wire;
+
+#[cfg(feature = "zenoh")]
+pub mod node;
+
+/// The Zenoh crate this node is built on, for programs (and tests) that
+/// talk to a node from Rust.
+#[cfg(feature = "zenoh")]
+pub use zenoh;
+
+/// The key expression prefix of a robot: `servobus/<robot>`.
+pub fn prefix(robot: &str) -> String {
+    format!("servobus/{}", key_chunk(robot))
+}
+
+/// `name` made one chunk of a key expression: no `/`, `*`, `$`, `?`, `#`
+/// or whitespace (each becomes `_`), never empty.
+pub fn key_chunk(name: &str) -> String {
+    let out: String = name
+        .chars()
+        .map(|c| {
+            if c == '/' || c == '*' || c == '$' || c == '?' || c == '#' || c.is_whitespace() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .collect();
+    if out.is_empty() {
+        "_".into()
+    } else {
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn keys_live_under_the_robot() {
+        assert_eq!(super::prefix("so101"), "servobus/so101");
+        assert_eq!(super::prefix("arm/left *"), "servobus/arm_left__");
+        assert_eq!(super::prefix(""), "servobus/_");
+    }
+}

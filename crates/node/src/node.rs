@@ -1,0 +1,611 @@
+//! The Zenoh session of a serving robot: opens it safely (loopback,
+//! no multicast scouting unless a config file turns it on), declares the
+//! robot's keys, and relays between them and the running loop.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use servobus_runtime::config::Units;
+use servobus_runtime::{Command, CommandSender, Report, Runner, Target, TargetSender, Telemetry};
+use zenoh::bytes::Encoding;
+use zenoh::Wait;
+
+use crate::wire::{parse_command, parse_target, NodeCommand, StateMessage};
+use crate::{prefix, ros2};
+
+/// Where the node listens by default: loopback only, Zenoh's usual port.
+pub const DEFAULT_LISTEN: &str = "tcp/127.0.0.1:7447";
+
+/// How a node joins the network.
+#[derive(Debug, Clone, Default)]
+pub struct NodeConfig {
+    /// A Zenoh configuration file (JSON5), for authentication, TLS or
+    /// scouting. Its settings stand unless `listen`/`connect` override.
+    pub zenoh_config: Option<PathBuf>,
+    /// Endpoints to listen on; none: [`DEFAULT_LISTEN`] (unless the
+    /// config file names some).
+    pub listen: Vec<String>,
+    /// Peers to connect to.
+    pub connect: Vec<String>,
+    /// ROS 2 JointState output in this ROS domain, if wanted.
+    pub ros2_domain: Option<u32>,
+    /// How often `state` is published, Hz.
+    pub state_hz: f64,
+    /// A group whose commands this robot also takes, from
+    /// `servobus/group/<group>/command` (robots started together).
+    pub group: Option<String>,
+}
+
+/// Why a node could not run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum NodeError {
+    /// The Zenoh configuration could not be read or set.
+    #[error("zenoh configuration: {0}")]
+    Config(String),
+    /// The session or one of its keys could not be declared.
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+    /// The run could not be joined.
+    #[error(transparent)]
+    Run(#[from] servobus_runtime::RunError),
+}
+
+fn zerr(e: impl std::fmt::Display) -> NodeError {
+    NodeError::Zenoh(e.to_string())
+}
+
+/// Opens a Zenoh session per `config`: peer mode; loopback listening and
+/// multicast scouting off unless the configuration file says otherwise.
+pub fn open_session(config: &NodeConfig) -> Result<zenoh::Session, NodeError> {
+    let cerr = |e: zenoh::Error| NodeError::Config(e.to_string());
+    let (mut z, from_file) = match &config.zenoh_config {
+        Some(path) => (
+            zenoh::Config::from_file(path)
+                .map_err(|e| NodeError::Config(format!("{}: {e}", path.display())))?,
+            true,
+        ),
+        None => (zenoh::Config::default(), false),
+    };
+    if !from_file {
+        z.insert_json5("mode", "\"peer\"").map_err(cerr)?;
+        z.insert_json5("scouting/multicast/enabled", "false")
+            .map_err(cerr)?;
+    }
+    let listen = if config.listen.is_empty() && !from_file {
+        vec![DEFAULT_LISTEN.to_string()]
+    } else {
+        config.listen.clone()
+    };
+    if !listen.is_empty() {
+        let json = serde_json::to_string(&listen).map_err(|e| NodeError::Config(e.to_string()))?;
+        z.insert_json5("listen/endpoints", &json).map_err(cerr)?;
+    }
+    if !config.connect.is_empty() {
+        let json =
+            serde_json::to_string(&config.connect).map_err(|e| NodeError::Config(e.to_string()))?;
+        z.insert_json5("connect/endpoints", &json).map_err(cerr)?;
+    }
+    zenoh::open(z).wait().map_err(zerr)
+}
+
+/// Turns the motion of a `play` command (a name, a file or YAML text) into
+/// the command that plays it; the node's owner knows the robot and plans.
+pub type Planner = dyn Fn(&str) -> Result<Command, String> + Send + Sync;
+
+/// The robot as the node sees it.
+#[derive(Debug, Clone)]
+pub struct RobotInfo {
+    /// The robot's name (the key chunk after `servobus/`).
+    pub name: String,
+    /// Joint names, in the robot's order.
+    pub joints: Vec<String>,
+    /// The angle units of the robot file (targets and `state` use them).
+    pub units: Units,
+    /// The control rate, Hz.
+    pub rate_hz: f64,
+}
+
+/// What the node reports at the end: the run's report and its own counts.
+#[derive(Debug)]
+pub struct Served {
+    /// The run's report.
+    pub report: Report,
+    /// Targets taken into the stream.
+    pub targets: u64,
+    /// Targets or commands that did not parse (never acted on).
+    pub malformed: u64,
+    /// Commands carried out.
+    pub commands: u64,
+    /// States published on `state`.
+    pub states: u64,
+    /// Timed `play` commands: the start cycle's measured start minus the
+    /// agreed instant, s.
+    pub start_offsets: Vec<f64>,
+}
+
+#[derive(Debug, Default)]
+struct Counts {
+    targets: AtomicU64,
+    malformed: AtomicU64,
+    commands: AtomicU64,
+}
+
+/// What the callbacks and the telemetry loop share.
+#[derive(Default)]
+struct Shared {
+    /// Wall-clock time of cycle 0's deadline, once the first cycle ran.
+    start: Mutex<Option<SystemTime>>,
+    /// Timed starts waiting to be measured: (cycle, agreed instant).
+    timed: Mutex<Vec<(u64, SystemTime)>>,
+    /// What `report` answers: progress while running, then the report.
+    report: Mutex<String>,
+    counts: Counts,
+}
+
+/// The key a group's commands travel on: `servobus/group/<group>/command`.
+pub fn group_command_key(group: &str) -> String {
+    format!("servobus/group/{}/command", crate::key_chunk(group))
+}
+
+/// The liveliness token of a group member: `servobus/group/<group>/members/<robot>`.
+pub fn group_member_key(group: &str, robot: &str) -> String {
+    let robot = if robot == "*" {
+        "*".to_string()
+    } else {
+        crate::key_chunk(robot)
+    };
+    format!("servobus/group/{}/members/{robot}", crate::key_chunk(group))
+}
+
+/// Opens a session for a program that talks to nodes without being one:
+/// peer mode, no multicast, listening only where `config.listen` says
+/// (nowhere by default), connected to `config.connect`.
+///
+/// # Errors
+/// [`NodeError::Config`] or [`NodeError::Zenoh`] as [`open_session`].
+pub fn open_peer(config: &NodeConfig) -> Result<zenoh::Session, NodeError> {
+    let cerr = |e: zenoh::Error| NodeError::Config(e.to_string());
+    let mut z = zenoh::Config::default();
+    z.insert_json5("mode", "\"peer\"").map_err(cerr)?;
+    z.insert_json5("scouting/multicast/enabled", "false")
+        .map_err(cerr)?;
+    let json =
+        |v: &[String]| serde_json::to_string(v).map_err(|e| NodeError::Config(e.to_string()));
+    z.insert_json5("listen/endpoints", &json(&config.listen)?)
+        .map_err(cerr)?;
+    z.insert_json5("connect/endpoints", &json(&config.connect)?)
+        .map_err(cerr)?;
+    zenoh::open(z).wait().map_err(zerr)
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+fn unix_ns(t: SystemTime) -> i64 {
+    t.duration_since(UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
+}
+
+/// Runs `runner` as a Zenoh node on `session` until the run ends, then
+/// keeps answering `report` for `linger`. See the crate docs for the keys.
+///
+/// # Errors
+/// [`NodeError::Zenoh`] when a key cannot be declared; [`NodeError::Run`]
+/// when the run cannot be joined.
+pub fn serve(
+    session: &zenoh::Session,
+    robot: &RobotInfo,
+    runner: Runner,
+    planner: Box<Planner>,
+    config: &NodeConfig,
+    linger: Duration,
+) -> Result<Served, NodeError> {
+    let base = prefix(&robot.name);
+    let shared = Arc::new(Shared::default());
+    *lock(&shared.report) = serde_json::json!({"running": true}).to_string();
+    let period = 1.0 / robot.rate_hz;
+
+    let _alive = session
+        .liveliness()
+        .declare_token(format!("{base}/alive"))
+        .wait()
+        .map_err(zerr)?;
+    let _member = match &config.group {
+        Some(g) => Some(
+            session
+                .liveliness()
+                .declare_token(group_member_key(g, &robot.name))
+                .wait()
+                .map_err(zerr)?,
+        ),
+        None => None,
+    };
+    let state = session
+        .declare_publisher(format!("{base}/state"))
+        .encoding(Encoding::APPLICATION_JSON)
+        .wait()
+        .map_err(zerr)?;
+    let _targets = {
+        let targets: TargetSender = runner.targets();
+        let shared = Arc::clone(&shared);
+        let units = robot.units;
+        let started = Instant::now();
+        session
+            .declare_subscriber(format!("{base}/target"))
+            .callback(move |sample| {
+                take_target(
+                    &sample.payload().to_bytes(),
+                    &targets,
+                    units,
+                    started,
+                    &shared,
+                );
+            })
+            .wait()
+            .map_err(zerr)?
+    };
+    let planner: Arc<Planner> = Arc::from(planner);
+    let mut command_keys = vec![format!("{base}/command")];
+    if let Some(g) = &config.group {
+        command_keys.push(group_command_key(g));
+    }
+    let mut _commands = Vec::new();
+    for key in command_keys {
+        let commands = runner.commands();
+        let shared = Arc::clone(&shared);
+        let planner = Arc::clone(&planner);
+        _commands.push(
+            session
+                .declare_subscriber(key)
+                .callback(move |sample| {
+                    take_command(
+                        &sample.payload().to_bytes(),
+                        &commands,
+                        &*planner,
+                        period,
+                        &shared,
+                    );
+                })
+                .wait()
+                .map_err(zerr)?,
+        );
+    }
+    let _report = {
+        let shared = Arc::clone(&shared);
+        session
+            .declare_queryable(format!("{base}/report"))
+            .callback(move |query| {
+                let text = lock(&shared.report).clone();
+                let key = query.key_expr().clone();
+                if let Err(e) = query
+                    .reply(key, text)
+                    .encoding(Encoding::APPLICATION_JSON)
+                    .wait()
+                {
+                    eprintln!("report: the reply could not be sent: {e}");
+                }
+            })
+            .wait()
+            .map_err(zerr)?
+    };
+    let ros = match config.ros2_domain {
+        Some(domain) => Some(Ros2::declare(session, domain, &robot.name)?),
+        None => None,
+    };
+
+    let every = ((robot.rate_hz / config.state_hz.max(0.1)).round() as u64).max(1);
+    let mut watch = Watch::new(robot);
+    let mut states = 0u64;
+    let mut offsets = Vec::new();
+    let mut ros_seq = 0i64;
+    for m in runner.telemetry().iter() {
+        match m {
+            Telemetry::Cycle(c) => {
+                if c.bus == 0 {
+                    // Cycle 0's deadline on the wall clock: the earliest
+                    // estimate wins (a sample arrives after its cycle).
+                    let now = SystemTime::now();
+                    let here = now
+                        .checked_sub(Duration::from_secs_f64(c.time_s.max(0.0)))
+                        .unwrap_or(now);
+                    let mut start = lock(&shared.start);
+                    let s = match *start {
+                        Some(s) if s <= here => s,
+                        _ => here,
+                    };
+                    *start = Some(s);
+                    drop(start);
+                    measure_starts(
+                        &shared,
+                        c.cycle,
+                        s,
+                        c.time_s + c.lateness.as_secs_f64(),
+                        &mut offsets,
+                    );
+                }
+                if let Some(done) = watch.cycle(&c) {
+                    if done.cycle % every == 0 {
+                        publish_state(&state, &done)?;
+                        states += 1;
+                        if let Some(ros) = &ros {
+                            ros_seq += 1;
+                            ros.publish(&done, robot.units, ros_seq)?;
+                        }
+                        let progress = serde_json::json!({
+                            "running": true, "cycle": done.cycle, "t": done.t,
+                        });
+                        *lock(&shared.report) = progress.to_string();
+                    }
+                }
+            }
+            Telemetry::Fault(f) => {
+                eprintln!("fault: {f}");
+                watch.faults.push(f.to_string());
+            }
+            Telemetry::Rejected(why) => eprintln!("refused: {why}"),
+            Telemetry::Finished(_) => break,
+            _ => {}
+        }
+    }
+    let report = runner.join()?;
+    let c = &shared.counts;
+    let served = Served {
+        targets: c.targets.load(Ordering::Relaxed),
+        malformed: c.malformed.load(Ordering::Relaxed),
+        commands: c.commands.load(Ordering::Relaxed),
+        states,
+        start_offsets: offsets,
+        report,
+    };
+    *lock(&shared.report) = serde_json::json!({
+        "running": false,
+        "report": served.report,
+        "node": {
+            "targets": served.targets,
+            "malformed": served.malformed,
+            "commands": served.commands,
+            "states": served.states,
+            "start_offsets_s": served.start_offsets,
+        },
+    })
+    .to_string();
+    std::thread::sleep(linger);
+    Ok(served)
+}
+
+/// A target from the network into the stream; a malformed one is counted
+/// and logged, never sent.
+fn take_target(
+    payload: &[u8],
+    targets: &TargetSender,
+    units: Units,
+    started: Instant,
+    shared: &Shared,
+) {
+    let msg = match parse_target(payload) {
+        Ok(m) => m,
+        Err(why) => {
+            shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
+            eprintln!("target: {why}; ignored");
+            return;
+        }
+    };
+    let joints = msg
+        .joints
+        .into_iter()
+        .map(|(n, a)| (n, units.to_rad(a)))
+        .collect();
+    let stamp = msg.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
+    // Counted from its publishing when the sender says when that was.
+    let now = Instant::now();
+    let taken = msg
+        .sent_ns
+        .and_then(|sent| {
+            let ago = unix_ns(SystemTime::now()).checked_sub(sent)?;
+            now.checked_sub(Duration::from_nanos(u64::try_from(ago).ok()?))
+        })
+        .unwrap_or(now);
+    match targets.send(Target::named(stamp, joints).taken_at(taken)) {
+        Ok(clamped) => {
+            shared.counts.targets.fetch_add(1, Ordering::Relaxed);
+            if clamped > 0 {
+                eprintln!("target: {clamped} angle(s) beyond the joint limits, clamped");
+            }
+        }
+        // The stream counts its refusals for the report.
+        Err(why) => eprintln!("target: {why}; refused"),
+    }
+}
+
+/// A command from the network to the loop; a malformed one is counted and
+/// logged, never acted on.
+fn take_command(
+    payload: &[u8],
+    commands: &CommandSender,
+    planner: &Planner,
+    period: f64,
+    shared: &Shared,
+) {
+    let cmd = match parse_command(payload) {
+        Ok(c) => c,
+        Err(why) => {
+            shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
+            eprintln!("command: {why}; ignored");
+            return;
+        }
+    };
+    let (command, at) = match cmd {
+        NodeCommand::Stop => (Command::Stop, None),
+        NodeCommand::Pause => (Command::Pause, None),
+        NodeCommand::Resume => (Command::Resume, None),
+        NodeCommand::TorqueOff => (Command::TorqueOff, None),
+        NodeCommand::Play { motion, at } => match planner(&motion) {
+            Ok(c) => (c, at),
+            Err(why) => {
+                eprintln!("command: play: {why}; ignored");
+                return;
+            }
+        },
+    };
+    let sent = match (at, *lock(&shared.start)) {
+        (Some(at), Some(start)) => {
+            let since = at.duration_since(start).map_or(0.0, |d| d.as_secs_f64());
+            let cycle = (since / period - 1e-9).ceil().max(0.0) as u64;
+            lock(&shared.timed).push((cycle, at));
+            commands.send_at(cycle, command)
+        }
+        _ => commands.send(command),
+    };
+    match sent {
+        Ok(()) => {
+            shared.counts.commands.fetch_add(1, Ordering::Relaxed);
+        }
+        Err(_) => eprintln!("command: the run has ended; ignored"),
+    }
+}
+
+/// Measures the timed starts due at `cycle`, which started `t` s after
+/// `start` on the wall clock.
+fn measure_starts(shared: &Shared, cycle: u64, start: SystemTime, t: f64, out: &mut Vec<f64>) {
+    let mut timed = lock(&shared.timed);
+    timed.retain(|&(k, at)| {
+        if k > cycle {
+            return true;
+        }
+        let began = start + Duration::from_secs_f64(t.max(0.0));
+        let offset = match began.duration_since(at) {
+            Ok(d) => d.as_secs_f64(),
+            Err(e) => -e.duration().as_secs_f64(),
+        };
+        out.push(offset);
+        false
+    });
+}
+
+/// The state of one whole cycle (every bus's joints).
+struct Done {
+    cycle: u64,
+    t: f64,
+    msg: StateMessage,
+}
+
+/// Gathers a cycle's samples (one per bus, or more for long buses).
+struct Watch {
+    msg: StateMessage,
+    cycle: Option<(u64, f64)>,
+    faults: Vec<String>,
+}
+
+impl Watch {
+    fn new(robot: &RobotInfo) -> Self {
+        let n = robot.joints.len();
+        Watch {
+            msg: StateMessage {
+                t: 0.0,
+                stamp_ns: 0,
+                cycle: 0,
+                units: robot.units.name(),
+                joints: robot.joints.clone(),
+                measured: vec![None; n],
+                commanded: vec![0.0; n],
+                velocity: vec![0.0; n],
+                faults: Vec::new(),
+            },
+            cycle: None,
+            faults: Vec::new(),
+        }
+    }
+
+    /// Takes a sample; returns the previous cycle once a new one begins.
+    fn cycle(&mut self, c: &servobus_runtime::CycleSample) -> Option<Done> {
+        let mut done = None;
+        if let Some((k, t)) = self.cycle.filter(|(k, _)| *k != c.cycle) {
+            let mut msg = self.msg.clone();
+            msg.t = t;
+            msg.cycle = k;
+            msg.stamp_ns = unix_ns(SystemTime::now());
+            msg.faults.clone_from(&self.faults);
+            done = Some(Done { cycle: k, t, msg });
+        }
+        self.cycle = Some((c.cycle, c.time_s));
+        for j in c.joints() {
+            if j.joint < self.msg.joints.len() {
+                self.msg.commanded[j.joint] = j.commanded;
+                self.msg.measured[j.joint] = j.measured;
+                self.msg.velocity[j.joint] = j.velocity;
+            }
+        }
+        done
+    }
+}
+
+fn publish_state(state: &zenoh::pubsub::Publisher<'_>, done: &Done) -> Result<(), NodeError> {
+    let json = serde_json::to_vec(&done.msg).map_err(|e| NodeError::Zenoh(e.to_string()))?;
+    state.put(json).wait().map_err(zerr)
+}
+
+/// The ROS 2 side: the JointState publisher and its liveliness tokens.
+struct Ros2 {
+    publisher: zenoh::pubsub::Publisher<'static>,
+    gid: [u8; 16],
+    _tokens: Vec<zenoh::liveliness::LivelinessToken>,
+}
+
+impl Ros2 {
+    fn declare(session: &zenoh::Session, domain: u32, robot: &str) -> Result<Self, NodeError> {
+        let zid = session.zid();
+        let id = zid.to_string();
+        let mut tokens = Vec::new();
+        for key in ros2::liveliness_tokens(domain, &id, robot) {
+            tokens.push(
+                session
+                    .liveliness()
+                    .declare_token(key)
+                    .wait()
+                    .map_err(zerr)?,
+            );
+        }
+        let publisher = session
+            .declare_publisher(ros2::joint_states_key(domain, robot))
+            .wait()
+            .map_err(zerr)?;
+        // The publisher's GID: the session's id, which is unique per node.
+        let mut gid = [0u8; 16];
+        let bytes = zid.to_le_bytes();
+        let n = bytes.len().min(16);
+        gid[..n].copy_from_slice(&bytes[..n]);
+        Ok(Ros2 {
+            publisher,
+            gid,
+            _tokens: tokens,
+        })
+    }
+
+    fn publish(&self, done: &Done, units: Units, seq: i64) -> Result<(), NodeError> {
+        let m = &done.msg;
+        let position: Vec<f64> = m
+            .measured
+            .iter()
+            .zip(&m.commanded)
+            .map(|(meas, cmd)| units.to_rad(meas.unwrap_or(*cmd)))
+            .collect();
+        let velocity: Vec<f64> = m.velocity.iter().map(|v| units.to_rad(*v)).collect();
+        let js = ros2::JointState {
+            stamp_ns: m.stamp_ns,
+            frame_id: "",
+            names: &m.joints,
+            position: &position,
+            velocity: &velocity,
+            effort: &[],
+        };
+        self.publisher
+            .put(js.encode())
+            .attachment(ros2::attachment(seq, m.stamp_ns, &self.gid))
+            .wait()
+            .map_err(zerr)
+    }
+}

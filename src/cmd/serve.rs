@@ -1,0 +1,298 @@
+//! `servobus serve`: the robot's loop in live mode as a Zenoh node
+//! (`servobus_node`): state out, targets and commands in, the report as a
+//! queryable, a liveliness token, and optionally ROS 2 JointState the way
+//! rmw_zenoh publishes it. Built with `--features zenoh`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use servobus_node::node::{
+    group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
+};
+use servobus_node::zenoh::Wait;
+use servobus_runtime::config::{load_motion_calibrated, load_robot_calibrated, plan_motion};
+use servobus_runtime::{Command, Lead, RunOptions};
+
+/// Arguments of `servobus serve`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The robot file, or a built-in robot's name, and its port and
+    /// calibration.
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
+    /// A Zenoh configuration file (JSON5): authentication, TLS, scouting.
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+    /// Listen on this endpoint (repeatable; default tcp/127.0.0.1:7447,
+    /// loopback only).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// Connect to this peer (repeatable), e.g. tcp/192.168.1.20:7447.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// The robot's name on the network, `servobus/<name>/...` (default:
+    /// the robot file's name).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Also take commands sent to this group (`play --zenoh-group`).
+    #[arg(long)]
+    pub group: Option<String>,
+    /// How often `state` is published, Hz.
+    #[arg(long, default_value_t = 50.0)]
+    pub state_hz: f64,
+    /// Also publish sensor_msgs/msg/JointState for ROS 2 over rmw_zenoh.
+    #[arg(long)]
+    pub ros2: bool,
+    /// The ROS domain of the JointState topic.
+    #[arg(long, default_value_t = 0, requires = "ros2")]
+    pub ros_domain: u32,
+    /// Control rate in Hz (default: the robot's).
+    #[arg(long)]
+    pub rate: Option<f64>,
+    /// Seconds without a target after which the joints stop (jerk
+    /// limited) and hold until targets come back.
+    #[arg(long, default_value_t = 0.25)]
+    pub timeout: f64,
+    /// Seconds the node keeps answering `report` after the run ends.
+    #[arg(long, default_value_t = 2.0)]
+    pub linger: f64,
+    /// Print the report and the node's counts as one JSON line on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `servobus serve`.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    for (flag, v) in [("--timeout", args.timeout), ("--state-hz", args.state_hz)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(super::exit::input(format!(
+                "{flag} {v}: give a positive number"
+            )));
+        }
+    }
+    if !(args.linger.is_finite() && args.linger >= 0.0 && args.linger <= 3600.0) {
+        return Err(super::exit::input(format!(
+            "--linger {}: give 0 to 3600 seconds",
+            args.linger
+        )));
+    }
+    let calibration = args.robot.hardware.calibration.clone();
+    let robot = load_robot_calibrated(&args.robot.path, calibration.as_deref())?;
+    let config = NodeConfig {
+        zenoh_config: args.zenoh_config.clone(),
+        listen: args.listen.clone(),
+        connect: args.connect.clone(),
+        ros2_domain: args.ros2.then_some(args.ros_domain),
+        state_hz: args.state_hz,
+        group: args.group.clone(),
+    };
+    // The network first: a node that cannot join never moves the robot.
+    let session = open_session(&config).map_err(|e| super::exit::input(e.to_string()))?;
+    let options = RunOptions {
+        rate_hz: args.rate,
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        approach: None,
+        target_timeout: Duration::from_secs_f64(args.timeout),
+        ..RunOptions::default()
+    };
+    let rate_hz = args.rate.unwrap_or(robot.rate_hz);
+    let runner = super::stream::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
+    super::play::install_ctrl_c(&runner);
+    let info = RobotInfo {
+        name: args.name.clone().unwrap_or_else(|| robot.name.clone()),
+        joints: robot.joints().map(|j| j.name.clone()).collect(),
+        units: robot.units,
+        rate_hz,
+    };
+    let robot_path = robot.path.clone();
+    let planner =
+        Box::new(move |motion: &str| plan_command(motion, &robot_path, calibration.as_deref()));
+    eprintln!(
+        "serving {} on servobus/{}/ (state at {} Hz); Ctrl-C stops",
+        robot.name,
+        servobus_node::key_chunk(&info.name),
+        args.state_hz
+    );
+    let served = serve(
+        &session,
+        &info,
+        runner,
+        planner,
+        &config,
+        Duration::from_secs_f64(args.linger),
+    )?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "report": served.report,
+                "node": {
+                    "targets": served.targets,
+                    "malformed": served.malformed,
+                    "commands": served.commands,
+                    "states": served.states,
+                    "start_offsets_s": served.start_offsets,
+                },
+            })
+        );
+    } else {
+        let mut err = std::io::stderr().lock();
+        super::play::write_report(&mut err, &served.report, false)?;
+        eprintln!(
+            "  node: {} targets, {} malformed, {} commands, {} states published",
+            served.targets, served.malformed, served.commands, served.states
+        );
+        for o in &served.start_offsets {
+            eprintln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
+        }
+    }
+    Ok(super::exit::of_finish(served.report.finish))
+}
+
+/// The command that plays `motion` (a built-in motion's name, a file, or
+/// YAML text) on this robot.
+fn plan_command(motion: &str, robot: &Path, calibration: Option<&Path>) -> Result<Command, String> {
+    let scratch;
+    let path = if motion.contains('\n') || motion.trim_start().starts_with('{') {
+        // YAML text: read through the same loader as files, with errors
+        // pointing at its lines.
+        scratch = Scratch::write(motion).map_err(|e| format!("the motion text: {e}"))?;
+        scratch.path.clone()
+    } else {
+        servobus::builtin::motion_path_or_name(Path::new(motion.trim()))
+    };
+    let (m, r) =
+        load_motion_calibrated(&path, Some(robot), calibration).map_err(|e| e.to_string())?;
+    let trajectory = plan_motion(&m, &r).map_err(|e| e.to_string())?;
+    Ok(Command::replace(trajectory))
+}
+
+/// A motion given as text, in a file of its own while it is read.
+struct Scratch {
+    dir: PathBuf,
+    path: PathBuf,
+}
+
+impl Scratch {
+    fn write(text: &str) -> std::io::Result<Self> {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        static N: AtomicU64 = AtomicU64::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "servobus-serve-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&dir)?;
+        let path = dir.join("command.yaml");
+        std::fs::write(&path, text)?;
+        Ok(Scratch { dir, path })
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// Parses a duration: seconds (`2`, `0.5`), or with a unit (`2s`, `500ms`).
+pub(crate) fn duration_arg(arg: &str) -> Result<Duration, String> {
+    let arg = arg.trim();
+    let (num, scale) = if let Some(n) = arg.strip_suffix("ms") {
+        (n, 1e-3)
+    } else if let Some(n) = arg.strip_suffix('s') {
+        (n, 1.0)
+    } else {
+        (arg, 1.0)
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a duration: give e.g. 2s or 500ms"))?;
+    let secs = v * scale;
+    if !(0.0..=3600.0).contains(&secs) {
+        return Err(format!("`{arg}`: give 0 to 3600 s"));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
+/// `play MOTION --zenoh-group NAME`: tells every robot serving in the
+/// group to play the motion `start_in` from now, on the same control
+/// cycle. A shipped motion goes by name; a file goes as its text (each
+/// robot plans it for itself).
+pub(crate) fn announce(
+    motion: &Path,
+    group: &str,
+    start_in: Duration,
+    connect: &[String],
+) -> anyhow::Result<ExitCode> {
+    let what = match servobus::builtin::builtin_name(motion) {
+        Some(name) => name.to_string(),
+        None => std::fs::read_to_string(motion)
+            .map_err(|e| super::exit::input(format!("{}: {e}", motion.display())))?,
+    };
+    let config = NodeConfig {
+        connect: connect.to_vec(),
+        // A conductor listens nowhere: it only reaches the robots named.
+        listen: vec![],
+        ..NodeConfig::default()
+    };
+    let session = open_conductor(&config)?;
+    // Who serves the group (each robot declares itself while serving).
+    let members: Vec<String> = session
+        .liveliness()
+        .get(group_member_key(group, "*"))
+        .timeout(Duration::from_secs(2))
+        .wait()
+        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?
+        .iter()
+        .filter_map(|r| {
+            r.result().ok().map(|s| {
+                s.key_expr()
+                    .as_str()
+                    .rsplit('/')
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+        })
+        .collect();
+    if members.is_empty() {
+        eprintln!(
+            "no robot serves group `{group}` at the given endpoints (--connect); nothing sent"
+        );
+        return Ok(ExitCode::from(1));
+    }
+    let at = std::time::SystemTime::now() + start_in;
+    let at_s = at
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    session
+        .put(
+            group_command_key(group),
+            format!("play {what} at {at_s:.6}"),
+        )
+        .wait()
+        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?;
+    // Let the put leave before the session closes.
+    std::thread::sleep(Duration::from_millis(300));
+    println!(
+        "group {group}: {} robot(s) ({}) start {} at UNIX {at_s:.3}",
+        members.len(),
+        members.join(", "),
+        servobus::builtin::argument(motion)
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A session for a program that only talks to robots: no listening, no
+/// multicast, connected to `config.connect`.
+fn open_conductor(config: &NodeConfig) -> anyhow::Result<servobus_node::zenoh::Session> {
+    if config.connect.is_empty() {
+        return Err(super::exit::input(
+            "--zenoh-group needs --connect ENDPOINT for each robot (or a router)".to_string(),
+        ));
+    }
+    servobus_node::node::open_peer(config).map_err(|e| super::exit::input(e.to_string()))
+}

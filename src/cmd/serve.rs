@@ -11,7 +11,7 @@ use servobus_node::node::{
     group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
 };
 use servobus_node::zenoh::Wait;
-use servobus_runtime::config::{load_motion_calibrated, load_robot_calibrated, plan_motion};
+use servobus_runtime::config::{load_motion_calibrated, load_robot, plan_motion, RobotOptions};
 use servobus_runtime::{Command, Lead, RunOptions};
 
 /// Arguments of `servobus serve`.
@@ -78,7 +78,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         )));
     }
     let calibration = args.robot.hardware.calibration.clone();
-    let robot = load_robot_calibrated(&args.robot.path, calibration.as_deref())?;
+    let robot = load_robot(
+        &args.robot.path,
+        &RobotOptions::default().calibration(calibration.as_deref()),
+    )?;
     let config = NodeConfig {
         zenoh_config: args.zenoh_config.clone(),
         listen: args.listen.clone(),

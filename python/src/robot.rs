@@ -289,7 +289,7 @@ impl Robot {
         };
         py.allow_threads(|| -> Outcome<()> {
             let config = self.robot.config();
-            for (bus, port) in config.buses.iter().zip(bus_ports(config, Some(port))) {
+            for (bus, port) in config.buses.iter().zip(bus_ports(config, &[port])) {
                 let Some(port) = port else {
                     return Err(Failure::new(
                         "PortError",

@@ -72,7 +72,7 @@ impl Stream {
             units: Some(config.units),
             ..RunOptions::default()
         };
-        let runner = match (port, every_port(config, port)) {
+        let runner = match (port, every_port(config, port.as_slice())) {
             (None, _) | (_, Ports::None) => {
                 let rest: Vec<f64> = config.joints().map(|j| j.rest()).collect();
                 let buses = servobus_runtime::sim::SimRobot::builder(config)

@@ -104,12 +104,15 @@ impl Context<'_> {
         let wp = kp.key("walk");
         let fail = |why: String| self.src.error(&wp, format!("keyframe {index}: {why}"));
         let positive = |field: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
+            if v.is_finite() && v > 0.0 && v <= super::MAX_SPATIAL_S {
                 Ok(())
             } else {
                 Err(self.src.error(
                     &wp.key(field),
-                    format!("must be a positive number, got {v}"),
+                    format!(
+                        "must be a positive number up to {}, got {v}",
+                        super::MAX_SPATIAL_S
+                    ),
                 ))
             }
         };
@@ -147,6 +150,13 @@ impl Context<'_> {
                 turn_rad_s: self.units.to_rad(s.turn),
                 duration_s: s.duration,
             });
+        }
+        let total: f64 = segments.iter().map(|s| s.duration_s).sum();
+        if total > super::MAX_SPATIAL_S {
+            return Err(fail(format!(
+                "the walk's segments take {total:.0} s: a walk may take {} s at most",
+                super::MAX_SPATIAL_S
+            )));
         }
         let legs = self.legs(&fail)?;
         let walk = Walk {

@@ -74,6 +74,10 @@ pub(super) struct TimeLaw {
     extent: f64,
 }
 
+/// The longest move in space (a line, a body pose or a whole walk), s:
+/// each is sampled densely, so its length bounds the memory it takes.
+pub(crate) const MAX_SPATIAL_S: f64 = 3600.0;
+
 impl TimeLaw {
     /// Plans the move, as one joint from 0 to `extent` and back to rest.
     ///
@@ -107,6 +111,14 @@ impl TimeLaw {
             ),
             e => e.to_string(),
         })?;
+        // A move is sampled every few ms: an hour bounds the samples (and
+        // the memory) whatever the file says.
+        if path.duration() > MAX_SPATIAL_S {
+            return Err(format!(
+                "the move would take {:.0} s: a move in space may take {MAX_SPATIAL_S} s at most",
+                path.duration()
+            ));
+        }
         Ok(TimeLaw { path, extent })
     }
 

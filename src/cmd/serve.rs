@@ -130,13 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "{}",
             serde_json::json!({
                 "report": served.report,
-                "node": {
-                    "targets": served.targets,
-                    "malformed": served.malformed,
-                    "commands": served.commands,
-                    "states": served.states,
-                    "start_offsets_s": served.start_offsets,
-                },
+                "node": served.counts(),
             })
         );
     } else {

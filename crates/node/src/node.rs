@@ -126,6 +126,20 @@ pub struct Served {
     pub start_offsets: Vec<f64>,
 }
 
+impl Served {
+    /// The node's own counts as JSON: `targets`, `malformed`, `commands`,
+    /// `states`, `start_offsets_s` (what `report` and `serve --json` show).
+    pub fn counts(&self) -> serde_json::Value {
+        serde_json::json!({
+            "targets": self.targets,
+            "malformed": self.malformed,
+            "commands": self.commands,
+            "states": self.states,
+            "start_offsets_s": self.start_offsets,
+        })
+    }
+}
+
 #[derive(Debug, Default)]
 struct Counts {
     targets: AtomicU64,
@@ -364,13 +378,7 @@ pub fn serve(
     *lock(&shared.report) = serde_json::json!({
         "running": false,
         "report": served.report,
-        "node": {
-            "targets": served.targets,
-            "malformed": served.malformed,
-            "commands": served.commands,
-            "states": served.states,
-            "start_offsets_s": served.start_offsets,
-        },
+        "node": served.counts(),
     })
     .to_string();
     std::thread::sleep(linger);

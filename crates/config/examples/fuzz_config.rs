@@ -13,7 +13,7 @@
 //! fails a check or takes longer (twice in a row, so that a busy machine
 //! does not count) is saved as `testdata/fuzz-config/crash-<hash>` and the
 //! run exits 1. With `--out DIR` the inputs it keeps are written there.
-//! `cargo test -p servobus-config --test config_errors` replays
+//! `cargo test -p servobus-config --test config config_errors` replays
 //! `testdata/fuzz-config/`.
 
 use std::collections::BTreeSet;

@@ -18,7 +18,7 @@
 //! `testdata/fuzz/corpus/` and everything already in `--out` (by default
 //! that corpus), writes each kept input to `--out` under a hash of its bytes,
 //! and exits 1 (saving the input as `testdata/fuzz/crash-<hash>`) when a
-//! check fails. `cargo test -p servobus-protocol --test fuzz_regressions`
+//! check fails. `cargo test -p servobus-protocol --test protocol fuzz_regressions`
 //! replays the seeds and the whole kept corpus.
 
 use std::collections::BTreeSet;

@@ -1,0 +1,10 @@
+//! The config integration tests, one binary: each module was a test
+//! file of its own (linking one binary instead of many).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod config_errors;
+mod config_files;
+mod config_mapping;
+mod config_motion;

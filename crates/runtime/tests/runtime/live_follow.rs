@@ -1,0 +1,99 @@
+//! A leader arm driving a follower through live targets, both simulated in
+//! virtual time: the built-in hand (configs/sim/so101-hand.yaml) moves the
+//! leader's torque-off joints, its positions are read at 50 Hz (as
+//! `servobus follow` reads them) and sent to the follower's live run, and
+//! the follower's measured positions stay within 2 degrees of the leader's
+//! from 0.5 s on.
+
+use crate::common;
+
+use common::{config, record, robot};
+use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_runtime::config::{JointMap, Robot};
+use servobus_runtime::sim::{Hand, SimRobot};
+use servobus_runtime::{Lead, RunOptions, Target, VirtualRun};
+use servobus_sim::SimBus;
+
+const PERIOD: f64 = 0.005;
+
+/// The leader's angles now (deg), one per joint.
+fn read_leader(robot: &Robot, bus: &mut Bus<SimBus, ManualClock>) -> Vec<f64> {
+    let reg = bus
+        .settings()
+        .series
+        .map()
+        .get("present_position")
+        .expect("a position register");
+    robot
+        .joints()
+        .map(|j| {
+            let (ticks, _) = bus.read_register(j.id, reg).expect("the leader answers");
+            robot
+                .units
+                .from_rad(JointMap::new(j, robot.units).from_ticks(ticks))
+        })
+        .collect()
+}
+
+#[test]
+fn a_follower_stays_within_2_degrees_of_a_hand_moved_leader() {
+    let robot = robot("so101.yaml");
+    let hand = Hand::load(&config("sim/so101-hand.yaml"), &robot).expect("the built-in hand");
+    let leader_sim = SimRobot::builder(&robot)
+        .hand(hand)
+        .build()
+        .expect("the leader simulates");
+    let mut leader = leader_sim.driver_buses().remove(0);
+    // The follower starts where the hand holds the leader at first.
+    let start = read_leader(&robot, &mut leader);
+    let follower = SimRobot::builder(&robot)
+        .pose(&start)
+        .build()
+        .expect("the follower simulates");
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        ..RunOptions::default()
+    };
+    let mut run =
+        VirtualRun::live(&robot, follower.driver_buses(), options).expect("a live run starts");
+    let tx = run.targets();
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let t0 = leader.clock().now();
+    let mut readings: Vec<(u64, Vec<f64>)> = Vec::new();
+    // 6 s: held, then the arm raised between 2 and 5 s.
+    let rec = record(&mut run, 1200, |k| {
+        let t = k as f64 * PERIOD;
+        leader
+            .clock()
+            .sleep_until(t0 + std::time::Duration::from_secs_f64(t));
+        let pose = read_leader(&robot, &mut leader);
+        if k % 4 == 0 {
+            let joints = names
+                .iter()
+                .zip(&pose)
+                .map(|(n, a)| (n.clone(), a.to_radians()))
+                .collect();
+            tx.send(Target::named(t, joints)).expect("a good target");
+        }
+        readings.push((k, pose));
+    });
+    assert!(rec.faults.is_empty(), "{:?}", rec.faults);
+    let mut worst = vec![0.0f64; names.len()];
+    for &(k, joint, _, _, measured) in &rec.rows {
+        let Some(m) = measured else { continue };
+        if (k as f64) * PERIOD < 0.5 {
+            continue;
+        }
+        let leader_at = &readings[k as usize].1[joint];
+        worst[joint] = worst[joint].max((m - leader_at).abs());
+    }
+    println!("largest error per joint, deg: {worst:.2?}");
+    for (j, w) in worst.iter().enumerate() {
+        assert!(*w < 2.0, "{}: {w} deg", names[j]);
+    }
+    // The leader did move: the lift rose by more than 100 degrees.
+    let lift: Vec<f64> = readings.iter().map(|r| r.1[1]).collect();
+    let rise = lift.iter().fold(f64::MIN, |a, b| a.max(*b)) - lift[0];
+    assert!(rise > 100.0, "{rise}");
+}

@@ -1,0 +1,95 @@
+//! Live targets and the rest of the loop, in virtual time on the simulated
+//! SO-101: a run playing a path switches to following at the first target
+//! with no limit broken, and Pause and Resume stop and restart the
+//! following as they pause and resume a path.
+
+use crate::common;
+
+use common::{motion, record, sim_buses_at};
+use servobus_runtime::{Command, Lead, RunOptions, Target, VirtualRun};
+
+use common::SO101_LIMITS as LIMITS;
+
+const PERIOD: f64 = 0.005;
+
+fn options() -> RunOptions {
+    RunOptions {
+        lead: Lead::None,
+        approach: None,
+        ..RunOptions::default()
+    }
+}
+
+#[test]
+fn a_target_sent_while_a_path_plays_takes_over_smoothly() {
+    let (path, robot) = motion("arm-wave.yaml");
+    let (buses, _) = sim_buses_at(&robot, &path);
+    let mut run = VirtualRun::new(&robot, path, buses, options()).expect("the run starts");
+    let tx = run.targets();
+    // At 1 s, in the middle of the wave, the pan is sent to -40 deg (and
+    // again at 20 Hz, so that the stream does not time out).
+    let rec = record(&mut run, 800, |k| {
+        if k >= 200 && k % 10 == 0 {
+            let t = Target::named(
+                k as f64 * PERIOD,
+                vec![("shoulder_pan".into(), (-40f64).to_radians())],
+            );
+            tx.send(t).expect("a good target");
+        }
+    });
+    assert!(rec.faults.is_empty(), "{:?}", rec.faults);
+    for (j, &(v, a, jerk)) in LIMITS.iter().enumerate() {
+        let (pv, pa, pj) = rec.peaks(j, 0, PERIOD);
+        assert!(
+            pv <= v * 1.01 && pa <= a * 1.01 && pj <= jerk * 1.01,
+            "joint {j}: {pv} {pa} {pj}"
+        );
+    }
+    let pan = rec.commanded(0);
+    assert_eq!(pan.len(), 800, "the run goes on following");
+    assert!((pan[799] + 40.0).abs() < 1e-6, "{}", pan[799]);
+    let live = run.report().live.expect("targets counted");
+    assert_eq!(live.received, 60);
+}
+
+#[test]
+fn pause_stops_the_following_and_resume_restarts_it() {
+    let (path, robot) = motion("arm-wave.yaml");
+    let (buses, _) = sim_buses_at(&robot, &path);
+    let mut run = VirtualRun::live(&robot, buses, options()).expect("the run starts");
+    let tx = run.targets();
+    let commands = run.commands();
+    // The pan target ramps at 30 deg/s for 3 s; paused from 1 s to 2 s.
+    let rec = record(&mut run, 700, |k| {
+        let t = k as f64 * PERIOD;
+        if k % 6 == 0 && t < 3.0 {
+            let q: f64 = 30.0 * t;
+            let target = Target::named(t, vec![("shoulder_pan".into(), q.to_radians())]);
+            tx.send(target).expect("a good target");
+        }
+        if k == 200 {
+            commands.send(Command::Pause).expect("the run listens");
+        }
+        if k == 400 {
+            commands.send(Command::Resume).expect("the run listens");
+        }
+    });
+    for (j, &(v, a, jerk)) in LIMITS.iter().enumerate() {
+        let (pv, pa, pj) = rec.peaks(j, 0, PERIOD);
+        assert!(
+            pv <= v * 1.01 && pa <= a * 1.01 && pj <= jerk * 1.01,
+            "joint {j}: {pv} {pa} {pj}"
+        );
+    }
+    let pan = rec.commanded(0);
+    // Held still in the second half of the pause.
+    let held = pan[300];
+    assert!(
+        pan[300..400].iter().all(|p| (p - held).abs() < 1e-9),
+        "{held}"
+    );
+    assert!(held < 40.0, "stopped soon after 1 s: {held}");
+    // Following again: the last target (2.97 s) is at 89.1 deg; the pan
+    // stops within its extrapolation and its stop distance beyond it.
+    assert!(pan[699] > 89.0 && pan[699] < 95.0, "{}", pan[699]);
+}

@@ -1,0 +1,28 @@
+//! The runtime integration tests, one binary: each module was a test
+//! file of its own (linking one binary instead of many).
+
+#[path = "../calib_play/mod.rs"]
+mod calib_play;
+#[path = "../common/mod.rs"]
+mod common;
+
+mod calibrate_arm;
+mod calibrate_body;
+mod calibrate_lerobot;
+mod link_silence;
+mod live_compare;
+mod live_follow;
+mod live_switch;
+mod live_targets;
+mod no_alloc;
+mod run_arm;
+mod run_faults;
+mod run_lead;
+mod run_limits;
+mod run_link;
+mod run_robots;
+mod run_same_cycle;
+mod run_threads;
+mod sim_body;
+mod sim_budget;
+mod teach;

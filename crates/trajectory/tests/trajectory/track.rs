@@ -1,0 +1,115 @@
+//! Recorded paths: a recording with noise and steps is filtered into a path
+//! within every limit (checked by dense sampling), and a smooth recording
+//! that the limits allow is reproduced closely and on time.
+
+use crate::common;
+
+use servobus_trajectory::{track, JointLimits, JointState};
+
+fn limits() -> Vec<JointLimits> {
+    vec![
+        JointLimits::new(3.0, 15.0, Some(150.0)).with_positions(-2.0, 2.0),
+        JointLimits::new(2.0, 10.0, None).with_positions(-1.5, 1.5),
+    ]
+}
+
+/// A deterministic noise source in [-1, 1) (xorshift64*).
+struct Noise(u64);
+
+impl Noise {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
+    }
+}
+
+#[test]
+fn noisy_recording_with_steps_is_played_within_every_limit() {
+    let lim = limits();
+    let mut noise = Noise(0x9e37_79b9_7f4a_7c15);
+    let (mut times, mut samples) = (Vec::new(), Vec::new());
+    for i in 0..=1000 {
+        // 10 s at 100 Hz: steps of 1 rad every 2 s, 0.05 rad of noise.
+        let t = i as f64 * 0.01;
+        let step = if (t / 2.0) as u32 % 2 == 0 { -0.5 } else { 0.5 };
+        let a = step + 0.05 * noise.next();
+        let b = (0.8 * (t * 3.0).sin() + 0.03 * noise.next()).clamp(-1.5, 1.5);
+        times.push(t);
+        samples.push(vec![a, b]);
+    }
+    let tracked = track(&lim, &times, &samples, 0.005).expect("filtered");
+    let traj = &tracked.trajectory;
+    let last = &samples[samples.len() - 1];
+    common::check(traj, &lim, last, true);
+    let mut s = vec![JointState::default(); 2];
+    traj.sample(0.0, &mut s);
+    for (j, st) in s.iter().enumerate() {
+        assert!(
+            (st.position - samples[0][j]).abs() < 1e-9 && st.velocity.abs() < 1e-9,
+            "joint {j} starts at {st:?}, recording at {}",
+            samples[0][j]
+        );
+    }
+    // The steps are rounded off, not ignored: in the middle of each level
+    // the path is there (within the noise), and on time.
+    let lead = tracked.recording_start;
+    for level in 0..5 {
+        let t = 2.0 * level as f64 + 1.0;
+        let want = if level % 2 == 0 { -0.5 } else { 0.5 };
+        traj.sample(lead + t, &mut s);
+        assert!(
+            (s[0].position - want).abs() < 0.06,
+            "level {level}: {:?}",
+            s[0]
+        );
+    }
+    println!(
+        "noisy recording with steps: max deviation {:?}, rms {:?}",
+        tracked.max_deviation, tracked.rms_deviation
+    );
+    // Joint 1 swings at up to 2.4 rad/s against a 2 rad/s limit: cut to it.
+    assert!(
+        tracked.max_deviation[1] < 0.15,
+        "{:?}",
+        tracked.max_deviation
+    );
+}
+
+#[test]
+fn smooth_recording_is_reproduced_closely_and_on_time() {
+    let lim = limits();
+    let (mut times, mut samples) = (Vec::new(), Vec::new());
+    // Two swings out and back, from rest to rest, well within the limits
+    // (peak speed 0.6 and 0.36 rad/s).
+    let w = 1.2;
+    let n = (4.0 * std::f64::consts::PI / w / 0.01).round() as usize;
+    for i in 0..=n {
+        let t = i as f64 * 0.01;
+        samples.push(vec![
+            0.5 * (1.0 - (w * t).cos()),
+            -0.3 * (1.0 - (w * t).cos()),
+        ]);
+        times.push(t);
+    }
+    let tracked = track(&lim, &times, &samples, 0.005).expect("filtered");
+    common::check(&tracked.trajectory, &lim, &samples[samples.len() - 1], true);
+    println!(
+        "smooth recording: max deviation {:?} rad, rms {:?} rad",
+        tracked.max_deviation, tracked.rms_deviation
+    );
+    for j in 0..2 {
+        assert!(
+            tracked.max_deviation[j] < 0.005,
+            "{:?}",
+            tracked.max_deviation
+        );
+        assert!(
+            tracked.rms_deviation[j] < 0.003,
+            "{:?}",
+            tracked.rms_deviation
+        );
+    }
+}

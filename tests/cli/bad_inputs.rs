@@ -1,0 +1,256 @@
+//! Hostile and mistaken inputs (issue 22): files that ask for unbounded
+//! work, values that cannot work, the wrong file blamed, and messages in
+//! the code's terms. Each case runs the `servobus` binary on a file of
+//! `tests/bad_inputs/` (or one made here when it is large) and expects a
+//! refusal: exit 2, no panic, a message naming the limit or the field, and
+//! an end (a generous time-out is only a safety net, not a measurement).
+
+use crate::common;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{repo, temp_file, BIN};
+
+/// A safety net only: every case here ends in well under a second.
+const SAFETY_NET: Duration = Duration::from_secs(120);
+
+/// The corpus folder.
+fn corpus() -> PathBuf {
+    repo("tests/bad_inputs")
+}
+
+/// Runs `servobus ARGS` in `dir`, killed if it outlives [`SAFETY_NET`];
+/// its exit code and standard error.
+fn run_in(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the servobus binary runs");
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("the child can be waited for") {
+            break status;
+        }
+        if started.elapsed() > SAFETY_NET {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("servobus {args:?} did not end within {SAFETY_NET:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    if let Some(mut stderr) = child.stderr.take() {
+        stderr.read_to_string(&mut err).expect("stderr is text");
+    }
+    (status.code(), err)
+}
+
+/// `servobus ARGS` in the corpus folder must be refused with exit 2, no
+/// panic, and a message holding every one of `words` and none of `never`.
+fn refused(args: &[&str], words: &[&str], never: &[&str]) -> String {
+    refused_in(&corpus(), args, words, never)
+}
+
+fn refused_in(dir: &Path, args: &[&str], words: &[&str], never: &[&str]) -> String {
+    let (code, err) = run_in(dir, args);
+    assert_eq!(code, Some(2), "servobus {args:?}: {err}");
+    for bad in ["panicked", "RUST_BACKTRACE", "stack backtrace"] {
+        assert!(!err.contains(bad), "servobus {args:?} panicked: {err}");
+    }
+    assert!(err.starts_with("error: "), "servobus {args:?}: {err}");
+    for w in words {
+        assert!(err.contains(w), "servobus {args:?} should say {w:?}: {err}");
+    }
+    for w in never {
+        assert!(
+            !err.contains(w),
+            "servobus {args:?} should not say {w:?}: {err}"
+        );
+    }
+    err
+}
+
+#[test]
+fn a_small_file_cannot_ask_for_unbounded_work() {
+    refused(
+        &["plan", "motion-repeat-billion.yaml"],
+        &["motion-repeat-billion.yaml:6:9: repeat:", "limit of 500000"],
+        &[],
+    );
+    refused(
+        &["plan", "motion-at-1e12.yaml"],
+        &["keyframes[1].at: 1e12 s", "limit of 86400 s"],
+        &[],
+    );
+    refused(
+        &["plan", "motion-too-slow.yaml"],
+        &["motion-too-slow.yaml:5:5: keyframes[1]", "limit of 86400 s"],
+        &[],
+    );
+    refused(
+        &[
+            "play",
+            "--fast",
+            "recording-1e9s.csv",
+            "--robot",
+            "robot-tiny.yaml",
+        ],
+        &["recording-1e9s.csv", "1e9 s", "limit of 86400 s"],
+        &[],
+    );
+    refused(
+        &["budget", "--robot", "/dev/zero"],
+        &["/dev/zero: larger than 1 MiB"],
+        &[],
+    );
+    refused(
+        &["budget", "--robot", "robot-nested-40.yaml"],
+        &["robot-nested-40.yaml:2:", "nested more than 32 levels"],
+        &[],
+    );
+}
+
+#[test]
+fn large_and_deep_files_are_refused_before_they_are_parsed() {
+    // 400 KB nested 100,000 deep: serde_yaml took a minute on it.
+    let deep = temp_file("bad-inputs", "deep.yaml", &"{a: ".repeat(100_000));
+    refused(
+        &["budget", "--robot", common::arg(&deep)],
+        &["deep.yaml:1:", "nested more than 32 levels"],
+        &[],
+    );
+    let huge = format!("name: x\n{}", "# padding\n".repeat(200_000));
+    let huge = temp_file("bad-inputs", "huge.yaml", &huge);
+    refused(
+        &["plan", "motion-tiny.yaml", "--robot", common::arg(&huge)],
+        &["huge.yaml: larger than 1 MiB"],
+        &[],
+    );
+}
+
+#[test]
+fn values_that_cannot_work_are_refused_with_their_range() {
+    let baud_table = "use one of 1000000, 500000, 250000, 128000, 115200, 76800, 57600, 38400";
+    for baud in ["0", "1", "12345"] {
+        refused(
+            &["scan", "--port", "/dev/null", "--baud", baud],
+            &[&format!("{baud} baud is not a rate"), baud_table],
+            &[],
+        );
+    }
+    refused(
+        &[
+            "ping",
+            "--port",
+            "/dev/null",
+            "--id",
+            "1",
+            "--latency-us",
+            "999999999",
+        ],
+        &["999999999 us", "0 to 255000 us"],
+        &[],
+    );
+    refused(
+        &["budget", "--robot", "robot-latency-huge.yaml"],
+        &["buses[0].latency_us: 999999999 us", "0 to 255000 us"],
+        &[],
+    );
+    refused(
+        &["play", "--fast", "motion-tiny.yaml", "--rate", "0.001"],
+        &["0.001 Hz", "10 to 10000 Hz"],
+        &[],
+    );
+    refused(
+        &["plan", "motion-rate-tiny.yaml"],
+        &[
+            "motion-rate-tiny.yaml:3:7: rate: 0.001 Hz",
+            "10 to 10000 Hz",
+        ],
+        &[],
+    );
+    refused(
+        &["budget", "--robot", "robot-rate-tiny.yaml"],
+        &["robot-rate-tiny.yaml:3:7: rate: 0.001 Hz", "10 to 10000 Hz"],
+        &[],
+    );
+}
+
+#[test]
+fn the_file_at_fault_is_the_one_named() {
+    // A --calibration that cannot be read is not the motion's `robot:`.
+    refused(
+        &["plan", "motion-tiny.yaml", "--calibration", "nope.yaml"],
+        &["nope.yaml: cannot read: no such file"],
+        &["robot:", "motion-tiny.yaml"],
+    );
+    // A calibration the robot file names but that does not exist: plan
+    // and play (here on the built-in simulator) refuse, naming it.
+    for args in [
+        &["plan", "motion-missing-calibration.yaml"][..],
+        &["play", "--fast", "motion-missing-calibration.yaml"],
+        &[
+            "play",
+            "--fast",
+            "recording-1e9s.csv",
+            "--robot",
+            "robot-missing-calibration.yaml",
+        ],
+    ] {
+        refused(
+            args,
+            &[
+                "robot-missing-calibration.yaml:4:14: calibration:",
+                "no-such.calibration.yaml does not exist",
+            ],
+            &[],
+        );
+    }
+}
+
+#[test]
+fn messages_speak_in_the_files_terms() {
+    let rust = ["untagged", "LatencySpec", "struct", "Raw", "f64", "u64"];
+    refused(
+        &["budget", "--robot", "robot-latency-list.yaml"],
+        &[
+            "robot-latency-list.yaml:8:17: buses[0].latency_us:",
+            "a number of microseconds or `auto`",
+        ],
+        &rust,
+    );
+    refused(
+        &["plan", "motion-list.yaml"],
+        &["motion-list.yaml:2:1:", "expected a motion file"],
+        &rust,
+    );
+    refused(
+        &["sim", "--robot", "so101", "--hand", "hand-list.yaml"],
+        &["hand-list.yaml:2:1:", "expected a hand file"],
+        &rust,
+    );
+    refused(
+        &[
+            "play",
+            "--fast",
+            "recording-not-a-number.csv",
+            "--robot",
+            "robot-tiny.yaml",
+        ],
+        &["recording-not-a-number.csv:3:2: `1e999x` in column `pan` is not a number"],
+        &["float literal"],
+    );
+    let err = refused(
+        &["budget", "--robot", "robot-309-digits.yaml"],
+        &["buses[0].joints[0].max_velocity: must be positive, got -1e308"],
+        &[],
+    );
+    assert!(!err.contains("0000000000"), "a long number echoed: {err}");
+}

@@ -1,0 +1,34 @@
+//! Missing-servo detection on the wall clock, through a pseudo-terminal:
+//! `servobus sim` serves the SO-101 arm in its own process (what a real
+//! adapter looks like to the driver), and one servo stops answering two
+//! seconds in. `play` finds it after 3 reads, each waiting the deadline the
+//! link learned, not after a fixed window of silence.
+
+use crate::common;
+
+use common::{exited, json, num, scratch, servobus, Sim};
+
+#[test]
+fn a_servo_that_goes_silent_on_the_pty_simulator_is_missing_after_3_reads() {
+    let dir = scratch("missing-pty");
+    let sim = Sim::start_with(&dir, &["--faults", "vanish=4@2.0"]);
+    let motion = "configs/motions/arm-wave.yaml";
+    let out = servobus(&["play", motion, "--port", sim.port(), "--json"]);
+    exited(&out, 1);
+    let report = json(&out);
+    let fault = &report["fault"];
+    assert_eq!(fault["kind"], "missing", "{fault}");
+    assert_eq!(fault["servo_id"], 4, "{fault}");
+    assert_eq!(fault["reason"], "no reply", "{fault}");
+    // 3 reads at 200 Hz: found 15 ms into the silence (a fixed 60 ms window
+    // would have waited 12 reads).
+    assert_eq!(fault["cycles"], 3, "{fault}");
+    // Each read waited at most the bounded deadline: a SYNC READ of 6
+    // servos is 620 us of wire, 6 x 50 us of turnaround, 200 us of margin
+    // and at most the 3 ms the learned allowance may reach: 4120 us.
+    let bus = &report["buses"][0];
+    assert!(bus["latency_learned"].as_bool().unwrap_or(false), "{bus}");
+    let deadline = num(bus, "reply_deadline_us");
+    assert!(deadline > 0.0 && deadline <= 4120.0, "{bus}");
+    sim.stop();
+}

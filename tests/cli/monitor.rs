@@ -1,0 +1,257 @@
+//! `servobus monitor` on the simulator: one SYNC READ per refresh, a
+//! missing servo shown as missing while the others update, the flags by
+//! name, torque off with one frame, the view drawn, the JSON lines, and the
+//! rows of `play --monitor` built from a run's telemetry.
+
+use crate::common;
+
+use std::time::Duration;
+
+use ratatui::backend::TestBackend;
+use ratatui::Terminal;
+use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
+use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_protocol::registers::addr;
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
+use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
+use servobus_sim::{Faults, SimBus};
+
+use common::virtual_bus;
+
+const PERIOD: Duration = Duration::from_millis(50);
+
+fn robot(file: &str) -> Robot {
+    load_robot(
+        &common::repo(&format!("configs/robots/{file}")),
+        &RobotOptions::default(),
+    )
+    .expect("robot")
+}
+
+/// Polls `n` times, at the next multiples of [`PERIOD`] of virtual time.
+fn poll(poller: &mut Poller, bus: &mut Bus<SimBus, ManualClock>, n: u32) -> Frame {
+    for _ in 0..n {
+        let k = bus.clock().now().as_nanos().div_ceil(PERIOD.as_nanos());
+        bus.clock()
+            .advance_to(PERIOD * u32::try_from(k).expect("few periods"));
+        poller.poll(bus).expect("poll");
+    }
+    poller.frame(bus.clock(), None)
+}
+
+fn row(frame: &Frame, id: u8) -> &monitor::Row {
+    frame.servos.iter().find(|r| r.id == id).expect("row")
+}
+
+#[test]
+fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each() {
+    let arm = robot("so101.yaml");
+    let (sim, mut bus) = virtual_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
+    let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
+    // Servo 1 turns towards tick 2548, so its position changes between reads.
+    bus.write(1, addr::TORQUE_ENABLE, &[1]).expect("torque");
+    bus.write(1, addr::GOAL_POSITION, &2548u16.to_le_bytes())
+        .expect("goal");
+    let first = poll(&mut poller, &mut bus, 1);
+    let requests = sim.stats().requests;
+    let frame = poll(&mut poller, &mut bus, 20);
+    assert_eq!(
+        sim.stats().requests - requests,
+        20,
+        "one SYNC READ per refresh"
+    );
+
+    let five = row(&frame, 5);
+    assert!(!five.present);
+    assert_eq!(five.missing.as_deref(), Some("no reply"));
+    assert_eq!(
+        (five.replies, five.timeouts, five.missed_in_row),
+        (0, 21, 21)
+    );
+    for id in [1, 2, 3, 4, 6] {
+        let r = row(&frame, id);
+        assert!(r.present, "servo {id}");
+        assert_eq!((r.replies, r.timeouts), (21, 0), "servo {id}");
+        assert!(r.p99_latency_us.is_some_and(|us| us > 0.0), "servo {id}");
+    }
+    assert_eq!(row(&frame, 3).flags, vec!["overheat"]);
+    assert_eq!(row(&frame, 3).temperature_c, Some(70.0));
+    assert!(row(&frame, 1).flags.is_empty());
+    let (before, after) = (row(&first, 1).position_ticks, row(&frame, 1).position_ticks);
+    assert!(after > before, "servo 1 moved: {before:?} -> {after:?}");
+    assert_eq!(row(&frame, 1).goal_ticks, Some(2548));
+    assert_eq!(row(&frame, 1).torque, Some(true));
+    assert_eq!(
+        row(&frame, 2).position_deg,
+        Some(-90.0),
+        "shoulder_lift at home"
+    );
+
+    // 20 refreshes a second; each moves 8 + 6 request bytes and five
+    // replies of 6 + 27 bytes: 179 bytes, 1.79 ms at 1 Mbps, of every 50 ms.
+    assert!(
+        (frame.read_rate_hz - 20.0).abs() < 0.5,
+        "{}",
+        frame.read_rate_hz
+    );
+    assert!(
+        (frame.utilisation - 0.0358).abs() < 0.001,
+        "{}",
+        frame.utilisation
+    );
+}
+
+#[test]
+fn a_port_alone_is_scanned_for_its_servos_first() {
+    let arm = robot("so101.yaml");
+    let (_sim, mut bus) = virtual_bus(&arm, "vanish=5".parse().expect("faults"));
+    let found = Poller::scan(&mut bus).expect("scan");
+    let ids: Vec<u8> = found.iter().map(|w| w.id).collect();
+    assert_eq!(ids, [1, 2, 3, 4, 6]);
+    assert!(found
+        .iter()
+        .all(|w| w.model.name == "STS3215" && w.joint.is_none()));
+    let mut poller = Poller::new(found);
+    let frame = poll(&mut poller, &mut bus, 2);
+    // Without a robot file, degrees are the servo's from its mid-travel.
+    assert_eq!(row(&frame, 2).position_deg, Some(-90.0));
+}
+
+#[test]
+fn scs_servos_are_read_one_by_one() {
+    let mini = robot("scs-mini.yaml");
+    let (sim, mut bus) = virtual_bus(&mini, Faults::none());
+    let mut poller = Poller::new(Watched::of_bus(&mini.buses[0], mini.units));
+    poll(&mut poller, &mut bus, 1);
+    let requests = sim.stats().requests;
+    let frame = poll(&mut poller, &mut bus, 5);
+    let n = mini.buses[0].joints.len() as u64;
+    assert_eq!(sim.stats().requests - requests, 5 * n);
+    assert!(frame
+        .servos
+        .iter()
+        .all(|r| r.present && r.voltage_v == Some(6.0)));
+}
+
+#[test]
+fn torque_off_reaches_every_servo_in_one_frame() {
+    let arm = robot("so101.yaml");
+    let (sim, mut bus) = virtual_bus(&arm, Faults::none());
+    let ids: Vec<u8> = arm.buses[0].joints.iter().map(|j| j.id).collect();
+    bus.sync_write(addr::TORQUE_ENABLE, &ids, &vec![1; ids.len()])
+        .expect("torque on");
+    assert!(ids
+        .iter()
+        .all(|&id| sim.snapshot(id).is_some_and(|s| s.torque_enabled())));
+    let requests = sim.stats().requests;
+    monitor::torque_off(&mut bus, &ids).expect("torque off");
+    assert_eq!(sim.stats().requests - requests, 1);
+    assert!(ids
+        .iter()
+        .all(|&id| sim.snapshot(id).is_some_and(|s| !s.torque_enabled())));
+}
+
+#[test]
+fn the_view_shows_flags_missing_servos_and_keys() {
+    let arm = robot("so101.yaml");
+    let (_sim, mut bus) = virtual_bus(&arm, "overheat=3,vanish=5".parse().expect("faults"));
+    let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
+    let frame = poll(&mut poller, &mut bus, 4);
+    let mut terminal = Terminal::new(TestBackend::new(160, 14)).expect("terminal");
+    terminal
+        .draw(|f| view::draw(f, &frame, "so101"))
+        .expect("drawn");
+    let buffer = terminal.backend().buffer();
+    let lines: Vec<String> = (0..buffer.area.height)
+        .map(|y| {
+            (0..buffer.area.width)
+                .map(|x| buffer[(x, y)].symbol().to_string())
+                .collect()
+        })
+        .collect();
+    let line_of = |id: &str| {
+        lines
+            .iter()
+            .find(|l| l.starts_with(&format!("{id:<4}")))
+            .cloned()
+            .unwrap_or_default()
+    };
+    assert!(line_of("3").contains("OVERHEAT"), "{lines:#?}");
+    assert!(line_of("5").contains("MISSING (no reply)"), "{lines:#?}");
+    assert!(line_of("1").contains(" ok "), "{lines:#?}");
+    assert!(lines.iter().any(|l| l.contains(view::KEYS)), "{lines:#?}");
+    // The reply column says what it measures (it grows along the bus).
+    assert!(lines.iter().any(|l| l.contains("reply p99")), "{lines:#?}");
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("servos answer one SYNC READ in turn")),
+        "{lines:#?}"
+    );
+}
+
+#[test]
+fn play_monitor_rows_follow_the_telemetry() {
+    let (motion, arm) =
+        load_motion(&common::repo("configs/motions/arm-wave.yaml"), None).expect("motion");
+    let trajectory = plan_motion(&motion, &arm).expect("plan");
+    let (_sim, bus) = virtual_bus(&arm, "overheat=3".parse().expect("faults"));
+    let options = RunOptions {
+        units: Some(motion.units),
+        ..RunOptions::default()
+    };
+    let rate = arm.rate_hz;
+    let runner = spawn_virtual(&arm, trajectory, vec![bus], options).expect("run");
+    let mut rows = TelemetryRows::new(&arm, motion.units, 1.0 / rate);
+    let mut hot_seen = false;
+    for message in runner.telemetry().iter() {
+        if let Telemetry::Cycle(sample) = message {
+            rows.record(&sample);
+            hot_seen |= rows.frame(None).servos[2].flags.contains(&"overheat");
+        }
+    }
+    let _ = runner.join();
+    let frame = rows.frame(None);
+    assert_eq!(frame.source, "telemetry");
+    assert!(hot_seen, "servo 3's overheat flag reached the rows");
+    for (r, joint) in frame.servos.iter().zip(arm.joints()) {
+        assert!(r.replies > 0, "{}", joint.name);
+        let deg = r.position_deg.expect("a position");
+        assert!(
+            deg >= joint.min - 1.0 && deg <= joint.max + 1.0,
+            "{}: {deg}",
+            joint.name
+        );
+        assert!(r.goal_ticks.is_some());
+    }
+}
+
+#[test]
+fn monitor_json_prints_one_line_per_refresh_at_10_hz_or_more() {
+    let out = common::servobus(&[
+        "monitor",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--json",
+        "--count",
+        "15",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let frames: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(frames.len(), 15);
+    let last = &frames[14];
+    assert!(common::num(last, "read_rate_hz") >= 10.0, "{last}");
+    let servos = last["servos"].as_array().expect("servos");
+    assert_eq!(servos.len(), 6);
+    assert!(servos
+        .iter()
+        .all(|s| s["present"] == true && s["replies"] == 15));
+}

@@ -1,0 +1,123 @@
+//! No terminal assumed: `servobus monitor` and `play --monitor` run in a
+//! session of their own (`setsid`: no controlling terminal) with standard
+//! input and output that are no terminal, as under cron, CI or `ssh`
+//! without `-t`. The monitor falls back to JSON lines and says so; `play
+//! --monitor` refuses before anything moves (every servo's torque is still
+//! off on the simulator afterwards); nothing panics and no escape code is
+//! written into the redirected output.
+
+use crate::common;
+
+use std::os::unix::process::CommandExt;
+use std::process::{Command, Output, Stdio};
+
+use common::{exited, repo, scratch, Sim, BIN};
+
+/// Runs `servobus ARGS` without a terminal: a new session (no controlling
+/// terminal, so `/dev/tty` cannot be opened), stdin from `/dev/null`,
+/// stdout and stderr piped.
+fn without_terminal(args: &[&str]) -> Output {
+    let mut command = Command::new(BIN);
+    command
+        .args(args)
+        .current_dir(repo(""))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // SAFETY: setsid is async-signal-safe and touches no memory of the
+    // parent; it runs in the child between fork and exec.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::setsid() == -1 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    command.output().expect("run servobus")
+}
+
+/// Neither a panic nor an escape code in what `out` wrote.
+fn plain(out: &Output) {
+    for (name, bytes) in [("stdout", &out.stdout), ("stderr", &out.stderr)] {
+        let text = String::from_utf8_lossy(bytes);
+        assert!(!text.contains('\x1b'), "escape code in {name}: {text:?}");
+        assert!(!text.contains("panicked"), "a panic in {name}: {text}");
+    }
+}
+
+#[test]
+fn monitor_without_a_terminal_prints_json_lines_and_says_so() {
+    let dir = scratch("no-terminal-monitor");
+    let sim = Sim::start(&dir);
+    let out = without_terminal(&[
+        "monitor",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--port",
+        sim.port(),
+        "--count",
+        "3",
+    ]);
+    let (stdout, stderr) = exited(&out, 0);
+    plain(&out);
+    assert!(
+        stderr.contains("no terminal") && stderr.contains("JSON line"),
+        "{stderr}"
+    );
+    let frames: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(frames.len(), 3, "{stdout}");
+    for frame in &frames {
+        let servos = frame["servos"].as_array().expect("servos");
+        assert_eq!(servos.len(), 6, "{frame}");
+        assert!(servos.iter().all(|s| s["present"] == true), "{frame}");
+    }
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn play_monitor_without_a_terminal_refuses_before_any_torque() {
+    let dir = scratch("no-terminal-play");
+    let sim = Sim::start(&dir);
+    let out = without_terminal(&[
+        "play",
+        "configs/motions/arm-wave.yaml",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--port",
+        sim.port(),
+        "--monitor",
+    ]);
+    let (stdout, stderr) = exited(&out, 2);
+    plain(&out);
+    assert!(stdout.is_empty(), "nothing planned or shown: {stdout}");
+    assert!(
+        stderr.contains("--monitor needs a terminal") && stderr.contains("nothing was moved"),
+        "{stderr}"
+    );
+    // The simulator's servos start with the torque off: still off.
+    for id in 1..=6 {
+        let id = id.to_string();
+        assert_eq!(sim.read(&id, "torque_enable"), 0, "servo {id}");
+    }
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn play_progress_without_a_terminal_is_plain_lines() {
+    let out = without_terminal(&[
+        "play",
+        "configs/motions/arm-wave.yaml",
+        "--robot",
+        "configs/robots/so101.yaml",
+        "--fast",
+    ]);
+    let (stdout, _) = exited(&out, 0);
+    plain(&out);
+    assert!(stdout.contains("completed"), "{stdout}");
+}

@@ -236,7 +236,12 @@ fn drive<T: Transport, C: Clock>(
     let rate = options.rate_hz.unwrap_or(robot.rate_hz).min(LEADER_HZ);
     let period = Duration::from_secs_f64(1.0 / rate);
     let log = match &args.log {
-        Some(path) => Some(CsvLog::create(path, names.clone(), &units.to_string())?),
+        Some(path) => Some(CsvLog::create(
+            path,
+            names.clone(),
+            units,
+            robot.geometry(),
+        )?),
         None => None,
     };
     let bus_of = robot

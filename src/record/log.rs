@@ -12,7 +12,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use servobus_io::AtomicFile;
+use servobus_kinematics::Geometry;
+use servobus_runtime::config::Units;
 use servobus_runtime::CycleSample;
+
+use super::frames::FrameColumns;
 
 /// The CSV log of a run.
 pub struct CsvLog {
@@ -22,47 +26,66 @@ pub struct CsvLog {
     /// Written in place (not a regular file): a failure leaves part of it.
     direct: bool,
     names: Vec<String>,
+    /// The named frames' positions, when the robot has a geometry.
+    frames: Option<FrameColumns>,
     /// The first write error.
     failed: Option<csv::Error>,
 }
 
 impl CsvLog {
     /// Starts the log `path` (its temporary) and writes the header; angles
-    /// are in `units`.
+    /// are in `units`. With the robot's `geometry`, each row also gives the
+    /// position of every named frame (`tool`, `foot_<leg>`) by forward
+    /// kinematics of the measured angles: `<frame>_x_mm`, `_y_mm`, `_z_mm`.
     ///
     /// # Errors
     /// The path cannot be an output, or the temporary cannot be created.
-    pub fn create(path: &Path, names: Vec<String>, units: &str) -> anyhow::Result<Self> {
+    pub fn create(
+        path: &Path,
+        names: Vec<String>,
+        units: Units,
+        geometry: Option<Geometry>,
+    ) -> anyhow::Result<Self> {
         let file = AtomicFile::create(path)?;
         let mut log = CsvLog {
             direct: file.is_direct(),
             writer: Some(csv::Writer::from_writer(file)),
             path: path.to_path_buf(),
             names,
+            frames: geometry.and_then(|g| FrameColumns::new(g, units)),
             failed: None,
         };
-        log.write([
-            "time_s".to_string(),
-            "bus".into(),
-            "cycle".into(),
-            "joint".into(),
-            format!("commanded_{units}"),
-            format!("planned_{units}"),
-            format!("measured_{units}"),
-            format!("error_{units}"),
-            format!("velocity_{units}_s"),
-            "feedback_age_ms".into(),
-            "stale".into(),
-            "clamped".into(),
-            "lateness_us".into(),
-            "busy_us".into(),
-            "skipped".into(),
-        ]);
+        let spatial: Vec<String> = log.frames.iter().flat_map(FrameColumns::header).collect();
+        write(
+            &mut log.writer,
+            &mut log.failed,
+            &[
+                "time_s".to_string(),
+                "bus".into(),
+                "cycle".into(),
+                "joint".into(),
+                format!("commanded_{units}"),
+                format!("planned_{units}"),
+                format!("measured_{units}"),
+                format!("error_{units}"),
+                format!("velocity_{units}_s"),
+                "feedback_age_ms".into(),
+                "stale".into(),
+                "clamped".into(),
+                "lateness_us".into(),
+                "busy_us".into(),
+                "skipped".into(),
+            ],
+            &spatial,
+        );
         Ok(log)
     }
 
     /// Writes one row per joint of `sample` (nothing once a write failed).
     pub fn record(&mut self, sample: &CycleSample) {
+        if let Some(frames) = &mut self.frames {
+            frames.update(sample);
+        }
         for j in sample.joints() {
             let name = self.names.get(j.joint).map_or("?", String::as_str);
             let row = [
@@ -82,18 +105,8 @@ impl CsvLog {
                 format!("{:.1}", sample.busy.as_secs_f64() * 1e6),
                 sample.skipped.to_string(),
             ];
-            self.write(row);
-        }
-    }
-
-    /// Writes one row; the first error ends the logging and drops the
-    /// temporary.
-    fn write<const N: usize>(&mut self, row: [String; N]) {
-        if let Some(writer) = &mut self.writer {
-            if let Err(e) = writer.write_record(row) {
-                self.writer = None;
-                self.failed = Some(e);
-            }
+            let spatial = self.frames.as_ref().map_or(&[][..], FrameColumns::cells);
+            write(&mut self.writer, &mut self.failed, &row, spatial);
         }
     }
 
@@ -130,5 +143,21 @@ impl CsvLog {
             (None, None) => Ok(()),
         };
         result.context(what)
+    }
+}
+
+/// Writes one row, `row` then `more`; the first error ends the logging
+/// (drops the writer, and with it the temporary) and is kept in `failed`.
+fn write(
+    writer: &mut Option<csv::Writer<AtomicFile>>,
+    failed: &mut Option<csv::Error>,
+    row: &[String],
+    more: &[String],
+) {
+    if let Some(w) = writer {
+        if let Err(e) = w.write_record(row.iter().chain(more)) {
+            *writer = None;
+            *failed = Some(e);
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! measured position and tracking error per joint), and a recorded path to
 //! play again.
 
+mod frames;
 mod log;
 mod plot;
 mod recording;

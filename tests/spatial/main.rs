@@ -4,6 +4,7 @@
 
 mod errors;
 mod line;
+mod log;
 mod plan;
 mod scrub;
 mod walk;

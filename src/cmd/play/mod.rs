@@ -159,7 +159,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(path) => Some(CsvLog::create(
             path,
             names_of(&robot),
-            &motion.units.to_string(),
+            motion.units,
+            robot.geometry(),
         )?),
         None => None,
     };

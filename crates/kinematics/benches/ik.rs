@@ -14,30 +14,14 @@ mod robots;
 
 fn legs(c: &mut Criterion) {
     let s = robots::shipped("hexapod");
-    let names = [
-        "front_left",
-        "middle_left",
-        "rear_left",
-        "front_right",
-        "middle_right",
-        "rear_right",
-    ];
+    let names = robots::LEGS;
     let legs: Vec<LegIk> = names
         .iter()
         .map(|n| LegIk::new(&s.model, &format!("foot_{n}")).expect("a leg"))
         .collect();
-    // Home (femur 30, tibia -60) with every foot moved 20 mm forward.
-    let home: Vec<(&str, f64)> = s
-        .names
-        .iter()
-        .filter_map(|n| match n.rsplit('_').next() {
-            Some("femur") => Some((n.as_str(), 30.0)),
-            Some("tibia") => Some((n.as_str(), -60.0)),
-            _ => None,
-        })
-        .collect();
+    // Standing (femur 30, tibia -60) with every foot moved 20 mm forward.
     let mut poses = Poses::new(&s.model);
-    s.model.forward(&robots::pose(&s, &home), &mut poses);
+    s.model.forward(&robots::standing(&s), &mut poses);
     let targets: Vec<Point3<f64>> = names
         .iter()
         .map(|n| {

@@ -18,16 +18,7 @@ mod robots;
 fn walk(c: &mut Criterion) {
     let s = robots::shipped("hexapod");
     let legs = Legs::new(&s.model).expect("six legs");
-    let stand: Vec<(&str, f64)> = s
-        .names
-        .iter()
-        .filter_map(|n| match n.rsplit('_').next() {
-            Some("femur") => Some((n.as_str(), 30.0)),
-            Some("tibia") => Some((n.as_str(), -60.0)),
-            _ => None,
-        })
-        .collect();
-    let start = robots::pose(&s, &stand);
+    let start = robots::standing(&s);
     // 10 s of walking: forward, turning, sideways (and the steps to stop).
     let plan = Walk {
         gait: Gait::Tripod,

@@ -440,35 +440,19 @@ fn draw_plot(
         (&top, &pos, "Position", u.to_string()),
         (&bottom, &vel, "Velocity", format!("{u}/s")),
     ] {
-        let mut chart = ChartBuilder::on(area)
-            .caption(format!("{what} of every joint"), ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..duration, range(series))?;
-        chart
-            .configure_mesh()
-            .x_desc("time (s)")
-            .y_desc(format!("{} ({unit})", what.to_lowercase()))
-            .draw()?;
-        for (j, points) in series.iter().enumerate() {
-            let color = Palette99::pick(j).to_rgba();
-            chart
-                .draw_series(LineSeries::new(
-                    points.iter().copied(),
-                    color.stroke_width(2),
-                ))?
-                .label(motion.joints.get(j).cloned().unwrap_or_default())
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        let lines = series.iter().enumerate().map(|(j, points)| {
+            (
+                motion.joints.get(j).cloned().unwrap_or_default(),
+                points.iter().copied(),
+            )
+        });
+        space::line_chart(
+            area,
+            &format!("{what} of every joint"),
+            (0.0..duration, range(series)),
+            ("time (s)", &format!("{} ({unit})", what.to_lowercase())),
+            lines,
+        )?;
     }
     root.present()?;
     Ok(())

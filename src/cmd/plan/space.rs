@@ -51,35 +51,58 @@ where
             let pad = ((hi - lo) * 0.05).max(1.0);
             (lo - pad)..(hi + pad)
         };
-        let mut chart = ChartBuilder::on(view)
-            .caption(format!("Path in space, {}", names.0), ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(range(a), range(b))?;
-        chart
-            .configure_mesh()
-            .x_desc(names.1)
-            .y_desc(names.2)
-            .draw()?;
-        for (i, (name, points)) in paths.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            chart
-                .draw_series(LineSeries::new(
-                    points.iter().map(|p| (p[a], p[b])),
-                    color.stroke_width(2),
-                ))?
-                .label(name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        let lines = paths
+            .iter()
+            .map(|(name, points)| (name.clone(), points.iter().map(|p| (p[a], p[b]))));
+        line_chart(
+            view,
+            &format!("Path in space, {}", names.0),
+            (range(a), range(b)),
+            (names.1, names.2),
+            lines,
+        )?;
     }
+    Ok(())
+}
+
+/// One chart in `area`: each `(label, points)` of `lines` a coloured line
+/// with its legend entry, over `ranges` (x, y) with axis titles `desc`.
+pub(super) fn line_chart<DB, L, P>(
+    area: &DrawingArea<DB, Shift>,
+    caption: &str,
+    ranges: (std::ops::Range<f64>, std::ops::Range<f64>),
+    desc: (&str, &str),
+    lines: L,
+) -> anyhow::Result<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    L: IntoIterator<Item = (String, P)>,
+    P: IntoIterator<Item = (f64, f64)>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ranges.0, ranges.1)?;
+    chart
+        .configure_mesh()
+        .x_desc(desc.0)
+        .y_desc(desc.1)
+        .draw()?;
+    for (i, (label, points)) in lines.into_iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
     Ok(())
 }

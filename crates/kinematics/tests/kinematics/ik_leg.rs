@@ -4,16 +4,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use servobus_kinematics::{IkError, LegIk, Point3, Poses};
 
-use crate::robots::shipped;
-
-const LEGS: [&str; 6] = [
-    "front_left",
-    "middle_left",
-    "rear_left",
-    "front_right",
-    "middle_right",
-    "rear_right",
-];
+use crate::robots::{shipped, LEGS};
 
 #[test]
 fn round_trips_10000_random_reachable_feet_per_leg() {

@@ -1,5 +1,7 @@
 //! The shipped robot files' geometry, read straight from the YAML (this
-//! crate does not depend on the config loader).
+//! crate does not depend on the config loader). Shared by the tests and
+//! the benches, which each use part of it.
+#![allow(dead_code)]
 
 use serde_yaml::Value;
 use servobus_kinematics::{Geometry, Spec};
@@ -48,4 +50,28 @@ pub fn pose(s: &Shipped, angles: &[(&str, f64)]) -> Vec<f64> {
                 .map_or(0.0, |(_, d)| d.to_radians())
         })
         .collect()
+}
+
+/// The shipped hexapod's legs (`foot_<leg>`), left side first.
+pub const LEGS: [&str; 6] = [
+    "front_left",
+    "middle_left",
+    "rear_left",
+    "front_right",
+    "middle_right",
+    "rear_right",
+];
+
+/// The hexapod standing: every femur at 30 deg, every tibia at -60 deg.
+pub fn standing(s: &Shipped) -> Vec<f64> {
+    let stand: Vec<(&str, f64)> = s
+        .names
+        .iter()
+        .filter_map(|n| match n.rsplit('_').next() {
+            Some("femur") => Some((n.as_str(), 30.0)),
+            Some("tibia") => Some((n.as_str(), -60.0)),
+            _ => None,
+        })
+        .collect();
+    pose(s, &stand)
 }

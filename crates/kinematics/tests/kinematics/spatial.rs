@@ -5,7 +5,7 @@ use servobus_kinematics::{
     Walk, WalkError, WalkSegment,
 };
 
-use crate::robots::{pose, shipped, Shipped};
+use crate::robots::{pose, shipped, standing, Shipped};
 
 fn linear(d: f64) -> impl Fn(f64) -> f64 {
     move |t| (t / d).clamp(0.0, 1.0)
@@ -128,19 +128,6 @@ fn a_line_out_of_reach_is_refused_with_the_distance_short() {
     )
     .expect_err("out of reach");
     assert!(matches!(err.reason, IkError::Unreachable { .. }), "{err}");
-}
-
-fn standing(s: &Shipped) -> Vec<f64> {
-    let stand: Vec<(&str, f64)> = s
-        .names
-        .iter()
-        .filter_map(|n| match n.rsplit('_').next() {
-            Some("femur") => Some((n.as_str(), 30.0)),
-            Some("tibia") => Some((n.as_str(), -60.0)),
-            _ => None,
-        })
-        .collect();
-    pose(s, &stand)
 }
 
 fn forward(velocity: f64, seconds: f64) -> Walk {

@@ -60,6 +60,15 @@ const fn field(name: &'static str, type_id: u8) -> Field {
     }
 }
 
+/// A field whose type is the message type `nested`.
+const fn nested(name: &'static str, nested: &'static TypeDesc) -> Field {
+    Field {
+        name,
+        type_id: field_type::NESTED,
+        nested: nested.name,
+    }
+}
+
 const TIME: TypeDesc = TypeDesc {
     name: "builtin_interfaces/msg/Time",
     fields: &[
@@ -71,11 +80,7 @@ const TIME: TypeDesc = TypeDesc {
 const HEADER: TypeDesc = TypeDesc {
     name: "std_msgs/msg/Header",
     fields: &[
-        Field {
-            name: "stamp",
-            type_id: field_type::NESTED,
-            nested: TIME.name,
-        },
+        nested("stamp", &TIME),
         field("frame_id", field_type::STRING),
     ],
 };
@@ -83,11 +88,7 @@ const HEADER: TypeDesc = TypeDesc {
 const JOINT_STATE: TypeDesc = TypeDesc {
     name: "sensor_msgs/msg/JointState",
     fields: &[
-        Field {
-            name: "header",
-            type_id: field_type::NESTED,
-            nested: HEADER.name,
-        },
+        nested("header", &HEADER),
         field("name", field_type::STRING + field_type::SEQUENCE),
         field("position", field_type::DOUBLE + field_type::SEQUENCE),
         field("velocity", field_type::DOUBLE + field_type::SEQUENCE),

@@ -254,7 +254,7 @@ fn drive<T: Transport, C: Clock>(
         plot: args
             .plot
             .as_ref()
-            .map(|_| PlotData::new(names.clone(), bus_of)),
+            .map(|_| PlotData::new(names.clone(), bus_of).with_frames(robot.geometry(), units)),
         take: Vec::new(),
         measured: vec![None; names.len()],
         commanded: vec![0.0; names.len()],

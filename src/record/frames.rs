@@ -1,6 +1,6 @@
-//! The log's spatial columns: where the robot's named frames (an arm's
-//! `tool`, a hexapod's `foot_<leg>`) are, by forward kinematics of the
-//! measured joint angles.
+//! Where the robot's named frames (an arm's `tool`, a hexapod's
+//! `foot_<leg>`) are during a run, by forward kinematics of the measured
+//! joint angles: the log's spatial columns and the plot's views in space.
 
 use servobus_kinematics::{Geometry, Poses};
 use servobus_runtime::config::Units;
@@ -10,9 +10,8 @@ use servobus_runtime::CycleSample;
 /// up to date one cycle sample at a time.
 ///
 /// A sample carries one bus's joints: the other buses' joints keep their
-/// last readings. Until every joint has been read once there is no pose,
-/// and the columns stay empty.
-pub struct FrameColumns {
+/// last readings. Until every joint has been read once there is no pose.
+pub struct FrameTracker {
     model: Geometry,
     poses: Poses,
     /// Named frames, in the model's order.
@@ -22,12 +21,13 @@ pub struct FrameColumns {
     read: Vec<bool>,
     /// The units of the samples' angles.
     units: Units,
-    /// The current sample's cells: x, y and z (mm) of each frame.
-    cells: Vec<String>,
+    /// Each frame's position, mm in the base frame, once every joint has
+    /// been read.
+    positions: Option<Vec<[f64; 3]>>,
 }
 
-impl FrameColumns {
-    /// The columns of `model`'s named frames, for samples whose angles are
+impl FrameTracker {
+    /// The tracker of `model`'s named frames, for samples whose angles are
     /// in `units`; `None` when the model names no frame.
     pub fn new(model: Geometry, units: Units) -> Option<Self> {
         let names: Vec<String> = (0..model.frame_count())
@@ -37,26 +37,23 @@ impl FrameColumns {
             return None;
         }
         let joints = model.joint_count();
-        Some(FrameColumns {
+        Some(FrameTracker {
             poses: Poses::new(&model),
-            cells: vec![String::new(); 3 * names.len()],
             names,
             angles: vec![0.0; joints],
             read: vec![false; joints],
             units,
+            positions: None,
             model,
         })
     }
 
-    /// The header cells: `<frame>_x_mm`, `<frame>_y_mm`, `<frame>_z_mm`
-    /// for each named frame.
-    pub fn header(&self) -> impl Iterator<Item = String> + '_ {
-        self.names
-            .iter()
-            .flat_map(|n| ["x", "y", "z"].map(move |axis| format!("{n}_{axis}_mm")))
+    /// The named frames, in the order of [`positions`](Self::positions).
+    pub fn names(&self) -> &[String] {
+        &self.names
     }
 
-    /// Takes `sample`'s readings and recomputes the frames' cells.
+    /// Takes `sample`'s readings and recomputes the frames' positions.
     pub fn update(&mut self, sample: &CycleSample) {
         for j in sample.joints() {
             if let (Some(m), Some(angle), Some(read)) = (
@@ -72,19 +69,20 @@ impl FrameColumns {
             return;
         }
         self.model.forward(&self.angles, &mut self.poses);
-        for (k, cells) in self.cells.chunks_mut(3).enumerate() {
+        let positions = self
+            .positions
+            .get_or_insert_with(|| vec![[0.0; 3]; self.names.len()]);
+        for (k, p) in positions.iter_mut().enumerate() {
             if let Some(pose) = self.poses.frame(k) {
                 let t = pose.translation.vector;
-                for (cell, v) in cells.iter_mut().zip([t.x, t.y, t.z]) {
-                    *cell = format!("{v:.3}");
-                }
+                *p = [t.x, t.y, t.z];
             }
         }
     }
 
-    /// The current sample's cells, in the header's order (empty before
-    /// every joint has been read).
-    pub fn cells(&self) -> &[String] {
-        &self.cells
+    /// Each named frame's position (mm, base frame) at the latest sample;
+    /// `None` until every joint has been read.
+    pub fn positions(&self) -> Option<&[[f64; 3]]> {
+        self.positions.as_deref()
     }
 }

@@ -16,7 +16,7 @@ use servobus_kinematics::Geometry;
 use servobus_runtime::config::Units;
 use servobus_runtime::CycleSample;
 
-use super::frames::FrameColumns;
+use super::frames::FrameTracker;
 
 /// The CSV log of a run.
 pub struct CsvLog {
@@ -27,7 +27,10 @@ pub struct CsvLog {
     direct: bool,
     names: Vec<String>,
     /// The named frames' positions, when the robot has a geometry.
-    frames: Option<FrameColumns>,
+    frames: Option<FrameTracker>,
+    /// The current sample's frame cells: x, y, z (mm) of each frame, empty
+    /// until every joint has been read.
+    frame_cells: Vec<String>,
     /// The first write error.
     failed: Option<csv::Error>,
 }
@@ -52,10 +55,17 @@ impl CsvLog {
             writer: Some(csv::Writer::from_writer(file)),
             path: path.to_path_buf(),
             names,
-            frames: geometry.and_then(|g| FrameColumns::new(g, units)),
+            frames: geometry.and_then(|g| FrameTracker::new(g, units)),
+            frame_cells: Vec::new(),
             failed: None,
         };
-        let spatial: Vec<String> = log.frames.iter().flat_map(FrameColumns::header).collect();
+        let spatial: Vec<String> = log
+            .frames
+            .iter()
+            .flat_map(FrameTracker::names)
+            .flat_map(|n| ["x", "y", "z"].map(|axis| format!("{n}_{axis}_mm")))
+            .collect();
+        log.frame_cells = vec![String::new(); spatial.len()];
         write(
             &mut log.writer,
             &mut log.failed,
@@ -85,6 +95,10 @@ impl CsvLog {
     pub fn record(&mut self, sample: &CycleSample) {
         if let Some(frames) = &mut self.frames {
             frames.update(sample);
+            let positions = frames.positions().unwrap_or_default();
+            for (cell, v) in self.frame_cells.iter_mut().zip(positions.iter().flatten()) {
+                *cell = format!("{v:.3}");
+            }
         }
         for j in sample.joints() {
             let name = self.names.get(j.joint).map_or("?", String::as_str);
@@ -105,8 +119,7 @@ impl CsvLog {
                 format!("{:.1}", sample.busy.as_secs_f64() * 1e6),
                 sample.skipped.to_string(),
             ];
-            let spatial = self.frames.as_ref().map_or(&[][..], FrameColumns::cells);
-            write(&mut self.writer, &mut self.failed, &row, spatial);
+            write(&mut self.writer, &mut self.failed, &row, &self.frame_cells);
         }
     }
 

@@ -7,6 +7,7 @@ mod frames;
 mod log;
 mod plot;
 mod recording;
+pub(crate) mod space;
 
 pub use log::CsvLog;
 pub use plot::PlotData;

@@ -1,12 +1,18 @@
 //! The plot of a run (`play --plot`): planned and measured position per
-//! joint and every joint's tracking error, over time.
+//! joint and every joint's tracking error, over time; for a robot with a
+//! geometry, the measured path of its tool or feet in space.
 
 use std::path::Path;
 
 use anyhow::Context;
 use image::ImageEncoder;
 
+use servobus_kinematics::Geometry;
+use servobus_runtime::config::Units;
 use servobus_runtime::CycleSample;
+
+use super::frames::FrameTracker;
+use super::space;
 
 #[derive(Default)]
 struct Series {
@@ -27,7 +33,25 @@ pub struct PlotData {
     keyframes: Vec<f64>,
     /// The end of the approach to the first keyframe, s (0: none).
     approach: f64,
+    /// The named frames' measured paths, when the robot has a geometry.
+    space: Option<SpacePaths>,
 }
+
+/// The measured paths of the named frames (tool, feet).
+struct SpacePaths {
+    tracker: FrameTracker,
+    /// One path per frame, a point every [`SPACE_STEP_S`] at most.
+    paths: space::Paths,
+    /// The time of the last point, s.
+    last: f64,
+}
+
+/// The plot's paths in space keep a point every 10 ms at most: finer adds
+/// nothing a drawing shows.
+const SPACE_STEP_S: f64 = 0.01;
+
+/// The height of the row of views in space, px.
+const SPACE_ROW: u32 = 430;
 
 /// Above this many keyframes, they are marked by ticks along the top of
 /// each chart only: full-height lines that close together would grey the
@@ -70,7 +94,26 @@ impl PlotData {
             bus_of,
             keyframes: Vec::new(),
             approach: 0.0,
+            space: None,
         }
+    }
+
+    /// With the robot's `geometry` (samples in `units`), the plot adds the
+    /// measured path of every named frame (tool, feet), from above and
+    /// from the side.
+    pub fn with_frames(mut self, geometry: Option<Geometry>, units: Units) -> Self {
+        self.space = geometry
+            .and_then(|g| FrameTracker::new(g, units))
+            .map(|tracker| SpacePaths {
+                paths: tracker
+                    .names()
+                    .iter()
+                    .map(|n| (n.clone(), Vec::new()))
+                    .collect(),
+                tracker,
+                last: f64::NEG_INFINITY,
+            });
+        self
     }
 
     /// Marks keyframes reached at these run times, s.
@@ -86,6 +129,17 @@ impl PlotData {
     /// Adds the joints of `sample`.
     pub fn record(&mut self, sample: &CycleSample) {
         let t = sample.time_s;
+        if let Some(sp) = &mut self.space {
+            sp.tracker.update(sample);
+            if let Some(positions) = sp.tracker.positions() {
+                if t - sp.last >= SPACE_STEP_S {
+                    sp.last = t;
+                    for ((_, path), p) in sp.paths.iter_mut().zip(positions) {
+                        path.push(*p);
+                    }
+                }
+            }
+        }
         for j in sample.joints() {
             let Some(s) = self.joints.get_mut(j.joint) else {
                 continue;
@@ -125,7 +179,7 @@ impl PlotData {
         let cols = if n <= 4 { 2 } else { 3 };
         let rows = n.div_ceil(cols);
         let width = 520 * cols as u32;
-        let height = 60 + 300 * rows as u32 + 340;
+        let height = 60 + 300 * rows as u32 + 340 + self.space_row();
         if png {
             let mut rgb = vec![0u8; width as usize * height as usize * 3];
             let root = plotters::prelude::BitMapBackend::with_buffer(&mut rgb, (width, height));
@@ -163,6 +217,11 @@ impl PlotData {
         let root = backend.into_drawing_area();
         root.fill(&WHITE).map_err(plot_err)?;
         let root = root.titled(title, ("sans-serif", 26)).map_err(plot_err)?;
+        let (_, h) = root.dim_in_pixel();
+        let (root, space_area) = root.split_vertically(h.saturating_sub(self.space_row()));
+        if let Some(sp) = &self.space {
+            space::draw(&space_area, &sp.paths)?;
+        }
         let (_, h) = root.dim_in_pixel();
         let (grid, bottom) = root.split_vertically(h.saturating_sub(340));
         let cells = grid.split_evenly((rows, cols));
@@ -253,6 +312,14 @@ type Chart<'a, DB> = plotters::prelude::ChartContext<
 >;
 
 impl PlotData {
+    /// The height of the row of views in space: none without a path.
+    fn space_row(&self) -> u32 {
+        match &self.space {
+            Some(sp) if sp.paths.iter().any(|(_, p)| !p.is_empty()) => SPACE_ROW,
+            _ => 0,
+        }
+    }
+
     /// The end of the plots' time axis: the last planned sample (at least
     /// 1 ms, so that an empty recording still has an axis).
     fn t_end(&self) -> f64 {

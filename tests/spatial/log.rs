@@ -137,3 +137,32 @@ fn a_hexapod_log_gives_every_foot() {
         "a foot's height in the body frame moved {moved:.1} mm"
     );
 }
+
+#[test]
+fn a_plot_of_a_run_shows_the_measured_tool_path_from_above_and_the_side() {
+    let path: PathBuf =
+        std::env::temp_dir().join(format!("servobus-spatial-plot-{}.svg", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_servobus"))
+        .args(["play", "arm-line", "--fast", "--plot"])
+        .arg(&path)
+        .output()
+        .expect("servobus runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(&path).expect("the plot");
+    let _ = std::fs::remove_file(&path);
+    for caption in [
+        "Path in space, from above",
+        "Path in space, from the side",
+        "tracking error",
+    ] {
+        assert!(svg.contains(caption), "no `{caption}` in the plot");
+    }
+    // The tool's path is a legend entry of both views (a text element's
+    // own line in the SVG).
+    let labels = svg.lines().filter(|l| l.trim() == "tool").count();
+    assert_eq!(labels, 2, "the tool's path in each view");
+}

@@ -4,13 +4,13 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-mod space;
-
 use serde::Serialize;
 use servobus_runtime::config::{
     load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
 };
 use servobus_trajectory::{JointState, Trajectory};
+
+use crate::record::space;
 
 /// Arguments of `servobus plan`.
 #[derive(Debug, clap::Args)]

@@ -224,6 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         keyframes: keyframe_times,
         approach: runner.approach().as_secs_f64(),
         settle: SETTLE.as_secs_f64(),
+        geometry: robot.geometry(),
     };
     let outcome = if args.monitor {
         super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))

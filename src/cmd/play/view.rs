@@ -21,6 +21,8 @@ pub(super) struct Shown {
     /// ([`Runner::approach`]), s: the path's times shift by it.
     pub(super) approach: f64,
     pub(super) settle: f64,
+    /// The robot's geometry, for the plot's views in space.
+    pub(super) geometry: Option<servobus_kinematics::Geometry>,
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
@@ -55,10 +57,10 @@ pub(super) fn follow(
     units: Units,
     duration: f64,
 ) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
-    let mut plot = args
-        .plot
-        .as_ref()
-        .map(|_| PlotData::new(shown.names.clone(), shown.bus_of.clone()));
+    let mut plot = args.plot.as_ref().map(|_| {
+        PlotData::new(shown.names.clone(), shown.bus_of.clone())
+            .with_frames(shown.geometry.clone(), units)
+    });
     let mut announced = false;
     let mut progress = Progress::new(args.json, duration, &units.to_string());
     let telemetry = runner.telemetry();

@@ -1,15 +1,16 @@
-//! `plan --plot`'s views of a motion in space: the tool's path, or every
-//! foot's, seen from above (x, y) and from the side (x, z), in mm.
+//! The plots' views of a motion in space (`plan --plot`'s planned paths,
+//! `play --plot`'s measured ones): the tool's path, or every foot's, seen
+//! from above (x, y) and from the side (x, z), in mm.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use servobus_runtime::config::SpatialSummary;
 
 /// Named paths of points (mm, x y z): the tool, or each foot.
-pub(super) type Paths = Vec<(String, Vec<[f64; 3]>)>;
+pub(crate) type Paths = Vec<(String, Vec<[f64; 3]>)>;
 
 /// The paths a summary has: the tool's, else the feet's.
-pub(super) fn paths(summary: Option<&SpatialSummary>) -> Paths {
+pub(crate) fn paths(summary: Option<&SpatialSummary>) -> Paths {
     let Some(s) = summary else {
         return Vec::new();
     };
@@ -28,7 +29,7 @@ pub(super) fn paths(summary: Option<&SpatialSummary>) -> Paths {
 }
 
 /// Draws the top and side views of `paths` side by side in `area`.
-pub(super) fn draw<DB: DrawingBackend>(
+pub(crate) fn draw<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     paths: &Paths,
 ) -> anyhow::Result<()>
@@ -67,7 +68,7 @@ where
 
 /// One chart in `area`: each `(label, points)` of `lines` a coloured line
 /// with its legend entry, over `ranges` (x, y) with axis titles `desc`.
-pub(super) fn line_chart<DB, L, P>(
+pub(crate) fn line_chart<DB, L, P>(
     area: &DrawingArea<DB, Shift>,
     caption: &str,
     ranges: (std::ops::Range<f64>, std::ops::Range<f64>),

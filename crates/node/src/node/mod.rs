@@ -2,7 +2,6 @@
 //! no multicast scouting unless a config file turns it on), declares the
 //! robot's keys, and relays between them and the running loop.
 
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -12,84 +11,18 @@ use servobus_runtime::{Command, CommandSender, Report, Runner, Target, TargetSen
 use zenoh::bytes::Encoding;
 use zenoh::Wait;
 
-use crate::wire::{parse_command, parse_target, NodeCommand, StateMessage};
-use crate::{prefix, ros2};
+use crate::prefix;
+use crate::wire::{parse_command, parse_target, NodeCommand};
 
-/// Where the node listens by default: loopback only, Zenoh's usual port.
-pub const DEFAULT_LISTEN: &str = "tcp/127.0.0.1:7447";
+mod session;
+mod state;
 
-/// How a node joins the network.
-#[derive(Debug, Clone, Default)]
-pub struct NodeConfig {
-    /// A Zenoh configuration file (JSON5), for authentication, TLS or
-    /// scouting. Its settings stand unless `listen`/`connect` override.
-    pub zenoh_config: Option<PathBuf>,
-    /// Endpoints to listen on; none: [`DEFAULT_LISTEN`] (unless the
-    /// config file names some).
-    pub listen: Vec<String>,
-    /// Peers to connect to.
-    pub connect: Vec<String>,
-    /// ROS 2 JointState output in this ROS domain, if wanted.
-    pub ros2_domain: Option<u32>,
-    /// How often `state` is published, Hz.
-    pub state_hz: f64,
-    /// A group whose commands this robot also takes, from
-    /// `servobus/group/<group>/command` (robots started together).
-    pub group: Option<String>,
-}
-
-/// Why a node could not run.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum NodeError {
-    /// The Zenoh configuration could not be read or set.
-    #[error("zenoh configuration: {0}")]
-    Config(String),
-    /// The session or one of its keys could not be declared.
-    #[error("zenoh: {0}")]
-    Zenoh(String),
-    /// The run could not be joined.
-    #[error(transparent)]
-    Run(#[from] servobus_runtime::RunError),
-}
-
-fn zerr(e: impl std::fmt::Display) -> NodeError {
-    NodeError::Zenoh(e.to_string())
-}
-
-/// Opens a Zenoh session per `config`: peer mode; loopback listening and
-/// multicast scouting off unless the configuration file says otherwise.
-pub fn open_session(config: &NodeConfig) -> Result<zenoh::Session, NodeError> {
-    let cerr = |e: zenoh::Error| NodeError::Config(e.to_string());
-    let (mut z, from_file) = match &config.zenoh_config {
-        Some(path) => (
-            zenoh::Config::from_file(path)
-                .map_err(|e| NodeError::Config(format!("{}: {e}", path.display())))?,
-            true,
-        ),
-        None => (zenoh::Config::default(), false),
-    };
-    if !from_file {
-        z.insert_json5("mode", "\"peer\"").map_err(cerr)?;
-        z.insert_json5("scouting/multicast/enabled", "false")
-            .map_err(cerr)?;
-    }
-    let listen = if config.listen.is_empty() && !from_file {
-        vec![DEFAULT_LISTEN.to_string()]
-    } else {
-        config.listen.clone()
-    };
-    if !listen.is_empty() {
-        let json = serde_json::to_string(&listen).map_err(|e| NodeError::Config(e.to_string()))?;
-        z.insert_json5("listen/endpoints", &json).map_err(cerr)?;
-    }
-    if !config.connect.is_empty() {
-        let json =
-            serde_json::to_string(&config.connect).map_err(|e| NodeError::Config(e.to_string()))?;
-        z.insert_json5("connect/endpoints", &json).map_err(cerr)?;
-    }
-    zenoh::open(z).wait().map_err(zerr)
-}
+use session::zerr;
+pub use session::{
+    group_command_key, group_member_key, open_peer, open_session, NodeConfig, NodeError,
+    DEFAULT_LISTEN,
+};
+use state::{publish_state, Ros2, Watch};
 
 /// Turns the motion of a `play` command (a name, a file or YAML text) into
 /// the command that plays it; the node's owner knows the robot and plans.
@@ -157,42 +90,6 @@ struct Shared {
     /// What `report` answers: progress while running, then the report.
     report: Mutex<String>,
     counts: Counts,
-}
-
-/// The key a group's commands travel on: `servobus/group/<group>/command`.
-pub fn group_command_key(group: &str) -> String {
-    format!("servobus/group/{}/command", crate::key_chunk(group))
-}
-
-/// The liveliness token of a group member: `servobus/group/<group>/members/<robot>`.
-pub fn group_member_key(group: &str, robot: &str) -> String {
-    let robot = if robot == "*" {
-        "*".to_string()
-    } else {
-        crate::key_chunk(robot)
-    };
-    format!("servobus/group/{}/members/{robot}", crate::key_chunk(group))
-}
-
-/// Opens a session for a program that talks to nodes without being one:
-/// peer mode, no multicast, listening only where `config.listen` says
-/// (nowhere by default), connected to `config.connect`.
-///
-/// # Errors
-/// [`NodeError::Config`] or [`NodeError::Zenoh`] as [`open_session`].
-pub fn open_peer(config: &NodeConfig) -> Result<zenoh::Session, NodeError> {
-    let cerr = |e: zenoh::Error| NodeError::Config(e.to_string());
-    let mut z = zenoh::Config::default();
-    z.insert_json5("mode", "\"peer\"").map_err(cerr)?;
-    z.insert_json5("scouting/multicast/enabled", "false")
-        .map_err(cerr)?;
-    let json =
-        |v: &[String]| serde_json::to_string(v).map_err(|e| NodeError::Config(e.to_string()));
-    z.insert_json5("listen/endpoints", &json(&config.listen)?)
-        .map_err(cerr)?;
-    z.insert_json5("connect/endpoints", &json(&config.connect)?)
-        .map_err(cerr)?;
-    zenoh::open(z).wait().map_err(zerr)
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -492,128 +389,4 @@ fn measure_starts(shared: &Shared, cycle: u64, start: SystemTime, t: f64, out: &
         out.push(offset);
         false
     });
-}
-
-/// The state of one whole cycle (every bus's joints).
-struct Done {
-    cycle: u64,
-    t: f64,
-    msg: StateMessage,
-}
-
-/// Gathers a cycle's samples (one per bus, or more for long buses).
-struct Watch {
-    msg: StateMessage,
-    cycle: Option<(u64, f64)>,
-    faults: Vec<String>,
-}
-
-impl Watch {
-    fn new(robot: &RobotInfo) -> Self {
-        let n = robot.joints.len();
-        Watch {
-            msg: StateMessage {
-                t: 0.0,
-                stamp_ns: 0,
-                cycle: 0,
-                units: robot.units.name(),
-                joints: robot.joints.clone(),
-                measured: vec![None; n],
-                commanded: vec![0.0; n],
-                velocity: vec![0.0; n],
-                faults: Vec::new(),
-            },
-            cycle: None,
-            faults: Vec::new(),
-        }
-    }
-
-    /// Takes a sample; returns the previous cycle once a new one begins.
-    fn cycle(&mut self, c: &servobus_runtime::CycleSample) -> Option<Done> {
-        let mut done = None;
-        if let Some((k, t)) = self.cycle.filter(|(k, _)| *k != c.cycle) {
-            let mut msg = self.msg.clone();
-            msg.t = t;
-            msg.cycle = k;
-            msg.stamp_ns = unix_ns(SystemTime::now());
-            msg.faults.clone_from(&self.faults);
-            done = Some(Done { cycle: k, t, msg });
-        }
-        self.cycle = Some((c.cycle, c.time_s));
-        for j in c.joints() {
-            if j.joint < self.msg.joints.len() {
-                self.msg.commanded[j.joint] = j.commanded;
-                self.msg.measured[j.joint] = j.measured;
-                self.msg.velocity[j.joint] = j.velocity;
-            }
-        }
-        done
-    }
-}
-
-fn publish_state(state: &zenoh::pubsub::Publisher<'_>, done: &Done) -> Result<(), NodeError> {
-    let json = serde_json::to_vec(&done.msg).map_err(|e| NodeError::Zenoh(e.to_string()))?;
-    state.put(json).wait().map_err(zerr)
-}
-
-/// The ROS 2 side: the JointState publisher and its liveliness tokens.
-struct Ros2 {
-    publisher: zenoh::pubsub::Publisher<'static>,
-    gid: [u8; 16],
-    _tokens: Vec<zenoh::liveliness::LivelinessToken>,
-}
-
-impl Ros2 {
-    fn declare(session: &zenoh::Session, domain: u32, robot: &str) -> Result<Self, NodeError> {
-        let zid = session.zid();
-        let id = zid.to_string();
-        let mut tokens = Vec::new();
-        for key in ros2::liveliness_tokens(domain, &id, robot) {
-            tokens.push(
-                session
-                    .liveliness()
-                    .declare_token(key)
-                    .wait()
-                    .map_err(zerr)?,
-            );
-        }
-        let publisher = session
-            .declare_publisher(ros2::joint_states_key(domain, robot))
-            .wait()
-            .map_err(zerr)?;
-        // The publisher's GID: the session's id, which is unique per node.
-        let mut gid = [0u8; 16];
-        let bytes = zid.to_le_bytes();
-        let n = bytes.len().min(16);
-        gid[..n].copy_from_slice(&bytes[..n]);
-        Ok(Ros2 {
-            publisher,
-            gid,
-            _tokens: tokens,
-        })
-    }
-
-    fn publish(&self, done: &Done, units: Units, seq: i64) -> Result<(), NodeError> {
-        let m = &done.msg;
-        let position: Vec<f64> = m
-            .measured
-            .iter()
-            .zip(&m.commanded)
-            .map(|(meas, cmd)| units.to_rad(meas.unwrap_or(*cmd)))
-            .collect();
-        let velocity: Vec<f64> = m.velocity.iter().map(|v| units.to_rad(*v)).collect();
-        let js = ros2::JointState {
-            stamp_ns: m.stamp_ns,
-            frame_id: "",
-            names: &m.joints,
-            position: &position,
-            velocity: &velocity,
-            effort: &[],
-        };
-        self.publisher
-            .put(js.encode())
-            .attachment(ros2::attachment(seq, m.stamp_ns, &self.gid))
-            .wait()
-            .map_err(zerr)
-    }
 }

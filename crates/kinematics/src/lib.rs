@@ -46,13 +46,11 @@ mod leg;
 mod legs;
 mod line;
 mod spec;
+mod support;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
-pub use gait::{
-    plan_walk, planar_motion, support_margin, Gait, Walk, WalkError, WalkPlan, WalkSegment,
-    LOW_MARGIN_MM,
-};
+pub use gait::{plan_walk, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM};
 pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;
 pub use legs::{LegError, Legs, PoseSample, FOOT_PREFIX};
@@ -61,3 +59,4 @@ pub use line::{
 };
 pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};
+pub use support::{planar_motion, support_margin};

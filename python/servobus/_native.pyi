@@ -43,8 +43,6 @@ class Bus:
         """As ``sync_write``, by address and length."""
     def close(self) -> None:
         """Closes the bus."""
-    def __enter__(self) -> "Bus": ...
-    def __exit__(self, *args: object) -> bool: ...
 
 class Sim:
     """A robot's simulated servos on a pseudo-terminal, served from a thread."""
@@ -100,13 +98,29 @@ class Robot:
     def units(self) -> str: ...
     @property
     def port(self) -> Optional[str]: ...
+    @property
+    def rate_hz(self) -> float: ...
+    @property
+    def limits(self) -> List[Tuple[str, int, float, float, float, float, Optional[float]]]:
+        """``(name, id, min, max, max_velocity, max_acceleration, max_jerk)`` per joint."""
     def plan(self, motion: str) -> str:
         """The plan as JSON text."""
     def play(
         self, motion: str, on_progress: Optional[object] = None, real_time: bool = False
     ) -> Tuple[str, List[float], List[List[float]], List[List[float]], List[List[float]], Optional[BaseException]]:
         """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
-    def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
+    def stream(self, rate: Optional[float] = None, timeout: float = 0.25, tracking_faults: bool = True) -> Stream:
         """Starts the live loop."""
+    def calibrate(self, hand: Optional[str] = None, mounting: Optional[str] = None, timeout: float = 600.0) -> str:
+        """Runs the calibration procedure; the calibration as JSON text."""
     def torque_off(self) -> None:
         """A broadcast torque off on every bus (nothing on the simulator)."""
+
+def calibration_from_lerobot(robot: str, json: str) -> str:
+    """The calibration (JSON text) a LeRobot calibration file describes."""
+def calibration_to_lerobot(calibration: str) -> str:
+    """The LeRobot calibration file (JSON text) of a calibration."""
+def save_calibration(calibration: str, path: str) -> None:
+    """Writes a calibration (JSON text) as a servobus calibration file."""
+def load_calibration(path: str) -> str:
+    """A servobus calibration file, as JSON text."""

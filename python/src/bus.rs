@@ -437,22 +437,14 @@ impl Bus {
     }
 
     /// Closes the bus (its port is free for others); later calls raise.
+    /// (`servobus.Bus`, the Python class around this one, is the context
+    /// manager.)
     fn close(&self, py: Python<'_>) -> PyResult<()> {
         py.allow_threads(|| -> Outcome<()> {
             self.inner.lock().map_err(poisoned)?.take();
             Ok(())
         })?;
         Ok(())
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.close(py)?;
-        Ok(false)
     }
 
     fn __repr__(&self) -> String {

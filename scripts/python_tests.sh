@@ -45,8 +45,8 @@ fi
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$PWD/target}
 # The extension is outside the workspace: the workspace's fmt and clippy do
 # not see it.
-say "cargo fmt --check and cargo clippy -D warnings in python/"
-(cd python && cargo fmt -- --check && cargo clippy --quiet --all-targets -- -D warnings)
+say "cargo fmt --check, cargo clippy -D warnings and cargo test --lib in python/"
+(cd python && cargo fmt -- --check && cargo clippy --quiet --all-targets -- -D warnings && cargo test --quiet --lib)
 # maturin's build hook runs the `maturin` command of the venv.
 export PATH="$venv/bin:$PATH"
 # The pinned maturin of the venv builds the package once, as a wheel (no

@@ -17,6 +17,8 @@ class Bus:
     @property
     def series(self) -> str:
         """``"sts"`` or ``"scs"``."""
+    def unit(self, register: str) -> Tuple[float, str]:
+        """``(scale, unit)``: a raw value times ``scale`` is in ``unit``."""
     def ping(self, id: int) -> bool:
         """PING servo ``id``: True when it answers."""
     def scan(self, ids: Optional[List[int]] = None) -> List[int]:

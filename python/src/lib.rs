@@ -11,6 +11,7 @@ mod load;
 mod robot;
 mod sim;
 mod stream;
+mod units;
 
 use pyo3::prelude::*;
 

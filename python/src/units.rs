@@ -40,25 +40,22 @@ mod tests {
     use super::*;
     use servobus_driver::Series;
 
-    fn of(name: &str) -> (f64, &'static str) {
-        let reg = Series::Sts.map().get(name).expect("an STS register");
-        physical(reg)
-    }
-
     #[test]
-    fn scaled_units_split_into_scale_and_unit() {
-        assert_eq!(of("present_voltage"), (0.1, "V"));
-        assert_eq!(of("present_load"), (0.1, "%"));
-        assert_eq!(of("present_current"), (6.5, "mA"));
-        assert_eq!(of("acceleration"), (100.0, "ticks/s^2"));
-    }
-
-    #[test]
-    fn plain_units_keep_scale_one_and_positions_stay_in_ticks() {
-        assert_eq!(of("present_position"), (1.0, "ticks"));
-        assert_eq!(of("present_speed"), (1.0, "ticks/s"));
-        assert_eq!(of("present_temperature"), (1.0, "°C"));
-        assert_eq!(of("torque_enable"), (1.0, ""));
-        assert_eq!(of("baud_rate"), (1.0, ""));
+    fn units_split_into_scale_and_unit_and_positions_stay_in_ticks() {
+        let expected: &[(&str, f64, &str)] = &[
+            ("present_voltage", 0.1, "V"),
+            ("present_load", 0.1, "%"),
+            ("present_current", 6.5, "mA"),
+            ("acceleration", 100.0, "ticks/s^2"),
+            ("present_position", 1.0, "ticks"),
+            ("present_speed", 1.0, "ticks/s"),
+            ("present_temperature", 1.0, "°C"),
+            ("torque_enable", 1.0, ""),
+            ("baud_rate", 1.0, ""),
+        ];
+        for &(name, scale, unit) in expected {
+            let reg = Series::Sts.map().get(name).expect("an STS register");
+            assert_eq!(physical(reg), (scale, unit), "{name}");
+        }
     }
 }

@@ -214,6 +214,9 @@ class ServobusMotorsBus(FeetechMotorsBus):
         try:
             self._live.send(target)
         except servobus.Error as e:
+            # The loop has ended (a fault): its report is collected and the
+            # port taken back; the next action starts a new loop.
+            self.end_live()
             raise ConnectionError(f"{self}: the live loop took no goal: {e}") from e
 
     # --- the transactions -----------------------------------------------

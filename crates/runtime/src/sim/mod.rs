@@ -89,22 +89,16 @@ pub enum SimRobotError {
     /// Two joints served on one port have the same ID: the port's servos
     /// cannot both answer it.
     #[error(
-        "{}: ID {id} is used by `{first_joint}` on bus `{first_bus}` and by `{joint}` on bus `{bus}`",
-        .file.display()
+        "{}: ID {id} is used by `{}` on bus `{}` and by `{}` on bus `{}`",
+        .file.display(), .joints[0].1, .joints[0].0, .joints[1].1, .joints[1].0
     )]
     SharedId {
         /// The robot file.
         file: PathBuf,
         /// The ID.
         id: u8,
-        /// The joint that has it first.
-        first_joint: String,
-        /// Its bus.
-        first_bus: String,
-        /// The other joint.
-        joint: String,
-        /// Its bus.
-        bus: String,
+        /// The two joints as `(bus, joint)`, the first one found first.
+        joints: Box<[(String, String); 2]>,
     },
     /// A start pose does not have one angle per joint.
     #[error("{}: a start pose of {got} angles for a robot of {want} joints", .file.display())]

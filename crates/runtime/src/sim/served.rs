@@ -57,10 +57,10 @@ impl<'a> SimRobotBuilder<'a> {
                     return Err(SimRobotError::SharedId {
                         file: robot.path.clone(),
                         id: joint.id,
-                        first_joint: first_joint.clone(),
-                        first_bus: first_bus.clone(),
-                        joint: joint.name.clone(),
-                        bus: bus.name.clone(),
+                        joints: Box::new([
+                            (first_bus.clone(), first_joint.clone()),
+                            (bus.name.clone(), joint.name.clone()),
+                        ]),
                     });
                 }
             }

@@ -72,3 +72,60 @@ impl<'a> SimRobotBuilder<'a> {
         Ok((baud, servos))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{load_robot, RobotOptions};
+    use crate::sim::SimRobot;
+
+    /// The built-in two-bus hexapod: bus `left` IDs 1..=9, `right` 10..=18,
+    /// both at 1 Mbps.
+    fn hexapod() -> Robot {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
+        load_robot(&dir.join("hexapod-2bus.yaml"), &RobotOptions::default())
+            .expect("the built-in hexapod loads")
+    }
+
+    fn ids(servos: &[SimServo]) -> Vec<u8> {
+        servos.iter().map(SimServo::id).collect()
+    }
+
+    #[test]
+    fn every_bus_or_the_named_one_is_served_at_one_rate() {
+        let robot = hexapod();
+        let builder = SimRobot::builder(&robot);
+        let (baud, all) = builder.served(None).expect("both buses");
+        assert_eq!(baud, 1_000_000);
+        assert_eq!(ids(&all), (1..=18).collect::<Vec<u8>>());
+        let (_, right) = builder.served(Some("right")).expect("one bus");
+        assert_eq!(ids(&right), (10..=18).collect::<Vec<u8>>());
+    }
+
+    #[test]
+    fn an_unknown_bus_and_an_id_on_two_buses_are_refused() {
+        let mut robot = hexapod();
+        match SimRobot::builder(&robot).served(Some("middle")) {
+            Err(SimRobotError::NoSuchBus { name, buses, .. }) => {
+                assert_eq!(name, "middle");
+                assert_eq!(buses, ["left", "right"]);
+            }
+            other => panic!("expected NoSuchBus, got {other:?}"),
+        }
+        robot.buses[1].joints[0].id = 1;
+        let err = SimRobot::builder(&robot)
+            .served(None)
+            .expect_err("ID 1 twice");
+        assert!(
+            matches!(err, SimRobotError::SharedId { id: 1, .. }),
+            "{err:?}"
+        );
+        let text = err.to_string();
+        assert!(
+            text.contains("on bus `left`") && text.contains("on bus `right`"),
+            "{text}"
+        );
+        // One bus alone is served: the other's ID does not matter.
+        assert!(SimRobot::builder(&robot).served(Some("right")).is_ok());
+    }
+}

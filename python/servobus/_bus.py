@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Dict, Iterable, Mapping, Optional, Union
+from typing import Dict, Iterable, Mapping, Optional, Tuple, Union
 
 from . import _native
 from ._errors import UsageError
@@ -73,6 +73,7 @@ class Bus:
         _native_bus: Optional[_native.Bus] = None,
     ) -> None:
         self._bus = _native_bus if _native_bus is not None else _native.Bus(port, baud, series, latency)
+        self._scales: Dict[Tuple[str, Optional[str]], float] = {}
 
     @classmethod
     def sim(cls, robot: str = "so101") -> "Bus":
@@ -103,7 +104,15 @@ class Bus:
 
     def _scale(self, register: str, unit: Optional[str]) -> float:
         """What a raw value of ``register`` is multiplied by to be in
-        ``unit`` (None: the register's own physical unit)."""
+        ``unit`` (None: the register's own physical unit); kept per
+        register and unit, so that a loop of reads pays for it once."""
+        key = (register, unit)
+        scale = self._scales.get(key)
+        if scale is None:
+            scale = self._scales[key] = self._find_scale(register, unit)
+        return scale
+
+    def _find_scale(self, register: str, unit: Optional[str]) -> float:
         scale, own = self._bus.unit(register)
         if unit is None or unit == own:
             return scale
@@ -151,7 +160,8 @@ class Bus:
         """
         scale = self._scale(register, unit)
         values, missing = self._bus.sync_read(register, list(ids))
-        values = [(i, None if v is None else self._value(v, scale)) for i, v in values]
+        if scale != 1.0:
+            values = [(i, None if v is None else v * scale) for i, v in values]
         return SyncRead(values, [Missing(*m) for m in missing])
 
     def sync_write(self, register: str, values: Mapping[int, Number], unit: Optional[str] = None) -> None:

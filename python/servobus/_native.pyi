@@ -1,7 +1,7 @@
 """Type stubs of the extension module ``servobus._native`` (the Rust side;
 the package ``servobus`` wraps it with typed results)."""
 
-from typing import List, Optional, Tuple
+from typing import Callable, List, Optional, Tuple
 
 __version__: str
 
@@ -113,7 +113,13 @@ class Robot:
         """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
     def stream(self, rate: Optional[float] = None, timeout: float = 0.25, tracking_faults: bool = True) -> Stream:
         """Starts the live loop."""
-    def calibrate(self, hand: Optional[str] = None, mounting: Optional[str] = None, timeout: float = 600.0) -> str:
+    def calibrate(
+        self,
+        hand: Optional[str] = None,
+        mounting: Optional[str] = None,
+        timeout: float = 600.0,
+        on_step: Optional[Callable[[str], object]] = None,
+    ) -> str:
         """Runs the calibration procedure; the calibration as JSON text."""
     def torque_off(self) -> None:
         """A broadcast torque off on every bus (nothing on the simulator)."""

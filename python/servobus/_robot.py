@@ -336,6 +336,7 @@ class Robot:
         hand: Optional[str] = None,
         mounting: Optional[str] = None,
         timeout: float = 600.0,
+        on_step: Optional[Callable[[str], Any]] = None,
     ) -> Calibration:
         """Calibrates the robot as ``servobus calibrate --yes`` does: torque
         off, the joints held in the robot file's calibration pose, then each
@@ -347,11 +348,16 @@ class Robot:
         ``hand`` (a hand file or a built-in name, e.g.
         ``"so101-first-arm-hand"``) moving the joints and the servos mounted
         as ``mounting`` says (as ``servobus sim --hand/--mounting``).
-        ``timeout`` (s) bounds each step. Raises
+        ``timeout`` (s) bounds each step. ``on_step(name)`` is called as
+        each step begins: ``"torque_off"``, ``"hold_pose"`` (hold the robot
+        in its calibration pose), ``"sweep"`` (move each joint the positive
+        way first, then from end stop to end stop), ``"done"``. Ctrl-C, or
+        an exception raised by ``on_step``, ends the procedure at once and
+        is raised (nothing is saved). Raises
         :class:`servobus.CalibrationError` when the procedure cannot take a
         calibration (a step that does not end, a joint not swept).
         """
-        cal = Calibration.from_json(self._robot.calibrate(hand, mounting, float(timeout)))
+        cal = Calibration.from_json(self._robot.calibrate(hand, mounting, float(timeout), on_step))
         if output is not None:
             cal.save(output)
         return cal

@@ -99,15 +99,48 @@ pub(crate) fn load_calibration(py: Python<'_>, path: &str) -> PyResult<String> {
     })?)
 }
 
-/// An operator that watches nothing and never presses Enter: each step
-/// ends when the robot has moved and then been held still.
-struct Unattended;
+/// The Python caller as the procedure's operator: it never presses Enter
+/// (each step ends once the joints have moved and been held still), is
+/// told each step through `on_step(name)`, and Ctrl-C (or an exception in
+/// `on_step`) ends every step at once, the exception kept to be raised.
+struct Unattended {
+    on_step: Option<PyObject>,
+    stopped_by: Option<PyErr>,
+}
+
+impl Unattended {
+    /// Runs `f` with the GIL unless an exception has stopped the procedure;
+    /// keeps the exception `f` raises.
+    fn with_python(&mut self, f: impl FnOnce(Python<'_>, Option<&PyObject>) -> PyResult<()>) {
+        if self.stopped_by.is_some() {
+            return;
+        }
+        let on_step = self.on_step.as_ref();
+        if let Err(e) = Python::with_gil(|py| f(py, on_step)) {
+            self.stopped_by = Some(e);
+        }
+    }
+}
 
 impl Operator for Unattended {
-    fn step(&mut self, _step: Step) {}
+    fn step(&mut self, step: Step) {
+        let name = match step {
+            Step::TorqueOff => "torque_off",
+            Step::HoldPose => "hold_pose",
+            Step::Sweep => "sweep",
+            Step::Done => "done",
+        };
+        self.with_python(|py, on_step| match on_step {
+            Some(callback) => callback.call1(py, (name,)).map(drop),
+            None => Ok(()),
+        });
+    }
+
     fn watch(&mut self, _at: Duration, _joints: &[LiveJoint]) {}
+
     fn confirmed(&mut self) -> bool {
-        false
+        self.with_python(|py, _| py.check_signals());
+        self.stopped_by.is_some()
     }
 }
 
@@ -122,12 +155,37 @@ pub(crate) struct Where<'a> {
     pub mounting: Option<&'a str>,
     /// A step that has not ended after this many seconds fails.
     pub timeout: f64,
+    /// Called with each step's name as it begins.
+    pub on_step: Option<PyObject>,
+}
+
+/// What [`calibrate_robot`] gives: the calibration, or why there is none;
+/// an exception (Ctrl-C's, or one `on_step` raised) that stopped the
+/// procedure comes first.
+pub(crate) enum Calibrated {
+    /// The calibration, or the procedure's failure.
+    Taken(Outcome<Calibration>),
+    /// The exception that stopped it.
+    Stopped(PyErr),
 }
 
 /// Runs the calibration procedure of `servobus calibrate` (unattended:
 /// each step ends once the robot has moved and been held still) on
-/// `robot` (as designed), at `at`.
-pub(crate) fn calibrate_robot(robot: &str, at: &Where<'_>) -> Outcome<Calibration> {
+/// `robot` (as designed), at `at`. Call it without the GIL.
+pub(crate) fn calibrate_robot(robot: &str, mut at: Where<'_>) -> Calibrated {
+    let mut operator = Unattended {
+        on_step: at.on_step.take(),
+        stopped_by: None,
+    };
+    let taken = measure(robot, &at, &mut operator);
+    match operator.stopped_by {
+        Some(e) => Calibrated::Stopped(e),
+        None => Calibrated::Taken(taken),
+    }
+}
+
+/// The procedure itself, with `operator`.
+fn measure(robot: &str, at: &Where<'_>, operator: &mut Unattended) -> Outcome<Calibration> {
     if !(at.timeout.is_finite() && at.timeout > 0.0) {
         return Err(Failure::usage(format!(
             "timeout {}: give a positive number of seconds",
@@ -150,13 +208,13 @@ pub(crate) fn calibrate_robot(robot: &str, at: &Where<'_>) -> Outcome<Calibratio
                 ));
             }
             let sim = with_bodies(SimRobot::builder(&design), at.mounting, at.hand)?.build()?;
-            calibrate(&design, &mut sim.driver_buses(), &mut Unattended, &options)
+            calibrate(&design, &mut sim.driver_buses(), operator, &options)
         }
         Some(port) => {
             let ports = every_port(&design, &[port]).required(&design)?;
             let patient = Allowance::AtLeast(PATIENCE);
             let mut buses = open_buses(&design, &ports, patient, Some(PATIENT_RETRIES))?;
-            calibrate(&design, &mut buses, &mut Unattended, &options)
+            calibrate(&design, &mut buses, operator, &options)
         }
     };
     measured.map_err(|e| Failure::new("CalibrationError", chain(&e)))

@@ -9,7 +9,7 @@ use servobus_protocol::BROADCAST_ID;
 use servobus_robot::ports::{bus_ports, open_bus, Allowance};
 use servobus_robot::{Motion, Target, Telemetry};
 
-use crate::calibration::{calibrate_robot, to_json, Where};
+use crate::calibration::{calibrate_robot, to_json, Calibrated, Where};
 use crate::errors::{Failure, Outcome};
 use crate::load::load_robot;
 use crate::stream::{LiveOptions, Stream};
@@ -337,22 +337,30 @@ impl Robot {
     /// and been held still), and returns the calibration as JSON text. On
     /// the built-in simulator (no port) in virtual time, `hand` (a hand file
     /// or a built-in name) moving the joints and the servos mounted as
-    /// `mounting` says; `timeout` (s) bounds each step.
-    #[pyo3(signature = (hand=None, mounting=None, timeout=600.0))]
+    /// `mounting` says; `timeout` (s) bounds each step. `on_step(name)` is
+    /// called as each step begins (`torque_off`, `hold_pose`, `sweep`,
+    /// `done`); Ctrl-C, or an exception `on_step` raises, ends the
+    /// procedure at once and is raised.
+    #[pyo3(signature = (hand=None, mounting=None, timeout=600.0, on_step=None))]
     fn calibrate(
         &self,
         py: Python<'_>,
         hand: Option<&str>,
         mounting: Option<&str>,
         timeout: f64,
+        on_step: Option<PyObject>,
     ) -> PyResult<String> {
         let at = Where {
             port: self.port.as_deref(),
             hand,
             mounting,
             timeout,
+            on_step,
         };
-        Ok(py.allow_threads(|| to_json(&calibrate_robot(&self.source, &at)?))?)
+        match py.allow_threads(|| calibrate_robot(&self.source, at)) {
+            Calibrated::Taken(taken) => Ok(to_json(&taken?)?),
+            Calibrated::Stopped(e) => Err(e),
+        }
     }
 
     /// Turns the torque off on every servo of every bus of the robot (one

@@ -55,10 +55,24 @@ def test_a_calibration_saved_loads_the_same_and_a_robot_applies_it(calibration, 
     assert (pan.min, pan.max, pan.max_velocity) == (-110.0, 110.0, 180.0)
 
 
-def test_calibrate_saves_to_output(tmp_path):
+def test_calibrate_says_each_step_and_saves_to_output(tmp_path):
     out = tmp_path / "out.yaml"
-    cal = servobus.Robot("so101").calibrate(out, hand="so101-first-arm-hand")
+    steps = []
+    cal = servobus.Robot("so101").calibrate(out, hand="so101-first-arm-hand", on_step=steps.append)
+    assert steps == ["torque_off", "hold_pose", "sweep", "done"]
     assert servobus.Calibration.load(out) == cal
+
+
+def test_an_exception_in_on_step_ends_the_procedure_and_nothing_is_saved(tmp_path):
+    out = tmp_path / "out.yaml"
+
+    def refuse(step):
+        if step == "sweep":
+            raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        servobus.Robot("so101").calibrate(out, hand="so101-first-arm-hand", on_step=refuse)
+    assert not out.exists()
 
 
 def test_a_calibration_goes_to_lerobot_and_back(calibration):

@@ -66,14 +66,19 @@ def test_an_action_moves_the_arm_there_through_the_live_loop(robot):
     err = settle_at(robot, action)
     assert robot.bus.is_live, "send_action started servobus's live loop"
     assert max(err.values()) <= 1.0, err
-    # The loop's readings are what LeRobot's own bus reads once it stops.
+    # The loop's readings of the arm at rest are what LeRobot's own bus
+    # reads once the loop has stopped, within 1 tick. (Not the gripper:
+    # 30 % is past the simulated gripper's closed stop, at 44 % of the
+    # range LeRobot read, so it presses against it as on an object.)
+    time.sleep(0.2)
     seen = robot.get_observation()
     theirs = feetech_positions(robot)
     assert not robot.bus.is_live, "a transaction of its own took the port back"
-    for m in MOTORS:
-        if m != "gripper":
-            assert abs(theirs[m] - action[f"{m}.pos"]) <= 1.0, (m, theirs[m], action)
-            assert abs(theirs[m] - seen[f"{m}.pos"]) <= 1.0, (m, theirs[m], seen)
+    arm = [m for m in MOTORS if m != "gripper"]
+    off = {m: abs(seen[f"{m}.pos"] - theirs[m]) / tick_in_units(robot, m) for m in arm}
+    assert max(off.values()) <= 1.0, off
+    for m in arm:
+        assert abs(theirs[m] - action[f"{m}.pos"]) <= 1.0, (m, theirs[m], action)
 
 
 def test_actions_at_30_hz_move_the_arm_smoothly_to_the_last(robot):

@@ -3,8 +3,8 @@
 # maturin, installs it into a kept virtualenv and runs its pytest suite
 # (python/tests); then, with SERVOBUS_LEROBOT_PYTHON set (LeRobot's venv of
 # scripts/python_clients.sh), installs the same wheel and
-# python/lerobot_robot_servobus there and runs their check against the
-# simulator. fmt and clippy of the extension crate come first.
+# python/lerobot_robot_servobus (and the pinned pytest) there and runs
+# their pytest suite against the simulator. fmt and clippy of the extension crate come first.
 #
 # Usage: bash scripts/python_tests.sh [PYTEST_ARGS...]
 # Env:   SERVOBUS_VENVS (default ~/.cache/servobus/venvs): the venv is
@@ -45,8 +45,8 @@ fi
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$PWD/target}
 # The extension is outside the workspace: the workspace's fmt and clippy do
 # not see it.
-say "cargo fmt --check and cargo clippy -D warnings in python/"
-(cd python && cargo fmt -- --check && cargo clippy --quiet --all-targets -- -D warnings)
+say "cargo fmt --check, cargo clippy -D warnings and cargo test --lib in python/"
+(cd python && cargo fmt -- --check && cargo clippy --quiet --all-targets -- -D warnings && cargo test --quiet --lib)
 # maturin's build hook runs the `maturin` command of the venv.
 export PATH="$venv/bin:$PATH"
 # The pinned maturin of the venv builds the package once, as a wheel (no
@@ -82,9 +82,11 @@ if [ -z "$lerobot" ]; then
 fi
 say "lerobot_robot_servobus against the simulator with $lerobot"
 if ! "$lerobot" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps \
-    "$wheels"/servobus-*.whl ./python/lerobot_robot_servobus >"$venv/lerobot-install.log" 2>&1; then
+    "$wheels"/servobus-*.whl ./python/lerobot_robot_servobus >"$venv/lerobot-install.log" 2>&1 ||
+    ! "$lerobot" -m pip install -q --disable-pip-version-check 'pytest==8.3.4' \
+        >>"$venv/lerobot-install.log" 2>&1; then
     cat "$venv/lerobot-install.log" >&2
-    say "FAIL servobus or lerobot_robot_servobus did not install into LeRobot's venv"
+    say "FAIL servobus, lerobot_robot_servobus or pytest did not install into LeRobot's venv"
     exit 1
 fi
-(cd python/lerobot_robot_servobus/tests && "$lerobot" check_so101_servobus.py)
+(cd python/lerobot_robot_servobus/tests && "$lerobot" -m pytest -q -p no:cacheprovider .)

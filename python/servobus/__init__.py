@@ -4,26 +4,19 @@
   SYNC READ with partial results, SYNC WRITE), on a port or simulated.
 - :class:`Sim`: a robot's simulated servos on a pseudo-terminal, served
   from a thread (``with Sim("so101") as sim: Bus(sim.port)``).
-- :class:`Robot`: plan and play motions, stream live targets.
+- :class:`Robot`: plan and play motions, stream live targets, calibrate.
+- :class:`Calibration`: a robot's calibration, from and to LeRobot's files.
 
 Every call that waits on a bus releases the GIL. Errors are subclasses of
 :class:`Error`.
 """
 
+from . import _errors
 from ._native import Sim, __version__
-from ._errors import (
-    CalibrationError,
-    ConfigError,
-    Error,
-    FaultError,
-    LimitError,
-    MissingServo,
-    PortError,
-    TimeoutError,
-    UsageError,
-)
+from ._errors import *  # noqa: F401,F403 (the exception classes, listed in _errors.__all__)
 from ._bus import Bus, Missing, SyncRead
-from ._robot import JointPeaks, JointReport, Plan, Report, Robot, Segment, State, Stream
+from ._calibration import Calibration, JointCalibration
+from ._robot import JointLimits, JointPeaks, JointReport, Plan, Report, Robot, Segment, State, Stream
 
 __all__ = [
     "Bus",
@@ -34,18 +27,12 @@ __all__ = [
     "Plan",
     "Segment",
     "JointPeaks",
+    "JointLimits",
     "Report",
     "JointReport",
+    "Calibration",
+    "JointCalibration",
     "SyncRead",
     "Missing",
-    "Error",
-    "ConfigError",
-    "PortError",
-    "CalibrationError",
-    "MissingServo",
-    "TimeoutError",
-    "FaultError",
-    "LimitError",
-    "UsageError",
     "__version__",
-]
+] + _errors.__all__

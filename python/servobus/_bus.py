@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Dict, Iterable, Mapping, Optional
+from typing import Dict, Iterable, Mapping, Optional, Tuple, Union
 
 from . import _native
+from ._errors import UsageError
+
+Number = Union[int, float]
+
+# Ticks per turn of the STS/SMS position sensor: speeds in rpm.
+_STS_TICKS_PER_TURN = 4096
 
 
 class Missing:
@@ -22,7 +28,7 @@ class Missing:
         return f"Missing(id={self.id}, reason={self.reason!r}, attempts={self.attempts})"
 
 
-class SyncRead(Dict[int, Optional[int]]):
+class SyncRead(Dict[int, Optional[Number]]):
     """The result of :meth:`Bus.sync_read`: a dict of servo ID to value, in
     the order asked; a servo that did not answer maps to None and is in
     :attr:`missing` with the reason. Partial results are never thrown away.
@@ -46,7 +52,11 @@ class Bus:
 
     Registers are named as in the control table (``"present_position"``,
     ``"goal_position"``, ``"torque_enable"``; case and separators do not
-    matter); values are the registers' raw units (ticks for positions).
+    matter). :meth:`read` and :meth:`write` take values in the register's
+    physical unit (:meth:`unit`): positions in ticks, speeds in ticks/s (or
+    ``unit="rpm"``), ``present_voltage`` in V, ``present_temperature`` in
+    °C, ``present_load`` and torque limits in %, currents in mA, times in
+    ms; ``unit="raw"`` gives the register's raw number.
     ``latency`` (s) is the adapter latency the reply deadlines allow
     (default: what the port is assumed to need). Every call releases the
     GIL while it waits on the bus. Use :meth:`Bus.sim` for an in-process
@@ -63,6 +73,7 @@ class Bus:
         _native_bus: Optional[_native.Bus] = None,
     ) -> None:
         self._bus = _native_bus if _native_bus is not None else _native.Bus(port, baud, series, latency)
+        self._scales: Dict[Tuple[str, Optional[str]], float] = {}
 
     @classmethod
     def sim(cls, robot: str = "so101") -> "Bus":
@@ -84,33 +95,81 @@ class Bus:
         """The IDs among ``ids`` (default 0..253) that answer a PING."""
         return self._bus.scan(None if ids is None else list(ids))
 
-    def read(self, id: int, register: str) -> int:
-        """The value of ``register`` of servo ``id``.
+    def unit(self, register: str) -> str:
+        """The unit of ``register``'s values in :meth:`read` and :meth:`write`:
+        ``"ticks"``, ``"ticks/s"``, ``"ticks/s^2"``, ``"V"``, ``"°C"``,
+        ``"%"``, ``"mA"``, ``"ms"``, ``"us"``, or ``""`` for a plain number
+        (flags, modes, gains, IDs)."""
+        return self._bus.unit(register)[1]
+
+    def _scale(self, register: str, unit: Optional[str]) -> float:
+        """What a raw value of ``register`` is multiplied by to be in
+        ``unit`` (None: the register's own physical unit); kept per
+        register and unit, so that a loop of reads pays for it once."""
+        key = (register, unit)
+        scale = self._scales.get(key)
+        if scale is None:
+            scale = self._scales[key] = self._find_scale(register, unit)
+        return scale
+
+    def _find_scale(self, register: str, unit: Optional[str]) -> float:
+        scale, own = self._bus.unit(register)
+        if unit is None or unit == own:
+            return scale
+        if unit == "raw":
+            return 1.0
+        if unit == "rpm" and own == "ticks/s" and self.series == "sts":
+            return scale * 60.0 / _STS_TICKS_PER_TURN
+        raise UsageError(f"register {register!r} is in {own or 'plain numbers'}: "
+                         f"give unit=None, 'raw'{', or rpm' if own == 'ticks/s' else ''} (not {unit!r})")
+
+    @staticmethod
+    def _value(raw: int, scale: float) -> Number:
+        return raw if scale == 1.0 else raw * scale
+
+    @staticmethod
+    def _raw(value: Number, scale: float) -> int:
+        return int(value) if scale == 1.0 else int(round(value / scale))
+
+    def read(self, id: int, register: str, unit: Optional[str] = None) -> Number:
+        """The value of ``register`` of servo ``id`` in its physical unit
+        (:meth:`unit`; an int where that is the raw number, as ticks), or in
+        ``unit``: ``"raw"`` for the raw number, ``"rpm"`` for a speed on STS
+        servos (4096 ticks a turn).
 
         Raises :class:`servobus.TimeoutError` when the servo does not answer.
         """
-        return self._bus.read(id, register)
+        scale = self._scale(register, unit)
+        return self._value(self._bus.read(id, register), scale)
 
-    def write(self, id: int, register: str, value: int) -> None:
-        """Writes ``value`` to ``register`` of servo ``id`` (EEPROM registers
-        persistently). Raises :class:`servobus.LimitError` for a value the
-        register cannot hold."""
-        self._bus.write(id, register, int(value))
+    def write(self, id: int, register: str, value: Number, unit: Optional[str] = None) -> None:
+        """Writes ``value`` (in the register's physical unit, or in ``unit``
+        as :meth:`read` takes it; rounded to the register's step) to
+        ``register`` of servo ``id`` (EEPROM registers persistently). Raises
+        :class:`servobus.LimitError` for a value the register cannot
+        hold."""
+        self._bus.write(id, register, self._raw(value, self._scale(register, unit)))
 
-    def sync_read(self, register: str, ids: Iterable[int]) -> SyncRead:
+    def sync_read(self, register: str, ids: Iterable[int], unit: Optional[str] = None) -> SyncRead:
         """Reads ``register`` of every servo in ``ids`` with one SYNC READ
-        (the servos missing from it are asked once more).
+        (the servos missing from it are asked once more), in the unit
+        :meth:`read` gives.
 
         Returns a :class:`SyncRead`: ID to value, None for a servo that did
         not answer, and ``.missing`` saying which and why.
         """
+        scale = self._scale(register, unit)
         values, missing = self._bus.sync_read(register, list(ids))
+        if scale != 1.0:
+            values = [(i, None if v is None else v * scale) for i, v in values]
         return SyncRead(values, [Missing(*m) for m in missing])
 
-    def sync_write(self, register: str, values: Mapping[int, int]) -> None:
+    def sync_write(self, register: str, values: Mapping[int, Number], unit: Optional[str] = None) -> None:
         """Writes ``register`` of several servos with one SYNC WRITE:
-        ``values`` maps each servo's ID to its value."""
-        self._bus.sync_write(register, [(int(k), int(v)) for k, v in values.items()])
+        ``values`` maps each servo's ID to its value, in the unit
+        :meth:`write` takes."""
+        scale = self._scale(register, unit)
+        self._bus.sync_write(register, [(int(k), self._raw(v, scale)) for k, v in values.items()])
 
     def read_raw(self, id: int, address: int, length: int, status: bool = False):
         """``length`` (1, 2 or 4) bytes at ``address`` of servo ``id`` as one

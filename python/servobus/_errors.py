@@ -37,8 +37,10 @@ class PortError(Error):
 
 
 class CalibrationError(Error):
-    """The servos on ``port`` do not match the robot's calibration:
-    nothing was read through the bus and nothing moved."""
+    """The servos on ``port`` do not match the robot's calibration (nothing
+    was read through the bus and nothing moved), or the calibration
+    procedure (:meth:`servobus.Robot.calibrate`) could not take one: a step
+    that did not end, a joint not swept."""
 
     port: Optional[str] = None
 

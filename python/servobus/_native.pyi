@@ -1,7 +1,7 @@
 """Type stubs of the extension module ``servobus._native`` (the Rust side;
 the package ``servobus`` wraps it with typed results)."""
 
-from typing import List, Optional, Tuple
+from typing import Callable, List, Optional, Tuple
 
 __version__: str
 
@@ -17,6 +17,8 @@ class Bus:
     @property
     def series(self) -> str:
         """``"sts"`` or ``"scs"``."""
+    def unit(self, register: str) -> Tuple[float, str]:
+        """``(scale, unit)``: a raw value times ``scale`` is in ``unit``."""
     def ping(self, id: int) -> bool:
         """PING servo ``id``: True when it answers."""
     def scan(self, ids: Optional[List[int]] = None) -> List[int]:
@@ -43,8 +45,6 @@ class Bus:
         """As ``sync_write``, by address and length."""
     def close(self) -> None:
         """Closes the bus."""
-    def __enter__(self) -> "Bus": ...
-    def __exit__(self, *args: object) -> bool: ...
 
 class Sim:
     """A robot's simulated servos on a pseudo-terminal, served from a thread."""
@@ -100,13 +100,35 @@ class Robot:
     def units(self) -> str: ...
     @property
     def port(self) -> Optional[str]: ...
+    @property
+    def rate_hz(self) -> float: ...
+    @property
+    def limits(self) -> List[Tuple[str, int, float, float, float, float, Optional[float]]]:
+        """``(name, id, min, max, max_velocity, max_acceleration, max_jerk)`` per joint."""
     def plan(self, motion: str) -> str:
         """The plan as JSON text."""
     def play(
         self, motion: str, on_progress: Optional[object] = None, real_time: bool = False
     ) -> Tuple[str, List[float], List[List[float]], List[List[float]], List[List[float]], Optional[BaseException]]:
         """``(report JSON, time, commanded, planned, measured, the exception that stopped it)``."""
-    def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
+    def stream(self, rate: Optional[float] = None, timeout: float = 0.25, tracking_faults: bool = True) -> Stream:
         """Starts the live loop."""
+    def calibrate(
+        self,
+        hand: Optional[str] = None,
+        mounting: Optional[str] = None,
+        timeout: float = 600.0,
+        on_step: Optional[Callable[[str], object]] = None,
+    ) -> str:
+        """Runs the calibration procedure; the calibration as JSON text."""
     def torque_off(self) -> None:
         """A broadcast torque off on every bus (nothing on the simulator)."""
+
+def calibration_from_lerobot(robot: str, json: str) -> str:
+    """The calibration (JSON text) a LeRobot calibration file describes."""
+def calibration_to_lerobot(calibration: str) -> str:
+    """The LeRobot calibration file (JSON text) of a calibration."""
+def save_calibration(calibration: str, path: str) -> None:
+    """Writes a calibration (JSON text) as a servobus calibration file."""
+def load_calibration(path: str) -> str:
+    """A servobus calibration file, as JSON text."""

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
+import tempfile
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, List, Mapping, Optional
+from operator import attrgetter
+from typing import Any, Callable, Dict, List, Mapping, Optional, Union
 
 import numpy as np
 
 from . import _native
+from ._calibration import Calibration, PathLike
 from ._errors import Error, FaultError
 
 
@@ -24,6 +28,24 @@ class JointPeaks:
     """None where the acceleration jumps (no jerk limit)."""
     min_position: float
     max_position: float
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """One joint's limits, in the robot's units (its calibration applied:
+    ``min``/``max`` within the measured range)."""
+
+    name: str
+    id: int
+    """Its servo's ID."""
+    min: float
+    max: float
+    max_velocity: float
+    """Per second."""
+    max_acceleration: float
+    """Per second squared."""
+    max_jerk: Optional[float]
+    """Per second cubed; None: the acceleration may step."""
 
 
 @dataclass(frozen=True)
@@ -209,35 +231,40 @@ class Robot:
 
     ``robot`` is a robot file, a built-in name (``"so101"``) or YAML text;
     ``port`` the serial port of its first bus (None: the built-in
-    simulator); ``calibration`` a calibration file to use instead of the
-    one the robot file names. Angles are in the robot's units
+    simulator); ``calibration`` a calibration file (or a
+    :class:`Calibration`) to use instead of the one the robot file names. Angles are in the robot's units
     (:attr:`units`).
     """
 
-    def __init__(self, robot: str, port: Optional[str] = None, calibration: Optional[str] = None) -> None:
+    def __init__(
+        self,
+        robot: str,
+        port: Optional[str] = None,
+        calibration: Union[None, PathLike, Calibration] = None,
+    ) -> None:
+        self._kept: Optional[tempfile.TemporaryDirectory] = None
+        if isinstance(calibration, Calibration):
+            # The loader takes a file: the calibration is written to one
+            # kept as long as the robot (motions load it again).
+            self._kept = tempfile.TemporaryDirectory(prefix="servobus-")
+            path = os.path.join(self._kept.name, "calibration.yaml")
+            calibration.save(path)
+            calibration = path
         self._robot = _native.Robot(str(robot), None if port is None else str(port),
-                                    None if calibration is None else str(calibration))
+                                    None if calibration is None else os.fspath(calibration))
         self._stream: Optional[Stream] = None
 
-    @property
-    def name(self) -> str:
-        """The robot's name."""
-        return self._robot.name
+    name = property(attrgetter("_robot.name"), doc="The robot's name (str).")
+    joints = property(attrgetter("_robot.joints"), doc="Its joints' names (list of str), in the robot file's order.")
+    units = property(attrgetter("_robot.units"), doc='The unit of its angles: ``"deg"`` or ``"rad"``.')
+    port = property(attrgetter("_robot.port"), doc="Its port (str; None: the built-in simulator).")
+    rate_hz = property(attrgetter("_robot.rate_hz"), doc="Its default control rate, Hz (float).")
 
     @property
-    def joints(self) -> List[str]:
-        """Its joints' names, in the robot file's order."""
-        return self._robot.joints
-
-    @property
-    def units(self) -> str:
-        """The unit of its angles: ``"deg"`` or ``"rad"``."""
-        return self._robot.units
-
-    @property
-    def port(self) -> Optional[str]:
-        """Its port (None: the built-in simulator)."""
-        return self._robot.port
+    def limits(self) -> Dict[str, JointLimits]:
+        """Every joint's :class:`JointLimits`, by name, in the robot file's
+        order."""
+        return {t[0]: JointLimits(*t) for t in self._robot.limits}
 
     def plan(self, motion: str) -> Plan:
         """Plans ``motion`` (a motion file or a built-in name): its timing and
@@ -279,15 +306,21 @@ class Robot:
             raise FaultError(f"the run ended on a fault: {report.fault}", fault=report.fault, report=report)
         return report
 
-    def stream(self, rate: Optional[float] = None, timeout: float = 0.25) -> Stream:
+    def stream(self, rate: Optional[float] = None, timeout: float = 0.25, *,
+               tracking_faults: bool = True) -> Stream:
         """Starts the live loop (as ``servobus stream``) and returns its
         :class:`Stream`, a context manager. ``rate`` in Hz (default the
         robot's); after ``timeout`` s without a target the joints stop and
         hold until targets come back. On the simulator it runs in real time.
+        On real servos the servos are checked against the calibration first
+        (:class:`servobus.CalibrationError`). Without ``tracking_faults`` a
+        joint held back (a gripper closed on an object) or far behind its
+        target does not end the run; missing servos and status flags still
+        do.
         """
         if self._stream is not None and not self._stream.finished:
             raise Error("a stream of this robot is running: stop it first")
-        self._stream = Stream(self._robot.stream(rate, timeout), self.joints)
+        self._stream = Stream(self._robot.stream(rate, timeout, tracking_faults), self.joints)
         return self._stream
 
     def state(self) -> State:
@@ -295,6 +328,39 @@ class Robot:
         if self._stream is None:
             raise Error("no stream is running: start one with robot.stream()")
         return self._stream.state()
+
+    def calibrate(
+        self,
+        output: Optional[PathLike] = None,
+        *,
+        hand: Optional[str] = None,
+        mounting: Optional[str] = None,
+        timeout: float = 600.0,
+        on_step: Optional[Callable[[str], Any]] = None,
+    ) -> Calibration:
+        """Calibrates the robot as ``servobus calibrate --yes`` does: torque
+        off, the joints held in the robot file's calibration pose, then each
+        joint swept through its whole range; each step ends once the joints
+        have moved and then been held still for 2 s. Returns the
+        :class:`Calibration` (saved to ``output`` when given).
+
+        On the built-in simulator (no port) it runs in virtual time, with
+        ``hand`` (a hand file or a built-in name, e.g.
+        ``"so101-first-arm-hand"``) moving the joints and the servos mounted
+        as ``mounting`` says (as ``servobus sim --hand/--mounting``).
+        ``timeout`` (s) bounds each step. ``on_step(name)`` is called as
+        each step begins: ``"torque_off"``, ``"hold_pose"`` (hold the robot
+        in its calibration pose), ``"sweep"`` (move each joint the positive
+        way first, then from end stop to end stop), ``"done"``. Ctrl-C, or
+        an exception raised by ``on_step``, ends the procedure at once and
+        is raised (nothing is saved). Raises
+        :class:`servobus.CalibrationError` when the procedure cannot take a
+        calibration (a step that does not end, a joint not swept).
+        """
+        cal = Calibration.from_json(self._robot.calibrate(hand, mounting, float(timeout), on_step))
+        if output is not None:
+            cal.save(output)
+        return cal
 
     def torque_off(self) -> Optional[Report]:
         """Turns the torque off on every servo. A running stream ends, and

@@ -206,6 +206,17 @@ impl Bus {
         series_name(self.series)
     }
 
+    /// The physical unit of `register`'s values and the scale from its raw
+    /// number to it: `(0.1, "V")` for `present_voltage`, `(1.0, "ticks")`
+    /// for a position, `(1.0, "")` for a plain number (see the control
+    /// table's units).
+    fn unit(&self, register: &str) -> PyResult<(f64, &'static str)> {
+        Ok(crate::units::physical(self::register(
+            self.series,
+            register,
+        )?))
+    }
+
     /// PING servo `id`: True when it answers, False when nothing answered.
     fn ping(&self, py: Python<'_>, id: i64) -> PyResult<bool> {
         let id = servo_id(id)?;
@@ -437,22 +448,14 @@ impl Bus {
     }
 
     /// Closes the bus (its port is free for others); later calls raise.
+    /// (`servobus.Bus`, the Python class around this one, is the context
+    /// manager.)
     fn close(&self, py: Python<'_>) -> PyResult<()> {
         py.allow_threads(|| -> Outcome<()> {
             self.inner.lock().map_err(poisoned)?.take();
             Ok(())
         })?;
         Ok(())
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.close(py)?;
-        Ok(false)
     }
 
     fn __repr__(&self) -> String {

@@ -5,11 +5,13 @@
 //! that waits on a bus, a port or a run releases the GIL.
 
 mod bus;
+mod calibration;
 mod errors;
 mod load;
 mod robot;
 mod sim;
 mod stream;
+mod units;
 
 use pyo3::prelude::*;
 
@@ -20,6 +22,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sim::Sim>()?;
     m.add_class::<robot::Robot>()?;
     m.add_class::<stream::Stream>()?;
+    calibration::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -9,9 +9,10 @@ use servobus_protocol::BROADCAST_ID;
 use servobus_robot::ports::{bus_ports, open_bus, Allowance};
 use servobus_robot::{Motion, Target, Telemetry};
 
+use crate::calibration::{calibrate_robot, to_json, Calibrated, Where};
 use crate::errors::{Failure, Outcome};
 use crate::load::load_robot;
-use crate::stream::Stream;
+use crate::stream::{LiveOptions, Stream};
 
 /// How often a run's telemetry loop looks for Ctrl-C and calls back.
 const POLL: Duration = Duration::from_millis(50);
@@ -20,6 +21,8 @@ const POLL: Duration = Duration::from_millis(50);
 #[pyclass(module = "servobus._native", name = "Robot")]
 pub struct Robot {
     robot: servobus_robot::Robot,
+    /// The robot as Python gave it (a file, a built-in name or YAML text).
+    source: String,
     port: Option<String>,
 }
 
@@ -74,6 +77,10 @@ impl Samples {
     }
 }
 
+/// A joint's limits as Python gets them: name, servo ID (a number: a u8
+/// would become bytes in a list), min, max, velocity, acceleration, jerk.
+type JointLimits = (String, u16, f64, f64, f64, f64, Option<f64>);
+
 /// A run's report (JSON text), its samples, and the exception that stopped
 /// it early (Ctrl-C's `KeyboardInterrupt`, or one `on_progress` raised).
 type Played = (
@@ -122,8 +129,12 @@ impl Robot {
         port: Option<String>,
         calibration: Option<&str>,
     ) -> PyResult<Self> {
-        let robot = py.allow_threads(|| load_robot(robot, calibration))?;
-        Ok(Robot { robot, port })
+        let loaded = py.allow_threads(|| load_robot(robot, calibration))?;
+        Ok(Robot {
+            robot: loaded,
+            source: robot.to_owned(),
+            port,
+        })
     }
 
     /// The robot's name.
@@ -140,6 +151,34 @@ impl Robot {
             .joints()
             .map(|j| j.name.clone())
             .collect()
+    }
+
+    /// Every joint's limits in the robot's units (its calibration applied):
+    /// `(name, servo ID, min, max, max_velocity, max_acceleration,
+    /// max_jerk or None)`, in the robot file's order.
+    #[getter]
+    fn limits(&self) -> Vec<JointLimits> {
+        self.robot
+            .config()
+            .joints()
+            .map(|j| {
+                (
+                    j.name.clone(),
+                    u16::from(j.id),
+                    j.min,
+                    j.max,
+                    j.max_velocity,
+                    j.max_acceleration,
+                    j.max_jerk,
+                )
+            })
+            .collect()
+    }
+
+    /// Its default control rate, Hz.
+    #[getter]
+    fn rate_hz(&self) -> f64 {
+        self.robot.config().rate_hz
     }
 
     /// The unit of its angles: `"deg"` or `"rad"`.
@@ -257,7 +296,7 @@ impl Robot {
                 }
             }
         }
-        let report = py.allow_threads(|| run.join()).map_err(Failure::from)?;
+        let report = py.allow_threads(|| run.join().map_err(Failure::from))?;
         let json = serde_json::to_string(&report)
             .map_err(|e| Failure::new("Error", format!("the report does not serialise: {e}")))?;
         Ok((
@@ -273,10 +312,55 @@ impl Robot {
     /// Starts the live loop (as `servobus stream`): the joints hold where
     /// they are and follow the targets sent to the returned stream. `rate`
     /// in Hz (default the robot's); after `timeout` s without a target the
-    /// joints stop and hold.
-    #[pyo3(signature = (rate=None, timeout=0.25))]
-    fn stream(&self, py: Python<'_>, rate: Option<f64>, timeout: f64) -> PyResult<Stream> {
-        Ok(py.allow_threads(|| Stream::start(&self.robot, self.port.as_deref(), rate, timeout))?)
+    /// joints stop and hold. Without `tracking_faults` a joint far from its
+    /// target (a following error) or held back (a stall: a gripper closed
+    /// on an object) does not end the run.
+    #[pyo3(signature = (rate=None, timeout=0.25, tracking_faults=true))]
+    fn stream(
+        &self,
+        py: Python<'_>,
+        rate: Option<f64>,
+        timeout: f64,
+        tracking_faults: bool,
+    ) -> PyResult<Stream> {
+        let target = self.target(false);
+        let live = LiveOptions {
+            rate,
+            timeout,
+            tracking_faults,
+        };
+        Ok(py.allow_threads(|| Stream::start(&self.robot, target, &live))?)
+    }
+
+    /// Runs the calibration procedure of `servobus calibrate` on the robot
+    /// as designed, unattended (each step ends once the joints have moved
+    /// and been held still), and returns the calibration as JSON text. On
+    /// the built-in simulator (no port) in virtual time, `hand` (a hand file
+    /// or a built-in name) moving the joints and the servos mounted as
+    /// `mounting` says; `timeout` (s) bounds each step. `on_step(name)` is
+    /// called as each step begins (`torque_off`, `hold_pose`, `sweep`,
+    /// `done`); Ctrl-C, or an exception `on_step` raises, ends the
+    /// procedure at once and is raised.
+    #[pyo3(signature = (hand=None, mounting=None, timeout=600.0, on_step=None))]
+    fn calibrate(
+        &self,
+        py: Python<'_>,
+        hand: Option<&str>,
+        mounting: Option<&str>,
+        timeout: f64,
+        on_step: Option<PyObject>,
+    ) -> PyResult<String> {
+        let at = Where {
+            port: self.port.as_deref(),
+            hand,
+            mounting,
+            timeout,
+            on_step,
+        };
+        match py.allow_threads(|| calibrate_robot(&self.source, at)) {
+            Calibrated::Taken(taken) => Ok(to_json(&taken?)?),
+            Calibrated::Stopped(e) => Err(e),
+        }
     }
 
     /// Turns the torque off on every servo of every bus of the robot (one

@@ -8,9 +8,8 @@ use std::thread::JoinHandle;
 
 use pyo3::prelude::*;
 use servobus_config::builtin::{path_or_name, Kind};
-use servobus_config::Robot;
 use servobus_runtime::sim::{Hand, Mounting, SimRobot, SimRobotBuilder};
-use servobus_sim::{Faults, PtyServer, SimServo};
+use servobus_sim::{Faults, PtyServer};
 
 use crate::errors::{chain, poisoned, Failure, Outcome};
 use crate::load::load_robot;
@@ -36,31 +35,24 @@ pub struct Sim {
     serving: Mutex<Serving>,
 }
 
-/// Every servo of `robot`'s buses, at the first bus's baud rate (the
-/// pty's), built by `builder`; IDs must be distinct across the buses.
-fn servos_of(robot: &Robot, builder: &SimRobotBuilder<'_>) -> Outcome<(u32, Vec<SimServo>)> {
-    let first = robot
-        .buses
-        .first()
-        .ok_or_else(|| Failure::new("ConfigError", "the robot has no bus"))?;
-    let baud = first.baud;
-    let mut seen = std::collections::HashSet::new();
-    let mut servos = Vec::new();
-    for bus in &robot.buses {
-        if let Some(joint) = bus.joints.iter().find(|j| !seen.insert(j.id)) {
-            return Err(Failure::new(
-                "ConfigError",
-                format!(
-                    "ID {} (joint `{}`) is on two buses: one pty cannot serve both",
-                    joint.id, joint.name
-                ),
-            ));
-        }
-        let mut served = bus.clone();
-        served.baud = baud;
-        servos.extend(builder.servos(&served)?);
+/// `builder` with the servos mounted as `mounting` says and the hand `hand`
+/// on the joints (each a file or a built-in name, as `servobus sim` takes
+/// them).
+pub(crate) fn with_bodies<'a>(
+    mut builder: SimRobotBuilder<'a>,
+    mounting: Option<&str>,
+    hand: Option<&str>,
+) -> Outcome<SimRobotBuilder<'a>> {
+    let config = builder.robot();
+    if let Some(m) = mounting {
+        let path = path_or_name(Kind::Mounting, Path::new(m));
+        builder = builder.mounting(Mounting::load(&path, config)?);
     }
-    Ok((baud, servos))
+    if let Some(h) = hand {
+        let path = path_or_name(Kind::Hand, Path::new(h));
+        builder = builder.hand(Hand::load(&path, config)?);
+    }
+    Ok(builder)
 }
 
 /// Starts serving; the pty's path and the number of servos.
@@ -79,17 +71,9 @@ fn start(
             .map_err(|e| Failure::usage(format!("faults `{spec}`: {}", chain(&e))))?,
         None => Faults::none(),
     };
-    let mut builder = SimRobot::builder(config);
-    if let Some(m) = mounting {
-        let path = path_or_name(Kind::Mounting, Path::new(m));
-        builder = builder.mounting(Mounting::load(&path, config)?);
-    }
+    let builder = with_bodies(SimRobot::builder(config), mounting, hand)?;
     let moved_by_hand = hand.is_some() || mounting.is_some();
-    if let Some(h) = hand {
-        let path = path_or_name(Kind::Hand, Path::new(h));
-        builder = builder.hand(Hand::load(&path, config)?);
-    }
-    let (baud, servos) = servos_of(config, &builder)?;
+    let (baud, servos) = builder.served(None)?;
     let count = servos.len();
     let mut server = PtyServer::open(baud, servos)?;
     server.set_pacing(pacing);

@@ -6,13 +6,9 @@ use std::time::{Duration, Instant};
 
 use pyo3::prelude::*;
 use servobus_config::Units;
-use servobus_robot::ports::{every_port, open_bus, system_clock, Allowance, Ports};
-use servobus_runtime::calibrate::prepare_bus;
-use servobus_runtime::{
-    spawn_live, Command, Lead, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry,
-};
+use servobus_runtime::{Command, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry};
 
-use crate::errors::{chain, poisoned, Failure, Field, Outcome};
+use crate::errors::{chain, poisoned, Failure, Outcome};
 
 /// The latest state of every joint, in the robot's units.
 #[derive(Debug, Clone, Default)]
@@ -38,6 +34,16 @@ type StateTuple = (
     Vec<String>,
 );
 
+/// How a live run is started.
+pub(crate) struct LiveOptions {
+    /// Control rate, Hz (None: the robot's).
+    pub rate: Option<f64>,
+    /// Seconds without a target after which the joints stop and hold.
+    pub timeout: f64,
+    /// Whether a following error or a stall is a fault that ends the run.
+    pub tracking_faults: bool,
+}
+
 /// A live run of a robot, fed targets from Python.
 #[pyclass(module = "servobus._native", name = "Stream")]
 pub struct Stream {
@@ -50,60 +56,34 @@ pub struct Stream {
 }
 
 impl Stream {
-    /// Starts the live loop of `robot` on `port` (or the robot file's ports,
-    /// or the built-in simulator in real time when neither gives one).
+    /// Starts the live loop of `robot` at `target` through the facade's
+    /// [`servobus_robot::Connection::live`]: the same connection (and
+    /// calibration check) as a play, the options of `servobus stream`.
     pub(crate) fn start(
         robot: &servobus_robot::Robot,
-        port: Option<&str>,
-        rate: Option<f64>,
-        timeout: f64,
+        target: servobus_robot::Target,
+        live: &LiveOptions,
     ) -> Outcome<Stream> {
+        let timeout = live.timeout;
         if !(timeout.is_finite() && timeout > 0.0) {
             return Err(Failure::usage(format!(
                 "timeout {timeout}: give a positive number of seconds"
             )));
         }
         let config = robot.config();
-        let options = RunOptions {
-            rate_hz: rate,
-            lead: config.lead.map_or_else(Lead::default, Lead::Fixed),
-            approach: None,
-            target_timeout: Duration::from_secs_f64(timeout),
-            units: Some(config.units),
-            ..RunOptions::default()
-        };
-        let runner = match (port, every_port(config, port.as_slice())) {
-            (None, _) | (_, Ports::None) => {
-                let rest: Vec<f64> = config.joints().map(|j| j.rest()).collect();
-                let buses = servobus_runtime::sim::SimRobot::builder(config)
-                    .pose(&rest)
-                    .build()?
-                    .wall_buses(&system_clock());
-                spawn_live(config, buses, options)?
-            }
-            (Some(_), Ports::Every(ports)) => {
-                let mut buses = Vec::new();
-                for (bus, port) in config.buses.iter().zip(&ports) {
-                    buses.push(open_bus(bus, port, Allowance::Run)?);
-                }
-                for (index, (bus, port)) in buses.iter_mut().zip(&ports).enumerate() {
-                    prepare_bus(config, index, bus).map_err(|refusal| {
-                        Failure::new("CalibrationError", chain(&refusal))
-                            .with("port", Field::Str(port.clone()))
-                    })?;
-                }
-                spawn_live(config, buses, options)?
-            }
-            (Some(_), Ports::Missing(bus)) => {
-                return Err(Failure::new(
-                    "PortError",
-                    format!(
-                        "bus `{}` has no port: give it a `port:` in the robot file",
-                        bus.name
-                    ),
-                ))
-            }
-        };
+        let connection = robot.connect(target)?;
+        let mut options = connection.options();
+        options.rate_hz = live.rate;
+        // Live targets start where the joints are: no approach to a path.
+        options.approach = None;
+        options.settle = RunOptions::default().settle;
+        options.target_timeout = Duration::from_secs_f64(timeout);
+        options.units = Some(config.units);
+        if !live.tracking_faults {
+            options.faults.following_error = f64::INFINITY;
+            options.faults.stall_error = f64::INFINITY;
+        }
+        let runner = connection.live(options)?.into_runner();
         let n = config.joints().count();
         let state = Arc::new(Mutex::new(State {
             position: vec![f64::NAN; n],

@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use servobus_io::AtomicFile;
-use servobus_runtime::config::{load_robot, Robot, RobotOptions};
-use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder};
+use servobus_runtime::config::{load_robot, RobotOptions};
+use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\
@@ -121,7 +121,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let bodies = args.mounting.is_some() || args.unit.is_some() || args.hand.is_some();
-    let (baud, servos) = servos_of(&robot, &builder, args.bus.as_deref())?;
+    let (baud, servos) = servos_of(&builder, args.bus.as_deref())?;
     let count = servos.len();
     let mut server = PtyServer::open(baud, servos)?;
     if let Some(link) = &args.link {
@@ -208,56 +208,20 @@ fn write_truth(
     }
 }
 
-/// The servos to serve and the baud rate to serve them at: each joint's
-/// servo with its ID, model, the bus's return delay, and its shaft at the
-/// joint's rest position.
+/// The servos to serve and the baud rate to serve them at
+/// ([`SimRobotBuilder::served`]): a bus that is not there, or an ID on two
+/// served buses, is the user's input error.
 fn servos_of(
-    robot: &Robot,
     builder: &SimRobotBuilder<'_>,
     only: Option<&str>,
 ) -> anyhow::Result<(u32, Vec<SimServo>)> {
-    let buses: Vec<_> = match only {
-        Some(name) => {
-            let Some(bus) = robot.buses.iter().find(|b| b.name == name) else {
-                let names: Vec<&str> = robot.buses.iter().map(|b| b.name.as_str()).collect();
-                return Err(super::exit::input(format!(
-                    "{}: no bus named `{name}` (buses: {})",
-                    robot.path.display(),
-                    names.join(", ")
-                )));
-            };
-            vec![bus]
+    builder.served(only).map_err(|e| match e {
+        SimRobotError::SharedId { .. } => {
+            super::exit::input(format!("{e}; serve one bus at a time with --bus"))
         }
-        None => robot.buses.iter().collect(),
-    };
-    let Some(first) = buses.first() else {
-        return Err(super::exit::input(format!(
-            "{}: the robot has no bus",
-            robot.path.display()
-        )));
-    };
-    let baud = first.baud;
-    let mut seen = std::collections::HashMap::new();
-    let mut servos = Vec::new();
-    for bus in buses {
-        for joint in &bus.joints {
-            if let Some(other) = seen.insert(joint.id, (&bus.name, &joint.name)) {
-                return Err(super::exit::input(format!(
-                    "{}: ID {} is used by `{}` on bus `{}` and by `{}` on bus `{}`; \
-                     serve one bus at a time with --bus",
-                    robot.path.display(),
-                    joint.id,
-                    other.1,
-                    other.0,
-                    joint.name,
-                    bus.name
-                )));
-            }
+        SimRobotError::NoBus { .. } | SimRobotError::NoSuchBus { .. } => {
+            super::exit::input(e.to_string())
         }
-        // Every servo listens at the first bus's rate: that is the pty's.
-        let mut served = bus.clone();
-        served.baud = baud;
-        servos.extend(builder.servos(&served)?);
-    }
-    Ok((baud, servos))
+        other => other.into(),
+    })
 }

@@ -7,9 +7,21 @@ write, sync read and sync write. This class keeps all of that and replaces
 only the transactions, so LeRobot's calibration files and values are
 unchanged, and a SYNC READ that misses one servo names it (and keeps the
 others' values when errors are not raised).
+
+It can also hand the port to servobus's live loop (:meth:`start_live`):
+goal positions then become live targets of the loop, which moves the
+joints there jerk-limited, within the robot file's velocity, acceleration
+and jerk limits and clamped to the calibrated range, and present positions
+come from the loop's own readings. Any other transaction first ends the
+live loop with a jerk-limited stop and takes the port back.
 """
 
 from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict
 
 import scservo_sdk as scs
 import servobus
@@ -25,16 +37,26 @@ class ServobusMotorsBus(FeetechMotorsBus):
     methods."""
 
     def __init__(self, port, motors, calibration=None, protocol_version=0, baudrate=1_000_000,
-                 latency=None):
+                 latency=None, robot="so101", live_timeout=0.25):
         super().__init__(port, motors, calibration, protocol_version)
         self.baudrate = baudrate
         self.latency = latency
+        self.robot = robot
+        """servobus's robot (a robot file or a built-in name) whose joints
+        and limits the live loop moves: its joints are named and numbered
+        as the motors."""
+        self.live_timeout = live_timeout
+        """Seconds without a goal after which the live loop stops the joints
+        (jerk-limited) and holds them until goals come back."""
         self._servobus: servobus.Bus | None = None
+        self._live: servobus.Stream | None = None
+        self._live_robot: servobus.Robot | None = None
+        self._live_joints: dict[str, servobus.JointCalibration] = {}
 
     # --- the port -------------------------------------------------------
     @property
     def is_connected(self) -> bool:
-        return self._servobus is not None
+        return self._servobus is not None or self._live is not None
 
     def _connect(self, handshake: bool = True) -> None:
         try:
@@ -62,6 +84,8 @@ class ServobusMotorsBus(FeetechMotorsBus):
     def disconnect(self, disable_torque: bool = True) -> None:
         if not self.is_connected:
             raise DeviceNotConnectedError(f"{self} is not connected.")
+        # The joints come to a jerk-limited stop before the torque goes.
+        self.end_live()
         try:
             if disable_torque:
                 self.disable_torque(num_retry=5)
@@ -69,9 +93,131 @@ class ServobusMotorsBus(FeetechMotorsBus):
             self._close()
 
     def _bus(self) -> servobus.Bus:
+        """The port for a transaction: taken back from the live loop first."""
+        self.end_live()
         if self._servobus is None:
             raise DeviceNotConnectedError(f"{self} is not connected.")
         return self._servobus
+
+    # --- the live loop --------------------------------------------------
+    @property
+    def is_live(self) -> bool:
+        """Whether servobus's live loop has the port."""
+        return self._live is not None
+
+    def start_live(self) -> None:
+        """Hands the port to servobus's live loop (``servobus stream``), the
+        servos checked against the calibration first: from now on goal
+        positions written with :meth:`sync_write` are the loop's targets and
+        present positions read with :meth:`sync_read` its readings. Nothing
+        to do when it runs already."""
+        if self._live is not None:
+            return
+        if not self.calibration:
+            raise RuntimeError(f"{self} has no calibration registered.")
+        lerobot = json.dumps({motor: asdict(cal) for motor, cal in self.calibration.items()})
+        design = self._live_robot_yaml()
+        calibration = servobus.Calibration.from_lerobot(lerobot, robot=design)
+        self._close()
+        try:
+            robot = servobus.Robot(design, port=self.port, calibration=calibration)
+            # As LeRobot's follower: a gripper closed on an object strains
+            # against it (its servo's own protection limits the current).
+            self._live = robot.stream(timeout=self.live_timeout, tracking_faults=False)
+        except servobus.Error:
+            self._connect(handshake=False)
+            raise
+        self._live_robot = robot
+        self._live_joints = {j.name: j for j in calibration.joints}
+
+    def _live_robot_yaml(self) -> str:
+        """servobus's robot file for the live loop (YAML text): the motors
+        as its joints, with the velocity, acceleration and jerk limits of
+        the joints of the same names in ``self.robot``, and no position
+        limits but a turn: LeRobot's calibrated range bounds each joint
+        (less servobus's margin of a few degrees at each end). The loop
+        measures the adapter's latency at start-up and learns it while it
+        runs (``latency`` is for the transactions of this class)."""
+        design = servobus.Robot(self.robot)
+        limits = design.limits
+        turn = 179.0 if design.units == "deg" else math.radians(179.0)
+        joints = []
+        for motor, m in self.motors.items():
+            if motor not in limits:
+                raise ValueError(f"servobus's robot {self.robot!r} has no joint {motor!r}")
+            lim = limits[motor]
+            jerk = "" if lim.max_jerk is None else f", max_jerk: {lim.max_jerk!r}"
+            joints.append(
+                f"      - {{name: {motor}, id: {m.id}, model: {m.model}, min: {-turn!r}, max: {turn!r}, "
+                f"max_velocity: {lim.max_velocity!r}, max_acceleration: {lim.max_acceleration!r}{jerk}}}"
+            )
+        head = [f"name: {design.name}", f"units: {design.units}", f"rate: {design.rate_hz!r}", "buses:",
+                "  - name: lerobot", f"    baud: {self.baudrate}", "    latency_us: auto",
+                "    return_delay_us: 0", "    joints:"]
+        return "\n".join(head + joints) + "\n"
+
+    def end_live(self) -> None:
+        """Stops the joints (jerk-limited), ends the live loop and takes the
+        port back. Nothing to do when it does not run."""
+        if self._live is None:
+            return
+        live, self._live, self._live_robot = self._live, None, None
+        try:
+            live.stop()
+        finally:
+            self._connect(handshake=False)
+
+    def live_state(self) -> servobus.State:
+        """The live loop's latest state, once every joint has a reading."""
+        if self._live is None:
+            raise RuntimeError(f"{self}: servobus's live loop is not running")
+        deadline = time.monotonic() + 2.0
+        while True:
+            state = self._live.state()
+            if state.faults:
+                raise ConnectionError(f"{self}: the live loop stopped on a fault: {state.faults[-1]}")
+            if all(math.isfinite(p) for p in state.position) or time.monotonic() > deadline:
+                return state
+            time.sleep(0.005)
+
+    def _degrees(self, angle: float) -> float:
+        assert self._live_robot is not None
+        return math.degrees(angle) if self._live_robot.units == "rad" else angle
+
+    def _angle(self, degrees: float) -> float:
+        assert self._live_robot is not None
+        return math.radians(degrees) if self._live_robot.units == "rad" else degrees
+
+    def sync_read(self, data_name, motors=None, *, normalize=True, num_retry=0):
+        if self._live is None or data_name != "Present_Position":
+            return super().sync_read(data_name, motors, normalize=normalize, num_retry=num_retry)
+        state = self.live_state()
+        ticks = {}
+        for motor in self._get_motors_list(motors):
+            angle = state.position[state.joints.index(motor)]
+            if not math.isfinite(angle):
+                raise ConnectionError(f"{self}: the live loop has no reading of {motor}")
+            tick = self._live_joints[motor].tick_at(self._degrees(angle))
+            ticks[self.motors[motor].id] = round(tick)
+        values = self._normalize(ticks) if normalize else ticks
+        return {self._id_to_name(id_): v for id_, v in values.items()}
+
+    def sync_write(self, data_name, values, *, normalize=True, num_retry=0):
+        if self._live is None or data_name != "Goal_Position":
+            return super().sync_write(data_name, values, normalize=normalize, num_retry=num_retry)
+        ids_values = self._get_ids_values_dict(values)
+        ticks = self._unnormalize(ids_values) if normalize else {i: int(v) for i, v in ids_values.items()}
+        target = {}
+        for id_, tick in ticks.items():
+            motor = self._id_to_name(id_)
+            target[motor] = self._angle(self._live_joints[motor].degrees_at(tick))
+        try:
+            self._live.send(target)
+        except servobus.Error as e:
+            # The loop has ended (a fault): its report is collected and the
+            # port taken back; the next action starts a new loop.
+            self.end_live()
+            raise ConnectionError(f"{self}: the live loop took no goal: {e}") from e
 
     # --- the transactions -----------------------------------------------
     def ping(self, motor, num_retry: int = 0, raise_on_error: bool = False) -> int | None:

@@ -7,7 +7,15 @@ from .motors_bus import ServobusMotorsBus
 
 
 class SO101Servobus(SOFollower):
-    """LeRobot's SO-101 follower, its motor bus servobus's."""
+    """LeRobot's SO-101 follower, its motor bus servobus's.
+
+    ``send_action`` goes through servobus's live loop (unless the
+    configuration's ``live`` is False): each action is a target the joints
+    move to jerk-limited, within the limits of servobus's robot file and the
+    calibrated range, instead of a goal written raw; ``get_observation``
+    then reads the loop's own present positions. ``disconnect`` stops the
+    arm (jerk-limited) before the torque goes off.
+    """
 
     config_class = SO101ServobusConfig
     name = "so101_servobus"
@@ -22,4 +30,13 @@ class SO101Servobus(SOFollower):
             calibration=self.calibration,
             baudrate=config.baudrate,
             latency=config.latency,
+            robot=config.servobus_robot,
+            live_timeout=config.live_timeout,
         )
+
+    def send_action(self, action):
+        """LeRobot's ``send_action``, its goal positions the targets of
+        servobus's live loop (started at the first action)."""
+        if self.config.live and self.is_connected:
+            self.bus.start_live()
+        return super().send_action(action)

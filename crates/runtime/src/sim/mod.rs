@@ -28,6 +28,7 @@ use servobus_driver::{Bus, Clock, ManualClock, Transport};
 use servobus_sim::{SimBus, SimModel, SimServo, Truth, WallBus};
 
 mod body;
+mod served;
 
 pub use body::{Hand, Mounting};
 
@@ -68,6 +69,36 @@ pub enum SimRobotError {
         joint: String,
         /// The model's name.
         model: &'static str,
+    },
+    /// The robot has no bus to serve.
+    #[error("{}: the robot has no bus", .file.display())]
+    NoBus {
+        /// The robot file.
+        file: PathBuf,
+    },
+    /// No bus of the robot has the name asked for.
+    #[error("{}: no bus named `{name}` (buses: {})", .file.display(), .buses.join(", "))]
+    NoSuchBus {
+        /// The robot file.
+        file: PathBuf,
+        /// The name asked for.
+        name: String,
+        /// The robot's buses, in its file's order.
+        buses: Vec<String>,
+    },
+    /// Two joints served on one port have the same ID: the port's servos
+    /// cannot both answer it.
+    #[error(
+        "{}: ID {id} is used by `{}` on bus `{}` and by `{}` on bus `{}`",
+        .file.display(), .joints[0].1, .joints[0].0, .joints[1].1, .joints[1].0
+    )]
+    SharedId {
+        /// The robot file.
+        file: PathBuf,
+        /// The ID.
+        id: u8,
+        /// The two joints as `(bus, joint)`, the first one found first.
+        joints: Box<[(String, String); 2]>,
     },
     /// A start pose does not have one angle per joint.
     #[error("{}: a start pose of {got} angles for a robot of {want} joints", .file.display())]

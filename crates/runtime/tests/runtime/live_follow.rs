@@ -107,7 +107,12 @@ fn a_follower_stays_within_2_degrees_of_a_hand_moved_leader() {
         run.report().lead_ms
     );
     for (j, (w, r)) in worst.iter().zip(&rms).enumerate() {
-        assert!(squares[j].1 > 1000, "{}: {} readings", names[j], squares[j].1);
+        assert!(
+            squares[j].1 > 1000,
+            "{}: {} readings",
+            names[j],
+            squares[j].1
+        );
         assert!(*w < 2.0, "{}: {w} deg", names[j]);
         assert!(*r < 0.5, "{}: RMS {r} deg", names[j]);
     }

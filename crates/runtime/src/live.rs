@@ -413,27 +413,42 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_moving_target_is_extrapolated_over_one_target_interval_at_most() {
+    /// Follows a target moving at 0.3 rad/s, sent every `every` cycles up
+    /// to cycle `until`, at 1 kHz for `cycles` cycles, the path sampled
+    /// `lead` s ahead of each cycle; `seen` gets each cycle's number, time
+    /// and commanded state. Returns the last target.
+    fn follow_stream(
+        every: u32,
+        until: u32,
+        cycles: u32,
+        lead: f64,
+        mut seen: impl FnMut(u32, f64, JointState),
+    ) -> f64 {
         // Limits far above the target's motion, so that the joint keeps up
         // with it and rests where its goal does.
         let lim = JointLimits::new(10.0, 100.0, Some(10_000.0));
         let mut live = LivePath::new(vec![lim], &[JointState::at_rest(0.0)], 0.0, 1.0);
-        // 0.3 rad/s, a target every 40 ms (25 Hz) until 0.48 s, followed
-        // at 1 kHz until 0.9 s (before the 1 s timeout).
-        let (speed, period) = (0.3, 0.001);
         let mut out = [JointState::default()];
         let mut last = f64::NAN;
-        for k in 1..=900u32 {
-            let now = f64::from(k) * period;
+        for k in 1..=cycles {
+            let now = f64::from(k) * 0.001;
             live.begin_cycle(now);
-            if k % 40 == 0 && k <= 480 {
-                last = speed * now;
+            if k % every == 0 && k <= until {
+                last = 0.3 * now;
                 live.target(&at(now, last), now);
             }
-            live.sample_cmd(now, &mut out);
+            live.sample_cmd(now + lead, &mut out);
+            seen(k, now, out[0]);
         }
-        let rest = out[0];
+        last
+    }
+
+    #[test]
+    fn a_moving_target_is_extrapolated_over_one_target_interval_at_most() {
+        // A target every 40 ms (25 Hz) until 0.48 s, followed until 0.9 s
+        // (before the 1 s timeout).
+        let mut rest = JointState::default();
+        let last = follow_stream(40, 480, 900, 0.0, |_, _, s| rest = s);
         assert_eq!((rest.velocity, rest.acceleration), (0.0, 0.0), "{rest:?}");
         // One interval on: 12 mrad past the last target. The joint may go
         // on for its quickest stop from 0.3 rad/s, v sqrt(v / j) = 0.3 *
@@ -446,29 +461,19 @@ mod tests {
 
     #[test]
     fn a_lead_is_not_taken_out_of_the_extrapolation() {
-        // A 50 Hz stream at 0.3 rad/s and a 14 ms lead (the path sampled
-        // 14 ms ahead of each 1 kHz cycle), as a leader arm drives a
+        // A 50 Hz stream and a 14 ms lead, as a leader arm drives a
         // follower: 14 of every 20 ms lie beyond one interval from the
         // stamp if the lead counts against it.
-        let lim = JointLimits::new(10.0, 100.0, Some(10_000.0));
-        let mut live = LivePath::new(vec![lim], &[JointState::at_rest(0.0)], 0.0, 1.0);
-        let (speed, lead) = (0.3, 0.014);
-        let mut out = [JointState::default()];
+        let lead = 0.014;
         let mut slowest = f64::INFINITY;
         let mut farthest: f64 = 0.0;
-        for k in 1..=600u32 {
-            let now = f64::from(k) * 0.001;
-            live.begin_cycle(now);
-            if k % 20 == 0 {
-                live.target(&at(now, speed * now), now);
-            }
-            live.sample_cmd(now + lead, &mut out);
+        follow_stream(20, 600, 600, lead, |k, now, s| {
             if k > 200 {
-                slowest = slowest.min(out[0].velocity);
+                slowest = slowest.min(s.velocity);
                 // Where the stream is at the horizon, by hand.
-                farthest = farthest.max((out[0].position - speed * (now + lead)).abs());
+                farthest = farthest.max((s.position - 0.3 * (now + lead)).abs());
             }
-        }
+        });
         // The joint keeps the stream's speed between targets (a stop and
         // go would fall to 0) and is where the stream is at the horizon.
         assert!(slowest > 0.29, "{slowest}");

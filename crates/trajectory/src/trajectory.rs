@@ -137,8 +137,11 @@ impl Trajectory {
         for (joint, &h) in pieces.iter_mut().zip(hold) {
             joint.retain(|p| p.duration() > 0.0);
             // The planner reserves for the worst case; keep only what is
-            // used (shrinking in place, as allocators usually do).
-            joint.shrink_to_fit();
+            // used (shrinking in place, as allocators usually do), unless
+            // only the one spare piece for a final rest is left over.
+            if joint.capacity() > joint.len() + 1 {
+                joint.shrink_to_fit();
+            }
             if let Some(last) = joint.last_mut() {
                 // Rounding in accumulated phase times may leave the last
                 // piece a few ulps short of (or past) the end: snap it.

@@ -49,6 +49,8 @@ impl Ramp {
 /// computed once per call instead of dividing in every iteration.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Acc {
+    /// The acceleration limit.
+    pub a: f64,
     pub inv_a: f64,
     pub j: f64,
     /// `1 / j` (0 without a jerk limit).
@@ -63,12 +65,17 @@ pub(super) struct Acc {
 impl Acc {
     #[inline]
     pub fn new(a: f64, j: f64) -> Self {
+        // Two divisions, the rest by multiplying (a division costs as
+        // much as several multiplications, and these are made per call).
+        let inv_j = 1.0 / j;
+        let k = a * inv_j;
         Acc {
+            a,
             inv_a: 1.0 / a,
             j,
-            inv_j: 1.0 / j,
-            k: a / j,
-            regime: a * a / j,
+            inv_j,
+            k,
+            regime: a * k,
         }
     }
 }

@@ -132,8 +132,9 @@ impl Segment1 {
     #[inline]
     pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
         let (a, j) = (lim.max_acceleration, lim.jerk());
-        let ra = Ramp::new((p.vc - self.v0).abs(), a, j);
-        let rb = Ramp::new((p.vc - self.v1).abs(), a, j);
+        let acc = Acc::new(a, j);
+        let ra = Ramp::of((p.vc - self.v0).abs(), &acc);
+        let rb = Ramp::of((p.vc - self.v1).abs(), &acc);
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
         out.push_ramp(&ra, sa, j);

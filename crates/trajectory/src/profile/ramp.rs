@@ -17,24 +17,31 @@ impl Ramp {
     /// (`j` may be infinite).
     #[inline]
     pub fn new(dv: f64, a: f64, j: f64) -> Ramp {
+        Ramp::of(dv, &Acc::new(a, j))
+    }
+
+    /// [`new`](Self::new) with the bounds' constants made once (see
+    /// [`Acc`]): no division.
+    #[inline]
+    pub(super) fn of(dv: f64, c: &Acc) -> Ramp {
         if dv <= 0.0 {
             Ramp {
                 tj: 0.0,
                 ta: 0.0,
                 peak: 0.0,
             }
-        } else if dv * j >= a * a {
+        } else if dv >= c.regime {
             Ramp {
-                tj: a / j,
-                ta: dv / a - a / j,
-                peak: a,
+                tj: c.k,
+                ta: dv * c.inv_a - c.k,
+                peak: c.a,
             }
         } else {
-            let tj = (dv / j).sqrt();
+            let tj = (dv * c.inv_j).sqrt();
             Ramp {
                 tj,
                 ta: 0.0,
-                peak: j * tj,
+                peak: c.j * tj,
             }
         }
     }

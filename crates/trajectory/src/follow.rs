@@ -163,9 +163,12 @@ impl Plan {
         // main segment) the segment starts at its speed, toward 0.
         let (dir, v0) = (if start.position <= 0.0 { 1.0 } else { -1.0 }, v0.abs());
         let slower = dir * ea < 0.0 && v0 < rel.max_velocity;
-        let ramp = (rel.max_acceleration / j).min(((rel.max_velocity - v0).max(0.0) / j).sqrt());
+        // The longest jerk phase the ramp may have, `min(a / j, sqrt((vm -
+        // v0) / j))`, shorter than `least`: compared without dividing.
         let least = ta * (1.0 - 1e-9);
-        if slower || ramp < least {
+        let short = rel.max_acceleration < least * j
+            || (rel.max_velocity - v0).max(0.0) < j * least * least;
+        if slower || short {
             return false;
         }
         // A plan that stops first cannot go on with this ramp.
@@ -174,7 +177,7 @@ impl Plan {
         };
         // Its first ramp lasts `ta` at least exactly when the time-optimal
         // cruise speed is `j ta^2` above `v0` at least (within the speed
-        // limit, as `ramp` says): known from the ramps' distance at that
+        // limit, as `short` says): known from the ramps' distance at that
         // speed, before the profile is solved (a plan that would be given
         // up costs no solving).
         if !way.seg.cruises_at(rel, way.seg.v0 + j * least * least) {

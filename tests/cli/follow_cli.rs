@@ -28,19 +28,24 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     // under 3 control periods (5 ms at the SO-101's 200 Hz). Both arms run
     // on the wall clock here, so the tail and the error are only bounded
     // loosely (a loaded machine delays the threads); the close following
-    // itself is checked in virtual time (crates/runtime/tests/live_follow.rs).
+    // itself is checked in virtual time (crates/runtime/tests/runtime/live_follow.rs).
     let period = common::num(follow, "period_ms");
     assert!((period - 5.0).abs() < 1e-9, "{follow}");
     let p50 = common::num(&follow["latency_ms"], "p50");
     assert!(p50 < 3.0 * period, "{follow}");
     let joints = follow["joints"].as_array().expect("joints");
     assert_eq!(joints.len(), 6);
-    // On the wall clock, shoulder_lift's error against the leader has run
-    // 5-15 deg worst and 2-5 deg RMS on a 2-core machine: these bounds catch
-    // a follower that does not follow, not the quality of the following.
+    // Issue 24 asks for 2 deg. On the wall clock of a 2-core machine the
+    // worst joint (shoulder_lift) has run 0.5-1.6 deg worst and 0.1-0.4 deg
+    // RMS when idle, up to 5.7 deg and 1.2 deg RMS while others built: a
+    // delayed thread shows as a spike of the worst error, hardly in the RMS.
+    // A follower brought to rest before every target by its lead (the
+    // regression these bounds were loosened for) ran 5-14 deg worst and
+    // 1.9-5.4 deg RMS. The close following itself is held in virtual time
+    // (crates/runtime/tests/runtime/live_follow.rs).
     for j in joints {
-        assert!(common::num(j, "max_error") < 25.0, "{j}");
-        assert!(common::num(j, "rms_error") < 8.0, "{j}");
+        assert!(common::num(j, "max_error") < 8.0, "{j}");
+        assert!(common::num(j, "rms_error") < 1.5, "{j}");
     }
     // The take: a header and one row per follower cycle, in degrees.
     let text = std::fs::read_to_string(&take).expect("the take is written");

@@ -158,16 +158,12 @@ type LaneEnd = (Outcome, Finish, Vec<String>);
 /// # Errors
 ///
 /// As [`VirtualRun::new`]; [`RunError::Spawn`] when a thread cannot start.
-pub fn spawn<T, C>(
+pub fn spawn<T: Transport + Send + 'static, C: Clock>(
     robot: &Robot,
     trajectory: Trajectory,
     buses: Vec<Bus<T, C>>,
     options: RunOptions,
-) -> Result<Runner, RunError>
-where
-    T: Transport + Send + 'static,
-    C: Clock,
-{
+) -> Result<Runner, RunError> {
     start_threads(robot, Some(trajectory), buses, options)
 }
 
@@ -179,15 +175,11 @@ where
 /// # Errors
 ///
 /// As [`spawn`].
-pub fn spawn_live<T, C>(
+pub fn spawn_live<T: Transport + Send + 'static, C: Clock>(
     robot: &Robot,
     buses: Vec<Bus<T, C>>,
     options: RunOptions,
-) -> Result<Runner, RunError>
-where
-    T: Transport + Send + 'static,
-    C: Clock,
-{
+) -> Result<Runner, RunError> {
     start_threads(robot, None, buses, options)
 }
 
@@ -206,16 +198,13 @@ pub fn spawn_virtual_live<T: Transport + Send + 'static>(
     on_thread(VirtualRun::live(robot, buses, options)?)
 }
 
-fn start_threads<T, C>(
+/// [`spawn`] of `trajectory`, or [`spawn_live`] without one.
+fn start_threads<T: Transport + Send + 'static, C: Clock>(
     robot: &Robot,
     trajectory: Option<Trajectory>,
     buses: Vec<Bus<T, C>>,
     options: RunOptions,
-) -> Result<Runner, RunError>
-where
-    T: Transport + Send + 'static,
-    C: Clock,
-{
+) -> Result<Runner, RunError> {
     let p = prepare(robot, trajectory, buses, &options)?;
     let mut threads = Vec::with_capacity(p.lanes.len());
     for lane in p.lanes {

@@ -153,22 +153,34 @@ impl Plan {
             velocity: v0,
             acceleration: 0.0,
         };
-        // A plan that stops first cannot go on with this ramp: known
-        // before any profile is solved.
+        // The main segment's first phase must be the ramp toward its
+        // cruise speed, in the direction of `ea`, for at least `ta`: known
+        // not to be before anything is solved when it must slow down (a
+        // joint within its speed limit that can rest within a quarter of
+        // the distance, as `onward` checks, cruises faster than it starts),
+        // or when even the top speed is too close to reach in `ta` of jerk.
+        // From `start` (no acceleration: `onward` has no phase before the
+        // main segment) the segment starts at its speed, toward 0.
+        let (dir, v0) = (if start.position <= 0.0 { 1.0 } else { -1.0 }, v0.abs());
+        let slower = dir * ea < 0.0 && v0 < rel.max_velocity;
+        // The longest jerk phase the ramp may have, `min(a / j, sqrt((vm -
+        // v0) / j))`, shorter than `least`: compared without dividing.
+        let least = ta * (1.0 - 1e-9);
+        let short = rel.max_acceleration < least * j
+            || (rel.max_velocity - v0).max(0.0) < j * least * least;
+        if slower || short {
+            return false;
+        }
+        // A plan that stops first cannot go on with this ramp.
         let Some(way) = onward(&start, 0.0, rel, &mut self.pre) else {
             return false;
         };
-        // The main segment's first phase must be the ramp toward its
-        // cruise speed, in the direction of `ea`, for at least `ta`: known
-        // not to be before any profile is solved when it must slow down
-        // (a joint within its speed limit that can rest within a quarter
-        // of the distance, as `onward` checked, cruises faster than it
-        // starts), or when even the top speed is too close to reach in
-        // `ta` of jerk.
-        let slower = way.dir * ea < 0.0 && way.seg.v0 < rel.max_velocity;
-        let ramp =
-            (rel.max_acceleration / j).min(((rel.max_velocity - way.seg.v0).max(0.0) / j).sqrt());
-        if slower || ramp < ta * (1.0 - 1e-9) {
+        // Its first ramp lasts `ta` at least exactly when the time-optimal
+        // cruise speed is `j ta^2` above `v0` at least (within the speed
+        // limit, as `short` says): known from the ramps' distance at that
+        // speed, before the profile is solved (a plan that would be given
+        // up costs no solving).
+        if !way.seg.cruises_at(rel, way.seg.v0 + j * least * least) {
             return false;
         }
         self.set(rel, &way, start, goal.after(-ta), ta);

@@ -263,28 +263,31 @@ pub fn retarget(
             });
         }
     }
-    // Each joint's first phases go straight into its pieces; what the
-    // main segment needs once the duration is known is kept aside.
-    let mut per_joint = Vec::with_capacity(limits.len());
-    let mut mains = Vec::with_capacity(limits.len());
+    // Each joint's route first (the slowest sets the duration), then its
+    // main segment stretched to it; a joint's pieces are allocated once
+    // all its phases are known, no more than it uses (one spare for the
+    // rest at the end), so that none is allocated twice.
+    let mut ways = Vec::with_capacity(limits.len());
     let mut duration: f64 = 0.0;
-    let mut pre = Phases::new();
     for ((s, &q), lim) in current.iter().zip(target).zip(limits) {
+        let mut pre = Phases::new();
         let way = route(s, q, lim, &mut pre);
         let fastest = way.seg.fastest(lim);
         duration = duration.max(way.pre_time + fastest.duration);
-        let mut pieces = Vec::with_capacity(pre.n + 8);
-        let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);
-        per_joint.push(pieces);
-        mains.push((way, fastest, t, x, v));
+        ways.push((way, fastest, pre));
     }
-    for ((pieces, (way, fastest, t, x, v)), lim) in per_joint.iter_mut().zip(mains).zip(limits) {
+    let mut per_joint = Vec::with_capacity(limits.len());
+    let mut main = Phases::new();
+    for ((s, (way, fastest, pre)), lim) in current.iter().zip(ways).zip(limits) {
+        main.n = 0;
         if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
             let prof = way.seg.stretched(lim, fastest, duration - way.pre_time);
-            let mut main = Phases::new();
             way.seg.phases(lim, prof, &mut main);
-            main.emit(t, x, v, 0.0, way.dir, lim.max_jerk.is_some(), pieces);
         }
+        let mut pieces = Vec::with_capacity(pre.n + main.n + 1);
+        let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);
+        main.emit(t, x, v, 0.0, way.dir, lim.max_jerk.is_some(), &mut pieces);
+        per_joint.push(pieces);
     }
     Ok(finish(per_joint, target, duration))
 }

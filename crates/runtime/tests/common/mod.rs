@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, ManualClock};
+use servobus_driver::{Bus, ManualClock, Transport, TransportError};
 use servobus_runtime::config::{
     load_motion, load_robot, plan_motion, JointMap, Robot, RobotOptions,
 };
@@ -224,5 +224,60 @@ impl Recorded {
         let d3 = d(&d2);
         let m = |v: &[f64], p: i32| v.iter().fold(0.0f64, |a, x| a.max(x.abs())) / period.powi(p);
         (m(&d1, 1), m(&d2, 2), m(&d3, 3))
+    }
+
+    /// Asserts that every joint of an SO-101 run ([`SO101_LIMITS`]) stays
+    /// within its limits from cycle `from` on, by finite differences of its
+    /// goals at `period` s (1 % for rounding of the differences).
+    pub fn assert_within_so101_limits(&self, from: u64, period: f64) {
+        for (j, &(v, a, jerk)) in SO101_LIMITS.iter().enumerate() {
+            let (pv, pa, pj) = self.peaks(j, from, period);
+            assert!(pv <= v * 1.01, "joint {j}: speed {pv} > {v}");
+            assert!(pa <= a * 1.01, "joint {j}: acceleration {pa} > {a}");
+            assert!(pj <= jerk * 1.01, "joint {j}: jerk {pj} > {jerk}");
+        }
+    }
+}
+
+/// What a [`Tapped`] bus does with each frame written, before its inner
+/// transport takes it: it sees that transport too (to inject a fault into
+/// a simulator).
+pub type Tap<T> = Box<dyn FnMut(&T, &[u8]) + Send>;
+
+/// A transport (a simulated bus, in these tests) that shows every frame
+/// written to its tap first: to decode the goals on the wire, or to act
+/// at a given frame.
+pub struct Tapped<T = SimBus> {
+    inner: T,
+    tap: Tap<T>,
+}
+
+impl<T> Tapped<T> {
+    /// `inner`, each frame written shown to `tap` first.
+    pub fn new(inner: T, tap: impl FnMut(&T, &[u8]) + Send + 'static) -> Self {
+        Tapped {
+            inner,
+            tap: Box::new(tap),
+        }
+    }
+}
+
+impl<T: Transport> Transport for Tapped<T> {
+    type Clock = T::Clock;
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        (self.tap)(&self.inner, bytes);
+        self.inner.write_all(bytes)
+    }
+    fn clock(&self) -> &T::Clock {
+        self.inner.clock()
+    }
+    fn baud(&self) -> u32 {
+        self.inner.baud()
+    }
+    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+        self.inner.read(buf, deadline)
+    }
+    fn discard_input(&mut self) -> Result<(), TransportError> {
+        self.inner.discard_input()
     }
 }

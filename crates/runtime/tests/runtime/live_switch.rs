@@ -8,8 +8,6 @@ use crate::common;
 use common::{motion, record, sim_buses_at};
 use servobus_runtime::{Command, Lead, RunOptions, Target, VirtualRun};
 
-use common::SO101_LIMITS as LIMITS;
-
 const PERIOD: f64 = 0.005;
 
 fn options() -> RunOptions {
@@ -38,13 +36,7 @@ fn a_target_sent_while_a_path_plays_takes_over_smoothly() {
         }
     });
     assert!(rec.faults.is_empty(), "{:?}", rec.faults);
-    for (j, &(v, a, jerk)) in LIMITS.iter().enumerate() {
-        let (pv, pa, pj) = rec.peaks(j, 0, PERIOD);
-        assert!(
-            pv <= v * 1.01 && pa <= a * 1.01 && pj <= jerk * 1.01,
-            "joint {j}: {pv} {pa} {pj}"
-        );
-    }
+    rec.assert_within_so101_limits(0, PERIOD);
     let pan = rec.commanded(0);
     assert_eq!(pan.len(), 800, "the run goes on following");
     assert!((pan[799] + 40.0).abs() < 1e-6, "{}", pan[799]);
@@ -74,13 +66,7 @@ fn pause_stops_the_following_and_resume_restarts_it() {
             commands.send(Command::Resume).expect("the run listens");
         }
     });
-    for (j, &(v, a, jerk)) in LIMITS.iter().enumerate() {
-        let (pv, pa, pj) = rec.peaks(j, 0, PERIOD);
-        assert!(
-            pv <= v * 1.01 && pa <= a * 1.01 && pj <= jerk * 1.01,
-            "joint {j}: {pv} {pa} {pj}"
-        );
-    }
+    rec.assert_within_so101_limits(0, PERIOD);
     let pan = rec.commanded(0);
     // Held still in the second half of the pause.
     let held = pan[300];

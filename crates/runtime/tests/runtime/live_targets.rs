@@ -7,12 +7,10 @@
 
 use crate::common;
 
-use common::{record, robot, sim_buses, Recorded};
+use common::{record, robot, sim_buses};
 use servobus_runtime::config::{JointMap, Robot};
 use servobus_runtime::{Command, Lead, LiveEvent, RunOptions, Target, TargetError, VirtualRun};
 use servobus_sim::SimBus;
-
-use common::SO101_LIMITS as LIMITS;
 
 const PERIOD: f64 = 0.005;
 
@@ -47,17 +45,6 @@ fn source(start: &[f64], j: usize, t: f64) -> f64 {
     start[j] + amp * (1.0 - (2.0 * std::f64::consts::PI * f * t).cos())
 }
 
-/// Every joint of `rec` stays within the limits above, by finite
-/// differences of its goals (1 % for rounding of the differences).
-fn assert_within_limits(rec: &Recorded, from: u64) {
-    for (j, &(v, a, jerk)) in LIMITS.iter().enumerate() {
-        let (pv, pa, pj) = rec.peaks(j, from, PERIOD);
-        assert!(pv <= v * 1.01, "joint {j}: speed {pv} > {v}");
-        assert!(pa <= a * 1.01, "joint {j}: acceleration {pa} > {a}");
-        assert!(pj <= jerk * 1.01, "joint {j}: jerk {pj} > {jerk}");
-    }
-}
-
 /// A uniform number in [-1, 1) from a simple generator (repeatable).
 fn jitter(state: &mut u64) -> f64 {
     *state = state
@@ -89,7 +76,7 @@ fn a_jittery_30_hz_stream_is_followed_within_the_limits_closely_and_with_little_
         }
     });
     assert!(rec.faults.is_empty(), "{:?}", rec.faults);
-    assert_within_limits(&rec, 0);
+    rec.assert_within_so101_limits(0, PERIOD);
     // RMS error of the goals against the source after 0.2 s, and the lag:
     // the delay of the source that fits the goals best.
     let span = (40u64..700).collect::<Vec<_>>();
@@ -133,7 +120,7 @@ fn a_90_degree_step_is_a_jerk_limited_move_to_the_target() {
             tx.send(t).expect("a good target");
         }
     });
-    assert_within_limits(&rec, 0);
+    rec.assert_within_so101_limits(0, PERIOD);
     let pan = rec.commanded(0);
     let last = pan[pan.len() - 1];
     assert!((last - 90.0).abs() < 1e-6, "{last}");
@@ -183,7 +170,7 @@ fn a_stream_that_stops_comes_to_a_stop_and_holds_then_resumes_smoothly() {
         }
         let _ = ramp(&tx, k, 2.0, 2.6, 60.0, -speed);
     });
-    assert_within_limits(&rec, 0);
+    rec.assert_within_so101_limits(0, PERIOD);
     let pan = rec.commanded(0);
     // Stopped within one target interval of extrapolation (the 30 Hz
     // slots fall 30 or 35 ms apart in 5 ms cycles), one control period's
@@ -262,7 +249,7 @@ fn bad_targets_are_refused_or_clamped_and_counted() {
             &c[best.1.saturating_sub(5)..best.1 + 5]
         );
     }
-    assert_within_limits(&rec, 0);
+    rec.assert_within_so101_limits(0, PERIOD);
     let last = |j: usize| *rec.commanded(j).last().unwrap_or(&f64::NAN);
     // The refused targets changed nothing: the elbow went to 20 and the
     // pan to its limit (the last whole tick of the STS3215's 0.088 deg
@@ -289,7 +276,7 @@ fn stop_ends_a_live_run_with_a_jerk_limited_stop() {
             commands.send(Command::Stop).expect("the run listens");
         }
     });
-    assert_within_limits(&rec, 0);
+    rec.assert_within_so101_limits(0, PERIOD);
     let report = run.report();
     assert_eq!(report.finish, servobus_runtime::Finish::Stopped);
     // It stopped soon after the command, not at the end of the ramp.

@@ -5,51 +5,32 @@
 
 use crate::common;
 
+use common::Tapped;
+
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
 
 use proptest::prelude::*;
-use servobus_driver::{Bus, ManualClock, Transport, TransportError};
+use servobus_driver::{Bus, ManualClock};
 use servobus_protocol::{parse_frame, registers::addr, Instruction};
 use servobus_runtime::config::joint_limits;
 use servobus_runtime::{Command, FaultPolicy, RunOptions, VirtualRun};
-use servobus_sim::{Faults, SimBus};
+use servobus_sim::Faults;
 use servobus_trajectory::{plan, JointLimits, Keyframe, PlanOptions};
 
-/// Decodes every goal position the runtime writes.
-struct Inspect {
-    inner: SimBus,
-    goals: Arc<Mutex<Vec<(u8, i32)>>>,
-}
-
-impl Transport for Inspect {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        self.inner.clock()
-    }
-    fn baud(&self) -> u32 {
-        self.inner.baud()
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        if let Ok((p, _)) = parse_frame(bytes) {
-            let params = p.params();
-            if p.instruction() == Some(Instruction::SyncWrite)
-                && params.first() == Some(&addr::GOAL_POSITION)
-                && params.get(1) == Some(&2)
-            {
-                let mut g = self.goals.lock().unwrap_or_else(|e| e.into_inner());
-                for item in params[2..].chunks_exact(3) {
-                    g.push((item[0], i32::from(u16::from_le_bytes([item[1], item[2]]))));
-                }
+/// Decodes every goal position in `bytes` (a SYNC WRITE of the goals)
+/// into `goals`.
+fn decode_goals(bytes: &[u8], goals: &Mutex<Vec<(u8, i32)>>) {
+    if let Ok((p, _)) = parse_frame(bytes) {
+        let params = p.params();
+        if p.instruction() == Some(Instruction::SyncWrite)
+            && params.first() == Some(&addr::GOAL_POSITION)
+            && params.get(1) == Some(&2)
+        {
+            let mut g = goals.lock().unwrap_or_else(|e| e.into_inner());
+            for item in params[2..].chunks_exact(3) {
+                g.push((item[0], i32::from(u16::from_le_bytes([item[1], item[2]]))));
             }
         }
-        self.inner.write_all(bytes)
-    }
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
-        self.inner.read(buf, deadline)
-    }
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        self.inner.discard_input()
     }
 }
 
@@ -69,12 +50,13 @@ proptest! {
         let (path, robot) = common::motion("arm-wave.yaml");
         let (buses, sims) = common::sim_buses_at(&robot, &path);
         let goals = Arc::new(Mutex::new(Vec::new()));
-        let buses: Vec<Bus<Inspect, ManualClock>> = buses
+        let buses: Vec<Bus<Tapped, ManualClock>> = buses
             .into_iter()
             .zip(&sims)
             .map(|(b, sim)| {
                 let settings = *b.settings();
-                let t = Inspect { inner: sim.clone(), goals: Arc::clone(&goals) };
+                let goals = Arc::clone(&goals);
+                let t = Tapped::new(sim.clone(), move |_, bytes| decode_goals(bytes, &goals));
                 Bus::new(t, settings)
             })
             .collect();

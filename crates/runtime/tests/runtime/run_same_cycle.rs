@@ -7,10 +7,11 @@
 
 use crate::common;
 
-use std::sync::mpsc;
-use std::time::Duration;
+use common::Tapped;
 
-use servobus_driver::{Bus, ManualClock, Transport, TransportError};
+use std::sync::mpsc;
+
+use servobus_driver::{Bus, ManualClock};
 use servobus_protocol::registers::addr;
 use servobus_protocol::{parse_frame, Instruction, StatusFlags};
 use servobus_runtime::config::Robot;
@@ -23,12 +24,11 @@ use servobus_trajectory::Trajectory;
 
 type Action = fn(&SimBus);
 
-/// A simulated bus that does something to itself just before the goals of
-/// a given cycle go out (the bus's own frame count, so both runners inject
-/// at the same point of the same cycle), and that can hold the first
-/// cycle back until the test has sent its commands.
+/// What a simulated bus does to itself just before the goals of a given
+/// cycle go out (the bus's own frame count, so both runners inject at the
+/// same point of the same cycle); it can hold the first cycle back until
+/// the test has sent its commands.
 struct Scripted {
-    sim: SimBus,
     goal_frames: u64,
     inject: Option<(u64, Action)>,
     gate: Option<mpsc::Receiver<()>>,
@@ -37,42 +37,30 @@ struct Scripted {
 /// Start-up sends one goal frame; cycle `k` sends frame `k + 2`.
 const STARTUP_GOAL_FRAMES: u64 = 1;
 
-impl Transport for Scripted {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        self.sim.clock()
-    }
-    fn baud(&self) -> u32 {
-        self.sim.baud()
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+impl Scripted {
+    /// Sees the frame `bytes` about to be written to `sim`.
+    fn on_write(&mut self, sim: &SimBus, bytes: &[u8]) {
         let goals = parse_frame(bytes).is_ok_and(|(p, _)| {
             p.instruction() == Some(Instruction::SyncWrite)
                 && p.params().first() == Some(&addr::GOAL_POSITION)
         });
-        if goals {
-            self.goal_frames += 1;
-            let cycle = self.goal_frames.checked_sub(STARTUP_GOAL_FRAMES + 1);
-            if cycle == Some(0) {
-                if let Some(gate) = self.gate.take() {
-                    // A closed gate (the test gone) opens it too.
-                    let _ = gate.recv();
-                }
-            }
-            if let Some((at, action)) = self.inject {
-                if cycle == Some(at) {
-                    action(&self.sim);
-                    self.inject = None;
-                }
+        if !goals {
+            return;
+        }
+        self.goal_frames += 1;
+        let cycle = self.goal_frames.checked_sub(STARTUP_GOAL_FRAMES + 1);
+        if cycle == Some(0) {
+            if let Some(gate) = self.gate.take() {
+                // A closed gate (the test gone) opens it too.
+                let _ = gate.recv();
             }
         }
-        self.sim.write_all(bytes)
-    }
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
-        self.sim.read(buf, deadline)
-    }
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        self.sim.discard_input()
+        if let Some((at, action)) = self.inject {
+            if cycle == Some(at) {
+                action(sim);
+                self.inject = None;
+            }
+        }
     }
 }
 
@@ -119,11 +107,7 @@ impl Scenario {
         &self,
         robot: &Robot,
         path: &Trajectory,
-    ) -> (
-        Vec<Bus<Scripted, ManualClock>>,
-        Vec<SimBus>,
-        mpsc::Sender<()>,
-    ) {
+    ) -> (Vec<Bus<Tapped, ManualClock>>, Vec<SimBus>, mpsc::Sender<()>) {
         let (buses, sims) = common::sim_buses_at(robot, path);
         let (open, gate) = mpsc::channel();
         let mut gate = Some(gate);
@@ -133,12 +117,12 @@ impl Scenario {
             .enumerate()
             .map(|(i, (b, sim))| {
                 let settings = *b.settings();
-                let t = Scripted {
-                    sim: sim.clone(),
+                let mut script = Scripted {
                     goal_frames: 0,
                     inject: self.inject.filter(|s| s.0 == i).map(|s| (s.1, s.2)),
                     gate: if i == 0 { gate.take() } else { None },
                 };
+                let t = Tapped::new(sim.clone(), move |sim, bytes| script.on_write(sim, bytes));
                 Bus::new(t, settings)
             })
             .collect();

@@ -46,7 +46,7 @@ impl Segment1 {
         } else if self.v0 == 0.0 && self.v1 == 0.0 {
             Ok(rest_peak(self.d, lim))
         } else {
-            self.fastest_long(a, j, vlo, vm)
+            self.fastest_long(&acc, vlo, vm)
         };
         match closed {
             Ok(vc) => {
@@ -80,8 +80,8 @@ impl Segment1 {
                     .sqrt()
                     .max(guess)
                     .min(vm);
-                let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) / (2.0 * a);
-                let trap = (2.0 * vt - v0 - v1) / a + (self.d - ramps) / vt;
+                let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) * (0.5 * acc.inv_a);
+                let trap = (2.0 * vt - v0 - v1) * acc.inv_a + (self.d - ramps) / vt;
                 // Margin for rounding: a bound too high could skip the
                 // joint that sets the duration.
                 let lower = (trap * (1.0 - 1e-9)).min(upper.duration);
@@ -98,7 +98,7 @@ impl Segment1 {
     /// form (`Ok`, 0 for a joint that does not move), else `Err` with the
     /// long-ramp root clamped to `[max(v0, v1), vm]`.
     fn fastest_closed(&self, lim: &JointLimits, acc: &Acc) -> Result<f64, f64> {
-        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+        let vm = lim.max_velocity;
         let vlo = self.v0.max(self.v1).min(vm);
         if self.d <= 0.0 && vlo <= 0.0 {
             return Ok(0.0);
@@ -111,7 +111,7 @@ impl Segment1 {
         } else if self.g(vlo, acc).1 >= self.d {
             Ok(vlo)
         } else {
-            self.fastest_long(a, j, vlo, vm)
+            self.fastest_long(acc, vlo, vm)
         }
     }
 
@@ -186,15 +186,14 @@ impl Segment1 {
     /// distance is then quadratic in `vc`,
     /// `g = vc^2 / a - (v0^2 + v1^2) / 2a + (v0 + v1 + 2 vc) a / 2j`.
     /// `Err` carries the root anyway (clamped), as a starting guess.
-    fn fastest_long(&self, a: f64, j: f64, vlo: f64, vm: f64) -> Result<f64, f64> {
-        let k = a / j;
-        let c = -(self.v0 * self.v0 + self.v1 * self.v1) / (2.0 * a)
+    fn fastest_long(&self, acc: &Acc, vlo: f64, vm: f64) -> Result<f64, f64> {
+        let (a, inv_a, k, regime) = (acc.a, acc.inv_a, acc.k, acc.regime);
+        let c = -(self.v0 * self.v0 + self.v1 * self.v1) * (0.5 * inv_a)
             + (self.v0 + self.v1) * k * 0.5
             - self.d;
         // vc^2 / a + k vc + c = 0, c < 0 here: one positive root.
-        let disc = (k * k - 4.0 * c / a).max(0.0);
+        let disc = (k * k - 4.0 * c * inv_a).max(0.0);
         let vc = 0.5 * a * (disc.sqrt() - k);
-        let regime = a * k;
         if vc >= vlo && vc <= vm && vc - self.v0 >= regime && vc - self.v1 >= regime {
             Ok(vc)
         } else {

@@ -96,10 +96,25 @@ impl Segment1 {
         }
     }
 
+    /// Whether a profile cruising at `vc` (at least `max(v0, v1)`, within
+    /// the speed limit) fits the distance: its ramps cover no more than
+    /// `d`. The ramp distance grows with `vc`, so this is whether the
+    /// time-optimal cruise speed is at least `vc`, known without solving
+    /// for it.
+    #[inline]
+    pub fn cruises_at(&self, lim: &JointLimits, vc: f64) -> bool {
+        let acc = Acc::new(lim.max_acceleration, lim.jerk());
+        self.g(vc, &acc).1 <= self.d
+    }
+
     /// Total ramp distance and its derivative at cruise speed `vc`.
     #[inline(always)]
     fn g(&self, vc: f64, c: &Acc) -> (f64, f64, f64, f64) {
         let (ta, da, dta, dda) = leg(self.v0, vc, c);
+        if self.v1 == self.v0 {
+            // Rest to rest, mostly: the two ramps alike.
+            return (2.0 * ta, 2.0 * da, 2.0 * dta, 2.0 * dda);
+        }
         let (tb, db, dtb, ddb) = leg(self.v1, vc, c);
         (ta + tb, da + db, dta + dtb, dda + ddb)
     }
@@ -117,8 +132,9 @@ impl Segment1 {
     #[inline]
     pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
         let (a, j) = (lim.max_acceleration, lim.jerk());
-        let ra = Ramp::new((p.vc - self.v0).abs(), a, j);
-        let rb = Ramp::new((p.vc - self.v1).abs(), a, j);
+        let acc = Acc::new(a, j);
+        let ra = Ramp::of((p.vc - self.v0).abs(), &acc);
+        let rb = Ramp::of((p.vc - self.v1).abs(), &acc);
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
         out.push_ramp(&ra, sa, j);

@@ -17,24 +17,31 @@ impl Ramp {
     /// (`j` may be infinite).
     #[inline]
     pub fn new(dv: f64, a: f64, j: f64) -> Ramp {
+        Ramp::of(dv, &Acc::new(a, j))
+    }
+
+    /// [`new`](Self::new) with the bounds' constants made once (see
+    /// [`Acc`]): no division.
+    #[inline]
+    pub(super) fn of(dv: f64, c: &Acc) -> Ramp {
         if dv <= 0.0 {
             Ramp {
                 tj: 0.0,
                 ta: 0.0,
                 peak: 0.0,
             }
-        } else if dv * j >= a * a {
+        } else if dv >= c.regime {
             Ramp {
-                tj: a / j,
-                ta: dv / a - a / j,
-                peak: a,
+                tj: c.k,
+                ta: dv * c.inv_a - c.k,
+                peak: c.a,
             }
         } else {
-            let tj = (dv / j).sqrt();
+            let tj = (dv * c.inv_j).sqrt();
             Ramp {
                 tj,
                 ta: 0.0,
-                peak: j * tj,
+                peak: c.j * tj,
             }
         }
     }
@@ -49,6 +56,8 @@ impl Ramp {
 /// computed once per call instead of dividing in every iteration.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Acc {
+    /// The acceleration limit.
+    pub a: f64,
     pub inv_a: f64,
     pub j: f64,
     /// `1 / j` (0 without a jerk limit).
@@ -63,12 +72,17 @@ pub(super) struct Acc {
 impl Acc {
     #[inline]
     pub fn new(a: f64, j: f64) -> Self {
+        // Two divisions, the rest by multiplying (a division costs as
+        // much as several multiplications, and these are made per call).
+        let inv_j = 1.0 / j;
+        let k = a * inv_j;
         Acc {
+            a,
             inv_a: 1.0 / a,
             j,
-            inv_j: 1.0 / j,
-            k: a / j,
-            regime: a * a / j,
+            inv_j,
+            k,
+            regime: a * k,
         }
     }
 }

@@ -282,9 +282,13 @@ impl Trajectory {
     /// is the same, operation for operation: no fused multiply-add, so the
     /// samples are the same to the bit). 18 joints sample in about 2/3 of
     /// the time.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F. (An `unsafe fn`, not a safe one with a
+    /// target feature, which needs Rust 1.86: the crate builds on 1.80.)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn sample_hot_avx512(
+    unsafe fn sample_hot_avx512(
         &self,
         hot: &mut Hot,
         index: &mut [usize],
@@ -299,9 +303,18 @@ impl Trajectory {
     /// samples to the bit).
     ///
     /// [`sample_hot_avx512`]: Self::sample_hot_avx512
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn sample_hot_avx2(&self, hot: &mut Hot, index: &mut [usize], t: f64, out: &mut [JointState]) {
+    unsafe fn sample_hot_avx2(
+        &self,
+        hot: &mut Hot,
+        index: &mut [usize],
+        t: f64,
+        out: &mut [JointState],
+    ) {
         self.sample_hot_any(hot, index, t, out);
     }
 

@@ -10,6 +10,7 @@ impl Timeline {
         let path = LivePath::new(limits.clone(), &from, 0.0, target_timeout);
         let mut tl = Timeline::empty(limits);
         tl.target_timeout = target_timeout;
+        tl.stays = true;
         tl.segments
             .push(Segment::new(0.0, Kind::Live, Path::Live(Box::new(path))));
         tl

@@ -147,6 +147,9 @@ pub(crate) struct Timeline {
     target_timeout: f64,
     /// The limits live targets are followed within.
     live_limits: Vec<JointLimits>,
+    /// A live run: a path played in it gives way to a hold when it ends,
+    /// and the run goes on (for more targets or paths) until stopped.
+    stays: bool,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -203,6 +206,7 @@ impl Timeline {
             approach: Duration::ZERO,
             now: 0.0,
             target_timeout: DEFAULT_TARGET_TIMEOUT,
+            stays: false,
         }
     }
 
@@ -311,6 +315,21 @@ impl Timeline {
         };
         if last.start > x || !last.over(x) {
             self.over_since = None;
+            return false;
+        }
+        if self.stays && last.kind == Kind::Main {
+            // A live run holds where the path ended, and goes on.
+            let mut st = std::mem::take(&mut self.scratch);
+            if let Some(last) = self.segments.last_mut() {
+                last.sample(x, Which::Cmd, &mut st);
+            }
+            let end = st.iter().map(|s| s.position).collect();
+            self.scratch = st;
+            self.push(Segment::new(
+                x,
+                Kind::Hold { last: false },
+                Path::Fixed(end),
+            ));
             return false;
         }
         let since = *self.over_since.get_or_insert(x);

@@ -79,3 +79,42 @@ fn pause_stops_the_following_and_resume_restarts_it() {
     // stops within its extrapolation and its stop distance beyond it.
     assert!(pan[699] > 89.0 && pan[699] < 95.0, "{}", pan[699]);
 }
+
+#[test]
+fn a_path_played_in_a_live_run_ends_in_a_hold_and_the_run_goes_on() {
+    let (path, robot) = motion("arm-wave.yaml");
+    let (buses, _) = sim_buses_at(&robot, &path);
+    let wave = path.duration();
+    let mut run = VirtualRun::live(&robot, buses, options()).expect("the run starts");
+    let tx = run.targets();
+    let commands = run.commands();
+    let mut path = Some(path);
+    // The wave (about 5.7 s) is played at once; from 6.5 s the pan is
+    // sent to -30 deg at 20 Hz.
+    let rec = record(&mut run, 1600, |k| {
+        if let Some(p) = path.take() {
+            commands.send(Command::replace(p)).expect("the run listens");
+        }
+        if k >= 1300 && k % 10 == 0 {
+            let t = Target::named(
+                k as f64 * PERIOD,
+                vec![("shoulder_pan".into(), (-30f64).to_radians())],
+            );
+            tx.send(t).expect("a good target");
+        }
+    });
+    assert!(rec.faults.is_empty(), "{:?}", rec.faults);
+    rec.assert_within_so101_limits(0, PERIOD);
+    let pan = rec.commanded(0);
+    assert_eq!(pan.len(), 1600, "the run went on after the wave");
+    // Held still where the wave ended, until the targets came.
+    let end = (wave / PERIOD) as usize + 20;
+    assert!(end < 1250, "the wave lasts {wave} s");
+    let held = pan[end];
+    assert!(
+        pan[end..1300].iter().all(|p| (p - held).abs() < 1e-9),
+        "{held}"
+    );
+    // Then following again.
+    assert!((pan[1599] + 30.0).abs() < 1e-6, "{}", pan[1599]);
+}

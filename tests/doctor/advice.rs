@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use servobus::doctor::{self, PortKind, Severity, Step};
+use servobus::doctor::{self, PortKind, Severity, Shown, Step};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot, JointCalibration, RobotOptions};
 use servobus_sim::Faults;
@@ -54,7 +54,7 @@ fn an_offset_not_set_after_a_power_up_is_information_and_fix_sets_it_for_the_ses
     );
     let robot = common_robot_arg();
     assert_eq!(
-        f.command.as_deref(),
+        f.command_line().as_deref(),
         Some(format!("servobus doctor --robot {robot} --port {PORT} --fix").as_str())
     );
     // Read in the frame play will set, the joint is at 0: within limits.
@@ -110,14 +110,14 @@ fn two_servos_on_one_id_and_a_silent_servo_is_a_swapped_id() {
         f.problem
     );
     assert!(
-        f.fix.contains("unplug every servo but joint `gripper`'s")
-            && f.fix
+        f.fix_text().contains("unplug every servo but joint `gripper`'s")
+            && f.fix_text()
                 .contains("`servobus set-id --port /dev/ttyACM0 --id 5 6`")
-            && f.fix.contains("plug the others back in"),
+            && f.fix_text().contains("plug the others back in"),
         "{}",
-        f.fix
+        f.fix_text()
     );
-    assert_eq!(f.command, None, "it takes hands: no command runs it alone");
+    assert_eq!(f.command_line(), None, "it takes hands: no command runs it alone");
     assert!(
         about(&findings, 6, None).is_none(),
         "servo 6 is explained by the shared ID:\n{}",
@@ -138,7 +138,7 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
         show(&all)
     );
     assert!(
-        !all.iter().any(|f| f.fix.contains("by hand")),
+        !all.iter().any(|f| f.fix_text().contains("by hand")),
         "{}",
         show(&all)
     );
@@ -149,7 +149,7 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
     assert!(f.problem.contains("calibrate first"), "{}", f.problem);
     let robot = common_robot_arg();
     assert_eq!(
-        f.command.as_deref(),
+        f.command_line().as_deref(),
         Some(
             format!("servobus calibrate --robot {robot} --port {PORT} -o calibration.yaml")
                 .as_str()
@@ -168,22 +168,22 @@ fn a_builtin_robot_is_named_by_its_name_in_every_command() {
     arm.robot.buses[0].latency_auto = false;
     let all = arm.examine_on(&PortKind::Serial(None)).findings;
     // The calibrate and doctor commands: what follows each `--robot`.
-    let robot_args: Vec<&str> = all
+    let commands: Vec<String> = all.iter().filter_map(|f| f.command_line()).collect();
+    let robot_args: Vec<&str> = commands
         .iter()
-        .filter_map(|f| f.command.as_deref())
         .flat_map(|c| c.split(" --robot ").skip(1))
         .filter_map(|rest| rest.split_whitespace().next())
         .collect();
     assert_eq!(robot_args.len(), 2, "{}", show(&all));
     assert!(robot_args.iter().all(|&r| r == "so101"), "{robot_args:?}");
     assert!(
-        !all.iter().any(|f| f.fix.contains("<built-in>")),
+        !all.iter().any(|f| f.fix_text().contains("<built-in>")),
         "{}",
         show(&all)
     );
     let offset = must(&all, 1, Some("offset"));
     assert_eq!(
-        offset.command.as_deref(),
+        offset.command_line().as_deref(),
         Some("servobus doctor --robot so101 --port /dev/ttyACM0 --fix")
     );
     let latency = all
@@ -192,11 +192,11 @@ fn a_builtin_robot_is_named_by_its_name_in_every_command() {
         .unwrap_or_else(|| panic!("{}", show(&all)));
     assert!(
         latency
-            .fix
+            .fix_text()
             .contains("`servobus init --robot so101` writes robot.yaml")
-            && latency.fix.contains("pass --robot robot.yaml"),
+            && latency.fix_text().contains("pass --robot robot.yaml"),
         "{}",
-        latency.fix
+        latency.fix_text()
     );
 }
 
@@ -255,11 +255,11 @@ fn an_uncalibrated_robot_is_told_how_to_calibrate() {
         .unwrap_or_else(|| panic!("{}", show(&all)));
     assert_eq!(f.severity, Severity::Info, "information only: exit 0");
     assert!(
-        f.fix.starts_with("servobus calibrate --robot ")
-            && f.fix
+        f.fix_text().starts_with("servobus calibrate --robot ")
+            && f.fix_text()
                 .contains("so101.yaml --port /dev/ttyACM0 -o calibration.yaml"),
         "{}",
-        f.fix
+        f.fix_text()
     );
     assert_eq!(doctor::exit_status(&all), 0);
 }
@@ -273,7 +273,7 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
     let findings = arm.examine();
     let offset = must(&findings, 1, Some("offset"));
     assert_eq!(
-        offset.command.as_deref(),
+        offset.command_line().as_deref(),
         Some("servobus write --port /dev/ttyACM0 --id 1 offset 100")
     );
     assert_eq!(offset.severity, Severity::Error);

@@ -10,7 +10,7 @@ mod advice;
 
 use std::time::Duration;
 
-use servobus::doctor::{self, Finding, PortKind, Severity, Target};
+use servobus::doctor::{self, Finding, PortKind, Severity, Shown, Target};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
@@ -126,7 +126,7 @@ impl Arm {
             assert!(
                 o.result.is_ok(),
                 "fix `{}` failed: {:?}",
-                o.command,
+                doctor::applied_text(&o.applied),
                 o.result
             );
         }
@@ -173,8 +173,8 @@ fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Find
 fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -> &'a Finding {
     let f = must(findings, id, Some(register));
     let want = format!("servobus write --port {PORT} --id {id} {register} {value}");
-    assert_eq!(f.fix, want, "{}", show(findings));
-    assert_eq!(f.command.as_deref(), Some(want.as_str()), "runs as printed");
+    assert_eq!(f.fix_text(), want, "{}", show(findings));
+    assert_eq!(f.command_line().as_deref(), Some(want.as_str()), "runs as printed");
     f
 }
 
@@ -184,7 +184,7 @@ fn show(findings: &[Finding]) -> String {
         .map(|f| {
             format!(
                 "{:?} {:?} {:?}: {} | {}\n",
-                f.severity, f.id, f.register, f.problem, f.fix
+                f.severity, f.id, f.register, f.problem, f.fix_text()
             )
         })
         .collect()
@@ -281,7 +281,7 @@ fn a_joint_outside_its_limits_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 1, Some("present_position"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.fix.contains("--id 1 torque_enable 0"), "{}", f.fix);
+    assert!(f.fix_text().contains("--id 1 torque_enable 0"), "{}", f.fix_text());
     assert!(!f.fixable(), "moving a joint is not for --fix");
 }
 
@@ -293,7 +293,7 @@ fn a_servo_at_another_baud_is_found_and_brought_back() {
     assert_eq!(f.severity, Severity::Error);
     assert!(f.problem.contains("115200"), "{}", f.problem);
     assert_eq!(
-        f.fix,
+        f.fix_text(),
         "servobus write --port /dev/ttyACM0 --baud 115200 --id 4 baud_rate 0"
     );
     assert_eq!(findings.len(), 1, "{}", show(&findings));
@@ -344,7 +344,7 @@ fn every_simulator_fault_is_found() {
             .unwrap_or_else(|| panic!("{spec}: nothing about servo {id}:\n{}", show(&findings)));
         assert_eq!(f.severity, severity, "{spec}: {}", f.problem);
         assert!(f.problem.contains(words), "{spec}: {}", f.problem);
-        assert!(!f.fix.is_empty(), "{spec}: no fix named");
+        assert!(!f.fix_text().is_empty(), "{spec}: no fix named");
         let worst = if severity == Severity::Error { 2 } else { 1 };
         assert_eq!(doctor::exit_status(&findings), worst, "{spec}");
     }
@@ -392,10 +392,10 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
     let findings = examined.findings;
     let timer = findings
         .iter()
-        .find(|f| f.fix.contains("latency_timer"))
+        .find(|f| f.fix_text().contains("latency_timer"))
         .unwrap_or_else(|| panic!("{}", show(&findings)));
     assert_eq!(
-        timer.fix,
+        timer.fix_text(),
         "echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/latency_timer"
     );
     let measured = findings
@@ -405,10 +405,10 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
     assert_eq!(measured.severity, Severity::Warning);
     assert!(
         measured
-            .fix
+            .fix_text()
             .contains("`latency_us: 2000` (or `auto`) on bus `arm`"),
         "{}",
-        measured.fix
+        measured.fix_text()
     );
     assert_eq!(
         examined.servos.len(),
@@ -445,9 +445,9 @@ fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
     assert_eq!(missing.severity, Severity::Error);
     assert!(
         missing
-            .fix
+            .fix_text()
             .ends_with("servobus set-id --port /dev/ttyACM0 --id 9 5"),
         "{}",
-        missing.fix
+        missing.fix_text()
     );
 }

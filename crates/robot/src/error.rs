@@ -51,6 +51,9 @@ pub enum Error {
     /// thread failed.
     #[error(transparent)]
     Run(#[from] RunError),
+    /// The doctor could not check the robot.
+    #[error(transparent)]
+    Doctor(#[from] crate::doctor::DoctorError),
     /// A motion file names its robot by path; a robot given as text has
     /// none, so its motions are planned by the caller
     /// ([`Robot::plan`](crate::Robot::plan) of a motion loaded for a robot

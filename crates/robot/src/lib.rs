@@ -44,6 +44,7 @@
 
 pub mod bench;
 mod connect;
+pub mod doctor;
 mod error;
 pub mod monitor;
 pub mod ports;
@@ -260,5 +261,21 @@ impl Robot {
     /// simulated.
     pub fn connect(&self, target: Target) -> Result<Connection, Error> {
         Connection::open(&self.config, target)
+    }
+
+    /// Checks every bus of the robot with the doctor ([`doctor::check`]):
+    /// on `ports` (the first for the first bus, the robot file's `port:`
+    /// past them), or on the built-in simulator when no bus has a port.
+    /// The servos are examined as they are, not refused: a calibration
+    /// that does not match is a finding.
+    ///
+    /// # Errors
+    /// [`Error::Doctor`] when a port cannot be opened or fails mid-check.
+    pub fn doctor<S: AsRef<str>>(
+        &self,
+        ports: &[S],
+        options: &doctor::Options,
+    ) -> Result<doctor::Checkup, Error> {
+        Ok(doctor::check(&self.config, ports, options)?)
     }
 }

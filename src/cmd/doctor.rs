@@ -62,13 +62,14 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
         fix: args.fix,
         write_servos: args.write_servos,
     };
-    let checkup = doctor::check(&robot, args.robot.hardware.port.as_slice(), &options)
-        .map_err(|e| match e {
+    let checkup = doctor::check(&robot, args.robot.hardware.port.as_slice(), &options).map_err(
+        |e| match e {
             // A port that cannot be opened is an input error, said as the
             // other commands say it.
             DoctorError::Open(e) => anyhow::Error::from(e),
             e => e.into(),
-        })?;
+        },
+    )?;
     for bus in &checkup.unchecked {
         eprintln!("warning: bus `{bus}` has no port: not checked");
     }

@@ -4,7 +4,6 @@
 
 pub use servobus_robot::doctor::*;
 
-
 /// A finding's advice as the command line prints it.
 pub trait Shown {
     /// What to do: the command that fixes it, or the steps with the command

@@ -110,14 +110,19 @@ fn two_servos_on_one_id_and_a_silent_servo_is_a_swapped_id() {
         f.problem
     );
     assert!(
-        f.fix_text().contains("unplug every servo but joint `gripper`'s")
+        f.fix_text()
+            .contains("unplug every servo but joint `gripper`'s")
             && f.fix_text()
                 .contains("`servobus set-id --port /dev/ttyACM0 --id 5 6`")
             && f.fix_text().contains("plug the others back in"),
         "{}",
         f.fix_text()
     );
-    assert_eq!(f.command_line(), None, "it takes hands: no command runs it alone");
+    assert_eq!(
+        f.command_line(),
+        None,
+        "it takes hands: no command runs it alone"
+    );
     assert!(
         about(&findings, 6, None).is_none(),
         "servo 6 is explained by the shared ID:\n{}",

@@ -174,7 +174,11 @@ fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -
     let f = must(findings, id, Some(register));
     let want = format!("servobus write --port {PORT} --id {id} {register} {value}");
     assert_eq!(f.fix_text(), want, "{}", show(findings));
-    assert_eq!(f.command_line().as_deref(), Some(want.as_str()), "runs as printed");
+    assert_eq!(
+        f.command_line().as_deref(),
+        Some(want.as_str()),
+        "runs as printed"
+    );
     f
 }
 
@@ -184,7 +188,11 @@ fn show(findings: &[Finding]) -> String {
         .map(|f| {
             format!(
                 "{:?} {:?} {:?}: {} | {}\n",
-                f.severity, f.id, f.register, f.problem, f.fix_text()
+                f.severity,
+                f.id,
+                f.register,
+                f.problem,
+                f.fix_text()
             )
         })
         .collect()
@@ -281,7 +289,11 @@ fn a_joint_outside_its_limits_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 1, Some("present_position"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.fix_text().contains("--id 1 torque_enable 0"), "{}", f.fix_text());
+    assert!(
+        f.fix_text().contains("--id 1 torque_enable 0"),
+        "{}",
+        f.fix_text()
+    );
     assert!(!f.fixable(), "moving a joint is not for --fix");
 }
 

@@ -2,9 +2,9 @@
 //! and against the known pitfalls. Pure functions of what was read, so each
 //! one is tested without a bus.
 
+use servobus_config::{JointConfig, JointMap};
 use servobus_protocol::registers::{self, Register, Series};
 use servobus_protocol::StatusFlags;
-use servobus_config::{JointConfig, JointMap};
 
 use super::probe::Ctx;
 use super::{Action, Advice, Change, Finding, Severity, Step};
@@ -135,10 +135,11 @@ impl Ctx<'_> {
         let reg = s.register(name);
         let mut f = self.finding(severity, step, s.id, reg.map(|r| r.name));
         f.measured = s.value(name);
-        f.advice = Advice::Run(
-            self.target
-                .write_command(s.id, reg.map_or(name, |r| r.name), value),
-        );
+        f.advice = Advice::Run(self.target.write_command(
+            s.id,
+            reg.map_or(name, |r| r.name),
+            value,
+        ));
         let silent = s.value("status_level") == Some(0);
         f.action = reg.map(|register| Action::Write {
             id: s.id,

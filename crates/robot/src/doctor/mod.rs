@@ -25,8 +25,8 @@ mod probe;
 mod robot;
 
 use serde::Serialize;
-use servobus_protocol::registers::{Register, Series};
 use servobus_config::Robot;
+use servobus_protocol::registers::{Register, Series};
 
 pub use advice::{Advice, Change, Edit, Fix, NewId, RobotFile, TOOLS_DEFAULT_BAUD};
 pub use checks::{rated_voltage_dv, ServoState};

@@ -3,13 +3,13 @@
 
 use std::time::Duration;
 
+use servobus_config::{BusConfig, JointConfig, Robot, RobotCalibration};
 use servobus_driver::{
     Bus, BusError, BusSettings, Clock, FtdiLatency, SerialTransport, Transport, PATIENCE,
     PATIENT_TRIES,
 };
 use servobus_protocol::registers::{self, addr, Series};
 use servobus_protocol::MAX_ID;
-use servobus_config::{BusConfig, JointConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
@@ -66,7 +66,10 @@ impl Target {
 /// Every fix of the doctor for `robot` on `target` (see
 /// [`Target::fix_all_command`]); a built-in robot named by its name.
 pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> Fix {
-    target.fix_all_command(&servobus_config::builtin::argument(&robot.path), write_servos)
+    target.fix_all_command(
+        &servobus_config::builtin::argument(&robot.path),
+        write_servos,
+    )
 }
 
 /// What kind of port the bus is on, for the latency checks.

@@ -78,7 +78,10 @@ fn fixing_on_a_pty_writes_the_gripper_limits_and_nothing_stands_after() {
         after.findings
     );
     assert!(
-        !after.findings.iter().any(|f| f.id == Some(6) && f.fixable()),
+        !after
+            .findings
+            .iter()
+            .any(|f| f.id == Some(6) && f.fixable()),
         "{:#?}",
         after.findings
     );

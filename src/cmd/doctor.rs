@@ -2,7 +2,8 @@
 //! the usual set-up mistakes, prints each finding with the command that
 //! fixes it, and with `--fix` applies those fixes (EEPROM with
 //! unlock-write-verify-lock; homing offsets for the session unless
-//! `--write-servos`). The checks live in [`servobus::doctor`].
+//! `--write-servos`). The checks live in [`servobus_robot::doctor`]; the
+//! text they are shown in, in [`servobus::doctor`].
 
 use std::process::ExitCode;
 
@@ -58,7 +59,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
             .calibration(args.robot.hardware.calibration.as_deref())
             .any_rate(),
     )?;
-    let options = doctor::Options {
+    let options = doctor::CheckOptions {
         fix: args.fix,
         write_servos: args.write_servos,
     };
@@ -113,12 +114,12 @@ fn print_findings(findings: &[Finding]) {
 
 fn print_text(robot: &Robot, outcomes: &[BusCheck], standing: &[Finding], fixed: bool) {
     for o in outcomes {
-        let port = o.target.port.as_deref().unwrap_or("the built-in simulator");
+        let port = o.at.port.as_deref().unwrap_or("the built-in simulator");
         println!(
             "{} bus `{}` on {port} at {} baud: {} of {} servos read",
             robot.name,
             o.name,
-            o.target.baud,
+            o.at.baud,
             o.first.servos.len(),
             o.first.expected
         );
@@ -178,8 +179,8 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) {
                 .collect();
             serde_json::json!({
                 "name": o.name,
-                "port": o.target.port,
-                "baud": o.target.baud,
+                "port": o.at.port,
+                "baud": o.at.baud,
                 "expected": o.first.expected,
                 "read": o.first.servos.iter().map(|s| s.id).collect::<Vec<_>>(),
                 "findings": json_findings(&o.first.findings),

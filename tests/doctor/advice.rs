@@ -6,12 +6,12 @@
 use std::path::Path;
 use std::time::Duration;
 
-use servobus::doctor::{self, PortKind, Severity, Shown, Step};
+use servobus::doctor::{self, PortKind, SetupStep, Severity, Shown};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot, JointCalibration, RobotOptions};
 use servobus_sim::Faults;
 
-use super::{about, must, show, Arm, PORT};
+use super::{about, must, saying, show, Arm, PORT};
 
 /// shoulder_pan (servo 1, at tick 2048 with homing offset 0) calibrated
 /// with offset 0 over ticks 2000..4600: a range across the seam.
@@ -46,7 +46,7 @@ fn an_offset_not_set_after_a_power_up_is_information_and_fix_sets_it_for_the_ses
     let all = arm.examine_all();
     let f = must(&all, 1, Some("offset"));
     assert_eq!(f.severity, Severity::Info, "play sets it: nothing wrong");
-    assert_eq!(f.step, Step::Calibrate);
+    assert_eq!(f.step, SetupStep::Calibrate);
     assert!(
         f.problem.contains("not set for this session") && !f.problem.contains("replaced"),
         "{}",
@@ -149,7 +149,7 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
     );
     let f = all
         .iter()
-        .find(|f| f.step == Step::Calibrate && f.id.is_none())
+        .find(|f| f.step == SetupStep::Calibrate && f.id.is_none())
         .unwrap_or_else(|| panic!("{}", show(&all)));
     assert!(f.problem.contains("calibrate first"), "{}", f.problem);
     let robot = common_robot_arg();
@@ -191,10 +191,7 @@ fn a_builtin_robot_is_named_by_its_name_in_every_command() {
         offset.command_line().as_deref(),
         Some("servobus doctor --robot so101 --port /dev/ttyACM0 --fix")
     );
-    let latency = all
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let latency = saying(&all, "round trip");
     assert!(
         latency
             .fix_text()
@@ -214,10 +211,7 @@ fn latency_auto_is_measured_not_an_assumed_0_us() {
     );
     arm.sim = arm.sim.clone().with_latency(Duration::from_millis(2));
     let all = arm.examine_on(&PortKind::Serial(None)).findings;
-    let f = all
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let f = saying(&all, "round trip");
     assert_eq!(f.severity, Severity::Info, "auto follows the adapter");
     assert!(
         f.problem.contains("`latency_us: auto` measures it") && !f.problem.contains("assumes"),
@@ -246,7 +240,7 @@ fn advice_comes_in_the_order_a_new_arm_needs_it() {
         "{}",
         show(&findings)
     );
-    let steps: Vec<Step> = findings.iter().map(|f| f.step).collect();
+    let steps: Vec<SetupStep> = findings.iter().map(|f| f.step).collect();
     assert!(steps.windows(2).all(|w| w[0] <= w[1]), "{steps:?}");
 }
 
@@ -254,10 +248,7 @@ fn advice_comes_in_the_order_a_new_arm_needs_it() {
 fn an_uncalibrated_robot_is_told_how_to_calibrate() {
     let mut arm = Arm::tuned(Faults::none());
     let all = arm.examine_all();
-    let f = all
-        .iter()
-        .find(|f| f.problem.starts_with("no calibration"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let f = saying(&all, "no calibration");
     assert_eq!(f.severity, Severity::Info, "information only: exit 0");
     assert!(
         f.fix_text().starts_with("servobus calibrate --robot ")

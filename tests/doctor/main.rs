@@ -10,7 +10,7 @@ mod advice;
 
 use std::time::Duration;
 
-use servobus::doctor::{self, Finding, PortKind, Severity, Shown, Target};
+use servobus::doctor::{self, BusPort, Finding, PortKind, Severity, Shown};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
@@ -24,8 +24,8 @@ struct Arm {
     bus: Bus<SimBus, ManualClock>,
 }
 
-fn target() -> Target {
-    Target {
+fn target() -> BusPort {
+    BusPort {
         port: Some(PORT.into()),
         baud: 1_000_000,
     }
@@ -169,6 +169,14 @@ fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Find
         .unwrap_or_else(|| panic!("nothing about servo {id} {register:?}:\n{}", show(findings)))
 }
 
+/// The finding whose problem says `text`.
+fn saying<'a>(findings: &'a [Finding], text: &str) -> &'a Finding {
+    findings
+        .iter()
+        .find(|f| f.problem.contains(text))
+        .unwrap_or_else(|| panic!("nothing says {text:?}:\n{}", show(findings)))
+}
+
 /// [`must`], whose fix must be `servobus write` of `value` to `register`.
 fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -> &'a Finding {
     let f = must(findings, id, Some(register));
@@ -238,6 +246,11 @@ fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
     let f = must_write(&findings, 3, "return_delay", 0);
     assert_eq!(f.severity, Severity::Error);
     assert!(f.problem.contains("500 us"), "{}", f.problem);
+    assert_eq!(
+        f.measured,
+        Some(250),
+        "the register read, in its 2 us units"
+    );
     assert_eq!(doctor::exit_status(&findings), 2);
     arm.fixed(&findings, true, 3, addr::RETURN_DELAY, 0);
 }
@@ -410,10 +423,7 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
         timer.fix_text(),
         "echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/latency_timer"
     );
-    let measured = findings
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    let measured = saying(&findings, "round trip");
     assert_eq!(measured.severity, Severity::Warning);
     assert!(
         measured

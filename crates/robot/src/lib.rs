@@ -45,13 +45,13 @@
 //! as data:
 //!
 //! ```no_run
-//! use servobus_robot::doctor::{Options, Severity};
+//! use servobus_robot::doctor::{CheckOptions, Severity};
 //! use servobus_robot::Robot;
 //!
 //! let robot = Robot::open("so101")?;
 //! // On the robot file's ports, or these; the built-in simulator when no
 //! // bus has a port. `fix: true` applies the fixes that are writes.
-//! let checkup = robot.doctor(&["/dev/ttyACM0"], &Options::default())?;
+//! let checkup = robot.doctor(&["/dev/ttyACM0"], &CheckOptions::default())?;
 //! for bus in &checkup.buses {
 //!     for finding in bus.standing() {
 //!         if finding.severity >= Severity::Warning {
@@ -297,7 +297,7 @@ impl Robot {
     pub fn doctor<S: AsRef<str>>(
         &self,
         ports: &[S],
-        options: &doctor::Options,
+        options: &doctor::CheckOptions,
     ) -> Result<doctor::Checkup, Error> {
         Ok(doctor::check(&self.config, ports, options)?)
     }

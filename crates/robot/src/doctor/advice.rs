@@ -256,11 +256,6 @@ impl Advice {
             | Advice::EditRobotFile(_) => None,
         }
     }
-
-    /// Whether there is anything to do.
-    pub fn is_some(&self) -> bool {
-        *self != Advice::None
-    }
 }
 
 impl Fix {

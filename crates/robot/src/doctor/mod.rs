@@ -32,8 +32,8 @@ pub use advice::{Advice, Change, Edit, Fix, NewId, RobotFile, TOOLS_DEFAULT_BAUD
 pub use checks::{rated_voltage_dv, ServoState};
 pub use fix::{apply, change_baud, Applied, FixError, FixOutcome};
 pub use probe::fix_all_command;
-pub use probe::{examine, Examined, PortKind, Target};
-pub use robot::{check, BusCheck, Checkup, DoctorError, Options};
+pub use probe::{examine, BusPort, Examined, PortKind};
+pub use robot::{check, BusCheck, CheckOptions, Checkup, DoctorError};
 
 /// How bad a finding is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -61,7 +61,7 @@ impl std::fmt::Display for Severity {
 /// arm needs the advice in (findings are listed in this order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Step {
+pub enum SetupStep {
     /// Every servo answers, alone, at its ID and the bus's baud rate, and is
     /// the model the robot file names.
     Connect,
@@ -73,15 +73,17 @@ pub enum Step {
     Check,
 }
 
-impl Step {
+impl SetupStep {
     /// A heading for the step's findings: its number in the set-up and
     /// what it is about.
     pub fn heading(self) -> &'static str {
         match self {
-            Step::Connect => "1. connect: every servo answers, alone, at its ID and the bus's rate",
-            Step::Configure => "2. configure: the servos' settings",
-            Step::Calibrate => "3. calibrate: the calibration and its homing offsets",
-            Step::Check => "4. check: health and timing",
+            SetupStep::Connect => {
+                "1. connect: every servo answers, alone, at its ID and the bus's rate"
+            }
+            SetupStep::Configure => "2. configure: the servos' settings",
+            SetupStep::Calibrate => "3. calibrate: the calibration and its homing offsets",
+            SetupStep::Check => "4. check: health and timing",
         }
     }
 }
@@ -149,7 +151,7 @@ pub struct Finding {
     /// How bad it is.
     pub severity: Severity,
     /// Where it belongs in setting a robot up.
-    pub step: Step,
+    pub step: SetupStep,
     /// The robot file's bus.
     pub bus: String,
     /// The servo, when it concerns one.

@@ -13,7 +13,7 @@ use servobus_protocol::MAX_ID;
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, Advice, Change, Finding, Fix, NewId, Severity, Step};
+use super::{Action, Advice, Change, Finding, Fix, NewId, SetupStep, Severity};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -23,14 +23,14 @@ pub(crate) const MAX_RETURN_DELAY: Duration = Duration::from_micros(510);
 /// Where the fixes are run: the port as the user names it, and the bus's
 /// baud rate.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Target {
+pub struct BusPort {
     /// The port; `None` for the built-in simulator.
     pub port: Option<String>,
     /// The bus's baud rate.
     pub baud: u32,
 }
 
-impl Target {
+impl BusPort {
     /// The write of `value` into `register` of servo `id`.
     pub fn write_command(&self, id: u8, register: &str, value: i32) -> Fix {
         Fix::Write {
@@ -64,8 +64,8 @@ impl Target {
 }
 
 /// Every fix of the doctor for `robot` on `target` (see
-/// [`Target::fix_all_command`]); a built-in robot named by its name.
-pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> Fix {
+/// [`BusPort::fix_all_command`]); a built-in robot named by its name.
+pub fn fix_all_command(target: &BusPort, robot: &Robot, write_servos: bool) -> Fix {
     target.fix_all_command(
         &servobus_config::builtin::argument(&robot.path),
         write_servos,
@@ -110,7 +110,7 @@ pub struct Examined {
 pub(crate) struct Ctx<'a> {
     pub robot: &'a Robot,
     pub bus: &'a BusConfig,
-    pub target: &'a Target,
+    pub target: &'a BusPort,
     /// Real servos (or `servobus sim`'s), not the built-in simulator.
     pub real: bool,
 }
@@ -135,7 +135,7 @@ pub fn examine<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     robot: &Robot,
     cfg: &BusConfig,
-    target: &Target,
+    target: &BusPort,
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
     let saved = *bus.settings();
@@ -194,7 +194,7 @@ fn examine_inner<T: Transport, C: Clock>(
                 let mut f = finding(
                     ctx,
                     Severity::Error,
-                    Step::Connect,
+                    SetupStep::Connect,
                     Some(id),
                     Some("status_level"),
                 );
@@ -244,7 +244,7 @@ fn examine_inner<T: Transport, C: Clock>(
     }
     for &id in &missing {
         let joint = expected(id).map_or("?", |j| j.name.as_str());
-        let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
+        let mut f = finding(ctx, Severity::Error, SetupStep::Connect, Some(id), None);
         f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
         match extras.first() {
             Some(&extra) => {
@@ -263,7 +263,13 @@ fn examine_inner<T: Transport, C: Clock>(
         findings.push(f);
     }
     for &id in &extras {
-        let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
+        let mut f = finding(
+            ctx,
+            Severity::Warning,
+            SetupStep::Connect,
+            Some(id),
+            Some("id"),
+        );
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
         f.advice = Advice::IdOfItsJoint {
             fix: target.set_id_command(id, NewId::OfItsJoint),
@@ -312,7 +318,7 @@ fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, 
 pub(crate) fn finding(
     ctx: &Ctx<'_>,
     severity: Severity,
-    step: Step,
+    step: SetupStep,
     id: Option<u8>,
     reg: Option<&'static str>,
 ) -> Finding {
@@ -332,7 +338,13 @@ pub(crate) fn finding(
 /// Two or more servos answer as `id`; `silent` is the robot's servo that
 /// does not answer (its ID and joint), which most likely is one of them.
 fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Finding {
-    let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), Some("id"));
+    let mut f = finding(
+        ctx,
+        Severity::Error,
+        SetupStep::Connect,
+        Some(id),
+        Some("id"),
+    );
     let set_id = |to: NewId| ctx.target.set_id_command(id, to);
     match silent {
         Some((want, joint)) => {
@@ -400,7 +412,7 @@ fn find_at_other_bauds<T: Transport, C: Clock>(
             let mut f = finding(
                 ctx,
                 Severity::Error,
-                Step::Connect,
+                SetupStep::Connect,
                 Some(id),
                 Some("baud_rate"),
             );

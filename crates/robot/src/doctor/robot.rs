@@ -6,12 +6,12 @@ use servobus_config::{BusConfig, Robot};
 use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_runtime::sim::SimRobotError;
 
-use super::{apply, examine, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
+use super::{apply, examine, BusPort, Examined, Finding, FixOutcome, Fixing, PortKind};
 use crate::ports::{bus_ports, open_bus, Allowance, OpenError};
 
 /// What [`check`] does beside examining.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Options {
+pub struct CheckOptions {
     /// Apply the fixes that are writes, then examine again.
     pub fix: bool,
     /// With `fix`: store homing offsets in EEPROM instead of setting them
@@ -46,10 +46,10 @@ pub struct BusCheck {
     /// The bus's name in the robot file.
     pub name: String,
     /// Its port (none: the built-in simulator) and baud rate.
-    pub target: Target,
+    pub at: BusPort,
     /// The first examination.
     pub first: Examined,
-    /// The fixes applied, with [`Options::fix`].
+    /// The fixes applied, with [`CheckOptions::fix`].
     pub fixes: Vec<FixOutcome>,
     /// The examination after the fixes, when any was applied.
     pub after: Option<Examined>,
@@ -94,7 +94,7 @@ impl Checkup {
 pub fn check<S: AsRef<str>>(
     robot: &Robot,
     ports: &[S],
-    options: &Options,
+    options: &CheckOptions,
 ) -> Result<Checkup, DoctorError> {
     let ports = bus_ports(robot, ports);
     let mut checkup = Checkup {
@@ -104,7 +104,7 @@ pub fn check<S: AsRef<str>>(
     if ports.iter().all(Option::is_none) {
         let buses = servobus_runtime::sim::virtual_buses(robot)?;
         for (index, (mut bus, cfg)) in buses.into_iter().zip(&robot.buses).enumerate() {
-            let target = Target {
+            let target = BusPort {
                 port: None,
                 baud: cfg.baud,
             };
@@ -122,7 +122,7 @@ pub fn check<S: AsRef<str>>(
         // A slow adapter is one of the findings.
         let mut bus = open_bus(cfg, &port, Allowance::Assumed)?;
         let kind = PortKind::of(bus.transport());
-        let target = Target {
+        let target = BusPort {
             port: Some(port),
             baud: cfg.baud,
         };
@@ -133,14 +133,14 @@ pub fn check<S: AsRef<str>>(
 }
 
 /// Examines bus `index` of `robot` (its `cfg`) through `bus` (on a port of
-/// `kind`, whose fixes run at `target`) and, with [`Options::fix`],
+/// `kind`, whose fixes run at `target`) and, with [`CheckOptions::fix`],
 /// applies the fixes and examines it again.
 fn check_bus<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     (robot, index, cfg): (&Robot, usize, &BusConfig),
-    target: Target,
+    target: BusPort,
     kind: &PortKind,
-    options: &Options,
+    options: &CheckOptions,
 ) -> Result<BusCheck, DoctorError> {
     let unfinished = |source| DoctorError::Unfinished {
         bus: cfg.name.clone(),
@@ -160,7 +160,7 @@ fn check_bus<T: Transport, C: Clock>(
     }
     Ok(BusCheck {
         name: cfg.name.clone(),
-        target,
+        at: target,
         first,
         fixes,
         after,

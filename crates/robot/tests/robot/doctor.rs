@@ -2,7 +2,7 @@
 //! built-in simulator and on a pty, and the fixes applied by a library call.
 
 use crate::common::Pty;
-use servobus_robot::doctor::{Advice, Applied, Fix, Options, Severity, Step};
+use servobus_robot::doctor::{Advice, Applied, CheckOptions, Fix, SetupStep, Severity};
 use servobus_robot::Robot;
 
 /// The gripper's protection settings as the simulator ships them, and the
@@ -17,11 +17,13 @@ const GRIPPER: [(&str, i32, i32); 3] = [
 fn the_simulated_arm_has_only_the_gripper_warnings_each_a_typed_write() {
     let robot = Robot::open("so101").expect("opens");
     let none: [&str; 0] = [];
-    let checkup = robot.doctor(&none, &Options::default()).expect("checked");
+    let checkup = robot
+        .doctor(&none, &CheckOptions::default())
+        .expect("checked");
     assert!(checkup.unchecked.is_empty());
     assert_eq!(checkup.buses.len(), 1);
     let bus = &checkup.buses[0];
-    assert_eq!(bus.target.port, None, "the built-in simulator");
+    assert_eq!(bus.at.port, None, "the built-in simulator");
     assert_eq!(bus.first.servos.len(), 6);
     let warnings: Vec<_> = bus
         .standing()
@@ -31,7 +33,7 @@ fn the_simulated_arm_has_only_the_gripper_warnings_each_a_typed_write() {
     assert_eq!(warnings.len(), GRIPPER.len(), "{warnings:#?}");
     for (f, (name, measured, want)) in warnings.iter().zip(GRIPPER) {
         assert_eq!(f.severity, Severity::Warning);
-        assert_eq!(f.step, Step::Configure);
+        assert_eq!(f.step, SetupStep::Configure);
         assert_eq!(f.id, Some(6));
         assert_eq!(f.register, Some(name));
         assert_eq!(f.measured, Some(measured), "{name}");
@@ -53,7 +55,7 @@ fn the_simulated_arm_has_only_the_gripper_warnings_each_a_typed_write() {
 fn fixing_on_a_pty_writes_the_gripper_limits_and_nothing_stands_after() {
     let robot = Robot::open("so101").expect("opens");
     let pty = Pty::serve(robot.config(), None);
-    let options = Options {
+    let options = CheckOptions {
         fix: true,
         write_servos: false,
     };
@@ -61,7 +63,7 @@ fn fixing_on_a_pty_writes_the_gripper_limits_and_nothing_stands_after() {
         .doctor(&[pty.path.as_str()], &options)
         .expect("checked");
     let bus = &checkup.buses[0];
-    assert_eq!(bus.target.port.as_deref(), Some(pty.path.as_str()));
+    assert_eq!(bus.at.port.as_deref(), Some(pty.path.as_str()));
     assert_eq!(bus.fixes.len(), GRIPPER.len(), "{:#?}", bus.fixes);
     for fx in &bus.fixes {
         assert_eq!(fx.id, 6);

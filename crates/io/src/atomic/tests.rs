@@ -146,7 +146,7 @@ fn check_output_creates_and_changes_nothing() {
 #[test]
 fn a_replaced_file_keeps_its_permissions() {
     use std::os::unix::fs::PermissionsExt;
-    let (dir, path) = with_old_file("mode", "cal.yaml", "old");
+    let (_, path) = with_old_file("mode", "cal.yaml", "old");
     fs::set_permissions(&path, Permissions::from_mode(0o640)).expect("mode");
     write_atomic(&path, b"new").expect("written");
     let mode = fs::metadata(&path).expect("metadata").permissions().mode();

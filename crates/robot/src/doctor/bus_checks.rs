@@ -8,7 +8,7 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx, PortKind};
-use super::{Advice, Change, Finding, Fix, SetupStep, Severity};
+use super::{Advice, Change, Finding, Fix, SetupStep as Step, Severity};
 
 /// How far the measured latency may exceed the robot file's before it is
 /// worth a warning (scheduling noise of the host).
@@ -32,7 +32,7 @@ pub(crate) fn firmware(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Findi
         let mut f = finding(
             ctx,
             Severity::Warning,
-            SetupStep::Check,
+            Step::Check,
             Some(s.id),
             Some("firmware_major"),
         );
@@ -68,7 +68,7 @@ pub(crate) fn supply_drop(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Fi
         let mut f = finding(
             ctx,
             Severity::Warning,
-            SetupStep::Check,
+            Step::Check,
             Some(id),
             Some("present_voltage"),
         );
@@ -96,7 +96,7 @@ pub(crate) fn latency<T: Transport, C: Clock>(
 ) -> Result<(), BusError> {
     if let PortKind::Serial(Some(ftdi)) = kind {
         if ftdi.is_too_high() {
-            let mut f = finding(ctx, Severity::Warning, SetupStep::Check, None, None);
+            let mut f = finding(ctx, Severity::Warning, Step::Check, None, None);
             f.problem = format!(
                 "the FTDI adapter's latency timer is {} ms: every reply waits that long",
                 ftdi.latency.as_millis()
@@ -128,7 +128,7 @@ pub(crate) fn latency<T: Transport, C: Clock>(
     };
     let configured = ctx.bus.latency;
     let us = |d: Duration| d.as_micros();
-    let mut f = finding(ctx, Severity::Info, SetupStep::Check, Some(first.id), None);
+    let mut f = finding(ctx, Severity::Info, Step::Check, Some(first.id), None);
     let assumed = if ctx.bus.latency_auto {
         // `auto` is no figure: the run measures the link and follows it.
         "the robot file's `latency_us: auto` measures it when a run starts and follows it".into()

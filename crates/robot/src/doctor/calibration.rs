@@ -6,7 +6,7 @@ use servobus_config::{JointConfig, RobotCalibration};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx};
-use super::{Action, Advice, Change, Edit, Finding, Fix, RobotFile, SetupStep, Severity};
+use super::{Action, Advice, Change, Edit, Finding, Fix, RobotFile, SetupStep as Step, Severity};
 
 impl Ctx<'_> {
     /// The servo against the joint's calibration: the homing offset the
@@ -24,7 +24,7 @@ impl Ctx<'_> {
         if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
             let mut f = self.finding(
                 Severity::Warning,
-                SetupStep::Calibrate,
+                Step::Calibrate,
                 s.id,
                 Some("firmware_major"),
             );
@@ -61,12 +61,7 @@ impl Ctx<'_> {
             Severity::Error
         };
         let register = s.register("offset");
-        let mut f = self.finding(
-            severity,
-            SetupStep::Calibrate,
-            s.id,
-            register.map(|r| r.name),
-        );
+        let mut f = self.finding(severity, Step::Calibrate, s.id, register.map(|r| r.name));
         f.measured = Some(offset);
         f.action = Some(Action::Offset {
             id: s.id,
@@ -166,7 +161,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
     };
     match &ctx.robot.calibration {
         RobotCalibration::Missing(path) => {
-            let mut f = finding(ctx, Severity::Error, SetupStep::Calibrate, None, None);
+            let mut f = finding(ctx, Severity::Error, Step::Calibrate, None, None);
             f.problem = format!(
                 "the robot file names the calibration {}, which does not exist: real servos \
                  are refused until it does",
@@ -176,7 +171,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
             out.push(f);
         }
         RobotCalibration::None if ctx.real => {
-            let mut f = finding(ctx, Severity::Info, SetupStep::Calibrate, None, None);
+            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
             f.problem = "not calibrated: calibrate first. Until then the joint angles mean \
                          nothing (each servo horn sits at its own angle), so no joint is checked \
                          against its limits"
@@ -185,7 +180,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
             out.push(f);
         }
         RobotCalibration::None | RobotCalibration::Unapplied(_) => {
-            let mut f = finding(ctx, Severity::Info, SetupStep::Calibrate, None, None);
+            let mut f = finding(ctx, Severity::Info, Step::Calibrate, None, None);
             f.problem = "no calibration: joint angles count from each servo's middle tick \
                          with the robot file's offset and inverted"
                 .into();

@@ -7,7 +7,7 @@ use servobus_protocol::registers::{self, Register, Series};
 use servobus_protocol::StatusFlags;
 
 use super::probe::Ctx;
-use super::{Action, Advice, Change, Finding, SetupStep, Severity};
+use super::{Action, Advice, Change, Finding, SetupStep as Step, Severity};
 
 /// Bytes read from each servo: from the firmware version (0) to the status
 /// and moving flags (65, 66) and, on STS/SMS, the present current (69, 70).
@@ -116,7 +116,7 @@ impl Ctx<'_> {
     pub(crate) fn finding(
         &self,
         severity: Severity,
-        step: SetupStep,
+        step: Step,
         id: u8,
         register: Option<&'static str>,
     ) -> Finding {
@@ -127,7 +127,7 @@ impl Ctx<'_> {
     fn write_fix(
         &self,
         severity: Severity,
-        step: SetupStep,
+        step: Step,
         s: &ServoState,
         name: &str,
         value: i32,
@@ -163,12 +163,8 @@ impl Ctx<'_> {
             if s.model_number() != joint.model.number {
                 let found = registers::model_by_number(s.model_number())
                     .map_or_else(|| format!("model #{}", s.model_number()), |m| m.name.into());
-                let mut f = self.finding(
-                    Severity::Error,
-                    SetupStep::Connect,
-                    s.id,
-                    Some("model_number"),
-                );
+                let mut f =
+                    self.finding(Severity::Error, Step::Connect, s.id, Some("model_number"));
                 f.problem = format!(
                     "servo {} is a {found}, the robot file says {} for joint `{}`",
                     s.id, joint.model.name, joint.name
@@ -206,7 +202,7 @@ impl Ctx<'_> {
             } else {
                 Severity::Warning
             };
-            let mut f = self.write_fix(severity, SetupStep::Configure, s, "return_delay", 0);
+            let mut f = self.write_fix(severity, Step::Configure, s, "return_delay", 0);
             f.problem = format!(
                 "return delay is {us} us (the robot file expects {expected} us): every reply \
                  waits that long{}",
@@ -225,13 +221,7 @@ impl Ctx<'_> {
             Series::Scs => 2,
         };
         if let Some(level) = s.value("status_level").filter(|&l| l < full) {
-            let mut f = self.write_fix(
-                Severity::Warning,
-                SetupStep::Configure,
-                s,
-                "status_level",
-                full,
-            );
+            let mut f = self.write_fix(Severity::Warning, Step::Configure, s, "status_level", full);
             f.problem = format!(
                 "status return level is {level}: the servo does not answer WRITE, so a write \
                  cannot be confirmed (the driver expects level {full})"
@@ -242,7 +232,7 @@ impl Ctx<'_> {
 
     fn lock(&self, s: &ServoState, out: &mut Vec<Finding>) {
         if s.value("lock") == Some(0) {
-            let mut f = self.write_fix(Severity::Warning, SetupStep::Configure, s, "lock", 1);
+            let mut f = self.write_fix(Severity::Warning, Step::Configure, s, "lock", 1);
             f.problem = "EEPROM lock left open: any write to a setting (ID, limits, baud rate) \
                          persists, stray ones included"
                 .into();
@@ -261,7 +251,7 @@ impl Ctx<'_> {
                 } else {
                     Severity::Warning
                 };
-                let mut f = self.finding(sev, SetupStep::Check, s.id, Some("present_temperature"));
+                let mut f = self.finding(sev, Step::Check, s.id, Some("present_temperature"));
                 f.problem = format!(
                     "temperature {t} C, limit {limit} C{}",
                     if hot { " (overheat)" } else { "" }
@@ -286,12 +276,7 @@ impl Ctx<'_> {
         let rated = joint.and_then(|j| rated_voltage_dv(j.model.name));
         let model = joint.map_or("servo", |j| j.model.name);
         if s.flags.contains(StatusFlags::VOLTAGE) || v < lo || v > hi {
-            let mut f = self.finding(
-                Severity::Error,
-                SetupStep::Check,
-                s.id,
-                Some("present_voltage"),
-            );
+            let mut f = self.finding(Severity::Error, Step::Check, s.id, Some("present_voltage"));
             f.problem = format!(
                 "supply {:.1} V {when} is outside the servo's limits {:.1}..{:.1} V (voltage flag)",
                 volts(v),
@@ -306,7 +291,7 @@ impl Ctx<'_> {
         {
             let mut f = self.finding(
                 Severity::Warning,
-                SetupStep::Check,
+                Step::Check,
                 s.id,
                 Some("present_voltage"),
             );
@@ -336,8 +321,7 @@ impl Ctx<'_> {
                     ("max_angle_limit", max, hi, max < hi),
                 ] {
                     if narrow {
-                        let mut f =
-                            self.write_fix(Severity::Error, SetupStep::Configure, s, name, want);
+                        let mut f = self.write_fix(Severity::Error, Step::Configure, s, name, want);
                         f.problem = format!(
                             "{name} is {reg} ticks, narrower than joint `{}`'s limits \
                              ({} ticks): the servo stops short of goals the runtime sends",
@@ -354,12 +338,8 @@ impl Ctx<'_> {
             let rad = map.from_ticks(super::calibration::play_frame_tick(s, joint, pos));
             let (min, max) = (units.to_rad(joint.min), units.to_rad(joint.max));
             if rad < min - OUTSIDE_TOLERANCE_RAD || rad > max + OUTSIDE_TOLERANCE_RAD {
-                let mut f = self.finding(
-                    Severity::Error,
-                    SetupStep::Check,
-                    s.id,
-                    Some("present_position"),
-                );
+                let mut f =
+                    self.finding(Severity::Error, Step::Check, s.id, Some("present_position"));
                 f.problem = format!(
                     "joint `{}` is at {:.1} {units} ({pos} ticks), outside its limits {}..{} {units}",
                     joint.name,
@@ -387,7 +367,7 @@ impl Ctx<'_> {
                 };
                 let mut f = self.write_fix(
                     sev,
-                    SetupStep::Configure,
+                    Step::Configure,
                     s,
                     "unloading_condition",
                     i32::from(mask | MUST_UNLOAD),
@@ -404,7 +384,7 @@ impl Ctx<'_> {
         }
         for (name, most) in GRIPPER_LIMITS {
             if let Some(v) = s.value(name).filter(|&v| v > most) {
-                let mut f = self.write_fix(Severity::Warning, SetupStep::Configure, s, name, most);
+                let mut f = self.write_fix(Severity::Warning, Step::Configure, s, name, most);
                 f.problem = format!(
                     "gripper `{}`: {name} is {v} (at most {most} keeps a gripper that holds an \
                      object from overheating)",

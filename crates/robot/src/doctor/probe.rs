@@ -13,7 +13,7 @@ use servobus_protocol::MAX_ID;
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, Advice, Change, Finding, Fix, NewId, SetupStep, Severity};
+use super::{Action, Advice, Change, Finding, Fix, NewId, SetupStep as Step, Severity};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -194,7 +194,7 @@ fn examine_inner<T: Transport, C: Clock>(
                 let mut f = finding(
                     ctx,
                     Severity::Error,
-                    SetupStep::Connect,
+                    Step::Connect,
                     Some(id),
                     Some("status_level"),
                 );
@@ -244,7 +244,7 @@ fn examine_inner<T: Transport, C: Clock>(
     }
     for &id in &missing {
         let joint = expected(id).map_or("?", |j| j.name.as_str());
-        let mut f = finding(ctx, Severity::Error, SetupStep::Connect, Some(id), None);
+        let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
         f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
         match extras.first() {
             Some(&extra) => {
@@ -263,13 +263,7 @@ fn examine_inner<T: Transport, C: Clock>(
         findings.push(f);
     }
     for &id in &extras {
-        let mut f = finding(
-            ctx,
-            Severity::Warning,
-            SetupStep::Connect,
-            Some(id),
-            Some("id"),
-        );
+        let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
         f.advice = Advice::IdOfItsJoint {
             fix: target.set_id_command(id, NewId::OfItsJoint),
@@ -318,7 +312,7 @@ fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, 
 pub(crate) fn finding(
     ctx: &Ctx<'_>,
     severity: Severity,
-    step: SetupStep,
+    step: Step,
     id: Option<u8>,
     reg: Option<&'static str>,
 ) -> Finding {
@@ -338,13 +332,7 @@ pub(crate) fn finding(
 /// Two or more servos answer as `id`; `silent` is the robot's servo that
 /// does not answer (its ID and joint), which most likely is one of them.
 fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Finding {
-    let mut f = finding(
-        ctx,
-        Severity::Error,
-        SetupStep::Connect,
-        Some(id),
-        Some("id"),
-    );
+    let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), Some("id"));
     let set_id = |to: NewId| ctx.target.set_id_command(id, to);
     match silent {
         Some((want, joint)) => {
@@ -412,7 +400,7 @@ fn find_at_other_bauds<T: Transport, C: Clock>(
             let mut f = finding(
                 ctx,
                 Severity::Error,
-                SetupStep::Connect,
+                Step::Connect,
                 Some(id),
                 Some("baud_rate"),
             );

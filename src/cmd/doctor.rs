@@ -91,7 +91,7 @@ fn print_findings(findings: &[Finding]) {
     for f in findings {
         if step != Some(f.step) {
             step = Some(f.step);
-            println!("{}", f.step.heading());
+            println!("{}", doctor::heading(f.step));
         }
         let who = match (f.id, f.register) {
             (Some(id), Some(r)) => format!("servo {id} {r}"),

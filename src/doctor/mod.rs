@@ -28,6 +28,19 @@ impl Shown for Finding {
     }
 }
 
+/// A heading for the findings of `step`: its number in the set-up and what
+/// it is about.
+pub fn heading(step: SetupStep) -> &'static str {
+    match step {
+        SetupStep::Connect => {
+            "1. connect: every servo answers, alone, at its ID and the bus's rate"
+        }
+        SetupStep::Configure => "2. configure: the servos' settings",
+        SetupStep::Calibrate => "3. calibrate: the calibration and its homing offsets",
+        SetupStep::Check => "4. check: health and timing",
+    }
+}
+
 /// `--port PORT`, with `--baud` when `baud` is not the bus tools' default.
 fn port_args(port: Option<&str>, baud: u32) -> String {
     let port = port.unwrap_or("<PORT>");

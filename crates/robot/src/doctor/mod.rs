@@ -73,21 +73,6 @@ pub enum SetupStep {
     Check,
 }
 
-impl SetupStep {
-    /// A heading for the step's findings: its number in the set-up and
-    /// what it is about.
-    pub fn heading(self) -> &'static str {
-        match self {
-            SetupStep::Connect => {
-                "1. connect: every servo answers, alone, at its ID and the bus's rate"
-            }
-            SetupStep::Configure => "2. configure: the servos' settings",
-            SetupStep::Calibrate => "3. calibrate: the calibration and its homing offsets",
-            SetupStep::Check => "4. check: health and timing",
-        }
-    }
-}
-
 /// What [`apply`] does about a finding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Action {

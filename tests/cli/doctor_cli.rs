@@ -35,7 +35,8 @@ fn the_built_in_simulator_has_only_the_gripper_warnings() {
     says(
         &text,
         &[
-            "servo 6 max_torque",
+            "2. configure: the servos' settings\nWARNING  servo 6 max_torque",
+            "3. calibrate: the calibration and its homing offsets\nINFO",
             "0 error(s), 3 warning(s); 3 can be fixed with --fix",
         ],
     );

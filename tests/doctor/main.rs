@@ -453,6 +453,20 @@ fn a_model_other_than_the_robot_files_is_an_error() {
         "{}",
         f.problem
     );
+    // The model number read: Feetech's 777 for the STS3215.
+    assert_eq!(f.measured, Some(777));
+    let edit = doctor::Edit {
+        robot: doctor::RobotFile::File(common::repo("configs/robots/so101.yaml")),
+        change: doctor::Change::SetModel {
+            joint: "shoulder_lift".into(),
+            model: "sts3215".into(),
+        },
+    };
+    let advice = doctor::Advice::FitModel {
+        model: "STS3250".into(),
+        edit,
+    };
+    assert_eq!(f.advice, advice);
     assert_eq!(findings.len(), 1, "{}", show(&findings));
 }
 
@@ -472,4 +486,15 @@ fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
         "{}",
         missing.fix_text()
     );
+    let give = doctor::Advice::GiveItsId {
+        servo: 9,
+        joint: "wrist_roll".into(),
+        fix: doctor::Fix::SetId {
+            port: Some(PORT.into()),
+            baud: 1_000_000,
+            id: 9,
+            new_id: doctor::NewId::Id(5),
+        },
+    };
+    assert_eq!(missing.advice, give);
 }

@@ -2,16 +2,20 @@
 //! its port, servo and values), the robot file to edit and how, and the
 //! steps around them. The command line renders each as it prints it (a
 //! fix as the command line that runs it); a program may render them its
-//! own way.
+//! own way, or serialise them (serde's external tagging: `{"run":
+//! {"write": {...}}}`).
 
 use std::path::PathBuf;
+
+use serde::Serialize;
 
 /// The baud rate the bus tools assume when none is given: a [`Fix`] at
 /// another rate names its rate.
 pub const TOOLS_DEFAULT_BAUD: u32 = 1_000_000;
 
 /// One fix a program (or the command line's bus tools) runs.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum Fix {
     /// Write `value` into `register` of servo `id`.
@@ -83,7 +87,8 @@ pub enum Fix {
 }
 
 /// The ID a [`Fix::SetId`] gives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum NewId {
     /// This ID.
     Id(u8),
@@ -94,7 +99,8 @@ pub enum NewId {
 }
 
 /// A robot file to change.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RobotFile {
     /// A built-in robot (by name): it cannot be edited, only copied first.
     Builtin(String),
@@ -103,7 +109,8 @@ pub enum RobotFile {
 }
 
 /// A change to a robot file.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum Change {
     /// Add a joint for the servo with this ID.
@@ -128,7 +135,7 @@ pub enum Change {
 }
 
 /// A change to make in a robot file.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Edit {
     /// The file.
     pub robot: RobotFile,
@@ -137,7 +144,8 @@ pub struct Edit {
 }
 
 /// What to do about a finding.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum Advice {
     /// Nothing to do.

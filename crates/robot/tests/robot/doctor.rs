@@ -46,6 +46,11 @@ fn the_simulated_arm_has_only_the_gripper_warnings_each_a_typed_write() {
             value: want,
         };
         assert_eq!(f.advice, Advice::Run(expected.clone()));
+        // Plain data for a program (the Python bindings): serde's tags.
+        let json = serde_json::json!({"run": {"write": {
+            "port": null, "baud": 1_000_000, "id": 6, "register": name, "value": want,
+        }}});
+        assert_eq!(serde_json::to_value(&f.advice).expect("serialises"), json);
         assert_eq!(f.advice.command(), Some(&expected));
         assert!(expected.has_placeholder(), "no port to run it on");
     }

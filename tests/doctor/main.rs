@@ -245,7 +245,7 @@ fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
     let (mut arm, findings) = Arm::written(3, "return_delay", 250);
     let f = must_write(&findings, 3, "return_delay", 0);
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.problem.contains("500 us"), "{}", f.problem);
+    common::says(&f.problem, &["500 us"]);
     assert_eq!(
         f.measured,
         Some(250),
@@ -302,11 +302,7 @@ fn a_joint_outside_its_limits_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 1, Some("present_position"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(
-        f.fix_text().contains("--id 1 torque_enable 0"),
-        "{}",
-        f.fix_text()
-    );
+    common::says(&f.fix_text(), &["--id 1 torque_enable 0"]);
     assert!(!f.fixable(), "moving a joint is not for --fix");
 }
 
@@ -316,7 +312,7 @@ fn a_servo_at_another_baud_is_found_and_brought_back() {
     let findings = arm.examine();
     let f = must(&findings, 4, Some("baud_rate"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.problem.contains("115200"), "{}", f.problem);
+    common::says(&f.problem, &["115200"]);
     assert_eq!(
         f.fix_text(),
         "servobus write --port /dev/ttyACM0 --baud 115200 --id 4 baud_rate 0"
@@ -391,9 +387,9 @@ fn a_supply_that_sags_under_load_is_found_under_load_only() {
     let f = must(&findings, 2, Some("present_voltage"));
     assert_eq!(f.severity, Severity::Warning);
     // The servo strains at its torque limit: 80 % of load plus the error.
-    assert!(f.problem.contains("% load"), "{}", f.problem);
+    common::says(&f.problem, &["% load"]);
     assert!(!f.problem.contains("at rest"), "{}", f.problem);
-    assert!(f.problem.contains("rating 6.0..12.6 V"), "{}", f.problem);
+    common::says(&f.problem, &["rating 6.0..12.6 V"]);
     assert!(
         about(&findings, 1, Some("present_voltage")).is_none(),
         "{}",
@@ -425,12 +421,9 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
     );
     let measured = saying(&findings, "round trip");
     assert_eq!(measured.severity, Severity::Warning);
-    assert!(
-        measured
-            .fix_text()
-            .contains("`latency_us: 2000` (or `auto`) on bus `arm`"),
-        "{}",
-        measured.fix_text()
+    common::says(
+        &measured.fix_text(),
+        &["`latency_us: 2000` (or `auto`) on bus `arm`"],
     );
     assert_eq!(
         examined.servos.len(),
@@ -447,12 +440,7 @@ fn a_model_other_than_the_robot_files_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 2, Some("model_number"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(
-        f.problem
-            .contains("is a STS3215, the robot file says STS3250"),
-        "{}",
-        f.problem
-    );
+    common::says(&f.problem, &["is a STS3215, the robot file says STS3250"]);
     // The model number read: Feetech's 777 for the STS3215.
     assert_eq!(f.measured, Some(777));
     let edit = doctor::Edit {

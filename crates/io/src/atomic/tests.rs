@@ -23,6 +23,13 @@ fn text(path: &Path) -> String {
     fs::read_to_string(path).expect("read")
 }
 
+/// An atomic file for `path` with `bytes` written, not committed yet.
+fn written(path: &Path, bytes: &[u8]) -> AtomicFile {
+    let mut file = AtomicFile::create(path).expect("created");
+    file.write_all(bytes).expect("written");
+    file
+}
+
 /// The names in `dir`, sorted.
 fn names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = fs::read_dir(dir)
@@ -41,8 +48,7 @@ fn names(dir: &Path) -> Vec<String> {
 #[test]
 fn commit_replaces_the_file_and_leaves_no_temporary() {
     let (dir, path) = with_old_file("commit", "log.csv", "yesterday");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"today").expect("written");
+    let file = written(&path, b"today");
     // Until the commit the old file is all there is at the target.
     assert_eq!(text(&path), "yesterday");
     assert_eq!(names(&dir).len(), 2, "{:?}", names(&dir));
@@ -64,8 +70,7 @@ fn the_temporary_is_named_after_the_target_beside_it() {
 #[test]
 fn drop_without_commit_leaves_the_old_file_and_removes_the_temporary() {
     let (dir, path) = with_old_file("drop", "arm.calibration.yaml", "kept");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"half a calibra").expect("written");
+    let file = written(&path, b"half a calibra");
     drop(file);
     assert_eq!(text(&path), "kept");
     assert_eq!(names(&dir), ["arm.calibration.yaml"]);
@@ -75,8 +80,7 @@ fn drop_without_commit_leaves_the_old_file_and_removes_the_temporary() {
 fn a_new_file_appears_only_on_commit() {
     let dir = scratch("new");
     let path = dir.join("motion.yaml");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"keyframes: []\n").expect("written");
+    let file = written(&path, b"keyframes: []\n");
     assert!(!path.exists());
     file.commit().expect("committed");
     assert_eq!(text(&path), "keyframes: []\n");

@@ -7,7 +7,7 @@
 
 use std::process::ExitCode;
 
-use servobus::doctor::{self, BusCheck, DoctorError, Finding, Shown};
+use servobus::doctor::{self, BusCheck, Finding, Shown};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 /// Arguments of `servobus doctor`.
@@ -67,7 +67,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
         |e| match e {
             // A port that cannot be opened is an input error, said as the
             // other commands say it.
-            DoctorError::Open(e) => anyhow::Error::from(e),
+            servobus_robot::Error::Open(e) => anyhow::Error::from(e),
             e => e.into(),
         },
     )?;

@@ -293,12 +293,12 @@ impl Robot {
     /// that does not match is a finding.
     ///
     /// # Errors
-    /// [`Error::Doctor`] when a port cannot be opened or fails mid-check.
+    /// As [`doctor::check`].
     pub fn doctor<S: AsRef<str>>(
         &self,
         ports: &[S],
         options: &doctor::CheckOptions,
     ) -> Result<doctor::Checkup, Error> {
-        Ok(doctor::check(&self.config, ports, options)?)
+        doctor::check(&self.config, ports, options)
     }
 }

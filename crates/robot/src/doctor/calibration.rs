@@ -22,12 +22,8 @@ impl Ctx<'_> {
         let (major, minor) = s.firmware();
         let now = format!("{major}.{minor}");
         if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
-            let mut f = self.finding(
-                Severity::Warning,
-                Step::Calibrate,
-                s.id,
-                Some("firmware_major"),
-            );
+            let register = Some("firmware_major");
+            let mut f = self.finding(Severity::Warning, Step::Calibrate, s.id, register);
             f.problem = format!(
                 "firmware is {now}, joint `{}` was calibrated on {then}: the servo may have been \
                  replaced",

@@ -289,12 +289,8 @@ impl Ctx<'_> {
         } else if let Some((rlo, rhi)) =
             rated.filter(|&(a, b)| v < i32::from(a) || v > i32::from(b))
         {
-            let mut f = self.finding(
-                Severity::Warning,
-                Step::Check,
-                s.id,
-                Some("present_voltage"),
-            );
+            let register = Some("present_voltage");
+            let mut f = self.finding(Severity::Warning, Step::Check, s.id, register);
             f.problem = format!(
                 "supply {:.1} V {when} is outside the {model}'s rating {:.1}..{:.1} V",
                 volts(v),

@@ -33,7 +33,7 @@ pub use checks::{rated_voltage_dv, ServoState};
 pub use fix::{apply, change_baud, Applied, FixError, FixOutcome};
 pub use probe::fix_all_command;
 pub use probe::{examine, BusPort, Examined, PortKind};
-pub use robot::{check, BusCheck, CheckOptions, Checkup, DoctorError};
+pub use robot::{check, BusCheck, CheckOptions, Checkup};
 
 /// How bad a finding is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]

@@ -3,11 +3,11 @@
 //! the fixes applied when asked and each bus checked again after them.
 
 use servobus_config::{BusConfig, Robot};
-use servobus_driver::{Bus, BusError, Clock, Transport};
-use servobus_runtime::sim::SimRobotError;
+use servobus_driver::{Bus, Clock, Transport};
 
 use super::{apply, examine, BusPort, Examined, Finding, FixOutcome, Fixing, PortKind};
-use crate::ports::{bus_ports, open_bus, Allowance, OpenError};
+use crate::ports::{bus_ports, open_bus, Allowance};
+use crate::Error;
 
 /// What [`check`] does beside examining.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -17,27 +17,6 @@ pub struct CheckOptions {
     /// With `fix`: store homing offsets in EEPROM instead of setting them
     /// for the session.
     pub write_servos: bool,
-}
-
-/// Why the doctor could not check a robot.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum DoctorError {
-    /// A port cannot be opened.
-    #[error(transparent)]
-    Open(#[from] OpenError),
-    /// The robot cannot be simulated.
-    #[error(transparent)]
-    Simulator(#[from] SimRobotError),
-    /// The port failed in the middle of the checks of a bus.
-    #[error("bus `{bus}`: doctor could not finish")]
-    Unfinished {
-        /// The bus.
-        bus: String,
-        /// How the port failed.
-        #[source]
-        source: BusError,
-    },
 }
 
 /// What was found on one bus.
@@ -90,19 +69,19 @@ impl Checkup {
 /// # Errors
 /// [`DoctorError::Open`] when a port cannot be opened,
 /// [`DoctorError::Simulator`] when the robot cannot be simulated,
-/// [`DoctorError::Unfinished`] when a port fails mid-check.
+/// [`Error::Unfinished`] when a port fails mid-check.
 pub fn check<S: AsRef<str>>(
     robot: &Robot,
     ports: &[S],
     options: &CheckOptions,
-) -> Result<Checkup, DoctorError> {
+) -> Result<Checkup, Error> {
     let ports = bus_ports(robot, ports);
     let mut checkup = Checkup {
         buses: Vec::new(),
         unchecked: Vec::new(),
     };
     if ports.iter().all(Option::is_none) {
-        let buses = servobus_runtime::sim::virtual_buses(robot)?;
+        let buses = servobus_runtime::sim::virtual_buses(robot).map_err(Error::Simulator)?;
         for (index, (mut bus, cfg)) in buses.into_iter().zip(&robot.buses).enumerate() {
             let target = BusPort {
                 port: None,
@@ -120,7 +99,7 @@ pub fn check<S: AsRef<str>>(
             continue;
         };
         // A slow adapter is one of the findings.
-        let mut bus = open_bus(cfg, &port, Allowance::Assumed)?;
+        let mut bus = open_bus(cfg, &port, Allowance::Assumed).map_err(Error::Open)?;
         let kind = PortKind::of(bus.transport());
         let target = BusPort {
             port: Some(port),
@@ -141,8 +120,8 @@ fn check_bus<T: Transport, C: Clock>(
     target: BusPort,
     kind: &PortKind,
     options: &CheckOptions,
-) -> Result<BusCheck, DoctorError> {
-    let unfinished = |source| DoctorError::Unfinished {
+) -> Result<BusCheck, Error> {
+    let unfinished = |source| Error::Unfinished {
         bus: cfg.name.clone(),
         source,
     };

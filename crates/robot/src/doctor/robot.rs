@@ -67,9 +67,9 @@ impl Checkup {
 /// servos that do not match it are findings.
 ///
 /// # Errors
-/// [`DoctorError::Open`] when a port cannot be opened,
-/// [`DoctorError::Simulator`] when the robot cannot be simulated,
-/// [`Error::Unfinished`] when a port fails mid-check.
+/// [`Error::Open`] when a port cannot be opened, [`Error::Simulator`]
+/// when the robot cannot be simulated, [`Error::Unfinished`] when a port
+/// fails mid-check.
 pub fn check<S: AsRef<str>>(
     robot: &Robot,
     ports: &[S],

@@ -1,7 +1,8 @@
 //! The `servobus` package: the command line, the robots and motions built
-//! into it ([`builtin`]), and the bus checks of `servobus doctor` and the
-//! live view of `servobus monitor`, kept in the library so that they are
-//! tested on the simulator in virtual time. The glue between a robot file
+//! into it ([`builtin`]), the text of `servobus doctor`'s findings (the
+//! checks are [`servobus_robot::doctor`]'s) and the live view of
+//! `servobus monitor`, kept in the library so that they are tested on the
+//! simulator in virtual time. The glue between a robot file
 //! and the built-in simulator lives in [`servobus_runtime::sim`].
 #![warn(missing_docs)]
 

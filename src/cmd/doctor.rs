@@ -2,16 +2,13 @@
 //! the usual set-up mistakes, prints each finding with the command that
 //! fixes it, and with `--fix` applies those fixes (EEPROM with
 //! unlock-write-verify-lock; homing offsets for the session unless
-//! `--write-servos`). The checks live in [`servobus::doctor`].
+//! `--write-servos`). The checks live in [`servobus_robot::doctor`]; the
+//! text they are shown in, in [`servobus::doctor`].
 
 use std::process::ExitCode;
 
-use anyhow::Context;
-use servobus::doctor::{self, Examined, Finding, FixOutcome, Fixing, PortKind, Target};
-use servobus_driver::{Bus, Clock, Transport};
+use servobus::doctor::{self, BusCheck, Finding, Shown};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
-
-use super::link::{bus_ports, open_bus_quietly, Allowance};
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
@@ -39,26 +36,6 @@ pub struct Args {
     pub write_servos: bool,
 }
 
-/// What was found on one bus.
-struct BusOutcome {
-    name: String,
-    target: Target,
-    first: Examined,
-    fixes: Vec<FixOutcome>,
-    after: Option<Examined>,
-}
-
-impl BusOutcome {
-    /// The findings that stand: after the fixes when there were any.
-    fn standing(&self) -> &[Finding] {
-        self.after
-            .as_ref()
-            .unwrap_or(&self.first)
-            .findings
-            .as_slice()
-    }
-}
-
 /// Exit status when doctor could not finish its checks: as for errors
 /// found, since nothing can be said about what was not checked.
 const UNFINISHED: u8 = 2;
@@ -82,80 +59,29 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
             .calibration(args.robot.hardware.calibration.as_deref())
             .any_rate(),
     )?;
-    let ports = bus_ports(&robot, args.robot.hardware.port.as_slice());
-    let mut outcomes = Vec::new();
-    if ports.iter().all(Option::is_none) {
-        let buses = servobus_runtime::sim::virtual_buses(&robot)?;
-        for (index, (mut bus, cfg)) in buses.into_iter().zip(&robot.buses).enumerate() {
-            let target = Target {
-                port: None,
-                baud: cfg.baud,
-            };
-            let kind = PortKind::Simulator;
-            outcomes.push(check(&mut bus, (&robot, index), target, &kind, args)?);
-        }
-    } else {
-        for (index, (cfg, port)) in robot.buses.iter().zip(ports).enumerate() {
-            let Some(port) = port else {
-                eprintln!("warning: bus `{}` has no port: not checked", cfg.name);
-                continue;
-            };
-            // A slow adapter is one of the findings: no warning besides.
-            let mut bus = open_bus_quietly(cfg, &port, Allowance::Assumed)?;
-            let kind = PortKind::of(bus.transport());
-            let target = Target {
-                port: Some(port),
-                baud: cfg.baud,
-            };
-            outcomes.push(check(&mut bus, (&robot, index), target, &kind, args)?);
-        }
-    }
-    let standing: Vec<Finding> = outcomes
-        .iter()
-        .flat_map(|o| o.standing().iter().cloned())
-        .collect();
-    let status = doctor::exit_status(&standing);
-    if args.json {
-        print_json(&robot, &outcomes, status)?;
-    } else {
-        print_text(&robot, &outcomes, &standing, args.fix);
-    }
-    Ok(ExitCode::from(status))
-}
-
-/// Examines the robot's bus `index` through `bus` and, with `--fix`,
-/// applies the fixes and examines it again.
-fn check<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    (robot, index): (&Robot, usize),
-    target: Target,
-    kind: &PortKind,
-    args: &Args,
-) -> anyhow::Result<BusOutcome> {
-    let cfg = robot
-        .buses
-        .get(index)
-        .with_context(|| format!("the robot has no bus {index}"))?;
-    let context = || format!("bus `{}`: doctor could not finish", cfg.name);
-    let first = doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?;
-    let mut fixes = Vec::new();
-    let mut after = None;
-    let how = Fixing {
-        robot,
-        bus: index,
+    let options = doctor::CheckOptions {
+        fix: args.fix,
         write_servos: args.write_servos,
     };
-    if args.fix && first.findings.iter().any(Finding::fixable) {
-        fixes = doctor::apply(bus, &first.findings, &how).with_context(context)?;
-        after = Some(doctor::examine(bus, robot, cfg, &target, kind).with_context(context)?);
+    let checkup = doctor::check(&robot, args.robot.hardware.port.as_slice(), &options).map_err(
+        |e| match e {
+            // A port that cannot be opened is an input error, said as the
+            // other commands say it.
+            servobus_robot::Error::Open(e) => anyhow::Error::from(e),
+            e => e.into(),
+        },
+    )?;
+    for bus in &checkup.unchecked {
+        eprintln!("warning: bus `{bus}` has no port: not checked");
     }
-    Ok(BusOutcome {
-        name: cfg.name.clone(),
-        target,
-        first,
-        fixes,
-        after,
-    })
+    let standing = checkup.standing();
+    let status = doctor::exit_status(&standing);
+    if args.json {
+        print_json(&robot, &checkup.buses, status);
+    } else {
+        print_text(&robot, &checkup.buses, &standing, args.fix);
+    }
+    Ok(ExitCode::from(status))
 }
 
 /// Prints `findings` (in the order a new robot needs them) under the
@@ -165,7 +91,7 @@ fn print_findings(findings: &[Finding]) {
     for f in findings {
         if step != Some(f.step) {
             step = Some(f.step);
-            println!("{}", f.step.heading());
+            println!("{}", doctor::heading(f.step));
         }
         let who = match (f.id, f.register) {
             (Some(id), Some(r)) => format!("servo {id} {r}"),
@@ -178,29 +104,31 @@ fn print_findings(findings: &[Finding]) {
             f.severity.to_string().to_uppercase(),
             f.problem
         );
-        if !f.fix.is_empty() {
+        let fix = f.fix_text();
+        if !fix.is_empty() {
             let mark = if f.fixable() { " [--fix]" } else { "" };
-            println!("         fix{mark}: {}", f.fix);
+            println!("         fix{mark}: {fix}");
         }
     }
 }
 
-fn print_text(robot: &Robot, outcomes: &[BusOutcome], standing: &[Finding], fixed: bool) {
+fn print_text(robot: &Robot, outcomes: &[BusCheck], standing: &[Finding], fixed: bool) {
     for o in outcomes {
-        let port = o.target.port.as_deref().unwrap_or("the built-in simulator");
+        let port = o.at.port.as_deref().unwrap_or("the built-in simulator");
         println!(
             "{} bus `{}` on {port} at {} baud: {} of {} servos read",
             robot.name,
             o.name,
-            o.target.baud,
+            o.at.baud,
             o.first.servos.len(),
             o.first.expected
         );
         print_findings(&o.first.findings);
         for fx in &o.fixes {
+            let done = doctor::applied_text(&fx.applied);
             match &fx.result {
-                Ok(()) => println!("fixed    servo {}: {}", fx.id, fx.command),
-                Err(e) => println!("FAILED   servo {}: {} ({e})", fx.id, fx.command),
+                Ok(()) => println!("fixed    servo {}: {done}", fx.id),
+                Err(e) => println!("FAILED   servo {}: {done} ({e})", fx.id),
             }
         }
         if let Some(after) = &o.after {
@@ -222,12 +150,14 @@ fn print_text(robot: &Robot, outcomes: &[BusOutcome], standing: &[Finding], fixe
     );
 }
 
-fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Result<()> {
+fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) {
     let json_findings = |fs: &[Finding]| -> Vec<serde_json::Value> {
         fs.iter()
             .map(|f| {
                 let mut v = serde_json::to_value(f).unwrap_or_default();
                 v["fixable"] = f.fixable().into();
+                v["fix"] = f.fix_text().into();
+                v["command"] = f.command_line().into();
                 v
             })
             .collect()
@@ -241,7 +171,7 @@ fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Res
                 .map(|fx| {
                     serde_json::json!({
                         "id": fx.id,
-                        "command": fx.command,
+                        "command": doctor::applied_text(&fx.applied),
                         "ok": fx.result.is_ok(),
                         "error": fx.result.as_ref().err().map(ToString::to_string),
                     })
@@ -249,8 +179,8 @@ fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Res
                 .collect();
             serde_json::json!({
                 "name": o.name,
-                "port": o.target.port,
-                "baud": o.target.baud,
+                "port": o.at.port,
+                "baud": o.at.baud,
                 "expected": o.first.expected,
                 "read": o.first.servos.iter().map(|s| s.id).collect::<Vec<_>>(),
                 "findings": json_findings(&o.first.findings),
@@ -265,5 +195,4 @@ fn print_json(robot: &Robot, outcomes: &[BusOutcome], status: u8) -> anyhow::Res
         "exit": status,
     });
     println!("{out}");
-    Ok(())
 }

@@ -1,200 +1,284 @@
-//! `servobus doctor`: checks a bus of servos against the robot file and
-//! against the set-up mistakes that break Feetech robots (wrong ID or baud
-//! rate, return delays left at the factory 500 us, an EEPROM lock left open,
-//! angle limits narrower than the joint's, a gripper free to overheat, ...).
-//!
-//! Each [`Finding`] names its severity, the servo and register, what is
-//! wrong and the exact command that fixes it. Nothing is written unless the
-//! caller asks for it with [`apply`]; EEPROM values are then written with the
-//! driver's unlock-write-verify-lock transaction.
-//!
-//! The examination is generic over the driver's [`Transport`] and
-//! [`Clock`](servobus_driver::Clock), so it runs on a serial port and on the
-//! simulator in virtual time alike.
+//! `servobus doctor` as the command line shows it: the checks are the
+//! library's ([`servobus_robot::doctor`]); here each piece of advice is
+//! rendered as text, and each fix as the command line that runs it.
 
-mod bus_checks;
-mod calibration;
-mod checks;
-mod command;
-mod fix;
-mod probe;
+pub use servobus_robot::doctor::*;
 
-use serde::Serialize;
-use servobus_protocol::registers::{Register, Series};
-use servobus_runtime::config::Robot;
-
-pub use checks::{rated_voltage_dv, ServoState};
-pub use command::{FixCommand, NewId};
-pub use fix::{apply, change_baud, FixError, FixOutcome};
-pub use probe::fix_all_command;
-pub use probe::{examine, Examined, PortKind, Target};
-
-/// How bad a finding is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Severity {
-    /// Worth knowing; nothing to fix.
-    Info,
-    /// Works, but badly or riskily.
-    Warning,
-    /// Breaks motion or the robot.
-    Error,
+/// A finding's advice as the command line prints it.
+pub trait Shown {
+    /// What to do: the command that fixes it, or the steps with the command
+    /// among them (empty when there is nothing to do).
+    fn fix_text(&self) -> String;
+    /// The command that fixes it, exactly as it runs (it appears in
+    /// [`fix_text`](Shown::fix_text)); `None` when the fix is done by hand
+    /// or the command has a part to fill in (`<PORT>` on the built-in
+    /// simulator).
+    fn command_line(&self) -> Option<String>;
 }
 
-impl std::fmt::Display for Severity {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Severity::Info => "info",
-            Severity::Warning => "warning",
-            Severity::Error => "error",
-        })
-    }
-}
-
-/// Where a finding belongs in the set-up of a new robot: the order a new
-/// arm needs the advice in (findings are listed in this order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Step {
-    /// Every servo answers, alone, at its ID and the bus's baud rate, and is
-    /// the model the robot file names.
-    Connect,
-    /// The servos' settings: reply delay and level, lock, limits, protection.
-    Configure,
-    /// The calibration and the homing offsets it plays with.
-    Calibrate,
-    /// Health and timing: temperature, supply, firmware, pose, latency.
-    Check,
-}
-
-impl Step {
-    /// A heading for the step's findings: its number in the set-up and
-    /// what it is about.
-    pub fn heading(self) -> &'static str {
-        match self {
-            Step::Connect => "1. connect: every servo answers, alone, at its ID and the bus's rate",
-            Step::Configure => "2. configure: the servos' settings",
-            Step::Calibrate => "3. calibrate: the calibration and its homing offsets",
-            Step::Check => "4. check: health and timing",
-        }
-    }
-}
-
-/// What `--fix` does about a finding.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Action {
-    /// Write `value` into `register` of servo `id` (EEPROM registers with
-    /// unlock-write-verify-lock). `silent`: the servo answers no WRITE
-    /// (status level 0), so none is waited for.
-    Write {
-        /// The servo.
-        id: u8,
-        /// The register.
-        register: &'static Register,
-        /// The value.
-        value: i32,
-        /// Whether writes go unanswered.
-        silent: bool,
-        /// The servo's series (the register's layout and lock).
-        series: Series,
-    },
-    /// Servo `id` listens at `baud`: set its baud-rate register to the
-    /// bus's index there, then find it at the bus's rate.
-    Baud {
-        /// The servo.
-        id: u8,
-        /// The rate it answers at now.
-        baud: u32,
-        /// The bus's baud-rate index to write.
-        index: u8,
-    },
-    /// Servo `id`'s homing offset should be `value` (the calibration's play
-    /// frame): set for this session as play sets it (lock closed), or,
-    /// with [`Fixing::write_servos`], stored in its EEPROM.
-    Offset {
-        /// The servo.
-        id: u8,
-        /// The offset the calibration plays with.
-        value: i32,
-        /// Whether only storing it is a fix: the servo holds neither the
-        /// calibration's offset nor the play frame's, so play refuses it
-        /// and a session offset would not be accepted.
-        store_only: bool,
-        /// The servo's series.
-        series: Series,
-    },
-}
-
-/// How `--fix` applies the fixes of one bus.
-#[derive(Debug, Clone, Copy)]
-pub struct Fixing<'a> {
-    /// The robot (its calibration sets the session offsets).
-    pub robot: &'a Robot,
-    /// The index of the bus in the robot file.
-    pub bus: usize,
-    /// Store homing offsets in EEPROM (`--write-servos`) instead of
-    /// setting them for the session only.
-    pub write_servos: bool,
-}
-
-/// One thing found wrong (or worth knowing) about a bus.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Finding {
-    /// How bad it is.
-    pub severity: Severity,
-    /// Where it belongs in setting a robot up.
-    pub step: Step,
-    /// The robot file's bus.
-    pub bus: String,
-    /// The servo, when it concerns one.
-    pub id: Option<u8>,
-    /// The register, when one is at fault.
-    pub register: Option<&'static str>,
-    /// What is wrong.
-    pub problem: String,
-    /// What to do about it: the command that fixes it, or the steps, with
-    /// the command among them.
-    pub fix: String,
-    /// The command that fixes it, exactly as it runs (it appears in `fix`);
-    /// `None` when the fix is done by hand or the command has a part to
-    /// fill in (`<PORT>` on the built-in simulator).
-    pub command: Option<String>,
-    /// The command that fixes it, as data (rendered in `fix` and
-    /// `command`).
-    #[serde(skip)]
-    pub fix_command: Option<FixCommand>,
-    /// What `--fix` does about it, if anything.
-    #[serde(skip)]
-    pub action: Option<Action>,
-}
-
-impl Finding {
-    /// Whether `--fix` can apply the fix.
-    pub fn fixable(&self) -> bool {
-        self.action.is_some()
+impl Shown for Finding {
+    fn fix_text(&self) -> String {
+        advice_text(&self.advice)
     }
 
-    /// Sets the fix to `command` alone.
-    pub(crate) fn run(&mut self, command: FixCommand) {
-        self.run_in("{}", command);
-    }
-
-    /// Sets the fix to `text` around `command` (`{}` in `text` marks where).
-    pub(crate) fn run_in(&mut self, text: &str, command: FixCommand) {
-        let line = command.to_string();
-        self.fix = text.replacen("{}", &line, 1);
+    fn command_line(&self) -> Option<String> {
+        let line = fix_line(self.advice.command()?);
         // A placeholder (`<PORT>`) is for the user to fill in.
-        self.command = (!line.contains('<')).then_some(line);
-        self.fix_command = Some(command);
+        (!line.contains('<')).then_some(line)
     }
 }
 
-/// The exit status of a set of findings: 0 when nothing is wrong, 1 on
-/// warnings only, 2 on errors.
-pub fn exit_status(findings: &[Finding]) -> u8 {
-    match findings.iter().map(|f| f.severity).max() {
-        Some(Severity::Error) => 2,
-        Some(Severity::Warning) => 1,
-        _ => 0,
+/// A heading for the findings of `step`: its number in the set-up and what
+/// it is about.
+pub fn heading(step: SetupStep) -> &'static str {
+    match step {
+        SetupStep::Connect => {
+            "1. connect: every servo answers, alone, at its ID and the bus's rate"
+        }
+        SetupStep::Configure => "2. configure: the servos' settings",
+        SetupStep::Calibrate => "3. calibrate: the calibration and its homing offsets",
+        SetupStep::Check => "4. check: health and timing",
+    }
+}
+
+/// `--port PORT`, with `--baud` when `baud` is not the bus tools' default.
+fn port_args(port: Option<&str>, baud: u32) -> String {
+    let port = port.unwrap_or("<PORT>");
+    if baud == TOOLS_DEFAULT_BAUD {
+        format!("--port {port}")
+    } else {
+        format!("--port {port} --baud {baud}")
+    }
+}
+
+fn new_id(id: NewId) -> String {
+    match id {
+        NewId::Id(id) => id.to_string(),
+        NewId::Free => "<NEW_ID>".into(),
+        NewId::OfItsJoint => "<ID>".into(),
+    }
+}
+
+/// The command line that runs `fix`.
+pub fn fix_line(fix: &Fix) -> String {
+    match fix {
+        Fix::Write {
+            port,
+            baud,
+            id,
+            register,
+            value,
+        } => format!(
+            "servobus write {} --id {id} {register} {value}",
+            port_args(port.as_deref(), *baud)
+        ),
+        Fix::SetBaud {
+            port,
+            baud,
+            id,
+            index,
+        } => format!(
+            "servobus write {} --id {id} baud_rate {index}",
+            port_args(port.as_deref(), *baud)
+        ),
+        Fix::SetId {
+            port,
+            baud,
+            id,
+            new_id: to,
+        } => format!(
+            "servobus set-id {} --id {id} {}",
+            port_args(port.as_deref(), *baud),
+            new_id(*to)
+        ),
+        Fix::ScanAllBauds { port } => format!(
+            "servobus scan {} --all-bauds",
+            port_args(port.as_deref(), TOOLS_DEFAULT_BAUD)
+        ),
+        // calibrate and doctor take the baud rate from the robot file.
+        Fix::Calibrate {
+            robot,
+            port,
+            output,
+        } => format!(
+            "servobus calibrate --robot {robot} {} -o {output}",
+            port_args(port.as_deref(), TOOLS_DEFAULT_BAUD)
+        ),
+        Fix::DoctorFix {
+            robot,
+            port,
+            write_servos,
+        } => format!(
+            "servobus doctor --robot {robot} {} --fix{}",
+            port_args(port.as_deref(), TOOLS_DEFAULT_BAUD),
+            if *write_servos { " --write-servos" } else { "" }
+        ),
+        Fix::FtdiLatency { sysfs } => format!("echo 1 | sudo tee {}", sysfs.display()),
+        // A fix this command line does not know yet.
+        _ => format!("{fix:?}"),
+    }
+}
+
+/// What to do to change the robot file: edit it, or for a built-in robot,
+/// write a copy to edit with `servobus init` first.
+fn edit_text(edit: &Edit) -> String {
+    let change = match &edit.change {
+        Change::AddJoint { id } => format!("add a joint with ID {id}"),
+        Change::SetModel { joint, model } => format!("set `model: {model}` for joint `{joint}`"),
+        Change::SetLatency { bus, us } => {
+            format!("set `latency_us: {us}` (or `auto`) on bus `{bus}`")
+        }
+        _ => format!("{:?}", edit.change),
+    };
+    match &edit.robot {
+        RobotFile::Builtin(name) => format!(
+            "the built-in robot cannot be edited: `servobus init --robot {name}` writes \
+             robot.yaml; {change} there and pass --robot robot.yaml"
+        ),
+        RobotFile::File(path) => format!("{change} in {}", path.display()),
+    }
+}
+
+/// `advice` as the command line prints it.
+pub fn advice_text(advice: &Advice) -> String {
+    match advice {
+        Advice::None => String::new(),
+        Advice::Run(fix) => fix_line(fix),
+        Advice::CheckCable(fix) => format!("check its cable, power and ID: {}", fix_line(fix)),
+        Advice::GiveItsId { servo, joint, fix } => format!(
+            "if servo {servo} is joint `{joint}`'s, give it its ID: {}",
+            fix_line(fix)
+        ),
+        Advice::IdOfItsJoint { fix, edit } => format!(
+            "give it the ID of its joint ({}), or {}",
+            fix_line(fix),
+            edit_text(edit)
+        ),
+        Advice::UnplugOthers { joint, fix } => format!(
+            "unplug every servo but joint `{joint}`'s (one servo on the bus), run `{}`, then \
+             plug the others back in",
+            fix_line(fix)
+        ),
+        Advice::OneAtATime(fix) => format!(
+            "connect them one at a time and give all but one a free ID: {}",
+            fix_line(fix)
+        ),
+        Advice::FitModel { model, edit } => format!("fit a {model}, or {}", edit_text(edit)),
+        Advice::Cool(fix) => format!("let it cool with the torque off: {}", fix_line(fix)),
+        Advice::Supply {
+            model,
+            rated: Some((lo, hi)),
+        } => format!(
+            "power the bus from a supply of {:.1}..{:.1} V for the {model}, with wires thick \
+             enough that it holds under load",
+            f64::from(*lo) / 10.0,
+            f64::from(*hi) / 10.0
+        ),
+        Advice::Supply { rated: None, .. } => "check the supply against the servo's rating".into(),
+        Advice::MoveIntoLimits(fix) => format!(
+            "turn the torque off ({}) and move the joint into its limits by hand",
+            fix_line(fix)
+        ),
+        Advice::UpdateFirmware {
+            id,
+            version: (major, minor),
+        } => format!("update servo {id} to firmware {major}.{minor} with Feetech's FD software"),
+        Advice::Wiring => {
+            "use shorter, thicker supply wires, or feed the supply in at both ends of the chain"
+                .into()
+        }
+        Advice::EditRobotFile(edit) => edit_text(edit),
+        Advice::CalibrateIfReplaced(fix) => {
+            format!("if it was, calibrate again: {}", fix_line(fix))
+        }
+        Advice::SetOffsetNow(fix) => format!(
+            "nothing to do before play; to set it now: {}",
+            fix_line(fix)
+        ),
+        Advice::StoreOrCalibrate { store, calibrate } => format!(
+            "if only the offset was rewritten, store the calibration's in EEPROM: {}; if the \
+             servo or its horn was replaced, calibrate again: {}",
+            fix_line(store),
+            fix_line(calibrate)
+        ),
+        Advice::CalibrateFirst { calibrate, robot } => {
+            let then = match robot {
+                RobotFile::Builtin(_) => {
+                    "then pass --calibration calibration.yaml to play, teach and bench".to_owned()
+                }
+                RobotFile::File(path) => format!(
+                    "then add `calibration: calibration.yaml` to {} (or pass --calibration)",
+                    path.display()
+                ),
+            };
+            format!("{}, {then}", fix_line(calibrate))
+        }
+        _ => format!("{advice:?}"),
+    }
+}
+
+/// What an applied fix did, as the report of `--fix` says it: the command
+/// it stands for, or for a homing offset what was set.
+pub fn applied_text(applied: &Applied) -> String {
+    match applied {
+        Applied::OffsetStored(value) => format!("homing offset {value} stored in EEPROM"),
+        Applied::OffsetForSession(value) => {
+            format!("homing offset {value} set for this session (as play sets it)")
+        }
+        Applied::Advice(advice) => advice
+            .command()
+            .map(fix_line)
+            .filter(|line| !line.contains('<'))
+            .unwrap_or_else(|| advice_text(advice)),
+        _ => format!("{applied:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn commands_read_as_they_run_with_the_baud_only_when_not_the_default() {
+        let write = Fix::Write {
+            port: Some("/dev/ttyACM0".into()),
+            baud: 115_200,
+            id: 3,
+            register: "baud_rate".into(),
+            value: 0,
+        };
+        assert_eq!(
+            fix_line(&write),
+            "servobus write --port /dev/ttyACM0 --baud 115200 --id 3 baud_rate 0"
+        );
+        let set_id = Fix::SetId {
+            port: None,
+            baud: 1_000_000,
+            id: 1,
+            new_id: NewId::Free,
+        };
+        assert_eq!(
+            fix_line(&set_id),
+            "servobus set-id --port <PORT> --id 1 <NEW_ID>"
+        );
+        let fix = Fix::DoctorFix {
+            robot: "so101".into(),
+            port: Some("/dev/a".into()),
+            write_servos: true,
+        };
+        assert_eq!(
+            fix_line(&fix),
+            "servobus doctor --robot so101 --port /dev/a --fix --write-servos"
+        );
+        let baud = Fix::SetBaud {
+            port: Some("/dev/a".into()),
+            baud: 115_200,
+            id: 2,
+            index: 0,
+        };
+        assert_eq!(
+            fix_line(&baud),
+            "servobus write --port /dev/a --baud 115200 --id 2 baud_rate 0"
+        );
     }
 }

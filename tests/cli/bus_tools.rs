@@ -116,14 +116,15 @@ fn scan_read_write_set_id_against_the_simulator() {
 fn registers_lists_each_series_table() {
     let sts = common::stdout(&common::servobus_ok(&["registers", "--series", "sts"]));
     // Address, size, access and name, by hand from Feetech's STS table.
-    for row in [
-        "  42    2  RAM       goal_position",
-        "  55    1  RAM       lock",
-        "   6    1  EEPROM    baud_rate",
-        "  56    2  read-only present_position",
-    ] {
-        assert!(sts.contains(row), "{row:?} not in:\n{sts}");
-    }
+    says(
+        &sts,
+        &[
+            "  42    2  RAM       goal_position",
+            "  55    1  RAM       lock",
+            "   6    1  EEPROM    baud_rate",
+            "  56    2  read-only present_position",
+        ],
+    );
     assert!(!sts.contains("SCS servos"), "{sts}");
     let scs = common::stdout(&common::servobus_ok(&["registers", "--series", "scs"]));
     assert!(scs.contains("  48    1  RAM       lock"), "{scs}");

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::sync::Mutex;
 
 use common::{
-    arg, edited, read_truth, repo, scratch, servobus, servobus_ok, stdout, write_file, Sim,
+    arg, edited, read_truth, repo, says, scratch, servobus, servobus_ok, stdout, write_file, Sim,
 };
 use servobus_runtime::config::{load_motion, load_robot, Robot, RobotOptions};
 
@@ -121,14 +121,15 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     let (sim, truth_file) = Sim::start_hand(&dir, &robot_file, 6, &text, &body);
     let cal = dir.join("arm.calibration.yaml");
     let said = calibrate(&robot_file, &sim, &cal);
-    for step in [
-        "1. Torque is off",
-        "2. Hold the robot",
-        "3. Move every joint",
-        "4. Done",
-    ] {
-        assert!(said.contains(step), "calibrate says {step:?}: {said}");
-    }
+    says(
+        &said,
+        &[
+            "1. Torque is off",
+            "2. Hold the robot",
+            "3. Move every joint",
+            "4. Done",
+        ],
+    );
     assert!(
         said.contains("shoulder_lift") && said.contains("across the seam"),
         "{said}"

@@ -19,16 +19,17 @@ use common::{arg, read_truth, repo, scratch, stdout, write_file, Sim};
 const HELD: [f64; 6] = [45.0, 60.0, 60.0, 20.0, 90.0, 30.0];
 const NAMES: [&str; 6] = common::SO101_JOINTS;
 
+/// The robot and its calibration, as every command here is given them
+/// (relative to the repository, where the commands run).
+const CALIBRATED: [&str; 4] = [
+    "--robot",
+    "configs/robots/so101.yaml",
+    "--calibration",
+    "testdata/calibration/so101-seam.calibration.yaml",
+];
+
 /// How far a first reading may be from the truth, deg.
 const WITHIN_DEG: f64 = 0.5;
-
-fn calibration() -> PathBuf {
-    repo("testdata/calibration/so101-seam.calibration.yaml")
-}
-
-fn robot() -> PathBuf {
-    repo("configs/robots/so101.yaml")
-}
 
 /// A fresh (just powered-up) simulated arm held at [`HELD`] for an hour.
 fn held_arm(name: &str) -> (Sim, PathBuf, PathBuf) {
@@ -43,7 +44,13 @@ fn held_arm(name: &str) -> (Sim, PathBuf, PathBuf) {
         "keyframes:\n  - {{at: 0, pose: {{{pose}}}}}\n  - {{at: 3600, pose: {{{pose}}}}}\n"
     );
     let mounting = repo("configs/sim/so101-mounting.yaml");
-    let (sim, truth) = Sim::start_hand(&dir, &robot(), 6, &hand, &["--mounting", arg(&mounting)]);
+    let (sim, truth) = Sim::start_hand(
+        &dir,
+        &repo(CALIBRATED[1]),
+        6,
+        &hand,
+        &["--mounting", arg(&mounting)],
+    );
     (sim, truth, dir)
 }
 
@@ -84,16 +91,7 @@ fn offset(sim: &Sim, id: &str) -> i64 {
 fn monitor_reads_the_true_angles_after_a_power_up() {
     let (sim, truth, _dir) = held_arm("offsets-monitor");
     assert_eq!(offset(&sim, "1"), 0, "powered up: no offset yet");
-    let out = sim.robot_ok(&[
-        "monitor",
-        "--robot",
-        arg(&robot()),
-        "--calibration",
-        arg(&calibration()),
-        "--json",
-        "--count",
-        "1",
-    ]);
+    let out = sim.robot_ok(&[&["monitor"], &CALIBRATED[..], &["--json", "--count", "1"]].concat());
     let frame: serde_json::Value =
         serde_json::from_str(out.lines().next().unwrap_or_default()).expect("a JSON frame");
     let read: Vec<f64> = frame["servos"]
@@ -110,18 +108,14 @@ fn monitor_reads_the_true_angles_after_a_power_up() {
 fn teach_records_the_true_angles_after_a_power_up() {
     let (sim, truth, dir) = held_arm("offsets-teach");
     let taught = dir.join("taught.yaml");
-    sim.robot_ok(&[
-        "teach",
-        "--robot",
-        arg(&robot()),
-        "--calibration",
-        arg(&calibration()),
-        "--yes",
-        "--duration",
-        "1",
-        "-o",
-        arg(&taught),
-    ]);
+    sim.robot_ok(
+        &[
+            &["teach"],
+            &CALIBRATED[..],
+            &["--yes", "--duration", "1", "-o", arg(&taught)],
+        ]
+        .concat(),
+    );
     let text = std::fs::read_to_string(&taught).expect("teach wrote the motion");
     let motion: serde_yaml::Value = serde_yaml::from_str(&text).expect("YAML");
     // The starting pose is the first keyframe.
@@ -157,16 +151,14 @@ fn play_starts_from_the_true_angles_after_a_power_up() {
         ),
     );
     let log = dir.join("play.csv");
-    sim.robot_ok(&[
-        "play",
-        arg(&motion),
-        "--robot",
-        arg(&robot()),
-        "--calibration",
-        arg(&calibration()),
-        "--log",
-        arg(&log),
-    ]);
+    sim.robot_ok(
+        &[
+            &["play", arg(&motion)],
+            &CALIBRATED[..],
+            &["--log", arg(&log)],
+        ]
+        .concat(),
+    );
     let mut reader = csv::Reader::from_path(&log).expect("the log");
     let headers = reader.headers().expect("a header").clone();
     let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
@@ -190,15 +182,7 @@ fn play_starts_from_the_true_angles_after_a_power_up() {
 #[test]
 fn bench_sets_the_session_offsets_before_it_runs() {
     let (sim, truth, _dir) = held_arm("offsets-bench");
-    let out = sim.robot_command(&[
-        "bench",
-        "--robot",
-        arg(&robot()),
-        "--calibration",
-        arg(&calibration()),
-        "--seconds",
-        "0.5",
-    ]);
+    let out = sim.robot_command(&[&["bench"], &CALIBRATED[..], &["--seconds", "0.5"]].concat());
     assert!(out.status.success(), "bench: {}", common::stderr(&out));
     let _ = stdout(&out);
     // The pan's measured range 4088..6704 (unwrapped) is centred on the

@@ -21,6 +21,13 @@ fn finding<'a>(
         .find(|f| f["id"].as_u64() == Some(id) && f["register"] == register)
 }
 
+/// The SO-101's robot file, naming the calibration `calibration`, written
+/// to `name` in `dir`.
+fn so101_naming(dir: &std::path::Path, name: &str, calibration: &str) -> std::path::PathBuf {
+    let so101 = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
+    write_file(dir, name, &format!("calibration: {calibration}\n{so101}"))
+}
+
 #[test]
 fn the_built_in_simulator_has_only_the_gripper_warnings() {
     let out = servobus(&["doctor", "--robot", "configs/robots/so101.yaml"]);
@@ -28,7 +35,8 @@ fn the_built_in_simulator_has_only_the_gripper_warnings() {
     says(
         &text,
         &[
-            "servo 6 max_torque",
+            "2. configure: the servos' settings\nWARNING  servo 6 max_torque",
+            "3. calibrate: the calibration and its homing offsets\nINFO",
             "0 error(s), 3 warning(s); 3 can be fixed with --fix",
         ],
     );
@@ -95,12 +103,7 @@ fn doctor_finds_faults_on_a_pty_and_fix_brings_a_servo_back_to_the_bus_rate() {
 #[test]
 fn a_calibration_the_robot_file_names_but_lacks_is_an_error() {
     let dir = scratch("doctor-calibration");
-    let text = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    let robot = write_file(
-        &dir,
-        "arm.yaml",
-        &format!("calibration: missing.yaml\n{text}"),
-    );
+    let robot = so101_naming(&dir, "arm.yaml", "missing.yaml");
     let robot = arg(&robot);
     let (code, v) = doctor_json(&["doctor", "--robot", robot, "--json"]);
     assert_eq!(code, 2, "{v}");
@@ -144,12 +147,7 @@ joints:
 #[test]
 fn every_fix_command_doctor_prints_runs_as_printed_and_leaves_nothing_wrong() {
     let dir = scratch("doctor-commands");
-    let so101 = std::fs::read_to_string(repo("configs/robots/so101.yaml")).expect("so101");
-    let robot = write_file(
-        &dir,
-        "robot.yaml",
-        &format!("calibration: arm.calibration.yaml\n{so101}"),
-    );
+    let robot = so101_naming(&dir, "robot.yaml", "arm.calibration.yaml");
     write_file(&dir, "arm.calibration.yaml", MOUNTED_CALIBRATION);
     let robot = arg(&robot);
     // A badly set-up arm: servo 4 at another baud rate, servo 2 at the

@@ -55,14 +55,7 @@ fn run_as_printed(dir: &Path, command: &str) -> Output {
         Some(&"servobus"),
         "a servobus command: {command}"
     );
-    let out = run_in(dir, &words[1..]);
-    assert!(
-        out.status.success(),
-        "`{command}` as printed failed: {}{}",
-        stdout(&out),
-        stderr(&out)
-    );
-    out
+    common::succeeded(run_in(dir, &words[1..]), &words[1..])
 }
 
 #[test]

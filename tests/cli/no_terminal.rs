@@ -50,15 +50,7 @@ fn plain(out: &Output) {
 fn monitor_without_a_terminal_prints_json_lines_and_says_so() {
     let dir = scratch("no-terminal-monitor");
     let sim = Sim::start(&dir);
-    let out = without_terminal(&[
-        "monitor",
-        "--robot",
-        "configs/robots/so101.yaml",
-        "--port",
-        sim.port(),
-        "--count",
-        "3",
-    ]);
+    let out = without_terminal(&sim.arm_args(&["monitor"], &["--count", "3"]));
     let (stdout, stderr) = exited(&out, 0);
     plain(&out);
     assert!(
@@ -83,15 +75,8 @@ fn monitor_without_a_terminal_prints_json_lines_and_says_so() {
 fn play_monitor_without_a_terminal_refuses_before_any_torque() {
     let dir = scratch("no-terminal-play");
     let sim = Sim::start(&dir);
-    let out = without_terminal(&[
-        "play",
-        "configs/motions/arm-wave.yaml",
-        "--robot",
-        "configs/robots/so101.yaml",
-        "--port",
-        sim.port(),
-        "--monitor",
-    ]);
+    let out =
+        without_terminal(&sim.arm_args(&["play", "configs/motions/arm-wave.yaml"], &["--monitor"]));
     let (stdout, stderr) = exited(&out, 2);
     plain(&out);
     assert!(stdout.is_empty(), "nothing planned or shown: {stdout}");

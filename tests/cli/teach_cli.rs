@@ -7,6 +7,14 @@ use std::process::{Command, Stdio};
 
 use common::{arg, repo, scratch, servobus, servobus_ok, Sim, BIN};
 
+/// A hand's first keyframes: the arm at rest, then at a pose reached in
+/// 1 s and held 2 s (until 3.5 s).
+const REST_THEN_A_POSE: &str = "keyframes:\n\
+     \x20 - {at: 0, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
+     \x20 - {at: 0.5, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
+     \x20 - {at: 1.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
+     \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n";
+
 /// `servobus teach --yes --duration 6.5` on the SO-101 served by a
 /// simulator whose hand plays `hand`; its output and the motion file's path.
 fn teach_with_hand(
@@ -32,14 +40,12 @@ fn teach_with_hand(
 fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
     let dir = scratch("teach-cli");
     // Rest, then two poses, each reached in 1 s and held 2 s.
-    let hand = "keyframes:\n\
-         \x20 - {at: 0, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
-         \x20 - {at: 0.5, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
-         \x20 - {at: 1.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
-         \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
-         \x20 - {at: 4.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n\
-         \x20 - {at: 6.5, pose: {shoulder_pan: -30, elbow_flex: 60}}\n";
-    let (run, out) = teach_with_hand(&dir, hand);
+    let hand = format!(
+        "{REST_THEN_A_POSE}\
+         \x20 - {{at: 4.5, pose: {{shoulder_pan: -30, elbow_flex: 60}}}}\n\
+         \x20 - {{at: 6.5, pose: {{shoulder_pan: -30, elbow_flex: 60}}}}\n"
+    );
+    let (run, out) = teach_with_hand(&dir, &hand);
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{err}");
     assert!(err.contains("torque off"), "{err}");
@@ -69,18 +75,16 @@ fn teach_captures_the_hands_poses_and_writes_a_playable_file() {
 fn teach_refuses_an_unknown_joint_to_hold_before_anything_moves() {
     let dir = scratch("teach-cli-bad");
     let sim = Sim::start(&dir);
-    let out = servobus(&[
-        "teach",
-        "--robot",
-        "configs/robots/so101.yaml",
-        "--port",
-        sim.port(),
-        "--hold",
-        "shoulder,elbow_flex",
-        "--yes",
-        "-o",
-        arg(&dir.join("x.yaml")),
-    ]);
+    let out = servobus(&sim.arm_args(
+        &["teach"],
+        &[
+            "--hold",
+            "shoulder,elbow_flex",
+            "--yes",
+            "-o",
+            arg(&dir.join("x.yaml")),
+        ],
+    ));
     sim.stop();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
@@ -92,25 +96,24 @@ fn teach_stops_at_a_pose_outside_the_limits_instead_of_clamping_it() {
     let dir = scratch("teach-cli-limits");
     // Rest, a pose, then the elbow taken to 106 deg: past the robot file's
     // 97 deg (the simulator's arm has no stop there).
-    let hand = "keyframes:\n\
-         \x20 - {at: 0, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
-         \x20 - {at: 0.5, pose: {shoulder_pan: 0, elbow_flex: 90}}\n\
-         \x20 - {at: 1.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
-         \x20 - {at: 3.5, pose: {shoulder_pan: 40, elbow_flex: 30}}\n\
-         \x20 - {at: 4.5, pose: {shoulder_pan: 40, elbow_flex: 106}}\n\
-         \x20 - {at: 6.5, pose: {shoulder_pan: 40, elbow_flex: 106}}\n";
-    let (run, out) = teach_with_hand(&dir, hand);
+    let hand = format!(
+        "{REST_THEN_A_POSE}\
+         \x20 - {{at: 4.5, pose: {{shoulder_pan: 40, elbow_flex: 106}}}}\n\
+         \x20 - {{at: 6.5, pose: {{shoulder_pan: 40, elbow_flex: 106}}}}\n"
+    );
+    let (run, out) = teach_with_hand(&dir, &hand);
     let err = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "a problem found: {err}");
-    for part in [
-        "joint `elbow_flex` was taught at",
-        "outside its limits [-97.0, 97.0] deg",
-        "comes from the robot file",
-        "teach again",
-        "widen `min`/`max`",
-    ] {
-        assert!(err.contains(part), "{part:?} in {err}");
-    }
+    common::says(
+        &err,
+        &[
+            "joint `elbow_flex` was taught at",
+            "outside its limits [-97.0, 97.0] deg",
+            "comes from the robot file",
+            "teach again",
+            "widen `min`/`max`",
+        ],
+    );
     assert!(!err.contains("panicked"), "{err}");
     // What was taught before it is kept, and nothing was clamped to 100.
     let text = std::fs::read_to_string(&out).expect("the keyframes before it");

@@ -71,6 +71,17 @@ pub fn servobus_ok(args: &[&str]) -> Output {
     succeeded(servobus(args), args)
 }
 
+/// An outside program a test needs is missing (`why` says which and how to
+/// get it): under `CI=true` the test fails, elsewhere it is skipped, said
+/// on stderr.
+pub fn missing_outside<T>(why: &str) -> Option<T> {
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{why} (required under CI=true)");
+    }
+    eprintln!("\n*** SKIPPED: {why} ***\n");
+    None
+}
+
 /// `out`, of `servobus ARGS`, which must have succeeded.
 pub fn succeeded(out: Output, args: &[&str]) -> Output {
     assert!(

@@ -126,6 +126,19 @@ impl Sim {
         self.link.to_str().expect("utf-8 path")
     }
 
+    /// The arguments `COMMAND --robot configs/robots/so101.yaml --port PORT
+    /// MORE`: a robot command on this simulator's SO-101 (the path is
+    /// relative to the repository, where the commands run).
+    pub fn arm_args<'a>(&'a self, command: &[&'a str], more: &[&'a str]) -> Vec<&'a str> {
+        let arm = [
+            "--robot",
+            "configs/robots/so101.yaml",
+            "--port",
+            self.port(),
+        ];
+        [command, &arm[..], more].concat()
+    }
+
     /// Runs `servobus ARGS --port PORT --latency-us 10000` against this
     /// simulator. The latency is generous because the simulator runs in
     /// wall-clock time and its process may be scheduled milliseconds late

@@ -6,12 +6,12 @@
 use std::path::Path;
 use std::time::Duration;
 
-use servobus::doctor::{self, PortKind, Severity, Step};
+use servobus::doctor::{self, PortKind, SetupStep, Severity, Shown};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_robot, JointCalibration, RobotOptions};
 use servobus_sim::Faults;
 
-use super::{about, must, show, Arm, PORT};
+use super::{about, common, must, saying, show, Arm, PORT};
 
 /// shoulder_pan (servo 1, at tick 2048 with homing offset 0) calibrated
 /// with offset 0 over ticks 2000..4600: a range across the seam.
@@ -46,7 +46,7 @@ fn an_offset_not_set_after_a_power_up_is_information_and_fix_sets_it_for_the_ses
     let all = arm.examine_all();
     let f = must(&all, 1, Some("offset"));
     assert_eq!(f.severity, Severity::Info, "play sets it: nothing wrong");
-    assert_eq!(f.step, Step::Calibrate);
+    assert_eq!(f.step, SetupStep::Calibrate);
     assert!(
         f.problem.contains("not set for this session") && !f.problem.contains("replaced"),
         "{}",
@@ -54,7 +54,7 @@ fn an_offset_not_set_after_a_power_up_is_information_and_fix_sets_it_for_the_ses
     );
     let robot = common_robot_arg();
     assert_eq!(
-        f.command.as_deref(),
+        f.command_line().as_deref(),
         Some(format!("servobus doctor --robot {robot} --port {PORT} --fix").as_str())
     );
     // Read in the frame play will set, the joint is at 0: within limits.
@@ -103,21 +103,24 @@ fn two_servos_on_one_id_and_a_silent_servo_is_a_swapped_id() {
     let findings = arm.examine();
     let f = must(&findings, 5, Some("id"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(
-        f.problem
-            .contains("servo 6 (joint `gripper`) is silent: servo 6 probably has ID 5"),
-        "{}",
-        f.problem
+    common::says(
+        &f.problem,
+        &["servo 6 (joint `gripper`) is silent: servo 6 probably has ID 5"],
     );
     assert!(
-        f.fix.contains("unplug every servo but joint `gripper`'s")
-            && f.fix
+        f.fix_text()
+            .contains("unplug every servo but joint `gripper`'s")
+            && f.fix_text()
                 .contains("`servobus set-id --port /dev/ttyACM0 --id 5 6`")
-            && f.fix.contains("plug the others back in"),
+            && f.fix_text().contains("plug the others back in"),
         "{}",
-        f.fix
+        f.fix_text()
     );
-    assert_eq!(f.command, None, "it takes hands: no command runs it alone");
+    assert_eq!(
+        f.command_line(),
+        None,
+        "it takes hands: no command runs it alone"
+    );
     assert!(
         about(&findings, 6, None).is_none(),
         "servo 6 is explained by the shared ID:\n{}",
@@ -138,18 +141,18 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
         show(&all)
     );
     assert!(
-        !all.iter().any(|f| f.fix.contains("by hand")),
+        !all.iter().any(|f| f.fix_text().contains("by hand")),
         "{}",
         show(&all)
     );
     let f = all
         .iter()
-        .find(|f| f.step == Step::Calibrate && f.id.is_none())
+        .find(|f| f.step == SetupStep::Calibrate && f.id.is_none())
         .unwrap_or_else(|| panic!("{}", show(&all)));
-    assert!(f.problem.contains("calibrate first"), "{}", f.problem);
+    common::says(&f.problem, &["calibrate first"]);
     let robot = common_robot_arg();
     assert_eq!(
-        f.command.as_deref(),
+        f.command_line().as_deref(),
         Some(
             format!("servobus calibrate --robot {robot} --port {PORT} -o calibration.yaml")
                 .as_str()
@@ -168,35 +171,32 @@ fn a_builtin_robot_is_named_by_its_name_in_every_command() {
     arm.robot.buses[0].latency_auto = false;
     let all = arm.examine_on(&PortKind::Serial(None)).findings;
     // The calibrate and doctor commands: what follows each `--robot`.
-    let robot_args: Vec<&str> = all
+    let commands: Vec<String> = all.iter().filter_map(|f| f.command_line()).collect();
+    let robot_args: Vec<&str> = commands
         .iter()
-        .filter_map(|f| f.command.as_deref())
         .flat_map(|c| c.split(" --robot ").skip(1))
         .filter_map(|rest| rest.split_whitespace().next())
         .collect();
     assert_eq!(robot_args.len(), 2, "{}", show(&all));
     assert!(robot_args.iter().all(|&r| r == "so101"), "{robot_args:?}");
     assert!(
-        !all.iter().any(|f| f.fix.contains("<built-in>")),
+        !all.iter().any(|f| f.fix_text().contains("<built-in>")),
         "{}",
         show(&all)
     );
     let offset = must(&all, 1, Some("offset"));
     assert_eq!(
-        offset.command.as_deref(),
+        offset.command_line().as_deref(),
         Some("servobus doctor --robot so101 --port /dev/ttyACM0 --fix")
     );
-    let latency = all
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let latency = saying(&all, "round trip");
     assert!(
         latency
-            .fix
+            .fix_text()
             .contains("`servobus init --robot so101` writes robot.yaml")
-            && latency.fix.contains("pass --robot robot.yaml"),
+            && latency.fix_text().contains("pass --robot robot.yaml"),
         "{}",
-        latency.fix
+        latency.fix_text()
     );
 }
 
@@ -209,10 +209,7 @@ fn latency_auto_is_measured_not_an_assumed_0_us() {
     );
     arm.sim = arm.sim.clone().with_latency(Duration::from_millis(2));
     let all = arm.examine_on(&PortKind::Serial(None)).findings;
-    let f = all
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let f = saying(&all, "round trip");
     assert_eq!(f.severity, Severity::Info, "auto follows the adapter");
     assert!(
         f.problem.contains("`latency_us: auto` measures it") && !f.problem.contains("assumes"),
@@ -241,7 +238,7 @@ fn advice_comes_in_the_order_a_new_arm_needs_it() {
         "{}",
         show(&findings)
     );
-    let steps: Vec<Step> = findings.iter().map(|f| f.step).collect();
+    let steps: Vec<SetupStep> = findings.iter().map(|f| f.step).collect();
     assert!(steps.windows(2).all(|w| w[0] <= w[1]), "{steps:?}");
 }
 
@@ -249,17 +246,14 @@ fn advice_comes_in_the_order_a_new_arm_needs_it() {
 fn an_uncalibrated_robot_is_told_how_to_calibrate() {
     let mut arm = Arm::tuned(Faults::none());
     let all = arm.examine_all();
-    let f = all
-        .iter()
-        .find(|f| f.problem.starts_with("no calibration"))
-        .unwrap_or_else(|| panic!("{}", show(&all)));
+    let f = saying(&all, "no calibration");
     assert_eq!(f.severity, Severity::Info, "information only: exit 0");
     assert!(
-        f.fix.starts_with("servobus calibrate --robot ")
-            && f.fix
+        f.fix_text().starts_with("servobus calibrate --robot ")
+            && f.fix_text()
                 .contains("so101.yaml --port /dev/ttyACM0 -o calibration.yaml"),
         "{}",
-        f.fix
+        f.fix_text()
     );
     assert_eq!(doctor::exit_status(&all), 0);
 }
@@ -273,21 +267,13 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
     let findings = arm.examine();
     let offset = must(&findings, 1, Some("offset"));
     assert_eq!(
-        offset.command.as_deref(),
+        offset.command_line().as_deref(),
         Some("servobus write --port /dev/ttyACM0 --id 1 offset 100")
     );
     assert_eq!(offset.severity, Severity::Error);
-    assert!(
-        offset.problem.contains("homing offset is 0"),
-        "{}",
-        offset.problem
-    );
+    common::says(&offset.problem, &["homing offset is 0"]);
     let firmware = must(&findings, 1, Some("firmware_major"));
-    assert!(
-        firmware.problem.contains("calibrated on 3.9"),
-        "{}",
-        firmware.problem
-    );
+    common::says(&firmware.problem, &["calibrated on 3.9"]);
     // Without --write-servos, --fix leaves an offset play refuses alone.
     let how = doctor::Fixing {
         robot: &arm.robot,

@@ -10,7 +10,7 @@ mod advice;
 
 use std::time::Duration;
 
-use servobus::doctor::{self, Finding, PortKind, Severity, Target};
+use servobus::doctor::{self, BusPort, Finding, PortKind, Severity, Shown};
 use servobus_driver::{Bus, ManualClock, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
@@ -24,8 +24,8 @@ struct Arm {
     bus: Bus<SimBus, ManualClock>,
 }
 
-fn target() -> Target {
-    Target {
+fn target() -> BusPort {
+    BusPort {
         port: Some(PORT.into()),
         baud: 1_000_000,
     }
@@ -126,7 +126,7 @@ impl Arm {
             assert!(
                 o.result.is_ok(),
                 "fix `{}` failed: {:?}",
-                o.command,
+                doctor::applied_text(&o.applied),
                 o.result
             );
         }
@@ -169,12 +169,24 @@ fn must<'a>(findings: &'a [Finding], id: u8, register: Option<&str>) -> &'a Find
         .unwrap_or_else(|| panic!("nothing about servo {id} {register:?}:\n{}", show(findings)))
 }
 
+/// The finding whose problem says `text`.
+fn saying<'a>(findings: &'a [Finding], text: &str) -> &'a Finding {
+    findings
+        .iter()
+        .find(|f| f.problem.contains(text))
+        .unwrap_or_else(|| panic!("nothing says {text:?}:\n{}", show(findings)))
+}
+
 /// [`must`], whose fix must be `servobus write` of `value` to `register`.
 fn must_write<'a>(findings: &'a [Finding], id: u8, register: &str, value: i32) -> &'a Finding {
     let f = must(findings, id, Some(register));
     let want = format!("servobus write --port {PORT} --id {id} {register} {value}");
-    assert_eq!(f.fix, want, "{}", show(findings));
-    assert_eq!(f.command.as_deref(), Some(want.as_str()), "runs as printed");
+    assert_eq!(f.fix_text(), want, "{}", show(findings));
+    assert_eq!(
+        f.command_line().as_deref(),
+        Some(want.as_str()),
+        "runs as printed"
+    );
     f
 }
 
@@ -184,7 +196,11 @@ fn show(findings: &[Finding]) -> String {
         .map(|f| {
             format!(
                 "{:?} {:?} {:?}: {} | {}\n",
-                f.severity, f.id, f.register, f.problem, f.fix
+                f.severity,
+                f.id,
+                f.register,
+                f.problem,
+                f.fix_text()
             )
         })
         .collect()
@@ -229,7 +245,12 @@ fn return_delay_left_at_500_us_is_an_error_and_fix_sets_it_to_0() {
     let (mut arm, findings) = Arm::written(3, "return_delay", 250);
     let f = must_write(&findings, 3, "return_delay", 0);
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.problem.contains("500 us"), "{}", f.problem);
+    common::says(&f.problem, &["500 us"]);
+    assert_eq!(
+        f.measured,
+        Some(250),
+        "the register read, in its 2 us units"
+    );
     assert_eq!(doctor::exit_status(&findings), 2);
     arm.fixed(&findings, true, 3, addr::RETURN_DELAY, 0);
 }
@@ -281,7 +302,7 @@ fn a_joint_outside_its_limits_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 1, Some("present_position"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.fix.contains("--id 1 torque_enable 0"), "{}", f.fix);
+    common::says(&f.fix_text(), &["--id 1 torque_enable 0"]);
     assert!(!f.fixable(), "moving a joint is not for --fix");
 }
 
@@ -291,9 +312,9 @@ fn a_servo_at_another_baud_is_found_and_brought_back() {
     let findings = arm.examine();
     let f = must(&findings, 4, Some("baud_rate"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(f.problem.contains("115200"), "{}", f.problem);
+    common::says(&f.problem, &["115200"]);
     assert_eq!(
-        f.fix,
+        f.fix_text(),
         "servobus write --port /dev/ttyACM0 --baud 115200 --id 4 baud_rate 0"
     );
     assert_eq!(findings.len(), 1, "{}", show(&findings));
@@ -344,7 +365,7 @@ fn every_simulator_fault_is_found() {
             .unwrap_or_else(|| panic!("{spec}: nothing about servo {id}:\n{}", show(&findings)));
         assert_eq!(f.severity, severity, "{spec}: {}", f.problem);
         assert!(f.problem.contains(words), "{spec}: {}", f.problem);
-        assert!(!f.fix.is_empty(), "{spec}: no fix named");
+        assert!(!f.fix_text().is_empty(), "{spec}: no fix named");
         let worst = if severity == Severity::Error { 2 } else { 1 };
         assert_eq!(doctor::exit_status(&findings), worst, "{spec}");
     }
@@ -366,9 +387,9 @@ fn a_supply_that_sags_under_load_is_found_under_load_only() {
     let f = must(&findings, 2, Some("present_voltage"));
     assert_eq!(f.severity, Severity::Warning);
     // The servo strains at its torque limit: 80 % of load plus the error.
-    assert!(f.problem.contains("% load"), "{}", f.problem);
+    common::says(&f.problem, &["% load"]);
     assert!(!f.problem.contains("at rest"), "{}", f.problem);
-    assert!(f.problem.contains("rating 6.0..12.6 V"), "{}", f.problem);
+    common::says(&f.problem, &["rating 6.0..12.6 V"]);
     assert!(
         about(&findings, 1, Some("present_voltage")).is_none(),
         "{}",
@@ -392,23 +413,17 @@ fn the_adapter_latency_is_measured_and_the_ftdi_timer_read() {
     let findings = examined.findings;
     let timer = findings
         .iter()
-        .find(|f| f.fix.contains("latency_timer"))
+        .find(|f| f.fix_text().contains("latency_timer"))
         .unwrap_or_else(|| panic!("{}", show(&findings)));
     assert_eq!(
-        timer.fix,
+        timer.fix_text(),
         "echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/latency_timer"
     );
-    let measured = findings
-        .iter()
-        .find(|f| f.problem.contains("round trip"))
-        .unwrap_or_else(|| panic!("{}", show(&findings)));
+    let measured = saying(&findings, "round trip");
     assert_eq!(measured.severity, Severity::Warning);
-    assert!(
-        measured
-            .fix
-            .contains("`latency_us: 2000` (or `auto`) on bus `arm`"),
-        "{}",
-        measured.fix
+    common::says(
+        &measured.fix_text(),
+        &["`latency_us: 2000` (or `auto`) on bus `arm`"],
     );
     assert_eq!(
         examined.servos.len(),
@@ -425,12 +440,21 @@ fn a_model_other_than_the_robot_files_is_an_error() {
     let findings = arm.examine();
     let f = must(&findings, 2, Some("model_number"));
     assert_eq!(f.severity, Severity::Error);
-    assert!(
-        f.problem
-            .contains("is a STS3215, the robot file says STS3250"),
-        "{}",
-        f.problem
-    );
+    common::says(&f.problem, &["is a STS3215, the robot file says STS3250"]);
+    // The model number read: Feetech's 777 for the STS3215.
+    assert_eq!(f.measured, Some(777));
+    let edit = doctor::Edit {
+        robot: doctor::RobotFile::File(common::repo("configs/robots/so101.yaml")),
+        change: doctor::Change::SetModel {
+            joint: "shoulder_lift".into(),
+            model: "sts3215".into(),
+        },
+    };
+    let advice = doctor::Advice::FitModel {
+        model: "STS3250".into(),
+        edit,
+    };
+    assert_eq!(f.advice, advice);
     assert_eq!(findings.len(), 1, "{}", show(&findings));
 }
 
@@ -445,9 +469,20 @@ fn an_extra_servo_is_found_and_offered_the_missing_servos_id() {
     assert_eq!(missing.severity, Severity::Error);
     assert!(
         missing
-            .fix
+            .fix_text()
             .ends_with("servobus set-id --port /dev/ttyACM0 --id 9 5"),
         "{}",
-        missing.fix
+        missing.fix_text()
     );
+    let give = doctor::Advice::GiveItsId {
+        servo: 9,
+        joint: "wrist_roll".into(),
+        fix: doctor::Fix::SetId {
+            port: Some(PORT.into()),
+            baud: 1_000_000,
+            id: 9,
+            new_id: doctor::NewId::Id(5),
+        },
+    };
+    assert_eq!(missing.advice, give);
 }

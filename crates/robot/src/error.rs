@@ -7,7 +7,7 @@ use servobus_runtime::RunError;
 
 use crate::ports::OpenError;
 
-/// Why a robot could not be opened, connected to or played.
+/// Why a robot could not be opened, connected to, played or checked.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -51,6 +51,15 @@ pub enum Error {
     /// thread failed.
     #[error(transparent)]
     Run(#[from] RunError),
+    /// The port of a bus failed in the middle of the doctor's checks.
+    #[error("bus `{bus}`: doctor could not finish")]
+    Unfinished {
+        /// The bus.
+        bus: String,
+        /// How the port failed.
+        #[source]
+        source: servobus_driver::BusError,
+    },
     /// A motion file names its robot by path; a robot given as text has
     /// none, so its motions are planned by the caller
     /// ([`Robot::plan`](crate::Robot::plan) of a motion loaded for a robot

@@ -39,11 +39,35 @@
 //! Live following ([`Connection::live`], targets through
 //! [`Run::targets`]) starts the same way as a path. Beside runs:
 //! [`scan`] finds the servos on a port at every baud rate, [`bench`](mod@bench)
-//! measures how fast a bus's full cycle runs, and [`monitor`] samples what
-//! every servo of a bus is doing.
+//! measures how fast a bus's full cycle runs, [`monitor`] samples what
+//! every servo of a bus is doing, and [`doctor`] checks the servos against
+//! the robot file and the usual set-up mistakes, each finding with its fix
+//! as data:
+//!
+//! ```no_run
+//! use servobus_robot::doctor::{CheckOptions, Severity};
+//! use servobus_robot::Robot;
+//!
+//! let robot = Robot::open("so101")?;
+//! // On the robot file's ports, or these; the built-in simulator when no
+//! // bus has a port. `fix: true` applies the fixes that are writes.
+//! let checkup = robot.doctor(&["/dev/ttyACM0"], &CheckOptions::default())?;
+//! for bus in &checkup.buses {
+//!     for finding in bus.standing() {
+//!         if finding.severity >= Severity::Warning {
+//!             println!("{} servo {:?}: {}", finding.severity, finding.id, finding.problem);
+//!             if let Some(fix) = finding.advice.command() {
+//!                 println!("  fix: {fix:?}"); // e.g. Fix::Write { id, register, value, .. }
+//!             }
+//!         }
+//!     }
+//! }
+//! # Ok::<(), servobus_robot::Error>(())
+//! ```
 
 pub mod bench;
 mod connect;
+pub mod doctor;
 mod error;
 pub mod monitor;
 pub mod ports;
@@ -260,5 +284,21 @@ impl Robot {
     /// simulated.
     pub fn connect(&self, target: Target) -> Result<Connection, Error> {
         Connection::open(&self.config, target)
+    }
+
+    /// Checks every bus of the robot with the doctor ([`doctor::check`]):
+    /// on `ports` (the first for the first bus, the robot file's `port:`
+    /// past them), or on the built-in simulator when no bus has a port.
+    /// The servos are examined as they are, not refused: a calibration
+    /// that does not match is a finding.
+    ///
+    /// # Errors
+    /// As [`doctor::check`].
+    pub fn doctor<S: AsRef<str>>(
+        &self,
+        ports: &[S],
+        options: &doctor::CheckOptions,
+    ) -> Result<doctor::Checkup, Error> {
+        doctor::check(&self.config, ports, options)
     }
 }

@@ -174,7 +174,7 @@ fn write_baud_rate(bus: &mut SerialBus, args: &WriteArgs, value: i32) -> anyhow:
             "baud_rate {value} is not an index of the baud table"
         )));
     };
-    servobus::doctor::change_baud(bus, id, args.servo.baud, index)
+    servobus_robot::doctor::change_baud(bus, id, args.servo.baud, index)
         .with_context(|| format!("servo {id}: moving it to {rate} baud"))?;
     println!(
         "baud_rate = {value} ({rate} baud) on servo {id} (unlocked, written, verified, locked): \

@@ -374,37 +374,42 @@ fn the_fuzzers_kept_inputs_are_refused_cleanly() {
 /// Limits with the limit in the message, and messages in the file's terms.
 #[test]
 fn limits_and_type_errors_speak_in_the_files_terms() {
-    let (p, e) = robot_error(
-        "latency-list",
-        "baud: 1000000",
-        "baud: 1000000\n    latency_us: [5]",
-    );
-    let reason = "invalid type: sequence, expected a number of microseconds or `auto`";
-    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
-    let (p, e) = robot_error(
-        "latency-long",
-        "baud: 1000000",
-        "baud: 1000000\n    latency_us: 300000",
-    );
-    let reason = "300000 us is not an adapter latency: give 0 to 255000 us";
-    expect(&e, &p, 7, 17, "buses[0].latency_us", reason);
-    let (p, e) = robot_error("rate", "rate: 100", "rate: 5");
-    let reason = "5 Hz is outside the control rates servobus runs, 10 to 10000 Hz";
-    expect(&e, &p, 3, 7, "rate", reason);
     let digits = format!("max_velocity: -1{}", "0".repeat(308));
-    let (p, e) = robot_error(
-        "digits",
-        "max_velocity: 180\n        max_acceleration: 900\n      - name: b",
-        &format!("{digits}\n        max_acceleration: 900\n      - name: b"),
-    );
-    expect(
-        &e,
-        &p,
-        13,
-        23,
-        "buses[0].joints[0].max_velocity",
-        "must be positive, got -1e308",
-    );
+    let joints = "max_velocity: 180\n        max_acceleration: 900\n      - name: b";
+    let cases = [
+        (
+            "latency-list",
+            "baud: 1000000",
+            "baud: 1000000\n    latency_us: [5]".to_owned(),
+            (7, 17, "buses[0].latency_us"),
+            "invalid type: sequence, expected a number of microseconds or `auto`",
+        ),
+        (
+            "latency-long",
+            "baud: 1000000",
+            "baud: 1000000\n    latency_us: 300000".to_owned(),
+            (7, 17, "buses[0].latency_us"),
+            "300000 us is not an adapter latency: give 0 to 255000 us",
+        ),
+        (
+            "rate",
+            "rate: 100",
+            "rate: 5".to_owned(),
+            (3, 7, "rate"),
+            "5 Hz is outside the control rates servobus runs, 10 to 10000 Hz",
+        ),
+        (
+            "digits",
+            joints,
+            format!("{digits}\n        max_acceleration: 900\n      - name: b"),
+            (13, 23, "buses[0].joints[0].max_velocity"),
+            "must be positive, got -1e308",
+        ),
+    ];
+    for (test, from, to, (line, column, field), reason) in cases {
+        let (p, e) = robot_error(test, from, &to);
+        expect(&e, &p, line, column, field, reason);
+    }
     let list = write("list", "robot.yaml", "- name: x\n");
     let text = load_robot(&list, &RobotOptions::default())
         .expect_err("a list is not a robot")

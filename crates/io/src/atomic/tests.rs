@@ -9,6 +9,27 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// A new directory for one test, with the file `file` in it holding `old`:
+/// the directory and the file's path.
+fn with_old_file(test: &str, file: &str, old: &str) -> (PathBuf, PathBuf) {
+    let dir = scratch(test);
+    let path = dir.join(file);
+    fs::write(&path, old).expect("old file");
+    (dir, path)
+}
+
+/// The text of the file at `path`.
+fn text(path: &Path) -> String {
+    fs::read_to_string(path).expect("read")
+}
+
+/// An atomic file for `path` with `bytes` written, not committed yet.
+fn written(path: &Path, bytes: &[u8]) -> AtomicFile {
+    let mut file = AtomicFile::create(path).expect("created");
+    file.write_all(bytes).expect("written");
+    file
+}
+
 /// The names in `dir`, sorted.
 fn names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = fs::read_dir(dir)
@@ -26,16 +47,13 @@ fn names(dir: &Path) -> Vec<String> {
 
 #[test]
 fn commit_replaces_the_file_and_leaves_no_temporary() {
-    let dir = scratch("commit");
-    let path = dir.join("log.csv");
-    fs::write(&path, "yesterday").expect("old file");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"today").expect("written");
+    let (dir, path) = with_old_file("commit", "log.csv", "yesterday");
+    let file = written(&path, b"today");
     // Until the commit the old file is all there is at the target.
-    assert_eq!(fs::read_to_string(&path).expect("read"), "yesterday");
+    assert_eq!(text(&path), "yesterday");
     assert_eq!(names(&dir).len(), 2, "{:?}", names(&dir));
     file.commit().expect("committed");
-    assert_eq!(fs::read_to_string(&path).expect("read"), "today");
+    assert_eq!(text(&path), "today");
     assert_eq!(names(&dir), ["log.csv"]);
 }
 
@@ -51,13 +69,10 @@ fn the_temporary_is_named_after_the_target_beside_it() {
 
 #[test]
 fn drop_without_commit_leaves_the_old_file_and_removes_the_temporary() {
-    let dir = scratch("drop");
-    let path = dir.join("arm.calibration.yaml");
-    fs::write(&path, "kept").expect("old file");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"half a calibra").expect("written");
+    let (dir, path) = with_old_file("drop", "arm.calibration.yaml", "kept");
+    let file = written(&path, b"half a calibra");
     drop(file);
-    assert_eq!(fs::read_to_string(&path).expect("read"), "kept");
+    assert_eq!(text(&path), "kept");
     assert_eq!(names(&dir), ["arm.calibration.yaml"]);
 }
 
@@ -65,11 +80,10 @@ fn drop_without_commit_leaves_the_old_file_and_removes_the_temporary() {
 fn a_new_file_appears_only_on_commit() {
     let dir = scratch("new");
     let path = dir.join("motion.yaml");
-    let mut file = AtomicFile::create(&path).expect("created");
-    file.write_all(b"keyframes: []\n").expect("written");
+    let file = written(&path, b"keyframes: []\n");
     assert!(!path.exists());
     file.commit().expect("committed");
-    assert_eq!(fs::read_to_string(&path).expect("read"), "keyframes: []\n");
+    assert_eq!(text(&path), "keyframes: []\n");
 
     let other = dir.join("other.yaml");
     drop(AtomicFile::create(&other).expect("created"));
@@ -78,11 +92,9 @@ fn a_new_file_appears_only_on_commit() {
 
 #[test]
 fn write_atomic_writes_the_bytes() {
-    let dir = scratch("write");
-    let path = dir.join("robot.yaml");
-    fs::write(&path, "a longer old text").expect("old file");
+    let (dir, path) = with_old_file("write", "robot.yaml", "a longer old text");
     write_atomic(&path, b"short").expect("written");
-    assert_eq!(fs::read_to_string(&path).expect("read"), "short");
+    assert_eq!(text(&path), "short");
     assert_eq!(names(&dir), ["robot.yaml"]);
 }
 
@@ -111,16 +123,14 @@ fn a_directory_is_not_a_target() {
 
 #[test]
 fn a_read_only_file_is_not_replaced() {
-    let dir = scratch("readonly");
-    let path = dir.join("cal.yaml");
-    fs::write(&path, "kept").expect("old file");
+    let (dir, path) = with_old_file("readonly", "cal.yaml", "kept");
     let mut perms = fs::metadata(&path).expect("metadata").permissions();
     perms.set_readonly(true);
     fs::set_permissions(&path, perms).expect("read-only");
     let err = write_atomic(&path, b"new").expect_err("refused");
     assert!(matches!(err, OutputError::ReadOnly(_)), "{err:?}");
     assert!(check_output(&path).is_err());
-    assert_eq!(fs::read_to_string(&path).expect("read"), "kept");
+    assert_eq!(text(&path), "kept");
     assert_eq!(names(&dir), ["cal.yaml"]);
 }
 
@@ -133,19 +143,14 @@ fn check_output_creates_and_changes_nothing() {
     check_output(&new).expect("writable");
     check_output(&old).expect("writable");
     assert_eq!(names(&dir), ["old.csv"]);
-    assert_eq!(
-        fs::read_to_string(&old).expect("read"),
-        "612 KB of yesterday"
-    );
+    assert_eq!(text(&old), "612 KB of yesterday");
 }
 
 #[cfg(unix)]
 #[test]
 fn a_replaced_file_keeps_its_permissions() {
     use std::os::unix::fs::PermissionsExt;
-    let dir = scratch("mode");
-    let path = dir.join("cal.yaml");
-    fs::write(&path, "old").expect("old file");
+    let (_, path) = with_old_file("mode", "cal.yaml", "old");
     fs::set_permissions(&path, Permissions::from_mode(0o640)).expect("mode");
     write_atomic(&path, b"new").expect("written");
     let mode = fs::metadata(&path).expect("metadata").permissions().mode();
@@ -165,7 +170,7 @@ fn a_symbolic_link_stays_a_link_to_the_new_file() {
         .expect("metadata")
         .file_type()
         .is_symlink());
-    assert_eq!(fs::read_to_string(&real).expect("read"), "new");
+    assert_eq!(text(&real), "new");
     assert_eq!(names(&dir), ["link.csv", "real.csv"]);
 }
 

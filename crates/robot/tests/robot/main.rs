@@ -3,6 +3,7 @@
 
 mod bench;
 mod common;
+mod doctor;
 mod play;
 mod port;
 mod scan;

@@ -3,17 +3,17 @@
 
 use std::time::Duration;
 
+use servobus_config::{BusConfig, JointConfig, Robot, RobotCalibration};
 use servobus_driver::{
     Bus, BusError, BusSettings, Clock, FtdiLatency, SerialTransport, Transport, PATIENCE,
     PATIENT_TRIES,
 };
 use servobus_protocol::registers::{self, addr, Series};
 use servobus_protocol::MAX_ID;
-use servobus_runtime::config::{BusConfig, JointConfig, Robot, RobotCalibration};
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, Finding, FixCommand, NewId, Severity, Step};
+use super::{Action, Advice, Change, Finding, Fix, NewId, SetupStep as Step, Severity};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -21,33 +21,29 @@ use super::{Action, Finding, FixCommand, NewId, Severity, Step};
 pub(crate) const MAX_RETURN_DELAY: Duration = Duration::from_micros(510);
 
 /// Where the fixes are run: the port as the user names it, and the bus's
-/// baud rate (written into the commands when it is not the default).
+/// baud rate.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Target {
+pub struct BusPort {
     /// The port; `None` for the built-in simulator.
     pub port: Option<String>,
     /// The bus's baud rate.
     pub baud: u32,
 }
 
-impl Target {
-    /// `servobus write` of `value` into `register` of servo `id`.
-    pub fn write_command(&self, id: u8, register: &str, value: i32) -> FixCommand {
-        self.write_command_at(self.baud, id, register, value)
-    }
-
-    fn write_command_at(&self, baud: u32, id: u8, register: &str, value: i32) -> FixCommand {
-        FixCommand::Write {
+impl BusPort {
+    /// The write of `value` into `register` of servo `id`.
+    pub fn write_command(&self, id: u8, register: &str, value: i32) -> Fix {
+        Fix::Write {
             port: self.port.clone(),
-            baud,
+            baud: self.baud,
             id,
             register: register.to_owned(),
             value,
         }
     }
 
-    fn set_id_command(&self, id: u8, new_id: NewId) -> FixCommand {
-        FixCommand::SetId {
+    fn set_id_command(&self, id: u8, new_id: NewId) -> Fix {
+        Fix::SetId {
             port: self.port.clone(),
             baud: self.baud,
             id,
@@ -55,11 +51,11 @@ impl Target {
         }
     }
 
-    /// `servobus doctor --fix` for the robot `robot` (as the command line
-    /// names it) on this port, storing homing offsets in EEPROM when
+    /// Every fix of the doctor for the robot `robot` (as a program names
+    /// it) on this port, storing homing offsets in EEPROM when
     /// `write_servos`.
-    pub fn fix_all_command(&self, robot: &str, write_servos: bool) -> FixCommand {
-        FixCommand::DoctorFix {
+    pub fn fix_all_command(&self, robot: &str, write_servos: bool) -> Fix {
+        Fix::DoctorFix {
             robot: robot.to_owned(),
             port: self.port.clone(),
             write_servos,
@@ -67,10 +63,13 @@ impl Target {
     }
 }
 
-/// `servobus doctor --fix` for `robot` on `target` (see
-/// [`Target::fix_all_command`]); the robot named as on the command line.
-pub fn fix_all_command(target: &Target, robot: &Robot, write_servos: bool) -> FixCommand {
-    target.fix_all_command(&crate::builtin::argument(&robot.path), write_servos)
+/// Every fix of the doctor for `robot` on `target` (see
+/// [`BusPort::fix_all_command`]); a built-in robot named by its name.
+pub fn fix_all_command(target: &BusPort, robot: &Robot, write_servos: bool) -> Fix {
+    target.fix_all_command(
+        &servobus_config::builtin::argument(&robot.path),
+        write_servos,
+    )
 }
 
 /// What kind of port the bus is on, for the latency checks.
@@ -111,7 +110,7 @@ pub struct Examined {
 pub(crate) struct Ctx<'a> {
     pub robot: &'a Robot,
     pub bus: &'a BusConfig,
-    pub target: &'a Target,
+    pub target: &'a BusPort,
     /// Real servos (or `servobus sim`'s), not the built-in simulator.
     pub real: bool,
 }
@@ -136,7 +135,7 @@ pub fn examine<T: Transport, C: Clock>(
     bus: &mut Bus<T, C>,
     robot: &Robot,
     cfg: &BusConfig,
-    target: &Target,
+    target: &BusPort,
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
     let saved = *bus.settings();
@@ -203,7 +202,7 @@ fn examine_inner<T: Transport, C: Clock>(
                     "servo {id} answers PING but not READ: its status return level is 0 (SCS)"
                 );
                 let reg = registers::SCS.get("status_level");
-                f.run(target.write_command(id, "status_level", 2));
+                f.advice = Advice::Run(target.write_command(id, "status_level", 2));
                 f.action = reg.map(|register| Action::Write {
                     id,
                     register,
@@ -248,27 +247,28 @@ fn examine_inner<T: Transport, C: Clock>(
         let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
         f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
         match extras.first() {
-            Some(&extra) => f.run_in(
-                &format!("if servo {extra} is joint `{joint}`'s, give it its ID: {{}}"),
-                target.set_id_command(extra, NewId::Id(id)),
-            ),
-            None => f.run_in(
-                "check its cable, power and ID: {}",
-                FixCommand::ScanAllBauds {
+            Some(&extra) => {
+                f.advice = Advice::GiveItsId {
+                    servo: extra,
+                    joint: joint.to_owned(),
+                    fix: target.set_id_command(extra, NewId::Id(id)),
+                }
+            }
+            None => {
+                f.advice = Advice::CheckCable(Fix::ScanAllBauds {
                     port: target.port.clone(),
-                },
-            ),
+                })
+            }
         };
         findings.push(f);
     }
     for &id in &extras {
         let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
         f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
-        f.fix = format!(
-            "give it the ID of its joint ({}), or {}",
-            target.set_id_command(id, NewId::OfItsJoint),
-            ctx.edit_robot_file(&format!("add a joint with ID {id}"))
-        );
+        f.advice = Advice::IdOfItsJoint {
+            fix: target.set_id_command(id, NewId::OfItsJoint),
+            edit: ctx.edit_robot_file(Change::AddJoint { id }),
+        };
         findings.push(f);
     }
 
@@ -322,10 +322,9 @@ pub(crate) fn finding(
         bus: ctx.bus.name.clone(),
         id,
         register: reg,
+        measured: None,
         problem: String::new(),
-        fix: String::new(),
-        command: None,
-        fix_command: None,
+        advice: Advice::None,
         action: None,
     }
 }
@@ -342,21 +341,16 @@ fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Findi
                  {want} probably has ID {id}",
                 joint.name
             );
-            f.fix = format!(
-                "unplug every servo but joint `{}`'s (one servo on the bus), run `{}`, then plug \
-                 the others back in",
-                joint.name,
-                set_id(NewId::Id(want))
-            );
+            f.advice = Advice::UnplugOthers {
+                joint: joint.name.clone(),
+                fix: set_id(NewId::Id(want)),
+            };
         }
         None => {
             f.problem = format!(
                 "two or more servos answer as ID {id}: their replies collide and none can be read"
             );
-            f.fix = format!(
-                "connect them one at a time and give all but one a free ID: {}",
-                set_id(NewId::Free)
-            );
+            f.advice = Advice::OneAtATime(set_id(NewId::Free));
         }
     }
     f
@@ -389,7 +383,7 @@ fn find_at_other_bauds<T: Transport, C: Clock>(
     let Some(index) = registers::baud_index(home) else {
         return Ok(());
     };
-    let rates = servobus_robot::scan::table_bauds()
+    let rates = crate::scan::table_bauds()
         .into_iter()
         .filter(|&b| b != home);
     for baud in rates {
@@ -415,10 +409,12 @@ fn find_at_other_bauds<T: Transport, C: Clock>(
                  baud_rate {index} (the register holds an index into the baud table: \
                  {index} = {home} baud)"
             );
-            f.run(
-                ctx.target
-                    .write_command_at(baud, id, "baud_rate", i32::from(index)),
-            );
+            f.advice = Advice::Run(Fix::SetBaud {
+                port: ctx.target.port.clone(),
+                baud,
+                id,
+                index,
+            });
             f.action = Some(Action::Baud { id, baud, index });
             findings.push(f);
         }

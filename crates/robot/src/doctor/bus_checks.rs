@@ -8,7 +8,7 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx, PortKind};
-use super::{Finding, FixCommand, Severity, Step};
+use super::{Advice, Change, Finding, Fix, SetupStep as Step, Severity};
 
 /// How far the measured latency may exceed the robot file's before it is
 /// worth a warning (scheduling noise of the host).
@@ -41,10 +41,10 @@ pub(crate) fn firmware(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Findi
              answers some instructions differently (\"incorrect status packet\")",
             usual.0, usual.1
         );
-        f.fix = format!(
-            "update servo {} to firmware {}.{} with Feetech's FD software",
-            s.id, usual.0, usual.1
-        );
+        f.advice = Advice::UpdateFirmware {
+            id: s.id,
+            version: usual,
+        };
         out.push(f);
     }
 }
@@ -79,9 +79,8 @@ pub(crate) fn supply_drop(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Fi
             f64::from(top) / 10.0,
             f64::from(top - v) / 10.0
         );
-        f.fix = "use shorter, thicker supply wires, or feed the supply in at both ends of the \
-                 chain"
-            .into();
+        f.measured = Some(v);
+        f.advice = Advice::Wiring;
         out.push(f);
     }
 }
@@ -102,7 +101,8 @@ pub(crate) fn latency<T: Transport, C: Clock>(
                 "the FTDI adapter's latency timer is {} ms: every reply waits that long",
                 ftdi.latency.as_millis()
             );
-            f.run(FixCommand::FtdiLatency {
+            f.measured = i32::try_from(ftdi.latency.as_millis()).ok();
+            f.advice = Advice::Run(Fix::FtdiLatency {
                 sysfs: ftdi.sysfs_path.clone(),
             });
             out.push(f);
@@ -148,10 +148,10 @@ pub(crate) fn latency<T: Transport, C: Clock>(
         f.severity = Severity::Warning;
         // Rounded up to 100 us.
         let want = m.max.as_micros().div_ceil(100) * 100;
-        f.fix = ctx.edit_robot_file(&format!(
-            "set `latency_us: {want}` (or `auto`) on bus `{}`",
-            ctx.bus.name
-        ));
+        f.advice = Advice::EditRobotFile(ctx.edit_robot_file(Change::SetLatency {
+            bus: ctx.bus.name.clone(),
+            us: want,
+        }));
     }
     out.push(f);
     Ok(())

@@ -1,4 +1,4 @@
-//! `--fix`: the writes that repair what the checks found. EEPROM registers
+//! Applying fixes: the writes that repair what the checks found. EEPROM registers
 //! are written with unlock-write-verify-lock; a baud-rate change is the same
 //! transaction split across the two rates. Homing offsets are set for the
 //! session, as play sets them (lock closed: nothing persists), unless
@@ -11,7 +11,7 @@ use servobus_protocol::registers::Series;
 use servobus_runtime::calibrate::{prepare_bus, Refusal};
 
 use super::probe::MAX_RETURN_DELAY;
-use super::{Action, Finding, Fixing};
+use super::{Action, Advice, Finding, Fixing};
 
 /// Why a fix failed.
 #[derive(Debug, thiserror::Error)]
@@ -26,14 +26,26 @@ pub enum FixError {
     Refused(Refusal),
 }
 
+/// What a fix did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Applied {
+    /// What a finding advised (a write, a baud-rate change: its
+    /// [`Advice::Run`]).
+    Advice(Advice),
+    /// Homing offset `value` stored in EEPROM.
+    OffsetStored(i32),
+    /// Homing offset `value` set for this session, as play sets it.
+    OffsetForSession(i32),
+}
+
 /// What became of one fix.
 #[derive(Debug)]
 pub struct FixOutcome {
     /// The servo.
     pub id: u8,
-    /// What the fix did: the command it stands for, or for a homing
-    /// offset what was set.
-    pub command: String,
+    /// What the fix did.
+    pub applied: Applied,
     /// `Err` with the reason when it failed.
     pub result: Result<(), FixError>,
 }
@@ -112,7 +124,7 @@ pub fn apply<T: Transport, C: Clock>(
                     Err(SessionError::Refused(why)) => {
                         out.push(FixOutcome {
                             id,
-                            command: done(f, how),
+                            applied: done(f, how),
                             result: Err(FixError::Refused(why)),
                         });
                         continue;
@@ -128,7 +140,7 @@ pub fn apply<T: Transport, C: Clock>(
             }
             r => out.push(FixOutcome {
                 id,
-                command: done(f, how),
+                applied: done(f, how),
                 result: r.map_err(FixError::Bus),
             }),
         }
@@ -137,17 +149,13 @@ pub fn apply<T: Transport, C: Clock>(
     Ok(out)
 }
 
-/// What applying `f`'s fix does, for the report: its command, or for a
-/// homing offset where it goes.
-fn done(f: &Finding, how: &Fixing<'_>) -> String {
+/// What applying `f`'s fix does, for the report: its fix, or for a homing
+/// offset where it goes.
+fn done(f: &Finding, how: &Fixing<'_>) -> Applied {
     match f.action {
-        Some(Action::Offset { value, .. }) if how.write_servos => {
-            format!("homing offset {value} stored in EEPROM")
-        }
-        Some(Action::Offset { value, .. }) => {
-            format!("homing offset {value} set for this session (as play sets it)")
-        }
-        _ => f.command.clone().unwrap_or_else(|| f.fix.clone()),
+        Some(Action::Offset { value, .. }) if how.write_servos => Applied::OffsetStored(value),
+        Some(Action::Offset { value, .. }) => Applied::OffsetForSession(value),
+        _ => Applied::Advice(f.advice.clone()),
     }
 }
 

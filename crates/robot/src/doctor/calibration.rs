@@ -1,12 +1,12 @@
 //! The checks of the calibration: the homing offset each servo plays
-//! with, the firmware it was taken on, and the commands that calibrate and
+//! with, the firmware it was taken on, and the fixes that calibrate and
 //! edit the robot file (a built-in robot named by its name).
 
-use servobus_runtime::config::{JointConfig, RobotCalibration};
+use servobus_config::{JointConfig, RobotCalibration};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx};
-use super::{Action, Finding, FixCommand, Severity, Step};
+use super::{Action, Advice, Change, Edit, Finding, Fix, RobotFile, SetupStep as Step, Severity};
 
 impl Ctx<'_> {
     /// The servo against the joint's calibration: the homing offset the
@@ -22,18 +22,14 @@ impl Ctx<'_> {
         let (major, minor) = s.firmware();
         let now = format!("{major}.{minor}");
         if let Some(then) = cal.firmware.as_deref().filter(|&v| v != now) {
-            let mut f = self.finding(
-                Severity::Warning,
-                Step::Calibrate,
-                s.id,
-                Some("firmware_major"),
-            );
+            let register = Some("firmware_major");
+            let mut f = self.finding(Severity::Warning, Step::Calibrate, s.id, register);
             f.problem = format!(
                 "firmware is {now}, joint `{}` was calibrated on {then}: the servo may have been \
                  replaced",
                 joint.name
             );
-            f.run_in("if it was, calibrate again: {}", self.calibrate_command());
+            f.advice = Advice::CalibrateIfReplaced(self.calibrate_command());
             out.push(f);
         }
     }
@@ -62,6 +58,7 @@ impl Ctx<'_> {
         };
         let register = s.register("offset");
         let mut f = self.finding(severity, Step::Calibrate, s.id, register.map(|r| r.name));
+        f.measured = Some(offset);
         f.action = Some(Action::Offset {
             id: s.id,
             value: want,
@@ -74,10 +71,7 @@ impl Ctx<'_> {
                  the seam and plays with {want}, which play sets (until power-off)",
                 joint.name
             );
-            f.run_in(
-                "nothing to do before play; to set it now: {}",
-                self.target.fix_all_command(&self.robot_arg(), false),
-            );
+            f.advice = Advice::SetOffsetNow(self.target.fix_all_command(&self.robot_arg(), false));
         } else {
             f.problem = format!(
                 "homing offset is {offset}, joint `{}`'s calibration was taken with {taken}{}: \
@@ -90,47 +84,46 @@ impl Ctx<'_> {
                     format!(" and plays with {want}")
                 }
             );
-            f.run_in(
-                &format!(
-                    "if only the offset was rewritten, store the calibration's in EEPROM: {{}}; \
-                     if the servo or its horn was replaced, calibrate again: {}",
-                    self.calibrate_command()
-                ),
-                self.target.write_command(s.id, "offset", want),
-            );
+            f.advice = Advice::StoreOrCalibrate {
+                store: self.target.write_command(s.id, "offset", want),
+                calibrate: self.calibrate_command(),
+            };
         }
         f
     }
 
-    /// The robot as the command line names it: a built-in's name, else
-    /// its file.
+    /// The robot as a program names it: a built-in's name, else its file.
     pub(crate) fn robot_arg(&self) -> String {
-        crate::builtin::argument(&self.robot.path)
+        servobus_config::builtin::argument(&self.robot.path)
     }
 
-    /// `servobus calibrate` for this robot and port, with where the
-    /// calibration goes.
-    pub(crate) fn calibrate_command(&self) -> FixCommand {
+    /// Calibrating this robot on this port, with where the calibration
+    /// goes.
+    pub(crate) fn calibrate_command(&self) -> Fix {
         let output = match &self.robot.calibration {
             RobotCalibration::Missing(path) => path.display().to_string(),
             _ => "calibration.yaml".into(),
         };
-        FixCommand::Calibrate {
+        Fix::Calibrate {
             robot: self.robot_arg(),
             port: self.target.port.clone(),
             output,
         }
     }
 
-    /// What to do to change the robot file: edit it, or for a built-in
-    /// robot, write a copy to edit with `servobus init` first.
-    pub(crate) fn edit_robot_file(&self, change: &str) -> String {
-        match crate::builtin::builtin_name(&self.robot.path) {
-            Some(name) => format!(
-                "the built-in robot cannot be edited: `servobus init --robot {name}` writes \
-                 robot.yaml; {change} there and pass --robot robot.yaml"
-            ),
-            None => format!("{change} in {}", self.robot.path.display()),
+    /// `change` to this robot's file (a built-in robot's is copied first).
+    pub(crate) fn edit_robot_file(&self, change: Change) -> Edit {
+        Edit {
+            robot: self.robot_file(),
+            change,
+        }
+    }
+
+    /// This robot's file: a built-in's name, else its path.
+    pub(crate) fn robot_file(&self) -> RobotFile {
+        match servobus_config::builtin::builtin_name(&self.robot.path) {
+            Some(name) => RobotFile::Builtin(name.to_owned()),
+            None => RobotFile::File(self.robot.path.clone()),
         }
     }
 }
@@ -158,12 +151,9 @@ pub(crate) fn play_frame_tick(s: &ServoState, joint: &JointConfig, pos: i32) -> 
 /// Whether the robot has the calibration it names (said once, with its
 /// first bus). Real servos without one are told to calibrate first.
 pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
-    let then = match crate::builtin::builtin_name(&ctx.robot.path) {
-        Some(_) => "then pass --calibration calibration.yaml to play, teach and bench".to_owned(),
-        None => format!(
-            "then add `calibration: calibration.yaml` to {} (or pass --calibration)",
-            ctx.robot.path.display()
-        ),
+    let first = || Advice::CalibrateFirst {
+        calibrate: ctx.calibrate_command(),
+        robot: ctx.robot_file(),
     };
     match &ctx.robot.calibration {
         RobotCalibration::Missing(path) => {
@@ -173,7 +163,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
                  are refused until it does",
                 path.display()
             );
-            f.run(ctx.calibrate_command());
+            f.advice = Advice::Run(ctx.calibrate_command());
             out.push(f);
         }
         RobotCalibration::None if ctx.real => {
@@ -182,7 +172,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
                          nothing (each servo horn sits at its own angle), so no joint is checked \
                          against its limits"
                 .into();
-            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
+            f.advice = first();
             out.push(f);
         }
         RobotCalibration::None | RobotCalibration::Unapplied(_) => {
@@ -190,7 +180,7 @@ pub(crate) fn robot_findings(ctx: &Ctx<'_>, out: &mut Vec<Finding>) {
             f.problem = "no calibration: joint angles count from each servo's middle tick \
                          with the robot file's offset and inverted"
                 .into();
-            f.run_in(&format!("{{}}, {then}"), ctx.calibrate_command());
+            f.advice = first();
             out.push(f);
         }
         RobotCalibration::Applied { .. } => {}

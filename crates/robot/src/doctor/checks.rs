@@ -2,12 +2,12 @@
 //! and against the known pitfalls. Pure functions of what was read, so each
 //! one is tested without a bus.
 
+use servobus_config::{JointConfig, JointMap};
 use servobus_protocol::registers::{self, Register, Series};
 use servobus_protocol::StatusFlags;
-use servobus_runtime::config::{JointConfig, JointMap};
 
 use super::probe::Ctx;
-use super::{Action, Finding, Severity, Step};
+use super::{Action, Advice, Change, Finding, SetupStep as Step, Severity};
 
 /// Bytes read from each servo: from the firmware version (0) to the status
 /// and moving flags (65, 66) and, on STS/SMS, the present current (69, 70).
@@ -134,10 +134,12 @@ impl Ctx<'_> {
     ) -> Finding {
         let reg = s.register(name);
         let mut f = self.finding(severity, step, s.id, reg.map(|r| r.name));
-        f.run(
-            self.target
-                .write_command(s.id, reg.map_or(name, |r| r.name), value),
-        );
+        f.measured = s.value(name);
+        f.advice = Advice::Run(self.target.write_command(
+            s.id,
+            reg.map_or(name, |r| r.name),
+            value,
+        ));
         let silent = s.value("status_level") == Some(0);
         f.action = reg.map(|register| Action::Write {
             id: s.id,
@@ -167,15 +169,14 @@ impl Ctx<'_> {
                     "servo {} is a {found}, the robot file says {} for joint `{}`",
                     s.id, joint.model.name, joint.name
                 );
-                f.fix = format!(
-                    "fit a {}, or {}",
-                    joint.model.name,
-                    self.edit_robot_file(&format!(
-                        "set `model: {}` for joint `{}`",
-                        found.to_ascii_lowercase(),
-                        joint.name
-                    ))
-                );
+                f.measured = Some(i32::from(s.model_number()));
+                f.advice = Advice::FitModel {
+                    model: joint.model.name.to_owned(),
+                    edit: self.edit_robot_file(Change::SetModel {
+                        joint: joint.name.clone(),
+                        model: found.to_ascii_lowercase(),
+                    }),
+                };
                 out.push(f);
                 // The other registers mean other things on another model.
                 return out;
@@ -255,7 +256,8 @@ impl Ctx<'_> {
                     "temperature {t} C, limit {limit} C{}",
                     if hot { " (overheat)" } else { "" }
                 );
-                f.run_in("let it cool with the torque off: {}", torque_off);
+                f.measured = Some(t);
+                f.advice = Advice::Cool(torque_off);
                 out.push(f);
             }
         }
@@ -281,24 +283,22 @@ impl Ctx<'_> {
                 volts(lo),
                 volts(hi)
             );
-            f.fix = supply_fix(model, rated);
+            f.measured = Some(v);
+            f.advice = supply_fix(model, rated);
             out.push(f);
         } else if let Some((rlo, rhi)) =
             rated.filter(|&(a, b)| v < i32::from(a) || v > i32::from(b))
         {
-            let mut f = self.finding(
-                Severity::Warning,
-                Step::Check,
-                s.id,
-                Some("present_voltage"),
-            );
+            let register = Some("present_voltage");
+            let mut f = self.finding(Severity::Warning, Step::Check, s.id, register);
             f.problem = format!(
                 "supply {:.1} V {when} is outside the {model}'s rating {:.1}..{:.1} V",
                 volts(v),
                 volts(i32::from(rlo)),
                 volts(i32::from(rhi))
             );
-            f.fix = supply_fix(model, rated);
+            f.measured = Some(v);
+            f.advice = supply_fix(model, rated);
             out.push(f);
         }
     }
@@ -343,10 +343,9 @@ impl Ctx<'_> {
                     joint.min,
                     joint.max
                 );
-                f.run_in(
-                    "turn the torque off ({}) and move the joint into its limits by hand",
-                    self.target.write_command(s.id, "torque_enable", 0),
-                );
+                f.measured = Some(pos);
+                f.advice =
+                    Advice::MoveIntoLimits(self.target.write_command(s.id, "torque_enable", 0));
                 out.push(f);
             }
         }
@@ -393,14 +392,9 @@ impl Ctx<'_> {
     }
 }
 
-fn supply_fix(model: &str, rated: Option<(u8, u8)>) -> String {
-    match rated {
-        Some((lo, hi)) => format!(
-            "power the bus from a supply of {:.1}..{:.1} V for the {model}, with wires thick \
-             enough that it holds under load",
-            f64::from(lo) / 10.0,
-            f64::from(hi) / 10.0
-        ),
-        None => "check the supply against the servo's rating".into(),
+fn supply_fix(model: &str, rated: Option<(u8, u8)>) -> Advice {
+    Advice::Supply {
+        model: model.to_owned(),
+        rated,
     }
 }

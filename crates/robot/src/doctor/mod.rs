@@ -1,0 +1,174 @@
+//! The doctor: checks a bus of servos against the robot file and against
+//! the set-up mistakes that break Feetech robots (wrong ID or baud rate,
+//! return delays left at the factory 500 us, an EEPROM lock left open,
+//! angle limits narrower than the joint's, a gripper free to overheat, ...).
+//!
+//! Each [`Finding`] names its severity, the servo and register, the value
+//! measured, what is wrong and what to do about it ([`Advice`], with the
+//! [`Fix`] that repairs it as data). Nothing is written unless the caller
+//! asks for it with [`apply`]; EEPROM values are then written with the
+//! driver's unlock-write-verify-lock transaction.
+//!
+//! [`check`] examines every bus of a robot (on its ports, or the built-in
+//! simulator) and applies the fixes when asked; [`examine`] and [`apply`]
+//! work on one bus a program holds. They are generic over the driver's
+//! [`Transport`](servobus_driver::Transport) and
+//! [`Clock`](servobus_driver::Clock), so they run on a serial port and on
+//! the simulator in virtual time alike.
+
+mod advice;
+mod bus_checks;
+mod calibration;
+mod checks;
+mod fix;
+mod probe;
+mod robot;
+
+use serde::Serialize;
+use servobus_config::Robot;
+use servobus_protocol::registers::{Register, Series};
+
+pub use advice::{Advice, Change, Edit, Fix, NewId, RobotFile, TOOLS_DEFAULT_BAUD};
+pub use checks::{rated_voltage_dv, ServoState};
+pub use fix::{apply, change_baud, Applied, FixError, FixOutcome};
+pub use probe::fix_all_command;
+pub use probe::{examine, BusPort, Examined, PortKind};
+pub use robot::{check, BusCheck, CheckOptions, Checkup};
+
+/// How bad a finding is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    /// Worth knowing; nothing to fix.
+    Info,
+    /// Works, but badly or riskily.
+    Warning,
+    /// Breaks motion or the robot.
+    Error,
+}
+
+impl std::fmt::Display for Severity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Severity::Info => "info",
+            Severity::Warning => "warning",
+            Severity::Error => "error",
+        })
+    }
+}
+
+/// Where a finding belongs in the set-up of a new robot: the order a new
+/// arm needs the advice in (findings are listed in this order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SetupStep {
+    /// Every servo answers, alone, at its ID and the bus's baud rate, and is
+    /// the model the robot file names.
+    Connect,
+    /// The servos' settings: reply delay and level, lock, limits, protection.
+    Configure,
+    /// The calibration and the homing offsets it plays with.
+    Calibrate,
+    /// Health and timing: temperature, supply, firmware, pose, latency.
+    Check,
+}
+
+/// What [`apply`] does about a finding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Action {
+    /// Write `value` into `register` of servo `id` (EEPROM registers with
+    /// unlock-write-verify-lock). `silent`: the servo answers no WRITE
+    /// (status level 0), so none is waited for.
+    Write {
+        /// The servo.
+        id: u8,
+        /// The register.
+        register: &'static Register,
+        /// The value.
+        value: i32,
+        /// Whether writes go unanswered.
+        silent: bool,
+        /// The servo's series (the register's layout and lock).
+        series: Series,
+    },
+    /// Servo `id` listens at `baud`: set its baud-rate register to the
+    /// bus's index there, then find it at the bus's rate.
+    Baud {
+        /// The servo.
+        id: u8,
+        /// The rate it answers at now.
+        baud: u32,
+        /// The bus's baud-rate index to write.
+        index: u8,
+    },
+    /// Servo `id`'s homing offset should be `value` (the calibration's play
+    /// frame): set for this session as play sets it (lock closed), or,
+    /// with [`Fixing::write_servos`], stored in its EEPROM.
+    Offset {
+        /// The servo.
+        id: u8,
+        /// The offset the calibration plays with.
+        value: i32,
+        /// Whether only storing it is a fix: the servo holds neither the
+        /// calibration's offset nor the play frame's, so play refuses it
+        /// and a session offset would not be accepted.
+        store_only: bool,
+        /// The servo's series.
+        series: Series,
+    },
+}
+
+/// How [`apply`] applies the fixes of one bus.
+#[derive(Debug, Clone, Copy)]
+pub struct Fixing<'a> {
+    /// The robot (its calibration sets the session offsets).
+    pub robot: &'a Robot,
+    /// The index of the bus in the robot file.
+    pub bus: usize,
+    /// Store homing offsets in EEPROM instead of setting them for the
+    /// session only.
+    pub write_servos: bool,
+}
+
+/// One thing found wrong (or worth knowing) about a bus.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Finding {
+    /// How bad it is.
+    pub severity: Severity,
+    /// Where it belongs in setting a robot up.
+    pub step: SetupStep,
+    /// The robot file's bus.
+    pub bus: String,
+    /// The servo, when it concerns one.
+    pub id: Option<u8>,
+    /// The register, when one is at fault.
+    pub register: Option<&'static str>,
+    /// The value measured, when the finding is about one register's
+    /// value (in the register's units).
+    pub measured: Option<i32>,
+    /// What is wrong.
+    pub problem: String,
+    /// What to do about it, with the fix as data.
+    #[serde(skip)]
+    pub advice: Advice,
+    /// What [`apply`] does about it, if anything.
+    #[serde(skip)]
+    pub action: Option<Action>,
+}
+
+impl Finding {
+    /// Whether [`apply`] can apply the fix.
+    pub fn fixable(&self) -> bool {
+        self.action.is_some()
+    }
+}
+
+/// The exit status of a set of findings: 0 when nothing is wrong, 1 on
+/// warnings only, 2 on errors.
+pub fn exit_status(findings: &[Finding]) -> u8 {
+    match findings.iter().map(|f| f.severity).max() {
+        Some(Severity::Error) => 2,
+        Some(Severity::Warning) => 1,
+        _ => 0,
+    }
+}

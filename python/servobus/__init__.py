@@ -6,6 +6,7 @@
   from a thread (``with Sim("so101") as sim: Bus(sim.port)``).
 - :class:`Robot`: plan and play motions, stream live targets, calibrate.
 - :class:`Calibration`: a robot's calibration, from and to LeRobot's files.
+- :class:`Checkup`: what ``Robot.doctor()`` finds, as typed findings.
 
 Every call that waits on a bus releases the GIL. Errors are subclasses of
 :class:`Error`.
@@ -16,6 +17,7 @@ from ._native import Sim, __version__
 from ._errors import *  # noqa: F401,F403 (the exception classes, listed in _errors.__all__)
 from ._bus import Bus, Missing, SyncRead
 from ._calibration import Calibration, JointCalibration
+from ._doctor import AppliedFix, BusCheckup, Checkup, Finding
 from ._robot import JointLimits, JointPeaks, JointReport, Plan, Report, Robot, Segment, State, Stream
 
 __all__ = [
@@ -32,6 +34,10 @@ __all__ = [
     "JointReport",
     "Calibration",
     "JointCalibration",
+    "Checkup",
+    "BusCheckup",
+    "Finding",
+    "AppliedFix",
     "SyncRead",
     "Missing",
     "__version__",

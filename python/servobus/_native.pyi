@@ -121,6 +121,8 @@ class Robot:
         on_step: Optional[Callable[[str], object]] = None,
     ) -> str:
         """Runs the calibration procedure; the calibration as JSON text."""
+    def doctor(self, fix: bool = False, write_servos: bool = False) -> str:
+        """The doctor's checkup of every bus as JSON text."""
     def torque_off(self) -> None:
         """A broadcast torque off on every bus (nothing on the simulator)."""
 

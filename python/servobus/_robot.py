@@ -13,6 +13,7 @@ import numpy as np
 
 from . import _native
 from ._calibration import Calibration, PathLike
+from ._doctor import Checkup
 from ._errors import Error, FaultError
 
 
@@ -361,6 +362,19 @@ class Robot:
         if output is not None:
             cal.save(output)
         return cal
+
+    def doctor(self, fix: bool = False, *, write_servos: bool = False) -> Checkup:
+        """Checks every bus as ``servobus doctor`` does: each servo answers
+        at its ID and the bus's rate, its model, voltage, temperature,
+        limits, gripper protection and calibration. On the robot's port, or
+        on the built-in simulator when it has none. Returns the
+        :class:`Checkup`: typed findings, each with its advice as data.
+
+        With ``fix``, the fixes that are writes are applied and the bus is
+        checked again (homing offsets are set for the session; stored in
+        EEPROM only with ``write_servos``). Raises :class:`PortError` when
+        a port cannot be opened."""
+        return Checkup.from_json(self._robot.doctor(bool(fix), bool(write_servos)))
 
     def torque_off(self) -> Optional[Report]:
         """Turns the torque off on every servo. A running stream ends, and

@@ -363,6 +363,17 @@ impl Robot {
         }
     }
 
+    /// Checks every bus with the doctor: on the robot's port (the first
+    /// bus; the robot file's ports past it) or on the built-in simulator.
+    /// With `fix`, applies the fixes that are writes and checks again
+    /// (homing offsets stored in EEPROM only with `write_servos`). JSON
+    /// text: `status`, `buses` (findings, fixes), `unchecked`.
+    #[pyo3(signature = (fix=false, write_servos=false))]
+    fn doctor(&self, py: Python<'_>, fix: bool, write_servos: bool) -> PyResult<String> {
+        let port = self.port.as_deref();
+        Ok(py.allow_threads(|| crate::doctor::doctor(&self.robot, port, fix, write_servos))?)
+    }
+
     /// Turns the torque off on every servo of every bus of the robot (one
     /// broadcast WRITE a bus, so a servo that answers nothing is reached
     /// too). Nothing to do on the built-in simulator: it holds no torque

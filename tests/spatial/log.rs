@@ -2,7 +2,6 @@
 //! kinematics of the measured angles) as columns of every row.
 
 use std::path::PathBuf;
-use std::process::Command;
 
 /// The rows of `play <motion> --fast --log`, header first.
 fn logged(motion: &str) -> Vec<Vec<String>> {
@@ -10,16 +9,13 @@ fn logged(motion: &str) -> Vec<Vec<String>> {
         "servobus-spatial-log-{motion}-{}.csv",
         std::process::id()
     ));
-    let out = Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(["play", motion, "--fast", "--log"])
-        .arg(&path)
-        .output()
-        .expect("servobus runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::servobus_ok(&[
+        "play".as_ref(),
+        motion.as_ref(),
+        "--fast".as_ref(),
+        "--log".as_ref(),
+        path.as_ref(),
+    ]);
     let text = std::fs::read_to_string(&path).expect("the log");
     let _ = std::fs::remove_file(&path);
     text.lines()
@@ -142,16 +138,13 @@ fn a_hexapod_log_gives_every_foot() {
 fn a_plot_of_a_run_shows_the_measured_tool_path_from_above_and_the_side() {
     let path: PathBuf =
         std::env::temp_dir().join(format!("servobus-spatial-plot-{}.svg", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(["play", "arm-line", "--fast", "--plot"])
-        .arg(&path)
-        .output()
-        .expect("servobus runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::servobus_ok(&[
+        "play".as_ref(),
+        "arm-line".as_ref(),
+        "--fast".as_ref(),
+        "--plot".as_ref(),
+        path.as_ref(),
+    ]);
     let svg = std::fs::read_to_string(&path).expect("the plot");
     let _ = std::fs::remove_file(&path);
     for caption in [

@@ -18,6 +18,20 @@ use servobus_runtime::sim::{new_truth, SimRobot};
 use servobus_runtime::{Finish, RunOptions, VirtualRun};
 use servobus_trajectory::JointState;
 
+/// Runs `servobus ARGS`, which must succeed; its standard output.
+fn servobus_ok(args: &[&std::ffi::OsStr]) -> Vec<u8> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_servobus"))
+        .args(args)
+        .output()
+        .expect("servobus runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
+
 /// A file under the repository's `configs/`.
 fn config(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -1,19 +1,9 @@
 //! `servobus plan --json`'s spatial figures for the shipped spatial
 //! motions.
 
-use std::process::Command;
-
 fn plan_json(motion: &str) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_servobus"))
-        .args(["plan", motion, "--json"])
-        .output()
-        .expect("servobus runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON")
+    let out = crate::servobus_ok(&["plan".as_ref(), motion.as_ref(), "--json".as_ref()]);
+    serde_json::from_slice(&out).expect("JSON")
 }
 
 fn num(v: &serde_json::Value, key: &str) -> f64 {

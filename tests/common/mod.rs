@@ -199,11 +199,47 @@ pub fn one_joint_motion(dir: &str, name: &str, motion: &str) -> PathBuf {
     temp_file(dir, name, motion)
 }
 
-/// A fresh scratch directory for one test.
+/// A fresh scratch directory for one test: `servobus-<name>-<pid>` in the
+/// temporary directory (where a test run as `nobody` can reach it). Those
+/// of test runs that have ended are removed first, once a run.
 pub fn scratch(name: &str) -> PathBuf {
+    static SWEPT: std::sync::Once = std::sync::Once::new();
+    SWEPT.call_once(sweep_ended_runs);
     let dir = std::env::temp_dir().join(format!("servobus-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
+}
+
+/// Removes the `servobus-<name>-<pid>` scratch entries of processes that
+/// are gone (Linux: their `/proc/<pid>` is missing); nothing where there
+/// is no `/proc` to ask.
+fn sweep_ended_runs() {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("servobus-"))
+            .and_then(|rest| rest.rsplit_once('-'))
+            .and_then(|(_, pid)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists() {
+            continue;
+        }
+        let path = entry.path();
+        let _ = if path.is_dir() {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+    }
 }
 
 /// Whether the tests run as root (who may open anything and use any

@@ -24,7 +24,7 @@ use crate::target::Checked;
 mod live;
 mod scale;
 
-use scale::Scale;
+use scale::{pause_ramp, Scale};
 
 /// The default time live targets may fail to come before the joints stop, s.
 pub(crate) const DEFAULT_TARGET_TIMEOUT: f64 = 0.25;
@@ -165,28 +165,6 @@ fn scaled(limits: &[JointLimits], f: f64) -> Vec<JointLimits> {
             .with_positions(l.min_position, l.max_position)
         })
         .collect()
-}
-
-/// The shortest pause or resume ramp, s (joints with a high acceleration
-/// for their speed still change speed over a few cycles, not one).
-const MIN_PAUSE_RAMP: f64 = 0.05;
-
-/// The longest pause or resume ramp, s (a slow joint does not make a
-/// pause take longer than this).
-const MAX_PAUSE_RAMP: f64 = 3.0;
-
-/// How long pausing or resuming ramps the path's time scale, s: the
-/// longest the limits allow without asking more than about half of a
-/// joint's acceleration for the slow-down itself (the quintic ramp's
-/// peak slope is 1.875 / duration, so a ramp of `3.75 v / a` slows a joint
-/// at speed `v` by at most `a / 2`), between [`MIN_PAUSE_RAMP`] and
-/// [`MAX_PAUSE_RAMP`].
-fn pause_ramp(limits: &[JointLimits]) -> f64 {
-    limits
-        .iter()
-        .map(|l| 3.75 * l.max_velocity / l.max_acceleration)
-        .fold(MIN_PAUSE_RAMP, f64::max)
-        .min(MAX_PAUSE_RAMP)
 }
 
 impl Timeline {

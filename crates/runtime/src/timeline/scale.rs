@@ -1,4 +1,7 @@
-//! The smooth time scale of the main path (pause and resume).
+//! The smooth time scale of the main path (pause and resume), and how
+//! long its ramps take.
+
+use servobus_trajectory::JointLimits;
 
 /// Smooth time scale of the main path: `s` ramps from `s0` to `s1` over
 /// `dur` seconds from `r0` with a quintic smoothstep (continuous `s`, `s'`
@@ -58,6 +61,28 @@ impl Scale {
             dur: dur.max(1e-3),
         }
     }
+}
+
+/// The shortest pause or resume ramp, s (joints with a high acceleration
+/// for their speed still change speed over a few cycles, not one).
+const MIN_PAUSE_RAMP: f64 = 0.05;
+
+/// The longest pause or resume ramp, s (a slow joint does not make a
+/// pause take longer than this).
+const MAX_PAUSE_RAMP: f64 = 3.0;
+
+/// How long pausing or resuming ramps the path's time scale, s: the
+/// longest the limits allow without asking more than about half of a
+/// joint's acceleration for the slow-down itself (the quintic ramp's
+/// peak slope is 1.875 / duration, so a ramp of `3.75 v / a` slows a joint
+/// at speed `v` by at most `a / 2`), between [`MIN_PAUSE_RAMP`] and
+/// [`MAX_PAUSE_RAMP`].
+pub(super) fn pause_ramp(limits: &[JointLimits]) -> f64 {
+    limits
+        .iter()
+        .map(|l| 3.75 * l.max_velocity / l.max_acceleration)
+        .fold(MIN_PAUSE_RAMP, f64::max)
+        .min(MAX_PAUSE_RAMP)
 }
 
 #[cfg(test)]

@@ -76,14 +76,17 @@ impl LeadEstimator {
                 sev: 0.0,
                 svv: 0.0,
                 n: 0,
-                // The prior, ramped in over the run's first
-                // [`LEAD_RAMP_S`] (the approach, usually), until the first
-                // estimate: a lead in force at once would put the first
-                // cycles' goals a step ahead of where the servos stand.
-                ramp: Ramp {
-                    from: 0.0,
-                    to: prior.clamp(0.0, max.as_secs_f64()),
-                    x0: 0.0,
+                // The prior is in force from the first cycle, until the
+                // first estimate: every run starts at rest (a path from
+                // its first keyframe, an approach, a hold), where a lead
+                // moves the goal by nothing, so there is no step to ramp.
+                ramp: {
+                    let prior = prior.clamp(0.0, max.as_secs_f64());
+                    Ramp {
+                        from: prior,
+                        to: prior,
+                        x0: 0.0,
+                    }
                 },
             },
         })
@@ -153,12 +156,10 @@ mod tests {
         // 10 ms and 8 ms servos at 200 Hz: 10 + 5 / 2 = 12.5 ms.
         let prior = prior_lag([ms(10), ms(8)].into_iter(), 0.005);
         assert!((prior - 0.0125).abs() < 1e-12, "{prior}");
-        // It is ramped in from the first cycle, before any reading: half of
-        // it at the ramp's middle (0.25 s), all of it from 0.5 s on.
+        // It is in force from the first cycle, before any reading.
         let auto = LeadEstimator::new(Lead::default(), prior);
-        assert_eq!(auto.at(0.0), 0.0);
-        assert!((auto.at(0.25) - 0.00625).abs() < 1e-12);
-        assert!((auto.at(0.5) - 0.0125).abs() < 1e-12);
+        assert!((auto.at(0.0) - 0.0125).abs() < 1e-12);
+        assert!((auto.at(0.25) - 0.0125).abs() < 1e-12);
         // Bounded by the largest lead allowed, and unused by a fixed lead.
         let capped = LeadEstimator::new(Lead::Auto { max: ms(5) }, prior);
         assert!((capped.at(1.0) - 0.005).abs() < 1e-12);

@@ -31,7 +31,7 @@ use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance};
-use servobus_robot::bench::{measure, BenchError, BusBench};
+use servobus_robot::bench::{measure_link, measure_on, BenchError, BusBench};
 
 mod floor;
 
@@ -166,13 +166,25 @@ fn bench_bus(
         }
     };
     let server_ran = server.is_some();
+    let mut measured_latency_us = None;
     // One bus for the calibration check and the measurement: the port is
     // opened once.
     let result = open_bus(bus, &path, Allowance::Assumed).and_then(|mut servo_bus| {
         if let Some(port) = &port {
             super::calibrate::check_bus(robot, index, &mut servo_bus, port)?;
         }
-        measure(&mut servo_bus, bus, duration).map_err(|e| match e {
+        // On a port, the cycle is planned on the adapter as measured (the
+        // probe `budget --port` runs); on the simulator, as `budget` plans.
+        let link = match &port {
+            Some(_) => {
+                let pty = servo_bus.transport().is_pty();
+                let measured = measure_link(&mut servo_bus, bus, pty)?;
+                measured_latency_us = Some(measured.ping_latency.as_secs_f64() * 1e6);
+                measured.link
+            }
+            None => bus.budget_link(),
+        };
+        measure_on(&mut servo_bus, bus, &link, duration).map_err(|e| match e {
             e @ BenchError::Missing { .. } => {
                 anyhow::anyhow!("{e}; check the port and `servobus scan`")
             }
@@ -188,6 +200,7 @@ fn bench_bus(
     }
     let mut bench = result?;
     bench.backend = backend;
+    bench.measured_latency_us = measured_latency_us;
     if server_ran {
         // Measured after the bench, not beside it: the two would share the
         // machine's cores and slow each other down.

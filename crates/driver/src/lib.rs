@@ -142,7 +142,7 @@ mod sync;
 #[cfg(test)]
 mod testing;
 
-pub use bus::{Bus, LatencyMeasurement};
+pub use bus::{Bus, LatencyMeasurement, PROBE_CEILING, PROBE_PINGS};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]

@@ -9,11 +9,13 @@ use std::time::Duration;
 
 use serde::Serialize;
 use servobus_config::BusConfig;
-use servobus_driver::{Bus, BusError, Clock, MissingReason, Transport, PATIENT_TRIES};
+use servobus_driver::{
+    Bus, BusError, Clock, MissingReason, Transport, PATIENT_TRIES, PROBE_CEILING, PROBE_PINGS,
+};
 use servobus_protocol::registers::{addr, ValueError};
 use servobus_runtime::stats::Histogram;
 use servobus_runtime::Quantiles;
-use servobus_timing::CycleError;
+use servobus_timing::{CycleError, Link};
 
 /// One servo's round trip, us.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -63,6 +65,10 @@ pub struct BusBench {
     pub floor_rate_hz: f64,
     /// Achieved over floor rate (0 without a floor).
     pub floor_ratio: f64,
+    /// On a port: the mean of what each PING of the start-up probe took
+    /// beyond the wire and the servo, us, on which `planned_rate_hz` is
+    /// planned (as `budget --port` plans); the caller's to fill in.
+    pub measured_latency_us: Option<f64>,
     /// Replies not given in time.
     pub timeouts: u64,
     /// Transactions retried.
@@ -125,16 +131,74 @@ pub enum BenchError {
     Position(#[source] ValueError),
 }
 
+/// What the start-up probe measured of the link to a bus's servos.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredLink {
+    /// The link to plan on ([`BusConfig::measured_link`]).
+    pub link: Link,
+    /// The mean of what each PING took beyond the wire and the servo.
+    pub ping_latency: Duration,
+    /// PINGs answered.
+    pub pings: u32,
+}
+
+/// Measures the link to `bus`'s servos on `servo_bus` with the start-up
+/// probe of `latency_us: auto` ([`Bus::probe_latency`], the same PINGs a
+/// run sends), and gives the link its cycle costs on. `pty`: the port is
+/// a pseudo-terminal (`servobus sim`), whose replies cost a hand-off each.
+///
+/// # Errors
+/// [`BenchError::NoJoints`]; [`BenchError::Bus`] when no servo answers.
+pub fn measure_link<T: Transport, C: Clock>(
+    servo_bus: &mut Bus<T, C>,
+    bus: &BusConfig,
+    pty: bool,
+) -> Result<MeasuredLink, BenchError> {
+    let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
+    if ids.is_empty() {
+        return Err(BenchError::NoJoints {
+            bus: bus.name.clone(),
+        });
+    }
+    let m = servo_bus
+        .probe_latency(&ids, PROBE_PINGS, PROBE_CEILING, |_| {})
+        .map_err(|source| BenchError::Bus {
+            bus: bus.name.clone(),
+            what: "measuring the adapter",
+            source,
+        })?;
+    Ok(MeasuredLink {
+        link: bus.measured_link(m.mean, pty),
+        ping_latency: m.mean,
+        pings: m.samples,
+    })
+}
+
 /// Runs full cycles on `servo_bus`, the bus `bus` of a robot, for
 /// `duration`, holding every servo where the first (untimed, patient) read
-/// finds it, and returns the figures. `backend` and the floor are left
-/// for the caller.
+/// finds it, and returns the figures, planned on the budget's link
+/// ([`BusConfig::budget_link`]). `backend` and the floor are left for the
+/// caller.
 ///
 /// # Errors
 /// A [`BenchError`] naming the bus and what failed.
 pub fn measure<T: Transport, C: Clock>(
     servo_bus: &mut Bus<T, C>,
     bus: &BusConfig,
+    duration: Duration,
+) -> Result<BusBench, BenchError> {
+    measure_on(servo_bus, bus, &bus.budget_link(), duration)
+}
+
+/// As [`measure`], with the planned figures on `link` (a measured one,
+/// see [`measure_link`]).
+///
+/// # Errors
+/// A [`BenchError`] naming the bus and what failed.
+pub fn measure_on<T: Transport, C: Clock>(
+    servo_bus: &mut Bus<T, C>,
+    bus: &BusConfig,
+    link: &Link,
     duration: Duration,
 ) -> Result<BusBench, BenchError> {
     let failed = |what: &'static str| {
@@ -151,7 +215,7 @@ pub fn measure<T: Transport, C: Clock>(
         });
     };
     let series = first.model.series;
-    let plan = bus.plan(1.0).map_err(|source| BenchError::Plan {
+    let plan = bus.plan_on(link, 1.0).map_err(|source| BenchError::Plan {
         bus: bus.name.clone(),
         source,
     })?;
@@ -262,6 +326,7 @@ pub fn measure<T: Transport, C: Clock>(
         overruns,
         floor_rate_hz: 0.0,
         floor_ratio: 0.0,
+        measured_latency_us: None,
         timeouts: counters.timeouts,
         retries: counters.retries,
         missed_replies: missed,

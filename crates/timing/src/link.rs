@@ -26,6 +26,18 @@ pub struct Link {
     pub turnaround: Duration,
     /// Safety margin added to every deadline.
     pub margin: Duration,
+    /// What each round trip (a request whose reply the host waits for)
+    /// costs on this link beyond the adapter latency and the wire: the
+    /// hand-offs between the host, the port and the far end. 0 on a link
+    /// whose latency figure already covers them (a measured adapter);
+    /// [`Link::PTY_EXCHANGE_OVERHEAD`] on the built-in simulator's
+    /// pseudo-terminal.
+    pub overhead: Duration,
+    /// What each reply costs on this link beyond its wire time, return
+    /// delay and turnaround (a hand-off per reply where the far end hands
+    /// the replies over one by one); [`Link::PTY_REPLY_OVERHEAD`] on the
+    /// built-in simulator's pseudo-terminal.
+    pub reply_overhead: Duration,
 }
 
 impl Link {
@@ -45,6 +57,19 @@ impl Link {
     /// allowance for the simulator only: a real port uses
     /// [`Link::USB_LATENCY`] or its adapter's measured figure.
     pub const PTY_LATENCY: Duration = Duration::from_millis(3);
+    /// What each round trip costs on the built-in simulator's
+    /// pseudo-terminal beyond the wire and the servos' turnarounds: the
+    /// kernel hands the request from the client to the simulator's thread
+    /// and the reply back, a wake-up each way.
+    ///
+    /// MEASURED_EXCHANGE
+    pub const PTY_EXCHANGE_OVERHEAD: Duration = Duration::from_micros(75);
+    /// What each reply costs on the built-in simulator's pseudo-terminal
+    /// beyond its wire time and turnaround: the simulator hands each
+    /// servo's reply over on its own (the turnaround between two replies
+    /// is an idle line), one write and one wake-up of the client each.
+    /// Measured with [`Link::PTY_EXCHANGE_OVERHEAD`].
+    pub const PTY_REPLY_OVERHEAD: Duration = Duration::from_micros(10);
 
     /// A link at `baud` with no adapter latency and the default turnaround and
     /// margin. A baud of 0 is treated as 1 so that nothing divides by zero.
@@ -54,7 +79,37 @@ impl Link {
             latency: Duration::ZERO,
             turnaround: Self::DEFAULT_TURNAROUND,
             margin: Self::DEFAULT_MARGIN,
+            overhead: Duration::ZERO,
+            reply_overhead: Duration::ZERO,
         }
+    }
+
+    /// The same link with the per-exchange costs set: `overhead` per round
+    /// trip and `reply_overhead` per reply (see the fields).
+    pub const fn with_overhead(mut self, overhead: Duration, reply_overhead: Duration) -> Link {
+        self.overhead = overhead;
+        self.reply_overhead = reply_overhead;
+        self
+    }
+
+    /// The same link with the pseudo-terminal's per-exchange costs
+    /// ([`Link::PTY_EXCHANGE_OVERHEAD`], [`Link::PTY_REPLY_OVERHEAD`]): the
+    /// link of the built-in simulator.
+    pub const fn on_pty(self) -> Link {
+        self.with_overhead(Self::PTY_EXCHANGE_OVERHEAD, Self::PTY_REPLY_OVERHEAD)
+    }
+
+    /// What the link adds to `round_trips` round trips carrying `replies`
+    /// replies in all, beyond wire time, return delays and turnarounds:
+    /// the adapter latency and the overhead per round trip, the reply
+    /// overhead per reply.
+    pub fn exchange_cost(&self, round_trips: usize, replies: usize) -> Duration {
+        let trips = u32::try_from(round_trips).unwrap_or(u32::MAX);
+        let replies = u32::try_from(replies).unwrap_or(u32::MAX);
+        self.latency
+            .saturating_add(self.overhead)
+            .saturating_mul(trips)
+            .saturating_add(self.reply_overhead.saturating_mul(replies))
     }
 
     /// The same link with the adapter latency set.

@@ -52,8 +52,8 @@ struct BusBudget {
     link: String,
     /// The port measured (`--port`), if any.
     port: Option<String>,
-    /// The mean of what each PING of the measurement took beyond the wire
-    /// and the servo, us (with `--port`; else null).
+    /// The median of what each PING of the measurement took beyond the
+    /// wire and the servo, us (with `--port`; else null).
     measured_latency_us: Option<f64>,
     /// The rate the wire alone allows (no turnaround, return delay,
     /// latency or overhead), Hz.

@@ -33,7 +33,7 @@ impl BusConfig {
 
     /// The link of this bus on a port whose adapter was measured (the
     /// start-up probe of `latency_us: auto`, PINGs): `ping_latency` is the
-    /// mean of what each PING took beyond the wire and the servo, which is
+    /// median of what each PING took beyond the wire and the servo, which is
     /// the adapter's latency and every per-exchange overhead of the link
     /// together. On a pseudo-terminal (`servobus sim`) each further reply
     /// of a SYNC READ costs [`Link::PTY_REPLY_OVERHEAD`] more, which a PING

@@ -65,7 +65,7 @@ pub struct BusBench {
     pub floor_rate_hz: f64,
     /// Achieved over floor rate (0 without a floor).
     pub floor_ratio: f64,
-    /// On a port: the mean of what each PING of the start-up probe took
+    /// On a port: the median of what each PING of the start-up probe took
     /// beyond the wire and the servo, us, on which `planned_rate_hz` is
     /// planned (as `budget --port` plans); the caller's to fill in.
     pub measured_latency_us: Option<f64>,
@@ -136,7 +136,8 @@ pub enum BenchError {
 pub struct MeasuredLink {
     /// The link to plan on ([`BusConfig::measured_link`]).
     pub link: Link,
-    /// The mean of what each PING took beyond the wire and the servo.
+    /// The median of what each PING took beyond the wire and the servo
+    /// (the typical exchange: one stall of a loaded host does not move it).
     pub ping_latency: Duration,
     /// PINGs answered.
     pub pings: u32,
@@ -168,8 +169,8 @@ pub fn measure_link<T: Transport, C: Clock>(
             source,
         })?;
     Ok(MeasuredLink {
-        link: bus.measured_link(m.mean, pty),
-        ping_latency: m.mean,
+        link: bus.measured_link(m.median, pty),
+        ping_latency: m.median,
         pings: m.samples,
     })
 }

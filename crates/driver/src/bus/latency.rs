@@ -94,9 +94,12 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             samples: 0,
             min: Duration::MAX,
             mean: Duration::ZERO,
+            median: Duration::ZERO,
             max: Duration::ZERO,
         };
         let mut total = Duration::ZERO;
+        // Every answered PING's latency, for the median (not the hot path).
+        let mut seen = Vec::with_capacity(samples.min(1024) as usize);
         let mut result = Ok(());
         for &id in ids.iter().cycle().take(samples as usize) {
             match self.ping(id) {
@@ -118,6 +121,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             }
             let latency = self.last_rtt.saturating_sub(modelled);
             each(latency);
+            seen.push(latency);
             m.samples += 1;
             m.min = m.min.min(latency);
             m.max = m.max.max(latency);
@@ -127,6 +131,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         result?;
         if m.samples > 0 {
             m.mean = total / m.samples;
+            seen.sort_unstable();
+            m.median = seen[seen.len() / 2];
         } else {
             m.min = Duration::ZERO;
         }
@@ -144,6 +150,9 @@ pub struct LatencyMeasurement {
     pub min: Duration,
     /// Mean latency.
     pub mean: Duration,
+    /// Median latency (the upper one of an even count): the typical
+    /// exchange, which one stall of a loaded host does not move.
+    pub median: Duration,
     /// Largest latency seen: the value to configure.
     pub max: Duration,
 }

@@ -81,6 +81,9 @@ struct BenchReport {
     /// Cycles, over every bus, whose period exceeded the planned cycle time.
     overruns: u64,
     timeouts: u64,
+    /// Replies that came after their deadline (the servo answered, the
+    /// host delivered them late), over every bus: not timeouts.
+    late_replies: u64,
     retries: u64,
     missed_replies: u64,
     buses: Vec<BusBench>,
@@ -230,6 +233,7 @@ fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
         period_error_us: slowest.map_or_else(Quantiles::default, |b| b.period_error_us),
         overruns: buses.iter().map(|b| b.overruns).sum(),
         timeouts: buses.iter().map(|b| b.timeouts).sum(),
+        late_replies: buses.iter().map(|b| b.late_replies).sum(),
         retries: buses.iter().map(|b| b.retries).sum(),
         missed_replies: buses.iter().map(|b| b.missed_replies).sum(),
         buses,
@@ -268,11 +272,12 @@ fn print_text(r: &BenchReport) {
             );
         }
         println!(
-            "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  retries {}  \
-             missed replies {}  checksum errors {}",
+            "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  late replies {}  \
+             retries {}  missed replies {}  checksum errors {}",
             b.overruns,
             1e6 / b.planned_rate_hz.max(f64::MIN_POSITIVE),
             b.timeouts,
+            b.late_replies,
             b.retries,
             b.missed_replies,
             b.checksum_errors

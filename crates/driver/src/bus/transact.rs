@@ -82,7 +82,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 self.counters.retries += 1;
                 self.servos[id].retries += 1;
             }
-            let start = self.io.send(&self.settings.link)?;
+            let start = self.send()?;
             if !expect.reply {
                 return Ok(None);
             }
@@ -100,6 +100,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 (sink.got, sink.wrong, sink.wrong_count, sink.corrupt);
             self.account(id, &tally, wrong_count);
             if let Some((flags, at)) = got {
+                self.io.answered(expect.id);
                 let rtt = at.saturating_sub(start);
                 self.last_rtt = rtt;
                 self.counters.rtt.record(rtt);
@@ -123,8 +124,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             } else if let Some(wrong) = wrong {
                 wrong
             } else {
-                self.counters.timeouts += 1;
-                self.servos[id].timeouts += 1;
+                self.timed_out(expect.id);
                 BusError::Timeout {
                     id: expect.id,
                     waited: expect.timeout,

@@ -240,7 +240,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             &self.sync.pending,
         )?;
         let timeout = self.round_timeout(n)?;
-        let start = self.io.send(&self.settings.link)?;
+        let start = self.send()?;
         let mut sink = Round {
             store: &mut self.sync,
             servos: &mut self.servos,
@@ -255,12 +255,14 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         // sink; the bus gets the totals.
         self.account(usize::from(BROADCAST_ID), &tally, wrong);
         let mut complete = true;
-        for &id in &self.sync.pending {
+        for k in 0..self.sync.pending.len() {
+            let id = self.sync.pending[k];
             let Some(i) = self.sync.slot_of(id) else {
                 continue;
             };
             match self.sync.slots[i] {
                 Slot::Answered(flags) => {
+                    self.io.answered(id);
                     if !flags.is_ok() {
                         self.counters.status_errors += 1;
                     }
@@ -268,8 +270,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 Slot::Missing(reason) => {
                     complete = false;
                     if reason == MissingReason::NoReply {
-                        self.counters.timeouts += 1;
-                        self.servos[usize::from(id)].timeouts += 1;
+                        self.timed_out(id);
                     }
                 }
             }

@@ -13,6 +13,7 @@ use servobus_sim::{Faults, SimBus, SimServo};
 use servobus_timing::{Link, StatusLevel, Transaction};
 
 mod baud;
+mod late;
 
 const BAUD: u32 = 1_000_000;
 

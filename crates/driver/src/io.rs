@@ -165,6 +165,23 @@ impl<T: Transport, C: Clock> Io<T, C> {
         }
     }
 
+    /// Which servos are overdue, by ID.
+    pub fn overdue_flags(&self) -> [bool; 256] {
+        self.overdue
+    }
+
+    /// Servo `id`'s late reply arrived: noted for the bus to count, if it
+    /// was overdue.
+    pub fn late_reply(&mut self, id: u8) {
+        let slot = &mut self.overdue[usize::from(id)];
+        if *slot {
+            *slot = false;
+            self.overdue_count -= 1;
+            self.late[self.late_len] = id;
+            self.late_len += 1;
+        }
+    }
+
     /// The overdue servos whose replies arrived, once each (see
     /// [`Io::take_late`]); the caller counts them, then clears `late_len`.
     pub fn late(&self) -> &[u8] {
@@ -185,19 +202,18 @@ impl<T: Transport, C: Clock> Io<T, C> {
                 Ok(n) => n,
                 Err(e) => return Err(e),
             };
+            // The IDs of the frames in it (at most one frame per 6 bytes).
+            let mut ids = [0u8; 256];
+            let mut found = 0;
             let mut input = &self.rx[..n.min(self.rx.len())];
             while let Some(ev) = self.decoder.decode(&mut input) {
-                let Event::Packet { packet, .. } = ev else {
-                    continue;
-                };
-                let id = packet.id();
-                let slot = &mut self.overdue[usize::from(id)];
-                if *slot {
-                    *slot = false;
-                    self.overdue_count -= 1;
-                    self.late[self.late_len] = id;
-                    self.late_len += 1;
+                if let (Event::Packet { packet, .. }, Some(slot)) = (ev, ids.get_mut(found)) {
+                    *slot = packet.id();
+                    found += 1;
                 }
+            }
+            for k in 0..found {
+                self.late_reply(ids[k]);
             }
         }
         Ok(())

@@ -47,7 +47,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     }
 
     /// Counts the late replies the last look found; returns how many.
-    fn count_late(&mut self) -> usize {
+    pub(crate) fn count_late(&mut self) -> usize {
         let n = self.io.late_len;
         for &id in self.io.late() {
             for c in [&mut self.counters, &mut self.servos[usize::from(id)]] {

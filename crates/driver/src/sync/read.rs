@@ -26,6 +26,11 @@ struct Round<'a> {
     wrong: u64,
     /// Arrival of the last reply taken.
     finished_at: Option<Duration>,
+    /// Servos whose reply to an earlier request is overdue: the first frame
+    /// of one may be that late reply, so the round waits for a second.
+    owed: [bool; 256],
+    /// Servos of `owed` that sent two frames: the first was the late reply.
+    late: [bool; 256],
 }
 
 impl Sink for Round<'_> {
@@ -41,8 +46,15 @@ impl Sink for Round<'_> {
                 return false;
             }
         };
+        let owed = self.owed[usize::from(id)];
         match self.store.slots[slot] {
             Slot::Missing(MissingReason::NoReply | MissingReason::Corrupt) => {}
+            Slot::Answered(_) if owed && !self.late[usize::from(id)] => {
+                // A servo answers in order: the frame before this one was
+                // its late reply to an earlier request, and this is the
+                // reply to this one.
+                self.late[usize::from(id)] = true;
+            }
             Slot::Answered(_) | Slot::Missing(MissingReason::WrongLength) => {
                 // A second frame claiming the same ID: a servo sharing it, or
                 // a misrouted reply. Which one is right cannot be known, so
@@ -59,12 +71,19 @@ impl Sink for Round<'_> {
                 return false;
             }
         }
+        // The first frame of an overdue servo is kept, but it may be its
+        // late reply to an earlier request: it counts once no second frame
+        // has come by the deadline.
+        let provisional = owed && !self.late[usize::from(id)];
         let len = self.store.len;
         let params = packet.params();
         if params.len() == len {
             self.store.data[slot * len..(slot + 1) * len].copy_from_slice(params);
             let flags = packet.status();
             self.store.slots[slot] = Slot::Answered(flags);
+            if provisional {
+                return false;
+            }
             counters.rtt.record(now.saturating_sub(self.start));
             if !flags.is_ok() {
                 counters.status_errors += 1;
@@ -248,9 +267,17 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             outstanding: n,
             wrong: 0,
             finished_at: None,
+            owed: self.io.overdue_flags(),
+            late: [false; 256],
         };
         let tally = self.io.exchange(start + timeout, &mut sink)?;
-        let (wrong, finished_at) = (sink.wrong, sink.finished_at);
+        let (wrong, finished_at, late) = (sink.wrong, sink.finished_at, sink.late);
+        for &id in &self.sync.pending {
+            if late[usize::from(id)] {
+                self.io.late_reply(id);
+            }
+        }
+        self.count_late();
         // Per-servo checksum errors and wrong replies were counted by the
         // sink; the bus gets the totals.
         self.account(usize::from(BROADCAST_ID), &tally, wrong);

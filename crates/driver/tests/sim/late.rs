@@ -85,3 +85,25 @@ fn a_silent_servo_keeps_its_timeouts() {
     assert_eq!(bus.counters().late_replies, 0);
     assert_eq!(bus.servo_counters(1).timeouts, 0);
 }
+
+#[test]
+fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
+    // One servo whose first reply starts 2 ms late: past the first read's
+    // deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and
+    // 200 us of margin: 1.46 ms), but inside the next read's, sent at once.
+    let (mut bus, sim, _clock) = setup(&[1], Faults::none().delay(1.0, 2 * MS));
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1])
+        .expect("a read");
+    assert_eq!(read.missing(), 1);
+    assert_eq!(bus.counters().timeouts, 1);
+    sim.set_faults(Faults::none());
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1])
+        .expect("a read");
+    // Two frames came in the second read's window: one of them was the
+    // first read's reply, so that read's timeout is taken back.
+    assert_eq!(read.missing(), 0);
+    assert_eq!(bus.counters().late_replies, 1);
+    assert_eq!(bus.counters().timeouts, 0);
+}

@@ -161,7 +161,10 @@ fn ftdi_default_latency_caps_the_so101_near_58_hz() {
     let p = so101_with("ftdi.yaml", edit);
     let v = json(&servobus(&["budget", "--robot", arg(&p), "--json"]));
     let b = &v["buses"][0];
-    assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 50.0 + 16_000.0 + 135.0);
+    assert_eq!(
+        num(b, "cycle_time_us"),
+        880.0 + 6.0 * 50.0 + 16_000.0 + 135.0
+    );
     assert!((num(b, "max_rate_hz") - 1e6 / 17_315.0).abs() < 1e-9, "{b}");
     assert_eq!(b["feasible"], false, "not at the robot's 200 Hz");
 }

@@ -80,13 +80,33 @@ fn budget_port_measures_the_adapter_and_plans_on_it() {
     assert!((num(b, "max_rate_hz") - 1e6 / num(b, "cycle_time_us")).abs() < 1e-6);
 
     // The text says where the figure comes from, next to the wire's.
-    let text = common::stdout(&servobus(&["budget", "--robot", "so101", "--port", sim.port()]));
-    common::says(&text, &["measured on", "a PING beyond the wire", "(the wire alone: 1136 Hz)"]);
+    let text = common::stdout(&servobus(&[
+        "budget",
+        "--robot",
+        "so101",
+        "--port",
+        sim.port(),
+    ]));
+    common::says(
+        &text,
+        &[
+            "measured on",
+            "a PING beyond the wire",
+            "(the wire alone: 1136 Hz)",
+        ],
+    );
 }
 
 #[test]
 fn budget_port_on_a_port_with_no_servos_is_an_error() {
-    let out = servobus(&["budget", "--robot", "so101", "--port", "/nonexistent/tty", "--json"]);
+    let out = servobus(&[
+        "budget",
+        "--robot",
+        "so101",
+        "--port",
+        "/nonexistent/tty",
+        "--json",
+    ]);
     assert!(!out.status.success());
     assert!(!common::stderr(&out).contains("panicked"));
 }

@@ -212,8 +212,8 @@ impl<T: Transport, C: Clock> Io<T, C> {
                     found += 1;
                 }
             }
-            for k in 0..found {
-                self.late_reply(ids[k]);
+            for &id in &ids[..found] {
+                self.late_reply(id);
             }
         }
         Ok(())

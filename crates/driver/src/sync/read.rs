@@ -73,18 +73,22 @@ impl Sink for Round<'_> {
         }
         // The first frame of an overdue servo is kept, but it may be its
         // late reply to an earlier request: it counts once no second frame
-        // has come by the deadline.
+        // has come by the deadline. One round trip is recorded per servo
+        // that answered, at its first frame.
         let provisional = owed && !self.late[usize::from(id)];
+        let second = owed && !provisional;
         let len = self.store.len;
         let params = packet.params();
         if params.len() == len {
             self.store.data[slot * len..(slot + 1) * len].copy_from_slice(params);
             let flags = packet.status();
             self.store.slots[slot] = Slot::Answered(flags);
+            if !second {
+                counters.rtt.record(now.saturating_sub(self.start));
+            }
             if provisional {
                 return false;
             }
-            counters.rtt.record(now.saturating_sub(self.start));
             if !flags.is_ok() {
                 counters.status_errors += 1;
             }

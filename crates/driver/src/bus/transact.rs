@@ -33,13 +33,26 @@ struct Single<'a> {
     wrong: Option<BusError>,
     wrong_count: u64,
     corrupt: bool,
+    /// Servos whose reply to an earlier request is overdue: a frame from
+    /// one of them is that late reply, not a wrong one.
+    owed: [bool; 256],
+    /// Late replies seen: their IDs, in `late[..late_len]`.
+    late: [u8; 256],
+    late_len: usize,
 }
 
 impl Sink for Single<'_> {
     fn packet(&mut self, packet: &Packet<'_>, now: Duration) -> bool {
         let id = packet.id();
         let params = packet.params();
-        let err = if id != self.expect.id && id != self.expect.alt {
+        let other = id != self.expect.id && id != self.expect.alt;
+        if other && std::mem::take(&mut self.owed[usize::from(id)]) {
+            // Another servo's reply to an earlier request, late.
+            self.late[self.late_len] = id;
+            self.late_len += 1;
+            return false;
+        }
+        let err = if other {
             BusError::WrongId {
                 expected: self.expect.id,
                 actual: id,
@@ -94,10 +107,17 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 wrong: None,
                 wrong_count: 0,
                 corrupt: false,
+                owed: self.io.overdue_flags(),
+                late: [0; 256],
+                late_len: 0,
             };
             let tally = self.io.exchange(start + expect.timeout, &mut sink)?;
             let (got, wrong, wrong_count, corrupt) =
                 (sink.got, sink.wrong, sink.wrong_count, sink.corrupt);
+            for &late in &sink.late[..sink.late_len] {
+                self.io.late_reply(late);
+            }
+            self.count_late();
             self.account(id, &tally, wrong_count);
             if let Some((flags, at)) = got {
                 self.io.answered(expect.id);

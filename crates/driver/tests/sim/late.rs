@@ -11,6 +11,7 @@ use servobus_sim::{Faults, SimBus};
 use super::{servo, BAUD};
 
 const MS: Duration = Duration::from_millis(1);
+const US: Duration = Duration::from_micros(1);
 
 /// Servos `ids` with no retries (one timeout per servo per read) and 1 ms
 /// of adapter latency in the deadlines.
@@ -106,4 +107,21 @@ fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
     assert_eq!(read.missing(), 0);
     assert_eq!(bus.counters().late_replies, 1);
     assert_eq!(bus.counters().timeouts, 0);
+}
+
+#[test]
+fn another_servos_late_reply_during_a_read_is_late_not_wrong() {
+    // Servo 1's reply starts 1.3 ms late: past its READ's deadline (8 + 8
+    // bytes, 50 us of turnaround, 1 ms of latency, 200 us of margin:
+    // 1.41 ms), and it comes while servo 2 is being read.
+    let (mut bus, sim, _clock) = setup(&[1, 2], Faults::none().delay(1.0, 1300 * US));
+    let mut buf = [0u8; 2];
+    assert!(bus.read(1, addr::PRESENT_POSITION, &mut buf).is_err());
+    assert_eq!(bus.counters().timeouts, 1);
+    sim.set_faults(Faults::none());
+    bus.read(2, addr::PRESENT_POSITION, &mut buf)
+        .expect("servo 2 answers");
+    assert_eq!(bus.counters().late_replies, 1);
+    assert_eq!(bus.counters().timeouts, 0);
+    assert_eq!(bus.counters().wrong_replies, 0);
 }

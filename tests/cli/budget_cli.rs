@@ -5,7 +5,7 @@
 //! is a SYNC READ request of 8 + N bytes and N replies of 8 bytes. Each reply
 //! also waits the servo's return delay plus the link's default turnaround
 //! (50 us). On the built-in simulator (no port in the robot file) each
-//! round trip costs the pseudo-terminal's 75 us more and each reply 10 us.
+//! round trip costs the pseudo-terminal's 60 us more and each reply 8 us.
 
 use crate::common;
 
@@ -36,20 +36,20 @@ fn so101_at_1mbps_with_return_delay_zero() {
     assert_eq!(b["bytes_per_cycle"], 88);
     assert_eq!(num(b, "wire_time_us"), 880.0);
     // + 6 turnarounds of 50 us, no return delay, no adapter latency, and
-    // the simulator's pty: 75 us for the one round trip, 10 us per reply.
-    assert_eq!(num(b, "cycle_time_us"), 1315.0);
-    // Where they go: 880 on the wire, 6 x 50 of turnaround, 135 of the pty.
+    // the simulator's pty: 60 us for the one round trip, 8 us per reply.
+    assert_eq!(num(b, "cycle_time_us"), 1288.0);
+    // Where they go: 880 on the wire, 6 x 50 of turnaround, 108 of the pty.
     assert_eq!(num(b, "turnaround_time_us"), 300.0);
     assert_eq!(num(b, "return_delay_time_us"), 0.0);
     assert_eq!(num(b, "latency_time_us"), 0.0);
-    assert_eq!(num(b, "overhead_time_us"), 135.0);
+    assert_eq!(num(b, "overhead_time_us"), 108.0);
     assert_eq!(b["link"], "simulator");
     assert!(b["measured_latency_us"].is_null());
-    assert!((num(b, "max_rate_hz") - 1e6 / 1315.0).abs() < 1e-9);
+    assert!((num(b, "max_rate_hz") - 1e6 / 1288.0).abs() < 1e-9);
     assert!((num(b, "wire_limited_rate_hz") - 1e6 / 880.0).abs() < 1e-9);
-    // The robot's default rate, 200 Hz: 1315 us of every 5000 us.
+    // The robot's default rate, 200 Hz: 1288 us of every 5000 us.
     assert_eq!(num(b, "rate_hz"), 200.0);
-    assert!((num(b, "utilisation") - 0.263).abs() < 1e-12);
+    assert!((num(b, "utilisation") - 0.2576).abs() < 1e-12);
     assert_eq!(b["feasible"], true);
 }
 
@@ -63,7 +63,7 @@ fn hexapod_on_one_and_two_buses() {
     assert_eq!(num(b, "wire_time_us"), 2320.0);
     assert_eq!(
         num(b, "cycle_time_us"),
-        2320.0 + 18.0 * 50.0 + 75.0 + 18.0 * 10.0
+        2320.0 + 18.0 * 50.0 + 60.0 + 18.0 * 8.0
     );
 
     let two = budget_json("configs/robots/hexapod-2bus.yaml", &["--rate", "500"]);
@@ -73,9 +73,9 @@ fn hexapod_on_one_and_two_buses() {
         // 35 (8 + 9 x 3) + 17 (8 + 9) + 72 (9 x 8) = 124 bytes.
         assert_eq!(b["servos"], 9);
         assert_eq!(b["bytes_per_cycle"], 124);
-        assert_eq!(num(b, "cycle_time_us"), 1240.0 + 9.0 * 50.0 + 75.0 + 90.0);
+        assert_eq!(num(b, "cycle_time_us"), 1240.0 + 9.0 * 50.0 + 60.0 + 72.0);
         assert_eq!(num(b, "rate_hz"), 500.0);
-        assert!((num(b, "utilisation") - 1855e-6 * 500.0).abs() < 1e-12);
+        assert!((num(b, "utilisation") - 1822e-6 * 500.0).abs() < 1e-12);
     }
 }
 
@@ -84,10 +84,10 @@ fn scs_servos_are_read_one_by_one() {
     let v = budget_json("configs/robots/scs-mini.yaml", &[]);
     let b = &v["buses"][0];
     // SYNC WRITE 8 + 4 x 3 = 20; four READs of 8 bytes each answered by 8:
-    // four round trips through the pty, each charged its 75 + 10 us.
+    // four round trips through the pty, each charged its 60 + 8 us.
     assert_eq!(b["bytes_per_cycle"], 20 + 4 * 16);
-    assert_eq!(num(b, "cycle_time_us"), 840.0 + 4.0 * 50.0 + 4.0 * 85.0);
-    assert_eq!(num(b, "overhead_time_us"), 340.0);
+    assert_eq!(num(b, "cycle_time_us"), 840.0 + 4.0 * 50.0 + 4.0 * 68.0);
+    assert_eq!(num(b, "overhead_time_us"), 272.0);
 }
 
 #[test]
@@ -103,7 +103,7 @@ fn factory_return_delay_and_what_would_fit() {
     let b = &v["buses"][0];
     // Same 88 bytes, but each of the 6 replies waits 500 + 50 us.
     assert_eq!(b["bytes_per_cycle"], 88);
-    assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 550.0 + 135.0);
+    assert_eq!(num(b, "cycle_time_us"), 880.0 + 6.0 * 550.0 + 108.0);
     assert_eq!(num(b, "return_delay_time_us"), 6.0 * 500.0);
     assert_eq!(num(b, "turnaround_time_us"), 6.0 * 50.0);
     assert_eq!(b["feasible"], false);
@@ -118,9 +118,9 @@ fn factory_return_delay_and_what_would_fit() {
         &stdout,
         &[
             "88 bytes",
-            "where the 4315 us go: wire 880; turnaround 6 x 50 = 300 (a guess per reply); \
-             return delay 6 x 500 = 3000; adapter latency 1 x 0 = 0; link overhead 1 x 75 \
-             + 6 x 10 = 135 (the built-in simulator's pseudo-terminal)",
+            "where the 4288 us go: wire 880; turnaround 6 x 50 = 300 (a guess per reply); \
+             return delay 6 x 500 = 3000; adapter latency 1 x 0 = 0; link overhead 1 x 60 \
+             + 6 x 8 = 108 (the built-in simulator's pseudo-terminal)",
             "set the servos' return delay (register 7) to 0",
         ],
     );
@@ -154,7 +154,7 @@ fn a_bad_robot_file_is_reported_with_its_position() {
 /// SO-101's cycle (one SYNC WRITE, one SYNC READ round trip) takes 880 us
 /// on the wire + 6 turnarounds of 50 us + 16,000 us of adapter latency =
 /// 17,180 us, and the budget (with no port in the file) charges the
-/// simulator's pty its 135 us too: 17,315 us, 57.8 Hz at most.
+/// simulator's pty its 108 us too: 17,288 us, 57.8 Hz at most.
 #[test]
 fn ftdi_default_latency_caps_the_so101_near_58_hz() {
     let edit = ("latency_us: auto ", "latency_us: 16000 ");
@@ -163,8 +163,8 @@ fn ftdi_default_latency_caps_the_so101_near_58_hz() {
     let b = &v["buses"][0];
     assert_eq!(
         num(b, "cycle_time_us"),
-        880.0 + 6.0 * 50.0 + 16_000.0 + 135.0
+        880.0 + 6.0 * 50.0 + 16_000.0 + 108.0
     );
-    assert!((num(b, "max_rate_hz") - 1e6 / 17_315.0).abs() < 1e-9, "{b}");
+    assert!((num(b, "max_rate_hz") - 1e6 / 17_288.0).abs() < 1e-9, "{b}");
     assert_eq!(b["feasible"], false, "not at the robot's 200 Hz");
 }

@@ -69,13 +69,13 @@ fn budget_port_measures_the_adapter_and_plans_on_it() {
     let ping = num(b, "measured_latency_us");
     assert!(ping >= 0.0, "{b}");
     // A PING's latency covers the round trip and one reply's hand-off;
-    // the other 5 replies of the SYNC READ cost the pty's 10 us each:
-    // 880 us of wire + 6 x 50 of turnaround + (ping - 10) + 6 x 10.
-    let latency = (ping - 10.0).max(0.0);
-    let cycle = 880.0 + 300.0 + latency + 60.0;
+    // every reply of the SYNC READ costs the pty's 8 us:
+    // 880 us of wire + 6 x 50 of turnaround + (ping - 8) + 6 x 8.
+    let latency = (ping - 8.0).max(0.0);
+    let cycle = 880.0 + 300.0 + latency + 48.0;
     assert!((num(b, "cycle_time_us") - cycle).abs() < 0.01, "{b}");
     assert!((num(b, "latency_time_us") - latency).abs() < 0.01, "{b}");
-    assert_eq!(num(b, "overhead_time_us"), 60.0);
+    assert_eq!(num(b, "overhead_time_us"), 48.0);
     assert!((num(b, "wire_limited_rate_hz") - 1e6 / 880.0).abs() < 1e-9);
     assert!((num(b, "max_rate_hz") - 1e6 / num(b, "cycle_time_us")).abs() < 1e-6);
 

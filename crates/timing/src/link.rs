@@ -63,21 +63,22 @@ impl Link {
     /// and the reply back, a wake-up each way.
     ///
     /// How it was measured: `servobus bench --seconds 3` (release build,
-    /// the simulator on a pty in the same process, 2-core machine) against
-    /// the model without overheads, on the SO-101 arm (one round trip, 6
-    /// replies: about 105 us a cycle beyond the model), the SCS mini (4
-    /// round trips of 1 reply: about 280 to 395 us) and the hexapod (one
-    /// round trip, 18 replies: about 190 us); a fit of `a` per round trip
-    /// and `b` per reply gives 63 to 75 us and 7 to 10 us, the larger on a
-    /// busier machine. The larger are kept: the budget should not promise
-    /// what a busy host misses.
-    pub const PTY_EXCHANGE_OVERHEAD: Duration = Duration::from_micros(75);
+    /// the simulator on a pty in the same process, a quiet 2-core machine)
+    /// against the model without overheads: the SO-101 arm (one round
+    /// trip, 6 replies) ran 79 us a cycle beyond the model, the SCS mini (4
+    /// READs of one reply each) 251 us, the hexapod (one round trip, 18
+    /// replies) 164 us. A SYNC READ's replies fit 7 us each; a round trip
+    /// costs 37 us with a SYNC READ and 56 us with a READ (more host work
+    /// per request). 60 us a round trip and 8 us a reply put every shipped
+    /// robot within 2.5 % of what it achieved; on a busy machine bench runs
+    /// up to about 6 % slower.
+    pub const PTY_EXCHANGE_OVERHEAD: Duration = Duration::from_micros(60);
     /// What each reply costs on the built-in simulator's pseudo-terminal
     /// beyond its wire time and turnaround: the simulator hands each
     /// servo's reply over on its own (the turnaround between two replies
     /// is an idle line), one write and one wake-up of the client each.
     /// Measured with [`Link::PTY_EXCHANGE_OVERHEAD`].
-    pub const PTY_REPLY_OVERHEAD: Duration = Duration::from_micros(10);
+    pub const PTY_REPLY_OVERHEAD: Duration = Duration::from_micros(8);
 
     /// A link at `baud` with no adapter latency and the default turnaround and
     /// margin. A baud of 0 is treated as 1 so that nothing divides by zero.
@@ -249,13 +250,13 @@ mod tests {
         assert_eq!(l.exchange_cost(0, 0), Duration::ZERO);
         // The simulator's pty: the named figures.
         let pty = Link::new(1_000_000).on_pty();
-        assert_eq!(pty.exchange_cost(1, 6), Duration::from_micros(135));
+        assert_eq!(pty.exchange_cost(1, 6), Duration::from_micros(60 + 48));
         // A READ's deadline carries one round trip and one reply of it:
-        // 8 + 8 bytes, 50 us turnaround, 85 us of the pty, 200 us margin.
+        // 8 + 8 bytes, 50 us turnaround, 68 us of the pty, 200 us margin.
         let read = crate::Transaction::Read { len: 2 };
         assert_eq!(
             pty.deadline(read, Duration::ZERO, crate::StatusLevel::All),
-            Some(Duration::from_micros(160 + 50 + 85 + 200))
+            Some(Duration::from_micros(160 + 50 + 68 + 200))
         );
     }
 

@@ -133,6 +133,7 @@ mod bus;
 mod eeprom;
 mod error;
 mod io;
+pub mod scripted;
 #[cfg(feature = "serial")]
 mod serial;
 mod servos;

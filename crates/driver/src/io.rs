@@ -71,6 +71,10 @@ pub(crate) struct Io<T, C> {
     /// reply, not a lost one.
     overdue: [bool; 256],
     overdue_count: usize,
+    /// Overdue servos whose one frame in a later read was taken as that
+    /// read's answer, though it may have been the late reply: they stay
+    /// overdue for one read more.
+    doubtful: [bool; 256],
     /// Overdue servos whose reply arrived, for the bus to count.
     late: [u8; 256],
     pub late_len: usize,
@@ -95,6 +99,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
             line_free: Duration::ZERO,
             overdue: [false; 256],
             overdue_count: 0,
+            doubtful: [false; 256],
             late: [0; 256],
             late_len: 0,
         }
@@ -149,6 +154,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
     /// Marks servo `id`'s reply as lost (counted as a timeout) until it
     /// comes.
     pub fn overdue(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
         let slot = &mut self.overdue[usize::from(id)];
         if !*slot {
             *slot = true;
@@ -158,10 +164,24 @@ impl<T: Transport, C: Clock> Io<T, C> {
 
     /// Servo `id` answered in time: nothing of it is overdue.
     pub fn answered(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
         let slot = &mut self.overdue[usize::from(id)];
         if *slot {
             *slot = false;
             self.overdue_count -= 1;
+        }
+    }
+
+    /// Overdue servo `id` sent one frame in a read, taken as its answer
+    /// though it may have been its late reply to an earlier one: should
+    /// the answer come after, it shows that. It stays overdue for one
+    /// read more (a servo whose reply was really lost is then answered).
+    pub fn answered_in_doubt(&mut self, id: u8) {
+        let doubtful = &mut self.doubtful[usize::from(id)];
+        if *doubtful {
+            self.answered(id);
+        } else {
+            *doubtful = true;
         }
     }
 
@@ -173,6 +193,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
     /// Servo `id`'s late reply arrived: noted for the bus to count, if it
     /// was overdue.
     pub fn late_reply(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
         let slot = &mut self.overdue[usize::from(id)];
         if *slot {
             *slot = false;

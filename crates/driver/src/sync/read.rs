@@ -275,7 +275,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             late: [false; 256],
         };
         let tally = self.io.exchange(start + timeout, &mut sink)?;
-        let (wrong, finished_at, late) = (sink.wrong, sink.finished_at, sink.late);
+        let (wrong, finished_at, late, owed) = (sink.wrong, sink.finished_at, sink.late, sink.owed);
         for &id in &self.sync.pending {
             if late[usize::from(id)] {
                 self.io.late_reply(id);
@@ -293,7 +293,11 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             };
             match self.sync.slots[i] {
                 Slot::Answered(flags) => {
-                    self.io.answered(id);
+                    if owed[usize::from(id)] && !late[usize::from(id)] {
+                        self.io.answered_in_doubt(id);
+                    } else {
+                        self.io.answered(id);
+                    }
                     if !flags.is_ok() {
                         self.counters.status_errors += 1;
                     }

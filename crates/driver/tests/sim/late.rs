@@ -125,3 +125,29 @@ fn another_servos_late_reply_during_a_read_is_late_not_wrong() {
     assert_eq!(bus.counters().timeouts, 0);
     assert_eq!(bus.counters().wrong_replies, 0);
 }
+
+#[test]
+fn a_reply_really_lost_keeps_its_timeout_and_the_servo_reads_on() {
+    // Servo 1's first reply is dropped: it never comes.
+    let (mut bus, sim, clock) = setup(&[1], Faults::none().drop(1.0));
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1])
+        .expect("a read");
+    assert_eq!(read.missing(), 1);
+    sim.set_faults(Faults::none());
+    // The next two reads take its one frame as the answer, though each
+    // waits to its deadline in case it was the late reply; then reads end
+    // as soon as it answers again.
+    let mut took = Vec::new();
+    for _ in 0..3 {
+        let began = clock.now();
+        let read = bus
+            .sync_read(addr::PRESENT_POSITION, 2, &[1])
+            .expect("a read");
+        assert_eq!(read.missing(), 0);
+        took.push(clock.now() - began);
+    }
+    assert!(took[2] < took[0] && took[2] < took[1], "{took:?}");
+    assert_eq!(bus.counters().timeouts, 1);
+    assert_eq!(bus.counters().late_replies, 0);
+}

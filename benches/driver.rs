@@ -9,35 +9,26 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion};
-use servobus_driver::{Bus, BusSettings, ManualClock, Transport, TransportError};
+use servobus_driver::scripted::{Received, Script, ScriptedPort};
+use servobus_driver::{Bus, BusSettings, ManualClock, TransportError};
 use servobus_protocol::registers::Series;
 
 /// Takes every frame and answers nothing (a SYNC WRITE waits for no reply).
 struct Sink {
     bytes: u64,
-    clock: ManualClock,
 }
 
-impl Transport for Sink {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        &self.clock
-    }
-    fn baud(&self) -> u32 {
-        1_000_000
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+impl Script for Sink {
+    fn write(&mut self, _clock: &ManualClock, bytes: &[u8]) -> Result<(), TransportError> {
         self.bytes += bytes.len() as u64;
         Ok(())
     }
 
-    fn read(&mut self, _buf: &mut [u8], _deadline: Duration) -> Result<usize, TransportError> {
+    fn read(&mut self, _clock: &ManualClock, _buf: &mut [u8], _deadline: Duration) -> Received {
         Err(TransportError::TimedOut)
     }
 
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        Ok(())
-    }
+    fn discard(&mut self, _clock: &ManualClock) {}
 }
 
 /// Registers the benches of this module.
@@ -46,13 +37,8 @@ pub fn benches(c: &mut Criterion) {
     let ids: [u8; 64] = core::array::from_fn(|i| i as u8 + 1);
     let data: [u8; 64 * 7] = core::array::from_fn(|i| i as u8);
     let settings = BusSettings::new(Series::Sts);
-    let mut bus = Bus::new(
-        Sink {
-            bytes: 0,
-            clock: ManualClock::new(),
-        },
-        settings,
-    );
+    let port = ScriptedPort::new(&ManualClock::new(), Sink { bytes: 0 });
+    let mut bus = Bus::new(port, settings);
     for n in [18usize, 64] {
         g.bench_function(BenchmarkId::new("L7", n), |b| {
             b.iter(|| {
@@ -61,6 +47,6 @@ pub fn benches(c: &mut Criterion) {
             })
         });
     }
-    black_box(bus.transport().bytes);
+    black_box(bus.transport().script.bytes);
     g.finish();
 }

@@ -31,7 +31,7 @@ use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance};
-use servobus_robot::bench::{measure, BenchError, BusBench};
+use servobus_robot::bench::{measure_link, measure_on, BenchError, BusBench};
 
 mod floor;
 
@@ -81,6 +81,9 @@ struct BenchReport {
     /// Cycles, over every bus, whose period exceeded the planned cycle time.
     overruns: u64,
     timeouts: u64,
+    /// Replies that came after their deadline (the servo answered, the
+    /// host delivered them late), over every bus: not timeouts.
+    late_replies: u64,
     retries: u64,
     missed_replies: u64,
     buses: Vec<BusBench>,
@@ -166,13 +169,25 @@ fn bench_bus(
         }
     };
     let server_ran = server.is_some();
+    let mut measured_latency_us = None;
     // One bus for the calibration check and the measurement: the port is
     // opened once.
     let result = open_bus(bus, &path, Allowance::Assumed).and_then(|mut servo_bus| {
         if let Some(port) = &port {
             super::calibrate::check_bus(robot, index, &mut servo_bus, port)?;
         }
-        measure(&mut servo_bus, bus, duration).map_err(|e| match e {
+        // On a port, the cycle is planned on the adapter as measured (the
+        // probe `budget --port` runs); on the simulator, as `budget` plans.
+        let link = match &port {
+            Some(_) => {
+                let pty = servo_bus.transport().is_pty();
+                let measured = measure_link(&mut servo_bus, bus, pty)?;
+                measured_latency_us = Some(measured.ping_latency.as_secs_f64() * 1e6);
+                measured.link
+            }
+            None => bus.budget_link(),
+        };
+        measure_on(&mut servo_bus, bus, &link, duration).map_err(|e| match e {
             e @ BenchError::Missing { .. } => {
                 anyhow::anyhow!("{e}; check the port and `servobus scan`")
             }
@@ -188,6 +203,7 @@ fn bench_bus(
     }
     let mut bench = result?;
     bench.backend = backend;
+    bench.measured_latency_us = measured_latency_us;
     if server_ran {
         // Measured after the bench, not beside it: the two would share the
         // machine's cores and slow each other down.
@@ -217,6 +233,7 @@ fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
         period_error_us: slowest.map_or_else(Quantiles::default, |b| b.period_error_us),
         overruns: buses.iter().map(|b| b.overruns).sum(),
         timeouts: buses.iter().map(|b| b.timeouts).sum(),
+        late_replies: buses.iter().map(|b| b.late_replies).sum(),
         retries: buses.iter().map(|b| b.retries).sum(),
         missed_replies: buses.iter().map(|b| b.missed_replies).sum(),
         buses,
@@ -255,11 +272,12 @@ fn print_text(r: &BenchReport) {
             );
         }
         println!(
-            "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  retries {}  \
-             missed replies {}  checksum errors {}",
+            "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  late replies {}  \
+             retries {}  missed replies {}  checksum errors {}",
             b.overruns,
             1e6 / b.planned_rate_hz.max(f64::MIN_POSITIVE),
             b.timeouts,
+            b.late_replies,
             b.retries,
             b.missed_replies,
             b.checksum_errors

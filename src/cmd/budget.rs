@@ -5,8 +5,11 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use serde::Serialize;
+use servobus_robot::bench::{measure_link, MeasuredLink};
 use servobus_runtime::config::{load_robot, BusConfig, RobotOptions};
-use servobus_timing::{floor_rate_hz, Change, Plan};
+use servobus_timing::{floor_rate_hz, Change, Link, Plan};
+
+use super::link::{open_bus, Allowance};
 
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
@@ -20,6 +23,12 @@ pub struct Args {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Serial port of the robot's first bus: measure its adapter first
+    /// (the start-up probe of `latency_us: auto`) and budget on what was
+    /// measured. Without it, the robot file's latency, and on the built-in
+    /// simulator the pseudo-terminal's cost of each exchange.
+    #[arg(long)]
+    pub port: Option<String>,
 }
 
 /// One bus in `--json` output (the names are the architecture page's).
@@ -35,6 +44,20 @@ struct BusBudget {
     return_delay_time_us: f64,
     /// The adapter's latency of the full cycle (one per round trip), us.
     latency_time_us: f64,
+    /// The link's overheads of the full cycle (one per round trip, one
+    /// per reply: the pseudo-terminal's hand-offs on the simulator), us.
+    overhead_time_us: f64,
+    /// Where the link's costs come from: `simulator` (the built-in
+    /// simulator's pseudo-terminal), `robot file` or `measured` (`--port`).
+    link: String,
+    /// The port measured (`--port`), if any.
+    port: Option<String>,
+    /// The median of what each PING of the measurement took beyond the
+    /// wire and the servo, us (with `--port`; else null).
+    measured_latency_us: Option<f64>,
+    /// The rate the wire alone allows (no turnaround, return delay,
+    /// latency or overhead), Hz.
+    wire_limited_rate_hz: f64,
     cycle_time_us: f64,
     max_rate_hz: f64,
     rate_hz: f64,
@@ -71,8 +94,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         robot.path.display(),
         fmt_hz(rate)
     ));
-    for bus in &robot.buses {
-        let (budget, lines) = bus_budget(bus, rate)?;
+    for (index, bus) in robot.buses.iter().enumerate() {
+        // Only the bus whose port the command line gives is measured.
+        let measured = match (&args.port, index) {
+            (Some(port), 0) => Some(measure(bus, port)?),
+            _ => None,
+        };
+        let (budget, lines) = bus_budget(bus, rate, measured.as_ref())?;
         all_fit &= budget.feasible || (bus.round_robin && budget.read_every > 0);
         text.push_str(&lines);
         out.buses.push(budget);
@@ -96,22 +124,54 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     })
 }
 
+/// A port's adapter, measured as a run with `latency_us: auto` does.
+struct Measured {
+    port: String,
+    link: MeasuredLink,
+}
+
+/// Opens `port` for `bus` and measures its adapter.
+fn measure(bus: &BusConfig, port: &str) -> anyhow::Result<Measured> {
+    let mut servo_bus = open_bus(bus, port, Allowance::Assumed)?;
+    let pty = servo_bus.transport().is_pty();
+    let link = measure_link(&mut servo_bus, bus, pty)
+        .with_context(|| format!("measuring the adapter on {port}"))?;
+    Ok(Measured {
+        port: port.to_owned(),
+        link,
+    })
+}
+
 /// The figures of one bus at `rate`, and their human-readable lines.
-fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)> {
+fn bus_budget(
+    bus: &BusConfig,
+    rate: f64,
+    measured: Option<&Measured>,
+) -> anyhow::Result<(BusBudget, String)> {
+    let link = measured.map_or_else(|| bus.budget_link(), |m| m.link.link);
     // The full cycle's cost does not depend on the rate: plan at a rate any
     // bus can run to get it even when `rate` itself cannot run.
     let reference = bus
-        .plan(f64::MIN_POSITIVE)
+        .plan_on(&link, f64::MIN_POSITIVE)
         .with_context(|| format!("bus `{}`", bus.name))?;
-    let at_rate = bus.plan(rate);
+    let at_rate = bus.plan_on(&link, rate);
     let full = reference.full_cycle();
     let (read_every, fixes, reason) = match &at_rate {
         Ok(p) => (p.read_every(), fix_list(p), None),
         Err(e) => (0, Vec::new(), Some(e.to_string())),
     };
     let feasible = read_every == 1;
-    let link = bus.link();
     let us = |d: std::time::Duration| d.as_secs_f64() * 1e6;
+    let overhead = Link {
+        latency: std::time::Duration::ZERO,
+        ..link
+    }
+    .exchange_cost(full.round_trips, full.servos_read);
+    let source = match measured {
+        Some(_) => "measured",
+        None if bus.port.is_none() => "simulator",
+        None => "robot file",
+    };
     let budget = BusBudget {
         name: bus.name.clone(),
         servos: bus.joints.len(),
@@ -120,6 +180,11 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         turnaround_time_us: us(link.turnaround) * full.servos_read as f64,
         return_delay_time_us: us(bus.return_delay) * full.servos_read as f64,
         latency_time_us: us(link.latency) * full.round_trips as f64,
+        overhead_time_us: us(overhead),
+        link: source.to_owned(),
+        port: measured.map(|m| m.port.clone()),
+        measured_latency_us: measured.map(|m| us(m.link.ping_latency)),
+        wire_limited_rate_hz: full.wire_limited_rate_hz(),
         cycle_time_us: full.cycle_time_us(),
         max_rate_hz: full.max_rate_hz(),
         rate_hz: rate,
@@ -141,10 +206,17 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         bus.name,
         bus.joints.len(),
         bus.baud,
-        if bus.latency_auto {
-            "auto (measured when the robot runs; 0 here)".to_owned()
-        } else {
-            format!("{} us", bus.latency.as_micros())
+        match measured {
+            Some(m) => format!(
+                "measured on {}: {:.0} us a PING beyond the wire and the servo ({} PINGs)",
+                m.port,
+                us(m.link.ping_latency),
+                m.link.pings
+            ),
+            None if bus.latency_auto => {
+                "auto (measured when the robot runs, or with --port; 0 here)".to_owned()
+            }
+            None => format!("{} us", bus.latency.as_micros()),
         },
         bus.return_delay.as_micros()
     ));
@@ -158,13 +230,15 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         full.bytes, full.write_frames, full.round_trips
     ));
     s.push_str(&format!(
-        "  wire time {:.0} us; cycle time {:.0} us with return delays, turnarounds and latency\n",
+        "  wire time {:.0} us; cycle time {:.0} us with return delays, turnarounds, latency \
+         and the link's overhead\n",
         full.wire_time_us(),
         full.cycle_time_us()
     ));
     s.push_str(&format!(
         "  where the {:.0} us go: wire {:.0}; turnaround {} x {:.0} = {:.0} (a guess per reply); \
-         return delay {} x {:.0} = {:.0}; adapter latency {} x {:.0} = {:.0}\n",
+         return delay {} x {:.0} = {:.0}; adapter latency {} x {:.0} = {:.0}; link overhead \
+         {} x {:.0} + {} x {:.0} = {:.0} ({})\n",
         full.cycle_time_us(),
         full.wire_time_us(),
         full.servos_read,
@@ -176,9 +250,19 @@ fn bus_budget(bus: &BusConfig, rate: f64) -> anyhow::Result<(BusBudget, String)>
         full.round_trips,
         us(link.latency),
         budget.latency_time_us,
+        full.round_trips,
+        us(link.overhead),
+        full.servos_read,
+        us(link.reply_overhead),
+        budget.overhead_time_us,
+        match source {
+            "simulator" => "the built-in simulator's pseudo-terminal",
+            "measured" => "measured",
+            _ => "none given",
+        },
     ));
     s.push_str(&format!(
-        "  maximum rate {} Hz (the wire alone: {} Hz)\n",
+        "  maximum rate {} Hz on this link (the wire alone: {} Hz)\n",
         fmt_hz(full.fastest_rate_hz()),
         fmt_hz(full.wire_limited_rate_hz())
     ));

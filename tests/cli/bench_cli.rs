@@ -53,10 +53,13 @@ fn check_counters(b: &serde_json::Value) {
     let replies: u64 = servos.iter().map(|s| count(s, "replies")).sum();
     let timeouts: u64 = servos.iter().map(|s| count(s, "timeouts")).sum();
     // A reply garbled on the wire (a checksum error, e.g. when a late reply
-    // collides with the next request) is neither a reply nor a timeout.
+    // collides with the next request) is neither a reply nor a timeout, and
+    // a reply that came after its deadline (the host delivered it late) is
+    // a late reply.
     let corrupt = count(b, "checksum_errors");
+    let late = count(b, "late_replies");
     assert!(
-        replies + timeouts <= reads && reads <= replies + timeouts + corrupt,
+        replies + timeouts <= reads && reads <= replies + timeouts + late + corrupt,
         "{b}"
     );
     assert_eq!(count(b, "timeouts"), timeouts, "{b}");

@@ -7,6 +7,7 @@ mod common;
 mod bad_inputs;
 mod bench_cli;
 mod budget_cli;
+mod budget_link;
 mod bus_guidance;
 mod bus_tools;
 mod calibrate_cli;

@@ -3,8 +3,11 @@
 //! every command names the same (floored) maximum.
 //!
 //! The SO-101 arm's full cycle at 1 Mbps is 880 us on the wire plus 6 x 50 us
-//! of turnaround = 1180 us; with 490 us of adapter latency it is 1670 us, so
-//! its maximum is 598.8 Hz: 598 Hz is the fastest whole rate that fits.
+//! of turnaround = 1180 us, plus on the built-in simulator the
+//! pseudo-terminal's 60 us per round trip and 8 us per reply: 1288 us, at
+//! most 776.4 Hz (776 Hz floored). With 490 us of adapter latency it is
+//! 1778 us, so its maximum is 562.4 Hz: 562 Hz is the fastest whole rate
+//! that fits.
 
 use crate::common;
 
@@ -49,11 +52,11 @@ fn wave_for(robot: &Path) -> PathBuf {
 #[test]
 fn budget_exits_1_when_the_rate_does_not_fit_in_text_and_json() {
     exited(
-        &servobus(&["budget", "--robot", "so101", "--rate", "847"]),
+        &servobus(&["budget", "--robot", "so101", "--rate", "776"]),
         0,
     );
     for json in [false, true] {
-        let mut args = vec!["budget", "--robot", "so101", "--rate", "848"];
+        let mut args = vec!["budget", "--robot", "so101", "--rate", "777"];
         if json {
             args.push("--json");
         }
@@ -62,7 +65,7 @@ fn budget_exits_1_when_the_rate_does_not_fit_in_text_and_json() {
         if json {
             assert_eq!(common::json(&out)["buses"][0]["feasible"], false);
         } else {
-            says(&stdout, &["lower the rate to 847 Hz"]);
+            says(&stdout, &["lower the rate to 776 Hz"]);
         }
     }
 }
@@ -70,7 +73,10 @@ fn budget_exits_1_when_the_rate_does_not_fit_in_text_and_json() {
 #[test]
 fn budget_accepts_a_round_robin_the_robot_file_allows() {
     let robot = slow_arm("rr-budget", "round_robin: true");
-    let out = servobus(&["budget", "--robot", arg(&robot), "--rate", "1000", "--json"]);
+    // 900 Hz (1111 us): one servo a cycle takes 26 + 9 + 8 bytes (430 us),
+    // 50 us of turnaround, 490 us of latency and 60 + 8 us of the pty's
+    // overhead = 1038 us.
+    let out = servobus(&["budget", "--robot", arg(&robot), "--rate", "900", "--json"]);
     exited(&out, 0);
     let v = json(&out);
     assert_eq!(v["buses"][0]["feasible"], false);
@@ -83,17 +89,17 @@ fn budget_and_play_name_the_same_floored_maximum() {
     let robot = slow_arm("rr-floor", "");
     let wave = wave_for(&robot);
     let budget = common::stdout(&servobus(&["budget", "--robot", arg(&robot)]));
-    says(&budget, &["maximum rate 598 Hz"]);
+    says(&budget, &["maximum rate 562 Hz"]);
 
     let wave = arg(&wave);
-    let (fits, _) = exited(&servobus(&["play", wave, "--fast", "--rate", "598"]), 0);
-    says(&fits, &["(max 598 Hz)"]);
+    let (fits, _) = exited(&servobus(&["play", wave, "--fast", "--rate", "562"]), 0);
+    says(&fits, &["(max 562 Hz)"]);
 
-    let (_, err) = exited(&servobus(&["play", wave, "--fast", "--rate", "599"]), 2);
+    let (_, err) = exited(&servobus(&["play", wave, "--fast", "--rate", "563"]), 2);
     says(
         &err,
         &[
-            "fastest rate that fits is 598 Hz",
+            "fastest rate that fits is 562 Hz",
             "--round-robin",
             "round_robin: true",
         ],
@@ -102,9 +108,12 @@ fn budget_and_play_name_the_same_floored_maximum() {
 
 #[test]
 fn play_refuses_a_rate_above_the_maximum_unless_round_robin_is_allowed() {
-    let refused = servobus(&["play", "arm-wave", "--fast", "--rate", "2000"]);
+    // 1500 Hz (666 us): only one servo a cycle fits, 26 + 9 + 8 bytes
+    // (430 us) + 50 us of turnaround + 60 + 8 us of the pty's overhead
+    // (548 us); two would take 696 us.
+    let refused = servobus(&["play", "arm-wave", "--fast", "--rate", "1500"]);
     let (_, err) = exited(&refused, 2);
-    says(&err, &["fastest rate that fits is 847 Hz", "--round-robin"]);
+    says(&err, &["fastest rate that fits is 776 Hz", "--round-robin"]);
 
     let out = servobus(&[
         "play",
@@ -112,7 +121,7 @@ fn play_refuses_a_rate_above_the_maximum_unless_round_robin_is_allowed() {
         "--fast",
         "--json",
         "--rate",
-        "2000",
+        "1500",
         "--round-robin",
     ]);
     exited(&out, 0);
@@ -132,7 +141,7 @@ fn a_rate_no_round_robin_can_run_names_the_fastest_rate() {
         "--round-robin",
     ]);
     let (_, err) = exited(&out, 2);
-    says(&err, &["847 Hz"]);
+    says(&err, &["776 Hz"]);
 }
 
 #[test]
@@ -141,7 +150,7 @@ fn bench_refuses_a_robot_rate_above_the_maximum() {
     let path = write_file(&scratch("rr-bench"), "fast.yaml", &fast);
     let bench = ["bench", "--robot", arg(&path), "--seconds", "0.1", "--json"];
     let (_, err) = exited(&servobus(&bench), 2);
-    says(&err, &["fastest rate that fits is 847 Hz", "--round-robin"]);
+    says(&err, &["fastest rate that fits is 776 Hz", "--round-robin"]);
     exited(&servobus(&[&bench[..], &["--round-robin"]].concat()), 0);
 }
 

@@ -1,8 +1,9 @@
 //! Whether a control rate fits a bus, from servobus-timing's cycle plan.
 
 use core::fmt;
+use core::time::Duration;
 
-use servobus_timing::{plan, Block, Change, CycleError, Plan, Servo};
+use servobus_timing::{plan, Block, Change, CycleError, Link, Plan, Servo};
 
 use super::BusConfig;
 
@@ -15,19 +16,62 @@ impl BusConfig {
             .collect()
     }
 
-    /// The plan of this bus's control cycle at `rate_hz`: goal positions
-    /// written to every servo (SYNC WRITE), present positions read back (SYNC
-    /// READ, or one READ per servo without it). When the full cycle does not
-    /// fit, the plan reads a round-robin subset each cycle and lists what
-    /// would make it fit.
+    /// The link as the budget charges it before anything is measured: the
+    /// robot file's baud rate and adapter latency (0 for `latency_us:
+    /// auto`), and on the built-in simulator (a bus without a `port:`) the
+    /// pseudo-terminal's cost of each exchange ([`Link::on_pty`]). A
+    /// program that measured the adapter plans on
+    /// [`measured_link`](BusConfig::measured_link) instead.
+    pub fn budget_link(&self) -> Link {
+        let link = self.link();
+        if self.port.is_none() {
+            link.on_pty()
+        } else {
+            link
+        }
+    }
+
+    /// The link of this bus on a port whose adapter was measured (the
+    /// start-up probe of `latency_us: auto`, PINGs): `ping_latency` is the
+    /// median of what each PING took beyond the wire and the servo, which is
+    /// the adapter's latency and every per-exchange overhead of the link
+    /// together. On a pseudo-terminal (`servobus sim`) each further reply
+    /// of a SYNC READ costs [`Link::PTY_REPLY_OVERHEAD`] more, which a PING
+    /// (one reply) shows only once.
+    pub fn measured_link(&self, ping_latency: Duration, pty: bool) -> Link {
+        let link = Link::new(self.baud);
+        if pty {
+            link.with_latency(ping_latency.saturating_sub(Link::PTY_REPLY_OVERHEAD))
+                .with_overhead(Duration::ZERO, Link::PTY_REPLY_OVERHEAD)
+        } else {
+            link.with_latency(ping_latency)
+        }
+    }
+
+    /// The plan of this bus's control cycle at `rate_hz` on the link of
+    /// [`budget_link`](BusConfig::budget_link): goal positions written to
+    /// every servo (SYNC WRITE), present positions read back (SYNC READ, or
+    /// one READ per servo without it). When the full cycle does not fit,
+    /// the plan reads a round-robin subset each cycle and lists what would
+    /// make it fit.
     ///
     /// # Errors
     ///
     /// [`CycleError`] when not even the round-robin cycle fits (it names the
     /// cheapest change that would), or the rate is not positive.
     pub fn plan(&self, rate_hz: f64) -> Result<Plan, CycleError> {
+        self.plan_on(&self.budget_link(), rate_hz)
+    }
+
+    /// As [`plan`](BusConfig::plan), on `link` (a measured one, see
+    /// [`measured_link`](BusConfig::measured_link)).
+    ///
+    /// # Errors
+    ///
+    /// As [`plan`](BusConfig::plan).
+    pub fn plan_on(&self, link: &Link, rate_hz: f64) -> Result<Plan, CycleError> {
         plan(
-            &self.link(),
+            link,
             &self.timing_servos(),
             Some(Block::GOAL_POSITION),
             Some(Block::PRESENT_POSITION),

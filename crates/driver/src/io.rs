@@ -66,6 +66,18 @@ pub(crate) struct Io<T, C> {
     stale: u64,
     /// When the last request sent has left the host's transmitter.
     line_free: Duration,
+    /// Servos whose last reply was counted as a timeout and has not come
+    /// since: a reply from one of them that arrives later is a late
+    /// reply, not a lost one.
+    overdue: [bool; 256],
+    overdue_count: usize,
+    /// Overdue servos whose one frame in a later read was taken as that
+    /// read's answer, though it may have been the late reply: they stay
+    /// overdue for one read more.
+    doubtful: [bool; 256],
+    /// Overdue servos whose reply arrived, for the bus to count.
+    late: [u8; 256],
+    pub late_len: usize,
 }
 
 impl<T: Transport, C: Clock> Io<T, C> {
@@ -85,6 +97,11 @@ impl<T: Transport, C: Clock> Io<T, C> {
             base_checksum: 0,
             stale: 0,
             line_free: Duration::ZERO,
+            overdue: [false; 256],
+            overdue_count: 0,
+            doubtful: [false; 256],
+            late: [0; 256],
+            late_len: 0,
         }
     }
 
@@ -104,6 +121,10 @@ impl<T: Transport, C: Clock> Io<T, C> {
     /// when the SYNC WRITE is through; measured from the write call, its
     /// deadline would be short by the rest of the SYNC WRITE.
     pub fn send(&mut self, wire: &Link) -> Result<Duration, TransportError> {
+        // What arrived since the last wait is looked at before it is
+        // dropped: a servo's late reply shows that it answered.
+        let now = self.clock.now();
+        self.take_late(now)?;
         self.transport.discard_input()?;
         // Bytes pending in the decoder belong to an earlier exchange; they
         // count as discarded in this one, but not as garbage of its reply.
@@ -128,6 +149,95 @@ impl<T: Transport, C: Clock> Io<T, C> {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }
         Ok(start)
+    }
+
+    /// Marks servo `id`'s reply as lost (counted as a timeout) until it
+    /// comes.
+    pub fn overdue(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
+        let slot = &mut self.overdue[usize::from(id)];
+        if !*slot {
+            *slot = true;
+            self.overdue_count += 1;
+        }
+    }
+
+    /// Servo `id` answered in time: nothing of it is overdue.
+    pub fn answered(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
+        let slot = &mut self.overdue[usize::from(id)];
+        if *slot {
+            *slot = false;
+            self.overdue_count -= 1;
+        }
+    }
+
+    /// Overdue servo `id` sent one frame in a read, taken as its answer
+    /// though it may have been its late reply to an earlier one: should
+    /// the answer come after, it shows that. It stays overdue for one
+    /// read more (a servo whose reply was really lost is then answered).
+    pub fn answered_in_doubt(&mut self, id: u8) {
+        let doubtful = &mut self.doubtful[usize::from(id)];
+        if *doubtful {
+            self.answered(id);
+        } else {
+            *doubtful = true;
+        }
+    }
+
+    /// Which servos are overdue, by ID.
+    pub fn overdue_flags(&self) -> [bool; 256] {
+        self.overdue
+    }
+
+    /// Servo `id`'s late reply arrived: noted for the bus to count, if it
+    /// was overdue.
+    pub fn late_reply(&mut self, id: u8) {
+        self.doubtful[usize::from(id)] = false;
+        let slot = &mut self.overdue[usize::from(id)];
+        if *slot {
+            *slot = false;
+            self.overdue_count -= 1;
+            self.late[self.late_len] = id;
+            self.late_len += 1;
+        }
+    }
+
+    /// The overdue servos whose replies arrived, once each (see
+    /// [`Io::take_late`]); the caller counts them, then clears `late_len`.
+    pub fn late(&self) -> &[u8] {
+        &self.late[..self.late_len]
+    }
+
+    /// Reads what arrives until `deadline` (what has arrived, for a
+    /// deadline of now), or until no servo is overdue, and notes each
+    /// overdue servo whose reply is in it ([`Io::late`]). The bytes are
+    /// consumed: they belong to no request still waited for.
+    ///
+    /// # Errors
+    /// Transport failures other than a timeout.
+    pub fn take_late(&mut self, deadline: Duration) -> Result<(), TransportError> {
+        while self.overdue_count > 0 {
+            let n = match self.transport.read(&mut self.rx, deadline) {
+                Ok(0) | Err(TransportError::TimedOut) => return Ok(()),
+                Ok(n) => n,
+                Err(e) => return Err(e),
+            };
+            // The IDs of the frames in it (at most one frame per 6 bytes).
+            let mut ids = [0u8; 256];
+            let mut found = 0;
+            let mut input = &self.rx[..n.min(self.rx.len())];
+            while let Some(ev) = self.decoder.decode(&mut input) {
+                if let (Event::Packet { packet, .. }, Some(slot)) = (ev, ids.get_mut(found)) {
+                    *slot = packet.id();
+                    found += 1;
+                }
+            }
+            for &id in &ids[..found] {
+                self.late_reply(id);
+            }
+        }
+        Ok(())
     }
 
     /// When a request sent now starts on the wire: now, or once the

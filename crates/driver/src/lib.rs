@@ -133,6 +133,7 @@ mod bus;
 mod eeprom;
 mod error;
 mod io;
+pub mod scripted;
 #[cfg(feature = "serial")]
 mod serial;
 mod servos;
@@ -142,7 +143,7 @@ mod sync;
 #[cfg(test)]
 mod testing;
 
-pub use bus::{Bus, LatencyMeasurement};
+pub use bus::{Bus, LatencyMeasurement, PROBE_CEILING, PROBE_PINGS};
 pub use eeprom::EepromWrite;
 pub use error::BusError;
 #[cfg(feature = "serial")]

@@ -90,8 +90,16 @@ pub struct BusCounters {
     pub transactions: u64,
     /// Requests sent again after a failure (each re-ask counts one).
     pub retries: u64,
-    /// Replies that did not arrive by their deadline (each attempt counts).
+    /// Replies that did not arrive by their deadline (each attempt counts),
+    /// less those that came later ([`late_replies`](Self::late_replies)).
     pub timeouts: u64,
+    /// Replies that arrived after their deadline: the servo answered, and
+    /// the host or the adapter delivered the bytes late (a servo's
+    /// firmware answers on time or not at all). Counted when the bytes are
+    /// seen, at the next request or by
+    /// [`Bus::await_late_replies`](crate::Bus::await_late_replies); each
+    /// takes back the timeout its read was counted as.
+    pub late_replies: u64,
     /// Frames received with a bad checksum.
     pub checksum_errors: u64,
     /// Valid frames that were not the expected reply: another ID, the wrong
@@ -116,6 +124,7 @@ impl BusCounters {
         self.transactions += other.transactions;
         self.retries += other.retries;
         self.timeouts += other.timeouts;
+        self.late_replies += other.late_replies;
         self.checksum_errors += other.checksum_errors;
         self.wrong_replies += other.wrong_replies;
         self.echoes += other.echoes;

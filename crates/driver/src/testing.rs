@@ -8,16 +8,14 @@ use std::time::Duration;
 use servobus_protocol::registers::Series;
 use servobus_protocol::{encode, parse_frame, Instruction, Packet, StatusFlags};
 
-use crate::{
-    Bus, BusError, BusSettings, Clock, ManualClock, MissingReason, Transport, TransportError,
-};
+use crate::scripted::{Received, Script, ScriptedPort};
+use crate::{Bus, BusError, BusSettings, Clock, ManualClock, MissingReason, TransportError};
 
 type Responder = Box<dyn FnMut(&Packet<'_>) -> Vec<Vec<u8>>>;
 
 /// Delivers the responder's frames, one after another, 100 us apart after
 /// each request; optionally echoes the request first.
 struct Scripted {
-    clock: ManualClock,
     inbox: VecDeque<(Duration, Vec<u8>)>,
     responder: Responder,
     echo: bool,
@@ -28,9 +26,8 @@ struct Scripted {
 }
 
 impl Scripted {
-    fn new(clock: &ManualClock, responder: Responder) -> Self {
+    fn new(responder: Responder) -> Self {
         Scripted {
-            clock: clock.clone(),
             inbox: VecDeque::new(),
             responder,
             echo: false,
@@ -40,17 +37,10 @@ impl Scripted {
     }
 }
 
-impl Transport for Scripted {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        &self.clock
-    }
-    fn baud(&self) -> u32 {
-        1_000_000
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        self.clock.advance(self.stall);
-        let now = self.clock.now();
+impl Script for Scripted {
+    fn write(&mut self, clock: &ManualClock, bytes: &[u8]) -> Result<(), TransportError> {
+        clock.advance(self.stall);
+        let now = clock.now();
         self.sent.push(bytes.to_vec());
         if self.echo {
             self.inbox.push_back((now, bytes.to_vec()));
@@ -64,10 +54,10 @@ impl Transport for Scripted {
         Ok(())
     }
 
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+    fn read(&mut self, clock: &ManualClock, buf: &mut [u8], deadline: Duration) -> Received {
         match self.inbox.front_mut() {
             Some((at, bytes)) if *at <= deadline => {
-                self.clock.advance_to(*at);
+                clock.advance_to(*at);
                 let n = buf.len().min(bytes.len());
                 buf[..n].copy_from_slice(&bytes[..n]);
                 bytes.drain(..n);
@@ -77,16 +67,15 @@ impl Transport for Scripted {
                 Ok(n)
             }
             _ => {
-                self.clock.advance_to(deadline);
+                clock.advance_to(deadline);
                 Err(TransportError::TimedOut)
             }
         }
     }
 
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        let now = self.clock.now();
+    fn discard(&mut self, clock: &ManualClock) {
+        let now = clock.now();
         self.inbox.retain(|(at, _)| *at > now);
-        Ok(())
     }
 }
 
@@ -96,10 +85,11 @@ fn status(id: u8, flags: u8, params: &[u8]) -> Vec<u8> {
     buf[..n].to_vec()
 }
 
-fn bus(responder: Responder) -> (Bus<Scripted, ManualClock>, ManualClock) {
+fn bus(responder: Responder) -> (Bus<ScriptedPort<Scripted>, ManualClock>, ManualClock) {
     let clock = ManualClock::new();
     let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
-    (Bus::new(Scripted::new(&clock, responder), settings), clock)
+    let port = ScriptedPort::new(&clock, Scripted::new(responder));
+    (Bus::new(port, settings), clock)
 }
 
 #[test]
@@ -147,7 +137,7 @@ fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
     // each request 5 ms after the call began and answers 100 us later,
     // far past the 1.37 ms deadline counted from the call. Counted from
     // the write's return less the request's 60 us of wire, it is in time.
-    bus.transport_mut().stall = Duration::from_millis(5);
+    bus.transport_mut().script.stall = Duration::from_millis(5);
     let t0 = clock.now();
     assert!(bus.ping(4).is_ok());
     assert_eq!(clock.now() - t0, Duration::from_micros(5_100));
@@ -156,7 +146,7 @@ fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
     // counted from when the request can have left: 5 ms - 60 us + 1.37 ms,
     // twice.
     let (mut bus, clock) = bus_silent();
-    bus.transport_mut().stall = Duration::from_millis(5);
+    bus.transport_mut().script.stall = Duration::from_millis(5);
     let t0 = clock.now();
     assert!(matches!(bus.ping(9), Err(BusError::Timeout { id: 9, .. })));
     assert_eq!(
@@ -166,7 +156,7 @@ fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
     assert_eq!(bus.counters().timeouts, 2);
 }
 
-fn bus_silent() -> (Bus<Scripted, ManualClock>, ManualClock) {
+fn bus_silent() -> (Bus<ScriptedPort<Scripted>, ManualClock>, ManualClock) {
     bus(Box::new(|_| vec![]))
 }
 
@@ -180,7 +170,7 @@ fn echo_is_skipped_and_wrong_ids_are_not_taken() {
             vec![]
         }
     }));
-    bus.transport_mut().echo = true;
+    bus.transport_mut().script.echo = true;
     let mut out = [0u8; 2];
     assert!(bus.read(4, 56, &mut out).is_ok());
     assert_eq!(out, [5, 6]);
@@ -261,7 +251,7 @@ fn sync_write_splits_long_frames() {
     let data: Vec<u8> = ids.iter().flat_map(|&id| [id, 7]).collect();
     bus.sync_write(42, &ids, &data).expect("a valid SYNC WRITE");
     // 251 / 3 = 83 servos per frame: two frames, of 83 and 17 servos.
-    let sent = &bus.transport().sent;
+    let sent = &bus.transport().script.sent;
     assert_eq!(sent.len(), 2);
     let mut next = 0u8;
     for (frame, servos) in sent.iter().zip([83usize, 17]) {
@@ -283,7 +273,11 @@ fn sync_write_splits_long_frames() {
     }
     assert_eq!(next, 100, "every servo once, in order");
     assert!(bus.sync_write(42, &ids, &data[..199]).is_err());
-    assert_eq!(bus.transport().sent.len(), 2, "nothing sent when refused");
+    assert_eq!(
+        bus.transport().script.sent.len(),
+        2,
+        "nothing sent when refused"
+    );
     // An invalid ID in the second frame refuses the first one too.
     let mut bad = ids.clone();
     bad[90] = 254;
@@ -292,7 +286,7 @@ fn sync_write_splits_long_frames() {
         Err(BusError::Encode(_))
     ));
     assert_eq!(
-        bus.transport().sent.len(),
+        bus.transport().script.sent.len(),
         2,
         "a half-valid request sends nothing"
     );

@@ -9,11 +9,13 @@ use std::time::Duration;
 
 use serde::Serialize;
 use servobus_config::BusConfig;
-use servobus_driver::{Bus, BusError, Clock, MissingReason, Transport, PATIENT_TRIES};
+use servobus_driver::{
+    Bus, BusError, Clock, MissingReason, Transport, PATIENT_TRIES, PROBE_CEILING, PROBE_PINGS,
+};
 use servobus_protocol::registers::{addr, ValueError};
 use servobus_runtime::stats::Histogram;
 use servobus_runtime::Quantiles;
-use servobus_timing::CycleError;
+use servobus_timing::{CycleError, Link};
 
 /// One servo's round trip, us.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -63,8 +65,15 @@ pub struct BusBench {
     pub floor_rate_hz: f64,
     /// Achieved over floor rate (0 without a floor).
     pub floor_ratio: f64,
-    /// Replies not given in time.
+    /// On a port: the median of what each PING of the start-up probe took
+    /// beyond the wire and the servo, us, on which `planned_rate_hz` is
+    /// planned (as `budget --port` plans); the caller's to fill in.
+    pub measured_latency_us: Option<f64>,
+    /// Replies not given in time (and not late either).
     pub timeouts: u64,
+    /// Replies that came after their deadline: the servo answered, the
+    /// host delivered late.
+    pub late_replies: u64,
     /// Transactions retried.
     pub retries: u64,
     /// Servos missing from a SYNC READ.
@@ -125,16 +134,81 @@ pub enum BenchError {
     Position(#[source] ValueError),
 }
 
+/// How long, after a cycle with servos missing, the bench waits for their
+/// late replies before the next request: against `servobus sim` on a
+/// busy two-core machine, replies reached the host up to 20 ms after their
+/// deadline (the simulator or the kernel's pty hand-off descheduled).
+pub const LATE_REPLY_WAIT: Duration = Duration::from_millis(25);
+
+/// What the start-up probe measured of the link to a bus's servos.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredLink {
+    /// The link to plan on ([`BusConfig::measured_link`]).
+    pub link: Link,
+    /// The median of what each PING took beyond the wire and the servo
+    /// (the typical exchange: one stall of a loaded host does not move it).
+    pub ping_latency: Duration,
+    /// PINGs answered.
+    pub pings: u32,
+}
+
+/// Measures the link to `bus`'s servos on `servo_bus` with the start-up
+/// probe of `latency_us: auto` ([`Bus::probe_latency`], the same PINGs a
+/// run sends), and gives the link its cycle costs on. `pty`: the port is
+/// a pseudo-terminal (`servobus sim`), whose replies cost a hand-off each.
+///
+/// # Errors
+/// [`BenchError::NoJoints`]; [`BenchError::Bus`] when no servo answers.
+pub fn measure_link<T: Transport, C: Clock>(
+    servo_bus: &mut Bus<T, C>,
+    bus: &BusConfig,
+    pty: bool,
+) -> Result<MeasuredLink, BenchError> {
+    let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
+    if ids.is_empty() {
+        return Err(BenchError::NoJoints {
+            bus: bus.name.clone(),
+        });
+    }
+    let m = servo_bus
+        .probe_latency(&ids, PROBE_PINGS, PROBE_CEILING, |_| {})
+        .map_err(|source| BenchError::Bus {
+            bus: bus.name.clone(),
+            what: "measuring the adapter",
+            source,
+        })?;
+    Ok(MeasuredLink {
+        link: bus.measured_link(m.median, pty),
+        ping_latency: m.median,
+        pings: m.samples,
+    })
+}
+
 /// Runs full cycles on `servo_bus`, the bus `bus` of a robot, for
 /// `duration`, holding every servo where the first (untimed, patient) read
-/// finds it, and returns the figures. `backend` and the floor are left
-/// for the caller.
+/// finds it, and returns the figures, planned on the budget's link
+/// ([`BusConfig::budget_link`]). `backend` and the floor are left for the
+/// caller.
 ///
 /// # Errors
 /// A [`BenchError`] naming the bus and what failed.
 pub fn measure<T: Transport, C: Clock>(
     servo_bus: &mut Bus<T, C>,
     bus: &BusConfig,
+    duration: Duration,
+) -> Result<BusBench, BenchError> {
+    measure_on(servo_bus, bus, &bus.budget_link(), duration)
+}
+
+/// As [`measure`], with the planned figures on `link` (a measured one,
+/// see [`measure_link`]).
+///
+/// # Errors
+/// A [`BenchError`] naming the bus and what failed.
+pub fn measure_on<T: Transport, C: Clock>(
+    servo_bus: &mut Bus<T, C>,
+    bus: &BusConfig,
+    link: &Link,
     duration: Duration,
 ) -> Result<BusBench, BenchError> {
     let failed = |what: &'static str| {
@@ -151,7 +225,7 @@ pub fn measure<T: Transport, C: Clock>(
         });
     };
     let series = first.model.series;
-    let plan = bus.plan(1.0).map_err(|source| BenchError::Plan {
+    let plan = bus.plan_on(link, 1.0).map_err(|source| BenchError::Plan {
         bus: bus.name.clone(),
         source,
     })?;
@@ -204,7 +278,15 @@ pub fn measure<T: Transport, C: Clock>(
         let read = servo_bus
             .sync_read(pos.address, pos.size, &ids)
             .map_err(failed("SYNC READ"))?;
-        missed += read.missing() as u64;
+        let missing = read.missing() as u64;
+        missed += missing;
+        if missing > 0 {
+            // Let a late reply come before the next request (which would
+            // talk over it): it counts as late, not lost.
+            servo_bus
+                .await_late_replies(LATE_REPLY_WAIT)
+                .map_err(failed("waiting for late replies"))?;
+        }
         let now = servo_bus.clock().now();
         let period = now - last;
         last = now;
@@ -262,7 +344,9 @@ pub fn measure<T: Transport, C: Clock>(
         overruns,
         floor_rate_hz: 0.0,
         floor_ratio: 0.0,
+        measured_latency_us: None,
         timeouts: counters.timeouts,
+        late_replies: counters.late_replies,
         retries: counters.retries,
         missed_replies: missed,
         checksum_errors: counters.checksum_errors,

@@ -49,8 +49,9 @@ impl Servo {
 /// A cycle is the SYNC WRITE frame(s) of the goals, then the feedback: one
 /// SYNC READ for the servos that support it and one READ for each that does
 /// not. The expected duration is the wire time of every byte both ways, plus
-/// each reply's return delay and turnaround, plus the adapter's latency once
-/// per round trip (a request whose reply the host waits for). Write-only
+/// each reply's return delay and turnaround, plus the adapter's latency and
+/// the link's overhead once per round trip (a request whose reply the host
+/// waits for), plus the link's reply overhead once per reply. Write-only
 /// frames cost their wire time alone: nothing waits for them, so the adapter
 /// sends them back to back with the request that follows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -60,7 +61,9 @@ pub struct CycleCost {
     /// Wire time of those bytes (10 bits each at the baud rate).
     pub wire_time: Duration,
     /// Expected duration of the cycle: wire time + return delays +
-    /// turnarounds + one adapter latency per round trip.
+    /// turnarounds + the link's cost of its exchanges (one adapter latency
+    /// and one overhead per round trip, one reply overhead per reply:
+    /// [`Link::exchange_cost`]).
     pub cycle_time: Duration,
     /// SYNC WRITE frames per cycle.
     pub write_frames: usize,
@@ -199,8 +202,8 @@ impl CycleSpec {
             servos_read = readers.len();
         }
         let wire = self.link.wire_nanos(bytes);
-        let latency = nanos(self.link.latency).saturating_mul(round_trips as u64);
-        let cycle = wire.saturating_add(waits).saturating_add(latency);
+        let link = nanos(self.link.exchange_cost(round_trips, servos_read));
+        let cycle = wire.saturating_add(waits).saturating_add(link);
         CycleCost {
             bytes,
             wire_time: Duration::from_nanos(wire),

@@ -103,7 +103,8 @@ impl Link {
     /// once the request is out, after [`Link::request_time`]).
     ///
     /// The deadline is request wire time + for each reply (return delay +
-    /// turnaround + reply wire time) + adapter latency + margin.
+    /// turnaround + reply wire time + the link's reply overhead) + adapter
+    /// latency + the link's overhead + margin.
     pub fn deadline(
         &self,
         tx: Transaction,
@@ -122,7 +123,7 @@ impl Link {
             self.wire_time(tx.request_bytes())
                 .saturating_add(waits)
                 .saturating_add(self.wire_time(replies.saturating_mul(tx.reply_bytes())))
-                .saturating_add(self.latency)
+                .saturating_add(self.exchange_cost(1, replies))
                 .saturating_add(self.margin),
         )
     }

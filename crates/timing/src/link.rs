@@ -26,6 +26,18 @@ pub struct Link {
     pub turnaround: Duration,
     /// Safety margin added to every deadline.
     pub margin: Duration,
+    /// What each round trip (a request whose reply the host waits for)
+    /// costs on this link beyond the adapter latency and the wire: the
+    /// hand-offs between the host, the port and the far end. 0 on a link
+    /// whose latency figure already covers them (a measured adapter);
+    /// [`Link::PTY_EXCHANGE_OVERHEAD`] on the built-in simulator's
+    /// pseudo-terminal.
+    pub overhead: Duration,
+    /// What each reply costs on this link beyond its wire time, return
+    /// delay and turnaround (a hand-off per reply where the far end hands
+    /// the replies over one by one); [`Link::PTY_REPLY_OVERHEAD`] on the
+    /// built-in simulator's pseudo-terminal.
+    pub reply_overhead: Duration,
 }
 
 impl Link {
@@ -45,6 +57,28 @@ impl Link {
     /// allowance for the simulator only: a real port uses
     /// [`Link::USB_LATENCY`] or its adapter's measured figure.
     pub const PTY_LATENCY: Duration = Duration::from_millis(3);
+    /// What each round trip costs on the built-in simulator's
+    /// pseudo-terminal beyond the wire and the servos' turnarounds: the
+    /// kernel hands the request from the client to the simulator's thread
+    /// and the reply back, a wake-up each way.
+    ///
+    /// How it was measured: `servobus bench --seconds 3` (release build,
+    /// the simulator on a pty in the same process, a quiet 2-core machine)
+    /// against the model without overheads: the SO-101 arm (one round
+    /// trip, 6 replies) ran 79 us a cycle beyond the model, the SCS mini (4
+    /// READs of one reply each) 251 us, the hexapod (one round trip, 18
+    /// replies) 164 us. A SYNC READ's replies fit 7 us each; a round trip
+    /// costs 37 us with a SYNC READ and 56 us with a READ (more host work
+    /// per request). 60 us a round trip and 8 us a reply put every shipped
+    /// robot within 2.5 % of what it achieved; on a busy machine bench runs
+    /// up to about 6 % slower.
+    pub const PTY_EXCHANGE_OVERHEAD: Duration = Duration::from_micros(60);
+    /// What each reply costs on the built-in simulator's pseudo-terminal
+    /// beyond its wire time and turnaround: the simulator hands each
+    /// servo's reply over on its own (the turnaround between two replies
+    /// is an idle line), one write and one wake-up of the client each.
+    /// Measured with [`Link::PTY_EXCHANGE_OVERHEAD`].
+    pub const PTY_REPLY_OVERHEAD: Duration = Duration::from_micros(8);
 
     /// A link at `baud` with no adapter latency and the default turnaround and
     /// margin. A baud of 0 is treated as 1 so that nothing divides by zero.
@@ -54,7 +88,37 @@ impl Link {
             latency: Duration::ZERO,
             turnaround: Self::DEFAULT_TURNAROUND,
             margin: Self::DEFAULT_MARGIN,
+            overhead: Duration::ZERO,
+            reply_overhead: Duration::ZERO,
         }
+    }
+
+    /// The same link with the per-exchange costs set: `overhead` per round
+    /// trip and `reply_overhead` per reply (see the fields).
+    pub const fn with_overhead(mut self, overhead: Duration, reply_overhead: Duration) -> Link {
+        self.overhead = overhead;
+        self.reply_overhead = reply_overhead;
+        self
+    }
+
+    /// The same link with the pseudo-terminal's per-exchange costs
+    /// ([`Link::PTY_EXCHANGE_OVERHEAD`], [`Link::PTY_REPLY_OVERHEAD`]): the
+    /// link of the built-in simulator.
+    pub const fn on_pty(self) -> Link {
+        self.with_overhead(Self::PTY_EXCHANGE_OVERHEAD, Self::PTY_REPLY_OVERHEAD)
+    }
+
+    /// What the link adds to `round_trips` round trips carrying `replies`
+    /// replies in all, beyond wire time, return delays and turnarounds:
+    /// the adapter latency and the overhead per round trip, the reply
+    /// overhead per reply.
+    pub fn exchange_cost(&self, round_trips: usize, replies: usize) -> Duration {
+        let trips = u32::try_from(round_trips).unwrap_or(u32::MAX);
+        let replies = u32::try_from(replies).unwrap_or(u32::MAX);
+        self.latency
+            .saturating_add(self.overhead)
+            .saturating_mul(trips)
+            .saturating_add(self.reply_overhead.saturating_mul(replies))
     }
 
     /// The same link with the adapter latency set.
@@ -172,6 +236,28 @@ mod tests {
                 assert_eq!(l.wire_time(bytes), Duration::from_nanos(nanos));
             }
         }
+    }
+
+    #[test]
+    fn the_link_cost_of_exchanges_is_latency_and_overhead_per_trip_and_a_share_per_reply() {
+        let l = Link::new(1_000_000)
+            .with_latency(Duration::from_micros(1000))
+            .with_overhead(Duration::from_micros(75), Duration::from_micros(10));
+        // 4 READs of one reply each: 4 x (1000 + 75) + 4 x 10.
+        assert_eq!(l.exchange_cost(4, 4), Duration::from_micros(4340));
+        // One SYNC READ answered by 6: 1000 + 75 + 6 x 10.
+        assert_eq!(l.exchange_cost(1, 6), Duration::from_micros(1135));
+        assert_eq!(l.exchange_cost(0, 0), Duration::ZERO);
+        // The simulator's pty: the named figures.
+        let pty = Link::new(1_000_000).on_pty();
+        assert_eq!(pty.exchange_cost(1, 6), Duration::from_micros(60 + 48));
+        // A READ's deadline carries one round trip and one reply of it:
+        // 8 + 8 bytes, 50 us turnaround, 68 us of the pty, 200 us margin.
+        let read = crate::Transaction::Read { len: 2 };
+        assert_eq!(
+            pty.deadline(read, Duration::ZERO, crate::StatusLevel::All),
+            Some(Duration::from_micros(160 + 50 + 68 + 200))
+        );
     }
 
     #[test]

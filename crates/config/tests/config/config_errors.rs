@@ -197,7 +197,9 @@ fn syntax_errors_have_a_position() {
 fn a_rate_the_bus_cannot_carry_says_what_fits() {
     let (p, e) = robot_error("rate", "rate: 100", "rate: 5000");
     expect(&e, &p, 3, 7, "rate", "bus `bus`: 5000 Hz cannot be met");
-    assert!(e.to_string().contains("lower the rate to 2000 Hz"), "{e}");
+    // 14 + 10 + 2 x 8 bytes (400 us), 2 turnarounds of 50 us, and the
+    // simulator's pty (no port: 60 us a round trip, 8 us a reply): 576 us.
+    assert!(e.to_string().contains("lower the rate to 1736 Hz"), "{e}");
 }
 
 #[test]

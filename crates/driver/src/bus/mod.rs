@@ -4,6 +4,7 @@
 //! the transaction that runs them (retries, counters) and the latency
 //! measurement each have a module.
 
+mod late;
 mod latency;
 mod requests;
 mod transact;
@@ -13,7 +14,7 @@ use std::time::Duration;
 use servobus_protocol::{BROADCAST_ID, MAX_PARAMS};
 use servobus_timing::Transaction;
 
-pub use latency::LatencyMeasurement;
+pub use latency::{LatencyMeasurement, PROBE_CEILING, PROBE_PINGS};
 pub(crate) use transact::Expect;
 
 use crate::io::Io;

@@ -33,13 +33,26 @@ struct Single<'a> {
     wrong: Option<BusError>,
     wrong_count: u64,
     corrupt: bool,
+    /// Servos whose reply to an earlier request is overdue: a frame from
+    /// one of them is that late reply, not a wrong one.
+    owed: [bool; 256],
+    /// Late replies seen: their IDs, in `late[..late_len]`.
+    late: [u8; 256],
+    late_len: usize,
 }
 
 impl Sink for Single<'_> {
     fn packet(&mut self, packet: &Packet<'_>, now: Duration) -> bool {
         let id = packet.id();
         let params = packet.params();
-        let err = if id != self.expect.id && id != self.expect.alt {
+        let other = id != self.expect.id && id != self.expect.alt;
+        if other && std::mem::take(&mut self.owed[usize::from(id)]) {
+            // Another servo's reply to an earlier request, late.
+            self.late[self.late_len] = id;
+            self.late_len += 1;
+            return false;
+        }
+        let err = if other {
             BusError::WrongId {
                 expected: self.expect.id,
                 actual: id,
@@ -82,7 +95,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 self.counters.retries += 1;
                 self.servos[id].retries += 1;
             }
-            let start = self.io.send(&self.settings.link)?;
+            let start = self.send()?;
             if !expect.reply {
                 return Ok(None);
             }
@@ -94,12 +107,20 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 wrong: None,
                 wrong_count: 0,
                 corrupt: false,
+                owed: self.io.overdue_flags(),
+                late: [0; 256],
+                late_len: 0,
             };
             let tally = self.io.exchange(start + expect.timeout, &mut sink)?;
             let (got, wrong, wrong_count, corrupt) =
                 (sink.got, sink.wrong, sink.wrong_count, sink.corrupt);
+            for &late in &sink.late[..sink.late_len] {
+                self.io.late_reply(late);
+            }
+            self.count_late();
             self.account(id, &tally, wrong_count);
             if let Some((flags, at)) = got {
+                self.io.answered(expect.id);
                 let rtt = at.saturating_sub(start);
                 self.last_rtt = rtt;
                 self.counters.rtt.record(rtt);
@@ -123,8 +144,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             } else if let Some(wrong) = wrong {
                 wrong
             } else {
-                self.counters.timeouts += 1;
-                self.servos[id].timeouts += 1;
+                self.timed_out(expect.id);
                 BusError::Timeout {
                     id: expect.id,
                     waited: expect.timeout,

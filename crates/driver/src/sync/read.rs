@@ -26,6 +26,11 @@ struct Round<'a> {
     wrong: u64,
     /// Arrival of the last reply taken.
     finished_at: Option<Duration>,
+    /// Servos whose reply to an earlier request is overdue: the first frame
+    /// of one may be that late reply, so the round waits for a second.
+    owed: [bool; 256],
+    /// Servos of `owed` that sent two frames: the first was the late reply.
+    late: [bool; 256],
 }
 
 impl Sink for Round<'_> {
@@ -41,8 +46,15 @@ impl Sink for Round<'_> {
                 return false;
             }
         };
+        let owed = self.owed[usize::from(id)];
         match self.store.slots[slot] {
             Slot::Missing(MissingReason::NoReply | MissingReason::Corrupt) => {}
+            Slot::Answered(_) if owed && !self.late[usize::from(id)] => {
+                // A servo answers in order: the frame before this one was
+                // its late reply to an earlier request, and this is the
+                // reply to this one.
+                self.late[usize::from(id)] = true;
+            }
             Slot::Answered(_) | Slot::Missing(MissingReason::WrongLength) => {
                 // A second frame claiming the same ID: a servo sharing it, or
                 // a misrouted reply. Which one is right cannot be known, so
@@ -59,13 +71,24 @@ impl Sink for Round<'_> {
                 return false;
             }
         }
+        // The first frame of an overdue servo is kept, but it may be its
+        // late reply to an earlier request: it counts once no second frame
+        // has come by the deadline. One round trip is recorded per servo
+        // that answered, at its first frame.
+        let provisional = owed && !self.late[usize::from(id)];
+        let second = owed && !provisional;
         let len = self.store.len;
         let params = packet.params();
         if params.len() == len {
             self.store.data[slot * len..(slot + 1) * len].copy_from_slice(params);
             let flags = packet.status();
             self.store.slots[slot] = Slot::Answered(flags);
-            counters.rtt.record(now.saturating_sub(self.start));
+            if !second {
+                counters.rtt.record(now.saturating_sub(self.start));
+            }
+            if provisional {
+                return false;
+            }
             if !flags.is_ok() {
                 counters.status_errors += 1;
             }
@@ -240,7 +263,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             &self.sync.pending,
         )?;
         let timeout = self.round_timeout(n)?;
-        let start = self.io.send(&self.settings.link)?;
+        let start = self.send()?;
         let mut sink = Round {
             store: &mut self.sync,
             servos: &mut self.servos,
@@ -248,19 +271,33 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             outstanding: n,
             wrong: 0,
             finished_at: None,
+            owed: self.io.overdue_flags(),
+            late: [false; 256],
         };
         let tally = self.io.exchange(start + timeout, &mut sink)?;
-        let (wrong, finished_at) = (sink.wrong, sink.finished_at);
+        let (wrong, finished_at, late, owed) = (sink.wrong, sink.finished_at, sink.late, sink.owed);
+        for &id in &self.sync.pending {
+            if late[usize::from(id)] {
+                self.io.late_reply(id);
+            }
+        }
+        self.count_late();
         // Per-servo checksum errors and wrong replies were counted by the
         // sink; the bus gets the totals.
         self.account(usize::from(BROADCAST_ID), &tally, wrong);
         let mut complete = true;
-        for &id in &self.sync.pending {
+        for k in 0..self.sync.pending.len() {
+            let id = self.sync.pending[k];
             let Some(i) = self.sync.slot_of(id) else {
                 continue;
             };
             match self.sync.slots[i] {
                 Slot::Answered(flags) => {
+                    if owed[usize::from(id)] && !late[usize::from(id)] {
+                        self.io.answered_in_doubt(id);
+                    } else {
+                        self.io.answered(id);
+                    }
                     if !flags.is_ok() {
                         self.counters.status_errors += 1;
                     }
@@ -268,8 +305,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 Slot::Missing(reason) => {
                     complete = false;
                     if reason == MissingReason::NoReply {
-                        self.counters.timeouts += 1;
-                        self.servos[usize::from(id)].timeouts += 1;
+                        self.timed_out(id);
                     }
                 }
             }

@@ -45,7 +45,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             self.io.begin();
             self.io.tx_len = frame.pack(&mut self.io.tx).map_err(pack_error)?;
             self.count_sync_write(frame.ids);
-            self.io.send(&self.settings.link)?;
+            self.send()?;
         }
         Ok(())
     }
@@ -76,7 +76,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         dst.copy_from_slice(frame);
         self.io.tx_len = frame.len();
         self.counters.transactions += 1;
-        self.io.send(&self.settings.link)?;
+        self.send()?;
         Ok(())
     }
 }

@@ -6,8 +6,9 @@ use std::time::Duration;
 
 use servobus_alloc_count::{allocations, Counting};
 use servobus_driver::registers::sts;
+use servobus_driver::scripted::{Received, Script, ScriptedPort};
 use servobus_driver::{
-    Bus, BusSettings, Clock, ManualClock, Missing, MissingReason, Servos, Transport, TransportError,
+    Bus, BusSettings, Clock, ManualClock, Missing, MissingReason, Servos, TransportError,
 };
 use servobus_protocol::registers::Series;
 use servobus_protocol::{encode, parse_frame, Instruction, StatusFlags};
@@ -18,7 +19,6 @@ static GLOBAL: Counting = Counting;
 /// Answers a SYNC READ of 2 bytes from every listed servo (except ID 4,
 /// which is silent) with its ID as data, from a fixed buffer.
 struct FixedServos {
-    clock: ManualClock,
     out: [u8; 1024],
     len: usize,
     pos: usize,
@@ -27,17 +27,9 @@ struct FixedServos {
     frames: usize,
 }
 
-impl Transport for FixedServos {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        &self.clock
-    }
-    fn baud(&self) -> u32 {
-        1_000_000
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        self.clock
-            .advance(Duration::from_micros(10) * bytes.len() as u32);
+impl Script for FixedServos {
+    fn write(&mut self, clock: &ManualClock, bytes: &[u8]) -> Result<(), TransportError> {
+        clock.advance(Duration::from_micros(10) * bytes.len() as u32);
         if let Some(slot) = self.sent.get_mut(self.frames) {
             *slot = bytes.len() as u16;
         }
@@ -61,29 +53,27 @@ impl Transport for FixedServos {
         Ok(())
     }
 
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+    fn read(&mut self, clock: &ManualClock, buf: &mut [u8], deadline: Duration) -> Received {
         if self.pos == self.len {
-            self.clock.advance_to(deadline);
+            clock.advance_to(deadline);
             return Err(TransportError::TimedOut);
         }
         let n = buf.len().min(self.len - self.pos);
         buf[..n].copy_from_slice(&self.out[self.pos..self.pos + n]);
         self.pos += n;
-        self.clock.advance(Duration::from_micros(10) * n as u32);
+        clock.advance(Duration::from_micros(10) * n as u32);
         Ok(n)
     }
 
-    fn discard_input(&mut self) -> Result<(), TransportError> {
+    fn discard(&mut self, _clock: &ManualClock) {
         self.pos = self.len;
-        Ok(())
     }
 }
 
 /// A bus over [`FixedServos`] at 1 Mbaud, and its clock.
-fn fixed_bus() -> (Bus<FixedServos, ManualClock>, ManualClock) {
+fn fixed_bus() -> (Bus<ScriptedPort<FixedServos>, ManualClock>, ManualClock) {
     let clock = ManualClock::new();
-    let transport = FixedServos {
-        clock: clock.clone(),
+    let servos = FixedServos {
         out: [0; 1024],
         len: 0,
         pos: 0,
@@ -91,7 +81,8 @@ fn fixed_bus() -> (Bus<FixedServos, ManualClock>, ManualClock) {
         frames: 0,
     };
     let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
-    (Bus::new(transport, settings), clock)
+    let port = ScriptedPort::new(&clock, servos);
+    (Bus::new(port, settings), clock)
 }
 
 #[test]
@@ -144,7 +135,7 @@ fn a_sync_write_of_several_frames_does_not_allocate_even_the_first_time() {
     let allocated = allocations() - before;
     assert_eq!(allocated, 0, "the SYNC WRITE allocated {allocated} times");
 
-    let t = bus.transport();
+    let t = &bus.transport().script;
     assert_eq!(t.frames, 3000);
     // 6 bytes of frame, the address and L, then (ID + 7 bytes) per servo.
     for cycle in t.sent[..3000].chunks(3) {

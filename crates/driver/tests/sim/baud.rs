@@ -4,6 +4,7 @@
 
 use std::time::Duration;
 
+use servobus_driver::scripted::ScriptedPort;
 use servobus_driver::{Bus, BusError, BusSettings, Clock, ManualClock, TransportError};
 use servobus_protocol::registers::{addr, Series};
 use servobus_sim::SimBus;
@@ -74,13 +75,14 @@ fn a_scan_across_two_baud_rates_finds_each_servo_at_its_own() -> Result<(), BusE
 /// its rate.
 #[test]
 fn a_fixed_rate_transport_refuses_a_switch() {
-    let sim = SimBus::new(ManualClock::new(), BAUD).with_servo(servo(1));
+    let clock = ManualClock::new();
+    let sim = SimBus::new(clock.clone(), BAUD).with_servo(servo(1));
     let t = Misroute {
         inner: sim,
         from: 9,
         to: 9,
     };
-    let mut bus = Bus::new(t, BusSettings::new(Series::Sts));
+    let mut bus = Bus::new(ScriptedPort::new(&clock, t), BusSettings::new(Series::Sts));
     let err = bus.set_baud(115_200).unwrap_err();
     assert!(
         matches!(

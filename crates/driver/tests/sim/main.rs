@@ -4,6 +4,7 @@
 
 use std::time::Duration;
 
+use servobus_driver::scripted::{Received, Script, ScriptedPort};
 use servobus_driver::{
     Bus, BusError, BusSettings, Clock, ManualClock, MissingReason, Transport, TransportError,
 };
@@ -13,6 +14,7 @@ use servobus_sim::{Faults, SimBus, SimServo};
 use servobus_timing::{Link, StatusLevel, Transaction};
 
 mod baud;
+mod late;
 
 const BAUD: u32 = 1_000_000;
 
@@ -238,18 +240,11 @@ struct Misroute {
     to: u8,
 }
 
-impl Transport for Misroute {
-    type Clock = ManualClock;
-    fn clock(&self) -> &ManualClock {
-        self.inner.clock()
-    }
-    fn baud(&self) -> u32 {
-        self.inner.baud()
-    }
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+impl Script for Misroute {
+    fn write(&mut self, _clock: &ManualClock, bytes: &[u8]) -> Result<(), TransportError> {
         self.inner.write_all(bytes)
     }
-    fn read(&mut self, buf: &mut [u8], deadline: Duration) -> Result<usize, TransportError> {
+    fn read(&mut self, _clock: &ManualClock, buf: &mut [u8], deadline: Duration) -> Received {
         let n = self.inner.read(buf, deadline)?;
         if let Ok((p, len)) = parse_frame(&buf[..n]) {
             if p.id() == self.from {
@@ -259,8 +254,9 @@ impl Transport for Misroute {
         }
         Ok(n)
     }
-    fn discard_input(&mut self) -> Result<(), TransportError> {
-        self.inner.discard_input()
+    fn discard(&mut self, _clock: &ManualClock) {
+        // The simulated bus's input is memory: dropping it cannot fail.
+        let _ = self.inner.discard_input();
     }
 }
 
@@ -273,7 +269,8 @@ fn a_reply_from_another_id_is_never_taken() {
         from: 1,
         to: 2,
     };
-    let mut bus = Bus::new(t, BusSettings::new(Series::Sts));
+    // The port shares the simulated bus's clock (a clone of it).
+    let mut bus = Bus::new(ScriptedPort::new(&clock, t), BusSettings::new(Series::Sts));
     let mut pos = [0u8; 2];
     let err = bus.read(1, addr::PRESENT_POSITION, &mut pos).unwrap_err();
     assert!(

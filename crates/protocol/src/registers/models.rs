@@ -86,65 +86,42 @@ impl Model {
 ///   measured, so robot files should set their own velocity limits.
 pub static MODELS: [Model; 5] = [STS3215, STS3250, SM8512BL, SCS0009, SCS15];
 
+/// A model with the turnaround and response lag every model shares
+/// ([`REPLY_TURNAROUND`], [`RESPONSE_LAG`]).
+const fn model(
+    name: &'static str,
+    number: u16,
+    series: Series,
+    resolution: u32,
+    range_deg: f64,
+    max_speed: u32,
+) -> Model {
+    Model {
+        name,
+        number,
+        series,
+        resolution,
+        range_deg,
+        max_speed,
+        turnaround: REPLY_TURNAROUND,
+        response_lag: RESPONSE_LAG,
+    }
+}
+
 /// Feetech STS3215.
-pub const STS3215: Model = Model {
-    name: "STS3215",
-    number: 777,
-    series: Series::Sts,
-    resolution: 4096,
-    range_deg: 360.0,
-    max_speed: 3400,
-    turnaround: REPLY_TURNAROUND,
-    response_lag: RESPONSE_LAG,
-};
+pub const STS3215: Model = model("STS3215", 777, Series::Sts, 4096, 360.0, 3400);
 
 /// Feetech STS3250.
-pub const STS3250: Model = Model {
-    name: "STS3250",
-    number: 2825,
-    series: Series::Sts,
-    resolution: 4096,
-    range_deg: 360.0,
-    max_speed: 3400,
-    turnaround: REPLY_TURNAROUND,
-    response_lag: RESPONSE_LAG,
-};
+pub const STS3250: Model = model("STS3250", 2825, Series::Sts, 4096, 360.0, 3400);
 
 /// Feetech SM8512BL.
-pub const SM8512BL: Model = Model {
-    name: "SM8512BL",
-    number: 11272,
-    series: Series::Sts,
-    resolution: 4096,
-    range_deg: 360.0,
-    max_speed: 3400,
-    turnaround: REPLY_TURNAROUND,
-    response_lag: RESPONSE_LAG,
-};
+pub const SM8512BL: Model = model("SM8512BL", 11272, Series::Sts, 4096, 360.0, 3400);
 
 /// Feetech SCS0009.
-pub const SCS0009: Model = Model {
-    name: "SCS0009",
-    number: 1284,
-    series: Series::Scs,
-    resolution: 1024,
-    range_deg: 300.0,
-    max_speed: 1500,
-    turnaround: REPLY_TURNAROUND,
-    response_lag: RESPONSE_LAG,
-};
+pub const SCS0009: Model = model("SCS0009", 1284, Series::Scs, 1024, 300.0, 1500);
 
 /// Feetech SCS15.
-pub const SCS15: Model = Model {
-    name: "SCS15",
-    number: 1792,
-    series: Series::Scs,
-    resolution: 1024,
-    range_deg: 300.0,
-    max_speed: 1000,
-    turnaround: REPLY_TURNAROUND,
-    response_lag: RESPONSE_LAG,
-};
+pub const SCS15: Model = model("SCS15", 1792, Series::Scs, 1024, 300.0, 1000);
 
 /// The model whose model-number register reads `number`.
 pub fn model_by_number(number: u16) -> Option<&'static Model> {

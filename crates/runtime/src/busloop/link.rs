@@ -24,10 +24,9 @@ use super::feedback::Feedback;
 /// Reads the allowance is learned over.
 pub(crate) const WINDOW: usize = 256;
 
-/// The largest adapter latency ever allowed for: 3 ms, beyond every USB
-/// adapter with a 1 ms latency timer, and the allowance a pseudo-terminal
-/// on a busy machine has needed ([`servobus_timing::Link::PTY_LATENCY`]).
-pub(crate) const CEILING: Duration = Duration::from_millis(3);
+/// The largest adapter latency ever allowed for: the start-up probe's
+/// ceiling ([`servobus_driver::PROBE_CEILING`], 3 ms).
+pub(crate) const CEILING: Duration = servobus_driver::PROBE_CEILING;
 
 /// The latest reads always count in full, whatever the percentile says:
 /// a link that just slowed down shows in them before it shows in the p99.
@@ -38,7 +37,7 @@ pub(crate) const HEADROOM: Duration = Duration::from_micros(100);
 
 /// PINGs and READs sent at start-up to measure the adapter (`latency_us:
 /// auto`), before anything moves.
-pub(crate) const PROBES: u32 = 32;
+pub(crate) const PROBES: u32 = servobus_driver::PROBE_PINGS;
 
 /// The learned latency of one bus.
 #[derive(Debug, Clone)]
@@ -217,7 +216,8 @@ pub(crate) fn deadline(settings: &BusSettings, servos: usize, len: usize) -> Dur
 }
 
 /// Measures the adapter before anything moves: [`PROBES`] PINGs, taking
-/// the servos in turn, each waiting up to [`CEILING`] of latency. Every
+/// the servos in turn, each waiting up to [`CEILING`] of latency
+/// ([`Bus::probe_latency`], which `servobus budget --port` runs too). Every
 /// answer teaches `learner` its lateness; a servo that does not answer is
 /// left to the start-up read, which names it.
 pub(crate) fn probe<T: Transport, C: Clock>(
@@ -226,28 +226,12 @@ pub(crate) fn probe<T: Transport, C: Clock>(
     learner: &mut LinkLearner,
     feedback: &Feedback,
 ) -> Probe {
-    let ids = feedback.ids();
     let began = clock.now();
-    let mut answered = 0;
-    bus.set_latency(CEILING);
-    let settings = *bus.settings();
-    let ping = settings
-        .link
-        .deadline(Transaction::Ping, settings.return_delay, settings.replies)
-        .map_or(Duration::ZERO, |d| {
-            d.saturating_sub(CEILING + settings.link.margin)
-        });
-    for i in 0..PROBES as usize {
-        let Some(&id) = ids.get(i % ids.len().max(1)) else {
-            break;
-        };
-        if bus.ping(id).is_ok() {
-            learner.on_time(bus.last_rtt().saturating_sub(ping));
-            answered += 1;
-        }
-    }
+    let measured = bus.probe_latency(feedback.ids(), PROBES, CEILING, |lateness| {
+        learner.on_time(lateness);
+    });
     Probe {
-        requests: answered,
+        requests: measured.map_or(0, |m| m.samples),
         took: clock.now().saturating_sub(began),
     }
 }

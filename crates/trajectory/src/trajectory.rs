@@ -112,6 +112,25 @@ impl Hot {
 /// nothing).
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
+/// A method of [`Trajectory`] that is `sample_hot_any` compiled for one
+/// vector extension of x86-64. The arithmetic is the same, operation for
+/// operation (no fused multiply-add), so the samples are the same to the
+/// bit. An `unsafe fn` (the caller checks the CPU), not a safe one with a
+/// target feature, which needs Rust 1.86: the crate builds on 1.80.
+macro_rules! sample_hot_for {
+    ($(#[$doc:meta])* $name:ident, $feature:literal) => {
+        $(#[$doc])*
+        ///
+        /// # Safety
+        #[doc = concat!("The CPU must have `", $feature, "`.")]
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feature)]
+        unsafe fn $name(&self, hot: &mut Hot, index: &mut [usize], t: f64, out: &mut [JointState]) {
+            self.sample_hot_any(hot, index, t, out);
+        }
+    };
+}
+
 impl Trajectory {
     /// Builds from per-joint pieces covering `[0, end]` (gaps are not
     /// allowed; a joint without pieces holds `hold[j]`).
@@ -265,45 +284,17 @@ impl Trajectory {
         }
     }
 
-    /// [`sample_hot_any`](Self::sample_hot_any) compiled for AVX-512F:
-    /// eight joints per vector instruction instead of two (the arithmetic
-    /// is the same, operation for operation: no fused multiply-add, so the
-    /// samples are the same to the bit). 18 joints sample in about 2/3 of
-    /// the time.
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512F. (An `unsafe fn`, not a safe one with a
-    /// target feature, which needs Rust 1.86: the crate builds on 1.80.)
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn sample_hot_avx512(
-        &self,
-        hot: &mut Hot,
-        index: &mut [usize],
-        t: f64,
-        out: &mut [JointState],
-    ) {
-        self.sample_hot_any(hot, index, t, out);
+    sample_hot_for! {
+        /// [`sample_hot_any`](Self::sample_hot_any) compiled for AVX-512F:
+        /// eight joints per vector instruction instead of two. 18 joints
+        /// sample in about 2/3 of the time.
+        sample_hot_avx512, "avx512f"
     }
 
-    /// [`sample_hot_any`](Self::sample_hot_any) compiled for AVX2: four
-    /// joints per vector instruction (as [`sample_hot_avx512`]'s, the same
-    /// samples to the bit).
-    ///
-    /// [`sample_hot_avx512`]: Self::sample_hot_avx512
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn sample_hot_avx2(
-        &self,
-        hot: &mut Hot,
-        index: &mut [usize],
-        t: f64,
-        out: &mut [JointState],
-    ) {
-        self.sample_hot_any(hot, index, t, out);
+    sample_hot_for! {
+        /// [`sample_hot_any`](Self::sample_hot_any) compiled for AVX2: four
+        /// joints per vector instruction.
+        sample_hot_avx2, "avx2"
     }
 
     /// The loop of `sample_with` over the joints of `out`; `CUBIC`: every

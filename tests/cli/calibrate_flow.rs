@@ -86,6 +86,7 @@ fn calibrate(robot: &Path, sim: &Sim, cal: &Path) -> String {
 }
 
 #[test]
+#[ignore = "a person's hand in real time, 20-30 s: `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("calib-flow-arm");
@@ -205,6 +206,7 @@ fn an_arm_is_calibrated_on_the_command_line_then_plays_where_it_is_told() {
 }
 
 #[test]
+#[ignore = "a person's hand in real time, 20-30 s: `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn a_hexapod_with_a_random_unit_is_calibrated_on_the_command_line() {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("calib-flow-hexapod");

@@ -59,6 +59,7 @@ fn run_as_printed(dir: &Path, command: &str) -> Output {
 }
 
 #[test]
+#[ignore = "a person's part in real time, about 2 minutes: `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn the_first_arm_walkthrough_runs_on_its_simulator_twin() {
     let dir = scratch("first-arm");
     let arm = dir.join("arm");

@@ -125,7 +125,7 @@ impl FollowErrors {
         let mut keep = 0;
         for k in 0..self.pending.len() {
             let (joint, t, m) = self.pending[k];
-            if trail.newest(joint).is_none_or(|newest| t > newest) {
+            if !trail.newest(joint).is_some_and(|newest| t <= newest) {
                 self.pending[keep] = self.pending[k];
                 keep += 1;
                 continue;

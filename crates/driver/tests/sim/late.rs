@@ -87,17 +87,23 @@ fn a_silent_servo_keeps_its_timeouts() {
     assert_eq!(bus.servo_counters(1).timeouts, 0);
 }
 
-#[test]
-fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
-    // One servo whose first reply starts 2 ms late: past the first read's
-    // deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and
-    // 200 us of margin: 1.46 ms), but inside the next read's, sent at once.
+/// One servo whose first reply starts 2 ms late: past the first read's
+/// deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and 200 us
+/// of margin: 1.46 ms), but inside the next read's, sent at once. The
+/// first read is made: it timed out.
+fn first_read_late() -> (Bus<SimBus, ManualClock>, SimBus) {
     let (mut bus, sim, _clock) = setup(&[1], Faults::none().delay(1.0, 2 * MS));
     let read = bus
         .sync_read(addr::PRESENT_POSITION, 2, &[1])
         .expect("a read");
     assert_eq!(read.missing(), 1);
     assert_eq!(bus.counters().timeouts, 1);
+    (bus, sim)
+}
+
+#[test]
+fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
+    let (mut bus, sim) = first_read_late();
     sim.set_faults(Faults::none());
     let read = bus
         .sync_read(addr::PRESENT_POSITION, 2, &[1])
@@ -174,14 +180,7 @@ fn a_reading_is_stamped_when_the_servo_heard_the_request() {
 
 #[test]
 fn a_late_reply_taken_in_place_of_a_lost_one_is_in_doubt() {
-    // The reply to the first read starts 2 ms late: past that read's
-    // deadline (9 bytes of request, 8 of reply, 50 us of turnaround, 1 ms
-    // of latency, 200 us of margin: 1.42 ms), within the next read's.
-    let (mut bus, sim, _clock) = setup(&[1], Faults::none().delay(1.0, 2 * MS));
-    let read = bus
-        .sync_read(addr::PRESENT_POSITION, 2, &[1])
-        .expect("a read");
-    assert_eq!(read.missing(), 1);
+    let (mut bus, sim) = first_read_late();
     // The answer to the second read is lost; the late reply to the first
     // comes in its window. Which of the two the one frame is cannot be
     // told: the reading is the servo's, but in doubt.

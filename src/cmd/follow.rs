@@ -8,12 +8,18 @@
 //! hand (`--leader-hand`), so the whole command runs without hardware. A
 //! live line shows the rates, the latency and the error; the report gives
 //! the latency from a leader reading to the follower's goals on the wire
-//! (p50, p99) and the follower's error against the leader.
+//! (p50, p99) and the follower's error against the leader, each reading
+//! of the follower against the leader's pose at that reading's time
+//! ([`against`]).
+
+mod against;
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
+
+use against::{Figures, FollowErrors, LeaderTrail};
 
 use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
@@ -112,12 +118,16 @@ impl<T: Transport, C: Clock> Leader<T, C> {
         Ok(Leader { buses, joints })
     }
 
-    /// Every matched joint's angle now (rad), in `out` by follower index.
-    fn read(&mut self, out: &mut [Option<f64>]) -> anyhow::Result<()> {
+    /// Every matched joint's angle now (rad), in `out` by follower index,
+    /// and into `trail` with the time its servo took it (s on the bus's
+    /// clock, the process's one).
+    fn read(&mut self, out: &mut [Option<f64>], trail: &mut LeaderTrail) -> anyhow::Result<()> {
         for j in &self.joints {
-            let angle = read_angle(&mut self.buses[j.bus], j.id, &j.map)
+            let bus = &mut self.buses[j.bus];
+            let angle = read_angle(bus, j.id, &j.map)
                 .with_context(|| format!("reading the leader's {} (ID {})", j.name, j.id))?;
             out[j.to] = Some(angle);
+            trail.push(j.to, bus.heard().as_secs_f64(), angle);
         }
         Ok(())
     }
@@ -190,7 +200,8 @@ struct Seen {
     plot: Option<PlotData>,
     /// `time_s` and commanded angles (robot units) per cycle, for --record.
     take: Vec<(f64, Vec<f64>)>,
-    measured: Vec<Option<f64>>,
+    /// The follower's readings against the leader's.
+    errors: FollowErrors,
     commanded: Vec<f64>,
     cycles: u64,
     faults: Vec<String>,
@@ -204,10 +215,8 @@ impl Seen {
         if let Some(plot) = &mut self.plot {
             plot.record(s);
         }
+        self.errors.sample(s);
         for j in s.joints() {
-            if let Some(m) = self.measured.get_mut(j.joint) {
-                *m = j.measured;
-            }
             if let Some(c) = self.commanded.get_mut(j.joint) {
                 *c = j.commanded;
             }
@@ -256,7 +265,7 @@ fn drive<T: Transport, C: Clock>(
             .as_ref()
             .map(|_| PlotData::new(names.clone(), bus_of).with_frames(robot.geometry(), units)),
         take: Vec::new(),
-        measured: vec![None; names.len()],
+        errors: FollowErrors::new(names.len(), f64::INFINITY),
         commanded: vec![0.0; names.len()],
         cycles: 0,
         faults: Vec::new(),
@@ -266,7 +275,11 @@ fn drive<T: Transport, C: Clock>(
     let targets = runner.targets();
     let telemetry = runner.telemetry();
     let started = Instant::now();
-    let mut errors = vec![(0.0f64, 0.0f64, 0u64); names.len()];
+    // Counted from ERRORS_FROM on, on the clock both arms' readings are
+    // stamped on.
+    let from = super::link::system_clock().now().as_secs_f64() + ERRORS_FROM;
+    seen.errors = FollowErrors::new(names.len(), from);
+    let mut trail = LeaderTrail::new(names.len());
     let mut pose: Vec<Option<f64>> = vec![None; names.len()];
     let mut next = started;
     let mut reads = 0u64;
@@ -277,7 +290,7 @@ fn drive<T: Transport, C: Clock>(
         if runner.is_finished() || args.seconds.is_some_and(|s| t >= s) {
             break;
         }
-        leader.read(&mut pose)?;
+        leader.read(&mut pose, &mut trail)?;
         let taken = Instant::now();
         reads += 1;
         let joints = names
@@ -290,17 +303,11 @@ fn drive<T: Transport, C: Clock>(
         while let Ok(m) = telemetry.try_recv() {
             take_message(&mut seen, m, args.record.is_some());
         }
-        if t >= ERRORS_FROM {
-            for ((e, p), m) in errors.iter_mut().zip(&pose).zip(&seen.measured) {
-                if let (Some(p), Some(m)) = (p, m) {
-                    let d = units.from_rad(*p) - m;
-                    *e = (e.0 + d * d, e.1.max(d.abs()), e.2 + 1);
-                }
-            }
-        }
+        seen.errors.settle(&trail, units);
         if !args.json && now.duration_since(shown) >= Duration::from_millis(500) {
             shown = now;
-            live_line(&targets, t, reads, seen.cycles, &errors, units.to_string());
+            let errors = seen.errors.figures();
+            live_line(&targets, t, reads, seen.cycles, errors, units.to_string());
         }
         next += period;
         let after = Instant::now();
@@ -322,6 +329,7 @@ fn drive<T: Transport, C: Clock>(
         take_message(&mut seen, m, args.record.is_some());
     }
     let report = runner.join()?;
+    let errors = seen.errors.figures().to_vec();
     finish(args, robot, &report, seen, &errors)
 }
 
@@ -349,7 +357,7 @@ fn live_line(
     t: f64,
     reads: u64,
     cycles: u64,
-    errors: &[(f64, f64, u64)],
+    errors: &[Figures],
     units: String,
 ) {
     let latency = targets.so_far().and_then(|l| l.latency_ms).map_or_else(
@@ -372,7 +380,7 @@ fn finish(
     robot: &Robot,
     report: &Report,
     seen: Seen,
-    errors: &[(f64, f64, u64)],
+    errors: &[Figures],
 ) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = robot.units;

@@ -35,17 +35,22 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     assert!(p50 < 3.0 * period, "{follow}");
     let joints = follow["joints"].as_array().expect("joints");
     assert_eq!(joints.len(), 6);
-    // Issue 24 asks for 2 deg. On the wall clock of a 2-core machine the
-    // worst joint (shoulder_lift) has run 0.5-1.6 deg worst and 0.1-0.4 deg
-    // RMS when idle, up to 5.7 deg and 1.2 deg RMS while others built: a
-    // delayed thread shows as a spike of the worst error, hardly in the RMS.
-    // A follower brought to rest before every target by its lead (the
-    // regression these bounds were loosened for) ran 5-14 deg worst and
-    // 1.9-5.4 deg RMS. The close following itself is held in virtual time
+    // Issue 24 asks for 2 deg. Each follower reading is compared with the
+    // leader's pose at that reading's own time (interpolated between the
+    // leader's 50 Hz readings), so a thread that reads late no longer
+    // shows as error; a follower cycle delayed on a loaded machine still
+    // moves the follower late, and that is real error. Measured with a
+    // release build while another engineer built the workspace: worst
+    // joint 0.6-1.7 deg worst, 0.2-0.4 deg RMS (the newest leader reading
+    // against the newest follower reading, as before, gave up to 5.7 deg
+    // and 1.2 deg RMS under load). A follower brought to rest before every
+    // target by its lead ran 5-14 deg worst and 1.9-5.4 deg RMS. The bounds
+    // are twice the issue's figure worst and half of it RMS; the close
+    // following itself is held in virtual time
     // (crates/runtime/tests/runtime/live_follow.rs).
     for j in joints {
-        assert!(common::num(j, "max_error") < 8.0, "{j}");
-        assert!(common::num(j, "rms_error") < 1.5, "{j}");
+        assert!(common::num(j, "max_error") < 4.0, "{j}");
+        assert!(common::num(j, "rms_error") < 1.0, "{j}");
     }
     // The take: a header and one row per follower cycle, in degrees.
     let text = std::fs::read_to_string(&take).expect("the take is written");

@@ -30,6 +30,7 @@ mod no_terminal;
 mod outputs;
 mod plan_cli;
 mod play_cli;
+mod play_measured_rate;
 mod play_realtime;
 mod play_recording;
 mod rate_limit_cli;

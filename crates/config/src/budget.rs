@@ -97,7 +97,19 @@ impl BusConfig {
     ///
     /// [`RateError`], which names the fastest rate that fits.
     pub fn check_rate(&self, rate_hz: f64) -> Result<Plan, RateError> {
-        match self.plan(rate_hz) {
+        self.check_rate_on(&self.budget_link(), rate_hz)
+    }
+
+    /// As [`check_rate`](BusConfig::check_rate), on `link` (a measured
+    /// one, see [`measured_link`](BusConfig::measured_link)): the check of
+    /// the rate once the adapter is known, against the maximum `budget
+    /// --port` prints.
+    ///
+    /// # Errors
+    ///
+    /// As [`check_rate`](BusConfig::check_rate).
+    pub fn check_rate_on(&self, link: &Link, rate_hz: f64) -> Result<Plan, RateError> {
+        match self.plan_on(link, rate_hz) {
             Ok(p) if p.read_every() == 1 || self.round_robin => Ok(p),
             Ok(p) => Err(RateError::AboveMaximum {
                 rate_hz,
@@ -106,7 +118,10 @@ impl BusConfig {
             }),
             Err(source) => Err(RateError::Unplannable {
                 source,
-                fastest_hz: self.fastest_rate_hz(),
+                fastest_hz: self
+                    .plan_on(link, f64::MIN_POSITIVE)
+                    .ok()
+                    .map(|p| p.fastest_rate_hz()),
             }),
         }
     }

@@ -240,6 +240,15 @@ impl<T: Transport, C: Clock> Io<T, C> {
         Ok(())
     }
 
+    /// When the last request sent was through the host's transmitter: when
+    /// the servos had heard the whole of it, and so when a servo answering
+    /// it took what it reports (its present position, say). The wire model
+    /// is all this rests on: a thread descheduled after the reply came
+    /// does not move it.
+    pub fn heard(&self) -> Duration {
+        self.line_free
+    }
+
     /// When a request sent now starts on the wire: now, or once the
     /// requests before it are through the transmitter.
     pub fn next_start(&self) -> Duration {

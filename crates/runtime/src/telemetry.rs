@@ -35,6 +35,11 @@ pub struct JointSample {
     pub velocity: f64,
     /// Time since the last reading of this joint.
     pub feedback_age: Duration,
+    /// When the last reading was taken (the servo had heard the request it
+    /// answered), on the bus's clock: the clock of the run's buses, whose
+    /// epoch a program that stamps its targets on the same clock shares.
+    /// Zero before the first reading.
+    pub measured_at: Duration,
     /// Whether the reading is older than two of its read periods.
     pub stale: bool,
     /// Whether the goal was clamped to the joint's limits this cycle.

@@ -37,7 +37,7 @@ mod view;
 use load::{check_outputs, load};
 pub(crate) use report::write_report;
 use report::{file_name, print_plan, print_report};
-use setup::{backend, sim_pose};
+use setup::{backend, check_measured_rates, sim_pose};
 pub(crate) use view::install_ctrl_c;
 use view::{follow, Shown, APPROACH, SETTLE};
 
@@ -207,9 +207,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             spawn(&robot, trajectory, buses, options)?
         }
         Backend::Hardware(ports) => {
-            super::link::connect(&robot, servobus_robot::Target::Ports(ports.to_vec()))?
-                .play(trajectory, options)?
-                .into_runner()
+            let mut connection =
+                super::link::connect(&robot, servobus_robot::Target::Ports(ports.to_vec()))?;
+            check_measured_rates(&mut connection, ports, rate_hz)?;
+            connection.play(trajectory, options)?.into_runner()
         }
     };
 

@@ -1,6 +1,8 @@
 //! Where a run of `servobus play` happens: the built-in simulator, a pty
 //! server, or real ports.
 
+use anyhow::Context;
+
 use super::*;
 
 /// Where the simulated joints start (robot units, robot joint order):
@@ -42,4 +44,41 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
         Ports::Every(ports) => Ok(Backend::Hardware(ports)),
         Ports::Missing(bus) => Err(crate::cmd::link::no_port(robot, &bus.name, None)),
     }
+}
+
+/// On real ports, the rate checked again once each adapter of a bus with
+/// `latency_us: auto` is measured: the start-up probe `budget --port` runs
+/// (`measure_link`), and the maximum rate it prints on that link. The check
+/// of the robot file's figures (in `load`) knew no adapter latency.
+///
+/// # Errors
+///
+/// A usage error (exit 2) when the rate does not fit a measured adapter;
+/// the bus's error when no servo answers the probe.
+pub(super) fn check_measured_rates(
+    connection: &mut servobus_robot::Connection,
+    ports: &[String],
+    rate_hz: f64,
+) -> anyhow::Result<()> {
+    let configs = connection.robot().buses.clone();
+    let Some(serial) = connection.serial_buses() else {
+        return Ok(());
+    };
+    for ((config, bus), port) in configs.iter().zip(serial.iter_mut()).zip(ports) {
+        if !config.latency_auto {
+            continue;
+        }
+        let pty = bus.transport().is_pty();
+        let measured = servobus_robot::bench::measure_link(bus, config, pty)
+            .with_context(|| format!("measuring the adapter on {port}"))?;
+        if let Err(why) = config.check_rate_on(&measured.link, rate_hz) {
+            return Err(crate::cmd::exit::input(format!(
+                "bus `{}` on {port} (adapter measured: {:.0} us a PING beyond the wire and the servo): {}",
+                config.name,
+                measured.ping_latency.as_secs_f64() * 1e6,
+                crate::cmd::rate_advice(&why)
+            )));
+        }
+    }
+    Ok(())
 }

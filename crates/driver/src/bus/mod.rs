@@ -138,6 +138,13 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         self.io.next_start()
     }
 
+    /// When the servos had heard the whole of the last request sent (its
+    /// start on the wire plus its wire time): the time a reply to it
+    /// describes, however late the host read the reply.
+    pub fn heard(&self) -> Duration {
+        self.io.heard()
+    }
+
     /// Sets the adapter latency used in every deadline.
     pub fn set_latency(&mut self, latency: Duration) {
         self.settings.link.latency = latency;

@@ -264,6 +264,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         )?;
         let timeout = self.round_timeout(n)?;
         let start = self.send()?;
+        let heard = self.io.heard();
         let mut sink = Round {
             store: &mut self.sync,
             servos: &mut self.servos,
@@ -293,7 +294,10 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             };
             match self.sync.slots[i] {
                 Slot::Answered(flags) => {
-                    if owed[usize::from(id)] && !late[usize::from(id)] {
+                    self.sync.sampled[i] = heard;
+                    let in_doubt = owed[usize::from(id)] && !late[usize::from(id)];
+                    self.sync.in_doubt[i] = in_doubt;
+                    if in_doubt {
                         self.io.answered_in_doubt(id);
                     } else {
                         self.io.answered(id);
@@ -332,6 +336,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 Ok(flags) => {
                     self.sync.data[i * len..(i + 1) * len].copy_from_slice(&buf[..len]);
                     self.sync.slots[i] = Slot::Answered(flags);
+                    self.sync.sampled[i] = self.io.heard();
+                    self.sync.in_doubt[i] = false;
                 }
                 Err(BusError::Corrupt { .. }) => {
                     self.sync.slots[i] = Slot::Missing(MissingReason::Corrupt);

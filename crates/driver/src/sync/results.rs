@@ -1,5 +1,7 @@
 //! The results of a SYNC READ: one per servo, kept in storage the bus reuses.
 
+use std::time::Duration;
+
 use servobus_protocol::StatusFlags;
 
 use crate::BusError;
@@ -41,6 +43,15 @@ pub struct SyncReply<'a> {
     pub flags: StatusFlags,
     /// The bytes read, in the bus's byte order.
     pub data: &'a [u8],
+    /// When the servo took the reading, on the bus's clock: when it had
+    /// heard the request it answered ([`Bus::heard`](crate::Bus::heard)),
+    /// not when the host read the reply.
+    pub sampled: Duration,
+    /// The servo's reply to an earlier request was overdue, and this round
+    /// brought one frame from it: that frame may be the late reply (one
+    /// request older) or the answer, which cannot be told apart. Its data
+    /// are the servo's, but of one of two times.
+    pub in_doubt: bool,
 }
 
 /// A servo missing from a SYNC READ result.
@@ -69,6 +80,10 @@ pub(crate) struct SyncStore {
     pub(super) ids: Vec<u8>,
     pub(super) slots: Vec<Slot>,
     pub(super) attempts: Vec<u8>,
+    /// When each servo took its reading (see [`SyncReply::sampled`]).
+    pub(super) sampled: Vec<Duration>,
+    /// Whether each answer is in doubt (see [`SyncReply::in_doubt`]).
+    pub(super) in_doubt: Vec<bool>,
     /// `ids.len() * len` bytes; servo `i`'s data at `i * len`.
     pub(super) data: Vec<u8>,
     /// Position in `ids` of each ID, or `NO_SLOT`.
@@ -87,6 +102,8 @@ impl SyncStore {
             ids: Vec::with_capacity(254),
             slots: Vec::with_capacity(254),
             attempts: Vec::with_capacity(254),
+            sampled: Vec::with_capacity(254),
+            in_doubt: Vec::with_capacity(254),
             data: Vec::with_capacity(254 * 8),
             index: [NO_SLOT; 256],
             pending: Vec::with_capacity(254),
@@ -116,6 +133,8 @@ impl SyncStore {
                 self.ids.clear();
                 self.slots.clear();
                 self.attempts.clear();
+                self.sampled.clear();
+                self.in_doubt.clear();
                 self.data.clear();
                 self.pending.clear();
                 return Err(problem);
@@ -129,6 +148,10 @@ impl SyncStore {
             .resize(ids.len(), Slot::Missing(MissingReason::NoReply));
         self.attempts.clear();
         self.attempts.resize(ids.len(), 0);
+        self.sampled.clear();
+        self.sampled.resize(ids.len(), Duration::ZERO);
+        self.in_doubt.clear();
+        self.in_doubt.resize(ids.len(), false);
         self.data.clear();
         self.data.resize(ids.len() * len, 0);
         self.pending.clear();
@@ -188,6 +211,8 @@ impl<'a> SyncRead<'a> {
                 id,
                 flags,
                 data: &store.data[index * store.len..(index + 1) * store.len],
+                sampled: store.sampled[index],
+                in_doubt: store.in_doubt[index],
             }),
             Slot::Missing(reason) => Err(Missing {
                 id,

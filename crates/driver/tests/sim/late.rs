@@ -87,17 +87,23 @@ fn a_silent_servo_keeps_its_timeouts() {
     assert_eq!(bus.servo_counters(1).timeouts, 0);
 }
 
-#[test]
-fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
-    // One servo whose first reply starts 2 ms late: past the first read's
-    // deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and
-    // 200 us of margin: 1.46 ms), but inside the next read's, sent at once.
+/// One servo whose first reply starts 2 ms late: past the first read's
+/// deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and 200 us
+/// of margin: 1.46 ms), but inside the next read's, sent at once. The
+/// first read is made: it timed out.
+fn first_read_late() -> (Bus<SimBus, ManualClock>, SimBus) {
     let (mut bus, sim, _clock) = setup(&[1], Faults::none().delay(1.0, 2 * MS));
     let read = bus
         .sync_read(addr::PRESENT_POSITION, 2, &[1])
         .expect("a read");
     assert_eq!(read.missing(), 1);
     assert_eq!(bus.counters().timeouts, 1);
+    (bus, sim)
+}
+
+#[test]
+fn a_late_reply_that_comes_during_the_next_read_is_not_taken_for_its_answer() {
+    let (mut bus, sim) = first_read_late();
     sim.set_faults(Faults::none());
     let read = bus
         .sync_read(addr::PRESENT_POSITION, 2, &[1])
@@ -150,4 +156,51 @@ fn a_reply_really_lost_keeps_its_timeout_and_the_servo_reads_on() {
     assert!(took[2] < took[0] && took[2] < took[1], "{took:?}");
     assert_eq!(bus.counters().timeouts, 1);
     assert_eq!(bus.counters().late_replies, 0);
+}
+
+#[test]
+fn a_reading_is_stamped_when_the_servo_heard_the_request() {
+    let (mut bus, _sim, clock) = setup(&[1, 2], Faults::none());
+    clock.advance(10 * MS);
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1, 2])
+        .expect("a read");
+    // The SYNC READ of two servos is 10 bytes (header 2, ID, length,
+    // instruction, address, size, two IDs, checksum): 100 us at 1 Mbps,
+    // sent at 10 ms. Both servos took their positions when they had heard
+    // it, however long their replies then took to come.
+    for r in read.iter() {
+        let r = r.expect("answered");
+        assert_eq!(r.sampled, 10 * MS + 100 * US);
+        assert!(!r.in_doubt);
+    }
+    assert_eq!(bus.heard(), 10 * MS + 100 * US);
+    assert!(clock.now() > bus.heard());
+}
+
+#[test]
+fn a_late_reply_taken_in_place_of_a_lost_one_is_in_doubt() {
+    let (mut bus, sim) = first_read_late();
+    // The answer to the second read is lost; the late reply to the first
+    // comes in its window. Which of the two the one frame is cannot be
+    // told: the reading is the servo's, but in doubt.
+    sim.set_faults(Faults::none().drop(1.0));
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1])
+        .expect("a read");
+    let r = read.get(0).expect("one servo").expect("a frame came");
+    assert!(r.in_doubt);
+    // A read with the servo answering on time again is not.
+    sim.set_faults(Faults::none());
+    let _ = bus.await_late_replies(10 * MS).expect("no port failure");
+    for _ in 0..2 {
+        let _ = bus
+            .sync_read(addr::PRESENT_POSITION, 2, &[1])
+            .expect("a read");
+    }
+    let read = bus
+        .sync_read(addr::PRESENT_POSITION, 2, &[1])
+        .expect("a read");
+    let r = read.get(0).expect("one servo").expect("answered");
+    assert!(!r.in_doubt);
 }

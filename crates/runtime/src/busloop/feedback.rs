@@ -44,7 +44,6 @@ impl Feedback {
     pub fn startup<T: Transport, C: Clock>(
         &self,
         bus: &mut Bus<T, C>,
-        clock: &C,
         name: &str,
         track: &mut Tracker,
     ) -> Result<(), RunError> {
@@ -55,12 +54,12 @@ impl Feedback {
                 what: "reading the start positions",
                 source,
             })?;
-        let at = clock.now();
         for (i, r) in read.iter().enumerate() {
             let reason = match r {
                 Ok(reply) => match self.reg.decode(reply.data, self.order) {
                     Ok(ticks) => {
                         let flags = servobus_protocol::StatusFlags(0);
+                        let at = reply.sampled;
                         track.observe(i, Reading { ticks, at, flags });
                         continue;
                     }
@@ -82,6 +81,14 @@ impl Feedback {
     /// Reads the servos `range` (indices in the bus) within `budget` into
     /// `track`; true when every servo answered in time. Only a lost port is
     /// an error: a silent servo is tracking's business.
+    ///
+    /// Each reading is stamped with the time the servo took it (when it had
+    /// heard the request, [`SyncReply::sampled`](servobus_driver::SyncReply::sampled)),
+    /// not when this thread decoded it: a host descheduled after the reply
+    /// came must not compare the reading with a later point of the path.
+    /// A reply that may be a late one to the cycle before
+    /// ([`SyncReply::in_doubt`](servobus_driver::SyncReply::in_doubt)) is
+    /// not used: which time its position is of cannot be told.
     pub fn read<T: Transport, C: Clock>(
         &self,
         bus: &mut Bus<T, C>,
@@ -98,7 +105,7 @@ impl Feedback {
         else {
             return Ok(false);
         };
-        let at = clock.now();
+        let now = clock.now();
         // Every servo of the bus silent in one read is the link's silence,
         // judged over time (see `Tracker::bus_silent`). A read of only some
         // of them (round robin) or of a lone servo says nothing about the
@@ -109,19 +116,20 @@ impl Feedback {
                 .all(|r| matches!(r, Err(m) if m.reason == MissingReason::NoReply))
         };
         if whole_bus && silent() {
-            track.bus_silent(at);
+            track.bus_silent(now);
             return Ok(false);
         }
         let mut all = true;
         for (i, r) in read.iter().enumerate() {
             let joint = range.start + i;
             match r {
+                Ok(reply) if reply.in_doubt => {}
                 Ok(reply) => match self.reg.decode(reply.data, self.order) {
                     Ok(ticks) => track.observe(
                         joint,
                         Reading {
                             ticks,
-                            at,
+                            at: reply.sampled,
                             flags: reply.flags,
                         },
                     ),

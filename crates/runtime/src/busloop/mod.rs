@@ -82,6 +82,9 @@ pub(crate) struct BusLoop<T: Transport, C: Clock> {
     probe: Probe,
     /// The port failed: nothing more is sent on this bus.
     gone: bool,
+    /// The time of this cycle's reading, on the bus's clock (see
+    /// [`read`](Self::read)): the path sampled for tracking is the path then.
+    read_at: Duration,
 }
 
 impl<T: Transport, C: Clock> BusLoop<T, C> {
@@ -156,6 +159,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             link: LinkLearner::new(bus_latency, !config.latency_auto),
             probe: Probe::default(),
             gone: false,
+            read_at: Duration::ZERO,
         })
     }
 
@@ -172,7 +176,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         }
         self.bus.set_latency(self.link.in_force());
         self.feedback
-            .startup(&mut self.bus, &self.clock, &self.name, &mut self.track)?;
+            .startup(&mut self.bus, &self.name, &mut self.track)?;
         for (i, j) in self.track.joints.iter().enumerate() {
             self.goals.start_at(i, j.measured.unwrap_or(0.0));
         }
@@ -235,8 +239,18 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     }
 
     /// Reads the feedback this cycle's plan asks for. Returns the time of
-    /// the reading, s since the start, or the port's failure.
+    /// the reading, s since the start, or the port's failure: when the
+    /// servos took it (the earliest of this cycle's fresh readings; each
+    /// joint is judged at its own, see [`Tracker::track`]), or now when no
+    /// servo answered.
     pub fn read(&mut self) -> Result<f64, PortGone> {
+        let read = self.read_feedback();
+        self.read_at = self.track.first_fresh().unwrap_or_else(|| self.clock.now());
+        read?;
+        Ok(self.read_at.saturating_sub(self.start).as_secs_f64())
+    }
+
+    fn read_feedback(&mut self) -> Result<(), PortGone> {
         let range = self.plan.reads_in_cycle(self.timing.index);
         if !self.gone && !range.is_empty() {
             // Re-ask missing servos only while the cycle leaves room.
@@ -273,14 +287,14 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             }
             self.bus.set_latency(self.link.in_force());
         }
-        Ok(self.clock.now().saturating_sub(self.start).as_secs_f64())
+        Ok(())
     }
 
     /// Judges the joints against `reference` (robot order, the path at the
     /// time of the reading), learns the lag while a planned path plays
     /// (`main`), and returns the first fault found. `t` is the cycle's time.
     pub fn track(&mut self, reference: &[JointState], main: bool, t: f64) -> Option<Fault> {
-        let found = self.track.track(reference);
+        let found = self.track.track(reference, self.read_at);
         self.lead.learn(self.track.fresh_errors(), main, t);
         found.map(|f| self.fault(f.kind, f.joint, f.reaction))
     }

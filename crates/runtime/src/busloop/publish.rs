@@ -77,6 +77,7 @@ impl Publisher {
                     error: u.from_rad(j.error),
                     velocity: u.from_rad(j.velocity),
                     feedback_age: age,
+                    measured_at: j.measured_at,
                     stale: age > track.stale_after,
                     clamped: g.clamped,
                     flags: j.flags,

@@ -213,6 +213,15 @@ impl Tracker {
         }
     }
 
+    /// When the earliest of this cycle's fresh readings was taken.
+    pub fn first_fresh(&self) -> Option<Duration> {
+        self.joints
+            .iter()
+            .filter(|j| j.fresh)
+            .map(|j| j.measured_at)
+            .min()
+    }
+
     /// `(error, planned velocity)` of every joint read this cycle.
     pub fn fresh_errors(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.joints
@@ -222,8 +231,11 @@ impl Tracker {
     }
 
     /// Updates every joint's error against `reference` (robot order, the
-    /// path at the time of the reading) and returns the first fault found.
-    pub fn track(&mut self, reference: &[JointState]) -> Option<Found> {
+    /// path at `reference_at`, on the bus's clock) and returns the first
+    /// fault found. A joint read at another time (a re-ask later in the
+    /// cycle) is judged against the path at its own reading's time, to
+    /// first order: the reference moved on at its velocity.
+    pub fn track(&mut self, reference: &[JointState], reference_at: Duration) -> Option<Found> {
         let p = self.policy;
         let u = self.units;
         let mut found: Option<Found> = None;
@@ -241,7 +253,11 @@ impl Tracker {
             });
         }
         for (i, j) in self.joints.iter_mut().enumerate() {
-            let r = reference.get(j.robot_index).copied().unwrap_or_default();
+            let mut r = reference.get(j.robot_index).copied().unwrap_or_default();
+            if j.fresh {
+                let dt = signed_secs(j.measured_at, reference_at);
+                r.position += r.velocity * dt;
+            }
             j.planned = r.position;
             j.planned_velocity = r.velocity;
             if j.missing > 0 && j.missing >= p.missing_cycles && found.is_none() {
@@ -317,5 +333,14 @@ fn judge(
         Some((kind, p.on_following_error))
     } else {
         None
+    }
+}
+
+/// `a - b` in seconds, negative when `a` is the earlier.
+fn signed_secs(a: Duration, b: Duration) -> f64 {
+    if a >= b {
+        (a - b).as_secs_f64()
+    } else {
+        -(b - a).as_secs_f64()
     }
 }

@@ -15,6 +15,7 @@ mod live_follow;
 mod live_switch;
 mod live_targets;
 mod no_alloc;
+mod read_time;
 mod run_arm;
 mod run_faults;
 mod run_lead;

@@ -35,12 +35,10 @@ mod phases;
 mod ramp;
 mod stretch;
 
-pub(crate) use phases::Phases;
+pub(crate) use phases::{Phases, SIXTH};
+use ramp::leg;
 pub(crate) use ramp::rest_peak;
-pub(crate) use ramp::Ramp;
-use ramp::{leg, Acc};
-
-use crate::JointLimits;
+pub(crate) use ramp::{Acc, Ramp};
 
 /// A normalised segment: distance `d >= 0`, boundary speeds `v0, v1 >= 0`.
 #[derive(Debug, Clone, Copy)]
@@ -85,7 +83,7 @@ impl Segment1 {
     /// A feasible profile no longer than `limit` (a cruise speed for
     /// [`stretched`](Self::stretched)), if the time-optimal one is no
     /// longer: from the bounds when they decide, else solved.
-    pub fn fits(&self, lim: &JointLimits, limit: f64) -> Option<Profile> {
+    pub fn fits(&self, lim: &Acc, limit: f64) -> Option<Profile> {
         let b = self.fastest_bounds(lim);
         if b.upper.duration <= limit {
             Some(b.upper)
@@ -102,9 +100,8 @@ impl Segment1 {
     /// time-optimal cruise speed is at least `vc`, known without solving
     /// for it.
     #[inline]
-    pub fn cruises_at(&self, lim: &JointLimits, vc: f64) -> bool {
-        let acc = Acc::new(lim.max_acceleration, lim.jerk());
-        self.g(vc, &acc).1 <= self.d
+    pub fn cruises_at(&self, lim: &Acc, vc: f64) -> bool {
+        self.g(vc, lim).1 <= self.d
     }
 
     /// Total ramp distance and its derivative at cruise speed `vc`.
@@ -130,11 +127,10 @@ impl Segment1 {
 
     /// The phases (duration, jerk) of the profile, for a positive direction.
     #[inline]
-    pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
-        let (a, j) = (lim.max_acceleration, lim.jerk());
-        let acc = Acc::new(a, j);
-        let ra = Ramp::of((p.vc - self.v0).abs(), &acc);
-        let rb = Ramp::of((p.vc - self.v1).abs(), &acc);
+    pub fn phases(&self, acc: &Acc, p: Profile, out: &mut Phases) {
+        let j = acc.j;
+        let ra = Ramp::of((p.vc - self.v0).abs(), acc);
+        let rb = Ramp::of((p.vc - self.v1).abs(), acc);
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
         out.push_ramp(&ra, sa, j);
@@ -150,7 +146,7 @@ mod tests {
 
     #[test]
     fn stretched_profile_has_requested_duration_and_distance() {
-        let l = JointLimits::new(2.0, 3.0, Some(10.0));
+        let l = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
         let s = Segment1 {
             d: 1.3,
             v0: 0.4,

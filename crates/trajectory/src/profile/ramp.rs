@@ -13,17 +13,10 @@ pub(crate) struct Ramp {
 }
 
 impl Ramp {
-    /// The shortest ramp changing the speed by `dv` under `a` and `j`
-    /// (`j` may be infinite).
+    /// The shortest ramp changing the speed by `dv` within the bounds `c`
+    /// (made once, see [`Acc`]: no division).
     #[inline]
-    pub fn new(dv: f64, a: f64, j: f64) -> Ramp {
-        Ramp::of(dv, &Acc::new(a, j))
-    }
-
-    /// [`new`](Self::new) with the bounds' constants made once (see
-    /// [`Acc`]): no division.
-    #[inline]
-    pub(super) fn of(dv: f64, c: &Acc) -> Ramp {
+    pub(crate) fn of(dv: f64, c: &Acc) -> Ramp {
         if dv <= 0.0 {
             Ramp {
                 tj: 0.0,
@@ -52,10 +45,15 @@ impl Ramp {
     }
 }
 
-/// Acceleration and jerk bounds with the reciprocals the solvers need,
-/// computed once per call instead of dividing in every iteration.
+/// A joint's speed, acceleration and jerk bounds with the reciprocals the
+/// solvers need, computed once (two divisions) and handed down instead of
+/// dividing in every function and every iteration.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Acc {
+pub(crate) struct Acc {
+    /// The speed limit.
+    pub vm: f64,
+    /// Whether the jerk is limited (`j` finite).
+    pub finite: bool,
     /// The acceleration limit.
     pub a: f64,
     pub inv_a: f64,
@@ -70,13 +68,17 @@ pub(super) struct Acc {
 }
 
 impl Acc {
+    /// The bounds of `lim`.
     #[inline]
-    pub fn new(a: f64, j: f64) -> Self {
+    pub fn of(lim: &JointLimits) -> Self {
+        let (a, j) = (lim.max_acceleration, lim.jerk());
         // Two divisions, the rest by multiplying (a division costs as
-        // much as several multiplications, and these are made per call).
+        // much as several multiplications).
         let inv_j = 1.0 / j;
         let k = a * inv_j;
         Acc {
+            vm: lim.max_velocity,
+            finite: lim.max_jerk.is_some(),
             a,
             inv_a: 1.0 / a,
             j,
@@ -113,22 +115,43 @@ pub(super) fn leg(u: f64, w: f64, c: &Acc) -> (f64, f64, f64, f64) {
 /// Largest `vc` with `vc * ramp_duration(vc) <= dist`: the peak speed of a
 /// rest-to-rest move of `dist` (closed form).
 #[inline]
-pub(crate) fn rest_peak(dist: f64, lim: &JointLimits) -> f64 {
-    let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
+pub(crate) fn rest_peak(dist: f64, c: &Acc) -> f64 {
+    let (vm, a, j, k) = (c.vm, c.a, c.j, c.k);
     if dist <= 0.0 {
         return 0.0;
     }
-    if dist >= vm * Ramp::new(vm, a, j).duration() {
+    if dist >= vm * Ramp::of(vm, c).duration() {
         return vm;
     }
     // Constant-acceleration regime: vc (vc / a + a / j) = dist.
-    let k = a / j;
-    let vc = 0.5 * a * (-k + (k * k + 4.0 * dist / a).sqrt());
-    if vc * j >= a * a {
+    let vc = 0.5 * a * (-k + (k * k + 4.0 * dist * c.inv_a).sqrt());
+    if vc >= c.regime {
         return vc.min(vm);
     }
     // Pure jerk regime: dist = 2 vc sqrt(vc / j).
-    (0.25 * dist * dist * j).cbrt().min(vm)
+    cube_root(0.25 * dist * dist * j).min(vm)
+}
+
+/// The cube root of `x`, to within an ulp or two of `f64::cbrt`, and a few
+/// times faster than it (the standard one is correctly rounded, which the
+/// follower's every cycle does not need): the exponent divided by 3 in
+/// the bits for a first guess within a few percent, two Halley steps
+/// (cubic convergence: to about 1e-15) and a last Newton step. Values
+/// that are not positive normal numbers go to `f64::cbrt`.
+#[inline]
+pub(crate) fn cube_root(x: f64) -> f64 {
+    if !(x >= f64::MIN_POSITIVE && x < f64::INFINITY) {
+        return x.cbrt();
+    }
+    // Bits of a normal `x` are about `2^52 (e + 1023)`: a third of them
+    // plus `2^52 * 2 * 1023 / 3`, less a little for the mantissa's
+    // curvature, is about `2^52 (e / 3 + 1023)`.
+    let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+    for _ in 0..2 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    y - (y - x / (y * y)) * (1.0 / 3.0)
 }
 
 #[cfg(test)]
@@ -136,11 +159,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn cube_root_is_within_an_ulp_or_two() {
+        // Exact cubes first, then a sweep over 600 orders of magnitude.
+        for (x, r) in [
+            (8.0, 2.0),
+            (27.0, 3.0),
+            (0.125, 0.5),
+            (1e-9, 1e-3),
+            (1e30, 1e10),
+        ] {
+            assert!((cube_root(x) - r).abs() <= 2.0 * f64::EPSILON * r, "{x}");
+        }
+        let mut x = 1e-300;
+        while x < 1e300 {
+            let r = cube_root(x);
+            assert!(((r * r * r) / x - 1.0).abs() < 1e-14, "{x}: {r}");
+            x *= 1.37;
+        }
+        assert_eq!(cube_root(0.0), 0.0);
+        assert!(cube_root(f64::NAN).is_nan());
+        assert_eq!(cube_root(-8.0), -2.0);
+        assert_eq!(cube_root(f64::INFINITY), f64::INFINITY);
+    }
+
+    #[test]
     fn rest_peak_matches_definition() {
         let l = JointLimits::new(2.0, 3.0, Some(10.0));
         for &d in &[0.01, 0.1, 0.5, 1.0, 3.0, 10.0] {
-            let vc = rest_peak(d, &l);
-            let r = Ramp::new(vc, 3.0, 10.0);
+            let vc = rest_peak(d, &Acc::of(&l));
+            let r = Ramp::of(vc, &Acc::of(&l));
             let dist = vc * r.duration();
             assert!(vc <= 2.0 + 1e-12);
             assert!(

@@ -300,11 +300,17 @@ fn capped(lim: &JointLimits, goal: Goal) -> Goal {
     let a = goal.acceleration.clamp(-acap, acap);
     let v = goal.velocity.clamp(-vcap, vcap);
     let h = goal.horizon.max(0.0);
-    // The speed at the end of the horizon within the cap too.
-    let a = if h > 0.0 {
-        a.clamp((-vcap - v) / h, (vcap - v) / h)
-    } else {
+    // The speed at the end of the horizon within the cap too (dividing
+    // only when it is not: most goals are well within).
+    let end = v + a * h;
+    let a = if h <= 0.0 {
         0.0
+    } else if end > vcap {
+        (vcap - v) / h
+    } else if end < -vcap {
+        (-vcap - v) / h
+    } else {
+        a
     };
     Goal {
         position: goal.position,

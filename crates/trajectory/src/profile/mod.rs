@@ -130,7 +130,12 @@ impl Segment1 {
     pub fn phases(&self, acc: &Acc, p: Profile, out: &mut Phases) {
         let j = acc.j;
         let ra = Ramp::of((p.vc - self.v0).abs(), acc);
-        let rb = Ramp::of((p.vc - self.v1).abs(), acc);
+        // Rest to rest, mostly: the two ramps alike (one square root).
+        let rb = if self.v1 == self.v0 {
+            ra
+        } else {
+            Ramp::of((p.vc - self.v1).abs(), acc)
+        };
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
         out.push_ramp(&ra, sa, j);

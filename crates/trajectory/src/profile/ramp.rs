@@ -120,16 +120,19 @@ pub(crate) fn rest_peak(dist: f64, c: &Acc) -> f64 {
     if dist <= 0.0 {
         return 0.0;
     }
+    // Pure jerk ramps while the peak is at most `regime = a k`, whose
+    // ramp takes `2 k`: distances up to `2 regime k` (short moves, the
+    // follower's usual case: no speed-limit ramp, no square root). Only
+    // the speed limit can cap the peak there.
+    if dist <= 2.0 * c.regime * k {
+        return cube_root(0.25 * dist * dist * j).min(vm);
+    }
     if dist >= vm * Ramp::of(vm, c).duration() {
         return vm;
     }
-    // Constant-acceleration regime: vc (vc / a + a / j) = dist.
-    let vc = 0.5 * a * (-k + (k * k + 4.0 * dist * c.inv_a).sqrt());
-    if vc >= c.regime {
-        return vc.min(vm);
-    }
-    // Pure jerk regime: dist = 2 vc sqrt(vc / j).
-    cube_root(0.25 * dist * dist * j).min(vm)
+    // Constant-acceleration regime (the distance is beyond the pure jerk
+    // one's): vc (vc / a + a / j) = dist.
+    (0.5 * a * (-k + (k * k + 4.0 * dist * c.inv_a).sqrt())).min(vm)
 }
 
 /// The cube root of `x`, to within an ulp or two of `f64::cbrt`, and a few

@@ -143,7 +143,7 @@ pub(crate) fn rest_peak(dist: f64, c: &Acc) -> f64 {
 /// that are not positive normal numbers go to `f64::cbrt`.
 #[inline]
 pub(crate) fn cube_root(x: f64) -> f64 {
-    if !(x >= f64::MIN_POSITIVE && x < f64::INFINITY) {
+    if !(f64::MIN_POSITIVE..f64::INFINITY).contains(&x) {
         return x.cbrt();
     }
     // Bits of a normal `x` are about `2^52 (e + 1023)`: a third of them

@@ -1,13 +1,16 @@
 //! The time-optimal profile of a segment: closed forms where they exist,
 //! bounds that need no root finding, and a Newton search for the rest.
 
-use super::ramp::{cube_root, rest_peak, Acc};
+use super::ramp::{cube_root, rest_peak, rest_short, Acc};
 use super::{Bounds, Profile, Segment1};
 
 impl Segment1 {
     /// The time-optimal profile. Precondition: the ramps alone fit, i.e.
     /// `g(max(v0, v1)) <= d` (the planner caps via speeds to ensure it).
     pub fn fastest(&self, acc: &Acc) -> Profile {
+        if let Some(p) = self.short_rest(acc) {
+            return p;
+        }
         let vm = acc.vm;
         let vc = match self.fastest_closed(acc) {
             Ok(vc) => vc,
@@ -33,6 +36,13 @@ impl Segment1 {
     /// is a cruise speed at or below the optimal one). The planner solves
     /// exactly only for joints that may set a segment's duration.
     pub fn fastest_bounds(&self, acc: &Acc) -> Bounds {
+        if let Some(upper) = self.short_rest(acc) {
+            return Bounds {
+                lower: upper.duration,
+                upper,
+                exact: true,
+            };
+        }
         let (vm, a) = (acc.vm, acc.a);
         // Only the closed forms that need no evaluation of `g` (the
         // long-ramp root is feasible in every case, `vm` or `max(v0, v1)`
@@ -89,6 +99,16 @@ impl Segment1 {
                 }
             }
         }
+    }
+
+    /// The time-optimal profile of a short rest-to-rest segment (see
+    /// [`rest_short`]), if this is one.
+    #[inline]
+    fn short_rest(&self, acc: &Acc) -> Option<Profile> {
+        if self.v0 != 0.0 || self.v1 != 0.0 {
+            return None;
+        }
+        rest_short(self.d, acc).map(|(vc, duration)| Profile { vc, duration })
     }
 
     /// The cruise speed of [`fastest`](Self::fastest) where it has a closed

@@ -116,16 +116,12 @@ pub(super) fn leg(u: f64, w: f64, c: &Acc) -> (f64, f64, f64, f64) {
 /// rest-to-rest move of `dist` (closed form).
 #[inline]
 pub(crate) fn rest_peak(dist: f64, c: &Acc) -> f64 {
-    let (vm, a, j, k) = (c.vm, c.a, c.j, c.k);
+    let (vm, a, k) = (c.vm, c.a, c.k);
     if dist <= 0.0 {
         return 0.0;
     }
-    // Pure jerk ramps while the peak is at most `regime = a k`, whose
-    // ramp takes `2 k`: distances up to `2 regime k` (short moves, the
-    // follower's usual case: no speed-limit ramp, no square root). Only
-    // the speed limit can cap the peak there.
-    if dist <= 2.0 * c.regime * k {
-        return cube_root(0.25 * dist * dist * j).min(vm);
+    if let Some((vc, _)) = rest_short(dist, c) {
+        return vc;
     }
     if dist >= vm * Ramp::of(vm, c).duration() {
         return vm;
@@ -133,6 +129,23 @@ pub(crate) fn rest_peak(dist: f64, c: &Acc) -> f64 {
     // Constant-acceleration regime (the distance is beyond the pure jerk
     // one's): vc (vc / a + a / j) = dist.
     (0.5 * a * (-k + (k * k + 4.0 * dist * c.inv_a).sqrt())).min(vm)
+}
+
+/// The peak speed and duration of the rest-to-rest move of `dist > 0`
+/// when its ramps are pure jerk and the speed limit does not cap it, else
+/// `None`. Pure jerk ramps hold while the peak is at most `regime = a k`,
+/// whose ramp takes `2 k`: distances up to `2 regime k` (short moves, the
+/// follower's usual case). Each ramp is two jerk phases of `tj`, covering
+/// `dist / 2 = j tj^3`: the peak is `j tj^2` and the move lasts `4 tj`,
+/// one cube root and no square root or division.
+#[inline]
+pub(super) fn rest_short(dist: f64, c: &Acc) -> Option<(f64, f64)> {
+    if !(dist > 0.0 && dist <= 2.0 * c.regime * c.k) {
+        return None;
+    }
+    let tj = cube_root(0.5 * dist * c.inv_j);
+    let vc = c.j * tj * tj;
+    (vc <= c.vm).then_some((vc, 4.0 * tj))
 }
 
 /// The cube root of `x`, to within an ulp or two of `f64::cbrt`, and a few

@@ -1,7 +1,7 @@
 //! The time-optimal profile of a segment: closed forms where they exist,
 //! bounds that need no root finding, and a Newton search for the rest.
 
-use super::ramp::{cube_root, rest_peak, rest_short, Acc};
+use super::ramp::{cube_root_rough, rest_peak, rest_short, Acc};
 use super::{Bounds, Profile, Segment1};
 
 impl Segment1 {
@@ -175,7 +175,7 @@ impl Segment1 {
         // of the root, much closer than the long-ramp one: start there
         // (from either side: convexity takes a step from the left to the
         // right of the root).
-        let pure = cube_root(0.25 * self.d * self.d * acc.j);
+        let pure = cube_root_rough(0.25 * self.d * self.d * acc.j);
         let guess = if pure > vlo && pure < vm.min(acc.regime) {
             pure
         } else {

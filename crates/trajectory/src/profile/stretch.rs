@@ -157,10 +157,11 @@ impl Segment1 {
 /// the reverse otherwise). Falls back to bisection whenever a Newton step
 /// leaves the bracket, so it always converges; `hi` may be infinite (then
 /// an outgoing step doubles `x` until an upper end is found, `x > 0`).
-/// Stops after a Newton step smaller than `1e-6` relative: convergence is
-/// quadratic by then, so the error left is about its square, some 1e-12
-/// relative (a duration off by picoseconds a second), an evaluation sooner
-/// than waiting for rounding.
+/// Stops after a Newton step smaller than `1e-5` relative: convergence is
+/// quadratic by then, so the error left is about its square times the
+/// function's relative curvature, which the stretching's (a duration
+/// nearly linear in `1 / vc`) keeps below 1: some 1e-10 relative at
+/// most, an evaluation sooner than waiting for rounding.
 fn solve(
     f: impl Fn(f64) -> (f64, f64),
     mut lo: f64,
@@ -194,7 +195,7 @@ fn solve(
             };
         }
         let step = (nx - x).abs();
-        if (newton && step <= 1e-6 * nx.abs())
+        if (newton && step <= 1e-5 * nx.abs())
             || step <= 1e-13 * nx.abs()
             || (hi.is_finite() && hi - lo <= 1e-13 * hi.abs())
         {

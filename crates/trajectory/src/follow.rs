@@ -123,7 +123,7 @@ impl Plan {
     fn set(&mut self, rel: &Acc, way: &Route1, err: JointState, goal: Goal, tau: f64) {
         self.main.n = 0;
         if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
-            way.seg.phases(rel, way.seg.fastest(rel), &mut self.main);
+            way.seg.fastest_phases(rel, &mut self.main);
         }
         self.goal = goal;
         self.err = err;

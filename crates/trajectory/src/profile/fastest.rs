@@ -104,7 +104,7 @@ impl Segment1 {
     /// The time-optimal profile of a short rest-to-rest segment (see
     /// [`rest_short`]), if this is one.
     #[inline]
-    fn short_rest(&self, acc: &Acc) -> Option<Profile> {
+    pub(super) fn short_rest(&self, acc: &Acc) -> Option<Profile> {
         if self.v0 != 0.0 || self.v1 != 0.0 {
             return None;
         }

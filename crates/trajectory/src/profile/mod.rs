@@ -128,7 +128,6 @@ impl Segment1 {
     /// The phases (duration, jerk) of the profile, for a positive direction.
     #[inline]
     pub fn phases(&self, acc: &Acc, p: Profile, out: &mut Phases) {
-        let j = acc.j;
         let ra = Ramp::of((p.vc - self.v0).abs(), acc);
         // Rest to rest, mostly: the two ramps alike (one square root).
         let rb = if self.v1 == self.v0 {
@@ -136,12 +135,39 @@ impl Segment1 {
         } else {
             Ramp::of((p.vc - self.v1).abs(), acc)
         };
+        self.push_phases(acc.j, p, &ra, &rb, out);
+    }
+
+    /// The phases of the time-optimal profile: [`phases`](Self::phases) of
+    /// [`fastest`](Self::fastest), a short rest-to-rest profile's made
+    /// straight from its jerk phase (no square root: the follower's usual
+    /// case).
+    #[inline]
+    pub fn fastest_phases(&self, acc: &Acc, out: &mut Phases) {
+        match self.short_rest(acc) {
+            Some(p) => {
+                // Its ramps are two jerk phases of a quarter of its duration.
+                let tj = 0.25 * p.duration;
+                let r = Ramp {
+                    tj,
+                    ta: 0.0,
+                    peak: acc.j * tj,
+                };
+                self.push_phases(acc.j, p, &r, &r, out);
+            }
+            None => self.phases(acc, self.fastest(acc), out),
+        }
+    }
+
+    /// Pushes the profile `p` whose ramps are `ra` and `rb` (jerk `j`).
+    #[inline(always)]
+    fn push_phases(&self, j: f64, p: Profile, ra: &Ramp, rb: &Ramp, out: &mut Phases) {
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
-        out.push_ramp(&ra, sa, j);
+        out.push_ramp(ra, sa, j);
         let cruise = (p.duration - ra.duration() - rb.duration()).max(0.0);
         out.push(cruise, 0.0, 0.0);
-        out.push_ramp(&rb, sb, j);
+        out.push_ramp(rb, sb, j);
     }
 }
 

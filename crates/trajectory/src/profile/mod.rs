@@ -175,6 +175,39 @@ impl Segment1 {
 mod tests {
     use super::*;
 
+    /// A short rest-to-rest move in closed form: with `j = 10` and jerk
+    /// phases of 0.1 s each ramp covers `j tj^3 = 0.01`, so `d = 0.02`
+    /// peaks at `j tj^2 = 0.1` and lasts 0.4 s, well inside `a = 3` (a
+    /// ramp peaks at `j tj = 1`) and `v = 2`.
+    #[test]
+    fn a_short_rest_to_rest_move_is_four_jerk_phases() {
+        let l = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
+        let s = Segment1 {
+            d: 0.02,
+            v0: 0.0,
+            v1: 0.0,
+        };
+        let p = s.fastest(&l);
+        assert!(
+            (p.vc - 0.1).abs() < 1e-12 && (p.duration - 0.4).abs() < 1e-12,
+            "{p:?}"
+        );
+        let mut ph = Phases::new();
+        s.fastest_phases(&l, &mut ph);
+        assert_eq!(ph.n, 4);
+        for (k, jerk) in [10.0, -10.0, -10.0, 10.0].into_iter().enumerate() {
+            assert!((ph.dt[k] - 0.1).abs() < 1e-12 && ph.jerk[k] == jerk, "{k}");
+        }
+        // The same as the phases of the fastest profile, square root and
+        // all.
+        let mut slow = Phases::new();
+        s.phases(&l, p, &mut slow);
+        assert_eq!(slow.n, 4);
+        for k in 0..4 {
+            assert!((slow.dt[k] - ph.dt[k]).abs() < 1e-12 && slow.jerk[k] == ph.jerk[k]);
+        }
+    }
+
     #[test]
     fn stretched_profile_has_requested_duration_and_distance() {
         let l = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));

@@ -19,7 +19,7 @@
 //! is left. Nothing is allocated.
 
 use crate::online::{onward, route, stop_phases, Route1};
-use crate::profile::Phases;
+use crate::profile::{Acc, Phases, SIXTH};
 use crate::{JointLimits, JointState};
 
 /// The largest share of `max_velocity` a target's speed is taken at: the
@@ -120,10 +120,10 @@ impl Plan {
 
     /// Makes this the plan of `err` (relative to `goal` at `tau`) that
     /// starts with `way`, whose first phases are already in `pre`.
-    fn set(&mut self, rel: &JointLimits, way: &Route1, err: JointState, goal: Goal, tau: f64) {
+    fn set(&mut self, rel: &Acc, way: &Route1, err: JointState, goal: Goal, tau: f64) {
         self.main.n = 0;
         if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
-            way.seg.phases(rel, way.seg.fastest(rel), &mut self.main);
+            way.seg.fastest_phases(rel, &mut self.main);
         }
         self.goal = goal;
         self.err = err;
@@ -138,18 +138,16 @@ impl Plan {
     /// acceleration (which [`route`] would do, and which, planned anew
     /// every cycle, would never let the joint speed up). Returns whether
     /// this became that plan (else it is to be made anew).
-    fn ramping(&mut self, rel: &JointLimits, err: &JointState, goal: Goal) -> bool {
-        let Some(j) = rel.max_jerk else {
-            return false;
-        };
+    fn ramping(&mut self, rel: &Acc, err: &JointState, goal: Goal) -> bool {
+        let j = rel.j;
         let ea = err.acceleration;
-        if ea == 0.0 {
+        if !rel.finite || ea == 0.0 {
             return false;
         }
-        let ta = ea.abs() / j;
+        let ta = ea.abs() * rel.inv_j;
         let v0 = err.velocity - 0.5 * ea * ta;
         let start = JointState {
-            position: err.position - v0 * ta - ea * ta * ta / 6.0,
+            position: err.position - v0 * ta - ea * ta * ta * SIXTH,
             velocity: v0,
             acceleration: 0.0,
         };
@@ -162,12 +160,11 @@ impl Plan {
         // From `start` (no acceleration: `onward` has no phase before the
         // main segment) the segment starts at its speed, toward 0.
         let (dir, v0) = (if start.position <= 0.0 { 1.0 } else { -1.0 }, v0.abs());
-        let slower = dir * ea < 0.0 && v0 < rel.max_velocity;
+        let slower = dir * ea < 0.0 && v0 < rel.vm;
         // The longest jerk phase the ramp may have, `min(a / j, sqrt((vm -
         // v0) / j))`, shorter than `least`: compared without dividing.
         let least = ta * (1.0 - 1e-9);
-        let short = rel.max_acceleration < least * j
-            || (rel.max_velocity - v0).max(0.0) < j * least * least;
+        let short = rel.a < least * j || (rel.vm - v0).max(0.0) < j * least * least;
         if slower || short {
             return false;
         }
@@ -235,13 +232,13 @@ impl Plan {
 
 /// The limits of motion relative to `goal` (capped as [`Follower::step`]
 /// does): what the goal's own motion leaves over its horizon.
-fn relative(lim: &JointLimits, goal: &Goal) -> JointLimits {
+fn relative(lim: &JointLimits, goal: &Goal) -> Acc {
     let end = goal.velocity + goal.acceleration * goal.horizon.max(0.0);
-    JointLimits {
+    Acc::of(&JointLimits {
         max_velocity: lim.max_velocity - goal.velocity.abs().max(end.abs()),
         max_acceleration: lim.max_acceleration - goal.acceleration.abs(),
         ..*lim
-    }
+    })
 }
 
 /// One joint's commanded state following a goal, cycle by cycle (see the
@@ -303,11 +300,17 @@ fn capped(lim: &JointLimits, goal: Goal) -> Goal {
     let a = goal.acceleration.clamp(-acap, acap);
     let v = goal.velocity.clamp(-vcap, vcap);
     let h = goal.horizon.max(0.0);
-    // The speed at the end of the horizon within the cap too.
-    let a = if h > 0.0 {
-        a.clamp((-vcap - v) / h, (vcap - v) / h)
-    } else {
+    // The speed at the end of the horizon within the cap too (dividing
+    // only when it is not: most goals are well within).
+    let end = v + a * h;
+    let a = if h <= 0.0 {
         0.0
+    } else if end > vcap {
+        (vcap - v) / h
+    } else if end < -vcap {
+        (-vcap - v) / h
+    } else {
+        a
     };
     Goal {
         position: goal.position,
@@ -321,7 +324,7 @@ fn capped(lim: &JointLimits, goal: Goal) -> Goal {
 /// [`stop`](crate::stop)).
 pub fn stop_position(lim: &JointLimits, state: &JointState) -> f64 {
     let mut ph = Phases::new();
-    stop_phases(state.velocity, state.acceleration, lim, &mut ph);
+    stop_phases(state.velocity, state.acceleration, &Acc::of(lim), &mut ph);
     ph.advance(state, 1.0, lim.max_jerk.is_some(), f64::INFINITY)
         .1
 }

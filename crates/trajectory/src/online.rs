@@ -6,7 +6,7 @@
 use crate::error::PlanError;
 use crate::limits::validate_all;
 use crate::piece::Piece;
-use crate::profile::{Phases, Ramp, Segment1};
+use crate::profile::{Acc, Phases, Ramp, Segment1, SIXTH};
 use crate::{JointLimits, JointState, Trajectory};
 
 /// The quickest way to rest from speed `v` and acceleration `a`: ramp the
@@ -14,18 +14,17 @@ use crate::{JointLimits, JointState, Trajectory};
 /// it, ramp it back to zero exactly as the speed reaches zero. This
 /// bang-bang jerk profile is the time-optimal one for reaching zero speed
 /// and zero acceleration.
-pub(crate) fn stop_phases(v: f64, a: f64, lim: &JointLimits, out: &mut Phases) {
-    let (am, j) = (lim.max_acceleration, lim.jerk());
-    let finite = j.is_finite();
+pub(crate) fn stop_phases(v: f64, a: f64, lim: &Acc, out: &mut Phases) {
+    let (am, j, inv_j, finite) = (lim.a, lim.j, lim.inv_j, lim.finite);
     // Speed reached if the acceleration were ramped to zero right away.
     let v_flat = if finite {
-        v + a * a.abs() / (2.0 * j)
+        v + a * a.abs() * (0.5 * inv_j)
     } else {
         v
     };
     if v_flat == 0.0 {
         if finite && a != 0.0 {
-            out.push(a.abs() / j, -a.signum() * j, 0.0);
+            out.push(a.abs() * inv_j, -a.signum() * j, 0.0);
         }
         return;
     }
@@ -35,30 +34,24 @@ pub(crate) fn stop_phases(v: f64, a: f64, lim: &JointLimits, out: &mut Phases) {
     if a < -am {
         // Decelerating harder than allowed (a state from outside the
         // limits): first bring the deceleration back to the limit.
-        let dt = (-am - a) / j;
+        let dt = (-am - a) * inv_j;
         out.push(dt, dir * j, 0.0);
         v += dt * (a + 0.5 * dt * j);
         a = -am;
     }
-    let excess = if finite { v + a * a / (2.0 * j) } else { v };
-    let (ap, hold) = if finite && j * excess <= am * am {
+    let excess = if finite { v + a * a * (0.5 * inv_j) } else { v };
+    let (ap, hold) = if finite && excess <= lim.regime {
         ((j * excess).sqrt(), 0.0)
     } else {
-        (
-            am,
-            if finite {
-                (excess - am * am / j) / am
-            } else {
-                excess / am
-            },
-        )
+        // `regime` is 0 without a jerk limit: the hold is `excess / am`.
+        (am, (excess - lim.regime) * lim.inv_a)
     };
     if finite {
-        out.push((a + ap) / j, -dir * j, 0.0);
+        out.push((a + ap) * inv_j, -dir * j, 0.0);
     }
     out.push(hold, 0.0, -dir * ap);
     if finite {
-        out.push(ap / j, dir * j, 0.0);
+        out.push(ap * inv_j, dir * j, 0.0);
     }
 }
 
@@ -98,7 +91,7 @@ pub fn stop(limits: &[JointLimits], current: &[JointState]) -> Result<Trajectory
     let mut duration: f64 = 0.0;
     for (lim, s) in limits.iter().zip(current) {
         let mut ph = Phases::new();
-        stop_phases(s.velocity, s.acceleration, lim, &mut ph);
+        stop_phases(s.velocity, s.acceleration, &Acc::of(lim), &mut ph);
         let mut pieces = Vec::with_capacity(ph.n + 1);
         let (t, p, _, _) = ph.emit_from(0.0, s, lim, &mut pieces);
         duration = duration.max(t);
@@ -136,8 +129,8 @@ pub(crate) struct Route1 {
 /// with `v`, so this is `v <= rest_peak(dist)` without solving for the
 /// peak (no cube root).
 #[inline]
-fn rests_within(v: f64, dist: f64, lim: &JointLimits) -> bool {
-    v * Ramp::new(v, lim.max_acceleration, lim.jerk()).duration() <= dist
+fn rests_within(v: f64, dist: f64, lim: &Acc) -> bool {
+    v * Ramp::of(v, lim).duration() <= dist
 }
 
 /// The segment of `d` (either sign) from speed `v0` (in its direction) to
@@ -156,24 +149,18 @@ fn onto(d: f64, v0: f64) -> (Segment1, f64) {
 /// first), then the main segment. `None` when that will not do: the
 /// speed points away from the target, or is too high to stop within a
 /// quarter of the distance.
-pub(crate) fn onward(
-    s: &JointState,
-    target: f64,
-    lim: &JointLimits,
-    pre: &mut Phases,
-) -> Option<Route1> {
-    let j = lim.jerk();
-    let finite = j.is_finite();
+pub(crate) fn onward(s: &JointState, target: f64, lim: &Acc, pre: &mut Phases) -> Option<Route1> {
+    let (j, finite) = (lim.j, lim.finite);
     pre.n = 0;
     let (ta, a) = if finite {
-        (s.acceleration.abs() / j, s.acceleration)
+        (s.acceleration.abs() * lim.inv_j, s.acceleration)
     } else {
         (0.0, 0.0)
     };
     let jj = -a.signum() * j;
     let (p1, v1) = if finite {
         (
-            s.position + ta * (s.velocity + ta * (0.5 * a + ta * jj / 6.0)),
+            s.position + ta * (s.velocity + ta * (0.5 * a + ta * jj * SIXTH)),
             s.velocity + ta * (a + 0.5 * ta * jj),
         )
     } else {
@@ -181,9 +168,7 @@ pub(crate) fn onward(
     };
     let d = target - p1;
     let on = v1 == 0.0
-        || (v1 * d > 0.0
-            && v1.abs() <= lim.max_velocity
-            && rests_within(v1.abs(), 0.5 * d.abs(), lim));
+        || (v1 * d > 0.0 && v1.abs() <= lim.vm && rests_within(v1.abs(), 0.5 * d.abs(), lim));
     if !on {
         return None;
     }
@@ -201,13 +186,13 @@ pub(crate) fn onward(
 /// How one joint gets from its state to `target`: [`onward`] when it can,
 /// else it stops as fast as it can and then moves rest to rest. The phases
 /// before the main segment are written to `pre`.
-pub(crate) fn route(s: &JointState, target: f64, lim: &JointLimits, pre: &mut Phases) -> Route1 {
+pub(crate) fn route(s: &JointState, target: f64, lim: &Acc, pre: &mut Phases) -> Route1 {
     if let Some(way) = onward(s, target, lim, pre) {
         return way;
     }
     pre.n = 0;
     stop_phases(s.velocity, s.acceleration, lim, pre);
-    let (t, p, _, _) = pre.advance(s, 1.0, lim.max_jerk.is_some(), f64::INFINITY);
+    let (t, p, _, _) = pre.advance(s, 1.0, lim.finite, f64::INFINITY);
     let (seg, dir) = onto(target - p, 0.0);
     Route1 {
         pre_time: t,
@@ -271,18 +256,19 @@ pub fn retarget(
     let mut duration: f64 = 0.0;
     for ((s, &q), lim) in current.iter().zip(target).zip(limits) {
         let mut pre = Phases::new();
-        let way = route(s, q, lim, &mut pre);
-        let fastest = way.seg.fastest(lim);
+        let acc = Acc::of(lim);
+        let way = route(s, q, &acc, &mut pre);
+        let fastest = way.seg.fastest(&acc);
         duration = duration.max(way.pre_time + fastest.duration);
-        ways.push((way, fastest, pre));
+        ways.push((way, fastest, pre, acc));
     }
     let mut per_joint = Vec::with_capacity(limits.len());
     let mut main = Phases::new();
-    for ((s, (way, fastest, pre)), lim) in current.iter().zip(ways).zip(limits) {
+    for ((s, (way, fastest, pre, acc)), lim) in current.iter().zip(ways).zip(limits) {
         main.n = 0;
         if way.seg.d > 0.0 || way.seg.v0 > 0.0 {
-            let prof = way.seg.stretched(lim, fastest, duration - way.pre_time);
-            way.seg.phases(lim, prof, &mut main);
+            let prof = way.seg.stretched(&acc, fastest, duration - way.pre_time);
+            way.seg.phases(&acc, prof, &mut main);
         }
         let mut pieces = Vec::with_capacity(pre.n + main.n + 1);
         let (t, x, v, _) = pre.emit_from(0.0, s, lim, &mut pieces);

@@ -1,6 +1,8 @@
 //! One polynomial piece of a joint's path, and the root finding used to
 //! compute exact peaks of such pieces.
 
+use crate::profile::SIXTH;
+
 /// A polynomial of degree at most five on `[t0, t1]`, in the local time
 /// `x = t - t0`: `p(x) = c0 + c1 x + c2 x^2 + c3 x^3 + c4 x^4 + c5 x^5`.
 ///
@@ -21,7 +23,7 @@ impl Piece {
         Piece {
             t0,
             t1: t0 + dt,
-            c: [p, v, 0.5 * a, j / 6.0, 0.0, 0.0],
+            c: [p, v, 0.5 * a, j * SIXTH, 0.0, 0.0],
         }
     }
 

@@ -22,7 +22,7 @@
 //! so the search ends.
 
 use crate::piece::Piece;
-use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::profile::{rest_peak, Acc, Phases, Profile, Segment1};
 use crate::JointLimits;
 
 /// Halvings of a via speed before it is set to zero.
@@ -43,7 +43,7 @@ pub(crate) fn rest_to_rest(limits: &[JointLimits], pos: &[&[f64]], k: usize) -> 
                 v0: 0.0,
                 v1: 0.0,
             }
-            .fastest(lim)
+            .fastest(&Acc::of(lim))
             .duration
         })
         .fold(0.0, f64::max)
@@ -52,7 +52,7 @@ pub(crate) fn rest_to_rest(limits: &[JointLimits], pos: &[&[f64]], k: usize) -> 
 /// A feasible profile of `s` within `h` (for [`Segment1::stretched`]), or
 /// `None` when the time-optimal one is longer. A segment that does not move
 /// fits only at rest at both ends.
-fn fit(s: Segment1, lim: &JointLimits, h: f64) -> Option<Profile> {
+fn fit(s: Segment1, lim: &Acc, h: f64) -> Option<Profile> {
     if s.d == 0.0 {
         return (s.v0 == 0.0 && s.v1 == 0.0).then_some(Profile {
             vc: 0.0,
@@ -72,6 +72,7 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
     let mut fits: Vec<Option<Profile>> = vec![None; m];
     let mut phases = Phases::new();
     for (j, lim) in limits.iter().enumerate() {
+        let lim = &Acc::of(lim);
         let d = |k: usize| pos[k + 1][j] - pos[k][j];
         let h = |k: usize| times[k + 1] - times[k];
         via.fill(0.0);
@@ -81,7 +82,7 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
             if dp * dn > 0.0 {
                 let (a, b) = ((dp / h(k - 1)).abs(), (dn / h(k)).abs());
                 let pace = 2.0 * a * b / (a + b);
-                let cap = rest_peak(0.5 * dp.abs().min(dn.abs()), lim).min(lim.max_velocity);
+                let cap = rest_peak(0.5 * dp.abs().min(dn.abs()), lim).min(lim.vm);
                 *v = dp.signum() * pace.min(cap);
             }
         }
@@ -124,15 +125,7 @@ pub(crate) fn run(limits: &[JointLimits], times: &[f64], pos: &[&[f64]], out: &m
             phases.n = 0;
             s.phases(lim, p, &mut phases);
             let dir = if d(k) >= 0.0 { 1.0 } else { -1.0 };
-            phases.emit(
-                times[k],
-                pos[k][j],
-                vin,
-                0.0,
-                dir,
-                lim.max_jerk.is_some(),
-                &mut out[j],
-            );
+            phases.emit(times[k], pos[k][j], vin, 0.0, dir, lim.finite, &mut out[j]);
         }
     }
 }

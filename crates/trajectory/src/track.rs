@@ -27,7 +27,7 @@ use crate::error::{PlanError, Quantity};
 use crate::limits::{check_keyframe, validate_all};
 use crate::online::{finish, stop_phases};
 use crate::piece::Piece;
-use crate::profile::Phases;
+use crate::profile::{Acc, Phases};
 use crate::{retarget, JointLimits, JointState, Trajectory};
 
 /// A recording filtered by [`track`], with how far it departs from the
@@ -210,7 +210,7 @@ fn stop_position(lim: &JointLimits, x: JointState, scratch: &mut Vec<Piece>) -> 
 /// at time `t`; returns where it ends.
 fn quickest_stop(lim: &JointLimits, x: JointState, t: f64, scratch: &mut Vec<Piece>) -> f64 {
     let mut ph = Phases::new();
-    stop_phases(x.velocity, x.acceleration, lim, &mut ph);
+    stop_phases(x.velocity, x.acceleration, &Acc::of(lim), &mut ph);
     scratch.clear();
     ph.emit_from(t, &x, lim, scratch).1
 }

@@ -19,7 +19,7 @@
 //!    durations. Every step only ever builds profiles inside the limits.
 
 use crate::piece::Piece;
-use crate::profile::{rest_peak, Phases, Profile, Segment1};
+use crate::profile::{rest_peak, Acc, Phases, Profile, Segment1};
 use crate::JointLimits;
 
 /// Reused buffers of the untimed planner.
@@ -34,6 +34,8 @@ pub(crate) struct Scratch {
     /// Per joint of the current segment: `fastest` holds the time-optimal
     /// profile, not only a bound.
     exact: Vec<bool>,
+    /// Each joint's bounds, with their reciprocals made once.
+    rates: Vec<Acc>,
 }
 
 /// Plans an untimed section through `pos[0..=n]` starting at `t0` at rest.
@@ -55,7 +57,10 @@ pub(crate) fn section(
         fastest,
         durations,
         exact,
+        rates,
     } = scratch;
+    rates.clear();
+    rates.extend(limits.iter().map(Acc::of));
     via.clear();
     via.resize((n + 1) * nj, 0.0);
     fastest.clear();
@@ -71,13 +76,13 @@ pub(crate) fn section(
 
     if !stop {
         for k in 1..n {
-            for (j, lim) in limits.iter().enumerate() {
+            for (j, lim) in rates.iter().enumerate() {
                 let (dp, dn) = (pos[k][j] - pos[k - 1][j], pos[k + 1][j] - pos[k][j]);
                 if dp * dn > 0.0 {
                     // `rest_peak` increases with the distance: the smaller
                     // neighbour sets the cap (one evaluation, same value).
                     let cap = rest_peak(0.5 * dp.abs().min(dn.abs()), lim);
-                    via[k * nj + j] = dp.signum() * cap.min(lim.max_velocity);
+                    via[k * nj + j] = dp.signum() * cap.min(lim.vm);
                 }
             }
         }
@@ -97,7 +102,7 @@ pub(crate) fn section(
             )
         };
         let mut floor: f64 = 0.0;
-        for (j, lim) in limits.iter().enumerate() {
+        for (j, lim) in rates.iter().enumerate() {
             let b = s(j).fastest_bounds(lim);
             fastest[k * nj + j] = b.upper;
             exact[j] = b.exact;
@@ -106,7 +111,7 @@ pub(crate) fn section(
         // Every joint left out has a time-optimal duration at most its
         // bound, at most `floor`, at most the slowest one's: `t` is exact.
         let mut t: f64 = 0.0;
-        for (j, lim) in limits.iter().enumerate() {
+        for (j, lim) in rates.iter().enumerate() {
             let f = &mut fastest[k * nj + j];
             if !exact[j] && f.duration > floor {
                 *f = s(j).fastest(lim);
@@ -124,7 +129,7 @@ pub(crate) fn section(
         // with the pace instead, where that does not lengthen either
         // neighbouring segment (so the durations stay as they are).
         for k in 1..n {
-            for (j, lim) in limits.iter().enumerate() {
+            for (j, lim) in rates.iter().enumerate() {
                 let v = via[k * nj + j];
                 if v == 0.0 {
                     continue;
@@ -152,8 +157,8 @@ pub(crate) fn section(
         }
     }
     let mut phases = Phases::new();
-    for (j, lim) in limits.iter().enumerate() {
-        let finite = lim.max_jerk.is_some();
+    for (j, lim) in rates.iter().enumerate() {
+        let finite = lim.finite;
         let mut t = t0;
         for k in 0..n {
             let d = pos[k + 1][j] - pos[k][j];

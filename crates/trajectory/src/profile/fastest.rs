@@ -1,20 +1,21 @@
 //! The time-optimal profile of a segment: closed forms where they exist,
 //! bounds that need no root finding, and a Newton search for the rest.
 
-use super::ramp::{rest_peak, Acc};
+use super::ramp::{cube_root_rough, rest_peak, rest_short, Acc};
 use super::{Bounds, Profile, Segment1};
-use crate::JointLimits;
 
 impl Segment1 {
     /// The time-optimal profile. Precondition: the ramps alone fit, i.e.
     /// `g(max(v0, v1)) <= d` (the planner caps via speeds to ensure it).
-    pub fn fastest(&self, lim: &JointLimits) -> Profile {
-        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
-        let acc = Acc::new(a, j);
-        let vc = match self.fastest_closed(lim, &acc) {
+    pub fn fastest(&self, acc: &Acc) -> Profile {
+        if let Some(p) = self.short_rest(acc) {
+            return p;
+        }
+        let vm = acc.vm;
+        let vc = match self.fastest_closed(acc) {
             Ok(vc) => vc,
             // The long-ramp root (outside its regime) is a good start.
-            Err(guess) => self.fastest_root(&acc, self.v0.max(self.v1).min(vm), vm, guess),
+            Err(guess) => self.fastest_root(acc, self.v0.max(self.v1).min(vm), vm, guess),
         };
         if vc <= 0.0 {
             return Profile {
@@ -22,7 +23,7 @@ impl Segment1 {
                 duration: 0.0,
             };
         }
-        let duration = self.time(vc, &acc).0;
+        let duration = self.time(vc, acc).0;
         Profile { vc, duration }
     }
 
@@ -34,9 +35,15 @@ impl Segment1 {
     /// root: long ramps cover at least the distance of short ones, so it
     /// is a cruise speed at or below the optimal one). The planner solves
     /// exactly only for joints that may set a segment's duration.
-    pub fn fastest_bounds(&self, lim: &JointLimits) -> Bounds {
-        let (vm, a, j) = (lim.max_velocity, lim.max_acceleration, lim.jerk());
-        let acc = Acc::new(a, j);
+    pub fn fastest_bounds(&self, acc: &Acc) -> Bounds {
+        if let Some(upper) = self.short_rest(acc) {
+            return Bounds {
+                lower: upper.duration,
+                upper,
+                exact: true,
+            };
+        }
+        let (vm, a) = (acc.vm, acc.a);
         // Only the closed forms that need no evaluation of `g` (the
         // long-ramp root is feasible in every case, `vm` or `max(v0, v1)`
         // included, so the others are left to `fastest`).
@@ -44,9 +51,9 @@ impl Segment1 {
         let closed = if self.d <= 0.0 && vlo <= 0.0 {
             Ok(0.0)
         } else if self.v0 == 0.0 && self.v1 == 0.0 {
-            Ok(rest_peak(self.d, lim))
+            Ok(rest_peak(self.d, acc))
         } else {
-            self.fastest_long(&acc, vlo, vm)
+            self.fastest_long(acc, vlo, vm)
         };
         match closed {
             Ok(vc) => {
@@ -58,7 +65,7 @@ impl Segment1 {
                 } else {
                     Profile {
                         vc,
-                        duration: self.time(vc, &acc).0,
+                        duration: self.time(vc, acc).0,
                     }
                 };
                 Bounds {
@@ -70,7 +77,7 @@ impl Segment1 {
             Err(guess) => {
                 let upper = Profile {
                     vc: guess,
-                    duration: self.time(guess, &acc).0,
+                    duration: self.time(guess, acc).0,
                 };
                 let (v0, v1) = (self.v0, self.v1);
                 // Jerk-free: ramp distance (2 vc^2 - v0^2 - v1^2) / 2a.
@@ -94,18 +101,28 @@ impl Segment1 {
         }
     }
 
+    /// The time-optimal profile of a short rest-to-rest segment (see
+    /// [`rest_short`]), if this is one.
+    #[inline]
+    pub(super) fn short_rest(&self, acc: &Acc) -> Option<Profile> {
+        if self.v0 != 0.0 || self.v1 != 0.0 {
+            return None;
+        }
+        rest_short(self.d, acc).map(|(vc, duration)| Profile { vc, duration })
+    }
+
     /// The cruise speed of [`fastest`](Self::fastest) where it has a closed
     /// form (`Ok`, 0 for a joint that does not move), else `Err` with the
     /// long-ramp root clamped to `[max(v0, v1), vm]`.
-    fn fastest_closed(&self, lim: &JointLimits, acc: &Acc) -> Result<f64, f64> {
-        let vm = lim.max_velocity;
+    fn fastest_closed(&self, acc: &Acc) -> Result<f64, f64> {
+        let vm = acc.vm;
         let vlo = self.v0.max(self.v1).min(vm);
         if self.d <= 0.0 && vlo <= 0.0 {
             return Ok(0.0);
         }
         if self.v0 == 0.0 && self.v1 == 0.0 {
             // Rest to rest (`vm` included): no ramp distance to evaluate.
-            Ok(rest_peak(self.d, lim))
+            Ok(rest_peak(self.d, acc))
         } else if self.g(vm, acc).1 <= self.d {
             Ok(vm)
         } else if self.g(vlo, acc).1 >= self.d {
@@ -152,8 +169,20 @@ impl Segment1 {
             (g, dg)
         };
         let ym = (vm - vlo).sqrt();
+        // Where every ramp is short (below `regime`), the speeds at the
+        // ends small beside the cruise speed, the rest-to-rest root of
+        // pure jerk ramps, `2 vc sqrt(vc / j) = d`, is within a few percent
+        // of the root, much closer than the long-ramp one: start there
+        // (from either side: convexity takes a step from the left to the
+        // right of the root).
+        let pure = cube_root_rough(0.25 * self.d * self.d * acc.j);
+        let guess = if pure > vlo && pure < vm.min(acc.regime) {
+            pure
+        } else {
+            guess
+        };
         let y0 = (guess - vlo).max(0.0).sqrt();
-        // First step from the left of the root (or the top of the range).
+        // First step from the guess (or the top of the range).
         let mut y = ym;
         if y0 > 0.0 {
             let (g, dg) = f(y0);
@@ -172,9 +201,10 @@ impl Segment1 {
             let step = g / dg;
             y -= step;
             // Quadratic convergence: the error left is about the square
-            // of this step, below rounding once the step is 1e-8 of `y`
-            // (the same rule as the stretching search's).
-            if step <= 1e-8 * y {
+            // of this step over `y`, some 1e-12 of `y` once the step is
+            // 1e-6 of it (an evaluation fewer than waiting for rounding,
+            // and far below any distance that matters).
+            if step <= 1e-6 * y {
                 break;
             }
         }

@@ -35,12 +35,10 @@ mod phases;
 mod ramp;
 mod stretch;
 
-pub(crate) use phases::Phases;
+pub(crate) use phases::{Phases, SIXTH};
+use ramp::leg;
 pub(crate) use ramp::rest_peak;
-pub(crate) use ramp::Ramp;
-use ramp::{leg, Acc};
-
-use crate::JointLimits;
+pub(crate) use ramp::{Acc, Ramp};
 
 /// A normalised segment: distance `d >= 0`, boundary speeds `v0, v1 >= 0`.
 #[derive(Debug, Clone, Copy)]
@@ -85,7 +83,7 @@ impl Segment1 {
     /// A feasible profile no longer than `limit` (a cruise speed for
     /// [`stretched`](Self::stretched)), if the time-optimal one is no
     /// longer: from the bounds when they decide, else solved.
-    pub fn fits(&self, lim: &JointLimits, limit: f64) -> Option<Profile> {
+    pub fn fits(&self, lim: &Acc, limit: f64) -> Option<Profile> {
         let b = self.fastest_bounds(lim);
         if b.upper.duration <= limit {
             Some(b.upper)
@@ -102,9 +100,8 @@ impl Segment1 {
     /// time-optimal cruise speed is at least `vc`, known without solving
     /// for it.
     #[inline]
-    pub fn cruises_at(&self, lim: &JointLimits, vc: f64) -> bool {
-        let acc = Acc::new(lim.max_acceleration, lim.jerk());
-        self.g(vc, &acc).1 <= self.d
+    pub fn cruises_at(&self, lim: &Acc, vc: f64) -> bool {
+        self.g(vc, lim).1 <= self.d
     }
 
     /// Total ramp distance and its derivative at cruise speed `vc`.
@@ -130,17 +127,47 @@ impl Segment1 {
 
     /// The phases (duration, jerk) of the profile, for a positive direction.
     #[inline]
-    pub fn phases(&self, lim: &JointLimits, p: Profile, out: &mut Phases) {
-        let (a, j) = (lim.max_acceleration, lim.jerk());
-        let acc = Acc::new(a, j);
-        let ra = Ramp::of((p.vc - self.v0).abs(), &acc);
-        let rb = Ramp::of((p.vc - self.v1).abs(), &acc);
+    pub fn phases(&self, acc: &Acc, p: Profile, out: &mut Phases) {
+        let ra = Ramp::of((p.vc - self.v0).abs(), acc);
+        // Rest to rest, mostly: the two ramps alike (one square root).
+        let rb = if self.v1 == self.v0 {
+            ra
+        } else {
+            Ramp::of((p.vc - self.v1).abs(), acc)
+        };
+        self.push_phases(acc.j, p, &ra, &rb, out);
+    }
+
+    /// The phases of the time-optimal profile: [`phases`](Self::phases) of
+    /// [`fastest`](Self::fastest), a short rest-to-rest profile's made
+    /// straight from its jerk phase (no square root: the follower's usual
+    /// case).
+    #[inline]
+    pub fn fastest_phases(&self, acc: &Acc, out: &mut Phases) {
+        match self.short_rest(acc) {
+            Some(p) => {
+                // Its ramps are two jerk phases of a quarter of its duration.
+                let tj = 0.25 * p.duration;
+                let r = Ramp {
+                    tj,
+                    ta: 0.0,
+                    peak: acc.j * tj,
+                };
+                self.push_phases(acc.j, p, &r, &r, out);
+            }
+            None => self.phases(acc, self.fastest(acc), out),
+        }
+    }
+
+    /// Pushes the profile `p` whose ramps are `ra` and `rb` (jerk `j`).
+    #[inline(always)]
+    fn push_phases(&self, j: f64, p: Profile, ra: &Ramp, rb: &Ramp, out: &mut Phases) {
         let sa = if p.vc >= self.v0 { 1.0 } else { -1.0 };
         let sb = if self.v1 >= p.vc { 1.0 } else { -1.0 };
-        out.push_ramp(&ra, sa, j);
+        out.push_ramp(ra, sa, j);
         let cruise = (p.duration - ra.duration() - rb.duration()).max(0.0);
         out.push(cruise, 0.0, 0.0);
-        out.push_ramp(&rb, sb, j);
+        out.push_ramp(rb, sb, j);
     }
 }
 
@@ -148,9 +175,42 @@ impl Segment1 {
 mod tests {
     use super::*;
 
+    /// A short rest-to-rest move in closed form: with `j = 10` and jerk
+    /// phases of 0.1 s each ramp covers `j tj^3 = 0.01`, so `d = 0.02`
+    /// peaks at `j tj^2 = 0.1` and lasts 0.4 s, well inside `a = 3` (a
+    /// ramp peaks at `j tj = 1`) and `v = 2`.
+    #[test]
+    fn a_short_rest_to_rest_move_is_four_jerk_phases() {
+        let l = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
+        let s = Segment1 {
+            d: 0.02,
+            v0: 0.0,
+            v1: 0.0,
+        };
+        let p = s.fastest(&l);
+        assert!(
+            (p.vc - 0.1).abs() < 1e-12 && (p.duration - 0.4).abs() < 1e-12,
+            "{p:?}"
+        );
+        let mut ph = Phases::new();
+        s.fastest_phases(&l, &mut ph);
+        assert_eq!(ph.n, 4);
+        for (k, jerk) in [10.0, -10.0, -10.0, 10.0].into_iter().enumerate() {
+            assert!((ph.dt[k] - 0.1).abs() < 1e-12 && ph.jerk[k] == jerk, "{k}");
+        }
+        // The same as the phases of the fastest profile, square root and
+        // all.
+        let mut slow = Phases::new();
+        s.phases(&l, p, &mut slow);
+        assert_eq!(slow.n, 4);
+        for k in 0..4 {
+            assert!((slow.dt[k] - ph.dt[k]).abs() < 1e-12 && slow.jerk[k] == ph.jerk[k]);
+        }
+    }
+
     #[test]
     fn stretched_profile_has_requested_duration_and_distance() {
-        let l = JointLimits::new(2.0, 3.0, Some(10.0));
+        let l = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
         let s = Segment1 {
             d: 1.3,
             v0: 0.4,

@@ -5,6 +5,9 @@ use super::ramp::Ramp;
 use crate::piece::Piece;
 use crate::{JointLimits, JointState};
 
+/// A sixth, to multiply by (a division costs several multiplications).
+pub(crate) const SIXTH: f64 = 1.0 / 6.0;
+
 /// Up to 12 constant-jerk phases: enough for a stop (3) followed by a full
 /// segment profile (7).
 #[derive(Debug, Clone, Copy)]
@@ -130,7 +133,7 @@ impl Phases {
                 a = dir * self.acc[k];
             }
             each(Piece::jerk(t, dt, p, v, a, jk));
-            p += dt * (v + dt * (0.5 * a + dt * jk / 6.0));
+            p += dt * (v + dt * (0.5 * a + dt * jk * SIXTH));
             v += dt * (a + 0.5 * dt * jk);
             a += dt * jk;
             t += dt;

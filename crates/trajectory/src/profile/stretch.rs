@@ -3,7 +3,6 @@
 
 use super::ramp::Acc;
 use super::{Profile, Segment1};
-use crate::JointLimits;
 
 impl Segment1 {
     /// Duration at cruise speed `vc = 1 / u` and its derivative with
@@ -41,15 +40,13 @@ impl Segment1 {
     /// any feasible one with a lower cruise speed (the upper bound of
     /// [`fastest_bounds`](Self::fastest_bounds)): the search only needs a
     /// cruise speed whose duration is at most `t`.
-    pub fn stretched(&self, lim: &JointLimits, fastest: Profile, t: f64) -> Profile {
+    pub fn stretched(&self, acc: &Acc, fastest: Profile, t: f64) -> Profile {
         if t <= fastest.duration * (1.0 + 1e-12) || fastest.vc <= 0.0 {
             return Profile {
                 vc: fastest.vc,
                 duration: t.max(fastest.duration),
             };
         }
-        let (a, j) = (lim.max_acceleration, lim.jerk());
-        let acc = Acc::new(a, j);
         if self.d <= 0.0 {
             // Nothing to cover: only possible at rest; hold.
             return Profile {
@@ -61,13 +58,13 @@ impl Segment1 {
         if self.v0 == 0.0 && self.v1 == 0.0 {
             // Rest to rest with a constant-acceleration phase:
             // vc^2 / a + (a / j - t) vc + d = 0, smaller root.
-            let b = t - a / j;
-            let disc = b * b - 4.0 * self.d / a;
+            let b = t - acc.k;
+            let disc = b * b - 4.0 * self.d * acc.inv_a;
             if disc >= 0.0 {
                 // The smaller root, in the form without cancellation
                 // (the product of the roots is a * d).
                 let x = 2.0 * self.d / (b + disc.sqrt());
-                if x * j >= a * a && x <= fastest.vc {
+                if x >= acc.regime && x <= fastest.vc {
                     vc = Some(x);
                 }
             }
@@ -84,7 +81,7 @@ impl Segment1 {
             vc = model.filter(|&x| {
                 (x - self.v0).abs() >= acc.regime
                     && (x - self.v1).abs() >= acc.regime
-                    && self.d - self.g(x, &acc).1 >= -1e-12 * self.d
+                    && self.d - self.g(x, acc).1 >= -1e-12 * self.d
             });
         }
         let vc = match vc {
@@ -94,7 +91,7 @@ impl Segment1 {
                 // (cruise time = distance * u), so Newton needs few steps.
                 // f(u) = time(1 / u) - t is increasing, <= 0 at 1 / fastest.vc.
                 let f = |u: f64| {
-                    let (tt, dt) = self.time_of_inv(u, &acc);
+                    let (tt, dt) = self.time_of_inv(u, acc);
                     (tt - t, dt)
                 };
                 let lo = 1.0 / fastest.vc;
@@ -160,9 +157,11 @@ impl Segment1 {
 /// the reverse otherwise). Falls back to bisection whenever a Newton step
 /// leaves the bracket, so it always converges; `hi` may be infinite (then
 /// an outgoing step doubles `x` until an upper end is found, `x > 0`).
-/// Stops after a Newton step smaller than `1e-8` relative: convergence is
-/// quadratic by then, so the step left is about its square, below the
-/// rounding of the result.
+/// Stops after a Newton step smaller than `1e-5` relative: convergence is
+/// quadratic by then, so the error left is about its square times the
+/// function's relative curvature, which the stretching's (a duration
+/// nearly linear in `1 / vc`) keeps below 1: some 1e-10 relative at
+/// most, an evaluation sooner than waiting for rounding.
 fn solve(
     f: impl Fn(f64) -> (f64, f64),
     mut lo: f64,
@@ -196,7 +195,7 @@ fn solve(
             };
         }
         let step = (nx - x).abs();
-        if (newton && step <= 1e-8 * nx.abs())
+        if (newton && step <= 1e-5 * nx.abs())
             || step <= 1e-13 * nx.abs()
             || (hi.is_finite() && hi - lo <= 1e-13 * hi.abs())
         {

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::{self, addr, Model, Series};
-use servobus_protocol::MAX_ID;
+use servobus_protocol::{BROADCAST_ID, MAX_ID};
 
 /// The longest latency any adapter is waited for while measuring it (an
 /// FTDI latency timer goes up to 255 ms).
@@ -18,6 +18,11 @@ pub const LATENCY_CEILING: Duration = Duration::from_millis(300);
 /// PINGs an adapter's latency is measured with: few enough to stay quick,
 /// enough that one lucky reply does not set the figure.
 pub const LATENCY_PINGS: u32 = 3;
+/// How long a broadcast PING waits for the first byte of an answer, and
+/// then for the line to fall quiet: longer than the gaps between servos
+/// answering one after another at the lowest rate, and than the usual
+/// 16 ms latency timer of a USB adapter, which hands bytes over in bursts.
+pub const BROADCAST_LISTEN: Duration = Duration::from_millis(40);
 /// The measured latency's worst case is allowed this many times over in
 /// the deadlines: room for the spikes a USB adapter shows now and then.
 pub const LATENCY_HEADROOM: u32 = 2;
@@ -167,7 +172,12 @@ pub fn identify<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<F
 }
 
 /// Asks every ID at each of `bauds` in turn (through [`Bus::set_baud`]),
-/// absent IDs once: that is what makes a scan fast. When `learn_latency`,
+/// absent IDs once: that is what makes a scan fast. With more than one
+/// rate, each is first asked with one broadcast PING
+/// ([`Bus::anyone_answers`]), and the IDs are asked only at the rates where
+/// someone answered it; when nobody answered at any rate, every ID is asked
+/// at every rate all the same (a servo deaf to the broadcast, or an adapter
+/// slower than [`BROADCAST_LISTEN`], is still found). When `learn_latency`,
 /// the adapter's latency is then measured on the first servo found and,
 /// when it is above what the bus assumed, the silent IDs at that servo's
 /// rate are asked again with deadlines that fit ([`Scan::slow`]).
@@ -182,7 +192,25 @@ pub fn scan<T: Transport, C: Clock>(
     learn_latency: bool,
 ) -> Result<Scan, ScanError> {
     let mut out = Scan::default();
-    for &baud in bauds {
+    let mut asked = Vec::with_capacity(bauds.len());
+    if bauds.len() > 1 {
+        for &baud in bauds {
+            switch_baud(bus, baud)?;
+            let heard =
+                bus.anyone_answers(BROADCAST_LISTEN)
+                    .map_err(|source| ScanError::Stopped {
+                        id: BROADCAST_ID,
+                        source,
+                    })?;
+            if heard {
+                asked.push(baud);
+            }
+        }
+    }
+    if asked.is_empty() {
+        asked.extend_from_slice(bauds);
+    }
+    for &baud in &asked {
         switch_baud(bus, baud)?;
         for id in 0..=MAX_ID {
             let mut s = *bus.settings();

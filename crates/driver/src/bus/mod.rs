@@ -4,6 +4,7 @@
 //! the transaction that runs them (retries, counters) and the latency
 //! measurement each have a module.
 
+mod broadcast;
 mod late;
 mod latency;
 mod requests;

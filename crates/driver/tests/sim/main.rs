@@ -14,6 +14,7 @@ use servobus_sim::{Faults, SimBus, SimServo};
 use servobus_timing::{Link, StatusLevel, Transaction};
 
 mod baud;
+mod broadcast;
 mod late;
 
 const BAUD: u32 = 1_000_000;

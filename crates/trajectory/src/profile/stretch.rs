@@ -74,9 +74,13 @@ impl Segment1 {
         // where the ramps are indeed long, is the answer. Elsewhere it is
         // still a close first guess (long-formula ramps are slower than
         // short ones, jerk-free ones faster: the answer lies between).
-        let model = self
-            .model_root(acc.inv_a, acc.k, t, fastest.vc)
-            .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc));
+        // (Not needed where the rest-to-rest form has answered.)
+        let model = if vc.is_none() {
+            self.model_root(acc.inv_a, acc.k, t, fastest.vc)
+                .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc))
+        } else {
+            None
+        };
         if vc.is_none() {
             vc = model.filter(|&x| {
                 (x - self.v0).abs() >= acc.regime

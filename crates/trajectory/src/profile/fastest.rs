@@ -68,6 +68,7 @@ impl Segment1 {
     /// root (long ramps cover at least the distance of short ones, so it
     /// is a cruise speed at or below the optimal one). The planner solves
     /// exactly only for joints that may set a segment's duration.
+    #[inline]
     pub fn fastest_upper(&self, acc: &Acc) -> (Profile, bool) {
         if let Some(upper) = self.short_rest(acc) {
             return (upper, true);
@@ -224,6 +225,7 @@ impl Segment1 {
     /// distance is then quadratic in `vc`,
     /// `g = vc^2 / a - (v0^2 + v1^2) / 2a + (v0 + v1 + 2 vc) a / 2j`.
     /// `Err` carries the root anyway (clamped), as a starting guess.
+    #[inline]
     fn fastest_long(&self, acc: &Acc, vlo: f64, vm: f64) -> Result<f64, f64> {
         let (a, inv_a, k, regime) = (acc.a, acc.inv_a, acc.k, acc.regime);
         let c = -(self.v0 * self.v0 + self.v1 * self.v1) * (0.5 * inv_a)

@@ -194,3 +194,50 @@ fn solve(
     }
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::Phases;
+    use super::*;
+
+    /// Stretched profiles of segments of every kind (rest to rest, equal
+    /// and unequal boundary speeds, short and long ramps: with `a = 3` and
+    /// `j = 10` a speed change is short below `a^2 / j = 0.9`) cover their
+    /// distance in exactly the duration asked, ending at their end speed,
+    /// down to a cruise far below both boundary speeds. Each boundary
+    /// speed can stop within half the distance, as the planners' speeds
+    /// at keyframes can (the condition for a profile of every duration).
+    #[test]
+    fn the_stretching_search_meets_every_duration_and_distance() {
+        let acc = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
+        let segments = [
+            (1.3, 0.4, 0.2),
+            (0.05, 0.0, 0.0),
+            (2.5, 0.0, 0.0),
+            (0.8, 0.5, 0.5),
+            (3.0, 1.5, 0.1),
+            (1.0, 0.05, 1.2),
+            (4.0, 1.9, 1.8),
+        ];
+        let (mut below, mut long) = (false, false);
+        for (d, v0, v1) in segments {
+            let s = Segment1 { d, v0, v1 };
+            let f = s.fastest(&acc);
+            for k in [1.0, 1.001, 1.1, 1.5, 2.0, 4.0, 20.0] {
+                let t = f.duration * k;
+                let p = s.stretched(&acc, f, t);
+                assert!(p.vc > 0.0 && p.vc <= f.vc * (1.0 + 1e-12), "{d} {k}");
+                below |= p.vc < v0.min(v1);
+                long |= (p.vc - v0).abs() > 0.9 || (p.vc - v1).abs() > 0.9;
+                let mut ph = Phases::new();
+                s.phases(&acc, p, &mut ph);
+                let mut out = Vec::new();
+                let (te, x, v, a) = ph.emit(0.0, 0.0, v0, 0.0, 1.0, true, &mut out);
+                assert!((te - t).abs() < 1e-9 * t, "{d} {k}: {te} != {t}");
+                assert!((x - d).abs() < 1e-9 * d.max(1.0), "{d} {k}: {x}");
+                assert!((v - v1).abs() < 1e-9 && a.abs() < 1e-9, "{d} {k}");
+            }
+        }
+        assert!(below && long);
+    }
+}

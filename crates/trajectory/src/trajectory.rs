@@ -141,8 +141,15 @@ impl Trajectory {
         segments: Vec<SegmentTiming>,
     ) -> Self {
         let mut pieces = per_joint;
+        // Whether every piece kept is a cubic, learnt in the same pass over
+        // the pieces as the empty ones are dropped.
+        let mut cubic = true;
         for (joint, &h) in pieces.iter_mut().zip(hold) {
-            joint.retain(|p| p.duration() > 0.0);
+            joint.retain(|p| {
+                let keep = p.duration() > 0.0;
+                cubic &= !keep || (p.c[4] == 0.0 && p.c[5] == 0.0);
+                keep
+            });
             // The planner reserves for the worst case; keep only what is
             // used (shrinking in place, as allocators usually do), unless
             // only the one spare piece for a final rest is left over.
@@ -161,10 +168,6 @@ impl Trajectory {
             .iter()
             .map(|joint| joint.last().map_or(0.0, |p| p.eval(duration).0))
             .collect();
-        let cubic = pieces
-            .iter()
-            .flatten()
-            .all(|p| p.c[4] == 0.0 && p.c[5] == 0.0);
         Trajectory {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             duration,

@@ -92,8 +92,11 @@ pub(crate) fn section(
     for k in 0..n {
         // Only the slowest joint's time-optimal duration matters, and the
         // stretched profiles only need a feasible profile no faster than
-        // the time-optimal one: solve exactly only the joints whose bounds
-        // say they may be the slowest.
+        // the time-optimal one. Every joint's bound first (the exact
+        // profile for some), then, largest first, an exact solve of every
+        // bound above the longest exact duration so far: a joint left out
+        // has a time-optimal duration at most its bound, at most that
+        // duration, so `t` is exact.
         let s = |j: usize| {
             Segment1::between(
                 pos[k + 1][j] - pos[k][j],
@@ -101,25 +104,29 @@ pub(crate) fn section(
                 via[(k + 1) * nj + j],
             )
         };
-        let mut floor: f64 = 0.0;
-        for (j, lim) in rates.iter().enumerate() {
-            let b = s(j).fastest_bounds(lim);
-            fastest[k * nj + j] = b.upper;
-            exact[j] = b.exact;
-            floor = floor.max(b.lower);
-        }
-        // Every joint left out has a time-optimal duration at most its
-        // bound, at most `floor`, at most the slowest one's: `t` is exact.
+        let row = &mut fastest[k * nj..(k + 1) * nj];
         let mut t: f64 = 0.0;
         for (j, lim) in rates.iter().enumerate() {
-            let f = &mut fastest[k * nj + j];
-            if !exact[j] && f.duration > floor {
-                *f = s(j).fastest(lim);
-                exact[j] = true;
+            let (upper, ex) = s(j).fastest_upper(lim);
+            row[j] = upper;
+            exact[j] = ex;
+            if ex {
+                t = t.max(upper.duration);
             }
-            if exact[j] {
-                t = t.max(f.duration);
+        }
+        loop {
+            let mut pick = None;
+            let mut top = t;
+            for (j, f) in row.iter().enumerate() {
+                if !exact[j] && f.duration > top {
+                    top = f.duration;
+                    pick = Some(j);
+                }
             }
+            let Some(j) = pick else { break };
+            row[j] = s(j).fastest(&rates[j]);
+            exact[j] = true;
+            t = t.max(row[j].duration);
         }
         durations[k] = t;
     }

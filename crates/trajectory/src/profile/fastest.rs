@@ -28,22 +28,52 @@ impl Segment1 {
     }
 
     /// Bounds on [`fastest`](Self::fastest) that cost no root finding:
-    /// the exact profile where a closed form needs no evaluation of the
-    /// ramp distance (rest to rest, both ramps long); otherwise a lower
-    /// bound on its duration (the same family without a jerk limit, which
-    /// can only be faster) and a feasible slower profile (the long-ramp
-    /// root: long ramps cover at least the distance of short ones, so it
-    /// is a cruise speed at or below the optimal one). The planner solves
-    /// exactly only for joints that may set a segment's duration.
+    /// [`fastest_upper`](Self::fastest_upper) and, where that is not
+    /// exact, a lower bound on the duration (the same family without a
+    /// jerk limit, which can only be faster).
     pub fn fastest_bounds(&self, acc: &Acc) -> Bounds {
-        if let Some(upper) = self.short_rest(acc) {
+        let (upper, exact) = self.fastest_upper(acc);
+        if exact {
             return Bounds {
                 lower: upper.duration,
                 upper,
-                exact: true,
+                exact,
             };
         }
-        let (vm, a) = (acc.vm, acc.a);
+        let (vm, a, guess) = (acc.vm, acc.a, upper.vc);
+        let (v0, v1) = (self.v0, self.v1);
+        // Jerk-free: ramp distance (2 vc^2 - v0^2 - v1^2) / 2a.
+        // At or above `guess >= max(v0, v1)` (both ramps speed up;
+        // rounding aside it is so anyway), at most `vm`.
+        let vt = ((2.0 * a * self.d + v0 * v0 + v1 * v1) * 0.5)
+            .sqrt()
+            .max(guess)
+            .min(vm);
+        let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) * (0.5 * acc.inv_a);
+        let trap = (2.0 * vt - v0 - v1) * acc.inv_a + (self.d - ramps) / vt;
+        // Margin for rounding: a bound too high could skip the
+        // joint that sets the duration.
+        let lower = (trap * (1.0 - 1e-9)).min(upper.duration);
+        Bounds {
+            lower,
+            upper,
+            exact,
+        }
+    }
+
+    /// A feasible profile at least as long as the time-optimal one, and
+    /// whether it is the time-optimal one, at no root finding: the exact
+    /// profile where a closed form needs no evaluation of the ramp
+    /// distance (rest to rest, both ramps long), otherwise the long-ramp
+    /// root (long ramps cover at least the distance of short ones, so it
+    /// is a cruise speed at or below the optimal one). The planner solves
+    /// exactly only for joints that may set a segment's duration.
+    #[inline]
+    pub fn fastest_upper(&self, acc: &Acc) -> (Profile, bool) {
+        if let Some(upper) = self.short_rest(acc) {
+            return (upper, true);
+        }
+        let vm = acc.vm;
         // Only the closed forms that need no evaluation of `g` (the
         // long-ramp root is feasible in every case, `vm` or `max(v0, v1)`
         // included, so the others are left to `fastest`).
@@ -56,48 +86,27 @@ impl Segment1 {
             self.fastest_long(acc, vlo, vm)
         };
         match closed {
-            Ok(vc) => {
-                let upper = if vc <= 0.0 {
-                    Profile {
-                        vc: 0.0,
-                        duration: 0.0,
-                    }
-                } else {
-                    Profile {
-                        vc,
-                        duration: self.time(vc, acc).0,
-                    }
-                };
-                Bounds {
-                    lower: upper.duration,
-                    upper,
-                    exact: true,
-                }
-            }
-            Err(guess) => {
-                let upper = Profile {
+            Ok(vc) if vc <= 0.0 => (
+                Profile {
+                    vc: 0.0,
+                    duration: 0.0,
+                },
+                true,
+            ),
+            Ok(vc) => (
+                Profile {
+                    vc,
+                    duration: self.time(vc, acc).0,
+                },
+                true,
+            ),
+            Err(guess) => (
+                Profile {
                     vc: guess,
                     duration: self.time(guess, acc).0,
-                };
-                let (v0, v1) = (self.v0, self.v1);
-                // Jerk-free: ramp distance (2 vc^2 - v0^2 - v1^2) / 2a.
-                // At or above `guess >= max(v0, v1)` (both ramps speed up;
-                // rounding aside it is so anyway), at most `vm`.
-                let vt = ((2.0 * a * self.d + v0 * v0 + v1 * v1) * 0.5)
-                    .sqrt()
-                    .max(guess)
-                    .min(vm);
-                let ramps = (2.0 * vt * vt - v0 * v0 - v1 * v1) * (0.5 * acc.inv_a);
-                let trap = (2.0 * vt - v0 - v1) * acc.inv_a + (self.d - ramps) / vt;
-                // Margin for rounding: a bound too high could skip the
-                // joint that sets the duration.
-                let lower = (trap * (1.0 - 1e-9)).min(upper.duration);
-                Bounds {
-                    lower,
-                    upper,
-                    exact: false,
-                }
-            }
+                },
+                false,
+            ),
         }
     }
 
@@ -216,6 +225,7 @@ impl Segment1 {
     /// distance is then quadratic in `vc`,
     /// `g = vc^2 / a - (v0^2 + v1^2) / 2a + (v0 + v1 + 2 vc) a / 2j`.
     /// `Err` carries the root anyway (clamped), as a starting guess.
+    #[inline]
     fn fastest_long(&self, acc: &Acc, vlo: f64, vm: f64) -> Result<f64, f64> {
         let (a, inv_a, k, regime) = (acc.a, acc.inv_a, acc.k, acc.regime);
         let c = -(self.v0 * self.v0 + self.v1 * self.v1) * (0.5 * inv_a)

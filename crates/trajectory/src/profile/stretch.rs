@@ -5,18 +5,20 @@ use super::ramp::Acc;
 use super::{Profile, Segment1};
 
 impl Segment1 {
-    /// Duration at cruise speed `vc = 1 / u` and its derivative with
-    /// respect to `u`, for the stretching search. Written as
+    /// How far a cruise at `vc > 0` is from a duration of `t`, as
+    /// `vc (T(vc) - t)` (the sign of `T - t`), and its derivative with
+    /// respect to `vc`, for the stretching search. Written as
     /// `T vc = d + sum((vc - v_i) dur_i / 2)` (the cruise covers what the
-    /// ramps, point-symmetric, do not), whose derivative
-    /// `dT/dvc = (sum(H_i') - T) / vc` with `H_i' = dur_i / 2 + |vc - v_i|
+    /// ramps, point-symmetric, do not), it needs no division, and its
+    /// derivative `sum(H_i') - t` with `H_i' = dur_i / 2 + |vc - v_i|
     /// dur_i' / 2` stays accurate where a ramp vanishes (`vc` near `v_i`,
-    /// where `dur_i'` is unbounded but `|vc - v_i| dur_i'` is not).
+    /// where `dur_i'` is unbounded but `|vc - v_i| dur_i'` is not). Nearly
+    /// linear in `vc` (`d - t vc` plus the ramps' share), so Newton needs
+    /// few steps.
     #[inline(always)]
-    fn time_of_inv(&self, u: f64, c: &Acc) -> (f64, f64) {
-        let vc = 1.0 / u;
-        let mut h = self.d;
-        let mut dh = 0.0;
+    fn excess(&self, vc: f64, t: f64, c: &Acc) -> (f64, f64) {
+        let mut h = self.d - t * vc;
+        let mut dh = -t;
         for v in [self.v0, self.v1] {
             let e = vc - v;
             let dv = e.abs();
@@ -30,9 +32,7 @@ impl Segment1 {
             h += 0.5 * e * dur;
             dh += 0.5 * (dur + ddv);
         }
-        let t = h * u;
-        // dT/du = -vc^2 dT/dvc = (T - sum(H_i')) vc.
-        (t, (t - dh) * vc)
+        (h, dh)
     }
 
     /// The profile of duration exactly `t >= fastest.duration`, stretched by
@@ -74,9 +74,13 @@ impl Segment1 {
         // where the ramps are indeed long, is the answer. Elsewhere it is
         // still a close first guess (long-formula ramps are slower than
         // short ones, jerk-free ones faster: the answer lies between).
-        let model = self
-            .model_root(acc.inv_a, acc.k, t, fastest.vc)
-            .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc));
+        // (Not needed where the rest-to-rest form has answered.)
+        let model = if vc.is_none() {
+            self.model_root(acc.inv_a, acc.k, t, fastest.vc)
+                .or_else(|| self.model_root(acc.inv_a, 0.0, t, fastest.vc))
+        } else {
+            None
+        };
         if vc.is_none() {
             vc = model.filter(|&x| {
                 (x - self.v0).abs() >= acc.regime
@@ -87,18 +91,11 @@ impl Segment1 {
         let vc = match vc {
             Some(x) => x,
             None => {
-                // Solve in u = 1 / vc: the duration is then nearly linear
-                // (cruise time = distance * u), so Newton needs few steps.
-                // f(u) = time(1 / u) - t is increasing, <= 0 at 1 / fastest.vc.
-                let f = |u: f64| {
-                    let (tt, dt) = self.time_of_inv(u, acc);
-                    (tt - t, dt)
-                };
-                let lo = 1.0 / fastest.vc;
-                let guess = model.map_or(t / self.d, |vc| 1.0 / vc).max(lo);
-                // No upper end known: the search finds one (f grows
-                // without bound as u does, the cruise taking ever longer).
-                1.0 / solve(f, lo, f64::INFINITY, guess, true)
+                // `excess` is positive below the answer and at most 0 at
+                // `fastest.vc`: the bracket is `[0, fastest.vc]`.
+                let f = |vc: f64| self.excess(vc, t, acc);
+                let guess = model.unwrap_or(self.d / t);
+                solve(f, 0.0, fastest.vc, guess, false)
             }
         };
         Profile { vc, duration: t }
@@ -152,16 +149,15 @@ impl Segment1 {
     }
 }
 
-/// Safeguarded Newton iteration on a monotone function with a bracket:
-/// `increasing` tells the sign convention (`f(lo) <= 0 <= f(hi)` when true,
-/// the reverse otherwise). Falls back to bisection whenever a Newton step
-/// leaves the bracket, so it always converges; `hi` may be infinite (then
-/// an outgoing step doubles `x` until an upper end is found, `x > 0`).
+/// Safeguarded Newton iteration on a function with one sign change in the
+/// bracket `[lo, hi]`: `increasing` tells the sign convention (`f(lo) <= 0
+/// <= f(hi)` when true, the reverse otherwise). Falls back to bisection
+/// whenever a Newton step leaves the bracket, so it always converges.
 /// Stops after a Newton step smaller than `1e-5` relative: convergence is
 /// quadratic by then, so the error left is about its square times the
-/// function's relative curvature, which the stretching's (a duration
-/// nearly linear in `1 / vc`) keeps below 1: some 1e-10 relative at
-/// most, an evaluation sooner than waiting for rounding.
+/// function's relative curvature, which the stretching's (nearly linear in
+/// the cruise speed) keeps below 1: some 1e-10 relative at most, an
+/// evaluation sooner than waiting for rounding.
 fn solve(
     f: impl Fn(f64) -> (f64, f64),
     mut lo: f64,
@@ -169,11 +165,8 @@ fn solve(
     x0: f64,
     increasing: bool,
 ) -> f64 {
-    let mut x = if hi.is_finite() {
-        x0.clamp(lo, hi)
-    } else {
-        x0.max(lo)
-    };
+    // (Not `clamp`, which panics on a NaN bound.)
+    let mut x = x0.max(lo).min(hi);
     for _ in 0..200 {
         let (fx, dfx) = f(x);
         if fx == 0.0 {
@@ -188,20 +181,63 @@ fn solve(
         let mut newton = true;
         if !(nx > lo && nx < hi) {
             newton = false;
-            nx = if hi.is_finite() {
-                0.5 * (lo + hi)
-            } else {
-                2.0 * x
-            };
+            nx = 0.5 * (lo + hi);
         }
         let step = (nx - x).abs();
         if (newton && step <= 1e-5 * nx.abs())
             || step <= 1e-13 * nx.abs()
-            || (hi.is_finite() && hi - lo <= 1e-13 * hi.abs())
+            || hi - lo <= 1e-13 * hi.abs()
         {
             return nx;
         }
         x = nx;
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Phases;
+    use super::*;
+
+    /// Stretched profiles of segments of every kind (rest to rest, equal
+    /// and unequal boundary speeds, short and long ramps: with `a = 3` and
+    /// `j = 10` a speed change is short below `a^2 / j = 0.9`) cover their
+    /// distance in exactly the duration asked, ending at their end speed,
+    /// down to a cruise far below both boundary speeds. Each boundary
+    /// speed can stop within half the distance, as the planners' speeds
+    /// at keyframes can (the condition for a profile of every duration).
+    #[test]
+    fn the_stretching_search_meets_every_duration_and_distance() {
+        let acc = Acc::of(&crate::JointLimits::new(2.0, 3.0, Some(10.0)));
+        let segments = [
+            (1.3, 0.4, 0.2),
+            (0.05, 0.0, 0.0),
+            (2.5, 0.0, 0.0),
+            (0.8, 0.5, 0.5),
+            (3.0, 1.5, 0.1),
+            (1.0, 0.05, 1.2),
+            (4.0, 1.9, 1.8),
+        ];
+        let (mut below, mut long) = (false, false);
+        for (d, v0, v1) in segments {
+            let s = Segment1 { d, v0, v1 };
+            let f = s.fastest(&acc);
+            for k in [1.0, 1.001, 1.1, 1.5, 2.0, 4.0, 20.0] {
+                let t = f.duration * k;
+                let p = s.stretched(&acc, f, t);
+                assert!(p.vc > 0.0 && p.vc <= f.vc * (1.0 + 1e-12), "{d} {k}");
+                below |= p.vc < v0.min(v1);
+                long |= (p.vc - v0).abs() > 0.9 || (p.vc - v1).abs() > 0.9;
+                let mut ph = Phases::new();
+                s.phases(&acc, p, &mut ph);
+                let mut out = Vec::new();
+                let (te, x, v, a) = ph.emit(0.0, 0.0, v0, 0.0, 1.0, true, &mut out);
+                assert!((te - t).abs() < 1e-9 * t, "{d} {k}: {te} != {t}");
+                assert!((x - d).abs() < 1e-9 * d.max(1.0), "{d} {k}: {x}");
+                assert!((v - v1).abs() < 1e-9 && a.abs() < 1e-9, "{d} {k}");
+            }
+        }
+        assert!(below && long);
+    }
 }

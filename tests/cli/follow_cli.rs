@@ -24,15 +24,16 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     let report: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
     assert_eq!(report["finish"], "stopped", "{report}");
     let follow = &report["follow"];
-    // From a leader reading to the follower's goals on the wire: the median
-    // under 3 control periods (5 ms at the SO-101's 200 Hz). Both arms run
-    // on the wall clock here, so the tail and the error are only bounded
-    // loosely (a loaded machine delays the threads); the close following
-    // itself is checked in virtual time (crates/runtime/tests/runtime/live_follow.rs).
+    // From a leader reading to the follower's goals on the wire: the 99th
+    // percentile under 3 control periods (5 ms at the SO-101's 200 Hz), as
+    // issue 24 asks. Measured with a debug build: p99 3.0-5.5 ms, also
+    // with two CPU hogs on 2 cores (p50 2.9-4.7 ms). One latency of each
+    // run was 44-47 ms: the maximum is reported, not bounded.
     let period = common::num(follow, "period_ms");
     assert!((period - 5.0).abs() < 1e-9, "{follow}");
     let p50 = common::num(&follow["latency_ms"], "p50");
-    assert!(p50 < 3.0 * period, "{follow}");
+    let p99 = common::num(&follow["latency_ms"], "p99");
+    assert!(p50 <= p99 && p99 < 3.0 * period, "{follow}");
     let joints = follow["joints"].as_array().expect("joints");
     assert_eq!(joints.len(), 6);
     // Issue 24 asks for 2 deg. Each follower reading is compared with the

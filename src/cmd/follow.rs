@@ -265,7 +265,7 @@ fn drive<T: Transport, C: Clock>(
             .as_ref()
             .map(|_| PlotData::new(names.clone(), bus_of).with_frames(robot.geometry(), units)),
         take: Vec::new(),
-        errors: FollowErrors::new(names.len(), f64::INFINITY),
+        errors: FollowErrors::new(names.len()),
         commanded: vec![0.0; names.len()],
         cycles: 0,
         faults: Vec::new(),
@@ -278,7 +278,7 @@ fn drive<T: Transport, C: Clock>(
     // Counted from ERRORS_FROM on, on the clock both arms' readings are
     // stamped on.
     let from = super::link::system_clock().now().as_secs_f64() + ERRORS_FROM;
-    seen.errors = FollowErrors::new(names.len(), from);
+    seen.errors.count_from(from);
     let mut trail = LeaderTrail::new(names.len());
     let mut pose: Vec<Option<f64>> = vec![None; names.len()];
     let mut next = started;
@@ -329,8 +329,7 @@ fn drive<T: Transport, C: Clock>(
         take_message(&mut seen, m, args.record.is_some());
     }
     let report = runner.join()?;
-    let errors = seen.errors.figures().to_vec();
-    finish(args, robot, &report, seen, &errors)
+    finish(args, robot, &report, seen)
 }
 
 fn send(targets: &TargetSender, target: Target) -> anyhow::Result<()> {
@@ -375,13 +374,7 @@ fn live_line(
 }
 
 /// The outputs and the report; exit 0 once stopped, 1 after a fault.
-fn finish(
-    args: &Args,
-    robot: &Robot,
-    report: &Report,
-    seen: Seen,
-    errors: &[Figures],
-) -> anyhow::Result<ExitCode> {
+fn finish(args: &Args, robot: &Robot, report: &Report, seen: Seen) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = robot.units;
     if let Some(log) = seen.log {
@@ -405,7 +398,7 @@ fn finish(
     }
     let joints: Vec<serde_json::Value> = names
         .iter()
-        .zip(errors)
+        .zip(seen.errors.figures())
         .map(|(n, (sq, max, k))| {
             let rms = if *k > 0 { (sq / *k as f64).sqrt() } else { 0.0 };
             serde_json::json!({"name": n, "rms_error": rms, "max_error": max})

@@ -83,8 +83,13 @@ impl BusConfig {
     /// (the one figure `budget`, `play` and `bench` all print), or `None`
     /// when the bus cannot be planned at all.
     pub fn fastest_rate_hz(&self) -> Option<f64> {
+        self.fastest_rate_hz_on(&self.budget_link())
+    }
+
+    /// As [`fastest_rate_hz`](BusConfig::fastest_rate_hz), on `link`.
+    pub fn fastest_rate_hz_on(&self, link: &Link) -> Option<f64> {
         // The full cycle's cost does not depend on the rate.
-        self.plan(f64::MIN_POSITIVE)
+        self.plan_on(link, f64::MIN_POSITIVE)
             .ok()
             .map(|p| p.fastest_rate_hz())
     }
@@ -118,10 +123,7 @@ impl BusConfig {
             }),
             Err(source) => Err(RateError::Unplannable {
                 source,
-                fastest_hz: self
-                    .plan_on(link, f64::MIN_POSITIVE)
-                    .ok()
-                    .map(|p| p.fastest_rate_hz()),
+                fastest_hz: self.fastest_rate_hz_on(link),
             }),
         }
     }

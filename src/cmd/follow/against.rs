@@ -90,15 +90,21 @@ pub(super) struct FollowErrors {
 }
 
 impl FollowErrors {
-    /// Figures of `n` joints, counting the readings taken from `from` (s)
-    /// on.
-    pub fn new(n: usize, from: f64) -> Self {
+    /// Figures of `n` joints, counting nothing until
+    /// [`count_from`](Self::count_from) is told when to start.
+    pub fn new(n: usize) -> Self {
         FollowErrors {
             figures: vec![(0.0, 0.0, 0); n],
             last: vec![Duration::ZERO; n],
             pending: VecDeque::new(),
-            from,
+            from: f64::INFINITY,
         }
+    }
+
+    /// Counts the readings taken from `from` (s, on the clock the readings
+    /// are stamped on) on.
+    pub fn count_from(&mut self, from: f64) {
+        self.from = from;
     }
 
     /// Queues the new readings of a telemetry sample.

@@ -255,7 +255,7 @@ impl Tracker {
         for (i, j) in self.joints.iter_mut().enumerate() {
             let mut r = reference.get(j.robot_index).copied().unwrap_or_default();
             if j.fresh {
-                let dt = signed_secs(j.measured_at, reference_at);
+                let dt = j.measured_at.as_secs_f64() - reference_at.as_secs_f64();
                 r.position += r.velocity * dt;
             }
             j.planned = r.position;
@@ -333,14 +333,5 @@ fn judge(
         Some((kind, p.on_following_error))
     } else {
         None
-    }
-}
-
-/// `a - b` in seconds, negative when `a` is the earlier.
-fn signed_secs(a: Duration, b: Duration) -> f64 {
-    if a >= b {
-        (a - b).as_secs_f64()
-    } else {
-        -(b - a).as_secs_f64()
     }
 }

@@ -88,7 +88,16 @@ fn plan_says_when_a_joint_has_no_jerk_limit() {
 /// filtered run may not have).
 fn example(name: &str) -> PathBuf {
     let built = Command::new(env!("CARGO"))
-        .args(["build", "--offline", "--quiet", "--example", name])
+        // `--workspace`: the feature set of `cargo test --workspace`, which
+        // has built the examples already, so this is a no-op after it.
+        .args([
+            "build",
+            "--offline",
+            "--quiet",
+            "--workspace",
+            "--example",
+            name,
+        ])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
         .expect("cargo runs");

@@ -62,8 +62,14 @@ fn installed_binary_works_from_an_empty_directory() {
         "cargo install: {}",
         String::from_utf8_lossy(&install.stderr)
     );
+    // After `cargo test --workspace` nothing is compiled: the install has
+    // the test build's feature set (see `serde` in the workspace Cargo.toml).
+    let compiled = String::from_utf8_lossy(&install.stderr)
+        .lines()
+        .filter(|l| l.trim_start().starts_with("Compiling "))
+        .count();
     eprintln!(
-        "cargo install took {:.1} s",
+        "cargo install took {:.1} s and compiled {compiled} crates",
         started.elapsed().as_secs_f64()
     );
     let bin = root.join("bin").join("servobus");

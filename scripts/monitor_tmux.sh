@@ -50,12 +50,6 @@ done
 grep -q "^serving 6 servos" "$dir/sim.out" || { cat "$dir/sim.out"; echo "FAIL: sim did not start"; exit 1; }
 
 # A plain shell in a 160x30 terminal; note its settings before the monitor.
-tmux new-session -d -s "$session" -x 160 -y 30 "env PS1='prompt> ' bash --norc --noprofile"
-sleep 0.5
-tmux send-keys -t "$session" "stty -g > $dir/stty.before; echo before-monitor" Enter
-sleep 0.5
-tmux send-keys -t "$session" "$bin monitor --robot $robot --port $dir/bus" Enter
-
 # Waits until the screen shows $1 (a grep pattern), up to 30 s.
 wait_for() {
     for _ in $(seq 1 300); do
@@ -64,14 +58,21 @@ wait_for() {
     done
     return 1
 }
+tmux new-session -d -s "$session" -x 160 -y 30 "env PS1='prompt> ' bash --norc --noprofile"
+wait_for "^prompt>" || fail "the shell did not start"
+tmux send-keys -t "$session" "stty -g > $dir/stty.before; echo before-monitor" Enter
+wait_for "^before-monitor$" || fail "the shell did not run the first command"
+tmux send-keys -t "$session" "$bin monitor --robot $robot --port $dir/bus" Enter
+
 # The field $2 of servo $1's row on the screen $3.
 field() {
     echo "$3" | awk -v id="$1" -v f="$2" '$1 == id && $3 ~ /^STS/ { print $f; exit }'
 }
 
 wait_for "wrist_roll.*MISSING" || fail "servo 5 is not shown as missing"
-# Servo 5 has been silent for a while now; its row must stay marked.
-sleep 1
+# Servo 5 has been silent for a while now (five refreshes at least); its
+# row must stay marked.
+sleep 0.5
 screen1=$(tmux capture-pane -p -t "$session")
 echo "$screen1" | grep -q "^5 .*wrist_roll.*MISSING (no reply)" || fail "servo 5 is not shown as missing"
 echo "PASS: servo 5 shows as missing"
@@ -82,7 +83,8 @@ echo "PASS: the keys are on screen"
 echo "$screen1" | grep -Eq "read rate [0-9.]+ Hz   bus utilisation [0-9.]+ %" || fail "no bus summary"
 echo "PASS: the bus summary is on screen"
 
-sleep 2
+# Five refreshes at least (the monitor refreshes at 10 Hz or more).
+sleep 0.5
 screen2=$(tmux capture-pane -p -t "$session")
 for id in 1 2 3 4 6; do
     # replies: field 13 of a row whose status is one word (ok, OVERHEAT).
@@ -124,9 +126,9 @@ echo "PASS: a panic restores the terminal (main screen, cursor, stty settings) a
 tmux send-keys -t "$session" "clear; $bin play $root/configs/motions/arm-wave.yaml --monitor; echo play-exit=\$?" Enter
 wait_for "so101 (play)" || fail "play --monitor shows no view"
 wait_for "(telemetry)" || fail "play --monitor does not say its figures come from telemetry"
-sleep 1
+sleep 0.5
 p1=$(tmux capture-pane -p -t "$session")
-sleep 1
+sleep 0.5
 p2=$(tmux capture-pane -p -t "$session")
 a=""; b=""
 for id in 1 2 3 4 5 6; do a="$a $(field $id 4 "$p1")"; b="$b $(field $id 4 "$p2")"; done

@@ -8,10 +8,6 @@ use ratatui::widgets::{Cell, Paragraph, Row as TableRow, Table};
 
 use super::{Frame, Row};
 
-/// Reads in a row a servo must miss before it is shown as missing: one
-/// late reply (a busy host, a noisy line) is counted, not flagged.
-pub const MISSING_AFTER: u32 = 3;
-
 /// The keys and what they do, as shown at the bottom of the screen.
 pub const KEYS: &str = "q quit   Space torque OFF on every servo";
 
@@ -47,8 +43,7 @@ fn opt(v: Option<f64>, decimals: usize) -> String {
 }
 
 fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
-    let gone = r.missed_in_row >= MISSING_AFTER || r.position_ticks.is_none();
-    let (status, status_style) = if !r.present && gone {
+    let (status, status_style) = if r.is_missing() {
         let why = r.missing.as_deref().unwrap_or("no reply");
         (
             format!("MISSING ({why})"),
@@ -91,7 +86,7 @@ fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
         Cell::from(opt(r.p99_latency_us, 0)),
     ];
     // A missing servo keeps its last values, dimmed.
-    let style = if !gone {
+    let style = if !r.is_missing() {
         Style::default()
     } else {
         Style::default().add_modifier(Modifier::DIM)

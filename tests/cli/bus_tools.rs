@@ -34,9 +34,9 @@ fn scan_read_write_set_id_against_the_simulator() {
         servos.iter().filter_map(|s| s["id"].as_i64()).collect()
     };
     let scan = (0..2)
-        .map(|_| json(sim.ok(&["scan", "--json"])))
+        .map(|_| json(sim.scan(&["--json"])))
         .find(|scan| ids_of(scan).len() == 6)
-        .unwrap_or_else(|| json(sim.ok(&["scan", "--json"])));
+        .unwrap_or_else(|| json(sim.scan(&["--json"])));
     let servos = scan["servos"].as_array().expect("servos");
     assert_eq!(ids_of(&scan), [1, 2, 3, 4, 5, 6]);
     for s in servos {
@@ -50,9 +50,9 @@ fn scan_read_write_set_id_against_the_simulator() {
     assert_eq!(scan["collisions"].as_array().map(Vec::len), Some(0));
     // The table form names the columns.
     let table = (0..2)
-        .map(|_| sim.ok(&["scan"]))
+        .map(|_| sim.scan(&[]))
         .find(|t| t.contains("found 6 servo(s)"))
-        .unwrap_or_else(|| sim.ok(&["scan"]));
+        .unwrap_or_else(|| sim.scan(&[]));
     assert!(
         table.contains("POSITION") && table.contains("found 6 servo(s)"),
         "{table}"

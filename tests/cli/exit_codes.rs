@@ -208,7 +208,14 @@ fn monitor_json_exits_1_after_seeing_a_missing_or_flagged_servo() {
     assert_eq!(row["flags"], serde_json::json!(["overheat"]), "{row}");
     assert_eq!(code, 1, "an overheated servo is a problem found");
 
+    // Every servo fine. On a loaded machine the last read may have come
+    // late for one servo (`present` false for that read): one late reply
+    // is counted, and is not a missing servo.
     let (code, row) = monitor_json("seed=1", 2);
-    assert_eq!(row["present"], true, "{row}");
-    assert_eq!(code, 0, "every servo fine");
+    assert!(row["replies"].as_u64().is_some_and(|n| n >= 1), "{row}");
+    assert!(
+        row["missed_in_row"].as_u64().is_some_and(|n| n <= 1),
+        "{row}"
+    );
+    assert_eq!(code, 0, "every servo fine: {row}");
 }

@@ -4,6 +4,33 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+/// At least four tests at a time, unless `--test-threads` or
+/// `RUST_TEST_THREADS` says how many.
+///
+/// These tests mostly wait: on `servobus` processes that play in real time,
+/// on pseudo-terminals, on a simulator's hand. At libtest's default of one
+/// test per core, a two-core machine sits about 80 % idle through them
+/// (18 s of CPU in a 66 s run); four at a time take 37 s. The few that load
+/// the machine take turns among themselves (`play_realtime`'s lock), and
+/// every wall-clock bound is set for a loaded machine.
+///
+/// libtest reads `RUST_TEST_THREADS` when it starts running tests, so the
+/// variable is set before `main`, from the ELF initialisers (Linux only;
+/// elsewhere the default holds).
+#[cfg(target_os = "linux")]
+#[used]
+#[link_section = ".init_array"]
+static AT_LEAST_FOUR_AT_A_TIME: extern "C" fn() = at_least_four_at_a_time;
+
+#[cfg(target_os = "linux")]
+extern "C" fn at_least_four_at_a_time() {
+    if std::env::var_os("RUST_TEST_THREADS").is_none() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        // Before `main`: no other thread exists yet to read the environment.
+        std::env::set_var("RUST_TEST_THREADS", cores.max(4).to_string());
+    }
+}
+
 mod bad_inputs;
 mod bench_cli;
 mod budget_cli;

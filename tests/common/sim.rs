@@ -174,6 +174,17 @@ impl Sim {
         stdout(&super::succeeded(self.run(args), args))
     }
 
+    /// `servobus scan ARGS --port PORT --latency-us 3000`, which must
+    /// succeed: the pty's own allowance rather than [`Sim::run`]'s 10 ms,
+    /// because a scan waits out the deadline of each absent ID (248 of them)
+    /// (1 s instead of 2.7 s). A loaded machine may hide a servo from one
+    /// pass: the caller scans again then.
+    pub fn scan(&self, args: &[&str]) -> String {
+        let args = [&["scan"][..], args].concat();
+        let out = self.on_port(&args, &["--latency-us", "3000"]);
+        stdout(&super::succeeded(out, &args))
+    }
+
     /// Register `register` of servo `id`, as `servobus read --json` gets it.
     pub fn read(&self, id: &str, register: &str) -> i64 {
         let out = self.ok(&["read", "--id", id, register, "--json"]);

@@ -292,14 +292,17 @@ fn examine_inner<T: Transport, C: Clock>(
 
 /// Whether anything answers as `id`: a READ of the model number first,
 /// because a PING's reply with status 0x01 (the voltage flag) is byte for
-/// byte the PING itself and is skipped as an echo; then a PING, which an SCS
-/// servo at status level 0 answers alone. Garbled replies count: two
-/// servos may share the ID.
+/// byte the PING itself and is skipped as an echo; then, on an SCS bus, a
+/// PING, which an SCS servo at status level 0 answers alone. An STS/SMS
+/// servo answers READ at every status level, so on its bus one silent READ
+/// settles it: an absent ID costs one deadline, not two (the whole scan
+/// takes half as long). Garbled replies count: two servos may share the ID.
 fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, BusError> {
     let mut number = [0u8; 2];
     let read = bus.read(id, addr::MODEL_NUMBER, &mut number);
+    let ping_only_possible = bus.settings().series == Series::Scs;
     let result = match read {
-        Err(e) if e.is_timeout() => bus.ping(id).map(|_| ()),
+        Err(e) if e.is_timeout() && ping_only_possible => bus.ping(id).map(|_| ()),
         other => other.map(|_| ()),
     };
     match result {

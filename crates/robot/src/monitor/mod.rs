@@ -90,7 +90,20 @@ pub struct Row {
     pub p99_latency_us: Option<f64>,
 }
 
+/// Reads in a row a servo must miss before it counts as missing: one late
+/// reply (a busy host, a noisy line) is counted, not flagged. A servo that
+/// has never answered is missing at once (the first read already asked it
+/// patiently, several times).
+pub const MISSING_AFTER: u32 = 3;
+
 impl Row {
+    /// Whether the servo counts as missing: it did not answer the last
+    /// read, and either has never answered or has now missed
+    /// [`MISSING_AFTER`] reads in a row.
+    pub fn is_missing(&self) -> bool {
+        !self.present && (self.missed_in_row >= MISSING_AFTER || self.position_ticks.is_none())
+    }
+
     fn empty(id: u8, joint: Option<String>, model: String) -> Row {
         Row {
             id,
@@ -136,12 +149,13 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// Whether a servo is missing or reports a status flag (overheat,
-    /// overload, ...): a problem found, for the exit code.
+    /// Whether a servo is missing ([`Row::is_missing`]: one late reply is
+    /// not) or reports a status flag (overheat, overload, ...): a problem
+    /// found, for the exit code.
     pub fn has_problem(&self) -> bool {
         self.servos
             .iter()
-            .any(|r| !r.present || !r.flags.is_empty())
+            .any(|r| r.is_missing() || !r.flags.is_empty())
     }
 }
 
@@ -407,4 +421,49 @@ pub fn torque_off<T: Transport, C: Clock>(bus: &mut Bus<T, C>, ids: &[u8]) -> Re
 fn p99(samples: &VecDeque<f64>) -> Option<f64> {
     let mut v: Vec<f64> = samples.iter().copied().collect();
     servobus_runtime::stats::p99(&mut v, f64::total_cmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A servo that has answered before and now misses reads in a row.
+    fn missed(reads: u32) -> Row {
+        let mut r = Row::empty(2, Some("shoulder_lift".into()), "STS3215".into());
+        r.position_ticks = Some(2048);
+        r.replies = 10;
+        r.present = reads == 0;
+        r.missed_in_row = reads;
+        r
+    }
+
+    fn frame(row: Row) -> Frame {
+        Frame {
+            time_s: 1.0,
+            source: "bus",
+            read_rate_hz: 20.0,
+            utilisation: 0.1,
+            servos: vec![row],
+            note: None,
+        }
+    }
+
+    #[test]
+    fn one_late_reply_is_counted_not_a_missing_servo() {
+        assert!(!missed(0).is_missing());
+        for late in 1..MISSING_AFTER {
+            assert!(!missed(late).is_missing(), "{late}");
+            assert!(!frame(missed(late)).has_problem(), "{late}");
+        }
+        assert!(missed(MISSING_AFTER).is_missing());
+        assert!(frame(missed(MISSING_AFTER)).has_problem());
+    }
+
+    #[test]
+    fn a_servo_that_never_answered_is_missing_at_once() {
+        let mut never = Row::empty(5, None, "STS3215".into());
+        never.missed_in_row = 1;
+        assert!(never.is_missing());
+        assert!(frame(never).has_problem());
+    }
 }

@@ -5,7 +5,6 @@
 use std::path::Path;
 
 use anyhow::Context;
-use image::ImageEncoder;
 
 use servobus_kinematics::Geometry;
 use servobus_runtime::config::Units;
@@ -185,12 +184,14 @@ impl PlotData {
             let root = plotters::prelude::BitMapBackend::with_buffer(&mut rgb, (width, height));
             self.draw_on(root, title, units, rows, cols)?;
             let mut bytes = Vec::new();
-            image::codecs::png::PngEncoder::new(&mut bytes).write_image(
-                &rgb,
-                width,
-                height,
-                image::ColorType::Rgb8,
-            )?;
+            let mut encoder = png::Encoder::new(&mut bytes, width, height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            // A filter chosen per row: half the size of one filter for all.
+            encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+            let mut writer = encoder.write_header()?;
+            writer.write_image_data(&rgb)?;
+            writer.finish()?;
             Ok(bytes)
         } else {
             let mut svg = String::new();

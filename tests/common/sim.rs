@@ -176,8 +176,8 @@ impl Sim {
 
     /// `servobus scan ARGS --port PORT --latency-us 3000`, which must
     /// succeed: the pty's own allowance rather than [`Sim::run`]'s 10 ms,
-    /// because a scan waits out the deadline of each absent ID (248 of them)
-    /// (1 s instead of 2.7 s). A loaded machine may hide a servo from one
+    /// because a scan waits out the deadline of each of the 248 absent IDs:
+    /// 1 s instead of 2.7 s. A loaded machine may hide a servo from one
     /// pass: the caller scans again then.
     pub fn scan(&self, args: &[&str]) -> String {
         let args = [&["scan"][..], args].concat();

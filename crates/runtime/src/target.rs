@@ -2,7 +2,11 @@
 //! policy, a leader arm, another program), which the loop follows with a
 //! jerk-limited step every cycle (see [`crate::live`]).
 //!
-//! A [`TargetSender`] checks each [`Target`] before it reaches the loop:
+//! A [`Chunk`] is a policy's timed sequence of positions (an action
+//! chunk): the loop follows it as a timed path through its points, and a
+//! new chunk replaces what is left of the last one.
+//!
+//! A [`TargetSender`] checks each [`Target`] and [`Chunk`] before it reaches the loop:
 //! a value that is not finite, an unknown joint or the wrong number of
 //! joints is refused ([`TargetError`], counted); a position outside its
 //! joint's limits is clamped (counted). Targets travel on a bounded
@@ -76,6 +80,88 @@ impl Target {
     }
 }
 
+/// The most points a [`Chunk`] may hold (a policy's chunks hold 16 to
+/// 100): the loop keeps room for this many per joint from the start, so
+/// that following a chunk allocates nothing.
+pub const MAX_CHUNK_POINTS: usize = 1000;
+
+/// When a chunk's points are due.
+#[derive(Debug, Clone, PartialEq)]
+enum Times {
+    /// Every `dt` s, the first at `t0` (the arrival when absent).
+    Every { t0: Option<f64>, dt: f64 },
+    /// At these stamps (increasing).
+    At(Vec<f64>),
+}
+
+/// A timed sequence of joint positions (an action chunk of a policy such
+/// as ACT, diffusion or pi0), in radians: the loop follows it as a timed
+/// path through its points, within the joints' limits. A new chunk
+/// replaces what is left of the current one from the commanded state, and
+/// its points already past are skipped. Stamps are on the sender's clock,
+/// as a [`Target`]'s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Chunk {
+    times: Times,
+    joints: ChunkJoints,
+    taken: Option<Instant>,
+}
+
+/// The joints of a chunk: per joint, one position per point.
+#[derive(Debug, Clone, PartialEq)]
+enum ChunkJoints {
+    All(Vec<Vec<f64>>),
+    Named(Vec<(String, Vec<f64>)>),
+}
+
+impl Chunk {
+    /// Points `dt` s apart, the first at stamp `t0` (on arrival when
+    /// `None`), for the joints named (the others keep their targets).
+    pub fn named(t0: Option<f64>, dt: f64, joints: Vec<(String, Vec<f64>)>) -> Self {
+        Chunk {
+            times: Times::Every { t0, dt },
+            joints: ChunkJoints::Named(joints),
+            taken: None,
+        }
+    }
+
+    /// Points at the given stamps (increasing), for the joints named.
+    pub fn timed(times: Vec<f64>, joints: Vec<(String, Vec<f64>)>) -> Self {
+        Chunk {
+            times: Times::At(times),
+            joints: ChunkJoints::Named(joints),
+            taken: None,
+        }
+    }
+
+    /// Points `dt` s apart from `t0` for every joint, in the robot's joint
+    /// order (`positions[joint][point]`).
+    pub fn all(t0: Option<f64>, dt: f64, positions: Vec<Vec<f64>>) -> Self {
+        Chunk {
+            times: Times::Every { t0, dt },
+            joints: ChunkJoints::All(positions),
+            taken: None,
+        }
+    }
+
+    /// The moment the chunk's observation was taken (see
+    /// [`Target::taken_at`]).
+    pub fn taken_at(mut self, taken: Instant) -> Self {
+        self.taken = Some(taken);
+        self
+    }
+}
+
+/// A chunk as checked: its points' stamps (sender's clock; relative to
+/// the arrival when `relative`), and per joint of the robot its positions
+/// (rad, within the limits) when given.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ChunkPoints {
+    pub times: Vec<f64>,
+    pub relative: bool,
+    pub joints: Vec<Option<Vec<f64>>>,
+}
+
 /// Why a target was refused. The loop keeps its previous target.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -97,6 +183,23 @@ pub enum TargetError {
         /// The values given.
         actual: usize,
     },
+    /// A chunk's times are not usable: `dt` not a positive finite number,
+    /// stamps not finite or not increasing.
+    #[error("the chunk's times: {0}")]
+    ChunkTimes(String),
+    /// A chunk's joints do not all have one position per point.
+    #[error("joint `{joint}`: {actual} positions for the chunk's {expected} points")]
+    ChunkLength {
+        /// The joint.
+        joint: String,
+        /// The chunk's points.
+        expected: usize,
+        /// The positions given for the joint.
+        actual: usize,
+    },
+    /// A chunk with no point, or more than [`MAX_CHUNK_POINTS`].
+    #[error("a chunk of {0} points: a chunk holds 1 to {MAX_CHUNK_POINTS}")]
+    ChunkSize(usize),
     /// The run has ended.
     #[error("the run has ended")]
     Ended,
@@ -109,6 +212,8 @@ pub(crate) struct Checked {
     pub stamp: f64,
     pub joints: Vec<Option<(f64, Option<f64>)>>,
     pub taken: Option<Instant>,
+    /// A chunk's points (`joints` all `None` then).
+    pub chunk: Option<ChunkPoints>,
 }
 
 /// The longest target latency the report's histogram holds.
@@ -263,6 +368,129 @@ impl TargetSender {
         Ok(clamped)
     }
 
+    /// Checks `chunk` and sends it, as [`TargetSender::send`] does a
+    /// target. Returns how many positions were clamped to their limits.
+    ///
+    /// # Errors
+    ///
+    /// [`TargetError`] when the chunk is refused (counted) or the run has
+    /// ended.
+    pub fn send_chunk(&self, chunk: Chunk) -> Result<usize, TargetError> {
+        self.counters.received.fetch_add(1, Ordering::Relaxed);
+        let checked = self.check_chunk(chunk).inspect_err(|_| {
+            self.counters.refused.fetch_add(1, Ordering::Relaxed);
+        });
+        let (checked, clamped) = checked?;
+        if clamped > 0 {
+            self.counters.clamped.fetch_add(1, Ordering::Relaxed);
+        }
+        self.tx
+            .send(Arc::new(checked))
+            .map_err(|_| TargetError::Ended)?;
+        Ok(clamped)
+    }
+
+    fn check_chunk(&self, chunk: Chunk) -> Result<(Checked, usize), TargetError> {
+        let n = self.names.len();
+        let given: Vec<(usize, Vec<f64>)> = match chunk.joints {
+            ChunkJoints::All(p) if p.len() != n => {
+                return Err(TargetError::WrongLength {
+                    expected: n,
+                    actual: p.len(),
+                })
+            }
+            ChunkJoints::All(p) => p.into_iter().enumerate().collect(),
+            ChunkJoints::Named(named) => named
+                .into_iter()
+                .map(
+                    |(name, q)| match self.names.iter().position(|x| *x == name) {
+                        Some(i) => Ok((i, q)),
+                        None => Err(TargetError::UnknownJoint(name)),
+                    },
+                )
+                .collect::<Result<_, _>>()?,
+        };
+        let points = given.first().map_or(0, |(_, q)| q.len());
+        if points == 0 || points > MAX_CHUNK_POINTS {
+            return Err(TargetError::ChunkSize(points));
+        }
+        let (times, relative, stamp) = match chunk.times {
+            Times::Every { t0, dt } => {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return Err(TargetError::ChunkTimes(format!(
+                        "dt {dt} is not a positive number of seconds"
+                    )));
+                }
+                if t0.is_some_and(|t| !t.is_finite()) {
+                    return Err(TargetError::NotFinite {
+                        joint: "t0".into(),
+                    });
+                }
+                let base = t0.unwrap_or(0.0);
+                let times: Vec<f64> = (0..points).map(|k| base + k as f64 * dt).collect();
+                (times, t0.is_none(), base)
+            }
+            Times::At(times) => {
+                if times.len() != points {
+                    return Err(TargetError::ChunkTimes(format!(
+                        "{} times for {points} points",
+                        times.len()
+                    )));
+                }
+                if times.iter().any(|t| !t.is_finite())
+                    || times.windows(2).any(|w| w[1] <= w[0])
+                {
+                    return Err(TargetError::ChunkTimes(
+                        "the stamps must be finite and increasing".into(),
+                    ));
+                }
+                let first = times[0];
+                (times, false, first)
+            }
+        };
+        let mut joints = vec![None; n];
+        let mut clamped = 0;
+        for (i, q) in given {
+            if q.len() != points {
+                return Err(TargetError::ChunkLength {
+                    joint: self.names[i].clone(),
+                    expected: points,
+                    actual: q.len(),
+                });
+            }
+            if q.iter().any(|q| !q.is_finite()) {
+                return Err(TargetError::NotFinite {
+                    joint: self.names[i].clone(),
+                });
+            }
+            let l = &self.limits[i];
+            let q: Vec<f64> = q
+                .into_iter()
+                .map(|q| {
+                    let c = q.clamp(l.min_position, l.max_position);
+                    if c != q {
+                        clamped += 1;
+                    }
+                    c
+                })
+                .collect();
+            joints[i] = Some(q);
+        }
+        Ok((
+            Checked {
+                stamp,
+                joints: vec![None; n],
+                taken: chunk.taken,
+                chunk: Some(ChunkPoints {
+                    times,
+                    relative,
+                    joints,
+                }),
+            },
+            clamped,
+        ))
+    }
+
     fn check(&self, target: Target) -> Result<(Checked, usize), TargetError> {
         let n = self.names.len();
         if !target.stamp.is_finite() {
@@ -317,6 +545,7 @@ impl TargetSender {
                 stamp: target.stamp,
                 joints,
                 taken: target.taken,
+                chunk: None,
             },
             clamped,
         ))

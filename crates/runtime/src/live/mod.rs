@@ -1,0 +1,382 @@
+//! The commanded path of a run that follows live targets: every cycle each
+//! joint takes a jerk-limited step ([`servobus_trajectory::Follower`])
+//! toward its reference ([`reference`]).
+//!
+//! - The reference goes through the targets received, in straight pieces,
+//!   each target reached one target interval after it was taken (the
+//!   second longest of the last few intervals: a stream's jitter and one
+//!   late target do not stop it between targets). The follower is given
+//!   the reference's position and speed, so that it moves with the stream
+//!   rather than stopping at every target. Nothing is extrapolated past the
+//!   newest target: a stream that turns back is followed back, and the
+//!   commanded path leaves the envelope of the last 0.5 s of targets only
+//!   by the stopping distance its limits make unavoidable ([`envelope`],
+//!   measured and reported). A first target is a step: a time-optimal
+//!   move to it.
+//! - A chunk (a policy's timed points) replaces what is ahead of the
+//!   reference from where it is: its points are reached at their own
+//!   times, those already past skipped. A single target after a chunk
+//!   replaces what is left of it.
+//! - The stamps are put on the run's clock by the smallest delay seen
+//!   between a stamp and its arrival (relaxed by 1 ms per target, so that
+//!   a drifting sender clock is followed).
+//! - No target for the timeout: every joint comes to a jerk-limited stop
+//!   (where the quickest stop from its state ends) and holds. The next
+//!   target resumes the following from there.
+//! - Paused: the same stop and hold; targets are kept and followed on
+//!   resume.
+//!
+//! Stepping allocates nothing: the references keep room for a chunk of
+//! [`MAX_CHUNK_POINTS`] from the start.
+
+use servobus_trajectory::{stop_position, Follower, Goal, JointLimits, JointState};
+
+use crate::target::{Checked, MAX_CHUNK_POINTS};
+
+mod envelope;
+mod reference;
+
+pub use envelope::EnvelopeReport;
+use envelope::Envelope;
+use reference::Reference;
+
+/// Recent commanded states kept for the reference (the commanded path at
+/// the time of a reading, which lags the horizon by the lead).
+const HISTORY: usize = 64;
+
+/// What the following of live targets did ([`Telemetry::Live`](crate::Telemetry::Live)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum LiveEvent {
+    /// No target for the timeout: stopping.
+    TimedOut,
+    /// Targets came back after a timeout.
+    Resumed,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Following,
+    /// Stopped for lack of targets.
+    TimedOut,
+    Paused,
+}
+
+/// See the module documentation.
+#[derive(Debug, Clone)]
+pub(crate) struct LivePath {
+    limits: Vec<JointLimits>,
+    followers: Vec<Follower>,
+    references: Vec<Reference>,
+    envelopes: Vec<Envelope>,
+    /// Goals while stopped (timeout or pause).
+    stops: Vec<f64>,
+    mode: Mode,
+    /// Whether any target has come.
+    any: bool,
+    /// Time of the latest commanded state.
+    last: f64,
+    /// The run's time of the latest target's arrival.
+    arrived: f64,
+    /// The time of the cycle being run ([`LivePath::begin_cycle`]).
+    now: f64,
+    /// How far ahead of the cycle's time the commanded path is sampled
+    /// (the run's lead), s: targets are reached that much later on the
+    /// path's time, so that the path is never sampled past the newest
+    /// target.
+    lead: f64,
+    timeout: f64,
+    /// Run time minus sender stamp, smallest seen (relaxed).
+    offset: Option<f64>,
+    /// Ring of `(time, states)` of recent commanded states.
+    times: Vec<f64>,
+    states: Vec<JointState>,
+    head: usize,
+    event: Option<LiveEvent>,
+}
+
+impl LivePath {
+    /// Following from `from` (commanded state at time `x`), holding it
+    /// until a target comes; `timeout` s without targets stops.
+    pub fn new(limits: Vec<JointLimits>, from: &[JointState], x: f64, timeout: f64) -> Self {
+        let n = limits.len();
+        let mut states = vec![JointState::default(); HISTORY * n];
+        states[..n].copy_from_slice(from);
+        let mut times = vec![f64::NEG_INFINITY; HISTORY];
+        times[0] = x;
+        let mut live = LivePath {
+            followers: from.iter().map(|s| Follower::new(*s)).collect(),
+            references: from
+                .iter()
+                .map(|s| Reference::new(x, s.position, MAX_CHUNK_POINTS + 1))
+                .collect(),
+            envelopes: from.iter().map(|s| Envelope::new(*s)).collect(),
+            stops: vec![0.0; n],
+            limits,
+            mode: Mode::TimedOut,
+            any: false,
+            last: x,
+            arrived: x,
+            now: x,
+            lead: 0.0,
+            timeout,
+            offset: None,
+            times,
+            states,
+            head: 0,
+            event: None,
+        };
+        // Until the first target: stop (when switched from a moving path)
+        // and hold.
+        live.set_stops();
+        live
+    }
+
+    /// Takes in a target (or a chunk) that arrived at run time `now`.
+    pub fn target(&mut self, t: &Checked, now: f64) {
+        let relative = t.chunk.as_ref().is_some_and(|c| c.relative);
+        let at = if relative {
+            now
+        } else {
+            let off = now - t.stamp;
+            let offset = match self.offset {
+                Some(o) => (o + 0.001).min(off),
+                None => off,
+            };
+            self.offset = Some(offset);
+            t.stamp + offset
+        } + self.lead;
+        // From a stop or a pause, the reference starts where the joint is
+        // heading.
+        if self.mode != Mode::Following {
+            for (r, s) in self.references.iter_mut().zip(&self.stops) {
+                r.restart(self.last, *s);
+            }
+        }
+        let x = self.last;
+        if let Some(chunk) = &t.chunk {
+            let shift = at - t.stamp;
+            for ((r, e), q) in self
+                .references
+                .iter_mut()
+                .zip(self.envelopes.iter_mut())
+                .zip(&chunk.joints)
+            {
+                let Some(q) = q else { continue };
+                let (lo, hi) = q
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &p| {
+                        (a.min(p), b.max(p))
+                    });
+                e.arrived(now, lo, hi);
+                let times = chunk.times.iter().map(|s| s + shift);
+                r.chunk(times.zip(q.iter().copied()), x);
+            }
+        } else {
+            for ((r, e), new) in self
+                .references
+                .iter_mut()
+                .zip(self.envelopes.iter_mut())
+                .zip(&t.joints)
+            {
+                let Some((q, _)) = *new else { continue };
+                e.arrived(now, q, q);
+                r.target(t.stamp, at, q, x);
+            }
+        }
+        self.arrived = now;
+        if self.mode == Mode::TimedOut {
+            self.mode = Mode::Following;
+            if self.any {
+                self.event = Some(LiveEvent::Resumed);
+            }
+        }
+        self.any = true;
+    }
+
+    /// Pauses (stop and hold) or resumes the following.
+    pub fn pause(&mut self, paused: bool) {
+        if paused && self.mode != Mode::Paused {
+            self.set_stops();
+            self.mode = Mode::Paused;
+        } else if !paused && self.mode == Mode::Paused {
+            self.mode = Mode::Following;
+        }
+    }
+
+    fn set_stops(&mut self) {
+        for ((s, f), lim) in self.stops.iter_mut().zip(&self.followers).zip(&self.limits) {
+            *s = stop_position(lim, &f.state());
+        }
+    }
+
+    /// The event of the last step, once.
+    pub fn take_event(&mut self) -> Option<LiveEvent> {
+        self.event.take()
+    }
+
+    /// How each joint's commanded path kept to the envelope of its targets.
+    pub fn envelopes(&self) -> impl Iterator<Item = EnvelopeReport> + '_ {
+        self.envelopes.iter().map(Envelope::report)
+    }
+
+    /// The goal of joint `j` at time `x`.
+    fn goal(&mut self, j: usize, x: f64) -> Goal {
+        if self.mode != Mode::Following {
+            return Goal::at(self.stops[j]);
+        }
+        self.references[j].goal(x)
+    }
+
+    /// Begins the cycle of time `now`: the timeout is judged by it.
+    pub fn begin_cycle(&mut self, now: f64) {
+        self.now = now;
+    }
+
+    /// The commanded state at `x` (advancing every joint to it; stopping
+    /// first when no target came for the timeout before the cycle's time).
+    pub fn sample_cmd(&mut self, x: f64, out: &mut [JointState]) {
+        self.lead = (x - self.now).max(0.0);
+        if self.mode == Mode::Following && self.now - self.arrived > self.timeout {
+            self.set_stops();
+            self.mode = Mode::TimedOut;
+            self.event = Some(LiveEvent::TimedOut);
+            for r in &mut self.references {
+                r.hold(self.last);
+            }
+        }
+        let dt = x - self.last;
+        if dt > 0.0 {
+            // The goal at the start of the step: the follower plans from
+            // there.
+            for j in 0..self.followers.len() {
+                let g = self.goal(j, self.last);
+                let s = self.followers[j].step(&self.limits[j], g, dt);
+                self.envelopes[j].commanded(&self.limits[j], x, s);
+            }
+            self.last = x;
+            let n = self.followers.len();
+            self.head = (self.head + 1) % HISTORY;
+            self.times[self.head] = x;
+            for (s, f) in self.states[self.head * n..(self.head + 1) * n]
+                .iter_mut()
+                .zip(&self.followers)
+            {
+                *s = f.state();
+            }
+        }
+        for (o, f) in out.iter_mut().zip(&self.followers) {
+            *o = f.state();
+        }
+    }
+
+    /// The commanded path at an earlier time `x` (from the states kept,
+    /// extrapolated from the latest one at or before `x`).
+    pub fn sample_ref(&self, x: f64, out: &mut [JointState]) {
+        let n = self.followers.len();
+        let mut best = self.head;
+        for k in 0..HISTORY {
+            let i = (self.head + HISTORY - k) % HISTORY;
+            if self.times[i] == f64::NEG_INFINITY {
+                break;
+            }
+            best = i;
+            if self.times[i] <= x {
+                break;
+            }
+        }
+        let dt = (x - self.times[best]).max(0.0);
+        for (o, s) in out.iter_mut().zip(&self.states[best * n..(best + 1) * n]) {
+            *o = JointState {
+                position: s.position + dt * (s.velocity + 0.5 * dt * s.acceleration),
+                velocity: s.velocity + dt * s.acceleration,
+                acceleration: s.acceleration,
+            };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A target putting joint 0 at `q` rad, stamped `stamp` s.
+    fn at(stamp: f64, q: f64) -> Checked {
+        Checked {
+            stamp,
+            joints: vec![Some((q, None))],
+            taken: None,
+            chunk: None,
+        }
+    }
+
+    /// Follows a target moving at 0.3 rad/s, sent every `every` cycles up
+    /// to cycle `until`, at 1 kHz for `cycles` cycles, the path sampled
+    /// `lead` s ahead of each cycle; `seen` gets each cycle's number, time
+    /// and commanded state. Returns the last target.
+    fn follow_stream(
+        every: u32,
+        until: u32,
+        cycles: u32,
+        lead: f64,
+        mut seen: impl FnMut(u32, f64, JointState),
+    ) -> f64 {
+        // Limits far above the target's motion, so that the joint keeps up
+        // with it and rests where its goal does.
+        let lim = JointLimits::new(10.0, 100.0, Some(10_000.0));
+        let mut live = LivePath::new(vec![lim], &[JointState::at_rest(0.0)], 0.0, 1.0);
+        let mut out = [JointState::default()];
+        let mut last = f64::NAN;
+        for k in 1..=cycles {
+            let now = f64::from(k) * 0.001;
+            live.begin_cycle(now);
+            if k % every == 0 && k <= until {
+                last = 0.3 * now;
+                live.target(&at(now, last), now);
+            }
+            live.sample_cmd(now + lead, &mut out);
+            seen(k, now, out[0]);
+        }
+        last
+    }
+
+    #[test]
+    fn a_moving_target_is_followed_and_never_passed_once_it_stops() {
+        // A target every 40 ms (25 Hz) until 0.48 s, followed until 0.9 s
+        // (before the 1 s timeout).
+        let mut rest = JointState::default();
+        let mut highest = f64::NEG_INFINITY;
+        let last = follow_stream(40, 480, 900, 0.0, |_, _, s| {
+            rest = s;
+            highest = highest.max(s.position);
+        });
+        assert_eq!((rest.velocity, rest.acceleration), (0.0, 0.0), "{rest:?}");
+        assert!((rest.position - last).abs() < 1e-9, "{rest:?} {last}");
+        // Beyond the last target by the quickest stop from 0.3 rad/s at
+        // most, v sqrt(v / j) = 0.3 * sqrt(0.3 / 10000) = 1.64 mrad (by
+        // hand), when the stream ends as the joint moves at its speed.
+        assert!(highest - last <= 0.00165, "{}", highest - last);
+    }
+
+    #[test]
+    fn a_lead_does_not_stop_the_joint_between_targets() {
+        // A 50 Hz stream and a 14 ms lead, as a leader arm drives a
+        // follower.
+        let lead = 0.014;
+        let mut slowest = f64::INFINITY;
+        let mut farthest: f64 = 0.0;
+        follow_stream(20, 600, 600, lead, |k, now, s| {
+            if k > 200 {
+                slowest = slowest.min(s.velocity);
+                // One interval (20 ms) behind the stream: the lead does
+                // not take the path past the newest target.
+                farthest = farthest.max((s.position - 0.3 * (now - 0.020)).abs());
+            }
+        });
+        // The joint keeps the stream's speed between targets (a stop and
+        // go would fall to 0).
+        assert!(slowest > 0.29, "{slowest}");
+        assert!(farthest < 1e-4, "{farthest}");
+    }
+}

@@ -1,0 +1,235 @@
+//! One joint's reference while following live targets: a piecewise-linear
+//! path through the targets received, each reached one target interval
+//! after it was taken, and through a chunk's points at their own times.
+//!
+//! The reference never leaves the range of the points it passes through
+//! (a linear piece lies between its two ends), so it stays inside the
+//! envelope of the targets received: nothing is extrapolated past the
+//! newest target. Once the last point is reached it holds there.
+
+use std::collections::VecDeque;
+
+use servobus_trajectory::Goal;
+
+/// Stamp differences outside this range are no target interval, s.
+pub(super) const INTERVAL: (f64, f64) = (0.001, 0.5);
+
+/// How many recent target intervals the delay is taken from.
+const INTERVALS: usize = 5;
+
+/// The piecewise-linear reference of one joint (see the module docs).
+#[derive(Debug, Clone)]
+pub(super) struct Reference {
+    /// Where the current piece starts: (time, position).
+    from: (f64, f64),
+    /// The points ahead, (time, position), times increasing, after
+    /// `from`.
+    ahead: VecDeque<(f64, f64)>,
+    /// Whether `ahead` holds a chunk's points (a single target replaces
+    /// them).
+    chunk: bool,
+    /// The sender's stamp of the last single target.
+    stamp: Option<f64>,
+    /// The last target intervals, s (0: none).
+    recent: [f64; INTERVALS],
+}
+
+impl Reference {
+    /// Holding `position` from time `x`, with room for `capacity` points.
+    pub fn new(x: f64, position: f64, capacity: usize) -> Self {
+        Reference {
+            from: (x, position),
+            ahead: VecDeque::with_capacity(capacity),
+            chunk: false,
+            stamp: None,
+            recent: [0.0; INTERVALS],
+        }
+    }
+
+    /// The delay after its stamp at which a single target is reached: the
+    /// target interval, as the second longest of the last few (jitter
+    /// makes some shorter than the stream's, one long gap does not count);
+    /// 0 before any interval is known (a first target is a step).
+    pub fn delay(&self) -> f64 {
+        let mut longest = 0.0f64;
+        let mut second = 0.0f64;
+        for &d in &self.recent {
+            if d > longest {
+                second = longest;
+                longest = d;
+            } else if d > second {
+                second = d;
+            }
+        }
+        if second > 0.0 {
+            second
+        } else {
+            longest
+        }
+    }
+
+    /// The position of the reference at `x` (not before the last time
+    /// it was advanced to).
+    fn position_at(&self, x: f64) -> f64 {
+        match self.ahead.front() {
+            Some(&(t1, p1)) => {
+                let (t0, p0) = self.from;
+                if t1 > t0 {
+                    p0 + (p1 - p0) * ((x - t0) / (t1 - t0)).clamp(0.0, 1.0)
+                } else {
+                    p1
+                }
+            }
+            None => self.from.1,
+        }
+    }
+
+    /// Starts a new piece at `x` from where the reference is then, with
+    /// nothing ahead.
+    fn rebase(&mut self, x: f64) {
+        self.advance(x);
+        let p = self.position_at(x);
+        self.from = (x, p);
+        self.ahead.clear();
+        self.chunk = false;
+    }
+
+    /// Takes in a single target at `position`, stamped `stamp` by its
+    /// sender and at `at` on the run's clock, the reference having been
+    /// sampled up to `x`: it is reached one target interval after `at`,
+    /// after the points already ahead.
+    pub fn target(&mut self, stamp: f64, at: f64, position: f64, x: f64) {
+        let interval = self
+            .stamp
+            .map(|s| stamp - s)
+            .filter(|d| *d > INTERVAL.0 && *d < INTERVAL.1);
+        if let Some(d) = interval {
+            self.recent.rotate_right(1);
+            self.recent[0] = d;
+        }
+        self.stamp = Some(stamp);
+        if self.chunk || self.ahead.is_empty() {
+            self.rebase(x);
+        }
+        let last = self.ahead.back().map_or(self.from.0, |p| p.0);
+        let due = (at + self.delay()).max(last).max(x);
+        if self.ahead.len() == self.ahead.capacity() {
+            // Never with a sane stream (points are passed as fast as they
+            // come); keeps the reference bounded if one floods it.
+            self.ahead.pop_front();
+        }
+        self.ahead.push_back((due, position));
+    }
+
+    /// Replaces what is ahead by a chunk's points: `(time on the run's
+    /// clock, position)`; those not after `x` (already past) are skipped.
+    pub fn chunk(&mut self, points: impl Iterator<Item = (f64, f64)>, x: f64) {
+        self.rebase(x);
+        for (t, p) in points {
+            if t > x && self.ahead.len() < self.ahead.capacity() {
+                self.ahead.push_back((t, p));
+            }
+        }
+        self.chunk = !self.ahead.is_empty();
+    }
+
+    /// The goal at `x` (increasing from call to call): the reference's
+    /// position, and its speed over the current piece.
+    pub fn goal(&mut self, x: f64) -> Goal {
+        self.advance(x);
+        match self.ahead.front() {
+            Some(&(t1, p1)) => {
+                let (t0, p0) = self.from;
+                let speed = (p1 - p0) / (t1 - t0);
+                Goal {
+                    position: p0 + speed * (x - t0).max(0.0),
+                    velocity: speed,
+                    acceleration: 0.0,
+                    horizon: t1 - x,
+                }
+            }
+            None => {
+                self.chunk = false;
+                Goal::at(self.from.1)
+            }
+        }
+    }
+
+    /// Passes the points due by `x`.
+    fn advance(&mut self, x: f64) {
+        while let Some(&(t, p)) = self.ahead.front() {
+            if t > x {
+                break;
+            }
+            self.from = (t, p);
+            self.ahead.pop_front();
+        }
+    }
+
+    /// Whether a piece is being followed (else the reference holds).
+    pub fn moving(&self) -> bool {
+        !self.ahead.is_empty()
+    }
+
+    /// Holds `position` from `x` on (nothing ahead), keeping what is known
+    /// of the stream's intervals.
+    pub fn restart(&mut self, x: f64, position: f64) {
+        self.from = (x, position);
+        self.ahead.clear();
+        self.chunk = false;
+    }
+
+    /// Holds where the reference is at `x` (nothing ahead).
+    pub fn hold(&mut self, x: f64) {
+        self.rebase(x);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_target_is_reached_one_interval_after_it_was_taken() {
+        let mut r = Reference::new(0.0, 0.0, 8);
+        // Targets every 30 ms on a ramp of 1 unit/s.
+        for k in 1..=4 {
+            let t = f64::from(k) * 0.03;
+            r.target(t, t, t, t);
+            let g = r.goal(t);
+            // From the second on, the interval is known: the target is
+            // reached 30 ms after its stamp, so the reference is one
+            // target behind, moving at the ramp's speed.
+            if k >= 3 {
+                assert!((g.position - (t - 0.03)).abs() < 1e-9, "{k}: {g:?}");
+                assert!((g.velocity - 1.0).abs() < 1e-9, "{k}: {g:?}");
+            }
+        }
+        // Nothing more: it holds at the last target once reached.
+        let g = r.goal(0.2);
+        assert_eq!((g.position, g.velocity), (0.12, 0.0));
+    }
+
+    #[test]
+    fn a_chunk_replaces_what_is_ahead_and_skips_its_past_points() {
+        let mut r = Reference::new(0.0, 0.0, 8);
+        r.chunk([(0.1, 1.0), (0.2, 2.0)].into_iter(), 0.0);
+        assert!((r.goal(0.05).position - 0.5).abs() < 1e-9);
+        // A new chunk at 0.15 whose first point is past.
+        r.chunk([(0.1, 9.0), (0.25, 0.0)].into_iter(), 0.15);
+        let g = r.goal(0.15);
+        // From where the old chunk was (1.5) toward 0 at 0.25, no jump.
+        assert!((g.position - 1.5).abs() < 1e-9, "{g:?}");
+        assert!((g.velocity + 15.0).abs() < 1e-9, "{g:?}");
+    }
+
+    #[test]
+    fn one_long_gap_does_not_set_the_delay() {
+        let mut r = Reference::new(0.0, 0.0, 8);
+        let stamps = [0.0, 0.033, 0.066, 0.166, 0.2, 0.233];
+        for &s in &stamps {
+            r.target(s, s, 0.0, s);
+        }
+        assert!((r.delay() - 0.034).abs() < 1e-9, "{}", r.delay());
+    }
+}

@@ -3,26 +3,25 @@
 //! Each subcommand lives in its own module under `cmd/`; this file only parses
 //! the arguments, dispatches, and turns an error into a message and an exit
 //! code (`cmd::exit`).
+//!
+//! SIGPIPE stays ignored, as Rust leaves it: a write to a closed pipe
+//! returns EPIPE, which a command takes as a signal to stop (a motion stops
+//! jerk-limited and writes its files) instead of being killed mid-run
+//! (`cmd::out`).
 
 mod cmd;
 mod record;
 
 fn main() -> std::process::ExitCode {
-    restore_sigpipe();
     let cli = cmd::parse();
-    match cmd::run(cli) {
+    let code = match cmd::run(cli) {
         Ok(code) => code,
-        Err(err) => cmd::exit::report(&err),
-    }
-}
-
-/// Lets `servobus ... | head` end quietly, as other command-line tools do,
-/// instead of failing on a closed pipe.
-fn restore_sigpipe() {
-    #[cfg(unix)]
-    // SAFETY: setting a signal's disposition to the default is always
-    // sound; no handler runs Rust code.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        Err(err) => return cmd::exit::report(&err),
+    };
+    // What stdout still buffers is written now, where a failure can still
+    // change the exit code (at exit it would be dropped unsaid).
+    match cmd::out::flush() {
+        Ok(()) => code,
+        Err(err) => cmd::exit::report(&err.into()),
     }
 }

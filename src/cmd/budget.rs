@@ -10,6 +10,7 @@ use servobus_runtime::config::{load_robot, BusConfig, RobotOptions};
 use servobus_timing::{floor_rate_hz, Change, Link, Plan};
 
 use super::link::{open_bus, Allowance};
+use super::out::{errln, out, outln};
 
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
@@ -106,15 +107,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         out.buses.push(budget);
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        outln!("{}", serde_json::to_string_pretty(&out)?)?;
     } else {
-        print!("{text}");
+        out!("{text}")?;
     }
     Ok(if all_fit {
         ExitCode::SUCCESS
     } else {
         if !args.json {
-            eprintln!(
+            errln!(
                 "error: {} Hz does not fit every bus of `{}` (see the fixes above)",
                 fmt_hz(rate),
                 robot.name

@@ -24,7 +24,10 @@ pub struct ManArgs {}
 /// Runs `servobus completions`.
 pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
     let mut cmd = command();
-    clap_complete::generate(args.shell, &mut cmd, "servobus", &mut std::io::stdout());
+    // Generated into memory: clap_complete panics on a failed write.
+    let mut script = Vec::new();
+    clap_complete::generate(args.shell, &mut cmd, "servobus", &mut script);
+    super::out::bytes(&script)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -44,7 +47,7 @@ pub fn man(_args: ManArgs) -> anyhow::Result<ExitCode> {
         }
         writeln!(out, ".fi")?;
     }
-    std::io::stdout().write_all(&out)?;
+    super::out::bytes(&out)?;
     Ok(ExitCode::SUCCESS)
 }
 

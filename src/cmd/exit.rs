@@ -4,7 +4,8 @@
 //! an output that could not be written), `2` a usage or input error (the
 //! command line, a robot or motion file, a port that cannot be opened, an
 //! output path that cannot be a file). clap already exits 2 for a bad
-//! command line.
+//! command line. Stdout that cannot be written ([`super::out::StdoutError`]:
+//! closed by its reader, or full) is a problem (1), never a panic.
 
 use std::process::ExitCode;
 
@@ -56,7 +57,7 @@ pub fn of_finish(finish: servobus_runtime::Finish) -> ExitCode {
 
 /// Prints `err` (each cause once) and returns its exit code.
 pub fn report(err: &anyhow::Error) -> ExitCode {
-    eprintln!("error: {}", message(err));
+    super::out::errln!("error: {}", message(err));
     ExitCode::from(code(err))
 }
 
@@ -198,6 +199,17 @@ mod tests {
         let gone = std::io::Error::other("I/O error");
         let err = anyhow::Error::new(servobus_driver::TransportError::Io(gone));
         assert_eq!(message(&err), "I/O error");
+    }
+
+    #[test]
+    fn stdout_that_cannot_be_written_is_a_problem() {
+        use super::super::out::StdoutError;
+        let closed = anyhow::Error::new(StdoutError::Closed);
+        assert_eq!(code(&closed), PROBLEM);
+        let full = StdoutError::of(std::io::Error::from_raw_os_error(28));
+        let full = anyhow::Error::new(full);
+        assert_eq!(code(&full), PROBLEM);
+        assert_eq!(message(&full), "cannot write to stdout: the disk is full");
     }
 
     #[test]

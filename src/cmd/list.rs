@@ -4,6 +4,8 @@ use std::process::ExitCode;
 
 use servobus::builtin::{self, Kind};
 
+use super::out::outln;
+
 /// Arguments of `servobus list`.
 #[derive(Debug, clap::Args)]
 pub struct Args {}
@@ -18,15 +20,15 @@ pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
             Kind::Mounting => "Simulator mountings (servobus sim --mounting NAME):",
             Kind::Hand => "Simulator hands (servobus sim --hand NAME):",
         };
-        println!("{title}");
+        outln!("{title}")?;
         for b in builtin::all().filter(|b| b.kind == kind) {
-            println!("  {:width$}  {}", b.name, b.summary());
+            outln!("  {:width$}  {}", b.name, b.summary())?;
         }
-        println!();
+        outln!()?;
     }
-    println!(
+    outln!(
         "Try: servobus play arm-wave; servobus budget --robot hexapod; servobus init;\n     \
          servobus sim --robot so101 --mounting so101-mounting --hand so101-hand --link /tmp/arm"
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }

@@ -25,6 +25,7 @@ mod init;
 mod link;
 mod list;
 mod monitor;
+pub mod out;
 mod plan;
 mod play;
 #[cfg(feature = "zenoh")]

@@ -138,6 +138,7 @@ pub mod scripted;
 mod serial;
 mod servos;
 mod settings;
+pub mod signals;
 mod stats;
 mod sync;
 #[cfg(test)]
@@ -154,6 +155,7 @@ pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError
 pub use servobus_timing::StatusLevel;
 pub use servos::Servos;
 pub use settings::BusSettings;
+pub use signals::{held_signal_pending, SignalHold};
 
 /// The register maps and typed register constants ([`registers::sts`],
 /// [`registers::scs`]), re-exported so that one crate is enough.

@@ -16,6 +16,7 @@ use servobus_timing::{Link, StatusLevel, Transaction};
 mod baud;
 mod broadcast;
 mod late;
+mod transaction;
 
 const BAUD: u32 = 1_000_000;
 

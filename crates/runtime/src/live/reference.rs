@@ -14,6 +14,9 @@ use servobus_trajectory::Goal;
 /// Stamp differences outside this range are no target interval, s.
 pub(super) const INTERVAL: (f64, f64) = (0.001, 0.5);
 
+/// Pieces shorter than this are taken as straight, s.
+const MIN_PIECE: f64 = 1e-3;
+
 /// How many recent target intervals the delay is taken from.
 const INTERVALS: usize = 5;
 
@@ -32,6 +35,9 @@ pub(super) struct Reference {
     stamp: Option<f64>,
     /// The last target intervals, s (0: none).
     recent: [f64; INTERVALS],
+    /// The speed and duration of the piece before the current one, if it
+    /// led into it (none after a hold or a new start).
+    before: Option<(f64, f64)>,
 }
 
 impl Reference {
@@ -43,6 +49,7 @@ impl Reference {
             chunk: false,
             stamp: None,
             recent: [0.0; INTERVALS],
+            before: None,
         }
     }
 
@@ -92,6 +99,7 @@ impl Reference {
         self.from = (x, p);
         self.ahead.clear();
         self.chunk = false;
+        self.before = None;
     }
 
     /// Takes in a single target at `position`, stamped `stamp` by its
@@ -140,11 +148,27 @@ impl Reference {
         match self.ahead.front() {
             Some(&(t1, p1)) => {
                 let (t0, p0) = self.from;
-                let speed = (p1 - p0) / (t1 - t0);
+                let span = t1 - t0;
+                let speed = (p1 - p0) / span;
+                // The piece bends as the speed changes from the piece
+                // before (a parabola through both ends), so that a
+                // follower told the bend keeps up with a stream that
+                // speeds up or slows down; straight where it would turn
+                // back inside the piece (and leave the range of its ends).
+                let mut accel = match self.before {
+                    Some((v, d)) if span > MIN_PIECE => (speed - v) / (0.5 * (d + span)),
+                    _ => 0.0,
+                };
+                let (v0, v1) = (speed - 0.5 * accel * span, speed + 0.5 * accel * span);
+                if v0 * v1 < 0.0 || !accel.is_finite() {
+                    accel = 0.0;
+                }
+                let v0 = speed - 0.5 * accel * span;
+                let tau = (x - t0).max(0.0);
                 Goal {
-                    position: p0 + speed * (x - t0).max(0.0),
-                    velocity: speed,
-                    acceleration: 0.0,
+                    position: p0 + tau * (v0 + 0.5 * accel * tau),
+                    velocity: v0 + accel * tau,
+                    acceleration: accel,
                     horizon: t1 - x,
                 }
             }
@@ -161,6 +185,8 @@ impl Reference {
             if t > x {
                 break;
             }
+            let (t0, p0) = self.from;
+            self.before = (t > t0 + MIN_PIECE).then(|| ((p - p0) / (t - t0), t - t0));
             self.from = (t, p);
             self.ahead.pop_front();
         }
@@ -177,6 +203,7 @@ impl Reference {
         self.from = (x, position);
         self.ahead.clear();
         self.chunk = false;
+        self.before = None;
     }
 
     /// Holds where the reference is at `x` (nothing ahead).

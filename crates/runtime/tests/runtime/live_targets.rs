@@ -94,13 +94,16 @@ fn a_jittery_30_hz_stream_is_followed_within_the_limits_closely_and_with_little_
         }
         (sum / n).sqrt()
     };
-    let err = rms(0.0);
-    assert!(err <= 0.5, "RMS error {err} deg");
+    // Nothing is extrapolated past the newest target: the goals trail the
+    // source by one target interval (33 ms, 38 with the jitter), within
+    // a cycle, and are close to it so delayed.
     let best = (0..=100)
         .map(|ms| ms as f64 * 1e-3)
         .min_by(|a, b| rms(*a).total_cmp(&rms(*b)))
         .unwrap_or(1.0);
-    assert!(best <= 0.050, "lag {best} s");
+    let err = rms(best);
+    assert!(err <= 0.5, "RMS error {err} deg at the best lag");
+    assert!(best <= 0.038 + PERIOD, "lag {best} s");
     println!("RMS error {err:.3} deg, lag {:.0} ms", best * 1e3);
     let report = run.report();
     let live = report.live.expect("targets counted");
@@ -172,19 +175,25 @@ fn a_stream_that_stops_comes_to_a_stop_and_holds_then_resumes_smoothly() {
     });
     rec.assert_within_so101_limits(0, PERIOD);
     let pan = rec.commanded(0);
-    // Stopped within one target interval of extrapolation (the 30 Hz
-    // slots fall 30 or 35 ms apart in 5 ms cycles), one control period's
-    // motion (where the step ending it lands), plus the quickest stop from
-    // 60 deg/s: v sqrt(v / j) = 60 sqrt(60 / 9000), about 4.9 deg (the
-    // speed is under a^2 / j = 90 deg/s), by hand.
+    // Nothing is extrapolated past the last target: the joint goes beyond
+    // it only by its quickest stop from 60 deg/s, v sqrt(v / j) = 60
+    // sqrt(60 / 9000), about 4.9 deg (the speed is under a^2 / j = 90
+    // deg/s), by hand; it then turns back toward the target until the
+    // timeout stops it there.
     let stop_distance = 60.0 * (60.0f64 / 9000.0).sqrt();
+    let highest = pan.iter().fold(f64::MIN, |a, &b| a.max(b));
+    assert!(
+        highest <= last_target + stop_distance + 1e-6,
+        "went to {highest}, last target {last_target}"
+    );
     let held = pan[380];
     assert!(
-        held >= last_target && held <= last_target + speed * 0.035 + speed * PERIOD + stop_distance,
+        held >= last_target - 1e-6 && held <= highest,
         "held at {held}, last target {last_target}"
     );
-    // Held still from the timeout (1.1 + 0.25 s) to the resume (2.0 s).
-    assert!(pan[290..400].iter().all(|&p| (p - held).abs() < 1e-9));
+    // Held still from the timeout's stop (1.1 + 0.25 s, then the stop) to
+    // the resume (2.0 s).
+    assert!(pan[320..400].iter().all(|&p| (p - held).abs() < 1e-9));
     // Resumed toward the new ramp.
     assert!(pan[699] < held - 10.0, "{}", pan[699]);
     let seen = &rec.live;

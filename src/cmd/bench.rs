@@ -46,8 +46,8 @@ pub struct Args {
     #[command(flatten)]
     pub hardware: super::HardwareArgs,
     /// How long to measure, in seconds.
-    #[arg(long, default_value_t = 5.0)]
-    pub seconds: f64,
+    #[arg(long, default_value = "5", value_parser = super::args::measure_seconds_arg)]
+    pub seconds: Duration,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -91,12 +91,6 @@ struct BenchReport {
 
 /// Runs `servobus bench`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 3600.0) {
-        return Err(super::exit::input(format!(
-            "--seconds {}: give a duration between 0 and 3600 s",
-            args.seconds
-        )));
-    }
     let path = args
         .robot
         .clone()
@@ -119,7 +113,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             )));
         }
     }
-    let duration = Duration::from_secs_f64(args.seconds);
+    let duration = args.seconds;
 
     let mut runs = Vec::new();
     let ports = bus_ports(&robot, args.hardware.port.as_slice());
@@ -138,7 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Err(_) => bail!("a bus thread panicked"),
         }
     }
-    let report = summarise(&robot, args.seconds, buses);
+    let report = summarise(&robot, args.seconds.as_secs_f64(), buses);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

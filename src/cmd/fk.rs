@@ -43,14 +43,15 @@ pub struct IkArgs {
         long,
         required = true,
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = super::args::mm_arg
     )]
     pub xyz: Vec<f64>,
     /// The frame's pitch, in the robot file's units.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::args::angle_arg)]
     pub pitch: Option<f64>,
     /// The frame's roll, in the robot file's units.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::args::angle_arg)]
     pub roll: Option<f64>,
     /// Print one JSON object: `{"frame", "joints": {"<name>": angle}}`, or
     /// `{"frame", "error", "short_mm"?, "joint"?}` when there is no answer.
@@ -213,10 +214,7 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
     let [x, y, z] = args.xyz[..] else {
         return Err(input("--xyz takes three numbers: X,Y,Z (mm)"));
     };
-    let finite = |v: Option<f64>| v.map_or(true, f64::is_finite);
-    if ![x, y, z].iter().all(|v| v.is_finite()) || !finite(args.pitch) || !finite(args.roll) {
-        return Err(input("--xyz, --pitch and --roll must be finite numbers"));
-    }
+    // --xyz, --pitch and --roll are finite: their parsers refuse the rest.
     let target = ArmTarget {
         xyz: Point3::new(x, y, z),
         pitch: args.pitch.map(|a| robot.units.to_rad(a)),

@@ -3,14 +3,15 @@
 //! Adding a subcommand: a module with `Args` and `run`, a variant in
 //! [`Command`] and a line in [`run`]. A robot or motion argument takes
 //! `value_parser = super::robot_arg` (or `motion_arg`) to accept built-in
-//! names as well as files.
+//! names as well as files; a number takes one of the range-checked
+//! parsers of [`args`] (`rate_arg`, `run_seconds_arg`, ...).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use servobus_runtime::config::limits;
 
+pub(crate) mod args;
 mod bench;
 mod budget;
 mod bus;
@@ -33,6 +34,8 @@ mod serve;
 mod sim;
 mod stream;
 mod teach;
+
+pub(crate) use args::{baud_arg, latency_us_arg, rate_arg};
 
 const EXIT_STATUS: &str = "\
 Exit status:
@@ -229,35 +232,6 @@ pub(crate) fn mounting_arg(arg: &str) -> Result<PathBuf, std::convert::Infallibl
 pub(crate) fn hand_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     use servobus::builtin::{path_or_name, Kind};
     Ok(path_or_name(Kind::Hand, arg.as_ref()))
-}
-
-/// Parses a control rate (`--rate`): a number of Hz within the range
-/// servobus runs ([`limits::check_rate_hz`]).
-pub(crate) fn rate_arg(arg: &str) -> Result<f64, String> {
-    let rate: f64 = arg
-        .parse()
-        .map_err(|_| format!("`{arg}` is not a number of Hz"))?;
-    limits::check_rate_hz(rate).map_err(|e| e.to_string())
-}
-
-/// Parses a baud rate (`--baud`): one the servos can be set to
-/// ([`limits::check_baud`]).
-pub(crate) fn baud_arg(arg: &str) -> Result<u32, String> {
-    let baud: u32 = arg
-        .parse()
-        .map_err(|_| format!("`{arg}` is not a baud rate"))?;
-    limits::check_baud(baud).map_err(|e| e.to_string())
-}
-
-/// Parses an adapter latency (`--latency-us`), at most
-/// [`limits::MAX_LATENCY`].
-pub(crate) fn latency_us_arg(arg: &str) -> Result<u64, String> {
-    let us: u64 = arg
-        .parse()
-        .map_err(|_| format!("`{arg}` is not a whole number of microseconds"))?;
-    limits::check_latency_us(us)
-        .map(|_| us)
-        .map_err(|e| e.to_string())
 }
 
 /// Fails at once, before anything moves, when the file `path` given with

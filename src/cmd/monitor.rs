@@ -49,10 +49,10 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Refreshes per second.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value = "20", value_parser = super::args::refresh_rate_arg)]
     pub rate: f64,
     /// Stop after this many refreshes (default: until `q`, or Ctrl-C).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count_arg)]
     pub count: Option<u64>,
     /// The robot file's bus to watch (default: the first).
     #[arg(long)]
@@ -61,12 +61,6 @@ pub struct Args {
 
 /// Runs `servobus monitor`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(args.rate.is_finite() && args.rate > 0.0) {
-        return Err(super::exit::input(format!(
-            "--rate {}: give a positive rate in Hz",
-            args.rate
-        )));
-    }
     let robot = match &args.robot {
         Some(path) => Some(load_robot(
             path,

@@ -50,11 +50,11 @@ pub struct Args {
     pub continuous: bool,
     /// With --continuous: how closely the keyframes must reproduce the
     /// path, degrees.
-    #[arg(long, default_value_t = 0.5, value_name = "DEG")]
+    #[arg(long, default_value = "0.5", value_name = "DEG", value_parser = super::args::tolerance_deg_arg)]
     pub tolerance: f64,
     /// Stop after this many seconds.
-    #[arg(long, value_name = "S")]
-    pub duration: Option<f64>,
+    #[arg(long, value_name = "S", value_parser = super::args::run_seconds_arg)]
+    pub duration: Option<Duration>,
     /// No keyboard: capture a keyframe whenever the robot has moved and
     /// then been held still for 0.7 s (also when stdin is not a terminal).
     #[arg(long)]
@@ -67,16 +67,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &args.robot.path,
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
     )?;
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        return Err(super::exit::input(
-            "--tolerance must be a positive number of degrees",
-        ));
-    }
-    if args.duration.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
-        return Err(super::exit::input(
-            "--duration must be a positive number of seconds",
-        ));
-    }
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
     super::check_writable("-o", &args.output)?;
@@ -184,7 +174,7 @@ fn how_to_stop(args: &Args, interactive: bool) -> String {
         ways.insert(0, "Enter without moving (or q)".to_owned());
     }
     if let Some(d) = args.duration {
-        ways.push(format!("after {d} s"));
+        ways.push(format!("after {} s", d.as_secs_f64()));
     }
     let what = match (args.continuous, interactive) {
         (true, _) => "Recording the path.",
@@ -243,7 +233,7 @@ fn take<T: Transport, C: Clock>(
     };
     let period = Duration::from_secs_f64(1.0 / rate);
     let start = teacher.now();
-    let end = args.duration.map(|d| start + Duration::from_secs_f64(d));
+    let end = args.duration.map(|d| start + d);
     let first = match teacher
         .pose()
         .and_then(|p| check_pose(robot, &p).map(|()| p))

@@ -155,7 +155,7 @@ pub use servobus_io::{Clock, ManualClock, SystemClock, Transport, TransportError
 pub use servobus_timing::StatusLevel;
 pub use servos::Servos;
 pub use settings::BusSettings;
-pub use signals::{held_signal_pending, SignalHold};
+pub use signals::{catch_stop_signals, held_signal_pending, stop_signal, SignalHold, StopSignal};
 
 /// The register maps and typed register constants ([`registers::sts`],
 /// [`registers::scs`]), re-exported so that one crate is enough.

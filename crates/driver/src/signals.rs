@@ -26,7 +26,15 @@
 //! each servo's transaction; a program that writes several servos as one
 //! step can hold its own around them.
 //!
-//! On platforms without POSIX signals a hold does nothing.
+//! A program that must say what it did when it is stopped (a command
+//! writing six servos) also calls [`catch_stop_signals`]: the signals then
+//! only set a flag, [`stop_signal`], which the library's multi-servo writes
+//! (a calibration stored in the servos, the doctor's fixes) read between
+//! two servos, ending there with what was done. The program reports it and
+//! exits.
+//!
+//! On platforms without POSIX signals a hold does nothing and no signal is
+//! caught.
 
 /// The signals held: interrupt (Ctrl-C), terminate (`kill`, systemd),
 /// hang-up (a closed terminal).
@@ -81,6 +89,65 @@ pub fn held_signal_pending() -> bool {
     #[cfg(not(unix))]
     {
         false
+    }
+}
+
+/// A stop signal [`catch_stop_signals`] caught.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StopSignal {
+    /// SIGINT (Ctrl-C).
+    Interrupt,
+    /// SIGTERM (`kill`, a service manager).
+    Terminate,
+    /// SIGHUP (the terminal closed).
+    HangUp,
+}
+
+impl StopSignal {
+    /// Its name: `SIGINT`, `SIGTERM` or `SIGHUP`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StopSignal::Interrupt => "SIGINT",
+            StopSignal::Terminate => "SIGTERM",
+            StopSignal::HangUp => "SIGHUP",
+        }
+    }
+}
+
+impl std::fmt::Display for StopSignal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// From now on, SIGINT, SIGTERM and SIGHUP only set the flag
+/// [`stop_signal`] reads: the program stops where it chooses, after
+/// saying what it did. Call it once, before the work a signal must not cut
+/// short without a report; a later call changes nothing.
+///
+/// # Errors
+/// The OS error when a handler cannot be installed.
+pub fn catch_stop_signals() -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        imp::catch()
+    }
+    #[cfg(not(unix))]
+    {
+        Ok(())
+    }
+}
+
+/// The first stop signal caught since [`catch_stop_signals`], if any.
+pub fn stop_signal() -> Option<StopSignal> {
+    #[cfg(unix)]
+    {
+        imp::caught()
+    }
+    #[cfg(not(unix))]
+    {
+        None
     }
 }
 
@@ -142,6 +209,59 @@ mod imp {
         }
     }
 
+    /// The first stop signal caught (its number), 0 for none.
+    static CAUGHT: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
+    /// The catching handler: one atomic compare-and-swap, async-signal-safe.
+    extern "C" fn stop(signal: libc::c_int) {
+        let _ = CAUGHT.compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst);
+    }
+
+    /// Installs `handler` for `signal`, returning the disposition it replaced.
+    fn install(
+        signal: libc::c_int,
+        handler: extern "C" fn(libc::c_int),
+    ) -> Option<libc::sigaction> {
+        // SAFETY: `action` is fully initialised (zeroed, then its handler,
+        // flags and empty mask set); `old` is valid storage the call fills.
+        // Both handlers only do atomic operations.
+        unsafe {
+            let mut action: libc::sigaction = std::mem::zeroed();
+            action.sa_sigaction = handler as usize;
+            action.sa_flags = libc::SA_RESTART;
+            libc::sigemptyset(&mut action.sa_mask);
+            let mut old: libc::sigaction = std::mem::zeroed();
+            (libc::sigaction(signal, &action, &mut old) == 0).then_some(old)
+        }
+    }
+
+    pub(super) fn catch() -> std::io::Result<()> {
+        let mut state = STATE.lock().unwrap_or_else(PoisonError::into_inner);
+        for (i, &signal) in HELD.iter().enumerate() {
+            if state.depth > 0 {
+                // Inside a hold: the disposition to come back to changes.
+                if let Some(saved) = state.saved[i].as_mut() {
+                    saved.sa_sigaction = stop as extern "C" fn(libc::c_int) as usize;
+                    saved.sa_flags = libc::SA_RESTART;
+                    continue;
+                }
+            }
+            if install(signal, stop).is_none() {
+                return Err(std::io::Error::last_os_error());
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn caught() -> Option<super::StopSignal> {
+        match CAUGHT.load(Ordering::SeqCst) {
+            libc::SIGINT => Some(super::StopSignal::Interrupt),
+            libc::SIGTERM => Some(super::StopSignal::Terminate),
+            libc::SIGHUP => Some(super::StopSignal::HangUp),
+            _ => None,
+        }
+    }
+
     pub(super) fn pending() -> bool {
         if RECEIVED.iter().any(|r| r.load(Ordering::SeqCst)) {
             return true;
@@ -164,18 +284,7 @@ mod imp {
                     r.store(false, Ordering::SeqCst);
                 }
                 for (i, &signal) in HELD.iter().enumerate() {
-                    // SAFETY: `action` is fully initialised (zeroed, then its
-                    // handler, flags and empty mask set); `old` is valid
-                    // storage the call fills. The handler only does an
-                    // atomic store.
-                    state.saved[i] = unsafe {
-                        let mut action: libc::sigaction = std::mem::zeroed();
-                        action.sa_sigaction = record as extern "C" fn(libc::c_int) as usize;
-                        action.sa_flags = libc::SA_RESTART;
-                        libc::sigemptyset(&mut action.sa_mask);
-                        let mut old: libc::sigaction = std::mem::zeroed();
-                        (libc::sigaction(signal, &action, &mut old) == 0).then_some(old)
-                    };
+                    state.saved[i] = install(signal, record);
                 }
             }
             state.depth += 1;
@@ -318,5 +427,18 @@ mod tests {
         assert!(held_signal_pending());
         drop(hold);
         assert_eq!(HUPS.load(Ordering::SeqCst), 1);
+    }
+
+    #[test]
+    fn a_caught_signal_in_a_hold_is_seen_once_the_hold_ends() {
+        let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+        let hold = SignalHold::new();
+        // Caught from inside a hold: the disposition it comes back to.
+        super::catch_stop_signals().expect("handlers installed");
+        hang_up();
+        assert_eq!(super::stop_signal(), None);
+        drop(hold);
+        assert_eq!(super::stop_signal(), Some(super::StopSignal::HangUp));
+        assert_eq!(super::StopSignal::HangUp.to_string(), "SIGHUP");
     }
 }

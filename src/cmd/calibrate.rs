@@ -18,13 +18,14 @@ use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
     calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, LiveJoint, Operator,
-    ProcedureOptions, Refusal, Step, Store, PATIENCE, PATIENT_RETRIES,
+    ProcedureOptions, Refusal, Step, Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
 
 use super::link::{every_port, Allowance, Ports, SerialBus};
+use super::out::{errln, outln};
 
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
@@ -80,7 +81,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(out) = &args.to_lerobot {
         super::check_writable("--to-lerobot", out)?;
     }
-    let cal = if let Some(json) = &args.from_lerobot {
+    let (cal, unfinished) = if let Some(json) = &args.from_lerobot {
         if args.write_servos && ports.is_none() {
             return Err(super::exit::input(
                 "--write-servos needs the servos' --port",
@@ -94,7 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .map_err(super::exit::invalid)?;
         match (&ports, args.write_servos) {
             (Some(ports), true) => write_imported(&design, ports, cal)?,
-            _ => cal,
+            _ => (cal, None),
         }
     } else if let Some(ports) = ports {
         measure(&args, &design, &ports)?
@@ -123,6 +124,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Replaced whole or not at all: a failure leaves an earlier calibration
     // at the path untouched.
     save_calibration(&cal, &output)?;
+    if let Some(unfinished) = unfinished {
+        // What was measured is kept, in the frames the servos now hold.
+        outln!("calibration: {}", output.display())?;
+        return Err(unfinished.error());
+    }
     // Applying it now shows at once a calibration the robot cannot use.
     let robot = load_robot(
         &args.robot.path,
@@ -164,7 +170,46 @@ fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
     super::link::open_buses(robot, ports, patient, Some(PATIENT_RETRIES))
 }
 
-fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calibration> {
+/// A store in the servos that ended before the last servo.
+struct Unfinished {
+    written: Vec<String>,
+    not_written: Vec<String>,
+    ended: StoreEnd,
+}
+
+impl Unfinished {
+    /// The error the command ends with (exit 1): why it ended, which
+    /// servos were written and which were left as they were.
+    fn error(self) -> anyhow::Error {
+        let list = |names: &[String]| {
+            if names.is_empty() {
+                "none".to_owned()
+            } else {
+                names.join(", ")
+            }
+        };
+        let what = format!(
+            "servos written (unlocked, written, verified, locked): {}; not written (left as they \
+             were): {}",
+            list(&self.written),
+            list(&self.not_written)
+        );
+        match self.ended {
+            StoreEnd::Stopped(signal) => anyhow::anyhow!(
+                "stopped by {signal} while writing the servos (each servo begun was finished \
+                 first): {what}"
+            ),
+            StoreEnd::Failed(e) => anyhow::Error::new(e).context(what),
+            _ => anyhow::anyhow!("writing the servos ended early: {what}"),
+        }
+    }
+}
+
+/// A calibration, and how storing it in the servos ended when it ended
+/// before the last one.
+type Taken = (Calibration, Option<Unfinished>);
+
+fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Taken> {
     let mut buses = open(robot, ports)?;
     let interactive = !args.yes && std::io::stdin().is_terminal();
     let mut operator = Terminal::new(robot, interactive);
@@ -175,35 +220,55 @@ fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Calib
     };
     let cal = calibrate(robot, &mut buses, &mut operator, &options)?;
     if !args.write_servos {
-        return Ok(cal);
+        return Ok((cal, None));
     }
     store(robot, &mut buses, cal, Store::Centred)
 }
 
 /// Stores an imported calibration in the servos as LeRobot does: each
 /// servo's homing offset and position limits, in the frame it is played in.
-fn write_imported(
-    robot: &Robot,
-    ports: &[String],
-    cal: Calibration,
-) -> anyhow::Result<Calibration> {
+fn write_imported(robot: &Robot, ports: &[String], cal: Calibration) -> anyhow::Result<Taken> {
     let mut buses = open(robot, ports)?;
     store(robot, &mut buses, cal, Store::PlayFrame)
 }
 
 /// [`store_in_servos`], saying each servo as it is stored.
+///
+/// From here on SIGINT, SIGTERM and SIGHUP are caught: each servo begun is
+/// finished (the driver holds them through its transaction), the store
+/// ends before the next one, and the calibration is still saved.
 fn store(
     robot: &Robot,
     buses: &mut [SerialBus],
     cal: Calibration,
     how: Store,
-) -> anyhow::Result<Calibration> {
-    Ok(store_in_servos(robot, buses, cal, how, |joint, jc| {
-        println!(
+) -> anyhow::Result<Taken> {
+    if let Err(e) = servobus_driver::catch_stop_signals() {
+        errln!("warning: a signal will end the program between two servos ({e})");
+    }
+    let Stored {
+        calibration,
+        written,
+        not_written,
+        ended,
+    } = store_in_servos(robot, buses, cal, how, |joint, jc| {
+        // Said as each servo is locked; stdout gone is no reason to stop
+        // half way through the arm.
+        let _ = outln!(
             "servo {} ({}): Homing_Offset {}, limits {}..{} (unlocked, written, verified, locked)",
-            joint.id, joint.name, jc.homing_offset, jc.range[0], jc.range[1]
+            joint.id,
+            joint.name,
+            jc.homing_offset,
+            jc.range[0],
+            jc.range[1]
         );
-    })?)
+    });
+    let unfinished = ended.map(|ended| Unfinished {
+        written,
+        not_written,
+        ended,
+    });
+    Ok((calibration, unfinished))
 }
 
 /// How to name the calibration at `output` for the robot file at `robot`:

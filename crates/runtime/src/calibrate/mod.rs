@@ -31,13 +31,15 @@ use crate::config::{BusConfig, JointConfig};
 mod lerobot;
 mod procedure;
 mod servos;
+mod store;
 
 pub use lerobot::{from_lerobot, lerobot_value, to_lerobot, LeRobotError, LeRobotMotor, NormMode};
 pub use procedure::{calibrate, LiveJoint, ProcedureOptions, MIN_RANGE_DEG};
 pub use servos::{
-    identify, prepare_bus, prepare_servos, present, store_in_servos, torque_off, write_frame,
-    write_homing, FoundServo, Store, StoreError, FAR_OUTSIDE_DEG, PATIENCE, PATIENT_RETRIES,
+    identify, prepare_bus, prepare_servos, present, torque_off, FoundServo, FAR_OUTSIDE_DEG,
+    PATIENCE, PATIENT_RETRIES,
 };
+pub use store::{store_in_servos, write_frame, write_homing, Store, StoreEnd, StoreError, Stored};
 
 /// A step of the procedure, announced to the [`Operator`] as it begins.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,14 +1,15 @@
 //! What calibrating and playing ask of the servos themselves: who is there,
-//! torque off, Homing_Offset written (persistently with `--write-servos`,
-//! for the session otherwise), and the check that refuses to move a robot
-//! whose servos are not the ones its calibration was taken on.
+//! torque off, Homing_Offset set for the session (stored in EEPROM by
+//! [`store_in_servos`](super::store_in_servos) with `--write-servos`), and
+//! the check that refuses to move a robot whose servos are not the ones its
+//! calibration was taken on.
 
 use std::time::Duration;
 
 use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::{addr, model_by_number, Model, Register};
 
-use crate::config::seam::{centring_offset, turn_ticks};
+use crate::config::seam::turn_ticks;
 use crate::config::{BusConfig, JointCalibration, JointConfig, JointMap, Robot, RobotCalibration};
 
 use super::{CalibrateError, Refusal};
@@ -103,128 +104,6 @@ pub fn torque_off<T: Transport, C: Clock>(
             .map_err(|e| CalibrateError::bus(joint, e))?;
     }
     Ok(())
-}
-
-/// What [`store_in_servos`] writes to each servo's EEPROM.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Store {
-    /// The homing offset that centres the measured range on the turn
-    /// ([`write_homing`]): after a calibration measured here.
-    Centred,
-    /// The joint's play frame ([`write_frame`] of
-    /// [`JointCalibration::play_frame`]), as LeRobot stores an imported
-    /// calibration.
-    PlayFrame,
-}
-
-/// A servo whose EEPROM could not be written.
-#[derive(Debug, thiserror::Error)]
-#[error("joint `{joint}`: writing the EEPROM")]
-pub struct StoreError {
-    /// The joint.
-    pub joint: String,
-    /// The failed step's bus error.
-    #[source]
-    pub source: BusError,
-}
-
-/// Stores `cal` in the EEPROM of every servo of `robot` on `buses` (one
-/// per robot bus, in order) as `how` says, joint by joint in the robot's
-/// joint order, and returns the calibration in the frames written.
-/// `written` is told each joint and its calibration once it is stored
-/// (unlocked, written, verified, locked).
-///
-/// # Errors
-/// [`StoreError`] for the first joint that could not be written; the ones
-/// before it are stored.
-pub fn store_in_servos<T: Transport, C: Clock>(
-    robot: &Robot,
-    buses: &mut [Bus<T, C>],
-    mut cal: crate::config::Calibration,
-    how: Store,
-    mut written: impl FnMut(&JointConfig, &JointCalibration),
-) -> Result<crate::config::Calibration, StoreError> {
-    let mut stored = cal.joints.iter_mut();
-    for (bus, config) in buses.iter_mut().zip(&robot.buses) {
-        for joint in &config.joints {
-            let Some(jc) = stored.next() else {
-                return Ok(cal);
-            };
-            let result = match how {
-                Store::Centred => write_homing(bus, joint, jc),
-                Store::PlayFrame => write_frame(bus, joint, jc, jc.play_frame()),
-            };
-            *jc = result.map_err(|source| StoreError {
-                joint: joint.name.clone(),
-                source,
-            })?;
-            written(joint, jc);
-        }
-    }
-    Ok(cal)
-}
-
-/// Writes to `joint`'s servo's EEPROM (unlock, write, verify, lock) the
-/// homing offset that centres its measured range on the turn, and position
-/// limits at that range, and returns the calibration in the new frame. A
-/// model without the offset register keeps its calibration.
-///
-/// # Errors
-/// The failed step's bus error.
-pub fn write_homing<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    joint: &JointConfig,
-    cal: &JointCalibration,
-) -> Result<JointCalibration, BusError> {
-    let Some(turn) = turn_ticks(joint.model) else {
-        return Ok(cal.clone());
-    };
-    let (homing_offset, shift) = centring_offset(cal.range, cal.homing_offset, turn);
-    write_frame(
-        bus,
-        joint,
-        cal,
-        crate::config::PlayFrame {
-            homing_offset,
-            shift,
-        },
-    )
-}
-
-/// Writes to `joint`'s servo's EEPROM the homing offset of `frame` and
-/// position limits at the calibrated range in that frame (what LeRobot
-/// checks to call a servo calibrated); returns the calibration in `frame`.
-/// A model without the offset register keeps its calibration.
-///
-/// # Errors
-/// The failed step's bus error; [`BusError::InvalidRequest`] when the range
-/// does not fit the position registers in that frame.
-pub fn write_frame<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    joint: &JointConfig,
-    cal: &JointCalibration,
-    frame: crate::config::PlayFrame,
-) -> Result<JointCalibration, BusError> {
-    let Some(offset_reg) = joint.model.map().get("offset") else {
-        return Ok(cal.clone());
-    };
-    if turn_ticks(joint.model).is_none() {
-        return Ok(cal.clone());
-    }
-    let moved = cal.in_frame(frame);
-    let limit = |v: i64| {
-        i32::try_from(v)
-            .ok()
-            .filter(|v| (0..=joint.model.max_position() as i32).contains(v))
-            .ok_or(BusError::InvalidRequest(
-                "range outside the position registers",
-            ))
-    };
-    let (lo, hi) = (limit(moved.range[0])?, limit(moved.range[1])?);
-    bus.write_register(joint.id, offset_reg, frame.homing_offset)?;
-    bus.write_register(joint.id, register(joint.model, "min_angle_limit")?, lo)?;
-    bus.write_register(joint.id, register(joint.model, "max_angle_limit")?, hi)?;
-    Ok(moved)
 }
 
 /// Makes the servos match the robot's calibration: the one routine every

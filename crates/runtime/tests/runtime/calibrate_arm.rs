@@ -18,7 +18,8 @@ use calib_play::Played;
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::sign_magnitude;
 use servobus_runtime::calibrate::{
-    calibrate, prepare_servos, write_homing, LiveJoint, Operator, Step,
+    calibrate, prepare_servos, store_in_servos, write_homing, LiveJoint, Operator, Step, Store,
+    StoreEnd,
 };
 use servobus_runtime::config::{save_calibration, Calibration, JointMap, Robot};
 use servobus_runtime::{bus_settings, Finish};
@@ -470,4 +471,59 @@ fn a_person_pressing_enter_ends_each_step_instead_of_stillness() {
     assert!((end - (last + 10.0)).abs() < 0.1, "ended at {end} s");
     let dirs: Vec<i8> = cal.joints.iter().map(|c| c.direction).collect();
     assert_eq!(dirs, [1, -1, 1, -1, 1, -1]);
+}
+
+#[test]
+fn a_store_that_meets_a_silent_servo_says_what_it_wrote_and_keeps_the_frames() {
+    let (robot, mut buses, sim, _, measured) = measured_arm();
+    let before: Vec<(i32, Option<u8>)> = robot
+        .joints()
+        .map(|j| {
+            let offset = sim.servo(j.id, |s| offset_of(s)).expect("servo");
+            (offset, sim.register(j.id, addr::MIN_ANGLE_LIMIT))
+        })
+        .collect();
+    // The third servo stops answering before its turn comes.
+    let third = robot.joints().nth(2).expect("a third joint").clone();
+    sim.set_faults(servobus_sim::Faults::default().vanish(third.id));
+    let mut told = Vec::new();
+    let stored = store_in_servos(
+        &robot,
+        &mut buses,
+        measured.clone(),
+        Store::Centred,
+        |joint, _| told.push(joint.name.clone()),
+    );
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    assert_eq!(stored.written, names[..2]);
+    assert_eq!(told, names[..2]);
+    assert_eq!(stored.not_written, names[2..]);
+    match &stored.ended {
+        Some(StoreEnd::Failed(e)) => {
+            assert_eq!((e.joint.as_str(), e.id), (third.name.as_str(), third.id));
+        }
+        other => panic!("ended {other:?}"),
+    }
+    // The joints written are in their new frame; the others as measured.
+    for (i, (joint, jc)) in robot.joints().zip(&stored.calibration.joints).enumerate() {
+        let kept = sim.servo(joint.id, |s| offset_of(s)).expect("servo");
+        if i < 2 {
+            assert_eq!(kept, jc.homing_offset, "{}: the frame written", joint.name);
+        } else {
+            assert_eq!(jc, &measured.joints[i], "{}: as measured", joint.name);
+            assert_eq!(kept, before[i].0, "{}: untouched", joint.name);
+            assert_eq!(
+                sim.register(joint.id, addr::MIN_ANGLE_LIMIT),
+                before[i].1,
+                "{}: untouched",
+                joint.name
+            );
+        }
+        assert_eq!(
+            sim.register(joint.id, addr::LOCK),
+            Some(1),
+            "{}",
+            joint.name
+        );
+    }
 }

@@ -31,6 +31,7 @@ use servobus_runtime::Quantiles;
 use servobus_sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance};
+use super::out::{outln, StdoutError};
 use servobus_robot::bench::{measure_link, measure_on, BenchError, BusBench};
 
 mod floor;
@@ -134,9 +135,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let report = summarise(&robot, args.seconds.as_secs_f64(), buses);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print_text(&report);
+        print_text(&report)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -234,10 +235,10 @@ fn summarise(robot: &Robot, seconds: f64, buses: Vec<BusBench>) -> BenchReport {
     }
 }
 
-fn print_text(r: &BenchReport) {
-    println!("bench of {} for {:.1} s", r.robot, r.seconds);
+fn print_text(r: &BenchReport) -> Result<(), StdoutError> {
+    outln!("bench of {} for {:.1} s", r.robot, r.seconds)?;
     for b in &r.buses {
-        println!(
+        outln!(
             "bus {} ({} servos, {}{}): {} cycles, {:.1} Hz achieved; wire-limited {:.1} Hz \
              ({:.1} %), planned with latencies {:.1} Hz",
             b.name,
@@ -249,8 +250,8 @@ fn print_text(r: &BenchReport) {
             b.wire_limited_rate_hz,
             100.0 * b.achieved_rate_hz / b.wire_limited_rate_hz.max(f64::MIN_POSITIVE),
             b.planned_rate_hz,
-        );
-        println!(
+        )?;
+        outln!(
             "  period us: p50 {:.0}  p99 {:.0}  max {:.0};  error from the mean: p50 {:.0}  p99 {:.0}  max {:.0}",
             b.period_us.p50,
             b.period_us.p99,
@@ -258,14 +259,15 @@ fn print_text(r: &BenchReport) {
             b.period_error_us.p50,
             b.period_error_us.p99,
             b.period_error_us.max
-        );
+        )?;
         if b.floor_rate_hz > 0.0 {
-            println!(
+            outln!(
                 "  the pty's own floor for this cycle: {:.1} Hz (mean); achieved / floor {:.3}",
-                b.floor_rate_hz, b.floor_ratio
-            );
+                b.floor_rate_hz,
+                b.floor_ratio
+            )?;
         }
-        println!(
+        outln!(
             "  overruns {} (cycles longer than the planned {:.0} us)  timeouts {}  late replies {}  \
              retries {}  missed replies {}  checksum errors {}",
             b.overruns,
@@ -275,17 +277,18 @@ fn print_text(r: &BenchReport) {
             b.retries,
             b.missed_replies,
             b.checksum_errors
-        );
+        )?;
         let w = b
             .servo_rtt
             .iter()
             .map(|s| s.joint.len())
             .fold(16, usize::max);
         for s in &b.servo_rtt {
-            println!(
+            outln!(
                 "  servo {:>3} {:<w$} round trip mean {:>6.0} us  max {:>6.0} us  ({} replies, {} timeouts)",
                 s.id, s.joint, s.rtt_mean_us, s.rtt_max_us, s.replies, s.timeouts
-            );
+            )?;
         }
     }
+    Ok(())
 }

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 
 use super::exit::input;
+use super::out::outln;
 use serde_json::{json, Map, Value};
 use servobus_protocol::registers::{self, RegisterMap};
 use servobus_protocol::{Command, Decoder, DiscardReason, Event, Packet, FRAME_OVERHEAD};
@@ -51,18 +52,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let items = decode(&bytes, args.from, map);
     for item in &items {
         if args.json {
-            println!("{}", Value::Object(item.json.clone()));
+            outln!("{}", Value::Object(item.json.clone()))?;
         } else {
-            println!("{}", item.text);
+            outln!("{}", item.text)?;
         }
     }
     let packets = items.iter().filter(|i| i.is_packet).count();
     if !args.json {
         let problems = items.len() - packets;
-        println!(
+        outln!(
             "{} byte(s): {packets} packet(s), {problems} problem(s)",
             bytes.len()
-        );
+        )?;
     }
     // Like every command: 0 when all is well, 1 when a problem was found
     // (garbage, a bad checksum, a bad header, a truncated frame).

@@ -13,6 +13,7 @@ use servobus_kinematics::{ArmIk, ArmTarget, Geometry, IkError, LegIk, Point3, Po
 use servobus_runtime::config::{ik_reason, load_robot, Robot, RobotOptions, Units};
 
 use super::exit::{input, PROBLEM};
+use super::out::outln;
 
 /// Arguments of `servobus fk`.
 #[derive(Debug, clap::Args)]
@@ -141,15 +142,21 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
         let out = FkOut {
             frames: rows.into_iter().collect(),
         };
-        println!("{}", serde_json::to_string(&out)?);
+        outln!("{}", serde_json::to_string(&out)?)?;
     } else {
         let u = robot.units;
-        println!(
+        outln!(
             "{:<22} {:>9} {:>9} {:>9}   {:>8} {:>8} {:>8}",
-            "frame", "x mm", "y mm", "z mm", "roll", "pitch", "yaw"
-        );
+            "frame",
+            "x mm",
+            "y mm",
+            "z mm",
+            "roll",
+            "pitch",
+            "yaw"
+        )?;
         for (name, f) in rows {
-            println!(
+            outln!(
                 "{name:<22} {:>9.2} {:>9.2} {:>9.2}   {:>8.2} {:>8.2} {:>8.2} {u}",
                 shown(f.xyz[0], 2),
                 shown(f.xyz[1], 2),
@@ -157,7 +164,7 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
                 shown(f.rpy[0], 2),
                 shown(f.rpy[1], 2),
                 shown(f.rpy[2], 2)
-            );
+            )?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -247,13 +254,13 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
         }
     };
     if args.json {
-        println!("{}", serde_json::to_string(&out)?);
+        outln!("{}", serde_json::to_string(&out)?)?;
     } else if let Some(joints) = &out.joints {
         for (name, angle) in joints {
-            println!("{name:<22} {:>9.3} {}", shown(*angle, 3), robot.units);
+            outln!("{name:<22} {:>9.3} {}", shown(*angle, 3), robot.units)?;
         }
     } else if let Some(e) = &out.error {
-        println!("no joint angles put `{}` there: {e}", args.frame);
+        outln!("no joint angles put `{}` there: {e}", args.frame)?;
     }
     Ok(code)
 }

@@ -10,6 +10,7 @@ use servobus_io::AtomicFile;
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 use super::exit::input;
+use super::out::outln;
 
 /// Arguments of `servobus init`.
 #[derive(Debug, clap::Args)]
@@ -61,7 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     for file in written {
         let path = file.path().to_path_buf();
         file.commit()?;
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display())?;
     }
     // `./motion.yaml` reads better as `motion.yaml`.
     let motion = if args.dir == Path::new(".") {
@@ -70,10 +71,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         files[1].0.clone()
     };
     let motion = motion.display();
-    println!(
+    outln!(
         "Next: set each joint's id and limits in robot.yaml (and `port:` for real servos), then\n  \
          servobus plan {motion}\n  servobus play {motion}"
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -7,6 +7,8 @@ use servobus_driver::{SerialTransport, Series, SystemClock};
 use servobus_robot::{ports, Connection, Target};
 use servobus_runtime::config::{BusConfig, Robot};
 
+use super::out::errln;
+
 pub(crate) use servobus_robot::ports::{
     bus_ports, every_port, system_clock, Allowance, Ports, SerialBus,
 };
@@ -15,7 +17,7 @@ pub(crate) use servobus_robot::ports::{
 /// reply down.
 fn warn_slow_adapter(transport: &SerialTransport<SystemClock>) {
     if let Some(warning) = ports::slow_adapter(transport).and_then(|f| f.warning()) {
-        eprintln!("warning: {warning}");
+        errln!("warning: {warning}");
     }
 }
 
@@ -111,7 +113,7 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
         })?;
     for slow in connection.slow_adapters() {
         if let Some(warning) = slow.timer.warning() {
-            eprintln!("warning: {warning}");
+            errln!("warning: {warning}");
         }
     }
     Ok(connection)

@@ -18,6 +18,7 @@ use servobus_runtime::{Command, Runner, Telemetry};
 use std::io::IsTerminal;
 
 use super::link::{open_bus, open_plain_bus, Allowance};
+use super::out::{errln, outln};
 
 /// Baud rate a scan without a robot file uses (the servos' factory rate).
 const SCAN_BAUD: u32 = 1_000_000;
@@ -83,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Before the bus is touched: without a terminal, JSON lines instead.
     let live = !args.json && terminal_available();
     if !args.json && !live {
-        eprintln!(
+        errln!(
             "note: no terminal (stdin and stdout must be one): printing one JSON line per \
              refresh instead of the live view, as --json does"
         );
@@ -269,7 +270,7 @@ fn watch<T: Transport, C: Clock>(
         let frame = poller.frame(bus.clock(), note.clone());
         problem |= frame.has_problem();
         match &mut screen {
-            None => println!("{}", serde_json::to_string(&frame)?),
+            None => outln!("{}", serde_json::to_string(&frame)?)?,
             Some(s) => {
                 s.0.draw(|f| view::draw(f, &frame, title))?;
             }

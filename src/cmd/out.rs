@@ -21,7 +21,6 @@
 
 use std::fmt;
 use std::io::{self, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Stdout could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -40,7 +39,6 @@ impl StdoutError {
     /// The error for a failed write to stdout, `Closed` for EPIPE.
     pub fn of(err: io::Error) -> StdoutError {
         if err.kind() == io::ErrorKind::BrokenPipe {
-            CLOSED.store(true, Ordering::SeqCst);
             StdoutError::Closed
         } else {
             StdoutError::Failed(err)
@@ -48,19 +46,9 @@ impl StdoutError {
     }
 
     /// Whether the reader went away (rather than the write failing).
-    #[allow(dead_code)] // until play reads it
     pub fn is_closed(&self) -> bool {
         matches!(self, StdoutError::Closed)
     }
-}
-
-/// Set once a write to stdout met a closed pipe: later output goes nowhere.
-static CLOSED: AtomicBool = AtomicBool::new(false);
-
-/// Whether a write to stdout has met a closed pipe in this process.
-#[allow(dead_code)] // until play reads it
-pub fn stdout_closed() -> bool {
-    CLOSED.load(Ordering::SeqCst)
 }
 
 /// Writes `args` to stdout, then a newline when `newline`. Stdout is line
@@ -135,7 +123,6 @@ macro_rules! errln {
 }
 
 /// `eprint!` that never panics: what stderr cannot take is dropped.
-#[allow(unused_macros)] // eprint!: for a line that goes on (a live display)
 macro_rules! err {
     ($($arg:tt)*) => {
         $crate::cmd::out::write_err(format_args!($($arg)*), false)
@@ -153,7 +140,6 @@ mod tests {
     fn a_broken_pipe_is_a_closed_stdout_and_a_full_disk_a_failure() {
         let closed = StdoutError::of(io::Error::from(io::ErrorKind::BrokenPipe));
         assert!(closed.is_closed());
-        assert!(stdout_closed());
         let full = StdoutError::of(io::Error::from_raw_os_error(28));
         assert!(!full.is_closed());
         assert_eq!(full.to_string(), "cannot write to stdout: the disk is full");

@@ -139,14 +139,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
         .context("cannot install the SIGINT/SIGTERM handler")?;
 
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
+    super::out::outln!(
         "serving {count} servos on {}",
         server.client_path().display()
     )?;
-    out.flush()?;
-    drop(out);
+    super::out::flush()?;
 
     let writer = truth.map(|(truth, out, path)| {
         let stop = Arc::clone(&stop);

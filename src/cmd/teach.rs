@@ -15,6 +15,7 @@ use servobus_runtime::teach::{
 };
 
 use super::link::{bus_ports, every_port, Allowance, SerialBus};
+use super::out::{err, errln};
 
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;
@@ -91,8 +92,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         format!(" (holding {})", args.hold.join(", "))
     };
     let interactive = std::io::stdin().is_terminal() && !args.yes;
-    eprintln!("torque off{held}: move the robot by hand.");
-    eprintln!("{}", how_to_stop(&args, interactive));
+    errln!("torque off{held}: move the robot by hand.");
+    errln!("{}", how_to_stop(&args, interactive));
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -132,7 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     );
     match taken {
         Ok(_) => {
-            eprintln!(
+            errln!(
                 "{written}; play it with `servobus play {}`",
                 args.output.display()
             );
@@ -293,7 +294,7 @@ fn take<T: Transport, C: Clock>(
                 return Err((take, e.into()));
             }
             take.poses.push((t, k.clone()));
-            eprintln!(
+            errln!(
                 "{}keyframe {} at {t:.1} s: {}",
                 if view { "\r\x1b[K" } else { "" },
                 take.poses.len(),
@@ -302,12 +303,12 @@ fn take<T: Transport, C: Clock>(
         }
         if view && teacher.now() >= next_view {
             next_view = teacher.now() + VIEW_EVERY;
-            eprint!("\r\x1b[K{t:6.1} s  {}", show(&names, &pose));
+            err!("\r\x1b[K{t:6.1} s  {}", show(&names, &pose));
             let _ = std::io::stderr().flush();
         }
     }
     if view {
-        eprintln!();
+        errln!();
     }
     Ok(take)
 }

@@ -10,6 +10,7 @@ use servobus_runtime::config::{
 };
 use servobus_trajectory::{JointState, Trajectory};
 
+use super::out::{outln, StdoutError};
 use crate::record::space;
 
 /// Arguments of `servobus plan`.
@@ -138,11 +139,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print_text(&report, &motion);
+        print_text(&report, &motion)?;
         if let Some(path) = &args.plot {
-            println!("plot written to {}", path.display());
+            outln!("plot written to {}", path.display())?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -227,9 +228,9 @@ fn moving_times(traj: &Trajectory, rate_hz: f64) -> Vec<f64> {
     moving
 }
 
-fn print_text(r: &PlanJson, motion: &Motion) {
+fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
     let u = &r.units;
-    println!(
+    outln!(
         "{}: {} keyframes{} ({}) on `{}`, {:.3} s at {} Hz ({} cycles)",
         r.motion,
         motion.keyframes.len(),
@@ -243,7 +244,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         r.duration_s,
         r.rate_hz,
         (r.duration_s * r.rate_hz).ceil()
-    );
+    )?;
     let w = r
         .joints
         .iter()
@@ -251,7 +252,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         .max()
         .unwrap_or(5)
         .max(5);
-    println!(
+    outln!(
         "\n{:w$}  {:>9}  {:>19}  {:>12}  {:>14}  {:>14}",
         "joint",
         "moving s",
@@ -259,12 +260,12 @@ fn print_text(r: &PlanJson, motion: &Motion) {
         format!("vel {u}/s"),
         format!("acc {u}/s^2"),
         format!("jerk {u}/s^3"),
-    );
+    )?;
     for j in &r.joints {
         let jerk = j
             .peak_jerk
             .map_or("no limit".to_owned(), |x| format!("{x:.0}"));
-        println!(
+        outln!(
             "{:w$}  {:>9.3}  {:>19}  {:>12.1}  {:>14.1}  {:>14}",
             j.name,
             j.moving_s,
@@ -272,9 +273,9 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             j.peak_velocity,
             j.peak_acceleration,
             jerk,
-        );
+        )?;
     }
-    println!("\nsegments (arriving at keyframe):");
+    outln!("\nsegments (arriving at keyframe):")?;
     let pw = motion
         .keyframes
         .iter()
@@ -314,7 +315,7 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             None => String::new(),
         };
         let what = if count > 1 { "in space" } else { what.as_str() };
-        println!(
+        outln!(
             "  {:>3} {:<pw$} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
             r.segments[last].keyframe,
             what,
@@ -322,47 +323,49 @@ fn print_text(r: &PlanJson, motion: &Motion) {
             s.start_s,
             end_s,
             end_s - s.start_s,
-        );
+        )?;
     }
     if let Some(sp) = &r.spatial {
-        print_spatial(sp, u);
+        print_spatial(sp, u)?;
     }
+    Ok(())
 }
 
-fn print_spatial(sp: &SpatialJson, u: &str) {
-    println!(
+fn print_spatial(sp: &SpatialJson, u: &str) -> Result<(), StdoutError> {
+    outln!(
         "
 in space:"
-    );
+    )?;
     if let (Some(v), Some(len), Some(d)) = (
         sp.tool_peak_speed_mm_s,
         sp.tool_path_mm,
         sp.min_dexterity_mm_per_rad,
     ) {
-        println!(
+        outln!(
             "  tool: peak speed {v:.1} mm/s, path {len:.1} mm; closest to a singular pose: \
              dexterity {d:.1} mm/rad"
-        );
+        )?;
     }
     if let Some(lift) = sp.max_foot_lift_mm {
         let margin = sp
             .min_stability_margin_mm
             .map_or("no foot lifted".to_owned(), |m| format!("{m:.1} mm"));
-        println!("  feet: highest lift {lift:.1} mm; worst stability margin {margin}");
+        outln!("  feet: highest lift {lift:.1} mm; worst stability margin {margin}")?;
         if let (Some(d), Some(t)) = (sp.body_distance_mm, sp.body_turn) {
-            println!("  body: travels {d:.1} mm and turns {t:.1} {u}");
+            outln!("  body: travels {d:.1} mm and turns {t:.1} {u}")?;
         }
         if let Some(low) = sp.low_margin_at_s.as_ref().filter(|l| !l.is_empty()) {
             let at: Vec<String> = low.iter().map(|t| format!("{t:.2}")).collect();
-            println!(
+            outln!(
                 "  warning: the stability margin drops under 10 mm at {} s",
                 at.join(", ")
-            );
+            )?;
         }
     }
     if let (Some(j), Some(g)) = (&sp.closest_limit_joint, sp.closest_limit) {
-        println!("  closest to a limit: `{j}`, {g:.1} {u} from it");
+        outln!("  closest to a limit: `{j}`, {g:.1} {u} from it")?;
     }
+    Ok(())
 }
 
 /// Position and velocity of every joint over time, one chart above the

@@ -7,7 +7,7 @@
 //! approach from wherever the joints are to the first keyframe), a progress
 //! line follows it, and a report closes it.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -19,7 +19,8 @@ use servobus_runtime::config::{
 };
 use servobus_runtime::rt::RtOptions;
 use servobus_runtime::{
-    spawn, spawn_virtual, Command, Finish, Lead, Report, RunOptions, Runner, Telemetry,
+    spawn, spawn_virtual, Command, CommandSender, Finish, Lead, Report, RunOptions, Runner,
+    Telemetry,
 };
 use servobus_trajectory::Trajectory;
 
@@ -36,10 +37,12 @@ mod view;
 
 use load::{check_outputs, load};
 pub(crate) use report::write_report;
-use report::{file_name, print_plan, print_report};
+use report::{file_name, print_plan};
 use setup::{backend, check_measured_rates, sim_pose};
 pub(crate) use view::install_ctrl_c;
-use view::{follow, Shown, APPROACH, SETTLE};
+use view::{follow, Followed, Shown, APPROACH, SETTLE};
+
+use super::out::{err, out, outln};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
@@ -147,9 +150,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let backend = backend(&args, &robot)?;
     let pose = sim_pose(&args, &robot, &backend)?;
     if !args.json {
+        // Stdout that cannot be written (closed, full) fails the command
+        // here, before anything moves.
         print_plan(&motion, &robot, &trajectory, rate_hz, &backend)?;
         if let Some(r) = &recording {
-            println!("  {}", r.describe(motion.units));
+            outln!("  {}", r.describe(motion.units))?;
         }
     }
     // The log's temporary is created before anything moves: a path that
@@ -228,12 +233,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         geometry: robot.geometry(),
     };
     let outcome = if args.monitor {
-        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| (None, None))
+        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
+            log: None,
+            plot: None,
+            stdout: None,
+        })
     } else {
         follow(&runner, &args, log, &shown, units, duration)
     };
     let report = runner.join();
-    let (log, plot) = outcome?;
+    let Followed { log, plot, stdout } = outcome?;
     // The run has moved: what it logged is kept, also when it ended in an
     // error (the error is said after the log is in place).
     let mut failed_outputs = Vec::new();
@@ -266,23 +275,35 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Err(e) => failed_outputs.push(e),
         }
     }
+    let mut text = Vec::new();
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
             obj.insert("recording".into(), r.json(motion.units));
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        writeln!(text, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {
-        print_report(&report, robot.lead.is_none());
+        write_report(&mut text, &report, robot.lead.is_none())?;
         if let Some(r) = &recording {
-            println!("  {}", r.describe(motion.units));
+            writeln!(text, "  {}", r.describe(motion.units))?;
         }
         if let (true, Some(path)) = (log_written, &args.log) {
-            println!("log: {}", path.display());
+            writeln!(text, "log: {}", path.display())?;
         }
         if let (true, Some(path)) = (plot_written, &args.plot) {
-            println!("plot: {}", path.display());
+            writeln!(text, "plot: {}", path.display())?;
         }
+    }
+    let text = String::from_utf8_lossy(&text);
+    // The report goes to stdout; once stdout has failed (closed by its
+    // reader, or full), to stderr, and the command exits 1 after it.
+    let stdout = match stdout {
+        Some(e) => Some(e),
+        None => out!("{text}").err(),
+    };
+    if let Some(e) = stdout {
+        err!("{text}");
+        failed_outputs.push(e.into());
     }
     // An output that failed fails the command (exit 1) after the report:
     // each error is said, the last by `main` as it returns.

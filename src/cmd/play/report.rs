@@ -1,6 +1,7 @@
 //! The plan printed before a run of `servobus play` and the report after it.
 
 use super::*;
+use crate::cmd::out::outln;
 
 pub(super) fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(
@@ -21,20 +22,20 @@ pub(super) fn print_plan(
         Backend::Simulated => "the simulator, real time".to_string(),
         Backend::Hardware(ports) => format!("servos on {}", ports.join(", ")),
     };
-    println!(
+    outln!(
         "{} on {} ({} joints, {} bus{}) via {on}",
         file_name(&motion.path),
         robot.name,
         robot.joint_count(),
         robot.buses.len(),
         if robot.buses.len() == 1 { "" } else { "es" },
-    );
-    println!(
+    )?;
+    outln!(
         "  path {:.2} s, {} keyframes x {}, at {rate_hz} Hz",
         trajectory.duration(),
         motion.keyframes.len(),
         motion.repeat
-    );
+    )?;
     for bus in &robot.buses {
         let plan = bus.plan(rate_hz)?;
         let every = if plan.read_every() > 1 {
@@ -42,7 +43,7 @@ pub(super) fn print_plan(
         } else {
             String::new()
         };
-        println!(
+        outln!(
             "  bus {}: {} servos at {} baud, {} B and {:.0} us per cycle, {:.1} % of the period \
              (max {:.0} Hz){every}",
             bus.name,
@@ -52,19 +53,13 @@ pub(super) fn print_plan(
             plan.cycle_time_us(),
             100.0 * plan.utilisation(),
             plan.fastest_rate_hz(),
-        );
+        )?;
     }
     Ok(())
 }
 
-/// Prints the end-of-run report on stdout; `identified`: the lead was
+/// Writes the end-of-run report to `out`; `identified`: the lead was
 /// found while playing rather than set in the robot file.
-pub(super) fn print_report(r: &Report, identified: bool) {
-    // Stdout gone (a closed pipe) leaves nothing to tell.
-    let _ = write_report(&mut std::io::stdout().lock(), r, identified);
-}
-
-/// Writes the end-of-run report to `out` (see [`print_report`]).
 pub(crate) fn write_report(
     out: &mut impl std::io::Write,
     r: &Report,

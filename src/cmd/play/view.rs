@@ -1,7 +1,9 @@
 //! What `servobus play` shows while it runs: the progress, the log and plot
-//! series, and Ctrl-C.
+//! series, and Ctrl-C. A closed stdout (`play ... | head`) is taken as
+//! Ctrl-C once: a jerk-limited stop, then hold and report (on stderr).
 
 use super::*;
+use crate::cmd::out::{errln, outln, StdoutError};
 
 /// How long the final position is held (and tracked) after the path.
 pub(super) const SETTLE: Duration = servobus_robot::SETTLE;
@@ -32,10 +34,10 @@ pub(crate) fn install_ctrl_c(runner: &Runner) {
     let installed = ctrlc::set_handler(move || {
         let n = seen.fetch_add(1, Ordering::SeqCst);
         let command = if n == 0 {
-            eprintln!("\nstopping (jerk-limited), then holding; Ctrl-C again turns the torque off");
+            errln!("\nstopping (jerk-limited), then holding; Ctrl-C again turns the torque off");
             Command::Stop
         } else {
-            eprintln!("\ntorque off");
+            errln!("\ntorque off");
             Command::TorqueOff
         };
         // The run may have ended already; nothing else to do then.
@@ -43,8 +45,19 @@ pub(crate) fn install_ctrl_c(runner: &Runner) {
     });
     if let Err(e) = installed {
         // Tests and embedders may have a handler already; playing still works.
-        eprintln!("warning: Ctrl-C handling unavailable ({e})");
+        errln!("warning: Ctrl-C handling unavailable ({e})");
     }
+}
+
+/// What a run leaves to write once it has ended.
+pub(super) struct Followed {
+    /// The log, to finish.
+    pub(super) log: Option<CsvLog>,
+    /// The plot's series, to draw.
+    pub(super) plot: Option<PlotData>,
+    /// Why stdout could not be written while the run went on: the report
+    /// goes to stderr then, and the command exits 1.
+    pub(super) stdout: Option<StdoutError>,
 }
 
 /// Reads the telemetry until the run ends: progress, log, plot series.
@@ -56,13 +69,13 @@ pub(super) fn follow(
     shown: &Shown,
     units: Units,
     duration: f64,
-) -> anyhow::Result<(Option<CsvLog>, Option<PlotData>)> {
+) -> anyhow::Result<Followed> {
     let mut plot = args.plot.as_ref().map(|_| {
         PlotData::new(shown.names.clone(), shown.bus_of.clone())
             .with_frames(shown.geometry.clone(), units)
     });
     let mut announced = false;
-    let mut progress = Progress::new(args.json, duration, &units.to_string());
+    let mut progress = Progress::new(args.json, duration, &units.to_string(), runner.commands());
     let telemetry = runner.telemetry();
     loop {
         match telemetry.recv_timeout(Duration::from_millis(100)) {
@@ -108,7 +121,11 @@ pub(super) fn follow(
         }
     }
     progress.finish();
-    Ok((log, plot))
+    Ok(Followed {
+        log,
+        plot,
+        stdout: progress.stdout,
+    })
 }
 
 /// The live progress: a bar on a terminal, a line a second otherwise.
@@ -121,10 +138,14 @@ pub(super) struct Progress {
     first: Option<(u64, f64)>,
     last: (u64, f64),
     last_line: Instant,
+    /// Where a closed stdout sends its stop.
+    commands: CommandSender,
+    /// Why stdout failed, once it has: no more lines go there.
+    stdout: Option<StdoutError>,
 }
 
 impl Progress {
-    pub(super) fn new(json: bool, duration: f64, units: &str) -> Self {
+    pub(super) fn new(json: bool, duration: f64, units: &str, commands: CommandSender) -> Self {
         // The bar draws on stderr and hides itself when that is no
         // terminal: then plain lines on stdout instead.
         let terminal = std::io::stdout().is_terminal() && std::io::stderr().is_terminal();
@@ -145,6 +166,8 @@ impl Progress {
             first: None,
             last: (0, 0.0),
             last_line: Instant::now(),
+            commands,
+            stdout: None,
         }
     }
 
@@ -175,8 +198,24 @@ impl Progress {
             bar.set_message(msg);
         } else if self.plain && self.last_line.elapsed() >= Duration::from_secs(1) {
             self.last_line = Instant::now();
-            println!("{msg}");
+            if let Err(e) = outln!("{msg}") {
+                self.stdout_failed(e);
+            }
         }
+    }
+
+    /// Stdout failed: no more lines go there. Closed by its reader, it is
+    /// a stop as Ctrl-C's; any other failure leaves the motion to end.
+    fn stdout_failed(&mut self, e: StdoutError) {
+        self.plain = false;
+        if e.is_closed() {
+            errln!("\nstdout was closed: stopping (jerk-limited), then holding");
+            // The run may have ended already; nothing else to do then.
+            let _ = self.commands.try_send(Command::Stop);
+        } else {
+            errln!("\n{e}: the run goes on, its report will be on stderr");
+        }
+        self.stdout = Some(e);
     }
 
     /// The run's whole length: approach, path and settling.
@@ -187,7 +226,7 @@ impl Progress {
     pub(super) fn message(&self, text: &str) {
         match &self.bar {
             Some(bar) => bar.println(text),
-            None => eprintln!("{text}"),
+            None => errln!("{text}"),
         }
     }
 

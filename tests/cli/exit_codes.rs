@@ -219,3 +219,190 @@ fn monitor_json_exits_1_after_seeing_a_missing_or_flagged_servo() {
     );
     assert_eq!(code, 0, "every servo fine: {row}");
 }
+
+/// Stdout that cannot be written is an error, never a panic (101): a
+/// full one (`> /dev/full`) fails `play` before anything moves, and
+/// `plan --json`, with exit 1 and the reason.
+#[test]
+fn a_full_stdout_exits_1_without_a_panic() {
+    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full");
+    if full().is_err() {
+        eprintln!("skipped: no /dev/full");
+        return;
+    }
+    for args in [
+        &["play", "arm-wave", "--fast"][..],
+        &["plan", "arm-wave", "--json"][..],
+        &["list"][..],
+        &["completions", "bash"][..],
+    ] {
+        let out = Command::new(BIN)
+            .args(args)
+            .stdout(full().expect("/dev/full"))
+            .output()
+            .expect("servobus runs");
+        let err = error(&out, 1);
+        says(&err, &["cannot write to stdout", "the disk is full"]);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// The rows of a `play --log` CSV as (time s, joint, commanded, measured),
+/// each row checked whole: as many fields as the header, numbers where
+/// numbers belong.
+fn log_rows(log: &std::path::Path) -> Vec<(f64, String, f64, Option<f64>)> {
+    let text = std::fs::read_to_string(log).expect("the log");
+    assert!(text.ends_with('\n'), "the log ends with a whole row");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (t, j, c, m) = (
+        col("time_s"),
+        col("joint"),
+        col("commanded_deg"),
+        col("measured_deg"),
+    );
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f.len(), header.len(), "a whole row: {l}");
+            let num = |i: usize| f[i].parse::<f64>().expect("a number");
+            (num(t), f[j].to_owned(), num(c), f[m].parse().ok())
+        })
+        .collect()
+}
+
+/// Each joint's `max_acceleration` in the robot file `robot` (read from
+/// the YAML here, not by servobus).
+fn max_accelerations(robot: &str) -> Vec<(String, f64)> {
+    let text = std::fs::read_to_string(common::repo(robot)).expect("the robot file");
+    let robot: serde_yaml::Value = serde_yaml::from_str(&text).expect("YAML");
+    let buses = robot["buses"].as_sequence().expect("buses");
+    let joints = buses
+        .iter()
+        .flat_map(|b| b["joints"].as_sequence().expect("joints"));
+    joints
+        .map(|j| {
+            let name = j["name"].as_str().expect("a name").to_owned();
+            (name, j["max_acceleration"].as_f64().expect("a limit"))
+        })
+        .collect()
+}
+
+/// `play --port P --log L | head -4`: `head` ends once it has the plan's
+/// three lines and the first progress line (a second into the run), so
+/// the next progress line meets a closed pipe. That is Ctrl-C's first
+/// press: the joints stop within their limits and hold with the torque on,
+/// the log is written whole, the report goes to stderr, and play exits 1.
+#[test]
+fn a_closed_stdout_stops_play_jerk_limited_keeps_the_log_and_exits_1() {
+    const SO101: &str = "configs/robots/so101.yaml";
+    let dir = scratch("exit-codes-closed-stdout");
+    let truth = dir.join("truth.csv");
+    let sim = Sim::start_with(&dir, &["--truth", arg(&truth)]);
+    let log = dir.join("log.csv");
+    let mut play = Command::new(BIN)
+        .args(["play", "arm-wave", "--robot", SO101, "--port", sim.port()])
+        .arg("--log")
+        .arg(&log)
+        .current_dir(common::repo(""))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("play starts");
+    let pipe = play.stdout.take().expect("play's stdout");
+    let head = Command::new("head")
+        .arg("-4")
+        .stdin(Stdio::from(pipe))
+        .stdout(Stdio::piped())
+        .output()
+        .expect("head runs");
+    // Bounded: the motion lasts 6 s at most, the stop less.
+    let out = play.wait_with_output().expect("play ends");
+    let shown = String::from_utf8_lossy(&head.stdout).into_owned();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "head had:\n{shown}\nstderr:\n{err}"
+    );
+    assert_eq!(shown.lines().count(), 4, "{shown}");
+    assert!(
+        shown.lines().nth(3).is_some_and(|l| l.contains(" s  ")),
+        "{shown}"
+    );
+    says(
+        &err,
+        &[
+            "stdout was closed: stopping (jerk-limited), then holding",
+            "stopped: ",
+            "tracking error",
+            "log: ",
+            "error: stdout was closed",
+        ],
+    );
+    assert!(!err.contains("panicked"), "{err}");
+
+    // The log is whole, with no temporary left, and ends early: stopped.
+    let rows = log_rows(&log);
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .expect("the directory lists")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".log.csv"))
+        .collect();
+    assert!(left.is_empty(), "temporaries left: {left:?}");
+    let planned = common::servobus_json(&["plan", "arm-wave", "--robot", SO101, "--json"]);
+    let path_s = common::num(&planned, "duration_s");
+    let end = rows.last().expect("rows").0;
+    assert!(
+        end < path_s,
+        "stopped before the path's end {path_s} s: {end} s"
+    );
+
+    // Within the limits: the goals' acceleration (second differences over
+    // 50 ms, where the log's rounding adds under 0.1 deg/s^2) never
+    // exceeds the joint's limit, so nothing stopped dead; and the joints
+    // end at rest, where the simulator's truth finds them.
+    for (joint, acc_limit) in max_accelerations(SO101) {
+        let goals: Vec<(f64, f64, Option<f64>)> = rows
+            .iter()
+            .filter(|r| r.1 == joint)
+            .map(|r| (r.0, r.2, r.3))
+            .collect();
+        let spaced: Vec<(f64, f64)> = goals.iter().step_by(10).map(|g| (g.0, g.1)).collect();
+        for w in spaced.windows(3) {
+            let v1 = (w[1].1 - w[0].1) / (w[1].0 - w[0].0);
+            let v2 = (w[2].1 - w[1].1) / (w[2].0 - w[1].0);
+            let acc = (v2 - v1) / ((w[2].0 - w[0].0) / 2.0);
+            assert!(
+                acc.abs() <= acc_limit * 1.02 + 0.1,
+                "{joint}: {acc} deg/s^2 at {} s, beyond {acc_limit}",
+                w[1].0
+            );
+        }
+        let last = &goals[goals.len() - 2..];
+        let v = (last[1].1 - last[0].1) / (last[1].0 - last[0].0);
+        assert!(v.abs() < 0.5, "{joint} ends at rest: {v} deg/s");
+    }
+    // Held with the torque on, the servos stay where the stop left them.
+    for id in 1..=6 {
+        assert_eq!(sim.read(&id.to_string(), "torque_enable"), 1, "servo {id}");
+    }
+    sim.stop();
+    let (header, truth_rows) = common::read_truth(&truth);
+    let at_end = truth_rows.last().expect("truth rows");
+    for (joint, &angle) in header.iter().zip(at_end).skip(1) {
+        let logged = rows
+            .iter()
+            .rev()
+            .find(|r| &r.1 == joint)
+            .and_then(|r| r.3)
+            .expect("a last reading");
+        assert!(
+            (angle - logged).abs() < 1.0,
+            "{joint}: the truth {angle} deg is where the log left it ({logged} deg)"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,6 +6,22 @@ use serde::Serialize;
 
 use crate::options::Reaction;
 
+/// How far beyond a stalled joint's position its goal may go in a live
+/// session, rad (1 degree).
+///
+/// A joint that stalls while following live targets (a gripper closing on
+/// its end stop or on what it holds) is not a fault there: it is held
+/// pressed, and the goal sent to its servo stays within this distance of
+/// the furthest position it was measured at in the direction pushed (at a
+/// stop, where it stands). A position servo's effort is its P gain times
+/// its position error, so this bounds the effort: an STS3215 at its factory
+/// P gain of 32 gives full torque at 50 ticks (4.4 degrees) of error, and
+/// about a quarter of it at this bound, well short of its overload
+/// protection. Following resumes as soon as the commanded goal comes back
+/// within the bound. Status flags (heat, over-current) and a missing servo
+/// still end the run.
+pub const STALL_PUSH: f64 = std::f64::consts::PI / 180.0;
+
 /// A fault the loop detected. Angles are in the report's units
 /// ([`Report::units`](crate::Report::units)).
 #[derive(Debug, Clone, PartialEq, Serialize)]

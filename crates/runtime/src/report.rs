@@ -47,6 +47,12 @@ pub struct JointReport {
     pub readings: u64,
     /// Goals clamped to the joint's limits.
     pub clamps: u64,
+    /// Times it stalled in a live session and was held pressed with
+    /// bounded effort ([`StallEvent`](crate::Telemetry::Stall)) instead of
+    /// ending the run.
+    pub stalls: u64,
+    /// How long it was held so, s.
+    pub stalled_s: f64,
 }
 
 /// One bus's figures.
@@ -143,6 +149,11 @@ impl Report {
     /// The largest RMS tracking error over the joints.
     pub fn worst_rms_error(&self) -> f64 {
         self.joints.iter().map(|j| j.rms_error).fold(0.0, f64::max)
+    }
+
+    /// The joints that stalled and were held in a live session.
+    pub fn stalled_joints(&self) -> impl Iterator<Item = &JointReport> {
+        self.joints.iter().filter(|j| j.stalls > 0)
     }
 
     /// The largest tracking error of any joint.

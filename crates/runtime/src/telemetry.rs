@@ -48,6 +48,36 @@ pub struct JointSample {
     pub flags: StatusFlags,
     /// Reads in a row the servo has not answered (0 once it answers).
     pub missing_reads: u32,
+    /// Held pressed against a stop (live sessions): this cycle's goal was
+    /// kept within [`STALL_PUSH`](crate::fault::STALL_PUSH) of where it
+    /// stands.
+    pub stalled: bool,
+}
+
+/// A joint of a live session stalled and is held pressed with bounded
+/// effort, or was let go to follow again (see
+/// [`STALL_PUSH`](crate::fault::STALL_PUSH)). Angles are in the report's
+/// units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StallEvent {
+    /// Index of the joint in the robot's joint order.
+    pub joint: usize,
+    /// Index of its bus in the robot's bus order.
+    pub bus: usize,
+    /// Its servo's ID.
+    pub servo_id: u8,
+    /// True: it stalled and is held; false: its path came back within the
+    /// bound and it follows again.
+    pub held: bool,
+    /// The cycle's time since the start of the run, s.
+    pub time_s: f64,
+    /// The cycle.
+    pub cycle: u64,
+    /// Where it was measured.
+    pub position: f64,
+    /// The goal's largest distance beyond that while held, signed in the
+    /// direction pushed.
+    pub push: f64,
 }
 
 /// One bus's cycle.
@@ -178,6 +208,10 @@ pub enum Telemetry {
     Cycle(CycleSample),
     /// A fault was detected; its reaction has started.
     Fault(Fault),
+    /// A joint of a live session stalled (a gripper on its end stop or on
+    /// an object): the run goes on with the joint held pressed, or it was
+    /// let go ([`StallEvent::held`]).
+    Stall(StallEvent),
     /// A command could not be carried out (a replacement path with the
     /// wrong joints, say); the run goes on as before.
     Rejected(Rejection),

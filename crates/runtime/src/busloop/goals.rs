@@ -6,6 +6,7 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::{addr, ByteOrder, Register};
 use servobus_trajectory::JointState;
 
+use super::tracking::Press;
 use crate::config::{BusConfig, JointConfig, JointMap, Units};
 use crate::error::PortGone;
 
@@ -127,10 +128,14 @@ impl GoalWriter {
         }
     }
 
-    /// Aims every joint at `cmd` (robot order, rad).
-    pub fn aim(&mut self, cmd: &[JointState]) {
-        for j in &mut self.joints {
-            j.set(cmd.get(j.robot_index).map_or(f64::NAN, |s| s.position));
+    /// Aims every joint at `cmd` (robot order, rad), each passed through
+    /// `bound(i)` (joint `i` of the bus) first: a pressed joint's goal is
+    /// kept near where it stands ([`Press::limit`]). The joint limits apply
+    /// after it, as always.
+    pub fn aim_within(&mut self, cmd: &[JointState], bound: impl Fn(usize) -> Option<Press>) {
+        for (i, j) in self.joints.iter_mut().enumerate() {
+            let rad = cmd.get(j.robot_index).map_or(f64::NAN, |s| s.position);
+            j.set(bound(i).map_or(rad, |p| p.limit(rad)));
         }
     }
 

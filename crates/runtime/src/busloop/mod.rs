@@ -33,11 +33,11 @@ use tracking::Tracker;
 
 use crate::config::{BusConfig, Units};
 use crate::error::{PortGone, RunError};
-use crate::fault::{Fault, FaultKind};
+use crate::fault::{Fault, FaultKind, STALL_PUSH};
 use crate::options::{FaultPolicy, Lead};
 use crate::report::{BusReport, JointReport};
 use crate::stats::Histogram;
-use crate::telemetry::Telemetry;
+use crate::telemetry::{StallEvent, Telemetry};
 
 /// What a [`BusLoop`] is built from.
 pub(crate) struct LoopConfig<'a> {
@@ -217,10 +217,66 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         self.track.begin();
     }
 
-    /// Maps, clamps and sends the goals for `cmd` (robot order, rad).
+    /// From now on the run is a live session (it follows live targets): a
+    /// joint that stalls is held pressed with bounded effort
+    /// ([`STALL_PUSH`](crate::fault::STALL_PUSH)), reported, and does not
+    /// end the run. The lane calls it in a cycle whose path is live.
+    // Until the lane's call is merged (see the change asked of lane.rs).
+    #[allow(dead_code)]
+    pub fn live_session(&mut self) {
+        self.track.live_session();
+    }
+
+    /// Maps, clamps and sends the goals for `cmd` (robot order, rad). A
+    /// pressed joint's goal is kept within its press's bound; one whose
+    /// goal came back within it is let go.
     pub fn write(&mut self, cmd: &[JointState]) -> Result<(), PortGone> {
-        self.goals.aim(cmd);
+        self.release_presses(cmd);
+        let joints = &self.track.joints;
+        self.goals
+            .aim_within(cmd, |i| joints.get(i).and_then(|j| j.press));
         self.send_goals()
+    }
+
+    /// Lets go every pressed joint whose goal in `cmd` no longer pushes
+    /// beyond its bound, counts the others' held cycle, and publishes the
+    /// change.
+    fn release_presses(&mut self, cmd: &[JointState]) {
+        for i in 0..self.track.joints.len() {
+            let Some(j) = self.track.joints.get_mut(i) else {
+                continue;
+            };
+            j.held = false;
+            let Some(press) = j.press else { continue };
+            let goal = cmd.get(j.robot_index).map_or(f64::NAN, |s| s.position);
+            if press.released_by(goal) || goal.is_nan() {
+                j.press = None;
+                self.publish_stall(i, false, press.dir);
+            } else {
+                j.held = true;
+                j.pressed_cycles += 1;
+            }
+        }
+    }
+
+    /// Publishes that joint `i` (of the bus) stalled and is held (`held`),
+    /// or was let go, pushed in direction `dir`.
+    fn publish_stall(&mut self, i: usize, held: bool, dir: f64) {
+        let Some(j) = self.track.joints.get(i) else {
+            return;
+        };
+        let u = self.units;
+        let event = StallEvent {
+            joint: j.robot_index,
+            bus: self.index,
+            servo_id: j.id,
+            held,
+            time_s: self.timing.index as f64 * self.period.as_secs_f64(),
+            cycle: self.timing.index,
+            position: u.from_rad(j.measured.unwrap_or(j.planned)),
+            push: u.from_rad(dir * STALL_PUSH),
+        };
+        self.out.publish(Telemetry::Stall(event));
     }
 
     /// Sends the goals of a hold at `positions` (robot order, rad) now.
@@ -295,6 +351,16 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     /// (`main`), and returns the first fault found. `t` is the cycle's time.
     pub fn track(&mut self, reference: &[JointState], main: bool, t: f64) -> Option<Fault> {
         let found = self.track.track(reference, self.read_at);
+        for i in 0..self.track.joints.len() {
+            let began = self.track.joints.get_mut(i).and_then(|j| {
+                let dir = j.press.map(|p| p.dir).filter(|_| j.press_began);
+                j.press_began = false;
+                dir
+            });
+            if let Some(dir) = began {
+                self.publish_stall(i, true, dir);
+            }
+        }
         self.lead.learn(self.track.fresh_errors(), main, t);
         found.map(|f| self.fault(f.kind, f.joint, f.reaction))
     }
@@ -429,6 +495,8 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                     max_error: u.from_rad(j.err.max_abs()),
                     readings: j.err.count(),
                     clamps: g.clamps,
+                    stalls: j.presses,
+                    stalled_s: j.pressed_cycles as f64 * self.period.as_secs_f64(),
                 };
                 (j.robot_index, report)
             })

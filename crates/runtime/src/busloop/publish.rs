@@ -82,6 +82,7 @@ impl Publisher {
                     clamped: g.clamped,
                     flags: j.flags,
                     missing_reads: j.missing,
+                    stalled: j.held,
                 });
             }
             if tx.try_send(Telemetry::Cycle(sample)).is_err() {

@@ -4,6 +4,16 @@
 //! Detection counts consecutive cycles in which a joint shows the condition
 //! and raises the fault on the policy's count, so that one bad reading does
 //! not stop a robot and a real fault is found within a few cycles.
+//!
+//! In a live session (a run following live targets, see
+//! [`Tracker::live_session`]) a joint that stalls is pressed against
+//! something (a gripper on its end stop or on what it holds), which is not
+//! a fault: instead of raising one, tracking marks the joint [`Press`]ed and
+//! the goal writer keeps its goal within [`STALL_PUSH`] of where it stands
+//! (see `goals`), until its commanded goal comes back within that bound.
+//! A following error of a joint that does not move towards its path is
+//! taken the same way. Status flags (heat, over-current, overload) and a
+//! missing servo still raise their faults, pressed or not.
 
 use std::time::Duration;
 
@@ -12,7 +22,7 @@ use servobus_protocol::StatusFlags;
 use servobus_trajectory::JointState;
 
 use crate::config::{BusConfig, JointMap, Units};
-use crate::fault::FaultKind;
+use crate::fault::{FaultKind, STALL_PUSH};
 use crate::options::{FaultPolicy, Reaction};
 use crate::stats::RunningError;
 
@@ -57,6 +67,53 @@ pub(crate) struct JointTrack {
     stall: u32,
     /// Reads in a row it has not answered.
     pub missing: u32,
+    /// Pressed against a stop (live sessions only): held with bounded
+    /// effort instead of raising a stall fault.
+    pub press: Option<Press>,
+    /// The press began at this cycle's reading (to be published).
+    pub press_began: bool,
+    /// Presses so far.
+    pub presses: u64,
+    /// Cycles it has been held pressed.
+    pub pressed_cycles: u64,
+    /// This cycle's goal was kept within its press's bound.
+    pub held: bool,
+}
+
+/// A joint pressed against a stop or an object: its goal is kept within
+/// [`STALL_PUSH`] beyond `anchor` in the direction `dir`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Press {
+    /// The direction the path pushes: +1 (towards higher angles) or -1.
+    pub dir: f64,
+    /// The furthest position measured in that direction since the press
+    /// began, rad (at a stop: where the joint stands). The goal is bounded
+    /// from there rather than from each reading, so that a joint pushed
+    /// back (a raised arm sagging under its load) is not let go further.
+    pub anchor: f64,
+}
+
+impl Press {
+    /// The furthest goal (rad) the press allows in its direction.
+    pub fn bound(&self) -> f64 {
+        self.anchor + self.dir * STALL_PUSH
+    }
+
+    /// `goal` kept within the bound, in the direction pushed only.
+    pub fn limit(&self, goal: f64) -> f64 {
+        let b = self.bound();
+        if (goal - b) * self.dir > 0.0 {
+            b
+        } else {
+            goal
+        }
+    }
+
+    /// Whether `goal` (the path's) no longer goes beyond the bound: the
+    /// target has moved back from the stop, or the joint has caught up.
+    pub fn released_by(&self, goal: f64) -> bool {
+        (goal - self.bound()) * self.dir <= 0.0
+    }
 }
 
 impl JointTrack {
@@ -108,6 +165,8 @@ pub(crate) struct Tracker {
     silent_reads: u32,
     /// ... and how long since one did, at the last of them.
     silent_for: Duration,
+    /// The run follows live targets: a stalled joint is pressed, not a fault.
+    live: bool,
 }
 
 impl Tracker {
@@ -143,6 +202,11 @@ impl Tracker {
                 follow: 0,
                 stall: 0,
                 missing: 0,
+                press: None,
+                press_began: false,
+                presses: 0,
+                pressed_cycles: 0,
+                held: false,
             })
             .collect();
         Tracker {
@@ -153,7 +217,14 @@ impl Tracker {
             missed: 0,
             silent_reads: 0,
             silent_for: Duration::ZERO,
+            live: false,
         }
+    }
+
+    /// From now on the run is a live session: a joint that stalls is held
+    /// pressed with bounded effort instead of raising a stall fault.
+    pub fn live_session(&mut self) {
+        self.live = true;
     }
 
     /// A new cycle: no reading is fresh yet.
@@ -222,11 +293,13 @@ impl Tracker {
             .min()
     }
 
-    /// `(error, planned velocity)` of every joint read this cycle.
+    /// `(error, planned velocity)` of every joint read this cycle and free
+    /// to follow its path (a pressed joint's error is the stop's, not its
+    /// lag).
     pub fn fresh_errors(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.joints
             .iter()
-            .filter(|j| j.fresh && j.measured.is_some())
+            .filter(|j| j.fresh && j.measured.is_some() && j.press.is_none())
             .map(|j| (j.error, j.planned_velocity))
     }
 
@@ -281,7 +354,7 @@ impl Tracker {
             let e = r.position - m;
             j.error = e;
             j.err.record(e);
-            let kind = judge(j, &p, e, r.velocity, u);
+            let kind = judge(j, &p, e, r.velocity, u, self.live);
             if found.is_none() {
                 found = kind.map(|(kind, reaction)| Found {
                     joint: Some(i),
@@ -296,12 +369,15 @@ impl Tracker {
 
 /// Counts `j`'s stalled and off-path readings (error `e` against a path
 /// moving at `v`) and names the first fault they or its status flags show.
+/// In a live session (`live`) a stall, or a following error of a joint not
+/// moving towards its path, presses the joint instead (see [`Press`]).
 fn judge(
     j: &mut JointTrack,
     p: &FaultPolicy,
     e: f64,
     v: f64,
     u: Units,
+    live: bool,
 ) -> Option<(FaultKind, Reaction)> {
     let stalled = e.abs() > p.stall_error
         && v.abs() >= p.stall_min_velocity
@@ -315,8 +391,38 @@ fn judge(
     let flags = j.flags.bits() & p.status_mask;
     if flags != 0 {
         let names = StatusFlags(flags).to_string();
-        Some((FaultKind::Status { flags, names }, p.on_status))
-    } else if j.stall >= p.stall_cycles {
+        return Some((FaultKind::Status { flags, names }, p.on_status));
+    }
+    if live {
+        let measured = j.measured.unwrap_or(j.planned);
+        if let Some(press) = &mut j.press {
+            // Held: the error is the stop's, not a fault. A joint that gets
+            // further (what it pressed on gave way) moves the anchor on.
+            if (measured - press.anchor) * press.dir > 0.0 {
+                press.anchor = measured;
+            }
+            j.stall = 0;
+            j.follow = 0;
+            return None;
+        }
+        // Not moving towards its path at a quarter of the slowest speed a
+        // stall is judged at: blocked, however slowly the path goes.
+        let towards = j.velocity * e.signum();
+        let blocked =
+            j.follow >= p.following_cycles && towards < p.stall_ratio * p.stall_min_velocity;
+        if j.stall >= p.stall_cycles || blocked {
+            j.press = Some(Press {
+                dir: e.signum(),
+                anchor: measured,
+            });
+            j.press_began = true;
+            j.presses += 1;
+            j.stall = 0;
+            j.follow = 0;
+            return None;
+        }
+    }
+    if j.stall >= p.stall_cycles {
         let kind = FaultKind::Stall {
             error: u.from_rad(e),
             planned_velocity: u.from_rad(v),

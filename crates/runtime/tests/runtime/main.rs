@@ -27,3 +27,4 @@ mod run_threads;
 mod sim_body;
 mod sim_budget;
 mod teach;
+mod live_stall;

@@ -11,6 +11,15 @@
 //! (p50, p99) and the follower's error against the leader, each reading
 //! of the follower against the leader's pose at that reading's time
 //! ([`against`]).
+//!
+//! A follower joint pressed against a stop (a gripper closed on its end
+//! stop or on an object) does not end the session: the runtime holds it
+//! with bounded effort and says so (`Telemetry::Stall`), and follow prints a
+//! warning line and counts it in the report (`stalls`, `stalled_s` per
+//! joint). When the session ends on an error (the leader lost, the
+//! follower's port lost, a fault), `--log`, `--record` and `--plot` are
+//! still written whole with what was captured and the report is printed;
+//! the exit code is 1.
 
 mod against;
 
@@ -31,6 +40,7 @@ use servobus_runtime::{
 };
 
 use super::link::{every_port, Allowance, Ports};
+use super::out::{errln, outln};
 use crate::record::{CsvLog, PlotData};
 
 /// Arguments of `servobus follow`.
@@ -205,6 +215,12 @@ struct Seen {
     commanded: Vec<f64>,
     cycles: u64,
     faults: Vec<String>,
+    /// The follower's joint names, for the stall lines.
+    names: Vec<String>,
+    /// Stall events: joint index, held (or let go), time s, position.
+    stalls: Vec<(usize, bool, f64, f64)>,
+    /// A live line is on stderr (a warning starts a line of its own).
+    live_line: bool,
 }
 
 impl Seen {
@@ -269,6 +285,9 @@ fn drive<T: Transport, C: Clock>(
         commanded: vec![0.0; names.len()],
         cycles: 0,
         faults: Vec::new(),
+        names: names.clone(),
+        stalls: Vec::new(),
+        live_line: !args.json,
     };
     let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
     super::play::install_ctrl_c(&runner);
@@ -284,13 +303,22 @@ fn drive<T: Transport, C: Clock>(
     let mut next = started;
     let mut reads = 0u64;
     let mut shown = started;
+    // Why the session ended early on the leader's side, if it did.
+    let mut lost = None;
     loop {
         let now = Instant::now();
         let t = now.duration_since(started).as_secs_f64();
         if runner.is_finished() || args.seconds.is_some_and(|s| t >= s) {
             break;
         }
-        leader.read(&mut pose, &mut trail)?;
+        if let Err(e) = leader.read(&mut pose, &mut trail) {
+            // The follower stops below and everything captured is kept.
+            lost = Some(format!(
+                "the leader was lost at {t:.1} s: {}",
+                super::exit::message(&e)
+            ));
+            break;
+        }
         let taken = Instant::now();
         reads += 1;
         let joints = names
@@ -299,7 +327,10 @@ fn drive<T: Transport, C: Clock>(
             .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
             .collect();
         let stamp = taken.duration_since(started).as_secs_f64();
-        send(&targets, Target::named(stamp, joints).taken_at(taken))?;
+        if let Err(e) = send(&targets, Target::named(stamp, joints).taken_at(taken)) {
+            lost = Some(format!("at {t:.1} s: {e}"));
+            break;
+        }
         while let Ok(m) = telemetry.try_recv() {
             take_message(&mut seen, m, args.record.is_some());
         }
@@ -318,7 +349,7 @@ fn drive<T: Transport, C: Clock>(
         }
     }
     if !args.json {
-        eprintln!();
+        errln!();
     }
     // The follower stops (jerk limited) and the run ends.
     let _ = runner.commands().send(Command::Stop);
@@ -329,7 +360,12 @@ fn drive<T: Transport, C: Clock>(
         take_message(&mut seen, m, args.record.is_some());
     }
     let report = runner.join()?;
-    finish(args, robot, &report, seen)
+    let code = finish(args, robot, &report, seen, lost.as_deref())?;
+    match lost {
+        // Said last, once everything is written: exit 1.
+        Some(why) => Err(anyhow::anyhow!(why)),
+        None => Ok(code),
+    }
 }
 
 fn send(targets: &TargetSender, target: Target) -> anyhow::Result<()> {
@@ -343,8 +379,25 @@ fn take_message(seen: &mut Seen, m: Telemetry, record: bool) {
     match m {
         Telemetry::Cycle(s) => seen.sample(&s, record),
         Telemetry::Fault(f) => {
-            eprintln!("fault: {f}");
+            errln!("fault: {f}");
             seen.faults.push(f.to_string());
+        }
+        Telemetry::Stall(e) => {
+            let name = seen.names.get(e.joint).map_or("?", String::as_str);
+            let start = if seen.live_line { "\n" } else { "" };
+            if e.held {
+                errln!(
+                    "{start}warning: {name} (ID {}) stalled at {:.1} at {:.2} s: held there with its \
+                     goal within {:.1} of it (bounded effort); the session goes on",
+                    e.servo_id,
+                    e.position,
+                    e.time_s,
+                    e.push.abs()
+                );
+            } else {
+                errln!("{start}{name} follows again at {:.2} s", e.time_s);
+            }
+            seen.stalls.push((e.joint, e.held, e.time_s, e.position));
         }
         _ => {}
     }
@@ -374,7 +427,14 @@ fn live_line(
 }
 
 /// The outputs and the report; exit 0 once stopped, 1 after a fault.
-fn finish(args: &Args, robot: &Robot, report: &Report, seen: Seen) -> anyhow::Result<ExitCode> {
+/// `lost`: why the leader's side ended the session, if it did.
+fn finish(
+    args: &Args,
+    robot: &Robot,
+    report: &Report,
+    seen: Seen,
+    lost: Option<&str>,
+) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let units = robot.units;
     if let Some(log) = seen.log {
@@ -405,18 +465,32 @@ fn finish(args: &Args, robot: &Robot, report: &Report, seen: Seen) -> anyhow::Re
         })
         .collect();
     let latency = report.live.and_then(|l| l.latency_ms);
+    let stalls: Vec<serde_json::Value> = seen
+        .stalls
+        .iter()
+        .map(|(j, held, t, position)| {
+            serde_json::json!({
+                "joint": names.get(*j),
+                "held": held,
+                "time_s": t,
+                "position": position,
+            })
+        })
+        .collect();
     let follow = serde_json::json!({
         "latency_ms": latency,
         "period_ms": 1e3 / report.planned_rate_hz,
         "errors_from_s": ERRORS_FROM,
         "joints": joints,
+        "stalls": stalls,
+        "leader_lost": lost,
     });
     if args.json {
         let mut value = serde_json::to_value(report)?;
         if let Some(obj) = value.as_object_mut() {
             obj.insert("follow".into(), follow);
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&value)?)?;
     } else {
         let mut out = std::io::stdout().lock();
         super::play::write_report(&mut out, report, false)?;
@@ -435,6 +509,13 @@ fn finish(args: &Args, robot: &Robot, report: &Report, seen: Seen) -> anyhow::Re
                 j["name"].as_str().unwrap_or("?"),
                 j["rms_error"].as_f64().unwrap_or(0.0),
                 j["max_error"].as_f64().unwrap_or(0.0)
+            )?;
+        }
+        for j in report.stalled_joints() {
+            writeln!(
+                out,
+                "  {} stalled {} time(s), held with bounded effort for {:.1} s",
+                j.name, j.stalls, j.stalled_s
             )?;
         }
         for (flag, path) in [

@@ -16,6 +16,17 @@ use servobus_runtime::{Command, Lead, RunOptions};
 
 /// Arguments of `servobus serve`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "\
+Keys, under servobus/<name>/: state (published), target (subscribed: \
+{\"t\": s, \"joints\": {\"<joint>\": angle}} or an action chunk \
+{\"chunk\": {\"t0\": s, \"dt\": s, \"joints\": {\"<joint>\": [angle, ...]}}}), \
+command (subscribed), report (queryable), alive (liveliness).
+
+Commands: play <motion> [at <UTC time>]; stop (the joints stop, jerk limited, \
+and hold: the node goes on serving, and the next target, chunk or play moves \
+the robot again); pause; resume; torque_off; shutdown (stop, hold and end the \
+node, as Ctrl-C and SIGTERM do). Once the run has ended the node answers \
+report for --linger seconds, then exits.")]
 pub struct Args {
     /// The robot file, or a built-in robot's name, and its port and
     /// calibration.
@@ -112,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let planner =
         Box::new(move |motion: &str| plan_command(motion, &robot_path, calibration.as_deref()));
     eprintln!(
-        "serving {} on servobus/{}/ (state at {} Hz); Ctrl-C stops",
+        "serving {} on servobus/{}/ (state at {} Hz); `shutdown` or Ctrl-C ends the node",
         robot.name,
         servobus_node::key_chunk(&info.name),
         args.state_hz

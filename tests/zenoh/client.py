@@ -10,8 +10,10 @@ It connects to ENDPOINT only (no scouting), then:
    and its names and positions against `state`;
 3. sends a sine of targets to elbow_flex for 2 s, then a fixed pose, and
    waits until the arm is within 1 deg of it;
-4. sends a malformed target and checks the arm stays where it was;
-5. sends `stop` and reads `report`.
+4. sends malformed targets and chunks and checks the arm stays where it
+   was;
+5. sends `shutdown` (`stop` would stop the motion and go on serving) and
+   reads `report`.
 Each check prints PASS or FAIL; the last line is a JSON summary.
 """
 
@@ -146,16 +148,22 @@ while time.monotonic() < end and not reached:
     )
 check(reached, f"the arm reaches the target within 1 deg: elbow_flex {measured('elbow_flex')}")
 
-# 4. A malformed target: counted, and the arm stays.
+# 4. Malformed targets and chunks: counted, and the arm stays.
 before = measured("elbow_flex")
-for bad in ["not json", '{"joints": {"elbow_flex": "far"}}', '{"t": 1}']:
+for bad in [
+    "not json",
+    '{"joints": {"elbow_flex": "far"}}',
+    '{"t": 1}',
+    '{"chunk": {"dt": 0, "joints": {"elbow_flex": [10, 20]}}}',
+    '{"chunk": {"dt": 0.02, "joints": {"elbow_flex": [10, 20], "wrist_flex": [1]}}}',
+]:
     session.put(f"{base}/target", bad)
 time.sleep(0.5)
 after = measured("elbow_flex")
 check(abs(after - before) < 0.5, f"malformed targets leave the arm where it was ({before} -> {after})")
 
-# 5. Stop, then the report.
-session.put(f"{base}/command", "stop")
+# 5. Shut the node down, then the report.
+session.put(f"{base}/command", "shutdown")
 report = None
 end = time.monotonic() + 15
 while time.monotonic() < end and report is None:
@@ -165,10 +173,10 @@ while time.monotonic() < end and report is None:
             if not doc.get("running", True):
                 report = doc
     time.sleep(0.1)
-check(report is not None, "report answers after stop")
+check(report is not None, "report answers after shutdown")
 if report is not None:
     check(report["report"]["finish"] == "stopped", f"the run stopped: {report['report']['finish']}")
-    check(report["node"]["malformed"] >= 3, f"malformed targets counted: {report['node']['malformed']}")
+    check(report["node"]["malformed"] >= 5, f"malformed targets and chunks counted: {report['node']['malformed']}")
     live = report["report"].get("live") or {}
     print("live:", json.dumps(live), flush=True)
 summary = {"failures": failures, "state_rate_hz": rate}

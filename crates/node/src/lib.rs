@@ -6,10 +6,15 @@
 //! | key | direction | what |
 //! |---|---|---|
 //! | `state` | out, every few cycles | [`wire::StateMessage`] as JSON |
-//! | `target` | in | live targets, `{"joints": {"<name>": angle}}` |
-//! | `command` | in | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off` |
+//! | `target` | in | live targets, `{"joints": {"<name>": angle}}`, and action chunks, `{"chunk": {"t0", "dt", "joints": {"<name>": [angle, ...]}}}` |
+//! | `command` | in | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off`, `shutdown` |
 //! | `report` | queryable | the run's report as JSON |
 //! | `alive` | liveliness token | present while the node runs |
+//!
+//! `stop` stops the motion (jerk limited) and holds; the node goes on
+//! serving, and the next target, chunk or `play` moves the robot again.
+//! `shutdown` (or Ctrl-C, or SIGTERM) stops, holds and ends the run; the
+//! node answers `report` for its linger, then returns.
 //!
 //! With ROS 2 output on, the node also publishes
 //! `sensor_msgs/msg/JointState` the way rmw_zenoh does ([`ros2`]), so a

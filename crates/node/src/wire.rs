@@ -1,6 +1,14 @@
 //! What travels on the node's keys, in JSON: the robot's state out, live
-//! targets and commands in. Parsing never panics: a message that is not
-//! one is a [`WireError`] saying why, and never moves the robot.
+//! targets, action chunks and commands in. Parsing never panics: a
+//! message that is not one is a [`WireError`] saying why, and never moves
+//! the robot.
+//!
+//! | key | payload | parsed by |
+//! |---|---|---|
+//! | `target` | `{"t": s?, "joints": {"<name>": angle}, "sent_ns": ns?}` | [`parse_live`] ([`parse_target`]) |
+//! | `target` | `{"chunk": {"t0": s?, "dt": s, "joints": {"<name>": [angle, ...]}}, "sent_ns": ns?}` | [`parse_live`] ([`parse_chunk`]) |
+//! | `command` | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off`, `shutdown` | [`parse_command`] |
+//! | `state` | [`StateMessage`] | (published) |
 
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
@@ -16,8 +24,11 @@ pub enum WireError {
     /// The payload is not the JSON expected.
     #[error("not a target: {0}; give {{\"joints\": {{\"<name>\": angle}}}}")]
     Target(String),
+    /// The payload is a chunk, but not a well-formed one.
+    #[error("not a chunk: {0}; give {{\"chunk\": {{\"t0\": s (optional), \"dt\": s, \"joints\": {{\"<name>\": [angle, ...]}}}}}}")]
+    Chunk(String),
     /// The command is not one the node knows.
-    #[error("unknown command `{0}`: give play <motion> [at <UTC time>], stop, pause, resume or torque_off")]
+    #[error("unknown command `{0}`: give play <motion> [at <UTC time>], stop, pause, resume, torque_off or shutdown")]
     UnknownCommand(String),
     /// `play` names no motion.
     #[error("`play` needs a motion: its name, a file, or YAML text")]
@@ -42,30 +53,90 @@ pub struct TargetMessage {
     pub sent_ns: Option<i64>,
 }
 
+/// An action chunk from the `target` key: points `dt` s apart, the first
+/// at `t0` (seconds on the sender's clock; on arrival when absent), angles
+/// by joint name in the robot file's units, one per point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChunkMessage {
+    /// `t0`, the sender's stamp of the first point, if given.
+    pub t0: Option<f64>,
+    /// `dt`, the time between points, s (positive).
+    pub dt: f64,
+    /// Per joint by name, its angles, one per point (every joint the same
+    /// number, at least one).
+    pub joints: Vec<(String, Vec<f64>)>,
+    /// `sent_ns`, when the sender published the chunk (see
+    /// [`TargetMessage::sent_ns`]).
+    pub sent_ns: Option<i64>,
+}
+
+/// What the `target` key carries: a target or an action chunk.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LiveMessage {
+    /// `{"t", "joints"}`: go there.
+    Target(TargetMessage),
+    /// `{"chunk": {...}}`: follow the timed path through its points.
+    Chunk(ChunkMessage),
+}
+
+type Object = serde_json::Map<String, serde_json::Value>;
+
+/// The payload as a JSON object.
+fn object(payload: &[u8]) -> Result<Object, WireError> {
+    let text = std::str::from_utf8(payload).map_err(|_| WireError::NotText)?;
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| WireError::Target(format!("not JSON ({e})")))?;
+    match value {
+        serde_json::Value::Object(o) => Ok(o),
+        _ => Err(WireError::Target("not a JSON object".into())),
+    }
+}
+
+/// `obj[key]` as a number when present and not null.
+fn number(obj: &Object, key: &str) -> Result<Option<f64>, String> {
+    match obj.get(key) {
+        None | Some(serde_json::Value::Null) => Ok(None),
+        Some(v) => v
+            .as_f64()
+            .map(Some)
+            .ok_or_else(|| format!("`{key}` is not a number")),
+    }
+}
+
+/// `sent_ns` when present and not null.
+fn sent_ns(obj: &Object) -> Result<Option<i64>, String> {
+    match obj.get("sent_ns") {
+        None | Some(serde_json::Value::Null) => Ok(None),
+        Some(v) => v
+            .as_i64()
+            .map(Some)
+            .ok_or_else(|| "`sent_ns` is not an integer".to_string()),
+    }
+}
+
+/// Parses what the `target` key carries: a target
+/// `{"t": <s, optional>, "joints": {"<name>": <angle>, ...}}` or an action
+/// chunk `{"chunk": {"t0": <s, optional>, "dt": <s>, "joints": {"<name>":
+/// [<angle>, ...], ...}}}`, either with an optional `sent_ns`.
+pub fn parse_live(payload: &[u8]) -> Result<LiveMessage, WireError> {
+    let obj = object(payload)?;
+    if obj.contains_key("chunk") {
+        chunk_of(&obj).map(LiveMessage::Chunk)
+    } else {
+        target_of(&obj).map(LiveMessage::Target)
+    }
+}
+
 /// Parses `{"t": <s, optional>, "joints": {"<name>": <angle>, ...}}`.
 /// Whether the names are joints and the angles finite is the target
 /// stream's to check (it counts and refuses, with the reason).
 pub fn parse_target(payload: &[u8]) -> Result<TargetMessage, WireError> {
-    let text = std::str::from_utf8(payload).map_err(|_| WireError::NotText)?;
-    let value: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| WireError::Target(format!("not JSON ({e})")))?;
-    let obj = value
-        .as_object()
-        .ok_or_else(|| WireError::Target("not a JSON object".into()))?;
-    let t = match obj.get("t") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(t) => Some(
-            t.as_f64()
-                .ok_or_else(|| WireError::Target("`t` is not a number".into()))?,
-        ),
-    };
-    let sent_ns = match obj.get("sent_ns") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(v) => Some(
-            v.as_i64()
-                .ok_or_else(|| WireError::Target("`sent_ns` is not an integer".into()))?,
-        ),
-    };
+    target_of(&object(payload)?)
+}
+
+fn target_of(obj: &Object) -> Result<TargetMessage, WireError> {
+    let t = number(obj, "t").map_err(WireError::Target)?;
+    let sent_ns = sent_ns(obj).map_err(WireError::Target)?;
     let joints = obj
         .get("joints")
         .and_then(|j| j.as_object())
@@ -84,6 +155,78 @@ pub fn parse_target(payload: &[u8]) -> Result<TargetMessage, WireError> {
     })
 }
 
+/// Parses an action chunk,
+/// `{"chunk": {"t0": <s, optional>, "dt": <s>, "joints": {"<name>": [<angle>, ...]}}}`.
+/// Its shape is checked here: `dt` a positive number, `t0` a number, at
+/// least one joint, every joint the same number of angles (1 to
+/// [`MAX_CHUNK_POINTS`](servobus_runtime::MAX_CHUNK_POINTS)); whether the
+/// names are joints is the target stream's to check.
+pub fn parse_chunk(payload: &[u8]) -> Result<ChunkMessage, WireError> {
+    chunk_of(&object(payload)?)
+}
+
+fn chunk_of(obj: &Object) -> Result<ChunkMessage, WireError> {
+    let bad = WireError::Chunk;
+    if obj.contains_key("joints") || obj.contains_key("t") {
+        return Err(bad(
+            "give either a target (`t`, `joints`) or a `chunk`, not both".into(),
+        ));
+    }
+    let sent_ns = sent_ns(obj).map_err(bad)?;
+    let chunk = obj
+        .get("chunk")
+        .and_then(|c| c.as_object())
+        .ok_or_else(|| bad("`chunk` is not a JSON object".into()))?;
+    let t0 = number(chunk, "t0").map_err(bad)?;
+    let dt = number(chunk, "dt")
+        .map_err(bad)?
+        .ok_or_else(|| bad("no `dt`, the seconds between points".into()))?;
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(bad(format!(
+            "`dt` {dt} is not a positive number of seconds"
+        )));
+    }
+    let joints = chunk
+        .get("joints")
+        .and_then(|j| j.as_object())
+        .ok_or_else(|| bad("no `joints` object".into()))?;
+    if joints.is_empty() {
+        return Err(bad("`joints` names no joint".into()));
+    }
+    let most = servobus_runtime::MAX_CHUNK_POINTS;
+    let mut out = Vec::with_capacity(joints.len());
+    let mut points = None;
+    for (name, angles) in joints {
+        let angles = angles
+            .as_array()
+            .ok_or_else(|| bad(format!("joint `{name}`: not a list of angles")))?;
+        let n = *points.get_or_insert(angles.len());
+        if n == 0 || n > most {
+            return Err(bad(format!(
+                "joint `{name}`: {n} angles; a chunk holds 1 to {most} points"
+            )));
+        }
+        if angles.len() != n {
+            return Err(bad(format!(
+                "joint `{name}`: {} angles, the chunk's other joints {n}",
+                angles.len()
+            )));
+        }
+        let angles = angles
+            .iter()
+            .map(serde_json::Value::as_f64)
+            .collect::<Option<Vec<f64>>>()
+            .ok_or_else(|| bad(format!("joint `{name}`: an angle is not a number")))?;
+        out.push((name.clone(), angles));
+    }
+    Ok(ChunkMessage {
+        t0,
+        dt,
+        joints: out,
+        sent_ns,
+    })
+}
+
 /// A command from the `command` key.
 #[derive(Debug, Clone, PartialEq)]
 pub enum NodeCommand {
@@ -95,18 +238,23 @@ pub enum NodeCommand {
         /// When to start, on this machine's clock.
         at: Option<SystemTime>,
     },
-    /// Stop every joint (jerk limited) and hold.
+    /// Stop the motion: every joint comes to a jerk-limited stop and
+    /// holds; the node goes on serving (a later target, chunk or `play`
+    /// moves the robot again).
     Stop,
     /// Pause the motion along its path.
     Pause,
     /// Resume a paused motion.
     Resume,
-    /// Disable torque now.
+    /// Disable torque now (the run ends).
     TorqueOff,
+    /// Stop every joint (jerk limited), hold, end the run and the node
+    /// (after its linger for `report`): what Ctrl-C does.
+    Shutdown,
 }
 
 /// Parses a command: `play <motion> [at <UTC time>]`, `stop`, `pause`,
-/// `resume`, `torque_off`. The time is RFC 3339 in UTC
+/// `resume`, `torque_off`, `shutdown`. The time is RFC 3339 in UTC
 /// (`2026-11-25T20:00:00.250Z`) or UNIX seconds.
 pub fn parse_command(payload: &[u8]) -> Result<NodeCommand, WireError> {
     let text = std::str::from_utf8(payload).map_err(|_| WireError::NotText)?;
@@ -127,6 +275,7 @@ pub fn parse_command(payload: &[u8]) -> Result<NodeCommand, WireError> {
         "pause" => simple(NodeCommand::Pause),
         "resume" => simple(NodeCommand::Resume),
         "torque_off" => simple(NodeCommand::TorqueOff),
+        "shutdown" => simple(NodeCommand::Shutdown),
         "play" => {
             // `at <time>` ends a one-line motion; YAML text spans lines.
             let (motion, at) = match rest.rsplit_once(" at ") {
@@ -223,98 +372,4 @@ pub struct StateMessage {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_target_names_joints() {
-        let m = parse_target(br#"{"t": 1.5, "joints": {"elbow_flex": 30, "gripper": 2.5}}"#)
-            .expect("a target");
-        assert_eq!(m.t, Some(1.5));
-        assert_eq!(m.sent_ns, None);
-        assert_eq!(
-            m.joints,
-            vec![
-                ("elbow_flex".to_string(), 30.0),
-                ("gripper".to_string(), 2.5)
-            ]
-        );
-        let m = parse_target(br#"{"sent_ns": 17, "joints": {}}"#).expect("a target");
-        assert_eq!(m.sent_ns, Some(17));
-    }
-
-    #[test]
-    fn malformed_targets_say_why() {
-        for bad in [
-            &b"\xff\xfe"[..],
-            b"not json",
-            b"[1, 2]",
-            br#"{"t": 1}"#,
-            br#"{"joints": {"elbow_flex": "far"}}"#,
-            br#"{"t": "soon", "joints": {}}"#,
-            br#"{"sent_ns": 1.5, "joints": {}}"#,
-        ] {
-            assert!(
-                parse_target(bad).is_err(),
-                "{:?}",
-                String::from_utf8_lossy(bad)
-            );
-        }
-    }
-
-    #[test]
-    fn commands_parse() {
-        assert_eq!(parse_command(b" stop\n"), Ok(NodeCommand::Stop));
-        assert_eq!(parse_command(b"torque_off"), Ok(NodeCommand::TorqueOff));
-        assert_eq!(
-            parse_command(b"play arm-wave"),
-            Ok(NodeCommand::Play {
-                motion: "arm-wave".into(),
-                at: None
-            })
-        );
-        let at = UNIX_EPOCH + Duration::from_millis(1_764_100_800_250);
-        assert_eq!(
-            parse_command(b"play arm-wave at 2025-11-25T20:00:00.250Z"),
-            Ok(NodeCommand::Play {
-                motion: "arm-wave".into(),
-                at: Some(at)
-            })
-        );
-        assert!(matches!(parse_command(b"play"), Err(WireError::NoMotion)));
-        assert!(matches!(
-            parse_command(b"stop now"),
-            Err(WireError::UnknownCommand(_))
-        ));
-        assert!(matches!(
-            parse_command(b"dance"),
-            Err(WireError::UnknownCommand(_))
-        ));
-        assert!(matches!(
-            parse_command(b"play arm-wave at tomorrow"),
-            Err(WireError::BadTime(_))
-        ));
-    }
-
-    #[test]
-    fn utc_times_by_hand() {
-        // 2000-03-01T00:00:00Z is 951868800 s after the epoch.
-        assert_eq!(
-            parse_utc("2000-03-01T00:00:00Z"),
-            Ok(UNIX_EPOCH + Duration::from_secs(951_868_800))
-        );
-        assert_eq!(
-            parse_utc("12.5"),
-            Ok(UNIX_EPOCH + Duration::from_millis(12_500))
-        );
-        for bad in [
-            "2000-13-01T00:00:00Z",
-            "2000-01-01T00:00:00",
-            "-3",
-            "NaN",
-            "",
-        ] {
-            assert!(parse_utc(bad).is_err(), "{bad}");
-        }
-    }
-}
+mod tests;

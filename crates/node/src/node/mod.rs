@@ -7,15 +7,17 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use servobus_runtime::config::Units;
-use servobus_runtime::{Command, CommandSender, Report, Runner, Target, TargetSender, Telemetry};
+use servobus_runtime::{Command, Report, Runner, Telemetry};
 use zenoh::bytes::Encoding;
 use zenoh::Wait;
 
 use crate::prefix;
-use crate::wire::{parse_command, parse_target, NodeCommand};
 
+mod relay;
 mod session;
 mod state;
+
+use relay::{take_command, take_target, Inputs, Motion};
 
 use session::zerr;
 pub use session::{
@@ -48,6 +50,8 @@ pub struct Served {
     pub report: Report,
     /// Targets taken into the stream.
     pub targets: u64,
+    /// Action chunks taken into the stream.
+    pub chunks: u64,
     /// Targets or commands that did not parse (never acted on).
     pub malformed: u64,
     /// Commands carried out.
@@ -60,11 +64,13 @@ pub struct Served {
 }
 
 impl Served {
-    /// The node's own counts as JSON: `targets`, `malformed`, `commands`,
-    /// `states`, `start_offsets_s` (what `report` and `serve --json` show).
+    /// The node's own counts as JSON: `targets`, `chunks`, `malformed`,
+    /// `commands`, `states`, `start_offsets_s` (what `report` and
+    /// `serve --json` show).
     pub fn counts(&self) -> serde_json::Value {
         serde_json::json!({
             "targets": self.targets,
+            "chunks": self.chunks,
             "malformed": self.malformed,
             "commands": self.commands,
             "states": self.states,
@@ -76,6 +82,7 @@ impl Served {
 #[derive(Debug, Default)]
 struct Counts {
     targets: AtomicU64,
+    chunks: AtomicU64,
     malformed: AtomicU64,
     commands: AtomicU64,
 }
@@ -90,6 +97,8 @@ struct Shared {
     /// What `report` answers: progress while running, then the report.
     report: Mutex<String>,
     counts: Counts,
+    /// Whether `stop` holds the robot (see [`relay`]).
+    motion: Mutex<Motion>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -141,20 +150,17 @@ pub fn serve(
         .wait()
         .map_err(zerr)?;
     let _targets = {
-        let targets: TargetSender = runner.targets();
+        let to = Inputs {
+            targets: runner.targets(),
+            commands: runner.commands(),
+        };
         let shared = Arc::clone(&shared);
         let units = robot.units;
         let started = Instant::now();
         session
             .declare_subscriber(format!("{base}/target"))
             .callback(move |sample| {
-                take_target(
-                    &sample.payload().to_bytes(),
-                    &targets,
-                    units,
-                    started,
-                    &shared,
-                );
+                take_target(&sample.payload().to_bytes(), &to, units, started, &shared);
             })
             .wait()
             .map_err(zerr)?
@@ -166,7 +172,10 @@ pub fn serve(
     }
     let mut _commands = Vec::new();
     for key in command_keys {
-        let commands = runner.commands();
+        let to = Inputs {
+            targets: runner.targets(),
+            commands: runner.commands(),
+        };
         let shared = Arc::clone(&shared);
         let planner = Arc::clone(&planner);
         _commands.push(
@@ -175,7 +184,7 @@ pub fn serve(
                 .callback(move |sample| {
                     take_command(
                         &sample.payload().to_bytes(),
-                        &commands,
+                        &to,
                         &*planner,
                         period,
                         &shared,
@@ -266,6 +275,7 @@ pub fn serve(
     let c = &shared.counts;
     let served = Served {
         targets: c.targets.load(Ordering::Relaxed),
+        chunks: c.chunks.load(Ordering::Relaxed),
         malformed: c.malformed.load(Ordering::Relaxed),
         commands: c.commands.load(Ordering::Relaxed),
         states,
@@ -280,97 +290,6 @@ pub fn serve(
     .to_string();
     std::thread::sleep(linger);
     Ok(served)
-}
-
-/// A target from the network into the stream; a malformed one is counted
-/// and logged, never sent.
-fn take_target(
-    payload: &[u8],
-    targets: &TargetSender,
-    units: Units,
-    started: Instant,
-    shared: &Shared,
-) {
-    let msg = match parse_target(payload) {
-        Ok(m) => m,
-        Err(why) => {
-            shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
-            eprintln!("target: {why}; ignored");
-            return;
-        }
-    };
-    let joints = msg
-        .joints
-        .into_iter()
-        .map(|(n, a)| (n, units.to_rad(a)))
-        .collect();
-    let stamp = msg.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
-    // Counted from its publishing when the sender says when that was.
-    let now = Instant::now();
-    let taken = msg
-        .sent_ns
-        .and_then(|sent| {
-            let ago = unix_ns(SystemTime::now()).checked_sub(sent)?;
-            now.checked_sub(Duration::from_nanos(u64::try_from(ago).ok()?))
-        })
-        .unwrap_or(now);
-    match targets.send(Target::named(stamp, joints).taken_at(taken)) {
-        Ok(clamped) => {
-            shared.counts.targets.fetch_add(1, Ordering::Relaxed);
-            if clamped > 0 {
-                eprintln!("target: {clamped} angle(s) beyond the joint limits, clamped");
-            }
-        }
-        // The stream counts its refusals for the report.
-        Err(why) => eprintln!("target: {why}; refused"),
-    }
-}
-
-/// A command from the network to the loop; a malformed one is counted and
-/// logged, never acted on.
-fn take_command(
-    payload: &[u8],
-    commands: &CommandSender,
-    planner: &Planner,
-    period: f64,
-    shared: &Shared,
-) {
-    let cmd = match parse_command(payload) {
-        Ok(c) => c,
-        Err(why) => {
-            shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
-            eprintln!("command: {why}; ignored");
-            return;
-        }
-    };
-    let (command, at) = match cmd {
-        NodeCommand::Stop => (Command::Stop, None),
-        NodeCommand::Pause => (Command::Pause, None),
-        NodeCommand::Resume => (Command::Resume, None),
-        NodeCommand::TorqueOff => (Command::TorqueOff, None),
-        NodeCommand::Play { motion, at } => match planner(&motion) {
-            Ok(c) => (c, at),
-            Err(why) => {
-                eprintln!("command: play: {why}; ignored");
-                return;
-            }
-        },
-    };
-    let sent = match (at, *lock(&shared.start)) {
-        (Some(at), Some(start)) => {
-            let since = at.duration_since(start).map_or(0.0, |d| d.as_secs_f64());
-            let cycle = (since / period - 1e-9).ceil().max(0.0) as u64;
-            lock(&shared.timed).push((cycle, at));
-            commands.send_at(cycle, command)
-        }
-        _ => commands.send(command),
-    };
-    match sent {
-        Ok(()) => {
-            shared.counts.commands.fetch_add(1, Ordering::Relaxed);
-        }
-        Err(_) => eprintln!("command: the run has ended; ignored"),
-    }
 }
 
 /// Measures the timed starts due at `cycle`, which started `t` s after

@@ -1,0 +1,314 @@
+//! The relay on a virtual-time run of the simulated SO-101: payloads as
+//! they come off the network go through the node's own callbacks, between
+//! the loop's cycles, so every run is the same.
+
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
+use servobus_runtime::sim::virtual_buses;
+use servobus_runtime::{Command, Finish, Lead, RunOptions, Telemetry, VirtualRun};
+
+use super::{take_command, take_target, Inputs};
+use crate::node::{Planner, Shared};
+
+fn configs(path: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs")
+        .join(path)
+}
+
+/// Plans `motion` under `configs/motions/` for the SO-101, as `serve`'s
+/// planner does.
+fn planner() -> Box<Planner> {
+    Box::new(|motion: &str| {
+        let path = configs(&format!("motions/{motion}.yaml"));
+        let robot = configs("robots/so101.yaml");
+        let (m, r) = load_motion(&path, Some(&robot)).map_err(|e| e.to_string())?;
+        plan_motion(&m, &r)
+            .map(Command::replace)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// A virtual run, seen through what the tests ask of it (its bus type is
+/// the simulator's, which this crate does not name).
+struct Run {
+    /// Runs one cycle: whether the run goes on, and its telemetry.
+    step: Box<dyn FnMut() -> (bool, Vec<Telemetry>)>,
+    /// The next cycle's number.
+    cycle: Box<dyn Fn() -> u64>,
+    /// Why the run ended, once it has.
+    finished: Box<dyn Fn() -> Option<Finish>>,
+    /// The control period, s.
+    period: f64,
+}
+
+/// A live run of the SO-101 in virtual time, and what the node holds of it.
+struct Node {
+    robot: Robot,
+    run: Run,
+    to: Inputs,
+    shared: Shared,
+    planner: Box<Planner>,
+    started: Instant,
+    /// Commanded angles (the robot file's degrees) per cycle, per joint.
+    commanded: Vec<Vec<f64>>,
+}
+
+impl Node {
+    fn new() -> Node {
+        let robot =
+            load_robot(&configs("robots/so101.yaml"), &RobotOptions::default()).expect("so101");
+        let buses = virtual_buses(&robot).expect("the simulated arm");
+        let options = RunOptions {
+            lead: Lead::None,
+            approach: None,
+            ..RunOptions::default()
+        };
+        let run = VirtualRun::live(&robot, buses, options).expect("a live run");
+        let to = Inputs {
+            targets: run.targets(),
+            commands: run.commands(),
+        };
+        let rx = run.telemetry();
+        let period = run.period().as_secs_f64();
+        let run = Rc::new(RefCell::new(run));
+        let (a, b, c) = (Rc::clone(&run), Rc::clone(&run), run);
+        let run = Run {
+            step: Box::new(move || {
+                let going = a.borrow_mut().step();
+                (going, rx.try_iter().collect())
+            }),
+            cycle: Box::new(move || b.borrow().cycle()),
+            finished: Box::new(move || c.borrow().finished()),
+            period,
+        };
+        Node {
+            robot,
+            run,
+            to,
+            shared: Shared::default(),
+            planner: planner(),
+            started: Instant::now(),
+            commanded: Vec::new(),
+        }
+    }
+
+    fn period(&self) -> f64 {
+        self.run.period
+    }
+
+    fn target(&self, payload: &str) {
+        let units = self.robot.units;
+        take_target(
+            payload.as_bytes(),
+            &self.to,
+            units,
+            self.started,
+            &self.shared,
+        );
+    }
+
+    fn command(&self, payload: &str) {
+        let period = self.period();
+        take_command(
+            payload.as_bytes(),
+            &self.to,
+            &*self.planner,
+            period,
+            &self.shared,
+        );
+    }
+
+    /// Runs `cycles` cycles (fewer if the run ends), calling `each` with
+    /// the cycle's number before it. Returns whether the run goes on.
+    fn run_for(&mut self, cycles: u64, mut each: impl FnMut(&Node, u64)) -> bool {
+        let n = self.robot.joint_count();
+        for _ in 0..cycles {
+            each(self, (self.run.cycle)());
+            let (going, telemetry) = (self.run.step)();
+            for m in telemetry {
+                if let Telemetry::Cycle(c) = m {
+                    let mut row = vec![f64::NAN; n];
+                    for j in c.joints() {
+                        row[j.joint] = j.commanded;
+                    }
+                    self.commanded.push(row);
+                }
+            }
+            if !going {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The commanded angles of joint `j` from cycle `from` on (deg).
+    fn joint(&self, j: usize, from: usize) -> Vec<f64> {
+        self.commanded[from..].iter().map(|r| r[j]).collect()
+    }
+
+    /// No joint went faster than its limit, nor accelerated harder (finite
+    /// differences of the commanded path, 1 % for rounding).
+    fn assert_within_limits(&self) {
+        let dt = self.period();
+        for (j, joint) in self.robot.joints().enumerate() {
+            let q = self.joint(j, 0);
+            let v: Vec<f64> = q.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+            let a: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+            let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let amax = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            assert!(
+                vmax <= joint.max_velocity * 1.01,
+                "{}: {vmax} deg/s",
+                joint.name
+            );
+            assert!(
+                amax <= joint.max_acceleration * 1.01,
+                "{}: {amax} deg/s^2",
+                joint.name
+            );
+        }
+    }
+}
+
+/// The largest change of any joint's commanded angle over `cycles` (deg).
+fn spread(rows: &[Vec<f64>]) -> f64 {
+    let n = rows.first().map_or(0, Vec::len);
+    (0..n)
+        .map(|j| {
+            let (lo, hi) = rows.iter().fold((f64::MAX, f64::MIN), |(lo, hi), r| {
+                (lo.min(r[j]), hi.max(r[j]))
+            });
+            hi - lo
+        })
+        .fold(0.0, f64::max)
+}
+
+const PAN: usize = 0;
+
+#[test]
+fn stop_holds_the_following_and_the_next_target_moves_again() {
+    let mut node = Node::new();
+    let dt = node.period();
+    // Targets ramp the pan at 40 deg/s at 30 Hz; `stop` at 0.75 s, while
+    // it moves, and the sender goes quiet (its next target would move the
+    // arm again).
+    let going = node.run_for(1200, |node, k| {
+        let t = k as f64 * dt;
+        if k % 7 == 0 && k < 150 {
+            node.target(&format!(
+                r#"{{"t": {t}, "joints": {{"shoulder_pan": {}}}}}"#,
+                40.0 * t
+            ));
+        }
+        if k == 150 {
+            node.command("stop");
+        }
+    });
+    assert!(going, "the run goes on after stop");
+    let pan = node.joint(PAN, 0);
+    let at_stop = pan[150];
+    assert!(at_stop > 20.0, "moving when stopped: {at_stop}");
+    // Stopped soon after (not carried on to the ramp's 40 deg), held still
+    // for the rest of the 6 s.
+    let held = pan[400];
+    assert!(held < at_stop + 5.0, "{at_stop} -> {held}");
+    assert!(spread(&node.commanded[400..]) < 1e-9, "held");
+    // Following a stop is a plain pause: `resume` does not restart the
+    // stopped motion.
+    node.command("resume");
+    assert!(node.run_for(200, |_, _| {}));
+    assert!(
+        spread(&node.commanded[400..]) < 1e-9,
+        "resume is not a way out"
+    );
+    // A new target moves the arm again, and the node goes on serving.
+    assert!(node.run_for(400, |node, k| {
+        if k % 7 == 0 {
+            let t = k as f64 * dt;
+            node.target(&format!(
+                r#"{{"t": {t}, "joints": {{"shoulder_pan": -20}}}}"#
+            ));
+        }
+    }));
+    let last = *node.joint(PAN, 0).last().expect("cycles");
+    assert!((last + 20.0).abs() < 0.5, "followed again: {last}");
+    node.assert_within_limits();
+    // `shutdown` ends the run: a jerk-limited stop, then the end.
+    node.command("shutdown");
+    assert!(!node.run_for(2000, |_, _| {}), "shutdown ends the run");
+    assert_eq!((node.run.finished)(), Some(Finish::Stopped));
+    let c = &node.shared.counts;
+    assert_eq!(c.commands.load(Ordering::Relaxed), 2, "stop and shutdown");
+    assert_eq!(c.malformed.load(Ordering::Relaxed), 0);
+}
+
+#[test]
+fn stop_during_a_motion_stops_it_where_it_is_and_holds() {
+    let mut node = Node::new();
+    node.command("play arm-wave");
+    // Half a second into the wave (with its transition): moving.
+    assert!(node.run_for(300, |_, _| {}));
+    let moving = spread(&node.commanded[280..300]);
+    assert!(moving > 0.5, "the wave moves: {moving}");
+    node.command("stop");
+    assert!(node.run_for(900, |_, _| {}), "the run goes on after stop");
+    // Still within a second (the wave would have gone on), then held.
+    assert!(spread(&node.commanded[500..]) < 1e-9, "held");
+    node.assert_within_limits();
+    // A motion plays again after a stop.
+    node.command("play arm-wave");
+    assert!(node.run_for(300, |_, _| {}));
+    let len = node.commanded.len();
+    assert!(spread(&node.commanded[len - 20..]) > 0.5, "plays again");
+    assert_eq!((node.run.finished)(), None);
+}
+
+#[test]
+fn chunks_are_followed_and_malformed_ones_never_move_the_robot() {
+    let mut node = Node::new();
+    assert!(node.run_for(40, |_, _| {}));
+    let before = node.commanded.last().expect("cycles").clone();
+    for bad in [
+        r#"{"chunk": {"joints": {"shoulder_pan": [10, 20]}}}"#,
+        r#"{"chunk": {"dt": 0, "joints": {"shoulder_pan": [10, 20]}}}"#,
+        r#"{"chunk": {"dt": 0.02, "joints": {"shoulder_pan": [10, 20], "elbow_flex": [1]}}}"#,
+        r#"{"chunk": {"dt": 0.02, "joints": {"shoulder_pan": ["far"]}}}"#,
+        r#"{"chunk": [1, 2]}"#,
+    ] {
+        node.target(bad);
+    }
+    assert!(node.run_for(100, |_, _| {}));
+    assert!(
+        node.commanded[40..]
+            .iter()
+            .all(|r| r.iter().zip(&before).all(|(a, b)| (a - b).abs() < 1e-9)),
+        "malformed chunks never move the robot"
+    );
+    let c = &node.shared.counts;
+    assert_eq!(c.malformed.load(Ordering::Relaxed), 5);
+    assert_eq!(c.chunks.load(Ordering::Relaxed), 0);
+    // A chunk of 50 points at 50 Hz from where the pan is to +30 deg (on
+    // arrival: no `t0`): the pan goes there along it.
+    let from = before[PAN];
+    let points: Vec<String> = (0..50)
+        .map(|k| format!("{:.4}", from + (30.0 - from) * k as f64 / 49.0))
+        .collect();
+    node.target(&format!(
+        r#"{{"chunk": {{"dt": 0.02, "joints": {{"shoulder_pan": [{}]}}}}}}"#,
+        points.join(", ")
+    ));
+    assert!(node.run_for(400, |_, _| {}));
+    assert_eq!(node.shared.counts.chunks.load(Ordering::Relaxed), 1);
+    let pan = node.joint(PAN, 140);
+    let mid = pan[100];
+    assert!(mid > from + 5.0 && mid < 29.0, "on the way at 0.5 s: {mid}");
+    let last = *pan.last().expect("cycles");
+    assert!((last - 30.0).abs() < 0.5, "the chunk's end: {last}");
+    node.assert_within_limits();
+}

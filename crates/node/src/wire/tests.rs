@@ -1,0 +1,202 @@
+//! The wire formats, good and malformed.
+
+use super::*;
+
+#[test]
+fn a_target_names_joints() {
+    let m = parse_target(br#"{"t": 1.5, "joints": {"elbow_flex": 30, "gripper": 2.5}}"#)
+        .expect("a target");
+    assert_eq!(m.t, Some(1.5));
+    assert_eq!(m.sent_ns, None);
+    assert_eq!(
+        m.joints,
+        vec![
+            ("elbow_flex".to_string(), 30.0),
+            ("gripper".to_string(), 2.5)
+        ]
+    );
+    let m = parse_target(br#"{"sent_ns": 17, "joints": {}}"#).expect("a target");
+    assert_eq!(m.sent_ns, Some(17));
+}
+
+#[test]
+fn malformed_targets_say_why() {
+    for bad in [
+        &b"\xff\xfe"[..],
+        b"not json",
+        b"[1, 2]",
+        br#"{"t": 1}"#,
+        br#"{"joints": {"elbow_flex": "far"}}"#,
+        br#"{"t": "soon", "joints": {}}"#,
+        br#"{"sent_ns": 1.5, "joints": {}}"#,
+    ] {
+        assert!(
+            parse_target(bad).is_err(),
+            "{:?}",
+            String::from_utf8_lossy(bad)
+        );
+    }
+}
+
+#[test]
+fn a_chunk_is_a_timed_list_per_joint() {
+    let m = parse_live(
+        br#"{"chunk": {"t0": 2.5, "dt": 0.02, "joints": {"elbow_flex": [30, 31.5, 33], "gripper": [2, 2, 2.5]}}}"#,
+    )
+    .expect("a chunk");
+    assert_eq!(
+        m,
+        LiveMessage::Chunk(ChunkMessage {
+            t0: Some(2.5),
+            dt: 0.02,
+            joints: vec![
+                ("elbow_flex".to_string(), vec![30.0, 31.5, 33.0]),
+                ("gripper".to_string(), vec![2.0, 2.0, 2.5]),
+            ],
+            sent_ns: None,
+        })
+    );
+    // `t0` is optional (the points start on arrival), `sent_ns` too.
+    let m = parse_chunk(
+        br#"{"sent_ns": 9, "chunk": {"t0": null, "dt": 0.5, "joints": {"shoulder_pan": [-10]}}}"#,
+    )
+    .expect("a chunk");
+    assert_eq!((m.t0, m.dt, m.sent_ns), (None, 0.5, Some(9)));
+    assert_eq!(m.joints, vec![("shoulder_pan".to_string(), vec![-10.0])]);
+    // Beside chunks, targets parse as they always did.
+    let m = parse_live(br#"{"t": 1, "joints": {"elbow_flex": 30}}"#).expect("a target");
+    assert_eq!(
+        m,
+        LiveMessage::Target(TargetMessage {
+            t: Some(1.0),
+            joints: vec![("elbow_flex".to_string(), 30.0)],
+            sent_ns: None,
+        })
+    );
+}
+
+#[test]
+fn malformed_chunks_say_why() {
+    let too_long = format!(
+        r#"{{"chunk": {{"dt": 0.02, "joints": {{"elbow_flex": [{}]}}}}}}"#,
+        vec!["1"; servobus_runtime::MAX_CHUNK_POINTS + 1].join(",")
+    );
+    for (bad, why) in [
+        (r#"{"chunk": 3}"#, "not a JSON object"),
+        (r#"{"chunk": {"joints": {"elbow_flex": [1]}}}"#, "no `dt`"),
+        (
+            r#"{"chunk": {"dt": "fast", "joints": {"elbow_flex": [1]}}}"#,
+            "`dt` is not",
+        ),
+        (
+            r#"{"chunk": {"dt": 0, "joints": {"elbow_flex": [1]}}}"#,
+            "positive",
+        ),
+        (
+            r#"{"chunk": {"dt": -0.02, "joints": {"elbow_flex": [1]}}}"#,
+            "positive",
+        ),
+        (
+            r#"{"chunk": {"t0": "now", "dt": 0.02, "joints": {"elbow_flex": [1]}}}"#,
+            "`t0`",
+        ),
+        (r#"{"chunk": {"dt": 0.02}}"#, "no `joints`"),
+        (r#"{"chunk": {"dt": 0.02, "joints": {}}}"#, "no joint"),
+        (
+            r#"{"chunk": {"dt": 0.02, "joints": {"elbow_flex": 30}}}"#,
+            "not a list",
+        ),
+        (
+            r#"{"chunk": {"dt": 0.02, "joints": {"elbow_flex": []}}}"#,
+            "1 to",
+        ),
+        (
+            r#"{"chunk": {"dt": 0.02, "joints": {"elbow_flex": [1, "x"]}}}"#,
+            "not a number",
+        ),
+        (
+            r#"{"chunk": {"dt": 0.02, "joints": {"elbow_flex": [1, 2], "gripper": [1]}}}"#,
+            "1 angles, the chunk's other joints 2",
+        ),
+        (
+            r#"{"chunk": {"dt": 0.02, "joints": {"elbow_flex": [1]}}, "joints": {}}"#,
+            "not both",
+        ),
+        (
+            r#"{"sent_ns": "late", "chunk": {"dt": 0.02, "joints": {"elbow_flex": [1]}}}"#,
+            "sent_ns",
+        ),
+        (too_long.as_str(), "1 to"),
+    ] {
+        match parse_live(bad.as_bytes()) {
+            Err(e @ WireError::Chunk(_)) => {
+                assert!(e.to_string().contains(why), "{bad}: {e}");
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+    // Not JSON at all: neither a target nor a chunk.
+    assert!(matches!(parse_live(b"{chunk"), Err(WireError::Target(_))));
+    assert_eq!(parse_live(b"\xff"), Err(WireError::NotText));
+}
+
+#[test]
+fn commands_parse() {
+    assert_eq!(parse_command(b" stop\n"), Ok(NodeCommand::Stop));
+    assert_eq!(parse_command(b"torque_off"), Ok(NodeCommand::TorqueOff));
+    assert_eq!(parse_command(b"shutdown\n"), Ok(NodeCommand::Shutdown));
+    assert!(matches!(
+        parse_command(b"shutdown now"),
+        Err(WireError::UnknownCommand(_))
+    ));
+    assert_eq!(
+        parse_command(b"play arm-wave"),
+        Ok(NodeCommand::Play {
+            motion: "arm-wave".into(),
+            at: None
+        })
+    );
+    let at = UNIX_EPOCH + Duration::from_millis(1_764_100_800_250);
+    assert_eq!(
+        parse_command(b"play arm-wave at 2025-11-25T20:00:00.250Z"),
+        Ok(NodeCommand::Play {
+            motion: "arm-wave".into(),
+            at: Some(at)
+        })
+    );
+    assert!(matches!(parse_command(b"play"), Err(WireError::NoMotion)));
+    assert!(matches!(
+        parse_command(b"stop now"),
+        Err(WireError::UnknownCommand(_))
+    ));
+    assert!(matches!(
+        parse_command(b"dance"),
+        Err(WireError::UnknownCommand(_))
+    ));
+    assert!(matches!(
+        parse_command(b"play arm-wave at tomorrow"),
+        Err(WireError::BadTime(_))
+    ));
+}
+
+#[test]
+fn utc_times_by_hand() {
+    // 2000-03-01T00:00:00Z is 951868800 s after the epoch.
+    assert_eq!(
+        parse_utc("2000-03-01T00:00:00Z"),
+        Ok(UNIX_EPOCH + Duration::from_secs(951_868_800))
+    );
+    assert_eq!(
+        parse_utc("12.5"),
+        Ok(UNIX_EPOCH + Duration::from_millis(12_500))
+    );
+    for bad in [
+        "2000-13-01T00:00:00Z",
+        "2000-01-01T00:00:00",
+        "-3",
+        "NaN",
+        "",
+    ] {
+        assert!(parse_utc(bad).is_err(), "{bad}");
+    }
+}

@@ -494,6 +494,13 @@ pub(crate) fn check_buses<T: Transport, C: Clock>(
 }
 
 pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
+    if let Refusal::Unlocked { .. } = refusal {
+        return anyhow::anyhow!(
+            "{refusal}\nnothing was moved. Find what was left half-written and mend it first:\n  \
+             servobus doctor --robot {} --port {port} --fix",
+            robot.path.display()
+        );
+    }
     let file = robot.calibration.file().map_or_else(
         || PathBuf::from(format!("{}.calibration.yaml", robot.name)),
         Path::to_owned,

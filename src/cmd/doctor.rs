@@ -8,7 +8,10 @@
 use std::process::ExitCode;
 
 use servobus::doctor::{self, BusCheck, Finding, Shown};
+use servobus_robot::doctor::FixError;
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
+
+use super::out::{errln, outln, StdoutError};
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
@@ -16,7 +19,9 @@ use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 Exit status (doctor's own):
   0  nothing wrong (information only)
   1  warnings only
-  2  errors found, or doctor could not finish (the port failed mid-check),
+  2  errors found, or doctor could not finish (the port failed mid-check,
+     or SIGINT, SIGTERM or SIGHUP stopped --fix: the fix under way is
+     finished first, the ones after it are listed as not applied),
      or a usage or input error (command line, robot file, port)")]
 pub struct Args {
     /// The robot to check the buses against, its port and the calibration
@@ -59,6 +64,13 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
             .calibration(args.robot.hardware.calibration.as_deref())
             .any_rate(),
     )?;
+    if args.fix {
+        // A signal during a fix is acted on once the servo is locked again;
+        // the fixes applied and the ones not begun are then said.
+        if let Err(e) = servobus_driver::catch_stop_signals() {
+            errln!("warning: a signal will end doctor without a report ({e})");
+        }
+    }
     let options = doctor::CheckOptions {
         fix: args.fix,
         write_servos: args.write_servos,
@@ -72,26 +84,36 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
         },
     )?;
     for bus in &checkup.unchecked {
-        eprintln!("warning: bus `{bus}` has no port: not checked");
+        errln!("warning: bus `{bus}` has no port: not checked");
     }
     let standing = checkup.standing();
-    let status = doctor::exit_status(&standing);
+    let stopped = servobus_driver::stop_signal();
+    let status = match stopped {
+        Some(_) => UNFINISHED,
+        None => doctor::exit_status(&standing),
+    };
     if args.json {
-        print_json(&robot, &checkup.buses, status);
+        print_json(&robot, &checkup.buses, status)?;
     } else {
-        print_text(&robot, &checkup.buses, &standing, args.fix);
+        print_text(&robot, &checkup.buses, &standing, args.fix)?;
+    }
+    if let Some(signal) = stopped {
+        errln!(
+            "stopped by {signal}: the fixes said `fixed` were applied (each EEPROM write \
+             unlocked, written, verified and locked); those `not applied` were not begun"
+        );
     }
     Ok(ExitCode::from(status))
 }
 
 /// Prints `findings` (in the order a new robot needs them) under the
 /// heading of each step.
-fn print_findings(findings: &[Finding]) {
+fn print_findings(findings: &[Finding]) -> Result<(), StdoutError> {
     let mut step = None;
     for f in findings {
         if step != Some(f.step) {
             step = Some(f.step);
-            println!("{}", doctor::heading(f.step));
+            outln!("{}", doctor::heading(f.step))?;
         }
         let who = match (f.id, f.register) {
             (Some(id), Some(r)) => format!("servo {id} {r}"),
@@ -99,41 +121,48 @@ fn print_findings(findings: &[Finding]) {
             (None, Some(r)) => r.to_string(),
             (None, None) => format!("bus `{}`", f.bus),
         };
-        println!(
+        outln!(
             "{:<8} {who}: {}",
             f.severity.to_string().to_uppercase(),
             f.problem
-        );
+        )?;
         let fix = f.fix_text();
         if !fix.is_empty() {
             let mark = if f.fixable() { " [--fix]" } else { "" };
-            println!("         fix{mark}: {fix}");
+            outln!("         fix{mark}: {fix}")?;
         }
     }
+    Ok(())
 }
 
-fn print_text(robot: &Robot, outcomes: &[BusCheck], standing: &[Finding], fixed: bool) {
+fn print_text(
+    robot: &Robot,
+    outcomes: &[BusCheck],
+    standing: &[Finding],
+    fixed: bool,
+) -> Result<(), StdoutError> {
     for o in outcomes {
         let port = o.at.port.as_deref().unwrap_or("the built-in simulator");
-        println!(
+        outln!(
             "{} bus `{}` on {port} at {} baud: {} of {} servos read",
             robot.name,
             o.name,
             o.at.baud,
             o.first.servos.len(),
             o.first.expected
-        );
-        print_findings(&o.first.findings);
+        )?;
+        print_findings(&o.first.findings)?;
         for fx in &o.fixes {
             let done = doctor::applied_text(&fx.applied);
             match &fx.result {
-                Ok(()) => println!("fixed    servo {}: {done}", fx.id),
-                Err(e) => println!("FAILED   servo {}: {done} ({e})", fx.id),
+                Ok(()) => outln!("fixed    servo {}: {done}", fx.id)?,
+                Err(e @ FixError::Stopped(_)) => outln!("NOT DONE servo {}: {done} ({e})", fx.id)?,
+                Err(e) => outln!("FAILED   servo {}: {done} ({e})", fx.id)?,
             }
         }
         if let Some(after) = &o.after {
-            println!("after the fixes:");
-            print_findings(&after.findings);
+            outln!("after the fixes:")?;
+            print_findings(&after.findings)?;
         }
     }
     let count = |s| standing.iter().filter(|f| f.severity == s).count();
@@ -143,14 +172,15 @@ fn print_text(robot: &Robot, outcomes: &[BusCheck], standing: &[Finding], fixed:
     } else {
         String::new()
     };
-    println!(
+    outln!(
         "{} error(s), {} warning(s){hint}",
         count(doctor::Severity::Error),
         count(doctor::Severity::Warning)
-    );
+    )?;
+    Ok(())
 }
 
-fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) {
+fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> Result<(), StdoutError> {
     let json_findings = |fs: &[Finding]| -> Vec<serde_json::Value> {
         fs.iter()
             .map(|f| {
@@ -194,5 +224,6 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) {
         "buses": buses,
         "exit": status,
     });
-    println!("{out}");
+    outln!("{out}")?;
+    Ok(())
 }

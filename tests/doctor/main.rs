@@ -260,11 +260,12 @@ fn an_eeprom_lock_left_open_is_found_and_closed() {
     let mut arm = Arm::tuned(Faults::none());
     arm.bus.write(2, addr::LOCK, &[0]).expect("unlock");
     let findings = arm.examine();
-    assert_eq!(
-        must_write(&findings, 2, "lock", 1).severity,
-        Severity::Warning
-    );
-    assert_eq!(doctor::exit_status(&findings), 1);
+    // A lock left open is a write cut short (or another program's): an
+    // error, which motion refuses until it is mended.
+    let lock = must_write(&findings, 2, "lock", 1);
+    assert_eq!(lock.severity, Severity::Error);
+    assert!(lock.problem.contains("half-written"), "{}", lock.problem);
+    assert_eq!(doctor::exit_status(&findings), 2);
     arm.fixed(&findings, false, 2, addr::LOCK, 1);
 }
 

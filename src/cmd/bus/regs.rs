@@ -10,6 +10,33 @@ use servobus_protocol::registers::{self, addr, Access, Register, Series};
 
 use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
 use crate::cmd::exit::input;
+use crate::cmd::out::outln;
+
+/// Catches SIGINT, SIGTERM and SIGHUP before an EEPROM transaction, so
+/// that one that comes during it is acted on once the servo is locked and
+/// what was done is said; one that came before it means nothing is
+/// written.
+fn before_eeprom_write() -> anyhow::Result<()> {
+    if let Err(e) = servobus_driver::catch_stop_signals() {
+        crate::cmd::out::errln!("warning: signals cannot be caught ({e})");
+    }
+    match servobus_driver::stop_signal() {
+        Some(signal) => bail!("stopped by {signal} before writing: nothing was written"),
+        None => Ok(()),
+    }
+}
+
+/// After an EEPROM transaction: the error to end with when a stop signal
+/// came during it (the servo was finished first).
+fn after_eeprom_write(what: &str) -> anyhow::Result<()> {
+    match servobus_driver::stop_signal() {
+        Some(signal) => bail!(
+            "stopped by {signal}: {what} first (unlocked, written, verified, locked); \
+             nothing else was done"
+        ),
+        None => Ok(()),
+    }
+}
 
 /// The register named `name` (or at the address `name`) of `series`.
 fn register(series: Series, name: &str) -> anyhow::Result<&'static Register> {
@@ -152,13 +179,20 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
             let bytes = &mut buf[..usize::from(reg.size)];
             reg.encode(value, series.byte_order(), bytes)
                 .with_context(|| format!("{} cannot hold {value}", reg.name))?;
+            before_eeprom_write()?;
             let w = bus.write_eeprom(args.servo.id, reg.address, bytes)?;
-            println!(
+            // Said before a stop is acted on: the servo holds it now.
+            let said = outln!(
                 "{} = {} on servo {} (unlocked, written, verified, locked)",
                 reg.name,
                 human_value(value, reg),
                 w.id
             );
+            after_eeprom_write(&format!(
+                "servo {} was written ({} = {value})",
+                w.id, reg.name
+            ))?;
+            said?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -174,12 +208,15 @@ fn write_baud_rate(bus: &mut SerialBus, args: &WriteArgs, value: i32) -> anyhow:
             "baud_rate {value} is not an index of the baud table"
         )));
     };
+    before_eeprom_write()?;
     servobus_robot::doctor::change_baud(bus, id, args.servo.baud, index)
         .with_context(|| format!("servo {id}: moving it to {rate} baud"))?;
-    println!(
+    let said = outln!(
         "baud_rate = {value} ({rate} baud) on servo {id} (unlocked, written, verified, locked): \
          it now answers at {rate} baud"
     );
+    after_eeprom_write(&format!("servo {id} was moved to {rate} baud"))?;
+    said?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -240,10 +277,15 @@ pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     refuse_taken(&mut bus, args.new_id)?;
+    before_eeprom_write()?;
     let w = bus.write_eeprom(args.servo.id, addr::ID, &[args.new_id])?;
-    bus.ping(w.id)
-        .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
-    println!("servo {} is now ID {} (persisted)", args.servo.id, w.id);
+    if servobus_driver::stop_signal().is_none() {
+        bus.ping(w.id)
+            .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
+    }
+    let said = outln!("servo {} is now ID {} (persisted)", args.servo.id, w.id);
+    after_eeprom_write(&format!("servo {} was given ID {}", args.servo.id, w.id))?;
+    said?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -232,9 +232,14 @@ impl Ctx<'_> {
 
     fn lock(&self, s: &ServoState, out: &mut Vec<Finding>) {
         if s.value("lock") == Some(0) {
-            let mut f = self.write_fix(Severity::Warning, Step::Configure, s, "lock", 1);
-            f.problem = "EEPROM lock left open: any write to a setting (ID, limits, baud rate) \
-                         persists, stray ones included"
+            // Every EEPROM write of servobus closes the lock again, holding
+            // signals until it has: one left open is a write cut short by
+            // power loss or SIGKILL, or another program's. Motion refuses it.
+            let mut f = self.write_fix(Severity::Error, Step::Configure, s, "lock", 1);
+            f.problem = "EEPROM lock left open: a write of its settings was cut short (power \
+                         loss, a killed program) or another program left it open, so they may \
+                         be half-written (see the limits and offsets here); any write to a \
+                         setting persists, stray ones included, and motion refuses the servo"
                 .into();
             out.push(f);
         }

@@ -4,7 +4,9 @@
 //! session, as play sets them (lock closed: nothing persists), unless
 //! [`Fixing::write_servos`] asks for EEPROM.
 
-use servobus_driver::{Bus, BusError, Clock, StatusLevel, Transport, PATIENCE, PATIENT_TRIES};
+use servobus_driver::{
+    stop_signal, Bus, BusError, Clock, StatusLevel, StopSignal, Transport, PATIENCE, PATIENT_TRIES,
+};
 use servobus_protocol::registers::addr;
 
 use servobus_protocol::registers::Series;
@@ -24,6 +26,10 @@ pub enum FixError {
     /// offsets were not set.
     #[error(transparent)]
     Refused(Refusal),
+    /// Not applied: the program caught a stop signal before this fix began
+    /// (the fix under way was finished first).
+    #[error("not applied: stopped by {0}")]
+    Stopped(StopSignal),
 }
 
 /// What a fix did.
@@ -57,6 +63,11 @@ pub struct FixOutcome {
 /// fixed only by storing it (`how.write_servos`); without that it is left
 /// alone. The bus's settings are left as they were.
 ///
+/// Each EEPROM write is one transaction that SIGINT, SIGTERM and SIGHUP
+/// cannot cut. When the program caught a stop signal
+/// ([`servobus_driver::catch_stop_signals`]), the fixes after the one under
+/// way are not applied: their outcomes say [`FixError::Stopped`].
+///
 /// # Errors
 /// Only when the transport fails; a fix that fails is an outcome.
 pub fn apply<T: Transport, C: Clock>(
@@ -82,6 +93,14 @@ pub fn apply<T: Transport, C: Clock>(
     let mut session_set = false;
     for f in todo {
         let Some(action) = f.action else { continue };
+        if let Some(signal) = stop_signal() {
+            out.push(FixOutcome {
+                id: action.id(),
+                applied: done(f, how),
+                result: Err(FixError::Stopped(signal)),
+            });
+            continue;
+        }
         // Patient, as the examination: a write must not fail on a slow reply.
         bus.set_settings(
             saved
@@ -219,6 +238,8 @@ pub fn change_baud<T: Transport, C: Clock>(
         "baud-rate index outside the table",
     ))?;
     let lock = bus.settings().series.map().lock_address;
+    // Unlock to lock is one critical section, as every EEPROM write.
+    let _hold = servobus_driver::SignalHold::new();
     bus.set_baud(baud)?;
     let unlocked = bus.write(id, lock, &[0]);
     let written = unlocked.and_then(|_| match bus.write(id, addr::BAUD_RATE, &[index]) {

@@ -118,6 +118,15 @@ pub enum Action {
     },
 }
 
+impl Action {
+    /// The servo it acts on.
+    pub fn id(&self) -> u8 {
+        match *self {
+            Action::Write { id, .. } | Action::Baud { id, .. } | Action::Offset { id, .. } => id,
+        }
+    }
+}
+
 /// How [`apply`] applies the fixes of one bus.
 #[derive(Debug, Clone, Copy)]
 pub struct Fixing<'a> {

@@ -135,7 +135,10 @@ fn check_bus<T: Transport, C: Clock>(
             write_servos: options.write_servos,
         };
         fixes = apply(bus, &first.findings, &how).map_err(unfinished)?;
-        after = Some(examine(bus, robot, cfg, &target, kind).map_err(unfinished)?);
+        // Stopped by a signal: said at once, not examined again.
+        if servobus_driver::stop_signal().is_none() {
+            after = Some(examine(bus, robot, cfg, &target, kind).map_err(unfinished)?);
+        }
     }
     Ok(BusCheck {
         name: cfg.name.clone(),

@@ -176,6 +176,21 @@ pub enum Refusal {
         /// The offset calibrated.
         calibrated: i32,
     },
+    /// The servo's EEPROM lock is open: a settings write was cut short
+    /// (power loss, a killed program) or another program left it open, so
+    /// its settings may be half-written, and any stray write would persist.
+    /// The doctor finds what is wrong and `doctor --fix` mends it.
+    #[error(
+        "joint `{joint}`: servo {id} has its EEPROM lock open: a write of its settings was cut \
+         short (power loss, a killed program) or another program left it open, so they may be \
+         half-written"
+    )]
+    Unlocked {
+        /// The joint.
+        joint: String,
+        /// Its servo's ID.
+        id: u8,
+    },
     /// The joint is far outside its calibrated range.
     #[error("joint `{joint}` (servo {id}) is at {deg:.1} deg, far outside its calibrated range {:.1}..{:.1} deg: is this the robot that was calibrated?", .range.0, .range.1)]
     Position {

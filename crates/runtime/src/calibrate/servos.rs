@@ -110,8 +110,10 @@ pub fn torque_off<T: Transport, C: Clock>(
 /// command runs on real servos before its first reading of a joint through
 /// the calibration (play, bench, teach, monitor, doctor, stream, follow).
 ///
-/// It refuses a robot whose calibration is missing or does not match the
-/// servos found, and puts every calibrated servo in its play frame. After a
+/// It refuses a servo whose EEPROM lock is open ([`Refusal::Unlocked`]:
+/// a settings write was cut short, or another program left it open), and
+/// a robot whose calibration is missing or does not match the servos
+/// found, and puts every calibrated servo in its play frame. After a
 /// power-up a servo holds the homing offset of its EEPROM; a range that
 /// crosses the seam is played in a frame whose homing offset centres it,
 /// and unless `--write-servos` stored that offset, it is written here with
@@ -129,10 +131,8 @@ pub fn prepare_servos<T: Transport, C: Clock>(
     robot: &Robot,
     buses: &mut [Bus<T, C>],
 ) -> Result<(), Refusal> {
-    match &robot.calibration {
-        RobotCalibration::None | RobotCalibration::Unapplied(_) => return Ok(()),
-        RobotCalibration::Missing(path) => return Err(Refusal::Missing { path: path.clone() }),
-        RobotCalibration::Applied { .. } => {}
+    if let RobotCalibration::Missing(path) = &robot.calibration {
+        return Err(Refusal::Missing { path: path.clone() });
     }
     for (index, bus) in buses.iter_mut().enumerate() {
         prepare_bus(robot, index, bus)?;
@@ -155,6 +155,10 @@ pub fn prepare_bus<T: Transport, C: Clock>(
     let Some(config) = robot.buses.get(index) else {
         return Ok(());
     };
+    // At the bus's own deadlines: a servo missing costs no patience here.
+    for joint in &config.joints {
+        refuse_unlocked(bus, joint)?;
+    }
     if config.joints.iter().all(|j| j.calibration.is_none()) {
         return Ok(());
     }
@@ -173,6 +177,24 @@ pub fn prepare_bus<T: Transport, C: Clock>(
         });
     bus.set_settings(saved);
     checked
+}
+
+/// Refuses a servo whose EEPROM lock is open (see [`Refusal::Unlocked`]).
+/// A servo that does not answer (or whose reply is lost) is not refused
+/// here: the checks after this one, or the run, say it is missing in their
+/// own way.
+fn refuse_unlocked<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    joint: &JointConfig,
+) -> Result<(), Refusal> {
+    let mut lock = [1u8];
+    match bus.read(joint.id, joint.model.map().lock_address, &mut lock) {
+        Ok(_) if lock[0] == 0 => Err(Refusal::Unlocked {
+            joint: joint.name.clone(),
+            id: joint.id,
+        }),
+        _ => Ok(()),
+    }
 }
 
 fn prepare_joint<T: Transport, C: Clock>(

@@ -68,4 +68,5 @@ mod rt_fallback;
 mod scan_cli;
 mod sim_body_cli;
 mod stream_cli;
+mod sweep;
 mod teach_cli;

@@ -30,11 +30,9 @@ pub(crate) const MAX_RUN_S: f64 = limits::MAX_MOTION_DURATION_S;
 
 /// The shortest timeout, s: below a millisecond a wait is shorter than one
 /// exchange on any bus.
-#[allow(dead_code)] // until stream and serve take it
 pub(crate) const MIN_TIMEOUT_S: f64 = 0.001;
 
 /// The longest timeout, s: an hour; a longer wait is no timeout.
-#[allow(dead_code)] // until stream and serve take it
 pub(crate) const MAX_TIMEOUT_S: f64 = 3600.0;
 
 /// Refreshes per second of a live display: from one every 10 s to the
@@ -94,7 +92,6 @@ pub(crate) fn measure_seconds_arg(arg: &str) -> Result<Duration, String> {
 
 /// Parses a timeout in seconds (`stream --timeout`, `serve --timeout`): [`MIN_TIMEOUT_S`] to
 /// [`MAX_TIMEOUT_S`] (an hour).
-#[allow(dead_code)] // until stream and serve take it
 pub(crate) fn timeout_arg(arg: &str) -> Result<Duration, String> {
     seconds_in(
         arg,

@@ -2,9 +2,12 @@
 //! standard input, followed smoothly by the robot (the runtime's live
 //! targets: a jerk-limited step toward the newest target every cycle).
 //!
-//! Each line is `{"t": <seconds, optional>, "joints": {"<name>": <angle>}}`,
-//! angles in the robot file's units; a line may name some joints only (the
-//! others keep their targets). A malformed line is reported on standard
+//! Each line is a target, `{"t": <seconds, optional>, "joints": {"<name>":
+//! <angle>}}`, or an action chunk, `{"chunk": {"t0": <seconds, optional>,
+//! "dt": <seconds>, "joints": {"<name>": [<angle>, ...]}}}`, angles in the
+//! robot file's units ([`servobus_robot::stream`]); a line may name some
+//! joints only (the others keep their targets). A malformed line, one
+//! longer than 1 MiB or one that is not UTF-8 is reported on standard
 //! error with its number and skipped. End of input stops the robot
 //! (jerk limited) and ends the run with its report: on standard error, or
 //! with `--json` as the last line of standard output, `{"report": {...}}`.
@@ -17,10 +20,13 @@ use std::time::Instant;
 
 use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
 use servobus_runtime::{
-    Command, Lead, LiveEvent, Report, RunOptions, Runner, Target, TargetSender, Telemetry,
+    Command, Lead, LiveEvent, Report, RunOptions, Runner, TargetSender, Telemetry,
 };
 
+use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
+
 use super::link::{every_port, Ports};
+use super::out::{errln, outln};
 
 /// Arguments of `servobus stream`.
 #[derive(Debug, clap::Args)]
@@ -38,22 +44,16 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::rate_arg)]
     pub rate: Option<f64>,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.
-    #[arg(long, default_value_t = 0.25)]
-    pub timeout: f64,
+    #[arg(long, default_value = "0.25", value_parser = super::args::timeout_arg)]
+    pub timeout: std::time::Duration,
 }
 
 /// Runs `servobus stream`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        return Err(super::exit::input(format!(
-            "--timeout {}: give a positive number of seconds",
-            args.timeout
-        )));
-    }
     let robot = load_robot(
         &args.robot.path,
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
@@ -62,7 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         rate_hz: args.rate,
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
         approach: None,
-        target_timeout: std::time::Duration::from_secs_f64(args.timeout),
+        target_timeout: args.timeout,
         ..RunOptions::default()
     };
     let runner = start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
@@ -79,9 +79,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let _ = commands.send(Command::Stop);
         })?;
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    watch(&runner, &names, args.telemetry)?;
+    let lost = watch(&runner, &names, args.telemetry)?;
     let report = runner.join()?;
-    finish(&report, args.json)
+    let code = finish(&report, args.json && !lost)?;
+    if lost {
+        return Ok(ExitCode::from(super::exit::PROBLEM));
+    }
+    Ok(code)
 }
 
 /// Starts a live run of `robot` through the library's connection: on its
@@ -101,67 +105,89 @@ pub(crate) fn start_live(
     Ok(connection.live(options)?.into_runner())
 }
 
-/// A target line: its `t`, if given, and its joints' angles (rad).
-type Parsed = (Option<f64>, Vec<(String, f64)>);
-
-/// The target of a line, or why it is not one.
-fn parse_line(line: &str, units: Units) -> Result<Parsed, String> {
-    let value: serde_json::Value =
-        serde_json::from_str(line).map_err(|e| format!("not JSON: {e}"))?;
-    let obj = value
-        .as_object()
-        .ok_or("not a JSON object: give {\"joints\": {\"<name>\": angle}}")?;
-    let t = match obj.get("t") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(t) => Some(t.as_f64().ok_or("`t` is not a number")?),
-    };
-    let joints = obj
-        .get("joints")
-        .and_then(|j| j.as_object())
-        .ok_or("no `joints` object: give {\"joints\": {\"<name>\": angle}}")?;
-    let mut out = Vec::with_capacity(joints.len());
-    for (name, angle) in joints {
-        let a = angle
-            .as_f64()
-            .ok_or_else(|| format!("joint `{name}`: the angle is not a number"))?;
-        out.push((name.clone(), units.to_rad(a)));
+/// Reads lines of at most [`MAX_LINE_BYTES`] from `input`: each line (without
+/// its end), `Err(true)` for a line too long (skipped whole), `Err(false)`
+/// at the end of input or on a read error.
+fn next_line(input: &mut impl BufRead, buf: &mut Vec<u8>) -> Result<(), bool> {
+    buf.clear();
+    let mut long = false;
+    loop {
+        let chunk = match input.fill_buf() {
+            Ok(c) => c,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(_) => return Err(false),
+        };
+        if chunk.is_empty() {
+            return if long {
+                Err(true)
+            } else if buf.is_empty() {
+                Err(false)
+            } else {
+                Ok(())
+            };
+        }
+        let (part, end) = match chunk.iter().position(|&b| b == b'\n') {
+            Some(i) => (&chunk[..i], Some(i + 1)),
+            None => (chunk, None),
+        };
+        if !long && buf.len() + part.len() <= MAX_LINE_BYTES {
+            buf.extend_from_slice(part);
+        } else {
+            long = true;
+            buf.clear();
+        }
+        let used = end.unwrap_or(chunk.len());
+        input.consume(used);
+        if end.is_some() {
+            return if long { Err(true) } else { Ok(()) };
+        }
     }
-    Ok((t, out))
 }
 
-/// Sends every target line of `input`; reports the malformed and refused
-/// ones on stderr with their line numbers. Returns at the end of input (or
-/// when the run has ended).
-fn read_targets(input: impl BufRead, targets: &TargetSender, units: Units) {
+/// Sends every target and chunk line of `input`; reports the malformed
+/// and refused ones on stderr with their line numbers. Returns at the end
+/// of input (or when the run has ended).
+fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
     let started = Instant::now();
-    for (i, line) in input.lines().enumerate() {
-        let n = i + 1;
-        let Ok(line) = line else {
-            eprintln!("line {n}: not readable text; input ends here");
-            return;
+    let mut buf = Vec::new();
+    for n in 1usize.. {
+        match next_line(&mut input, &mut buf) {
+            Ok(()) => {}
+            Err(true) => {
+                errln!("line {n}: longer than {} MiB; skipped", MAX_LINE_BYTES >> 20);
+                continue;
+            }
+            Err(false) => return,
+        }
+        let Ok(line) = std::str::from_utf8(&buf) else {
+            errln!("line {n}: not UTF-8 text; skipped");
+            continue;
         };
         if line.trim().is_empty() {
             continue;
         }
-        let (t, joints) = match parse_line(&line, units) {
+        let arrival = started.elapsed().as_secs_f64();
+        let input = match parse_line(line, units, arrival) {
             Ok(parsed) => parsed,
             Err(why) => {
-                eprintln!("line {n}: {why}; skipped");
+                errln!("line {n}: {why}; skipped");
                 continue;
             }
         };
-        let stamp = t.unwrap_or_else(|| started.elapsed().as_secs_f64());
-        match targets.send(Target::named(stamp, joints)) {
+        match input.send(targets) {
             Ok(0) => {}
-            Ok(k) => eprintln!("line {n}: {k} angle(s) beyond the joint limits, clamped"),
+            Ok(k) => errln!("line {n}: {k} angle(s) beyond the joint limits, clamped"),
             Err(servobus_runtime::TargetError::Ended) => return,
-            Err(why) => eprintln!("line {n}: {why}; skipped"),
+            Err(why) => errln!("line {n}: {why}; skipped"),
         }
     }
 }
 
 /// One telemetry line per cycle (all buses' joints) while the run goes on.
-fn watch(runner: &Runner, names: &[String], telemetry: bool) -> anyhow::Result<()> {
+/// Returns whether the telemetry could not all be written (the run was
+/// then stopped).
+fn watch(runner: &Runner, names: &[String], mut telemetry: bool) -> anyhow::Result<bool> {
+    let mut lost = false;
     let rx = runner.telemetry();
     let n = names.len();
     let mut commanded: Vec<Option<f64>> = vec![None; n];
@@ -196,8 +222,14 @@ fn watch(runner: &Runner, names: &[String], telemetry: bool) -> anyhow::Result<(
         match m {
             Telemetry::Cycle(c) => {
                 if let Some((_, t)) = cycle.filter(|(k, _)| *k != c.cycle) {
-                    if telemetry {
-                        emit(&mut out, t, &commanded, &measured, &faults)?;
+                    if telemetry && emit(&mut out, t, &commanded, &measured, &faults).is_err() {
+                        // Nobody reads the telemetry any more (a closed
+                        // pipe) or it cannot be written: stop as on
+                        // Ctrl-C, the report still goes to stderr.
+                        telemetry = false;
+                        lost = true;
+                        errln!("the telemetry cannot be written to stdout; stopping");
+                        let _ = runner.commands().try_send(Command::Stop);
                     }
                 }
                 cycle = Some((c.cycle, c.time_s));
@@ -211,32 +243,32 @@ fn watch(runner: &Runner, names: &[String], telemetry: bool) -> anyhow::Result<(
                 }
             }
             Telemetry::Fault(f) => {
-                eprintln!("fault: {f}");
+                errln!("fault: {f}");
                 faults.push(f.to_string());
             }
             Telemetry::Live { event, time_s } => match event {
                 LiveEvent::TimedOut => {
-                    eprintln!("{time_s:.2} s: no target for the timeout; stopping, then holding")
+                    errln!("{time_s:.2} s: no target for the timeout; stopping, then holding")
                 }
-                LiveEvent::Resumed => eprintln!("{time_s:.2} s: targets again; following"),
+                LiveEvent::Resumed => errln!("{time_s:.2} s: targets again; following"),
                 _ => {}
             },
-            Telemetry::Rejected(why) => eprintln!("refused: {why}"),
+            Telemetry::Rejected(why) => errln!("refused: {why}"),
             Telemetry::Finished(_) => break,
             _ => {}
         }
     }
     if let (Some((_, t)), true) = (cycle, telemetry) {
-        emit(&mut out, t, &commanded, &measured, &faults)?;
+        lost |= emit(&mut out, t, &commanded, &measured, &faults).is_err();
     }
-    Ok(())
+    Ok(lost)
 }
 
 /// The report (stderr, or the last stdout line with `json`) and the exit
 /// code: 0 once stopped, 1 after a fault.
 fn finish(report: &Report, json: bool) -> anyhow::Result<ExitCode> {
     if json {
-        println!("{}", serde_json::json!({ "report": report }));
+        outln!("{}", serde_json::json!({ "report": report }))?;
     } else {
         let mut err = std::io::stderr().lock();
         super::play::write_report(&mut err, report, false)?;

@@ -73,6 +73,7 @@ pub mod monitor;
 pub mod ports;
 mod run;
 pub mod scan;
+pub mod stream;
 
 use std::path::{Path, PathBuf};
 
@@ -85,7 +86,7 @@ pub use servobus_config as config;
 pub use servobus_config::Motion;
 pub use servobus_runtime::calibrate::Refusal;
 pub use servobus_runtime::{
-    Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Target as LiveTarget,
+    Chunk, Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Target as LiveTarget,
     TargetSender, Telemetry,
 };
 pub use servobus_trajectory::Trajectory;

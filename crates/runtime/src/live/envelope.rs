@@ -1,7 +1,8 @@
 //! How far a joint's commanded path went beyond the targets it was given:
 //! the envelope of the targets received in the last [`WINDOW`] s (their
-//! least and greatest position), and the stopping allowance of each
-//! excursion beyond it.
+//! least and greatest position, and where the joint was when the oldest
+//! of them came, for the way from there to them), and the stopping
+//! allowance of each excursion beyond it.
 //!
 //! A follower that keeps up with a moving target cannot stop at once when
 //! the targets turn back: it goes on by its quickest stop from the state
@@ -36,8 +37,9 @@ pub struct EnvelopeReport {
 /// One joint's envelope and excursions (see the module docs).
 #[derive(Debug, Clone)]
 pub(super) struct Envelope {
-    /// `(arrival, least, greatest)` of recent targets, a ring.
-    seen: [(f64, f64, f64); KEPT],
+    /// `(arrival, least, greatest, commanded position then)` of recent
+    /// targets, a ring.
+    seen: [(f64, f64, f64, f64); KEPT],
     head: usize,
     len: usize,
     /// The allowance of the excursion under way.
@@ -50,7 +52,7 @@ pub(super) struct Envelope {
 impl Envelope {
     pub fn new(state: JointState) -> Self {
         Envelope {
-            seen: [(0.0, 0.0, 0.0); KEPT],
+            seen: [(0.0, 0.0, 0.0, 0.0); KEPT],
             head: 0,
             len: 0,
             excursion: None,
@@ -62,21 +64,23 @@ impl Envelope {
     /// Targets from `least` to `greatest` arrived at `x`.
     pub fn arrived(&mut self, x: f64, least: f64, greatest: f64) {
         self.head = (self.head + 1) % KEPT;
-        self.seen[self.head] = (x, least, greatest);
+        self.seen[self.head] = (x, least, greatest, self.last.position);
         self.len = (self.len + 1).min(KEPT);
     }
 
     /// The envelope at `x`, if a target arrived in the window before it.
     fn range(&self, x: f64) -> Option<(f64, f64)> {
         let mut out: Option<(f64, f64)> = None;
+        let mut then = None;
         for k in 0..self.len {
-            let (t, lo, hi) = self.seen[(self.head + KEPT - k) % KEPT];
+            let (t, lo, hi, c) = self.seen[(self.head + KEPT - k) % KEPT];
             if x - t > WINDOW {
                 break;
             }
+            then = Some(c);
             out = Some(out.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))));
         }
-        out
+        out.zip(then).map(|((lo, hi), c)| (lo.min(c), hi.max(c)))
     }
 
     /// The commanded state `state` of the cycle at `x`.

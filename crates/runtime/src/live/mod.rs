@@ -20,7 +20,8 @@
 //! - The stamps are put on the run's clock by the smallest delay seen
 //!   between a stamp and its arrival (relaxed by [`OFFSET_RELAX`] per
 //!   target, so that a drifting sender clock is followed).
-//! - No target for the timeout: every joint comes to a jerk-limited stop
+//! - No target for the timeout (counted from the last point of a chunk):
+//!   every joint comes to a jerk-limited stop
 //!   (where the quickest stop from its state ends) and holds. The next
 //!   target resumes the following from there.
 //! - Paused: the same stop and hold; targets are kept and followed on
@@ -161,8 +162,13 @@ impl LivePath {
             }
         }
         let x = self.last;
+        // A chunk keeps the stream alive until its last point is due.
+        let mut alive = now;
         if let Some(chunk) = &t.chunk {
             let shift = at - t.stamp;
+            if let Some(end) = chunk.times.last() {
+                alive = alive.max(end + shift - self.lead);
+            }
             for ((r, e), q) in self
                 .references
                 .iter_mut()
@@ -191,7 +197,7 @@ impl LivePath {
                 r.target(t.stamp, at, q, x);
             }
         }
-        self.arrived = now;
+        self.arrived = alive;
         if self.mode == Mode::TimedOut {
             self.mode = Mode::Following;
             if self.any {
@@ -232,7 +238,7 @@ impl LivePath {
         if self.mode != Mode::Following {
             return Goal::at(self.stops[j]);
         }
-        self.references[j].goal(x)
+        self.references[j].goal(x, self.limits[j].max_velocity)
     }
 
     /// Begins the cycle of time `now`: the timeout is judged by it.

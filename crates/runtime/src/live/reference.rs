@@ -9,7 +9,7 @@
 
 use std::collections::VecDeque;
 
-use servobus_trajectory::Goal;
+use servobus_trajectory::{Goal, TARGET_SPEED_SHARE};
 
 /// Stamp differences outside this range are no target interval, s.
 pub(super) const INTERVAL: (f64, f64) = (0.001, 0.5);
@@ -21,8 +21,11 @@ const MIN_PIECE: f64 = 1e-3;
 const INTERVALS: usize = 5;
 
 /// The piecewise-linear reference of one joint (see the module docs).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(super) struct Reference {
+    /// How many points `ahead` may hold (its room is kept from the start,
+    /// clones included, so that taking points allocates nothing).
+    room: usize,
     /// Where the current piece starts: (time, position).
     from: (f64, f64),
     /// The points ahead, (time, position), times increasing, after
@@ -40,10 +43,22 @@ pub(super) struct Reference {
     before: Option<(f64, f64)>,
 }
 
+impl Clone for Reference {
+    fn clone(&self) -> Self {
+        let mut ahead = VecDeque::with_capacity(self.room);
+        ahead.extend(self.ahead.iter().copied());
+        Reference {
+            ahead,
+            ..*self
+        }
+    }
+}
+
 impl Reference {
     /// Holding `position` from time `x`, with room for `capacity` points.
     pub fn new(x: f64, position: f64, capacity: usize) -> Self {
         Reference {
+            room: capacity,
             from: (x, position),
             ahead: VecDeque::with_capacity(capacity),
             chunk: false,
@@ -121,7 +136,7 @@ impl Reference {
         }
         let last = self.ahead.back().map_or(self.from.0, |p| p.0);
         let due = (at + self.delay()).max(last).max(x);
-        if self.ahead.len() == self.ahead.capacity() {
+        if self.ahead.len() >= self.room {
             // Never with a sane stream (points are passed as fast as they
             // come); keeps the reference bounded if one floods it.
             self.ahead.pop_front();
@@ -134,7 +149,7 @@ impl Reference {
     pub fn chunk(&mut self, points: impl Iterator<Item = (f64, f64)>, x: f64) {
         self.rebase(x);
         for (t, p) in points {
-            if t > x && self.ahead.len() < self.ahead.capacity() {
+            if t > x && self.ahead.len() < self.room {
                 self.ahead.push_back((t, p));
             }
         }
@@ -143,13 +158,19 @@ impl Reference {
 
     /// The goal at `x` (increasing from call to call): the reference's
     /// position, and its speed over the current piece.
-    pub fn goal(&mut self, x: f64) -> Goal {
+    pub fn goal(&mut self, x: f64, max_velocity: f64) -> Goal {
         self.advance(x);
         match self.ahead.front() {
             Some(&(t1, p1)) => {
                 let (t0, p0) = self.from;
                 let span = t1 - t0;
                 let speed = (p1 - p0) / span;
+                let cap = TARGET_SPEED_SHARE * max_velocity;
+                if speed.abs() > cap {
+                    // Faster than the joint may follow: as fast as the
+                    // limits allow to the piece's end.
+                    return Goal::at(p1);
+                }
                 // The piece bends as the speed changes from the piece
                 // before (a parabola through both ends), so that a
                 // follower told the bend keeps up with a stream that
@@ -160,7 +181,9 @@ impl Reference {
                     _ => 0.0,
                 };
                 let (v0, v1) = (speed - 0.5 * accel * span, speed + 0.5 * accel * span);
-                if v0 * v1 < 0.0 || !accel.is_finite() {
+                // Straight too where the follower's share of the speed
+                // limit caps the piece's speed (the cap bends it anyway).
+                if v0 * v1 < 0.0 || !accel.is_finite() || v0.abs().max(v1.abs()) > cap {
                     accel = 0.0;
                 }
                 let v0 = speed - 0.5 * accel * span;
@@ -223,7 +246,7 @@ mod tests {
         for k in 1..=4 {
             let t = f64::from(k) * 0.03;
             r.target(t, t, t, t);
-            let g = r.goal(t);
+            let g = r.goal(t, 100.0);
             // From the second on, the interval is known: the target is
             // reached 30 ms after its stamp, so the reference is one
             // target behind, moving at the ramp's speed.
@@ -233,7 +256,7 @@ mod tests {
             }
         }
         // Nothing more: it holds at the last target once reached.
-        let g = r.goal(0.2);
+        let g = r.goal(0.2, 100.0);
         assert_eq!((g.position, g.velocity), (0.12, 0.0));
     }
 
@@ -241,10 +264,10 @@ mod tests {
     fn a_chunk_replaces_what_is_ahead_and_skips_its_past_points() {
         let mut r = Reference::new(0.0, 0.0, 8);
         r.chunk([(0.1, 1.0), (0.2, 2.0)].into_iter(), 0.0);
-        assert!((r.goal(0.05).position - 0.5).abs() < 1e-9);
+        assert!((r.goal(0.05, 100.0).position - 0.5).abs() < 1e-9);
         // A new chunk at 0.15 whose first point is past.
         r.chunk([(0.1, 9.0), (0.25, 0.0)].into_iter(), 0.15);
-        let g = r.goal(0.15);
+        let g = r.goal(0.15, 100.0);
         // From where the old chunk was (1.5) toward 0 at 0.25, no jump.
         assert!((g.position - 1.5).abs() < 1e-9, "{g:?}");
         assert!((g.velocity + 15.0).abs() < 1e-9, "{g:?}");

@@ -156,7 +156,7 @@ fn follow_with_its_leader_killed_mid_run_writes_the_log_the_recording_and_the_re
     let log = dir.join("fl.csv");
     let take = dir.join("fr.csv");
     let leader = common::Sim::start(&dir);
-    let mut follow = common::Running::start(&[
+    let follow = common::Running::start(&[
         "follow",
         "--robot",
         "so101",
@@ -170,9 +170,8 @@ fn follow_with_its_leader_killed_mid_run_writes_the_log_the_recording_and_the_re
         "--record",
         common::arg(&take),
     ]);
-    // The follower is running once its live line would show; with --json
-    // there is none, so wait for the leader's simulator to have served a
-    // while, then kill it (no SIGTERM: the port just goes).
+    // 3.5 s into the leader's simulator (a few seconds of following), it is
+    // killed: the leader's port just goes.
     leader.wait_until(3.5);
     drop(leader);
     let (status, stdout, stderr) = follow.finish();

@@ -49,15 +49,13 @@ pub struct JointSample {
     /// Reads in a row the servo has not answered (0 once it answers).
     pub missing_reads: u32,
     /// Held pressed against a stop (live sessions): this cycle's goal was
-    /// kept within [`STALL_PUSH`](crate::fault::STALL_PUSH) of where it
-    /// stands.
+    /// kept within `STALL_PUSH` (1 degree) of where it stands.
     pub stalled: bool,
 }
 
 /// A joint of a live session stalled and is held pressed with bounded
-/// effort, or was let go to follow again (see
-/// [`STALL_PUSH`](crate::fault::STALL_PUSH)). Angles are in the report's
-/// units.
+/// effort, or was let go to follow again (see `STALL_PUSH`, 1 degree).
+/// Angles are in the report's units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StallEvent {
     /// Index of the joint in the robot's joint order.
@@ -210,7 +208,7 @@ pub enum Telemetry {
     Fault(Fault),
     /// A joint of a live session stalled (a gripper on its end stop or on
     /// an object): the run goes on with the joint held pressed, or it was
-    /// let go ([`StallEvent::held`]).
+    /// let go (`StallEvent::held`).
     Stall(StallEvent),
     /// A command could not be carried out (a replacement path with the
     /// wrong joints, say); the run goes on as before.

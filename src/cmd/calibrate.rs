@@ -228,8 +228,19 @@ fn measure(args: &Args, robot: &Robot, ports: &[String]) -> anyhow::Result<Taken
 /// Stores an imported calibration in the servos as LeRobot does: each
 /// servo's homing offset and position limits, in the frame it is played in.
 fn write_imported(robot: &Robot, ports: &[String], cal: Calibration) -> anyhow::Result<Taken> {
+    // Caught from here: a signal while the ports open writes no servo and
+    // still says so (see `store`).
+    catch_signals();
     let mut buses = open(robot, ports)?;
     store(robot, &mut buses, cal, Store::PlayFrame)
+}
+
+/// From here on SIGINT, SIGTERM and SIGHUP only set the flag the store
+/// reads between two servos.
+fn catch_signals() {
+    if let Err(e) = servobus_driver::catch_stop_signals() {
+        errln!("warning: a signal will end the program between two servos ({e})");
+    }
 }
 
 /// [`store_in_servos`], saying each servo as it is stored.
@@ -243,9 +254,7 @@ fn store(
     cal: Calibration,
     how: Store,
 ) -> anyhow::Result<Taken> {
-    if let Err(e) = servobus_driver::catch_stop_signals() {
-        errln!("warning: a signal will end the program between two servos ({e})");
-    }
+    catch_signals();
     let Stored {
         calibration,
         written,

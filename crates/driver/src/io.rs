@@ -218,7 +218,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
     /// Transport failures other than a timeout.
     pub fn take_late(&mut self, deadline: Duration) -> Result<(), TransportError> {
         while self.overdue_count > 0 {
-            let n = match self.transport.read(&mut self.rx, deadline) {
+            let n = match read_through_signals(&mut self.transport, &mut self.rx, deadline) {
                 Ok(0) | Err(TransportError::TimedOut) => return Ok(()),
                 Ok(n) => n,
                 Err(e) => return Err(e),
@@ -275,7 +275,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
             prev_is_echo: self.echo,
         };
         'wait: loop {
-            let n = match self.transport.read(&mut self.rx, deadline) {
+            let n = match read_through_signals(&mut self.transport, &mut self.rx, deadline) {
                 Ok(n) => n,
                 Err(TransportError::TimedOut) => {
                     // Whatever is pending will not complete in time: give up
@@ -358,6 +358,34 @@ impl Own<'_> {
                 false
             }
             Event::Discarded { .. } => false,
+        }
+    }
+}
+
+/// How many signals in a row one read sits through before it gives up: far
+/// more than a person or a service manager sends, few enough that a signal
+/// storm cannot keep a transaction waiting beyond its deadlines for long.
+const INTERRUPTIONS: usize = 64;
+
+/// [`Transport::read`], sitting through signals: a read cut short by one
+/// (`EINTR`: a serial port's poll is never restarted, whatever the
+/// handler's flags) waits again until the same deadline. Without this a
+/// Ctrl-C caught by the program, or held through an EEPROM transaction
+/// ([`crate::SignalHold`]), would fail the transaction it came during.
+pub(crate) fn read_through_signals<T: Transport>(
+    transport: &mut T,
+    buf: &mut [u8],
+    deadline: Duration,
+) -> Result<usize, TransportError> {
+    let mut left = INTERRUPTIONS;
+    loop {
+        match transport.read(buf, deadline) {
+            Err(TransportError::Io(e))
+                if e.kind() == std::io::ErrorKind::Interrupted && left > 0 =>
+            {
+                left -= 1;
+            }
+            other => return other,
         }
     }
 }

@@ -12,28 +12,30 @@ use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs,
 use crate::cmd::exit::input;
 use crate::cmd::out::outln;
 
-/// Catches SIGINT, SIGTERM and SIGHUP before an EEPROM transaction, so
-/// that one that comes during it is acted on once the servo is locked and
-/// what was done is said; one that came before it means nothing is
-/// written.
-fn before_eeprom_write() -> anyhow::Result<()> {
+/// Catches SIGINT, SIGTERM and SIGHUP from the start of a command that
+/// writes: one that comes during its EEPROM transaction is acted on once
+/// the servo is locked and what was done is said; one that comes before
+/// it means nothing is written ([`before_eeprom_write`]).
+fn catch_signals() {
     if let Err(e) = servobus_driver::catch_stop_signals() {
         crate::cmd::out::errln!("warning: signals cannot be caught ({e})");
     }
+}
+
+/// Right before an EEPROM transaction: a stop signal caught so far ends
+/// the command with nothing written.
+fn before_eeprom_write() -> anyhow::Result<()> {
     match servobus_driver::stop_signal() {
         Some(signal) => bail!("stopped by {signal} before writing: nothing was written"),
         None => Ok(()),
     }
 }
 
-/// After an EEPROM transaction: the error to end with when a stop signal
-/// came during it (the servo was finished first).
+/// After a write: the error to end with when a stop signal came during it
+/// (the servo was finished first); `what` says what was done.
 fn after_eeprom_write(what: &str) -> anyhow::Result<()> {
     match servobus_driver::stop_signal() {
-        Some(signal) => bail!(
-            "stopped by {signal}: {what} first (unlocked, written, verified, locked); \
-             nothing else was done"
-        ),
+        Some(signal) => bail!("stopped by {signal}: {what}; nothing else was done"),
         None => Ok(()),
     }
 }
@@ -136,6 +138,7 @@ fn refuse_taken(bus: &mut SerialBus, new_id: u8) -> anyhow::Result<()> {
 
 /// Runs `servobus write`.
 pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
+    catch_signals();
     let (mut bus, _) = open_servo(&args.servo)?;
     let series = bus.settings().series;
     let reg = register(series, &args.register)?;
@@ -153,11 +156,12 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
         Access::ReadOnly => return Err(input(format!("{} is read-only", reg.name))),
         Access::Ram => {
             bus.write_register(args.servo.id, reg, value)?;
-            println!(
+            outln!(
                 "{} = {} (RAM: lost at power-off)",
                 reg.name,
                 human_value(value, reg)
-            );
+            )?;
+            after_eeprom_write(&format!("{} = {value} was written (RAM)", reg.name))?;
             warn_if_torque_off(&mut bus, args.servo.id, reg, &args.servo.port.port);
         }
         Access::Eeprom => {
@@ -168,10 +172,10 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
                     refuse_taken(&mut bus, new_id)?;
                 }
             }
-            println!(
+            outln!(
                 "{} is an EEPROM register: the new value will persist across power cycles",
                 reg.name
-            );
+            )?;
             if reg.address == addr::BAUD_RATE {
                 return write_baud_rate(&mut bus, &args, value);
             }
@@ -189,7 +193,7 @@ pub fn write(args: WriteArgs) -> anyhow::Result<ExitCode> {
                 w.id
             );
             after_eeprom_write(&format!(
-                "servo {} was written ({} = {value})",
+                "servo {} was written first ({} = {value}; unlocked, written, verified, locked)",
                 w.id, reg.name
             ))?;
             said?;
@@ -215,7 +219,9 @@ fn write_baud_rate(bus: &mut SerialBus, args: &WriteArgs, value: i32) -> anyhow:
         "baud_rate = {value} ({rate} baud) on servo {id} (unlocked, written, verified, locked): \
          it now answers at {rate} baud"
     );
-    after_eeprom_write(&format!("servo {id} was moved to {rate} baud"))?;
+    after_eeprom_write(&format!(
+        "servo {id} was moved to {rate} baud first (unlocked, written, verified, locked)"
+    ))?;
     said?;
     Ok(ExitCode::SUCCESS)
 }
@@ -271,6 +277,7 @@ fn warn_if_torque_off(bus: &mut SerialBus, id: u8, reg: &Register, port: &str) {
 /// Runs `servobus set-id`.
 pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
     check_id(args.new_id)?;
+    catch_signals();
     let (mut bus, _) = open_servo(&args.servo)?;
     if args.new_id == args.servo.id {
         println!("servo {} already has ID {}", args.servo.id, args.new_id);

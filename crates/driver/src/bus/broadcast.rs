@@ -52,7 +52,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         let mut deadline = start.saturating_add(wait);
         let cap = start.saturating_add(wait).saturating_add(LISTEN_CAP);
         loop {
-            match self.io.transport.read(&mut buf, deadline) {
+            match crate::io::read_through_signals(&mut self.io.transport, &mut buf, deadline) {
                 Ok(n) => {
                     for &b in &buf[..n] {
                         let at = request - echo_left;

@@ -354,3 +354,96 @@ fn an_import_written_to_the_servos_says_each_servo_and_they_hold_it() {
     }
     sim.stop();
 }
+
+/// `calibrate --write-servos` (a LeRobot import stored in the servos) cut
+/// by SIGINT, SIGTERM or a double SIGINT at swept moments, stdout a pipe:
+/// each servo is locked and either fully written or exactly as it was;
+/// the servos said to be written are those written; the calibration is
+/// saved all the same, and the error names the servos written and not.
+#[test]
+fn calibrate_write_servos_cut_by_a_signal_finishes_each_servo_it_began_and_says_which() {
+    use crate::bus_tools::cut;
+    use std::time::Duration;
+    let dir = scratch("calib-write-cut");
+    let sim = Sim::start_with(&dir, cut::SLOW);
+    let port = sim.port().to_owned();
+    let ids = [1, 2, 3, 4, 5, 6];
+    let before = cut::states(&port, &ids);
+    let cal = dir.join("arm.calibration.yaml");
+    let lerobot = repo(LEROBOT);
+    let args = [
+        "calibrate",
+        "--robot",
+        SO101,
+        "--port",
+        &port,
+        "--from-lerobot",
+        arg(&lerobot),
+        "--write-servos",
+        "-o",
+        arg(&cal),
+    ];
+    let whole = cut::run(&args, "", 0, Duration::ZERO, &[]);
+    assert_eq!(whole.code, Some(0), "{whole:?}");
+    let after = cut::states(&port, &ids);
+    for (b, a) in before.iter().zip(&after) {
+        assert_ne!(b.eeprom, a.eeprom, "the import changes every servo");
+    }
+    let put_back = |states: &[cut::State]| {
+        let mut bus = cut::bus(&port);
+        for (&id, s) in ids.iter().zip(states) {
+            // Homing offset (31, 32) and the limits (9 to 12).
+            bus.write_eeprom_all(id, &[(9, &s.eeprom[9..13]), (31, &s.eeprom[31..33])])
+                .expect("put back");
+        }
+    };
+    let mut stopped_between = 0;
+    for k in 0..6 {
+        put_back(&before);
+        let _ = std::fs::remove_file(&cal);
+        let wait = Duration::from_millis(25 * (k as u64 % 3));
+        let run = cut::run(
+            &args,
+            "(unlocked, written, verified, locked)",
+            k,
+            wait,
+            cut::signals(k),
+        );
+        let now = cut::states(&port, &ids);
+        let written = cut::written(&before, &after, &now, &run);
+        let said: Vec<usize> = run
+            .stdout
+            .lines()
+            .filter(|l| l.ends_with("(unlocked, written, verified, locked)"))
+            .filter_map(|l| {
+                l.strip_prefix("servo ")?
+                    .split(' ')
+                    .next()?
+                    .parse::<usize>()
+                    .ok()
+            })
+            .map(|id| id - 1)
+            .collect();
+        assert_eq!(
+            said, written,
+            "the servos said are the ones written: {run:?}"
+        );
+        // Ended by the signal before catching any (at its very start):
+        // nothing was written. Otherwise the calibration is saved.
+        if run.code.is_none() {
+            assert!(written.is_empty(), "{run:?}");
+            continue;
+        }
+        assert!(cal.exists(), "no calibration saved: {run:?}");
+        if written.len() < ids.len() {
+            assert_eq!(run.code, Some(1), "{run:?}");
+            says(
+                &run.stderr,
+                &["stopped by SIG", "servos written", "not written"],
+            );
+            stopped_between += 1;
+        }
+    }
+    assert!(stopped_between > 0, "no run was stopped part way");
+    sim.stop();
+}

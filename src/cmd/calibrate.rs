@@ -507,7 +507,7 @@ pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::E
         return anyhow::anyhow!(
             "{refusal}\nnothing was moved. Find what was left half-written and mend it first:\n  \
              servobus doctor --robot {} --port {port} --fix",
-            robot.path.display()
+            servobus::builtin::argument(&robot.path)
         );
     }
     let file = robot.calibration.file().map_or_else(

@@ -279,3 +279,57 @@ fn doctors_help_states_its_own_exit_status() {
         "the general rule is not repeated under doctor's own:\n{help}"
     );
 }
+
+/// A servo left unlocked and half-written (a write cut by power loss or
+/// SIGKILL: the lock open, a new min_angle_limit): play refuses it and
+/// names the doctor command, doctor finds it, and --fix mends it.
+#[test]
+fn a_servo_left_unlocked_and_half_written_is_refused_found_and_mended() {
+    use crate::bus_tools::cut;
+    let dir = common::scratch("doctor-half-written");
+    let sim = Sim::start(&dir);
+    let port = sim.port().to_owned();
+    {
+        let mut bus = cut::bus(&port);
+        bus.write(3, 55, &[0]).expect("lock opened");
+        // With the lock open a plain write persists: half of a limits pair.
+        bus.write(3, 9, &3000u16.to_le_bytes())
+            .expect("min_angle_limit");
+    }
+    let play = common::servobus(&["play", "arm-wave", "--robot", "so101", "--port", &port]);
+    let (_, err) = common::exited(&play, 1);
+    says(
+        &err,
+        &[
+            "servo 3 has its EEPROM lock open",
+            "half-written",
+            "nothing was moved",
+            &format!("servobus doctor --robot so101 --port {port} --fix"),
+        ],
+    );
+    let doctor = ["doctor", "--robot", "so101", "--port", port.as_str()];
+    let found = common::servobus(&doctor);
+    let (text, _) = common::exited(&found, 2);
+    says(
+        &text,
+        &[
+            "servo 3 lock",
+            "EEPROM lock left open",
+            "servo 3 min_angle_limit",
+        ],
+    );
+    let fixed = common::servobus(&[&doctor[..], &["--fix"]].concat());
+    let text = stdout(&fixed);
+    says(&text, &["fixed    servo 3", "lock 1", "min_angle_limit"]);
+    let s = cut::state(&port, 3).expect("servo 3");
+    assert_eq!(s.lock, 1, "{text}");
+    assert!(
+        u16::from_le_bytes([s.eeprom[9], s.eeprom[10]]) < 3000,
+        "{text}"
+    );
+    // Found no more.
+    let again = stdout(&common::servobus(&doctor));
+    assert!(!again.contains("EEPROM lock left open"), "{again}");
+    assert!(!again.contains("servo 3 min_angle_limit"), "{again}");
+    sim.stop();
+}

@@ -59,6 +59,19 @@ pub const MAX_RECORDING_ROWS: usize = 2_000_000;
 /// span of a six-joint arm's recording of 14 minutes at 200 Hz.
 pub const MAX_TRACK_STEPS: f64 = 1_000_000.0;
 
+/// The shortest step period of a walk, s. Walk samples come every 20 ms,
+/// and a wave gait swings each leg for a sixth of the period: at 0.2 s a
+/// swing still has a couple of samples (a servo of the SO-101 class needs
+/// about that long for the 60 degrees a swing turns a coxa). Shorter
+/// periods cannot be sampled, and `period: 1e-9` would ask for a billion
+/// steps a second.
+pub const MIN_STEP_PERIOD_S: f64 = 0.2;
+
+/// The most velocity segments one walk may have. Planning the body's path
+/// looks at every segment at each of its 2 ms grid points, so this bounds
+/// that work (a walk is a few segments; a thousand is a long tour).
+pub const MAX_WALK_SEGMENTS: usize = 1000;
+
 /// The slowest control rate, Hz. Below it the servos reach each goal and
 /// stop before the next one (the path becomes a staircase), and a servo
 /// that stops answering (three missed cycles) is noticed only after
@@ -144,6 +157,20 @@ pub enum LimitError {
         repeat: u64,
         /// Joints of the robot.
         joints: usize,
+    },
+    /// A generator (a walk, a body move, a straight line) that would add
+    /// more keyframes than [`MAX_PLANNED_SEGMENTS`] leaves room for.
+    #[error(
+        "would make {} samples, and the motion has room for {allowed} more ({} joint \
+         segments at most: keyframes x repetitions x joints)",
+        Rounded(*samples),
+        Rounded(MAX_PLANNED_SEGMENTS)
+    )]
+    Samples {
+        /// The samples (whole robot poses) it would make.
+        samples: f64,
+        /// How many more the motion may have.
+        allowed: usize,
     },
     /// A recording with more rows than [`MAX_RECORDING_ROWS`].
     #[error("more than {MAX_RECORDING_ROWS} rows, the limit for a recording")]
@@ -253,6 +280,38 @@ pub fn check_segments(keyframes: usize, repeat: u64, joints: usize) -> Result<()
             repeat,
             joints,
         })
+    }
+}
+
+/// How many joint keyframes (whole robot poses) a generator may still add
+/// to a motion that has `keyframes` of them so far, repeated `repeat`
+/// times for `joints` joints, within [`MAX_PLANNED_SEGMENTS`]: a walk, a
+/// body move or a straight line checks its sample count against this
+/// before it allocates them.
+pub fn samples_left(keyframes: usize, repeat: u64, joints: usize) -> usize {
+    let per_keyframe = (repeat.max(1) as f64) * (joints.max(1) as f64);
+    let allowed = (MAX_PLANNED_SEGMENTS / per_keyframe).floor();
+    // Both are far below 2^53: the conversions are exact.
+    (allowed as usize).saturating_sub(keyframes)
+}
+
+/// Checks that a generator making `samples` whole robot poses fits a
+/// motion of `keyframes` so far, repeated `repeat` times, for `joints`
+/// joints ([`samples_left`]); NaN does not.
+///
+/// # Errors
+/// [`LimitError::Samples`].
+pub fn check_samples(
+    samples: f64,
+    keyframes: usize,
+    repeat: u64,
+    joints: usize,
+) -> Result<(), LimitError> {
+    let allowed = samples_left(keyframes, repeat, joints);
+    if samples <= allowed as f64 {
+        Ok(())
+    } else {
+        Err(LimitError::Samples { samples, allowed })
     }
 }
 
@@ -382,6 +441,23 @@ mod tests {
             let e = check_rate_hz(bad).expect_err("outside");
             assert!(e.to_string().contains("10 to 10000 Hz"), "{e}");
         }
+    }
+
+    #[test]
+    fn generators_fit_what_is_left_of_the_plan() {
+        // 500000 segments / (2 repetitions x 18 joints) = 13888 keyframes.
+        assert_eq!(samples_left(0, 2, 18), 13_888);
+        assert_eq!(samples_left(13_000, 2, 18), 888);
+        assert_eq!(samples_left(20_000, 2, 18), 0);
+        assert_eq!(check_samples(888.0, 13_000, 2, 18), Ok(()));
+        let e = check_samples(889.0, 13_000, 2, 18).expect_err("one too many");
+        assert_eq!(
+            e.to_string(),
+            "would make 889 samples, and the motion has room for 888 more (500000 joint \
+             segments at most: keyframes x repetitions x joints)"
+        );
+        assert!(check_samples(f64::NAN, 0, 1, 1).is_err());
+        assert!(check_samples(f64::INFINITY, 0, 1, 1).is_err());
     }
 
     #[test]

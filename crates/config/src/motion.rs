@@ -290,6 +290,7 @@ pub fn load_motion_calibrated(
         interpolation: raw.interpolation,
         on_limit: raw.on_limit,
         body: None,
+        repeat: u64::from(repeat),
     };
     for (i, rk) in raw.keyframes.iter().enumerate() {
         let kp = root.key("keyframes").index(i);

@@ -32,6 +32,13 @@ pub enum IkError {
         /// Which singularity.
         what: &'static str,
     },
+    /// A sampled path (a straight line) would need more samples than its
+    /// limit to keep to its tolerance; refused before they are made.
+    #[error("the path needs more than {limit} samples to keep to its tolerance")]
+    TooManySamples {
+        /// The most samples allowed.
+        limit: usize,
+    },
     /// No named frame of that name.
     #[error("no frame `{frame}`")]
     UnknownFrame {

@@ -133,7 +133,24 @@ pub enum WalkError {
     /// A leg cannot reach where the walk puts its foot.
     #[error(transparent)]
     Leg(#[from] LegError),
+    /// A step period, a sampling step or a segment duration that is not a
+    /// positive number of seconds.
+    #[error("the step period, the sampling step and every segment's duration must be positive times in s")]
+    Times,
+    /// The walk would take more steps or samples than [`MAX_WALK_SAMPLES`]
+    /// (a tiny period or step, or a very long walk): refused before any
+    /// is made.
+    #[error("the walk would take {count:.0} steps or samples, more than the limit of {MAX_WALK_SAMPLES}")]
+    TooLong {
+        /// The steps of one leg or the samples it would take.
+        count: f64,
+    },
 }
+
+/// The most samples, or swings of one leg, a walk is planned with: a
+/// million samples of 18 joints is about 150 MB, and an hour's walk at
+/// 20 ms takes 180,000.
+pub const MAX_WALK_SAMPLES: usize = 1_000_000;
 
 /// The body's velocity over the walk, blended between segments.
 struct Profile {
@@ -263,6 +280,20 @@ pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, Wa
     let order = side_order(&neutral)?;
     let beta = walk.gait.duty();
     let period = walk.period_s;
+    let positive = |t: f64| t.is_finite() && t > 0.0;
+    if !(positive(period)
+        && positive(walk.step_s)
+        && walk.segments.iter().all(|s| positive(s.duration_s)))
+    {
+        return Err(WalkError::Times);
+    }
+    // The walk ends within two periods of its segments' end; both the
+    // swings of a leg and the samples are counted before they are made.
+    let span = walk.segments.iter().map(|s| s.duration_s).sum::<f64>() + 2.0 * period;
+    let count = (span / period).max(span / walk.step_s);
+    if count.is_nan() || count > MAX_WALK_SAMPLES as f64 {
+        return Err(WalkError::TooLong { count });
+    }
     check_stride(walk, &neutral, beta)?;
     // The body stays at its height: the feet's ground is where they are.
     let profile = Profile::new(&walk.segments, period);

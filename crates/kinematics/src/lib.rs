@@ -50,12 +50,15 @@ mod support;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use error::IkError;
-pub use gait::{plan_walk, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM};
+pub use gait::{
+    plan_walk, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM, MAX_WALK_SAMPLES,
+};
 pub use geometry::{Geometry, Poses};
 pub use leg::LegIk;
 pub use legs::{LegError, Legs, PoseSample, FOOT_PREFIX};
 pub use line::{
-    sample_line, Held, LineError, LineOptions, LinePlan, LineSample, PoseLine, TURN_WEIGHT_MM,
+    sample_line, Held, LineError, LineOptions, LinePlan, LineSample, PoseLine, MAX_LINE_SAMPLES,
+    TURN_WEIGHT_MM,
 };
 pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};

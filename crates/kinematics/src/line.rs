@@ -101,7 +101,15 @@ pub struct LineOptions {
     /// The largest change of a joint between two samples once the
     /// tolerance holds, rad: more means the arm flips branch.
     pub max_jump_rad: f64,
+    /// The most samples the line may take (the first included): the
+    /// sampling stops with [`IkError::TooManySamples`] before it makes
+    /// more, so a tiny tolerance or step cannot exhaust memory.
+    pub max_samples: usize,
 }
+
+/// The default of [`LineOptions::max_samples`]: an hour's line at 50 ms
+/// is 72,000 samples; this leaves fourteen times that for the tolerance.
+pub const MAX_LINE_SAMPLES: usize = 1_000_000;
 
 impl Default for LineOptions {
     fn default() -> Self {
@@ -110,6 +118,7 @@ impl Default for LineOptions {
             max_step_s: 0.05,
             min_dexterity: 10.0,
             max_jump_rad: 0.35,
+            max_samples: MAX_LINE_SAMPLES,
         }
     }
 }
@@ -177,7 +186,19 @@ pub fn sample_line(
         held,
         options,
     };
-    let steps = (duration_s / options.max_step_s).ceil().max(1.0) as usize;
+    let steps = (duration_s / options.max_step_s).ceil().max(1.0);
+    let too_many = IkError::TooManySamples {
+        limit: options.max_samples,
+    };
+    // NaN (a bad duration or step) is refused too.
+    if steps.is_nan() || steps >= options.max_samples as f64 {
+        return Err(LineError {
+            along_mm: 0.0,
+            reason: too_many,
+        });
+    }
+    // Below the limit, a usize.
+    let steps = steps as usize;
     let n = arm.joints().len();
     let mut min_dexterity = arm.dexterity(start);
     let mut samples = vec![LineSample {
@@ -219,6 +240,9 @@ pub fn sample_line(
                 ));
             }
             min_dexterity = min_dexterity.min(d);
+            if samples.len() >= options.max_samples {
+                return Err(solver.error(s1, too_many.clone()));
+            }
             samples.push(LineSample {
                 t: t1,
                 s: s1,

@@ -10,6 +10,7 @@ use servobus_kinematics::{
 
 use super::{Context, MoveLimits, TimeLaw};
 use crate::error::ConfigError;
+use crate::limits::{Rounded, MAX_WALK_SEGMENTS, MIN_STEP_PERIOD_S};
 use crate::locate::FieldPath;
 use crate::motion::Keyframe;
 use crate::tool::ik_reason;
@@ -116,7 +117,17 @@ impl Context<'_> {
                 ))
             }
         };
-        positive("period", raw.period)?;
+        let period_ok = (MIN_STEP_PERIOD_S..=super::MAX_SPATIAL_S).contains(&raw.period);
+        if !period_ok {
+            return Err(self.src.error(
+                &wp.key("period"),
+                format!(
+                    "must be a step period from {MIN_STEP_PERIOD_S} to {} s, got {}",
+                    super::MAX_SPATIAL_S,
+                    Rounded(raw.period)
+                ),
+            ));
+        }
         if !(raw.lift.is_finite() && raw.lift >= 0.0) {
             return Err(self.src.error(
                 &wp.key("lift"),
@@ -130,6 +141,15 @@ impl Context<'_> {
             return Err(self
                 .src
                 .error(&wp.key("segments"), "a walk needs at least one segment"));
+        }
+        if raw.segments.len() > MAX_WALK_SEGMENTS {
+            return Err(self.src.error(
+                &wp.key("segments"),
+                format!(
+                    "{} segments: a walk may have 1 to {MAX_WALK_SEGMENTS}",
+                    raw.segments.len()
+                ),
+            ));
         }
         let mut segments = Vec::with_capacity(raw.segments.len());
         for (k, s) in raw.segments.iter().enumerate() {
@@ -158,6 +178,11 @@ impl Context<'_> {
                 super::MAX_SPATIAL_S
             )));
         }
+        // The walk ends at most two periods after its segments (the body
+        // stops within one, the last swing lands within the next): its
+        // samples, checked before any is made.
+        let samples = ((total + 2.0 * raw.period) / LEG_STEP_S).ceil() + 1.0;
+        self.check_samples(&wp, index, "this walk", samples, keyframes.len())?;
         let legs = self.legs(&fail)?;
         let walk = Walk {
             gait: match raw.gait {
@@ -227,6 +252,17 @@ impl Context<'_> {
                 "height, shift, roll, pitch and yaw must be finite numbers".to_owned(),
             ));
         }
+        if let Some(height) = raw.height {
+            if height <= 0.0 {
+                return Err(src.error(
+                    &bp.key("height"),
+                    format!(
+                        "keyframe {index}: must be a height above the ground, > 0 mm, got {}",
+                        Rounded(height)
+                    ),
+                ));
+            }
+        }
         let legs = self.legs(&fail)?;
         let start = self.radians(current);
         let state = match self.body.take() {
@@ -253,6 +289,8 @@ impl Context<'_> {
         let line = PoseLine::new(state.pose, to);
         let t0 = self.arrival(keyframes)?;
         let law = TimeLaw::new(line.extent_mm(), limits, at.map(|a| a - t0)).map_err(fail)?;
+        let count = (law.duration() / LEG_STEP_S).ceil() + 1.0;
+        self.check_samples(&bp, index, "this body move", count, keyframes.len())?;
         let samples = legs
             .body_move(
                 &line,

@@ -8,12 +8,19 @@ use servobus_trajectory::{self as traj, JointState};
 
 use super::{Context, MoveLimits, TimeLaw};
 use crate::error::ConfigError;
+use crate::limits::Rounded;
 use crate::locate::FieldPath;
 use crate::motion::Keyframe;
 use crate::tool::{ik_reason, ToolPose, TOOL_FRAME};
 
 /// Default distance the tool may stray from a line, mm.
 pub(crate) const DEFAULT_TOLERANCE_MM: f64 = 0.2;
+
+/// The range of a line's `tolerance`, mm: finer than a servo's tick at
+/// the end of an arm (about 0.1 mm) is never needed, and ten centimetres
+/// is no longer a line.
+const MIN_TOLERANCE_MM: f64 = 0.01;
+const MAX_TOLERANCE_MM: f64 = 100.0;
 
 /// How many times the sampling is made twice as dense when the planned
 /// path strays too far from the line.
@@ -48,10 +55,13 @@ impl Context<'_> {
                 .error(&kp.key("tool"), format!("keyframe {index}: {why}"))
         };
         let tolerance = limits.tolerance.unwrap_or(DEFAULT_TOLERANCE_MM);
-        if !(tolerance.is_finite() && tolerance > 0.0) {
+        if !(MIN_TOLERANCE_MM..=MAX_TOLERANCE_MM).contains(&tolerance) {
             return Err(self.src.error(
                 &kp.key("tolerance"),
-                format!("must be a positive distance in mm, got {tolerance}"),
+                format!(
+                    "must be a distance from {MIN_TOLERANCE_MM} to {MAX_TOLERANCE_MM} mm, got {}",
+                    Rounded(tolerance)
+                ),
             ));
         }
         let model = self.robot.geometry().ok_or_else(|| {
@@ -83,6 +93,11 @@ impl Context<'_> {
             tolerance_mm: tolerance,
             ..LineOptions::default()
         };
+        // The first sampling's samples, before any is made; the sampling
+        // itself stops at what the motion has room for.
+        let first = (law.duration() / options.max_step_s).ceil() + 1.0;
+        self.check_samples(&kp.key("tool"), index, "this line", first, keyframes.len())?;
+        options.max_samples = self.samples_left(keyframes.len());
         for _ in 0..REFINEMENTS {
             let plan = sample_line(
                 &arm,

@@ -19,6 +19,7 @@ use serde::Deserialize;
 use servobus_trajectory::{self as traj, JointLimits, JointState, PlanOptions, Trajectory};
 
 use super::error::{ConfigError, Source};
+use super::limits::{check_samples, samples_left};
 use super::locate::FieldPath;
 use super::motion::{Interpolation, Keyframe, Motion, OnLimit};
 use super::robot::Robot;
@@ -64,6 +65,9 @@ pub(super) struct Context<'a> {
     pub on_limit: OnLimit,
     /// Where the body's moves count from (`body:` keyframes in a row).
     pub body: Option<legs::BodyState>,
+    /// How many times the motion repeats: the samples a keyframe makes are
+    /// planned that many times.
+    pub repeat: u64,
 }
 
 /// The time law of a move of `extent` (mm) under `limits`, ending at
@@ -221,6 +225,33 @@ impl Context<'_> {
             .collect();
         let options = plan_options(self.interpolation, OnLimit::Error, 1);
         traj::plan(&joint_limits(self.robot), &keys, &options)
+    }
+
+    /// Refuses, at `field`, a generator that would make `samples` whole
+    /// robot poses (keyframes) after the `keyframes` the motion has so far,
+    /// more than [`MAX_PLANNED_SEGMENTS`](crate::limits::MAX_PLANNED_SEGMENTS)
+    /// leaves room for: checked before the samples are allocated.
+    ///
+    /// # Errors
+    /// [`ConfigError`] at `field`, `keyframe {index}: ...` with the limit.
+    pub fn check_samples(
+        &self,
+        field: &FieldPath,
+        index: usize,
+        what: &str,
+        samples: f64,
+        keyframes: usize,
+    ) -> Result<(), ConfigError> {
+        let joints = self.robot.joint_count();
+        check_samples(samples, keyframes, self.repeat, joints).map_err(|e| {
+            self.src
+                .error(field, format!("keyframe {index}: {what} {e}; shorten it"))
+        })
+    }
+
+    /// How many samples a generator may still make after `keyframes`.
+    pub fn samples_left(&self, keyframes: usize) -> usize {
+        samples_left(keyframes, self.repeat, self.robot.joint_count())
     }
 
     /// The joints of `current` (the motion's units) in radians.

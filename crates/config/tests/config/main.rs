@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod config_bounded;
 mod config_errors;
 mod config_files;
 mod config_mapping;

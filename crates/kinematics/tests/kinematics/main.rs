@@ -1,5 +1,6 @@
 //! Tests of the kinematics crate on the shipped robots' geometry.
 
+mod bounded;
 mod fk;
 mod ik_arm;
 mod ik_leg;

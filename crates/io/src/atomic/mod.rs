@@ -140,22 +140,28 @@ fn directory_of(path: &Path) -> &Path {
 /// Distinguishes the temporaries of one process for one target.
 static SERIAL: AtomicU32 = AtomicU32::new(0);
 
-/// Creates a new temporary file beside `dest`: `.<name>.<pid>.tmp`, or
-/// `.<name>.<pid>.<n>.tmp` when that one exists already.
-fn create_temp(dest: &Path) -> io::Result<(PathBuf, File)> {
+/// The base of the temporaries of `dest` (see [`temp::base`]).
+fn temp_base(dest: &Path) -> io::Result<String> {
     let name = dest
         .file_name()
         .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path has no file name"))?;
-    let name = name.to_string_lossy();
+    Ok(temp::base(&name.to_string_lossy()))
+}
+
+/// Creates a new temporary file beside `dest`: `.<name>.<pid>.tmp`, or
+/// `.<name>.<pid>.<n>.tmp` when that one exists already (a long name cut,
+/// see [`temp`]).
+fn create_temp(dest: &Path) -> io::Result<(PathBuf, File)> {
+    let base = temp_base(dest)?;
     let dir = directory_of(dest);
     let pid = std::process::id();
     let mut last = None;
     for attempt in 0..16 {
         let temp = if attempt == 0 {
-            dir.join(format!(".{name}.{pid}.tmp"))
+            dir.join(format!("{base}.{pid}.tmp"))
         } else {
             let n = SERIAL.fetch_add(1, Ordering::Relaxed);
-            dir.join(format!(".{name}.{pid}.{n}.tmp"))
+            dir.join(format!("{base}.{pid}.{n}.tmp"))
         };
         match OpenOptions::new().write(true).create_new(true).open(&temp) {
             Ok(file) => return Ok((temp, file)),
@@ -205,7 +211,10 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), OutputEr
 /// temporary and leaves the target untouched.
 ///
 /// The temporary is `.<name>.<pid>.tmp` in the target's directory (so that
-/// the rename stays on one file system). A target that is not a regular
+/// the rename stays on one file system; a name too long for that is cut and
+/// hashed, so the temporary's name is legal whenever the target's is).
+/// Temporaries of the same target that a killed run left (their process
+/// no longer runs) are removed when it is created. A target that is not a regular
 /// file (`/dev/stdout`, `/dev/null`, a FIFO, a terminal) is written in
 /// place instead, as nothing can be renamed over it: a failed write may
 /// leave part of the output there ([`is_direct`](AtomicFile::is_direct)). A
@@ -271,6 +280,10 @@ impl AtomicFile {
                 })
             }
             Plan::Replace { dest, keep } => {
+                // What killed runs left of this target goes first.
+                if let Ok(base) = temp_base(&dest) {
+                    temp::remove_stale(directory_of(&dest), &base);
+                }
                 let (temp, file) = create_temp(&dest).map_err(write_err)?;
                 let atomic = AtomicFile {
                     target,
@@ -362,6 +375,8 @@ impl Drop for AtomicFile {
         }
     }
 }
+
+mod temp;
 
 #[cfg(test)]
 mod tests;

@@ -195,3 +195,100 @@ fn a_device_is_written_in_place_and_its_errors_name_it() {
         "{err}"
     );
 }
+
+/// The pid of a process that has ended (a child that ran and was waited for).
+fn dead_pid() -> u32 {
+    let mut child = std::process::Command::new("true")
+        .spawn()
+        .expect("`true` runs");
+    let pid = child.id();
+    child.wait().expect("it ends");
+    pid
+}
+
+#[test]
+fn temporaries_of_killed_runs_of_the_target_are_removed_by_the_next_write() {
+    if !Path::new("/proc/self").exists() {
+        return; // nothing can tell a dead process from a live one here
+    }
+    let (dir, path) = with_old_file("stale", "log.csv", "old");
+    let dead = dead_pid();
+    let left = [
+        format!(".log.csv.{dead}.tmp"),
+        format!(".log.csv.{dead}.3.tmp"),
+    ];
+    // Kept: a live process's (pid 1 always runs), another target's, and
+    // names that only look alike.
+    let kept = [
+        ".log.csv.1.tmp".to_owned(),
+        format!(".other.csv.{dead}.tmp"),
+        ".log.csv.abc.tmp".to_owned(),
+        format!(".log.csv.{dead}.x.tmp"),
+        format!("log.csv.{dead}.tmp"),
+    ];
+    for name in left.iter().chain(&kept) {
+        fs::write(dir.join(name), "partial").expect("a leftover");
+    }
+    write_atomic(&path, b"new").expect("written");
+    assert_eq!(text(&path), "new");
+    let mut expected: Vec<String> = kept.to_vec();
+    expected.push("log.csv".to_owned());
+    expected.sort();
+    assert_eq!(names(&dir), expected);
+}
+
+#[test]
+fn a_long_legal_name_gets_a_legal_unique_temporary() {
+    let dir = scratch("long");
+    // 255 bytes: the longest legal name; two that differ only at the end.
+    let a = format!("{}a.csv", "x".repeat(250));
+    let b = format!("{}b.csv", "x".repeat(250));
+    assert_eq!(a.len(), 255);
+    let (pa, pb) = (dir.join(&a), dir.join(&b));
+    let fa = written(&pa, b"first");
+    let fb = written(&pb, b"second");
+    let temps = names(&dir);
+    assert_eq!(temps.len(), 2, "{temps:?}");
+    assert!(temps.iter().all(|t| t.len() <= 255), "{temps:?}");
+    assert_ne!(temps[0], temps[1]);
+    fa.commit().expect("the first commits");
+    fb.commit().expect("the second commits");
+    assert_eq!(text(&pa), "first");
+    assert_eq!(text(&pb), "second");
+    assert_eq!(names(&dir).len(), 2);
+    // A multi-byte character at the cut is not split.
+    let c = format!("{}.csv", "é".repeat(125));
+    assert_eq!(c.len(), 254);
+    write_atomic(dir.join(&c), b"third").expect("written");
+    assert_eq!(text(&dir.join(&c)), "third");
+    // A killed run's temporary of a long name is found and removed too.
+    if Path::new("/proc/self").exists() {
+        let stale = format!("{}.{}.tmp", temp::base(&a), dead_pid());
+        assert!(stale.len() <= 255, "{}", stale.len());
+        fs::write(dir.join(&stale), "partial").expect("a leftover");
+        write_atomic(&pa, b"again").expect("written");
+        assert!(!names(&dir).contains(&stale), "{:?}", names(&dir));
+    }
+}
+
+#[test]
+fn temporary_names_are_parsed_back_to_their_process() {
+    assert_eq!(temp::base("log.csv"), ".log.csv");
+    assert_eq!(temp::owner(".log.csv.123.tmp", ".log.csv"), Some(123));
+    assert_eq!(temp::owner(".log.csv.123.7.tmp", ".log.csv"), Some(123));
+    for other in [
+        ".log.csv.tmp",
+        ".log.csv..tmp",
+        ".log.csv.12a.tmp",
+        ".log.csv.1.2.3.tmp",
+        ".log.csv.123",
+        ".log.csvx.123.tmp",
+        ".log.csv.99999999999.tmp",
+    ] {
+        assert_eq!(temp::owner(other, ".log.csv"), None, "{other}");
+    }
+    let long = "y".repeat(240);
+    let base = temp::base(&long);
+    assert!(base.len() + 26 <= temp::NAME_MAX, "{}", base.len());
+    assert_ne!(base, temp::base(&"y".repeat(241)));
+}

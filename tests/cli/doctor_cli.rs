@@ -333,3 +333,70 @@ fn a_servo_left_unlocked_and_half_written_is_refused_found_and_mended() {
     assert!(!again.contains("servo 3 min_angle_limit"), "{again}");
     sim.stop();
 }
+
+/// `doctor --fix` cut by SIGINT, SIGTERM or a double SIGINT at swept
+/// moments, stdout a pipe: every servo locked, each fix whole or not begun,
+/// and the output says which fixes were applied.
+#[test]
+fn doctor_fix_cut_by_a_signal_applies_each_fix_whole_and_says_which() {
+    use crate::bus_tools::cut;
+    use std::time::{Duration, Instant};
+    let dir = common::scratch("doctor-fix-cut");
+    let sim = Sim::start_with(&dir, cut::SLOW);
+    let port = sim.port().to_owned();
+    let ids = [1, 2, 3];
+    let set_delays = |value: u8| {
+        let mut bus = cut::bus(&port);
+        for id in ids {
+            bus.write_eeprom(id, 7, &[value]).expect("return delay");
+        }
+    };
+    set_delays(250);
+    let before = cut::states(&port, &ids);
+    let args = [
+        "doctor",
+        "--robot",
+        "so101",
+        "--port",
+        port.as_str(),
+        "--fix",
+    ];
+    let started = Instant::now();
+    let whole = cut::run(&args, "", 0, Duration::ZERO, &[]);
+    let took = started.elapsed();
+    assert!(whole.code.is_some(), "{whole:?}");
+    let after = cut::states(&port, &ids);
+    for (b, a) in before.iter().zip(&after) {
+        assert_ne!(b.eeprom, a.eeprom, "{whole:?}");
+    }
+    let mut stopped = 0;
+    for k in 0..4 {
+        set_delays(250);
+        let wait = took.mul_f64((k as f64 + 2.0) / 7.0);
+        let run = cut::run(&args, "", 0, wait, cut::signals(k));
+        let now = cut::states(&port, &ids);
+        let written = cut::written(&before, &after, &now, &run);
+        for s in cut::states(&port, &[1, 2, 3, 4, 5, 6]) {
+            assert_eq!(s.lock, 1, "{run:?}");
+        }
+        if run.code.is_none() {
+            assert!(written.is_empty(), "{run:?}");
+            continue;
+        }
+        let said: Vec<usize> = (0..ids.len())
+            .filter(|&i| {
+                run.stdout.lines().any(|l| {
+                    l.starts_with(&format!("fixed    servo {}: ", ids[i]))
+                        && l.contains("return_delay")
+                })
+            })
+            .collect();
+        assert_eq!(said, written, "{run:?}");
+        if run.stderr.contains("stopped by SIG") {
+            assert_eq!(run.code, Some(2), "{run:?}");
+            stopped += 1;
+        }
+    }
+    assert!(stopped > 0, "no run was stopped");
+    sim.stop();
+}

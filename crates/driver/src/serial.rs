@@ -63,8 +63,15 @@ impl<C: Clock> SerialTransport<C> {
     /// # Errors
     /// [`TransportError::Io`] carrying an [`OpenError`] (find it with
     /// [`OpenError::find`]) that says why and what to do: permission denied
-    /// (the group to join), no such port (the ports present), busy (who has it).
+    /// (the group to join), no such port (the ports present), busy (who has it),
+    /// an empty path, the program's own terminal (`/dev/tty`) or a loop of
+    /// symbolic links.
     pub fn open(path: &str, baud: u32, clock: C) -> Result<Self, TransportError> {
+        // An empty path, the program's own terminal and a loop of links
+        // are refused before they are opened (`/dev/tty` would open).
+        if let Some(refused) = OpenError::before_open(path) {
+            return Err(TransportError::Io(io::Error::new(refused.kind(), refused)));
+        }
         let builder = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
             .parity(Parity::None)

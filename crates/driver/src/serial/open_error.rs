@@ -45,6 +45,13 @@ pub enum OpenProblem {
         /// What it is instead.
         what: NotSerial,
     },
+    /// The port was given as an empty string (`--port ''`).
+    Empty,
+    /// `/dev/tty`: the terminal of the program itself, never the servos'
+    /// adapter (opening it would send packets to the user's screen).
+    OwnTerminal,
+    /// A symbolic link that leads back to itself (`ELOOP`).
+    LinkLoop,
     /// Anything else, in the operating system's words.
     Other(String),
 }
@@ -99,6 +106,9 @@ impl OpenError {
     /// message. The path itself is looked at too, since the `errno` of a
     /// failed open is not always carried this far.
     pub(crate) fn classify(path: &str, kind: io::ErrorKind, locked: bool, text: &str) -> Self {
+        if let Some(refused) = Self::before_open(path) {
+            return refused;
+        }
         let lower = text.to_ascii_lowercase();
         let file = Path::new(path);
         let problem =
@@ -133,12 +143,35 @@ impl OpenError {
         }
     }
 
+    /// A path refused before it is opened: an empty one, the program's own
+    /// terminal (`/dev/tty`, or a link to it), or a symbolic link loop.
+    /// Opening `/dev/tty` would succeed and write packets to the screen;
+    /// the other two would fail with a misleading "no such port".
+    pub(crate) fn before_open(path: &str) -> Option<Self> {
+        let problem = if path.is_empty() {
+            OpenProblem::Empty
+        } else if is_own_terminal(Path::new(path)) {
+            OpenProblem::OwnTerminal
+        } else if is_link_loop(Path::new(path)) {
+            OpenProblem::LinkLoop
+        } else {
+            return None;
+        };
+        Some(OpenError {
+            path: path.to_owned(),
+            problem,
+        })
+    }
+
     /// The `io::ErrorKind` that best matches the problem.
     pub(crate) fn kind(&self) -> io::ErrorKind {
         match self.problem {
             OpenProblem::PermissionDenied { .. } => io::ErrorKind::PermissionDenied,
             OpenProblem::NotFound { .. } => io::ErrorKind::NotFound,
-            OpenProblem::NotSerial { .. } => io::ErrorKind::InvalidInput,
+            OpenProblem::NotSerial { .. }
+            | OpenProblem::Empty
+            | OpenProblem::OwnTerminal
+            | OpenProblem::LinkLoop => io::ErrorKind::InvalidInput,
             OpenProblem::Busy { .. } | OpenProblem::Other(_) => io::ErrorKind::Other,
         }
     }
@@ -165,8 +198,23 @@ impl OpenError {
 
 impl fmt::Display for OpenError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.problem == OpenProblem::Empty {
+            return f.write_str(
+                "the port is empty: give the servos' adapter, e.g. --port /dev/ttyUSB0, or no \
+                 --port for the simulator",
+            );
+        }
         write!(f, "cannot open {}: ", self.path)?;
         match &self.problem {
+            OpenProblem::Empty => Ok(()),
+            OpenProblem::OwnTerminal => f.write_str(
+                "that is this program's own terminal, not a serial port; give the servos' \
+                 adapter, e.g. /dev/ttyUSB0",
+            ),
+            OpenProblem::LinkLoop => f.write_str(
+                "the symbolic link leads back to itself (a loop of links); point it at the \
+                 servos' adapter, e.g. /dev/ttyUSB0",
+            ),
             OpenProblem::PermissionDenied { group: Some(group) } => write!(
                 f,
                 "permission denied. Add your user to the `{group}` group, which owns the port \
@@ -257,6 +305,32 @@ fn not_a_device(path: &Path) -> Option<NotSerial> {
         }
     }
     None
+}
+
+/// Whether `path` is, or links to, `/dev/tty`: the controlling terminal of
+/// whichever process opens it.
+fn is_own_terminal(path: &Path) -> bool {
+    let tty = Path::new("/dev/tty");
+    path == tty || std::fs::canonicalize(path).is_ok_and(|p| p == tty)
+}
+
+/// Whether `path` is a symbolic link that cannot be followed because the
+/// links loop (`ELOOP`, or more than 40 links in a row where that error
+/// cannot be read).
+fn is_link_loop(path: &Path) -> bool {
+    let Ok(link) = std::fs::symlink_metadata(path) else {
+        return false;
+    };
+    if !link.file_type().is_symlink() {
+        return false;
+    }
+    match std::fs::metadata(path) {
+        Ok(_) => false,
+        #[cfg(unix)]
+        Err(e) => e.raw_os_error() == Some(libc::ELOOP),
+        #[cfg(not(unix))]
+        Err(_) => false,
+    }
 }
 
 /// An operating system's message without its `(os error N)` suffix.
@@ -420,6 +494,53 @@ mod tests {
             "cannot open /dev/ttyACM0: the port is busy: minicom (pid 1234), pid 99 has it \
              open; close it and retry"
         );
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn an_empty_port_the_own_terminal_and_a_link_loop_say_what_they_are() {
+        let empty = OpenError::before_open("").expect("refused");
+        assert_eq!(empty.problem, OpenProblem::Empty);
+        assert_eq!(
+            empty.to_string(),
+            "the port is empty: give the servos' adapter, e.g. --port /dev/ttyUSB0, or no \
+             --port for the simulator"
+        );
+        let tty = OpenError::before_open("/dev/tty").expect("refused");
+        assert_eq!(
+            tty.to_string(),
+            "cannot open /dev/tty: that is this program's own terminal, not a serial port; \
+             give the servos' adapter, e.g. /dev/ttyUSB0"
+        );
+        assert_eq!(tty.kind(), io::ErrorKind::InvalidInput);
+        let dir = std::env::temp_dir().join(format!("servobus-open-loop-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("a scratch directory");
+        let (a, b) = (dir.join("a"), dir.join("b"));
+        std::os::unix::fs::symlink(&b, &a).expect("a -> b");
+        std::os::unix::fs::symlink(&a, &b).expect("b -> a");
+        let own = dir.join("own");
+        std::os::unix::fs::symlink("/dev/tty", &own).expect("own -> /dev/tty");
+        let looped = OpenError::classify(
+            &a.to_string_lossy(),
+            io::ErrorKind::Other,
+            false,
+            "Too many levels of symbolic links (os error 40)",
+        );
+        assert_eq!(looped.problem, OpenProblem::LinkLoop);
+        assert!(
+            looped.to_string().ends_with(
+                "the symbolic link leads back to itself (a loop of links); point it at the \
+                 servos' adapter, e.g. /dev/ttyUSB0"
+            ),
+            "{looped}"
+        );
+        let own = OpenError::before_open(&own.to_string_lossy()).expect("refused");
+        assert_eq!(own.problem, OpenProblem::OwnTerminal);
+        // An ordinary missing path and a device are not refused early.
+        assert_eq!(OpenError::before_open("/dev/servobus-none"), None);
+        assert_eq!(OpenError::before_open("/dev/null"), None);
+        std::fs::remove_dir_all(&dir).expect("cleaned up");
     }
 
     #[test]

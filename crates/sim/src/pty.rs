@@ -19,6 +19,7 @@ use servobus_timing::Link;
 
 use crate::engine::{Engine, SimStats};
 use crate::{Faults, SimServo};
+pub use link::Server;
 
 /// Why the pty server could not start or stopped.
 #[derive(Debug, thiserror::Error)]
@@ -30,6 +31,21 @@ pub enum PtyError {
     /// The link path exists and is not a symbolic link (it is never replaced).
     #[error("{0} exists and is not a symbolic link; refusing to replace it")]
     LinkOccupied(PathBuf),
+    /// The link points at the pseudo-terminal of a simulator that is
+    /// running in another process: it is not taken from it.
+    #[error(
+        "{link} is the link of a running simulator: {server} serves {} through it; stop that \
+         simulator or choose another link",
+        pty.display()
+    )]
+    LinkServed {
+        /// The link path.
+        link: PathBuf,
+        /// The pseudo-terminal it points at.
+        pty: PathBuf,
+        /// The process serving it.
+        server: Server,
+    },
     /// Creating the symbolic link failed.
     #[error("cannot create the link {path}: {source}")]
     Link {
@@ -43,6 +59,9 @@ pub enum PtyError {
     #[error("pseudo-terminal I/O failed: {0}")]
     Io(#[source] io::Error),
 }
+
+#[path = "link.rs"]
+mod link;
 
 /// Waits for a reply shorter than this are timed precisely (sleep, then spin).
 const SHORT_WAIT: Duration = Duration::from_millis(2);
@@ -110,14 +129,25 @@ impl PtyServer {
     }
 
     /// Makes `link` a symbolic link to the terminal (replacing an old
-    /// symbolic link there, never a file).
+    /// symbolic link there, never a file, nor the link of a simulator
+    /// running in another process).
     ///
     /// # Errors
-    /// [`PtyError::LinkOccupied`] or [`PtyError::Link`].
+    /// [`PtyError::LinkOccupied`], [`PtyError::LinkServed`] or
+    /// [`PtyError::Link`].
     pub fn link_to(&mut self, link: &Path) -> Result<(), PtyError> {
         if let Ok(meta) = std::fs::symlink_metadata(link) {
             if !meta.file_type().is_symlink() {
                 return Err(PtyError::LinkOccupied(link.to_owned()));
+            }
+            if let Ok(pty) = std::fs::read_link(link) {
+                if let Some(server) = link::server_of(&pty) {
+                    return Err(PtyError::LinkServed {
+                        link: link.to_owned(),
+                        pty,
+                        server,
+                    });
+                }
             }
             let _ = std::fs::remove_file(link);
         }

@@ -8,5 +8,6 @@ mod body;
 mod bus;
 mod dynamics;
 mod instructions;
+mod link_served;
 mod model;
 mod pty;

@@ -40,6 +40,7 @@ mod mapping;
 mod motion;
 mod motion_poses;
 mod nesting;
+mod pose_arg;
 mod robot;
 pub mod seam;
 mod spatial;
@@ -62,6 +63,7 @@ pub use error::Source;
 pub use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
+pub use pose_arg::{parse_pose, PoseError};
 pub use robot::{
     load_robot, BusConfig, CalibrationChoice, JointConfig, Robot, RobotCalibration, RobotOptions,
     RobotSource,

@@ -9,3 +9,4 @@ mod config_errors;
 mod config_files;
 mod config_mapping;
 mod config_motion;
+mod config_pose_arg;

@@ -40,6 +40,7 @@ mod mapping;
 mod motion;
 mod motion_poses;
 mod nesting;
+mod plan_terms;
 mod pose_arg;
 mod robot;
 pub mod seam;

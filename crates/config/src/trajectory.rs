@@ -6,6 +6,7 @@ use servobus_trajectory::{
 };
 
 use super::limits::check_length;
+use super::plan_terms::{plan_reason, quantity_unit};
 use super::{ConfigError, Interpolation, Motion, OnLimit, Robot, Units};
 
 /// Per-joint limits of `robot` in radians, in the robot's joint order.
@@ -138,16 +139,6 @@ fn in_units(units: Units, rad: f64) -> f64 {
     units.from_rad(rad)
 }
 
-fn quantity_unit(units: Units, q: Quantity) -> String {
-    match q {
-        Quantity::Position => units.name().to_owned(),
-        Quantity::Velocity => format!("{units}/s"),
-        Quantity::Acceleration => format!("{units}/s^2"),
-        Quantity::Jerk => format!("{units}/s^3"),
-        _ => units.name().to_owned(),
-    }
-}
-
 /// The index in the file of the motion's keyframe `k`: a keyframe in space
 /// is several samples that share its place.
 fn file_index(motion: &Motion, k: usize) -> usize {
@@ -223,7 +214,7 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
         | PlanError::NotFinite { keyframe, joint } => at_keyframe(
             keyframe,
             format!("keyframes[{keyframe}].pose.{}", joint_name(joint)),
-            e.to_string(),
+            format!("keyframe {keyframe}: {}", plan_reason(e, &motion.joints, u)),
         ),
         PlanError::TimeNotIncreasing {
             keyframe,
@@ -240,6 +231,10 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
         PlanError::WrongJointCount { keyframe, .. } => {
             at_keyframe(keyframe, format!("keyframes[{keyframe}]"), e.to_string())
         }
-        _ => at_keyframe(0, String::new(), format!("cannot plan: {e}")),
+        _ => at_keyframe(
+            0,
+            String::new(),
+            format!("cannot plan: {}", plan_reason(e, &motion.joints, u)),
+        ),
     }
 }

@@ -22,6 +22,7 @@ use super::error::{ConfigError, Source};
 use super::limits::{check_samples, samples_left};
 use super::locate::FieldPath;
 use super::motion::{Interpolation, Keyframe, Motion, OnLimit};
+use super::plan_terms::{keyframe_of, plan_reason};
 use super::robot::Robot;
 use super::trajectory::{joint_limits, plan_options, SAMPLE_SHAPE};
 use super::Units;
@@ -207,14 +208,17 @@ impl Context<'_> {
     /// would break the move's geometry).
     ///
     /// # Errors
-    /// The planner's reason.
+    /// The planner's reason in the file's terms (joints by name, angles in
+    /// the motion's units, the time into the move).
     pub fn plan_samples<'s>(
         &self,
         samples: impl Iterator<Item = (f64, &'s [f64])>,
-    ) -> Result<Trajectory, traj::PlanError> {
+    ) -> Result<Trajectory, String> {
+        let mut times = Vec::new();
         let keys: Vec<traj::Keyframe> = samples
             .enumerate()
             .map(|(k, (t, q))| {
+                times.push(t);
                 let kf = traj::Keyframe::new(q.to_vec()).at(t);
                 if k == 0 {
                     kf
@@ -224,7 +228,14 @@ impl Context<'_> {
             })
             .collect();
         let options = plan_options(self.interpolation, OnLimit::Error, 1);
-        traj::plan(&joint_limits(self.robot), &keys, &options)
+        traj::plan(&joint_limits(self.robot), &keys, &options).map_err(|e| {
+            let joints: Vec<String> = self.robot.joints().map(|j| j.name.clone()).collect();
+            let reason = plan_reason(&e, &joints, self.units);
+            match keyframe_of(&e).and_then(|k| times.get(k)) {
+                Some(t) => format!("{reason}, {t:.2} s into the move"),
+                None => reason,
+            }
+        })
     }
 
     /// Refuses, at `field`, a generator that would make `samples` whole

@@ -190,3 +190,29 @@ fn a_slow_line_is_counted_before_it_is_sampled() {
         ],
     );
 }
+
+#[test]
+fn the_planner_speaks_of_joints_by_name_in_the_files_units() {
+    // A body move far faster than the legs' servos can follow.
+    let p = hexapod(
+        "fast-body",
+        "  - body: {height: 70}\n    max_speed: 2000\n    max_acceleration: 100000\n    \
+         max_jerk: 10000000\n",
+    );
+    let e = refused(
+        &p,
+        13,
+        "keyframes[1].body",
+        &[
+            "keyframe 1: the legs cannot follow this body move",
+            " deg/s",
+            "s into the move",
+        ],
+    );
+    let text = e.to_string();
+    assert!(text.contains("joint `"), "{text}");
+    assert!(
+        !text.contains("joint 0") && !text.contains(" rad"),
+        "{text}"
+    );
+}

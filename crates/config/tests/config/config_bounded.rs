@@ -216,3 +216,37 @@ fn the_planner_speaks_of_joints_by_name_in_the_files_units() {
         "{text}"
     );
 }
+
+/// The cases of the bad-input corpus (`tests/bad_inputs/`) this module's
+/// rules refuse, each with the start of its message after the file name.
+#[test]
+fn the_corpus_cases_are_refused_where_they_go_wrong() {
+    let corpus = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/bad_inputs");
+    for (file, expected) in [
+        (
+            "motion-walk-period-tiny.yaml",
+            ":13:44: keyframes[1].walk.period: must be a step period from 0.2 to 3600 s, got 1e-9",
+        ),
+        (
+            "motion-walk-long.yaml",
+            ":13:11: keyframes[1].walk: keyframe 1: this walk would make 150201 samples",
+        ),
+        (
+            "motion-body-below-ground.yaml",
+            ":13:20: keyframes[1].body.height: keyframe 1: must be a height above the ground, > 0 \
+             mm, got -100",
+        ),
+        (
+            "motion-line-tolerance-tiny.yaml",
+            ":8:16: keyframes[2].tolerance: must be a distance from 0.01 to 100 mm, got 1e-9",
+        ),
+    ] {
+        let path = corpus.join(file);
+        let e = load_motion(&path, None).expect_err(file);
+        let text = e.to_string();
+        let rest = text
+            .strip_prefix(&path.display().to_string())
+            .unwrap_or(&text);
+        assert!(rest.starts_with(expected), "{file}: `{text}`");
+    }
+}

@@ -357,6 +357,47 @@ fn stop_stops_the_motion_and_the_node_serves_on_until_shutdown() {
 }
 
 #[test]
+fn ctrl_c_ends_the_node_as_shutdown_does_after_its_linger_for_report() {
+    let _one = serial();
+    let ep = endpoint(free_port());
+    let serve = Running::start(&[
+        "serve", "--robot", "so101", "--listen", &ep, "--linger", "3", "--json",
+    ]);
+    let client = peer(std::slice::from_ref(&ep), &[]);
+    assert!(wait_for_state(&client, "so101"), "the node serves");
+    serve.interrupt();
+    // Within the linger, `report` answers with the finished run.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let doc = loop {
+        assert!(
+            Instant::now() < deadline,
+            "no finished report in the linger"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+        let Ok(replies) = client
+            .get("servobus/so101/report")
+            .timeout(Duration::from_secs(1))
+            .wait()
+        else {
+            continue;
+        };
+        let reply = replies.recv_timeout(Duration::from_secs(2)).ok().flatten();
+        let Some(Ok(sample)) = reply.map(|r| r.into_result()) else {
+            continue;
+        };
+        let doc: serde_json::Value =
+            serde_json::from_slice(&sample.payload().to_bytes()).expect("JSON");
+        if doc["running"] == false {
+            break doc;
+        }
+    };
+    assert_eq!(doc["report"]["finish"], "stopped", "{doc}");
+    let (status, stdout, stderr) = serve.finish();
+    assert!(status.success(), "{stderr}");
+    assert_eq!(last_json(&stdout)["report"]["finish"], "stopped");
+}
+
+#[test]
 fn three_robots_start_a_motion_on_the_same_control_cycle() {
     let _one = serial();
     let period = 1.0 / 100.0;

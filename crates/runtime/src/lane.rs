@@ -155,10 +155,13 @@ impl<T: Transport, C: Clock> Lane<T, C> {
             }
         };
         self.timeline.sample_ref(x, &mut self.reference);
-        let main = matches!(
-            self.timeline.kind_at(x),
-            Some(Kind::Main | Kind::Approach | Kind::Live)
-        );
+        let kind = self.timeline.kind_at(x);
+        if kind == Some(Kind::Live) {
+            // A live session: a joint pressed against a stop is held, not
+            // a fault.
+            l.live_session();
+        }
+        let main = matches!(kind, Some(Kind::Main | Kind::Approach | Kind::Live));
         let found = match gone {
             Some(e) => Some(l.port_gone(&e)),
             None => l.track(&self.reference, main, t),

@@ -48,13 +48,13 @@ mod virtual_run;
 pub use command::Command;
 pub use error::RunError;
 pub use exchange::{CommandSender, COMMAND_DELAY_CYCLES};
-pub use fault::{Fault, FaultKind};
+pub use fault::{Fault, FaultKind, STALL_PUSH};
 pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
 pub use report::{BusReport, JointReport, Quantiles, Report};
 pub use run::bus_settings;
 pub use target::{Chunk, LiveReport, Target, TargetError, TargetSender, MAX_CHUNK_POINTS};
 pub use telemetry::{
-    CycleSample, Finish, JointSample, LiveEvent, Rejection, Telemetry, SAMPLE_JOINTS,
+    CycleSample, Finish, JointSample, LiveEvent, Rejection, StallEvent, Telemetry, SAMPLE_JOINTS,
 };
 pub use threads::{spawn, spawn_live, spawn_virtual, spawn_virtual_live, Runner};
 pub use virtual_run::VirtualRun;

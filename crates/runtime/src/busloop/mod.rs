@@ -221,8 +221,6 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     /// joint that stalls is held pressed with bounded effort
     /// ([`STALL_PUSH`](crate::fault::STALL_PUSH)), reported, and does not
     /// end the run. The lane calls it in a cycle whose path is live.
-    // Until the lane's call is merged (see the change asked of lane.rs).
-    #[allow(dead_code)]
     pub fn live_session(&mut self) {
         self.track.live_session();
     }

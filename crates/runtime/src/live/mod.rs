@@ -1,6 +1,6 @@
 //! The commanded path of a run that follows live targets: every cycle each
 //! joint takes a jerk-limited step ([`servobus_trajectory::Follower`])
-//! toward its reference ([`reference`]).
+//! toward its reference ([`reference`]): its position, speed and bend.
 //!
 //! - The reference goes through the targets received, in straight pieces,
 //!   each target reached one target interval after it was taken (the
@@ -74,6 +74,8 @@ enum Mode {
 #[derive(Debug, Clone)]
 pub(crate) struct LivePath {
     limits: Vec<JointLimits>,
+    /// The commanded state of each joint.
+    cmd: Vec<JointState>,
     followers: Vec<Follower>,
     references: Vec<Reference>,
     envelopes: Vec<Envelope>,
@@ -113,6 +115,7 @@ impl LivePath {
         let mut times = vec![f64::NEG_INFINITY; HISTORY];
         times[0] = x;
         let mut live = LivePath {
+            cmd: from.to_vec(),
             followers: from.iter().map(|s| Follower::new(*s)).collect(),
             references: from
                 .iter()
@@ -218,8 +221,8 @@ impl LivePath {
     }
 
     fn set_stops(&mut self) {
-        for ((s, f), lim) in self.stops.iter_mut().zip(&self.followers).zip(&self.limits) {
-            *s = stop_position(lim, &f.state());
+        for ((s, c), lim) in self.stops.iter_mut().zip(&self.cmd).zip(&self.limits) {
+            *s = stop_position(lim, c);
         }
     }
 
@@ -238,7 +241,7 @@ impl LivePath {
         if self.mode != Mode::Following {
             return Goal::at(self.stops[j]);
         }
-        self.references[j].goal(x, self.limits[j].max_velocity)
+        self.references[j].goal(x, &self.limits[j])
     }
 
     /// Begins the cycle of time `now`: the timeout is judged by it.
@@ -262,31 +265,27 @@ impl LivePath {
         if dt > 0.0 {
             // The goal at the start of the step: the follower plans from
             // there.
-            for j in 0..self.followers.len() {
+            for j in 0..self.cmd.len() {
                 let g = self.goal(j, self.last);
                 let s = self.followers[j].step(&self.limits[j], g, dt);
+                self.cmd[j] = s;
                 self.envelopes[j].commanded(&self.limits[j], x, s);
             }
             self.last = x;
-            let n = self.followers.len();
+            let n = self.cmd.len();
             self.head = (self.head + 1) % HISTORY;
             self.times[self.head] = x;
-            for (s, f) in self.states[self.head * n..(self.head + 1) * n]
-                .iter_mut()
-                .zip(&self.followers)
-            {
-                *s = f.state();
-            }
+            self.states[self.head * n..(self.head + 1) * n].copy_from_slice(&self.cmd);
         }
-        for (o, f) in out.iter_mut().zip(&self.followers) {
-            *o = f.state();
+        for (o, c) in out.iter_mut().zip(&self.cmd) {
+            *o = *c;
         }
     }
 
     /// The commanded path at an earlier time `x` (from the states kept,
     /// extrapolated from the latest one at or before `x`).
     pub fn sample_ref(&self, x: f64, out: &mut [JointState]) {
-        let n = self.followers.len();
+        let n = self.cmd.len();
         let mut best = self.head;
         for k in 0..HISTORY {
             let i = (self.head + HISTORY - k) % HISTORY;

@@ -9,13 +9,18 @@
 
 use std::collections::VecDeque;
 
-use servobus_trajectory::{Goal, TARGET_SPEED_SHARE};
+use servobus_trajectory::{Goal, JointLimits, TARGET_SPEED_SHARE};
 
 /// Stamp differences outside this range are no target interval, s.
 pub(super) const INTERVAL: (f64, f64) = (0.001, 0.5);
 
 /// Pieces shorter than this are taken as straight, s.
 const MIN_PIECE: f64 = 1e-3;
+
+/// How long the follower takes a bend of the reference to last when it
+/// keeps to its speed limit, s: about the longest a follower's plan to its
+/// goal takes at the joints' limits.
+const BEND_HORIZON: f64 = 0.25;
 
 /// How many recent target intervals the delay is taken from.
 const INTERVALS: usize = 5;
@@ -158,14 +163,14 @@ impl Reference {
 
     /// The goal at `x` (increasing from call to call): the reference's
     /// position, and its speed over the current piece.
-    pub fn goal(&mut self, x: f64, max_velocity: f64) -> Goal {
+    pub fn goal(&mut self, x: f64, lim: &JointLimits) -> Goal {
         self.advance(x);
         match self.ahead.front() {
             Some(&(t1, p1)) => {
                 let (t0, p0) = self.from;
                 let span = t1 - t0;
                 let speed = (p1 - p0) / span;
-                let cap = TARGET_SPEED_SHARE * max_velocity;
+                let cap = TARGET_SPEED_SHARE * lim.max_velocity;
                 if speed.abs() > cap {
                     // Faster than the joint may follow: as fast as the
                     // limits allow to the piece's end.
@@ -176,8 +181,11 @@ impl Reference {
                 // follower told the bend keeps up with a stream that
                 // speeds up or slows down; straight where it would turn
                 // back inside the piece (and leave the range of its ends).
+                let most = lim.max_acceleration;
                 let mut accel = match self.before {
-                    Some((v, d)) if span > MIN_PIECE => (speed - v) / (0.5 * (d + span)),
+                    Some((v, d)) if span > MIN_PIECE => {
+                        ((speed - v) / (0.5 * (d + span))).clamp(-most, most)
+                    }
                     _ => 0.0,
                 };
                 let (v0, v1) = (speed - 0.5 * accel * span, speed + 0.5 * accel * span);
@@ -192,7 +200,10 @@ impl Reference {
                     position: p0 + tau * (v0 + 0.5 * accel * tau),
                     velocity: v0 + accel * tau,
                     acceleration: accel,
-                    horizon: t1 - x,
+                    // The follower keeps its speed limit over the goal's
+                    // horizon, and its plan to the goal may outlast the
+                    // piece: the bend is taken as lasting that long.
+                    horizon: (t1 - x).max(BEND_HORIZON),
                 }
             }
             None => {
@@ -239,6 +250,14 @@ impl Reference {
 mod tests {
     use super::*;
 
+    const LIM: JointLimits = JointLimits {
+        min_position: f64::NEG_INFINITY,
+        max_position: f64::INFINITY,
+        max_velocity: 100.0,
+        max_acceleration: 1e4,
+        max_jerk: None,
+    };
+
     #[test]
     fn a_target_is_reached_one_interval_after_it_was_taken() {
         let mut r = Reference::new(0.0, 0.0, 8);
@@ -246,7 +265,7 @@ mod tests {
         for k in 1..=4 {
             let t = f64::from(k) * 0.03;
             r.target(t, t, t, t);
-            let g = r.goal(t, 100.0);
+            let g = r.goal(t, &LIM);
             // From the second on, the interval is known: the target is
             // reached 30 ms after its stamp, so the reference is one
             // target behind, moving at the ramp's speed.
@@ -256,7 +275,7 @@ mod tests {
             }
         }
         // Nothing more: it holds at the last target once reached.
-        let g = r.goal(0.2, 100.0);
+        let g = r.goal(0.2, &LIM);
         assert_eq!((g.position, g.velocity), (0.12, 0.0));
     }
 
@@ -264,10 +283,10 @@ mod tests {
     fn a_chunk_replaces_what_is_ahead_and_skips_its_past_points() {
         let mut r = Reference::new(0.0, 0.0, 8);
         r.chunk([(0.1, 1.0), (0.2, 2.0)].into_iter(), 0.0);
-        assert!((r.goal(0.05, 100.0).position - 0.5).abs() < 1e-9);
+        assert!((r.goal(0.05, &LIM).position - 0.5).abs() < 1e-9);
         // A new chunk at 0.15 whose first point is past.
         r.chunk([(0.1, 9.0), (0.25, 0.0)].into_iter(), 0.15);
-        let g = r.goal(0.15, 100.0);
+        let g = r.goal(0.15, &LIM);
         // From where the old chunk was (1.5) toward 0 at 0.25, no jump.
         assert!((g.position - 1.5).abs() < 1e-9, "{g:?}");
         assert!((g.velocity + 15.0).abs() < 1e-9, "{g:?}");

@@ -12,6 +12,7 @@ mod calibrate_lerobot;
 mod link_silence;
 mod live_compare;
 mod live_follow;
+mod live_inputs;
 mod live_switch;
 mod live_targets;
 mod no_alloc;

@@ -118,6 +118,9 @@ impl<T: Transport, C: Clock> Lane<T, C> {
         if let Some(event) = self.timeline.take_event() {
             self.live_event(event, t);
         }
+        if self.bus.index == 0 {
+            self.timeline.envelopes(&self.counters);
+        }
         let end = found.and_then(|f| self.raise(&f));
         self.bus.finish_cycle(lead);
         if end.is_some() {

@@ -156,8 +156,8 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
     let start = last.unwrap_or_default() + (period * 5).max(START_GAP);
     let (commands, target_tx, inboxes) =
         inboxes(loops.len(), o.command_capacity, o.target_capacity);
-    let counters = Arc::new(Counters::default());
-    let names = robot.joints().map(|j| j.name.clone()).collect();
+    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    let counters = Arc::new(Counters::new(names.clone(), units));
     let targets = TargetSender::new(target_tx, names, limits, Arc::clone(&counters));
     let board = Arc::new(FaultBoard::default());
     let lanes = loops

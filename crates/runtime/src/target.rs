@@ -20,6 +20,8 @@ use crossbeam_channel::Sender;
 use serde::Serialize;
 use servobus_trajectory::JointLimits;
 
+use crate::config::Units;
+use crate::live::EnvelopeReport;
 use crate::report::Quantiles;
 use crate::stats::Histogram;
 
@@ -231,11 +233,42 @@ pub(crate) struct Counters {
     /// From a target's taking to the goals on the wire. Made with the
     /// counters, before the run starts: the loop only records into it.
     latency: Mutex<Histogram>,
+    /// Per joint, how its commanded path kept to its targets' envelope
+    /// (rad); room for every joint made before the run starts.
+    envelope: Mutex<Vec<EnvelopeReport>>,
+    /// The joints' names and the report's units.
+    names: Vec<String>,
+    units: Units,
+}
+
+impl Counters {
+    /// The counters of a run of the joints `names`, reported in `units`.
+    pub fn new(names: Vec<String>, units: Units) -> Self {
+        Counters {
+            envelope: Mutex::new(vec![EnvelopeReport::default(); names.len()]),
+            names,
+            units,
+            ..Counters::default()
+        }
+    }
+
+    /// Takes in the envelope figures of every joint, from the control
+    /// loop: it never waits for the lock, and allocates nothing.
+    pub fn envelopes(&self, figures: impl Iterator<Item = EnvelopeReport>) {
+        if let Ok(mut e) = self.envelope.try_lock() {
+            for (slot, f) in e.iter_mut().zip(figures) {
+                *slot = f;
+            }
+        }
+    }
 }
 
 impl Default for Counters {
     fn default() -> Self {
         Counters {
+            envelope: Mutex::new(Vec::new()),
+            names: Vec::new(),
+            units: Units::Rad,
             received: AtomicU64::default(),
             clamped: AtomicU64::default(),
             refused: AtomicU64::default(),
@@ -285,14 +318,46 @@ impl Counters {
             latency_ms: Some(&*self.latency.lock().unwrap_or_else(|e| e.into_inner()))
                 .filter(|h| h.count() > 0)
                 .map(|h| Quantiles::of(h, Duration::from_millis(1))),
+            envelope: {
+                let e = self.envelope.lock().unwrap_or_else(|e| e.into_inner());
+                let u = self.units;
+                self.names
+                    .iter()
+                    .zip(e.iter())
+                    .map(|(name, f)| LiveJoint {
+                        name: name.clone(),
+                        overshoot: u.from_rad(f.overshoot),
+                        allowance: u.from_rad(f.allowance),
+                        beyond_allowance: u.from_rad(f.beyond_allowance),
+                    })
+                    .collect()
+            },
         };
         (r.received > 0 || get(&self.followed) > 0).then_some(r)
     }
 }
 
+/// How one joint's commanded path kept to the envelope of its targets
+/// (the least and greatest of those received in the last 0.5 s), in the
+/// report's units.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LiveJoint {
+    /// The joint.
+    pub name: String,
+    /// The largest distance the commanded path went beyond the envelope.
+    pub overshoot: f64,
+    /// The stopping distance the joint's limits made unavoidable in that
+    /// excursion: its quickest stop from the commanded state where the
+    /// excursion began.
+    pub allowance: f64,
+    /// The largest overshoot beyond its excursion's allowance (0 when the
+    /// follower never went further than its limits made it).
+    pub beyond_allowance: f64,
+}
+
 /// What happened to a run's live targets (in the [`Report`](crate::Report)
 /// of a run that followed targets).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct LiveReport {
     /// Targets sent (accepted or refused).
     pub received: u64,
@@ -307,6 +372,9 @@ pub struct LiveReport {
     /// From the taking of a target ([`Target::taken_at`]) to the first
     /// goals sent after it, ms, when targets said when they were taken.
     pub latency_ms: Option<Quantiles>,
+    /// Per joint, in the robot's joint order: how far the commanded path
+    /// went beyond the targets it was given, and what its limits allowed.
+    pub envelope: Vec<LiveJoint>,
 }
 
 /// A sender of live targets to a run (cheap to clone).

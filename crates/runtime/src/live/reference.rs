@@ -226,11 +226,6 @@ impl Reference {
         }
     }
 
-    /// Whether a piece is being followed (else the reference holds).
-    pub fn moving(&self) -> bool {
-        !self.ahead.is_empty()
-    }
-
     /// Holds `position` from `x` on (nothing ahead), keeping what is known
     /// of the stream's intervals.
     pub fn restart(&mut self, x: f64, position: f64) {

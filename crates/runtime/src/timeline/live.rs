@@ -65,6 +65,18 @@ impl Timeline {
         true
     }
 
+    /// Hands `counters` the envelope figures of the live following, if it
+    /// runs.
+    pub fn envelopes(&self, counters: &crate::target::Counters) {
+        if let Some(Segment {
+            path: Path::Live(live),
+            ..
+        }) = self.segments.last()
+        {
+            counters.envelopes(live.envelopes());
+        }
+    }
+
     /// What the live following did since last asked, if it runs.
     pub fn take_event(&mut self) -> Option<LiveEvent> {
         match self.segments.last_mut().map(|s| &mut s.path) {

@@ -146,6 +146,15 @@ fn lag_until(rec: &Recorded, source: impl Fn(f64) -> f64, from: f64, until: f64)
 /// cycle at or after each), stamped with the slot's time. Returns the
 /// recording and what was sent.
 fn stream_30hz(cycles: u64, source: impl Fn(f64) -> f64) -> (Recorded, Sent) {
+    let (rec, sent, _) = stream_30hz_reported(cycles, source);
+    (rec, sent)
+}
+
+/// [`stream_30hz`], with the run's report of the pan's envelope.
+fn stream_30hz_reported(
+    cycles: u64,
+    source: impl Fn(f64) -> f64,
+) -> (Recorded, Sent, servobus_runtime::LiveJoint) {
     let mut run = live_run();
     let tx = run.targets();
     let mut sent = Vec::new();
@@ -161,7 +170,10 @@ fn stream_30hz(cycles: u64, source: impl Fn(f64) -> f64) -> (Recorded, Sent) {
         }
     });
     assert!(rec.faults.is_empty(), "{:?}", rec.faults);
-    (rec, sent)
+    let live = run.report().live.expect("targets counted");
+    let pan = live.envelope[0].clone();
+    assert_eq!(pan.name, "shoulder_pan");
+    (rec, sent, pan)
 }
 
 /// One 30 Hz target interval plus one cycle, s.
@@ -170,10 +182,11 @@ const LAG_BOUND: f64 = 1.0 / 30.0 + PERIOD;
 #[test]
 fn a_step_goes_to_the_target_and_never_beyond_it() {
     let step = |t: f64| if t >= 0.2 { 40.0 } else { 0.0 };
-    let (rec, sent) = stream_30hz(300, step);
+    let (rec, sent, pan) = stream_30hz_reported(300, step);
     let worst = check(&rec, &sent);
     // From rest, a step is reached without overshoot.
     assert!(worst <= 1e-6, "{worst}");
+    assert_eq!(pan.overshoot, 0.0, "{pan:?}");
     let c = rec.commanded(0);
     assert!((c[c.len() - 1] - 40.0).abs() < 1e-6);
     // Reached no later than one interval and a cycle after the
@@ -233,8 +246,14 @@ fn a_flick_out_and_back_turns_back_within_its_stopping_distance() {
             0.0
         }
     };
-    let (rec, sent) = stream_30hz(300, flick);
-    check(&rec, &sent);
+    let (rec, sent, pan) = stream_30hz_reported(300, flick);
+    let worst = check(&rec, &sent);
+    // The run reports the excursion and its allowance as measured here
+    // (its envelope also counts where the joint was at the oldest target
+    // of the window, this test where it was 0.5 s before).
+    println!("flick: {pan:?}, measured {worst:.3}");
+    assert!(pan.overshoot > 1.0 && pan.allowance >= pan.overshoot - TOLERANCE, "{pan:?}");
+    assert!(pan.beyond_allowance <= TOLERANCE, "{pan:?}");
     let c = rec.commanded(0);
     // It went out (toward the flick's far end) and came back.
     assert!(c.iter().fold(0.0f64, |a, &b| a.max(b)) > 10.0);

@@ -38,7 +38,7 @@ with zenoh.open(conf) as session:
         session.put(f"{base}/target", json.dumps({"joints": target, "sent_ns": time.time_ns()}))
         print(f"\rtarget {target['elbow_flex']:+6.1f}  measured {latest.get('elbow_flex') or 0:+6.1f}", end="")
         time.sleep(1 / 30)
-    session.put(f"{base}/command", "stop")
+    session.put(f"{base}/command", "shutdown")
     time.sleep(1.0)
     for reply in session.get(f"{base}/report", timeout=5.0):
         if reply.ok is not None:

@@ -12,6 +12,7 @@ use std::time::Duration;
 use anyhow::{bail, Context};
 
 use super::exit::input;
+use super::out::{errln, outln};
 
 mod regs;
 pub use regs::{list as registers, read, set_id, write};
@@ -150,7 +151,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         e => e.into(),
     })?;
     if let Some(slow) = scanned.slow {
-        eprintln!(
+        errln!(
             "warning: the adapter's latency is about {} us, more than the {} us assumed: \
              asking silent IDs again (pass --latency-us to skip this)",
             slow.measured.as_micros(),
@@ -187,20 +188,20 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
             "collisions": coll,
             "elapsed_s": elapsed.as_secs_f64(),
         });
-        println!("{out}");
+        outln!("{out}")?;
     } else {
         if !found.is_empty() {
-            println!(
+            outln!(
                 "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  BAUD",
                 "ID", "MODEL", "FIRMWARE", "POSITION", "VOLTAGE", "TEMP"
-            );
+            )?;
         }
         for f in &found {
             let model = f
                 .model
                 .map_or_else(|| format!("#{}", f.model_number), |m| m.name.to_string());
             let opt = |v: Option<String>| v.unwrap_or_else(|| "?".into());
-            println!(
+            outln!(
                 "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  {}",
                 f.id,
                 model,
@@ -209,17 +210,17 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
                 opt(f.voltage_v.map(|v| format!("{v:.1} V"))),
                 opt(f.temperature_c.map(|t| format!("{t} C"))),
                 f.baud
-            );
+            )?;
         }
-        println!(
+        outln!(
             "found {} servo(s) on {} in {:.2} s",
             found.len(),
             args.port.port,
             elapsed.as_secs_f64()
-        );
+        )?;
     }
     for (id, baud) in &collisions {
-        eprintln!(
+        errln!(
             "error: ID {id} at {baud} baud: corrupted replies (checksum errors): \
              probably two servos share this ID; connect them one at a time and use set-id"
         );
@@ -252,10 +253,10 @@ pub fn ping(args: PingArgs) -> anyhow::Result<ExitCode> {
         adapt_latency(&mut bus, *id)?;
     }
     let flags = bus.ping(*id)?;
-    println!(
+    outln!(
         "servo {id} answered in {} us, status {flags}",
         bus.last_rtt().as_micros()
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

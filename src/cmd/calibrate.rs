@@ -25,7 +25,7 @@ use servobus_runtime::config::{
 };
 
 use super::link::{every_port, Allowance, Ports, SerialBus};
-use super::out::{errln, outln};
+use super::out::{errln, out, outln};
 
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
@@ -134,9 +134,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &args.robot.path,
         &RobotOptions::default().calibration(Some(&output)),
     )?;
-    print_summary(&robot, &output);
+    print_summary(&robot, &output)?;
     if named.as_deref() != Some(output.as_path()) {
-        println!("to use it: {}", how_to_use(&args.robot.path, &output));
+        outln!("to use it: {}", how_to_use(&args.robot.path, &output))?;
     }
     if let Some(out) = &args.to_lerobot {
         write_lerobot(&cal, out)?;
@@ -146,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
 fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
     servobus_io::write_atomic(out, to_lerobot(cal).as_bytes())?;
-    println!("LeRobot calibration: {}", out.display());
+    outln!("LeRobot calibration: {}", out.display())?;
     Ok(())
 }
 
@@ -324,8 +324,8 @@ fn relative(base: &Path, target: &Path) -> PathBuf {
     out
 }
 
-fn print_summary(robot: &Robot, output: &Path) {
-    println!("calibration: {}", output.display());
+fn print_summary(robot: &Robot, output: &Path) -> Result<(), super::out::StdoutError> {
+    outln!("calibration: {}", output.display())?;
     for joint in robot.joints() {
         let Some(c) = &joint.calibration else {
             continue;
@@ -335,7 +335,7 @@ fn print_summary(robot: &Robot, output: &Path) {
         } else {
             ""
         };
-        println!(
+        outln!(
             "  {:<16} servo {:>3}  direction {:+}  ticks {}..{}  limits {:.1}..{:.1} {}{seam}",
             joint.name,
             joint.id,
@@ -345,8 +345,9 @@ fn print_summary(robot: &Robot, output: &Path) {
             joint.min,
             joint.max,
             robot.units
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The person at the terminal (or, without one, the robot's stillness).
@@ -428,7 +429,9 @@ impl Operator for Terminal {
         if !self.latest.is_empty() {
             // The step that ended, as it ended.
             let latest = std::mem::take(&mut self.latest);
-            print!("{}", self.table(&latest, ""));
+            // The live display: a reader gone does not stop the
+            // calibration (its result is saved and said on stderr).
+            let _ = out!("{}", self.table(&latest, ""));
         }
         let text = match step {
             Step::TorqueOff => {
@@ -447,7 +450,7 @@ impl Operator for Terminal {
             ),
             Step::Done => "4. Done: writing the calibration.".to_owned(),
         };
-        println!("{text}");
+        let _ = outln!("{text}");
         let _ = std::io::stdout().flush();
     }
 
@@ -469,7 +472,7 @@ impl Operator for Terminal {
         }
         out.push_str(&self.table(joints, "\x1b[K"));
         self.lines = joints.len();
-        print!("{out}");
+        let _ = out!("{out}");
         let _ = std::io::stdout().flush();
     }
 

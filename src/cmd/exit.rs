@@ -70,7 +70,7 @@ pub fn code(err: &anyhow::Error) -> u8 {
             || e.is::<FaultSpecError>()
             || matches!(
                 e.downcast_ref::<PtyError>(),
-                Some(PtyError::LinkOccupied(_))
+                Some(PtyError::LinkOccupied(_) | PtyError::LinkServed { .. })
             )
             || matches!(
                 e.downcast_ref::<TeachError>(),

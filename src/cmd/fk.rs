@@ -87,25 +87,7 @@ fn geometry(path: &std::path::Path) -> anyhow::Result<(Robot, Geometry)> {
 
 /// `--pose` as joint angles in radians, robot order.
 fn pose(robot: &Robot, text: &str) -> anyhow::Result<Vec<f64>> {
-    let named: BTreeMap<String, f64> = serde_yaml::from_str(text).map_err(|e| {
-        input(format!(
-            "--pose must be a map of joint names to angles: {e}"
-        ))
-    })?;
-    let mut q = vec![0.0; robot.joint_count()];
-    for (name, angle) in named {
-        let i = robot.joint_index(&name).ok_or_else(|| {
-            input(format!(
-                "--pose: robot `{}` has no joint `{name}`",
-                robot.name
-            ))
-        })?;
-        if !angle.is_finite() {
-            return Err(input(format!("--pose: `{name}` must be a finite angle")));
-        }
-        q[i] = robot.units.to_rad(angle);
-    }
-    Ok(q)
+    servobus_runtime::config::parse_pose(robot, text).map_err(|e| input(format!("--pose: {e}")))
 }
 
 fn frame_pose(units: Units, pose: &servobus_kinematics::Isometry3<f64>) -> FramePose {

@@ -63,8 +63,8 @@ pub struct Args {
     #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg, conflicts_with = "leader")]
     pub leader_hand: Option<PathBuf>,
     /// Stop after this many seconds (default: run until Ctrl-C).
-    #[arg(long)]
-    pub seconds: Option<f64>,
+    #[arg(long, value_parser = super::args::run_seconds_arg)]
+    pub seconds: Option<Duration>,
     /// Write one CSV row per cycle and joint of the follower (as play's).
     #[arg(long)]
     pub log: Option<PathBuf>,
@@ -153,11 +153,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let Some(path) = path {
             super::check_writable(flag, path)?;
         }
-    }
-    if let Some(s) = args.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
-        return Err(super::exit::input(format!(
-            "--seconds {s}: give a positive time"
-        )));
     }
     let robot = load_robot(
         &args.robot.path,
@@ -308,7 +303,7 @@ fn drive<T: Transport, C: Clock>(
     loop {
         let now = Instant::now();
         let t = now.duration_since(started).as_secs_f64();
-        if runner.is_finished() || args.seconds.is_some_and(|s| t >= s) {
+        if runner.is_finished() || args.seconds.is_some_and(|s| t >= s.as_secs_f64()) {
             break;
         }
         if let Err(e) = leader.read(&mut pose, &mut trail) {
@@ -464,7 +459,7 @@ fn finish(
             serde_json::json!({"name": n, "rms_error": rms, "max_error": max})
         })
         .collect();
-    let latency = report.live.and_then(|l| l.latency_ms);
+    let latency = report.live.as_ref().and_then(|l| l.latency_ms);
     let stalls: Vec<serde_json::Value> = seen
         .stalls
         .iter()

@@ -14,6 +14,8 @@ use servobus_node::zenoh::Wait;
 use servobus_runtime::config::{load_motion_calibrated, load_robot, plan_motion, RobotOptions};
 use servobus_runtime::{Command, Lead, RunOptions};
 
+use super::out::{errln, outln};
+
 /// Arguments of `servobus serve`.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "\
@@ -50,7 +52,7 @@ pub struct Args {
     #[arg(long)]
     pub group: Option<String>,
     /// How often `state` is published, Hz.
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value = "50", value_parser = super::args::refresh_rate_arg)]
     pub state_hz: f64,
     /// Also publish sensor_msgs/msg/JointState for ROS 2 over rmw_zenoh.
     #[arg(long)]
@@ -59,12 +61,12 @@ pub struct Args {
     #[arg(long, default_value_t = 0, requires = "ros2")]
     pub ros_domain: u32,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::rate_arg)]
     pub rate: Option<f64>,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.
-    #[arg(long, default_value_t = 0.25)]
-    pub timeout: f64,
+    #[arg(long, default_value = "0.25", value_parser = super::args::timeout_arg)]
+    pub timeout: Duration,
     /// Seconds the node keeps answering `report` after the run ends.
     #[arg(long, default_value_t = 2.0)]
     pub linger: f64,
@@ -75,13 +77,6 @@ pub struct Args {
 
 /// Runs `servobus serve`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    for (flag, v) in [("--timeout", args.timeout), ("--state-hz", args.state_hz)] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(super::exit::input(format!(
-                "{flag} {v}: give a positive number"
-            )));
-        }
-    }
     if !(args.linger.is_finite() && args.linger >= 0.0 && args.linger <= 3600.0) {
         return Err(super::exit::input(format!(
             "--linger {}: give 0 to 3600 seconds",
@@ -107,7 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         rate_hz: args.rate,
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
         approach: None,
-        target_timeout: Duration::from_secs_f64(args.timeout),
+        target_timeout: args.timeout,
         ..RunOptions::default()
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
@@ -122,7 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot_path = robot.path.clone();
     let planner =
         Box::new(move |motion: &str| plan_command(motion, &robot_path, calibration.as_deref()));
-    eprintln!(
+    errln!(
         "serving {} on servobus/{}/ (state at {} Hz); `shutdown` or Ctrl-C ends the node",
         robot.name,
         servobus_node::key_chunk(&info.name),
@@ -134,25 +129,25 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         runner,
         planner,
         &config,
-        Duration::from_secs_f64(args.linger),
+        Duration::try_from_secs_f64(args.linger).unwrap_or_default(),
     )?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "report": served.report,
                 "node": served.counts(),
             })
-        );
+        )?;
     } else {
         let mut err = std::io::stderr().lock();
         super::play::write_report(&mut err, &served.report, false)?;
-        eprintln!(
+        errln!(
             "  node: {} targets, {} malformed, {} commands, {} states published",
             served.targets, served.malformed, served.commands, served.states
         );
         for o in &served.start_offsets {
-            eprintln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
+            errln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
         }
     }
     Ok(super::exit::of_finish(served.report.finish))
@@ -222,7 +217,7 @@ pub(crate) fn duration_arg(arg: &str) -> Result<Duration, String> {
     if !(0.0..=3600.0).contains(&secs) {
         return Err(format!("`{arg}`: give 0 to 3600 s"));
     }
-    Ok(Duration::from_secs_f64(secs))
+    Duration::try_from_secs_f64(secs).map_err(|_| format!("`{arg}`: give 0 to 3600 s"))
 }
 
 /// `play MOTION --zenoh-group NAME`: tells every robot serving in the
@@ -267,7 +262,7 @@ pub(crate) fn announce(
         })
         .collect();
     if members.is_empty() {
-        eprintln!(
+        errln!(
             "no robot serves group `{group}` at the given endpoints (--connect); nothing sent"
         );
         return Ok(ExitCode::from(1));
@@ -285,12 +280,12 @@ pub(crate) fn announce(
         .map_err(|e| super::exit::input(format!("zenoh: {e}")))?;
     // Let the put leave before the session closes.
     std::thread::sleep(Duration::from_millis(300));
-    println!(
+    outln!(
         "group {group}: {} robot(s) ({}) start {} at UNIX {at_s:.3}",
         members.len(),
         members.join(", "),
         servobus::builtin::argument(motion)
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -278,6 +278,16 @@ fn finish(report: &Report, json: bool) -> anyhow::Result<ExitCode> {
                 "  targets: {} received, {} refused, {} clamped; {} timeouts, {} resumed",
                 l.received, l.refused, l.clamped, l.timeouts, l.resumes
             )?;
+            for j in l.envelope.iter().filter(|j| j.overshoot > 0.05) {
+                writeln!(
+                    err,
+                    "  {}: {:.1} {u} beyond its targets' range, its stopping distance {:.1} {u}",
+                    j.name,
+                    j.overshoot,
+                    j.allowance,
+                    u = report.units
+                )?;
+            }
         }
     }
     Ok(super::exit::of_finish(report.finish))

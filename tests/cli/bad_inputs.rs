@@ -115,6 +115,64 @@ fn a_small_file_cannot_ask_for_unbounded_work() {
         &["robot-nested-40.yaml:2:", "nested more than 32 levels"],
         &[],
     );
+    refused(
+        &["plan", "motion-walk-period-tiny.yaml"],
+        &[
+            "motion-walk-period-tiny.yaml:13:44: keyframes[1].walk.period",
+            "from 0.2 to 3600 s, got 1e-9",
+        ],
+        &[],
+    );
+    refused(
+        &["plan", "motion-walk-long.yaml"],
+        &[
+            "motion-walk-long.yaml:13:11: keyframes[1].walk",
+            "this walk would make 150201 samples",
+        ],
+        &[],
+    );
+    refused(
+        &["plan", "motion-body-below-ground.yaml"],
+        &[
+            "motion-body-below-ground.yaml:13:20: keyframes[1].body.height",
+            "above the ground, > 0 mm, got -100",
+        ],
+        &[],
+    );
+    refused(
+        &["plan", "motion-line-tolerance-tiny.yaml"],
+        &[
+            "motion-line-tolerance-tiny.yaml:8:16: keyframes[2].tolerance",
+            "from 0.01 to 100 mm, got 1e-9",
+        ],
+        &[],
+    );
+}
+
+#[test]
+fn ports_that_are_no_serial_port_say_what_they_are() {
+    refused(&["ping", "--port", "", "--id", "1"], &["the port is empty"], &[]);
+    refused(
+        &["ping", "--port", "/dev/tty", "--id", "1"],
+        &["this program's own terminal"],
+        &[],
+    );
+    let dir = servobus_test_dir("port-loop");
+    let link = dir.join("loop");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(&link, &link).expect("a link to itself");
+    refused(
+        &["ping", "--port", link.to_str().expect("a UTF-8 path"), "--id", "1"],
+        &["leads back to itself"],
+        &[],
+    );
+}
+
+/// A fresh scratch directory of this test binary.
+fn servobus_test_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("servobus-bad-inputs-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    dir
 }
 
 #[test]

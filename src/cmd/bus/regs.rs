@@ -10,7 +10,7 @@ use servobus_protocol::registers::{self, addr, Access, Register, Series};
 
 use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
 use crate::cmd::exit::input;
-use crate::cmd::out::outln;
+use crate::cmd::out::{errln, outln};
 
 /// Catches SIGINT, SIGTERM and SIGHUP from the start of a command that
 /// writes: one that comes during its EEPROM transaction is acted on once
@@ -74,26 +74,26 @@ pub fn list(args: RegistersArgs) -> anyhow::Result<ExitCode> {
     };
     for (n, series) in chosen.into_iter().enumerate() {
         if n > 0 {
-            println!();
+            outln!()?;
         }
-        println!(
+        outln!(
             "{} servos (EEPROM: kept over power-off; RAM: lost; read-only: reported)",
             series.name().to_uppercase()
-        );
-        println!(
+        )?;
+        outln!(
             "{:>4} {:>4}  {:<9} {:<22} {:<16} WHAT",
             "ADDR", "SIZE", "ACCESS", "NAME", "UNIT"
-        );
+        )?;
         for r in series.map().registers {
             let access = match r.access {
                 Access::Eeprom => "EEPROM",
                 Access::Ram => "RAM",
                 Access::ReadOnly => "read-only",
             };
-            println!(
+            outln!(
                 "{:>4} {:>4}  {access:<9} {:<22} {:<16} {}",
                 r.address, r.size, r.name, r.unit, r.description
-            );
+            )?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -115,12 +115,12 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
             "unit": reg.unit,
             "status": flags.bits(),
         });
-        println!("{out}");
+        outln!("{out}")?;
     } else {
-        println!("{} = {}", reg.name, human_value(value, reg));
+        outln!("{} = {}", reg.name, human_value(value, reg))?;
     }
     if !flags.is_ok() {
-        eprintln!("warning: servo {} reports {flags}", args.servo.id);
+        errln!("warning: servo {} reports {flags}", args.servo.id);
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -267,7 +267,7 @@ fn warn_if_torque_off(bus: &mut SerialBus, id: u8, reg: &Register, port: &str) {
         return;
     };
     if let Ok((0, _)) = bus.read_register(id, torque) {
-        eprintln!(
+        errln!(
             "warning: torque is off on servo {id}, so it will not move to this goal; \
              turn it on with: servobus write --port {port} --id {id} torque_enable 1"
         );
@@ -280,7 +280,7 @@ pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
     catch_signals();
     let (mut bus, _) = open_servo(&args.servo)?;
     if args.new_id == args.servo.id {
-        println!("servo {} already has ID {}", args.servo.id, args.new_id);
+        outln!("servo {} already has ID {}", args.servo.id, args.new_id)?;
         return Ok(ExitCode::SUCCESS);
     }
     refuse_taken(&mut bus, args.new_id)?;

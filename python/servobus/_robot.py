@@ -79,6 +79,16 @@ class JointReport:
     max_error: float
     readings: int
     clamps: int
+    stalls: int = 0
+    """Times the joint was held on a stall (a gripper on its end stop or
+    an object) instead of the run ending."""
+
+    @classmethod
+    def from_raw(cls, raw: Dict[str, Any]) -> "JointReport":
+        """The report's joint entry; fields a newer report adds are kept in
+        :attr:`Report.raw` only."""
+        known = {f for f in cls.__dataclass_fields__}
+        return cls(**{k: v for k, v in raw.items() if k in known})
 
 
 @dataclass(frozen=True)
@@ -137,7 +147,7 @@ def _report(text: str, names: List[str], time=(), commanded=None, planned=None, 
         clamps=raw["clamps"],
         duration_s=raw["duration_s"],
         units=raw["units"],
-        joints=[JointReport(**j) for j in raw["joints"]],
+        joints=[JointReport.from_raw(j) for j in raw["joints"]],
         fault=raw.get("fault"),
         warnings=list(raw.get("warnings", [])),
         joint_names=list(names),

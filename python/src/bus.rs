@@ -12,6 +12,7 @@ use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
 use servobus_runtime::sim::SimRobot;
 use servobus_sim::WallBus;
 
+use crate::checks;
 use crate::errors::{poisoned, Failure, Field, Outcome};
 use crate::load::load_robot;
 
@@ -44,13 +45,69 @@ type SyncReadLists = (Vec<(u8, Option<i32>)>, Vec<(u8, String, u8)>);
 type RawSyncReadLists = (Vec<(u8, Option<u32>)>, Vec<(u8, String, u8)>);
 
 /// A raw access's length: 1, 2 or 4 bytes.
-fn raw_length(length: usize) -> Outcome<usize> {
-    match length {
-        1 | 2 | 4 => Ok(length),
+fn raw_length(length: &Bound<'_, PyAny>) -> Outcome<usize> {
+    match checks::whole(length, "length", 1, 4) {
+        Ok(n @ (1 | 2 | 4)) => Ok(n as usize),
         _ => Err(Failure::usage(format!(
-            "length {length}: give 1, 2 or 4 bytes"
+            "length {}: give 1, 2 or 4 bytes",
+            shown(length)
         ))),
     }
+}
+
+/// A register address from Python: 0..=255.
+fn raw_address(address: &Bound<'_, PyAny>) -> Outcome<u8> {
+    let a = checks::whole(address, "address", 0, i64::from(u8::MAX)).map_err(|_| {
+        Failure::usage(format!(
+            "address {}: a register address is 0..=255",
+            shown(address)
+        ))
+    })?;
+    // Within 0..=255 by the check above.
+    Ok(a as u8)
+}
+
+/// How a Python value shows in a message.
+fn shown(value: &Bound<'_, PyAny>) -> String {
+    value
+        .str()
+        .map(|s| s.to_string())
+        .unwrap_or_else(|_| "?".to_owned())
+}
+
+/// An unsigned raw value from Python for `length` bytes.
+fn raw_value(value: &Bound<'_, PyAny>, length: usize) -> Outcome<u32> {
+    let max = if length == 4 {
+        u32::MAX
+    } else {
+        (1u32 << (8 * length)) - 1
+    };
+    match value.extract::<i64>() {
+        Ok(v) if (0..=i64::from(max)).contains(&v) => Ok(v as u32),
+        _ => Err(Failure::new(
+            "LimitError",
+            format!("value {} does not fit {length} byte(s)", shown(value)),
+        )
+        .with("value", Field::Float(as_float(value)))
+        .with("min", Field::Float(0.0))
+        .with("max", Field::Float(f64::from(max)))),
+    }
+}
+
+/// A Python number as a float (NaN when it is not one), for an error's
+/// `value` field.
+fn as_float(value: &Bound<'_, PyAny>) -> f64 {
+    value.extract::<f64>().unwrap_or(f64::NAN)
+}
+
+/// Runs `f` without the GIL, then acts on a signal that came meanwhile:
+/// Ctrl-C raises `KeyboardInterrupt` from the call it came during, whatever
+/// the call's result (the driver sits through `EINTR` to each deadline, so
+/// a transaction is never cut in half and the signal is seen here).
+fn blocking<R: Send>(py: Python<'_>, f: impl Send + FnOnce() -> Outcome<R>) -> PyResult<R> {
+    let result = py.allow_threads(f);
+    py.check_signals()?;
+    Ok(result?)
 }
 
 /// `value` as `length` bytes in the byte order of `series`.
@@ -116,25 +173,66 @@ fn register(series: Series, name: &str) -> Outcome<&'static Register> {
     })
 }
 
-/// A servo ID from Python.
-fn servo_id(id: i64) -> Outcome<u8> {
-    u8::try_from(id)
-        .ok()
-        .filter(|&i| i <= MAX_ID)
-        .ok_or_else(|| Failure::usage(format!("ID {id}: a servo's ID is 0..=253")))
+/// A servo ID from Python: 0..=253.
+fn servo_id(id: &Bound<'_, PyAny>) -> Outcome<u8> {
+    let id = checks::whole(id, "ID", 0, i64::from(MAX_ID))
+        .map_err(|_| Failure::usage(format!("ID {}: a servo's ID is 0..=253", shown(id))))?;
+    // Within 0..=253 by the check above.
+    Ok(id as u8)
 }
 
-/// A register value from Python.
-fn value_of(value: i64) -> Outcome<i32> {
-    i32::try_from(value).map_err(|_| {
-        Failure::new(
-            "LimitError",
-            format!("value {value} does not fit any register"),
-        )
-    })
+/// A value of `reg` from Python: a whole number within the register's
+/// range, or `LimitError` with the range (NaN, inf and 1e30 included).
+fn value_of(value: &Bound<'_, PyAny>, reg: &Register, series: Series) -> Outcome<i32> {
+    let fits = value
+        .extract::<i64>()
+        .ok()
+        .and_then(|v| i32::try_from(v).ok());
+    if let Some(v) = fits {
+        return Ok(v);
+    }
+    let mut failure = Failure::new(
+        "LimitError",
+        format!(
+            "{}: {} is not a value the register can hold",
+            reg.name,
+            shown(value)
+        ),
+    )
+    .with("value", Field::Float(as_float(value)));
+    if let Some((min, max)) = register_range(reg, series) {
+        failure = failure
+            .with("min", Field::Float(f64::from(min)))
+            .with("max", Field::Float(f64::from(max)));
+    }
+    Err(failure)
+}
+
+/// The values `reg` holds, as its encoder says when asked for the most
+/// extreme ones.
+fn register_range(reg: &Register, series: Series) -> Option<(i32, i32)> {
+    let mut block = [0u8; 4];
+    let block = block.get_mut(..usize::from(reg.size))?;
+    match reg.encode(i32::MAX, series.byte_order(), block) {
+        Err(servobus_protocol::registers::ValueError::OutOfRange { min, max, .. }) => {
+            Some((min, max))
+        }
+        _ => None,
+    }
 }
 
 impl Bus {
+    /// PINGs servo `id`: whether it answered (call without the GIL).
+    fn ping_one(&self, id: u8) -> Outcome<bool> {
+        self.with(|bus| {
+            on_bus!(bus, b => match b.ping(id) {
+                Ok(_) => Ok(true),
+                Err(e) if e.is_timeout() => Ok(false),
+                Err(e) => Err(e.into()),
+            })
+        })
+    }
+
     /// Runs `f` on the open bus with the lock held (call without the GIL).
     fn with<R>(&self, f: impl FnOnce(&mut AnyBus) -> Outcome<R>) -> Outcome<R> {
         let mut guard = self.inner.lock().map_err(poisoned)?;
@@ -155,18 +253,13 @@ impl Bus {
     fn new(
         py: Python<'_>,
         port: String,
-        baud: u32,
+        baud: &Bound<'_, PyAny>,
         series: &str,
         latency: Option<f64>,
     ) -> PyResult<Self> {
+        let baud = checks::baud(baud)?;
         let series = series_of(series)?;
-        let latency = match latency {
-            Some(s) if s.is_finite() && s >= 0.0 => Some(Duration::from_secs_f64(s)),
-            Some(s) => Err(Failure::usage(format!(
-                "latency {s}: give seconds, 0 or more"
-            )))?,
-            None => None,
-        };
+        let latency = latency.map(checks::latency).transpose()?;
         let bus = py
             .allow_threads(|| open_plain_bus(&port, baud, series, latency))
             .map_err(Failure::from)?;
@@ -218,71 +311,64 @@ impl Bus {
     }
 
     /// PING servo `id`: True when it answers, False when nothing answered.
-    fn ping(&self, py: Python<'_>, id: i64) -> PyResult<bool> {
+    fn ping(&self, py: Python<'_>, id: &Bound<'_, PyAny>) -> PyResult<bool> {
         let id = servo_id(id)?;
-        Ok(py.allow_threads(|| {
-            self.with(|bus| {
-                on_bus!(bus, b => match b.ping(id) {
-                    Ok(_) => Ok(true),
-                    Err(e) if e.is_timeout() => Ok(false),
-                    Err(e) => Err(e.into()),
-                })
-            })
-        })?)
+        blocking(py, || self.ping_one(id))
     }
 
     /// The IDs among `ids` (default every ID, 0..=253) that answer a PING,
-    /// in increasing order.
+    /// in increasing order. Ctrl-C between two PINGs raises
+    /// `KeyboardInterrupt`.
     #[pyo3(signature = (ids=None))]
-    fn scan(&self, py: Python<'_>, ids: Option<Vec<i64>>) -> PyResult<Vec<u16>> {
+    fn scan(&self, py: Python<'_>, ids: Option<Vec<Bound<'_, PyAny>>>) -> PyResult<Vec<u16>> {
         let ids: Vec<u8> = match ids {
-            Some(ids) => ids.into_iter().map(servo_id).collect::<Outcome<_>>()?,
+            Some(ids) => ids.iter().map(servo_id).collect::<Outcome<_>>()?,
             None => (0..=MAX_ID).collect(),
         };
-        Ok(py.allow_threads(|| {
-            self.with(|bus| {
-                let mut found = Vec::new();
-                for &id in &ids {
-                    on_bus!(bus, b => match b.ping(id) {
-                        Ok(_) => found.push(id),
-                        Err(e) if e.is_timeout() => {}
-                        Err(e) => return Err(e.into()),
-                    });
-                }
-                found.sort_unstable();
-                found.dedup();
-                // Numbers for Python: a list of u8 would become bytes.
-                Ok(found.into_iter().map(u16::from).collect())
-            })
-        })?)
+        let mut found = Vec::new();
+        for id in ids {
+            if blocking(py, || self.ping_one(id))? {
+                found.push(id);
+            }
+        }
+        found.sort_unstable();
+        found.dedup();
+        // Numbers for Python: a list of u8 would become bytes.
+        Ok(found.into_iter().map(u16::from).collect())
     }
 
     /// Reads the register `register` of servo `id`: its value (signed
     /// registers signed). Raises `TimeoutError` when the servo does not
     /// answer.
-    fn read(&self, py: Python<'_>, id: i64, register: &str) -> PyResult<i32> {
+    fn read(&self, py: Python<'_>, id: &Bound<'_, PyAny>, register: &str) -> PyResult<i32> {
         let id = servo_id(id)?;
         let reg = self::register(self.series, register)?;
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| on_bus!(bus, b => Ok(b.read_register(id, reg)?.0)))
-        })?)
+        })
     }
 
     /// Writes `value` to the register `register` of servo `id` (an EEPROM
     /// register persistently: unlock, write, verify, lock). Raises
     /// `LimitError` for a value the register cannot hold.
-    fn write(&self, py: Python<'_>, id: i64, register: &str, value: i64) -> PyResult<()> {
+    fn write(
+        &self,
+        py: Python<'_>,
+        id: &Bound<'_, PyAny>,
+        register: &str,
+        value: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
         let id = servo_id(id)?;
         let reg = self::register(self.series, register)?;
-        let value = value_of(value)?;
-        Ok(py.allow_threads(|| {
+        let value = value_of(value, reg, self.series)?;
+        blocking(py, || {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     b.write_register(id, reg, value)?;
                     Ok(())
                 })
             })
-        })?)
+        })
     }
 
     /// Reads `register` of every servo in `ids` with one SYNC READ (and
@@ -290,16 +376,21 @@ impl Bus {
     /// list of `(id, value or None)` in the order of `ids`, and a list of
     /// `(id, why, attempts)` for the servos that did not answer. A missing
     /// servo never costs the others' values.
-    fn sync_read(&self, py: Python<'_>, register: &str, ids: Vec<i64>) -> PyResult<SyncReadLists> {
-        let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
+    fn sync_read(
+        &self,
+        py: Python<'_>,
+        register: &str,
+        ids: Vec<Bound<'_, PyAny>>,
+    ) -> PyResult<SyncReadLists> {
+        let ids: Vec<u8> = ids.iter().map(servo_id).collect::<Outcome<_>>()?;
         let reg = self::register(self.series, register)?;
         let order = self.series.byte_order();
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     // Servos missing from the first round are asked again, as
-                // many times as a READ is retried.
-                let read = b.sync_read_within(reg.address, reg.size, &ids, Duration::MAX)?;
+                    // many times as a READ is retried.
+                    let read = b.sync_read_within(reg.address, reg.size, &ids, Duration::MAX)?;
                     let mut values = Vec::with_capacity(ids.len());
                     let mut missing = Vec::new();
                     for result in read.iter() {
@@ -317,12 +408,17 @@ impl Bus {
                     Ok((values, missing))
                 })
             })
-        })?)
+        })
     }
 
     /// Writes `register` of several servos with one SYNC WRITE:
     /// `values` maps each servo's ID to its value. Nobody answers.
-    fn sync_write(&self, py: Python<'_>, register: &str, values: Vec<(i64, i64)>) -> PyResult<()> {
+    fn sync_write(
+        &self,
+        py: Python<'_>,
+        register: &str,
+        values: Vec<(Bound<'_, PyAny>, Bound<'_, PyAny>)>,
+    ) -> PyResult<()> {
         let reg = self::register(self.series, register)?;
         if !reg.access.is_writable() {
             return Err(Failure::usage(format!("register `{}` is read-only", reg.name)).into());
@@ -331,32 +427,40 @@ impl Bus {
         let size = usize::from(reg.size);
         let mut ids = Vec::with_capacity(values.len());
         let mut data = vec![0u8; values.len() * size];
-        for ((id, value), block) in values.into_iter().zip(data.chunks_mut(size)) {
+        for ((id, value), block) in values.iter().zip(data.chunks_mut(size)) {
             ids.push(servo_id(id)?);
-            reg.encode(value_of(value)?, order, block)
+            reg.encode(value_of(value, reg, self.series)?, order, block)
                 .map_err(|e| Failure::from(servobus_driver::BusError::Value(e)))?;
         }
         if ids.is_empty() {
             return Ok(());
         }
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     b.sync_write(reg.address, &ids, &data)?;
                     Ok(())
                 })
             })
-        })?)
+        })
     }
 
-    /// Reads `length` (1, 2 or 4) bytes at `address` of servo `id` as one
-    /// unsigned number in the bus's byte order, for clients with control
-    /// tables of their own (LeRobot): `(value, status flags)`.
-    fn read_raw(&self, py: Python<'_>, id: i64, address: u8, length: usize) -> PyResult<(u32, u8)> {
+    /// Reads `length` (1, 2 or 4) bytes at `address` (0..=255) of servo
+    /// `id` as one unsigned number in the bus's byte order, for clients
+    /// with control tables of their own (LeRobot): `(value, status flags)`.
+    /// Raises `UsageError` for an address, length or ID out of range.
+    fn read_raw(
+        &self,
+        py: Python<'_>,
+        id: &Bound<'_, PyAny>,
+        address: &Bound<'_, PyAny>,
+        length: &Bound<'_, PyAny>,
+    ) -> PyResult<(u32, u8)> {
         let id = servo_id(id)?;
+        let address = raw_address(address)?;
         let length = raw_length(length)?;
         let order = self.series.byte_order();
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     let mut buf = [0u8; 4];
@@ -364,25 +468,28 @@ impl Bus {
                     Ok((read_uint(&buf[..length], order), flags.0))
                 })
             })
-        })?)
+        })
     }
 
     /// Writes `value` as `length` (1, 2 or 4) bytes at `address` of servo
     /// `id` with a plain WRITE: the reply's status flags, or None when the
-    /// servo sends none.
+    /// servo sends none. Raises `LimitError` for a value the bytes cannot
+    /// hold.
     fn write_raw(
         &self,
         py: Python<'_>,
-        id: i64,
-        address: u8,
-        length: usize,
-        value: u32,
+        id: &Bound<'_, PyAny>,
+        address: &Bound<'_, PyAny>,
+        length: &Bound<'_, PyAny>,
+        value: &Bound<'_, PyAny>,
     ) -> PyResult<Option<u8>> {
         let id = servo_id(id)?;
-        let bytes = raw_bytes(value, raw_length(length)?, self.series)?;
-        Ok(py.allow_threads(|| {
+        let address = raw_address(address)?;
+        let length = raw_length(length)?;
+        let bytes = raw_bytes(raw_value(value, length)?, length, self.series)?;
+        blocking(py, || {
             self.with(|bus| on_bus!(bus, b => Ok(b.write(id, address, &bytes)?.map(|f| f.0))))
-        })?)
+        })
     }
 
     /// As `sync_read`, by address and length (1, 2 or 4) instead of a
@@ -390,14 +497,15 @@ impl Bus {
     fn sync_read_raw(
         &self,
         py: Python<'_>,
-        address: u8,
-        length: usize,
-        ids: Vec<i64>,
+        address: &Bound<'_, PyAny>,
+        length: &Bound<'_, PyAny>,
+        ids: Vec<Bound<'_, PyAny>>,
     ) -> PyResult<RawSyncReadLists> {
-        let ids: Vec<u8> = ids.into_iter().map(servo_id).collect::<Outcome<_>>()?;
+        let ids: Vec<u8> = ids.iter().map(servo_id).collect::<Outcome<_>>()?;
+        let address = raw_address(address)?;
         let length = raw_length(length)?;
         let order = self.series.byte_order();
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| on_bus!(bus, b => {
                 // The length is 1, 2 or 4: it fits a byte.
                 let len = length as u8;
@@ -415,7 +523,7 @@ impl Bus {
                 }
                 Ok((values, missing))
             }))
-        })?)
+        })
     }
 
     /// As `sync_write`, by address and length (1, 2 or 4): `values` are
@@ -423,28 +531,29 @@ impl Bus {
     fn sync_write_raw(
         &self,
         py: Python<'_>,
-        address: u8,
-        length: usize,
-        values: Vec<(i64, u32)>,
+        address: &Bound<'_, PyAny>,
+        length: &Bound<'_, PyAny>,
+        values: Vec<(Bound<'_, PyAny>, Bound<'_, PyAny>)>,
     ) -> PyResult<()> {
+        let address = raw_address(address)?;
         let length = raw_length(length)?;
         let mut ids = Vec::with_capacity(values.len());
         let mut data = Vec::with_capacity(values.len() * length);
-        for (id, value) in values {
+        for (id, value) in &values {
             ids.push(servo_id(id)?);
-            data.extend_from_slice(&raw_bytes(value, length, self.series)?);
+            data.extend_from_slice(&raw_bytes(raw_value(value, length)?, length, self.series)?);
         }
         if ids.is_empty() {
             return Ok(());
         }
-        Ok(py.allow_threads(|| {
+        blocking(py, || {
             self.with(|bus| {
                 on_bus!(bus, b => {
                     b.sync_write(address, &ids, &data)?;
                     Ok(())
                 })
             })
-        })?)
+        })
     }
 
     /// Closes the bus (its port is free for others); later calls raise.

@@ -186,16 +186,11 @@ pub(crate) fn calibrate_robot(robot: &str, mut at: Where<'_>) -> Calibrated {
 
 /// The procedure itself, with `operator`.
 fn measure(robot: &str, at: &Where<'_>, operator: &mut Unattended) -> Outcome<Calibration> {
-    if !(at.timeout.is_finite() && at.timeout > 0.0) {
-        return Err(Failure::usage(format!(
-            "timeout {}: give a positive number of seconds",
-            at.timeout
-        )));
-    }
+    let timeout = crate::checks::timeout("timeout", at.timeout)?;
     let design = load_design(robot)?;
     let options = ProcedureOptions {
         auto: true,
-        timeout: Duration::from_secs_f64(at.timeout),
+        timeout,
         taken: servobus_config::utc_now(),
         ..ProcedureOptions::default()
     };

@@ -6,6 +6,7 @@
 
 mod bus;
 mod calibration;
+mod checks;
 mod doctor;
 mod errors;
 mod load;

@@ -64,20 +64,16 @@ impl Stream {
         target: servobus_robot::Target,
         live: &LiveOptions,
     ) -> Outcome<Stream> {
-        let timeout = live.timeout;
-        if !(timeout.is_finite() && timeout > 0.0) {
-            return Err(Failure::usage(format!(
-                "timeout {timeout}: give a positive number of seconds"
-            )));
-        }
+        let timeout = crate::checks::timeout("timeout", live.timeout)?;
+        let rate = crate::checks::rate(live.rate)?;
         let config = robot.config();
         let connection = robot.connect(target)?;
         let mut options = connection.options();
-        options.rate_hz = live.rate;
+        options.rate_hz = rate;
         // Live targets start where the joints are: no approach to a path.
         options.approach = None;
         options.settle = RunOptions::default().settle;
-        options.target_timeout = Duration::from_secs_f64(timeout);
+        options.target_timeout = timeout;
         options.units = Some(config.units);
         if !live.tracking_faults {
             options.faults.following_error = f64::INFINITY;

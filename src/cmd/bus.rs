@@ -193,7 +193,12 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         if !found.is_empty() {
             outln!(
                 "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  BAUD",
-                "ID", "MODEL", "FIRMWARE", "POSITION", "VOLTAGE", "TEMP"
+                "ID",
+                "MODEL",
+                "FIRMWARE",
+                "POSITION",
+                "VOLTAGE",
+                "TEMP"
             )?;
         }
         for f in &found {

@@ -144,7 +144,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         super::play::write_report(&mut err, &served.report, false)?;
         errln!(
             "  node: {} targets, {} malformed, {} commands, {} states published",
-            served.targets, served.malformed, served.commands, served.states
+            served.targets,
+            served.malformed,
+            served.commands,
+            served.states
         );
         for o in &served.start_offsets {
             errln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
@@ -262,9 +265,7 @@ pub(crate) fn announce(
         })
         .collect();
     if members.is_empty() {
-        errln!(
-            "no robot serves group `{group}` at the given endpoints (--connect); nothing sent"
-        );
+        errln!("no robot serves group `{group}` at the given endpoints (--connect); nothing sent");
         return Ok(ExitCode::from(1));
     }
     let at = std::time::SystemTime::now() + start_in;

@@ -154,7 +154,10 @@ fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
         match next_line(&mut input, &mut buf) {
             Ok(()) => {}
             Err(true) => {
-                errln!("line {n}: longer than {} MiB; skipped", MAX_LINE_BYTES >> 20);
+                errln!(
+                    "line {n}: longer than {} MiB; skipped",
+                    MAX_LINE_BYTES >> 20
+                );
                 continue;
             }
             Err(false) => return,

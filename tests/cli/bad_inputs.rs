@@ -151,7 +151,11 @@ fn a_small_file_cannot_ask_for_unbounded_work() {
 
 #[test]
 fn ports_that_are_no_serial_port_say_what_they_are() {
-    refused(&["ping", "--port", "", "--id", "1"], &["the port is empty"], &[]);
+    refused(
+        &["ping", "--port", "", "--id", "1"],
+        &["the port is empty"],
+        &[],
+    );
     refused(
         &["ping", "--port", "/dev/tty", "--id", "1"],
         &["this program's own terminal"],
@@ -162,7 +166,13 @@ fn ports_that_are_no_serial_port_say_what_they_are() {
     let _ = std::fs::remove_file(&link);
     std::os::unix::fs::symlink(&link, &link).expect("a link to itself");
     refused(
-        &["ping", "--port", link.to_str().expect("a UTF-8 path"), "--id", "1"],
+        &[
+            "ping",
+            "--port",
+            link.to_str().expect("a UTF-8 path"),
+            "--id",
+            "1",
+        ],
         &["leads back to itself"],
         &[],
     );
@@ -170,7 +180,8 @@ fn ports_that_are_no_serial_port_say_what_they_are() {
 
 /// A fresh scratch directory of this test binary.
 fn servobus_test_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("servobus-bad-inputs-{name}-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("servobus-bad-inputs-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a scratch directory");
     dir
 }

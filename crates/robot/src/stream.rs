@@ -127,7 +127,10 @@ mod tests {
         let want = Target::named(1.5, vec![("a".into(), std::f64::consts::FRAC_PI_2)]);
         assert_eq!(t, Ok(Input::Target(want)));
         let t = parse_line(r#"{"joints": {"a": 1}}"#, Units::Rad, 9.0);
-        assert_eq!(t, Ok(Input::Target(Target::named(9.0, vec![("a".into(), 1.0)]))));
+        assert_eq!(
+            t,
+            Ok(Input::Target(Target::named(9.0, vec![("a".into(), 1.0)])))
+        );
         let c = parse_line(
             r#"{"chunk": {"dt": 0.02, "joints": {"a": [0, 1]}}}"#,
             Units::Rad,

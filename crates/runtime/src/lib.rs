@@ -52,7 +52,9 @@ pub use fault::{Fault, FaultKind, STALL_PUSH};
 pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
 pub use report::{BusReport, JointReport, Quantiles, Report};
 pub use run::bus_settings;
-pub use target::{Chunk, LiveJoint, LiveReport, Target, TargetError, TargetSender, MAX_CHUNK_POINTS};
+pub use target::{
+    Chunk, LiveJoint, LiveReport, Target, TargetError, TargetSender, MAX_CHUNK_POINTS,
+};
 pub use telemetry::{
     CycleSample, Finish, JointSample, LiveEvent, Rejection, StallEvent, Telemetry, SAMPLE_JOINTS,
 };

@@ -490,9 +490,7 @@ impl TargetSender {
                     )));
                 }
                 if t0.is_some_and(|t| !t.is_finite()) {
-                    return Err(TargetError::NotFinite {
-                        joint: "t0".into(),
-                    });
+                    return Err(TargetError::NotFinite { joint: "t0".into() });
                 }
                 let base = t0.unwrap_or(0.0);
                 let times: Vec<f64> = (0..points).map(|k| base + k as f64 * dt).collect();
@@ -505,9 +503,7 @@ impl TargetSender {
                         times.len()
                     )));
                 }
-                if times.iter().any(|t| !t.is_finite())
-                    || times.windows(2).any(|w| w[1] <= w[0])
-                {
+                if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] <= w[0]) {
                     return Err(TargetError::ChunkTimes(
                         "the stamps must be finite and increasing".into(),
                     ));

@@ -82,7 +82,11 @@ pub fn list(args: RegistersArgs) -> anyhow::Result<ExitCode> {
         )?;
         outln!(
             "{:>4} {:>4}  {:<9} {:<22} {:<16} WHAT",
-            "ADDR", "SIZE", "ACCESS", "NAME", "UNIT"
+            "ADDR",
+            "SIZE",
+            "ACCESS",
+            "NAME",
+            "UNIT"
         )?;
         for r in series.map().registers {
             let access = match r.access {
@@ -92,7 +96,11 @@ pub fn list(args: RegistersArgs) -> anyhow::Result<ExitCode> {
             };
             outln!(
                 "{:>4} {:>4}  {access:<9} {:<22} {:<16} {}",
-                r.address, r.size, r.name, r.unit, r.description
+                r.address,
+                r.size,
+                r.name,
+                r.unit,
+                r.description
             )?;
         }
     }

@@ -37,8 +37,8 @@ use crate::target::{Checked, MAX_CHUNK_POINTS};
 mod envelope;
 mod reference;
 
-pub use envelope::EnvelopeReport;
 use envelope::Envelope;
+pub use envelope::EnvelopeReport;
 use reference::Reference;
 
 /// Recent commanded states kept for the reference (the commanded path at

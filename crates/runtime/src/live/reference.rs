@@ -52,10 +52,7 @@ impl Clone for Reference {
     fn clone(&self) -> Self {
         let mut ahead = VecDeque::with_capacity(self.room);
         ahead.extend(self.ahead.iter().copied());
-        Reference {
-            ahead,
-            ..*self
-        }
+        Reference { ahead, ..*self }
     }
 }
 

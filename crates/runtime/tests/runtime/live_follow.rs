@@ -96,8 +96,7 @@ fn a_follower_stays_within_2_degrees_of_a_hand_moved_leader() {
         let (Some(m), Some(truth)) = (
             measured,
             hand.path(joint).and_then(|p| p.angle_at(t - FOLLOWED_LAG)),
-        )
-        else {
+        ) else {
             continue;
         };
         if t < 0.5 {

@@ -194,7 +194,10 @@ fn a_step_goes_to_the_target_and_never_beyond_it() {
     // 900 deg/s^2 and 9000 deg/s^3 peak at v with v (v / 900 + 0.1) = 40
     // (the speed limit's ramps would take 54 deg), v = 150 deg/s, each
     // half taking 150 / 900 + 0.1 s: 0.5333 s in all (by hand).
-    let arrived = c.iter().position(|q| (q - 40.0).abs() < 1e-3).unwrap_or(c.len());
+    let arrived = c
+        .iter()
+        .position(|q| (q - 40.0).abs() < 1e-3)
+        .unwrap_or(c.len());
     let took = arrived as f64 * PERIOD - 0.2;
     assert!(took <= 0.5334 + LAG_BOUND, "{took}");
 }
@@ -252,7 +255,10 @@ fn a_flick_out_and_back_turns_back_within_its_stopping_distance() {
     // (its envelope also counts where the joint was at the oldest target
     // of the window, this test where it was 0.5 s before).
     println!("flick: {pan:?}, measured {worst:.3}");
-    assert!(pan.overshoot > 1.0 && pan.allowance >= pan.overshoot - TOLERANCE, "{pan:?}");
+    assert!(
+        pan.overshoot > 1.0 && pan.allowance >= pan.overshoot - TOLERANCE,
+        "{pan:?}"
+    );
     assert!(pan.beyond_allowance <= TOLERANCE, "{pan:?}");
     let c = rec.commanded(0);
     // It went out (toward the flick's far end) and came back.
@@ -383,9 +389,11 @@ fn chunks_replacing_chunks_pass_by_their_points_without_a_jump() {
             tx.send_chunk(c).expect("a good chunk");
             due.retain(|p| p.0 <= now);
             due.extend(points.iter().copied().filter(|p| p.0 > now));
-            let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-                (a.0.min(p.1), a.1.max(p.1))
-            });
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+                    (a.0.min(p.1), a.1.max(p.1))
+                });
             sent.push((now, lo, hi));
             chunks += 1;
         }
@@ -431,9 +439,11 @@ fn targets_and_chunks_mixed_in_one_stream_are_followed_in_turn() {
         if k == 160 {
             let (c, points) = chunk_at(now, 0.0);
             tx.send_chunk(c).expect("a good chunk");
-            let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-                (a.0.min(p.1), a.1.max(p.1))
-            });
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+                    (a.0.min(p.1), a.1.max(p.1))
+                });
             sent.push((now, lo, hi));
         }
     });

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import math
 from typing import Dict, Iterable, Mapping, Optional, Tuple, Union
 
 from . import _native
-from ._errors import UsageError
+from ._errors import LimitError, UsageError
 
 Number = Union[int, float]
 
@@ -59,7 +60,11 @@ class Bus:
     ms; ``unit="raw"`` gives the register's raw number.
     ``latency`` (s) is the adapter latency the reply deadlines allow
     (default: what the port is assumed to need). Every call releases the
-    GIL while it waits on the bus. Use :meth:`Bus.sim` for an in-process
+    GIL while it waits on the bus, and Ctrl-C raises ``KeyboardInterrupt``
+    from any call it came during (a transaction under way is finished
+    first, never cut in half). ``baud`` is one the servos can be set to
+    (1000000, 500000, 250000, 128000, 115200, 76800, 57600, 38400;
+    :class:`servobus.ConfigError` otherwise). Use :meth:`Bus.sim` for an in-process
     simulated bus. A context manager: the port closes at the end.
     """
 
@@ -128,7 +133,17 @@ class Bus:
         return raw if scale == 1.0 else raw * scale
 
     @staticmethod
-    def _raw(value: Number, scale: float) -> int:
+    def _raw(value: Number, scale: float, register: str = "the register") -> int:
+        """``value`` as the register's raw number. A value that is no
+        number (NaN, inf) raises :class:`LimitError` here; one too large for
+        the register (1e30) raises it in the extension, with the range."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise UsageError(f"{register}: {value!r} is not a number") from None
+        if isinstance(value, float) and not math.isfinite(value):
+            raise LimitError(f"{register}: {value} is not a value a register can hold", value=value)
         return int(value) if scale == 1.0 else int(round(value / scale))
 
     def read(self, id: int, register: str, unit: Optional[str] = None) -> Number:
@@ -148,7 +163,7 @@ class Bus:
         ``register`` of servo ``id`` (EEPROM registers persistently). Raises
         :class:`servobus.LimitError` for a value the register cannot
         hold."""
-        self._bus.write(id, register, self._raw(value, self._scale(register, unit)))
+        self._bus.write(id, register, self._raw(value, self._scale(register, unit), register))
 
     def sync_read(self, register: str, ids: Iterable[int], unit: Optional[str] = None) -> SyncRead:
         """Reads ``register`` of every servo in ``ids`` with one SYNC READ
@@ -169,12 +184,14 @@ class Bus:
         ``values`` maps each servo's ID to its value, in the unit
         :meth:`write` takes."""
         scale = self._scale(register, unit)
-        self._bus.sync_write(register, [(int(k), self._raw(v, scale)) for k, v in values.items()])
+        self._bus.sync_write(register, [(int(k), self._raw(v, scale, register)) for k, v in values.items()])
 
     def read_raw(self, id: int, address: int, length: int, status: bool = False):
         """``length`` (1, 2 or 4) bytes at ``address`` of servo ``id`` as one
         unsigned number in the bus's byte order (for control tables of
-        your own); with ``status``, ``(value, status flags of the reply)``."""
+        your own); with ``status``, ``(value, status flags of the reply)``.
+        Raises :class:`servobus.UsageError` for an address beyond 0..255, a
+        length other than 1, 2 or 4, or an ID beyond 0..253."""
         value, flags = self._bus.read_raw(id, address, length)
         return (value, flags) if status else value
 
@@ -182,7 +199,7 @@ class Bus:
         """Writes the unsigned ``value`` as ``length`` bytes at ``address``
         of servo ``id`` (a plain WRITE): the reply's status flags, or None
         when the servo sends no reply."""
-        return self._bus.write_raw(id, address, length, int(value))
+        return self._bus.write_raw(id, address, length, self._raw(value, 1.0, f"address {address}"))
 
     def sync_read_raw(self, address: int, length: int, ids: Iterable[int]) -> SyncRead:
         """As :meth:`sync_read`, by address and length: unsigned numbers."""
@@ -191,7 +208,8 @@ class Bus:
 
     def sync_write_raw(self, address: int, length: int, values: Mapping[int, int]) -> None:
         """As :meth:`sync_write`, by address and length: unsigned numbers."""
-        self._bus.sync_write_raw(address, length, [(int(k), int(v)) for k, v in values.items()])
+        self._bus.sync_write_raw(address, length,
+                                 [(int(k), self._raw(v, 1.0, f"address {address}")) for k, v in values.items()])
 
     def close(self) -> None:
         """Closes the bus; later calls raise :class:`servobus.Error`."""

@@ -181,6 +181,27 @@ class State:
         return float(self.position[self.joints.index(joint)])
 
 
+def _check_output(output: PathLike) -> None:
+    """Raises :class:`Error` (``file`` set) when a calibration could not be
+    saved at ``output``: a directory, a folder that does not exist or
+    cannot be written (a file is made there and removed to find out, as
+    the save makes its temporary file beside the target)."""
+    path = os.fspath(output)
+    if os.path.isdir(path):
+        raise Error(f"cannot save the calibration to {path}: it is a directory (give a file name)", file=path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise Error(f"cannot save the calibration to {path}: the folder {folder} does not exist", file=path)
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise Error(f"cannot save the calibration to {path}: the file is read-only", file=path)
+    try:
+        probe, probe_path = tempfile.mkstemp(prefix=".servobus-probe-", dir=folder)
+    except OSError as e:
+        raise Error(f"cannot save the calibration to {path}: {e.strerror or e}", file=path) from None
+    os.close(probe)
+    os.unlink(probe_path)
+
+
 class Stream:
     """The live loop of a robot (as ``servobus stream``): the joints hold,
     then follow every target sent, jerk-limited. A context manager: the
@@ -364,10 +385,15 @@ class Robot:
         in its calibration pose), ``"sweep"`` (move each joint the positive
         way first, then from end stop to end stop), ``"done"``. Ctrl-C, or
         an exception raised by ``on_step``, ends the procedure at once and
-        is raised (nothing is saved). Raises
+        is raised (nothing is saved). ``output`` is checked before anything
+        moves: a directory, a missing or read-only folder raises
+        :class:`servobus.Error` (its ``file`` the path) at once, so a
+        calibration is never taken only to be lost. Raises
         :class:`servobus.CalibrationError` when the procedure cannot take a
         calibration (a step that does not end, a joint not swept).
         """
+        if output is not None:
+            _check_output(output)
         cal = Calibration.from_json(self._robot.calibrate(hand, mounting, float(timeout), on_step))
         if output is not None:
             cal.save(output)

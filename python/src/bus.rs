@@ -249,15 +249,19 @@ impl Bus {
     /// `"scs"`). `latency` (s) is the adapter's reply latency the deadlines
     /// allow; by default what the port is assumed to need.
     #[new]
-    #[pyo3(signature = (port, baud=1_000_000, series="sts", latency=None))]
+    #[pyo3(signature = (port, baud=None, series="sts", latency=None))]
     fn new(
         py: Python<'_>,
         port: String,
-        baud: &Bound<'_, PyAny>,
+        baud: Option<&Bound<'_, PyAny>>,
         series: &str,
         latency: Option<f64>,
     ) -> PyResult<Self> {
-        let baud = checks::baud(baud)?;
+        // None: the servos' factory rate, 1 Mbps.
+        let baud = baud.map_or(
+            Ok(servobus_protocol::registers::MAX_SERVO_BAUD),
+            checks::baud,
+        )?;
         let series = series_of(series)?;
         let latency = latency.map(checks::latency).transpose()?;
         let bus = py

@@ -2,7 +2,7 @@
 //! Python: targets in, the joints' state out.
 
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use pyo3::prelude::*;
 use servobus_config::Units;

@@ -52,9 +52,18 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     // are twice the issue's figure worst and half of it RMS; the close
     // following itself is held in virtual time
     // (crates/runtime/tests/runtime/live_follow.rs).
+    // Since the follower no longer extrapolates past the newest reading
+    // (issue 35: it never goes beyond what it was told), it trails the
+    // leader by one 50 Hz reading interval by design: the base's fastest
+    // swing of the hand, about 150 deg/s, is 3 deg in 20 ms, and a cycle
+    // late on a loaded machine adds its own. Measured with a debug build
+    // while other tests ran: 5.7-7.7 deg worst, 1.3-2.0 deg RMS (the lift
+    // or the base). Bounds: 12 deg worst, 3 deg RMS; the following itself
+    // is held to 2 deg of the leader, one interval and the servo's lag
+    // before, in virtual time (live_follow.rs).
     for j in joints {
-        assert!(common::num(j, "max_error") < 4.0, "{j}");
-        assert!(common::num(j, "rms_error") < 1.0, "{j}");
+        assert!(common::num(j, "max_error") < 12.0, "{j}");
+        assert!(common::num(j, "rms_error") < 3.0, "{j}");
     }
     // The take: a header and one row per follower cycle, in degrees.
     let text = std::fs::read_to_string(&take).expect("the take is written");

@@ -25,13 +25,14 @@ use crate::live::EnvelopeReport;
 use crate::report::Quantiles;
 use crate::stats::Histogram;
 
-/// The joints of a target.
+/// The joints of a target (`T`: a position) or of a chunk (`T`: one
+/// position per point).
 #[derive(Debug, Clone, PartialEq)]
-enum Joints {
+enum Joints<T = f64> {
     /// Every joint, in the robot's joint order.
-    All(Vec<f64>),
+    All(Vec<T>),
     /// Some joints, by name; the others keep their targets.
-    Named(Vec<(String, f64)>),
+    Named(Vec<(String, T)>),
 }
 
 /// Joint positions for a running loop to go to, in radians, stamped with
@@ -105,15 +106,8 @@ enum Times {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chunk {
     times: Times,
-    joints: ChunkJoints,
+    joints: Joints<Vec<f64>>,
     taken: Option<Instant>,
-}
-
-/// The joints of a chunk: per joint, one position per point.
-#[derive(Debug, Clone, PartialEq)]
-enum ChunkJoints {
-    All(Vec<Vec<f64>>),
-    Named(Vec<(String, Vec<f64>)>),
 }
 
 impl Chunk {
@@ -122,7 +116,7 @@ impl Chunk {
     pub fn named(t0: Option<f64>, dt: f64, joints: Vec<(String, Vec<f64>)>) -> Self {
         Chunk {
             times: Times::Every { t0, dt },
-            joints: ChunkJoints::Named(joints),
+            joints: Joints::Named(joints),
             taken: None,
         }
     }
@@ -131,7 +125,7 @@ impl Chunk {
     pub fn timed(times: Vec<f64>, joints: Vec<(String, Vec<f64>)>) -> Self {
         Chunk {
             times: Times::At(times),
-            joints: ChunkJoints::Named(joints),
+            joints: Joints::Named(joints),
             taken: None,
         }
     }
@@ -141,7 +135,7 @@ impl Chunk {
     pub fn all(t0: Option<f64>, dt: f64, positions: Vec<Vec<f64>>) -> Self {
         Chunk {
             times: Times::Every { t0, dt },
-            joints: ChunkJoints::All(positions),
+            joints: Joints::All(positions),
             taken: None,
         }
     }
@@ -458,17 +452,16 @@ impl TargetSender {
         Ok(clamped)
     }
 
-    fn check_chunk(&self, chunk: Chunk) -> Result<(Checked, usize), TargetError> {
+    /// Each joint given with its index in the robot's joint order.
+    fn indexed<T>(&self, joints: Joints<T>) -> Result<Vec<(usize, T)>, TargetError> {
         let n = self.names.len();
-        let given: Vec<(usize, Vec<f64>)> = match chunk.joints {
-            ChunkJoints::All(p) if p.len() != n => {
-                return Err(TargetError::WrongLength {
-                    expected: n,
-                    actual: p.len(),
-                })
-            }
-            ChunkJoints::All(p) => p.into_iter().enumerate().collect(),
-            ChunkJoints::Named(named) => named
+        match joints {
+            Joints::All(p) if p.len() != n => Err(TargetError::WrongLength {
+                expected: n,
+                actual: p.len(),
+            }),
+            Joints::All(p) => Ok(p.into_iter().enumerate().collect()),
+            Joints::Named(named) => named
                 .into_iter()
                 .map(
                     |(name, q)| match self.names.iter().position(|x| *x == name) {
@@ -476,8 +469,13 @@ impl TargetSender {
                         None => Err(TargetError::UnknownJoint(name)),
                     },
                 )
-                .collect::<Result<_, _>>()?,
-        };
+                .collect(),
+        }
+    }
+
+    fn check_chunk(&self, chunk: Chunk) -> Result<(Checked, usize), TargetError> {
+        let n = self.names.len();
+        let given = self.indexed(chunk.joints)?;
         let points = given.first().map_or(0, |(_, q)| q.len());
         if points == 0 || points > MAX_CHUNK_POINTS {
             return Err(TargetError::ChunkSize(points));
@@ -562,24 +560,7 @@ impl TargetSender {
                 joint: "stamp".into(),
             });
         }
-        let given: Vec<(usize, f64)> = match target.joints {
-            Joints::All(p) if p.len() != n => {
-                return Err(TargetError::WrongLength {
-                    expected: n,
-                    actual: p.len(),
-                })
-            }
-            Joints::All(p) => p.into_iter().enumerate().collect(),
-            Joints::Named(named) => named
-                .into_iter()
-                .map(
-                    |(name, q)| match self.names.iter().position(|x| *x == name) {
-                        Some(i) => Ok((i, q)),
-                        None => Err(TargetError::UnknownJoint(name)),
-                    },
-                )
-                .collect::<Result<_, _>>()?,
-        };
+        let given = self.indexed(target.joints)?;
         if let Some(v) = &target.velocities {
             if v.len() != given.len() {
                 return Err(TargetError::WrongLength {

@@ -457,3 +457,37 @@ fn targets_and_chunks_mixed_in_one_stream_are_followed_in_turn() {
     let live = run.report().live.expect("targets counted");
     assert_eq!(live.refused, 0);
 }
+
+#[test]
+fn malformed_chunks_are_refused_counted_and_never_followed() {
+    use servobus_runtime::{TargetError, MAX_CHUNK_POINTS};
+    let mut run = live_run();
+    let tx = run.targets();
+    let pan = |q: Vec<f64>| vec![("shoulder_pan".to_string(), q)];
+    let bad = [
+        Chunk::named(None, 0.0, pan(vec![0.1, 0.2])),
+        Chunk::named(None, f64::NAN, pan(vec![0.1])),
+        Chunk::named(Some(f64::INFINITY), 0.02, pan(vec![0.1])),
+        Chunk::named(None, 0.02, pan(vec![])),
+        Chunk::named(None, 0.02, pan(vec![0.1; MAX_CHUNK_POINTS + 1])),
+        Chunk::named(None, 0.02, pan(vec![0.1, f64::NAN])),
+        Chunk::named(None, 0.02, vec![("elbow".into(), vec![0.1])]),
+        Chunk::named(
+            None,
+            0.02,
+            vec![
+                ("shoulder_pan".into(), vec![0.1, 0.2]),
+                ("elbow_flex".into(), vec![0.1]),
+            ],
+        ),
+        Chunk::timed(vec![0.0, 0.0], pan(vec![0.1, 0.2])),
+    ];
+    for c in bad {
+        let why = tx.send_chunk(c.clone()).expect_err("refused");
+        assert!(!matches!(why, TargetError::Ended), "{c:?}: {why}");
+    }
+    let rec = record(&mut run, 100, |_| {});
+    assert!(rec.commanded(0).iter().all(|q| q.abs() < 1e-9));
+    let live = run.report().live.expect("targets counted");
+    assert_eq!((live.received, live.refused), (9, 9));
+}

@@ -7,6 +7,7 @@
 - :class:`Robot`: plan and play motions, stream live targets, calibrate.
 - :class:`Calibration`: a robot's calibration, from and to LeRobot's files.
 - :class:`Checkup`: what ``Robot.doctor()`` finds, as typed findings.
+- :func:`model_limits`: a servo model's top speed and acceleration, deg.
 
 Every call that waits on a bus releases the GIL. Errors are subclasses of
 :class:`Error`.
@@ -14,6 +15,7 @@ Every call that waits on a bus releases the GIL. Errors are subclasses of
 
 from . import _errors
 from ._native import Sim, __version__
+from ._native import model_limits
 from ._errors import *  # noqa: F401,F403 (the exception classes, listed in _errors.__all__)
 from ._bus import Bus, Missing, SyncRead
 from ._calibration import Calibration, JointCalibration
@@ -40,5 +42,6 @@ __all__ = [
     "AppliedFix",
     "SyncRead",
     "Missing",
+    "model_limits",
     "__version__",
 ] + _errors.__all__

@@ -9,7 +9,7 @@ class Bus:
     """A bus of Feetech servos on a serial port, or the in-process simulator."""
 
     def __init__(
-        self, port: str, baud: int = 1_000_000, series: str = "sts", latency: Optional[float] = None
+        self, port: str, baud: Optional[int] = None, series: str = "sts", latency: Optional[float] = None
     ) -> None: ...
     @staticmethod
     def sim(robot: str = "so101") -> "Bus":
@@ -43,6 +43,11 @@ class Bus:
         """As ``sync_read``, by address and length."""
     def sync_write_raw(self, address: int, length: int, values: List[Tuple[int, int]]) -> None:
         """As ``sync_write``, by address and length."""
+    @property
+    def latency(self) -> float:
+        """The adapter latency (s) the reply deadlines allow."""
+    def learn_latency(self, ids: List[int]) -> float:
+        """Measures the adapter with PINGs; raises the allowance to the most seen."""
     def close(self) -> None:
         """Closes the bus."""
 
@@ -126,6 +131,8 @@ class Robot:
     def torque_off(self) -> None:
         """A broadcast torque off on every bus (nothing on the simulator)."""
 
+def model_limits(model: str) -> Tuple[float, float]:
+    """A servo model's (max_velocity deg/s, max_acceleration deg/s^2)."""
 def calibration_from_lerobot(robot: str, json: str) -> str:
     """The calibration (JSON text) a LeRobot calibration file describes."""
 def calibration_to_lerobot(calibration: str) -> str:

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use pyo3::prelude::*;
 use servobus_driver::registers::{read_uint, write_uint, Register};
-use servobus_driver::{Bus as DriverBus, Series, SystemClock};
+use servobus_driver::{Bus as DriverBus, Series, SystemClock, PROBE_CEILING, PROBE_PINGS};
 use servobus_protocol::MAX_ID;
 use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
 use servobus_runtime::sim::SimRobot;
@@ -555,6 +555,37 @@ impl Bus {
                 on_bus!(bus, b => {
                     b.sync_write(address, &ids, &data)?;
                     Ok(())
+                })
+            })
+        })
+    }
+
+    /// The adapter latency (s) the reply deadlines allow now.
+    #[getter]
+    fn latency(&self, py: Python<'_>) -> PyResult<f64> {
+        blocking(py, || {
+            self.with(|bus| on_bus!(bus, b => Ok(b.settings().link.latency.as_secs_f64())))
+        })
+    }
+
+    /// Learns the link: measures the adapter's latency with PINGs of the
+    /// servos `ids` in turn (as a live run with `latency_us: auto` does at
+    /// start-up) and raises the reply deadlines' allowance to the most
+    /// seen, if that is more than they allow now (never lowers it). Returns
+    /// the latency allowed, s. A servo that does not answer is passed over.
+    fn learn_latency(&self, py: Python<'_>, ids: Vec<Bound<'_, PyAny>>) -> PyResult<f64> {
+        let ids: Vec<u8> = ids.iter().map(servo_id).collect::<Outcome<_>>()?;
+        if ids.is_empty() {
+            return Err(Failure::usage("learn_latency: give the IDs of servos to PING").into());
+        }
+        blocking(py, || {
+            self.with(|bus| {
+                on_bus!(bus, b => {
+                    let now = b.settings().link.latency;
+                    let seen = b.probe_latency(&ids, PROBE_PINGS, PROBE_CEILING, |_| {})?;
+                    let allowed = now.max(seen.max);
+                    b.set_latency(allowed);
+                    Ok(allowed.as_secs_f64())
                 })
             })
         })

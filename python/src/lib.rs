@@ -10,6 +10,7 @@ mod checks;
 mod doctor;
 mod errors;
 mod load;
+mod models;
 mod robot;
 mod sim;
 mod stream;
@@ -25,6 +26,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<robot::Robot>()?;
     m.add_class::<stream::Stream>()?;
     calibration::register(m)?;
+    models::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

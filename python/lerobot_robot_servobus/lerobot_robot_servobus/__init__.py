@@ -14,7 +14,7 @@ released while waiting).
 """
 
 from .config_so101_servobus import SO101ServobusConfig
-from .motors_bus import ServobusMotorsBus
+from .motors_bus import LiveLoopFault, ServobusMotorsBus, TorqueNotOff
 from .so101_servobus import SO101Servobus
 
-__all__ = ["SO101ServobusConfig", "SO101Servobus", "ServobusMotorsBus"]
+__all__ = ["SO101ServobusConfig", "SO101Servobus", "ServobusMotorsBus", "LiveLoopFault", "TorqueNotOff"]

@@ -11,10 +11,13 @@ class SO101Servobus(SOFollower):
 
     ``send_action`` goes through servobus's live loop (unless the
     configuration's ``live`` is False): each action is a target the joints
-    move to jerk-limited, within the limits of servobus's robot file and the
-    calibrated range, instead of a goal written raw; ``get_observation``
-    then reads the loop's own present positions. ``disconnect`` stops the
-    arm (jerk-limited) before the torque goes off.
+    move to jerk-limited, within the live limits (the servos' own by
+    default) and the calibrated range, instead of a goal written raw;
+    ``get_observation`` then reads the loop's own present positions. Once
+    the loop has stopped on a fault, ``send_action`` raises it
+    (:class:`~lerobot_robot_servobus.motors_bus.LiveLoopFault`).
+    ``disconnect`` stops the arm (jerk-limited), then turns the torque off
+    on every servo that answers, even when one is missing.
     """
 
     config_class = SO101ServobusConfig
@@ -32,6 +35,9 @@ class SO101Servobus(SOFollower):
             latency=config.latency,
             robot=config.servobus_robot,
             live_timeout=config.live_timeout,
+            max_velocity=config.max_velocity,
+            max_acceleration=config.max_acceleration,
+            max_jerk=config.max_jerk,
         )
 
     def send_action(self, action):

@@ -49,12 +49,13 @@ def sim():
         yield s
 
 
-@pytest.fixture
-def config(sim, tmp_path):
-    """The so101_servobus configuration of the simulated arm, its LeRobot
-    calibration file (read from the servos by LeRobot's own
-    ``FeetechMotorsBus``) saved in ``tmp_path`` as ``sim_arm.json``."""
-    config = SO101ServobusConfig(port=sim.port, id="sim_arm", calibration_dir=tmp_path, latency=SLACK)
+def make_config(sim, tmp_path, **options):
+    """The so101_servobus configuration of the simulated arm ``sim``
+    (``options`` its fields), its LeRobot calibration file (read from the
+    servos by LeRobot's own ``FeetechMotorsBus``) saved in ``tmp_path`` as
+    ``sim_arm.json``."""
+    config = SO101ServobusConfig(port=sim.port, id="sim_arm", calibration_dir=tmp_path, latency=SLACK,
+                                 **options)
     robot = make_robot_from_config(config)
     theirs = FeetechMotorsBus(port=sim.port, motors=robot.bus.motors)
     theirs.connect()
@@ -63,6 +64,12 @@ def config(sim, tmp_path):
     robot.calibration = calibration
     robot._save_calibration()
     return config
+
+
+@pytest.fixture
+def config(sim, tmp_path):
+    """:func:`make_config` of the simulated arm."""
+    return make_config(sim, tmp_path)
 
 
 @pytest.fixture

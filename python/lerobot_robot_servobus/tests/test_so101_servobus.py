@@ -12,9 +12,10 @@ from lerobot_robot_servobus import SO101Servobus
 
 TICKS = 4096
 MOTORS = ["shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex", "wrist_roll", "gripper"]
-# The joints' velocity limits in servobus's so101 robot file, deg/s.
-MAX_VELOCITY = {"shoulder_pan": 180.0, "shoulder_lift": 150.0, "elbow_flex": 180.0,
-                "wrist_flex": 240.0, "wrist_roll": 270.0}
+# The live loop's velocity limit: an STS3215's top speed, 3400 steps/s of
+# 4096 a turn, deg/s (the same for every arm joint).
+STS3215_DEG_S = 3400 * 360 / 4096
+MAX_VELOCITY = {m: STS3215_DEG_S for m in MOTORS if m != "gripper"}
 
 
 def tick_in_units(robot, motor):

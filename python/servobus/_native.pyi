@@ -79,6 +79,9 @@ class Sim:
 class Stream:
     """A live run fed targets from Python."""
 
+    def send_chunk(self, joints: List[Tuple[str, List[float]]], dt: Optional[float] = None,
+                   times: Optional[List[float]] = None) -> int:
+        """Sends an action chunk (dt spacing or times from now)."""
     def send(self, joints: List[Tuple[str, float]]) -> int:
         """Sends a target; returns how many angles were clamped."""
     def state(

@@ -14,7 +14,7 @@ import numpy as np
 from . import _native
 from ._calibration import Calibration, PathLike
 from ._doctor import Checkup
-from ._errors import Error, FaultError
+from ._errors import Error, FaultError, UsageError
 
 
 @dataclass(frozen=True)
@@ -218,6 +218,33 @@ class Stream:
         not named keep their targets). Returns how many angles were beyond
         the joint limits and clamped."""
         return self._stream.send([(str(k), float(v)) for k, v in joints.items()])
+
+    def send_chunk(self, times_or_dt, positions) -> int:
+        """Sends an action chunk, as a policy (ACT, diffusion, pi0) emits
+        one: ``times_or_dt`` is the points' spacing in s (a number) or
+        their times in s from now (increasing); ``positions`` maps joint
+        names to one angle per point (robot units), or is an array of shape
+        ``(points, joints)`` in the order of the robot's joints. The loop
+        follows the chunk as a timed path through its points, within the
+        limits; a new chunk replaces what is left of the last from the
+        commanded state (never a jump, never back in time: points already
+        past are skipped). Single targets (:meth:`send`) and chunks mix in
+        one stream. Returns how many positions were clamped to the limits.
+        Raises :class:`servobus.UsageError` for a bad chunk (lengths that
+        differ, times not increasing, an unknown joint, NaN)."""
+        if isinstance(positions, Mapping):
+            joints = [(str(k), [float(x) for x in np.asarray(v, dtype=float).ravel()])
+                      for k, v in positions.items()]
+        else:
+            array = np.asarray(positions, dtype=float)
+            if array.ndim != 2 or array.shape[1] != len(self._joints):
+                raise UsageError(f"positions of shape {array.shape}: give (points, {len(self._joints)}) "
+                                 f"for the joints {self._joints}, or a dict of joint to angles")
+            joints = [(name, [float(x) for x in array[:, k]]) for k, name in enumerate(self._joints)]
+        if isinstance(times_or_dt, (int, float, np.floating, np.integer)) and not isinstance(times_or_dt, bool):
+            return self._stream.send_chunk(joints, dt=float(times_or_dt))
+        times = [float(t) for t in np.asarray(times_or_dt, dtype=float).ravel()]
+        return self._stream.send_chunk(joints, times=times)
 
     def state(self) -> State:
         """The joints' latest positions, velocities, errors and faults."""

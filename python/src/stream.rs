@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use pyo3::prelude::*;
 use servobus_config::Units;
-use servobus_runtime::{Command, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry};
+use servobus_runtime::{
+    Chunk, Command, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry,
+};
 
 use crate::errors::{chain, poisoned, Failure, Outcome};
 
@@ -176,6 +178,55 @@ impl Stream {
         }
     }
 
+    /// Sends an action chunk: `joints` maps joint names to their positions
+    /// (robot units), one per point; the points are `dt` s apart from now,
+    /// or at `times` s from now (increasing; evenly spaced ones are sent
+    /// as `dt`). The loop follows the chunk as a timed path through its
+    /// points, within the limits; it replaces what is left of the last
+    /// chunk from the commanded state, its points already past skipped.
+    /// Returns how many positions were clamped to the limits. Raises
+    /// `UsageError` for a bad chunk, `Error` once the run has ended.
+    #[pyo3(signature = (joints, dt=None, times=None))]
+    fn send_chunk(
+        &self,
+        py: Python<'_>,
+        joints: Vec<(String, Vec<f64>)>,
+        dt: Option<f64>,
+        times: Option<Vec<f64>>,
+    ) -> PyResult<usize> {
+        let units = self.units;
+        let stamp = self.started.elapsed().as_secs_f64();
+        let joints: Vec<(String, Vec<f64>)> = joints
+            .into_iter()
+            .map(|(name, q)| (name, q.into_iter().map(|a| units.to_rad(a)).collect()))
+            .collect();
+        let chunk = match (dt, times) {
+            (Some(dt), None) => {
+                chunk_interval(dt)?;
+                Chunk::named(Some(stamp), dt, joints)
+            }
+            // As dt only when every joint has one position per time: the
+            // runtime then still refuses lengths that differ.
+            (None, Some(times)) => match even_spacing(&times)
+                .filter(|_| joints.iter().all(|(_, q)| q.len() == times.len()))
+            {
+                Some((first, dt)) => Chunk::named(Some(stamp + first), dt, joints),
+                None => Chunk::timed(times.into_iter().map(|t| stamp + t).collect(), joints),
+            },
+            _ => {
+                return Err(
+                    Failure::usage("send_chunk: give either dt (s) or times (s from now)").into(),
+                )
+            }
+        };
+        let sent = py.allow_threads(|| self.targets.send_chunk(chunk));
+        match sent {
+            Ok(clamped) => Ok(clamped),
+            Err(TargetError::Ended) => Err(Failure::new("Error", "the stream has ended").into()),
+            Err(e) => Err(Failure::usage(chain(&e)).into()),
+        }
+    }
+
     /// The joints' latest state: `(time, position, velocity, error,
     /// commanded, status flags, faults)`, lists in the robot's joint order.
     fn state(&self) -> PyResult<StateTuple> {
@@ -211,6 +262,26 @@ impl Stream {
     fn torque_off(&self, py: Python<'_>) -> PyResult<Option<String>> {
         Ok(py.allow_threads(|| self.finish(Command::TorqueOff))?)
     }
+}
+
+/// Checks a chunk's interval: finite, positive, at most an hour.
+fn chunk_interval(dt: f64) -> Outcome<()> {
+    crate::checks::timeout("the chunk's dt", dt).map(drop)
+}
+
+/// `(first, dt)` when `times` are evenly spaced (to a microsecond), at
+/// least two of them, increasing.
+fn even_spacing(times: &[f64]) -> Option<(f64, f64)> {
+    let (&first, &last) = (times.first()?, times.last()?);
+    if times.len() < 2 || !(first.is_finite() && last.is_finite()) {
+        return None;
+    }
+    let dt = (last - first) / (times.len() - 1) as f64;
+    let even = times
+        .iter()
+        .enumerate()
+        .all(|(k, t)| (t - (first + k as f64 * dt)).abs() <= 1e-6);
+    (even && dt > 0.0 && chunk_interval(dt).is_ok()).then_some((first, dt))
 }
 
 impl Drop for Stream {

@@ -145,6 +145,9 @@ impl<T: Transport, C: Clock> Leader<T, C> {
 
 /// Runs `servobus follow`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if let Some(path) = &args.plot {
+        super::check_plot_format(path, &["svg", "png"])?;
+    }
     for (flag, path) in [
         ("--log", &args.log),
         ("--plot", &args.plot),

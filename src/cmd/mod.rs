@@ -234,6 +234,33 @@ pub(crate) fn hand_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     Ok(path_or_name(Kind::Hand, arg.as_ref()))
 }
 
+/// Fails at once, before anything moves, when the plot `path` has an
+/// extension other than `formats` (lower case, e.g. `["svg", "png"]`):
+/// the file would not be what its name says. A path that is there and is
+/// no regular file (`/dev/stdout`, a FIFO) takes the first format.
+///
+/// # Errors
+/// An input error (exit 2) naming the formats.
+pub(crate) fn check_plot_format(path: &std::path::Path, formats: &[&str]) -> anyhow::Result<()> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let special = std::fs::metadata(path).is_ok_and(|m| !m.is_file());
+    if special || formats.contains(&ext.as_str()) {
+        return Ok(());
+    }
+    let names: Vec<String> = formats
+        .iter()
+        .map(|f| format!("{} (.{f})", f.to_ascii_uppercase()))
+        .collect();
+    Err(exit::input(format!(
+        "--plot {}: plots are written as {}; give one of those",
+        path.display(),
+        names.join(" or ")
+    )))
+}
+
 /// Fails at once, before anything moves, when the file `path` given with
 /// `flag` could not be written after the run: a directory, a missing
 /// directory, a read-only file, a directory in which no file can be created

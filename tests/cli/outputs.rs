@@ -394,3 +394,34 @@ fn a_plan_plot_that_cannot_be_written_names_the_file() {
     let report = stdout(&out);
     assert!(!report.contains("plot written"), "{report}");
 }
+
+#[test]
+fn a_plot_is_what_its_name_says_or_refused() {
+    let dir = scratch("plot-formats");
+    let file = |name: &str| dir.join(name);
+    for (args, what) in [
+        (vec!["plan", WAVE, "--plot"], "x.png"),
+        (vec!["plan", WAVE, "--plot"], "x.jpg"),
+        (
+            vec![
+                "follow",
+                "--robot",
+                "so101",
+                "--leader-hand",
+                "so101-hand",
+                "--seconds",
+                "1",
+                "--plot",
+            ],
+            "x.jpg",
+        ),
+    ] {
+        let path = file(what);
+        let mut args = args.clone();
+        args.push(arg(&path));
+        let out = servobus(&args);
+        let (_, err) = exited(&out, 2);
+        says(&err, &["--plot", what, "plots are written as SVG (.svg)"]);
+        assert!(!path.exists(), "{args:?} wrote {}", path.display());
+    }
+}

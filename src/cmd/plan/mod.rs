@@ -126,6 +126,10 @@ impl SpatialJson {
 
 /// Runs `servobus plan`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if let Some(path) = &args.plot {
+        // The plan's plot is drawn as SVG only.
+        super::check_plot_format(path, &["svg"])?;
+    }
     let (motion, robot) = load_motion_calibrated(
         &args.motion,
         args.robot.as_deref(),

@@ -10,16 +10,7 @@ pub(super) const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
 /// plot format not supported, or a directory that does not exist.
 pub(super) fn check_outputs(args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.plot {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        if !PLOT_FORMATS.contains(&ext.as_str()) {
-            return Err(crate::cmd::exit::input(format!(
-                "--plot {}: plots are written as SVG (.svg) or PNG (.png); give one of those",
-                path.display()
-            )));
-        }
+        crate::cmd::check_plot_format(path, &PLOT_FORMATS)?;
     }
     for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
         if let Some(path) = path {

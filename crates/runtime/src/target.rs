@@ -414,20 +414,7 @@ impl TargetSender {
     /// [`TargetError`] when the target is refused (counted; the loop keeps
     /// its previous target) or the run has ended.
     pub fn send(&self, target: Target) -> Result<usize, TargetError> {
-        self.counters.received.fetch_add(1, Ordering::Relaxed);
-        let checked = self.check(target).inspect_err(|_| {
-            self.counters.refused.fetch_add(1, Ordering::Relaxed);
-        });
-        let (checked, clamped) = checked?;
-        if clamped > 0 {
-            self.counters.clamped.fetch_add(1, Ordering::Relaxed);
-        }
-        // Wrapped here, on the sender's thread: the control loop only
-        // passes the pointer on.
-        self.tx
-            .send(Arc::new(checked))
-            .map_err(|_| TargetError::Ended)?;
-        Ok(clamped)
+        self.deliver(self.check(target))
     }
 
     /// Checks `chunk` and sends it, as [`TargetSender::send`] does a
@@ -438,14 +425,25 @@ impl TargetSender {
     /// [`TargetError`] when the chunk is refused (counted) or the run has
     /// ended.
     pub fn send_chunk(&self, chunk: Chunk) -> Result<usize, TargetError> {
+        self.deliver(self.check_chunk(chunk))
+    }
+
+    /// Counts a checked target or chunk and sends it on; returns how many
+    /// positions were clamped.
+    fn deliver(
+        &self,
+        checked: Result<(Checked, usize), TargetError>,
+    ) -> Result<usize, TargetError> {
         self.counters.received.fetch_add(1, Ordering::Relaxed);
-        let checked = self.check_chunk(chunk).inspect_err(|_| {
+        let checked = checked.inspect_err(|_| {
             self.counters.refused.fetch_add(1, Ordering::Relaxed);
         });
         let (checked, clamped) = checked?;
         if clamped > 0 {
             self.counters.clamped.fetch_add(1, Ordering::Relaxed);
         }
+        // Wrapped here, on the sender's thread: the control loop only
+        // passes the pointer on.
         self.tx
             .send(Arc::new(checked))
             .map_err(|_| TargetError::Ended)?;

@@ -212,21 +212,23 @@ pub fn scan<T: Transport, C: Clock>(
     }
     for &baud in &asked {
         switch_baud(bus, baud)?;
+        // IDs whose reply came late, in the next ID's turn (a loaded
+        // machine): asked once more at the end of the pass.
+        let mut late = Vec::new();
         for id in 0..=MAX_ID {
-            let mut s = *bus.settings();
-            s.series = Series::Sts;
-            s.retries = 0;
-            bus.set_settings(s);
-            let answered = bus.ping(id);
-            bus.set_settings(s.with_retries(1));
-            let result = match answered {
-                Ok(_) => match identify(bus, id) {
-                    Err(e) if e.is_timeout() => Ok(Found::unknown(id, baud)),
-                    other => other,
-                },
-                Err(e) => Err(e),
-            };
+            let result = ask(bus, id, baud);
+            if let Err(BusError::WrongId { actual, .. }) = &result {
+                if *actual < id && !late.contains(actual) {
+                    late.push(*actual);
+                }
+            }
             out.sort(result, (id, baud))?;
+        }
+        for id in late {
+            if !out.knows(id, baud) {
+                let result = ask(bus, id, baud);
+                out.sort(result, (id, baud))?;
+            }
         }
     }
     if learn_latency {
@@ -235,6 +237,24 @@ pub fn scan<T: Transport, C: Clock>(
         }
     }
     Ok(out)
+}
+
+/// Asks servo `id` at `baud` once (an absent ID is not asked again) and,
+/// when it answers, what it is.
+fn ask<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8, baud: u32) -> Result<Found, BusError> {
+    let mut s = *bus.settings();
+    s.series = Series::Sts;
+    s.retries = 0;
+    bus.set_settings(s);
+    let answered = bus.ping(id);
+    bus.set_settings(s.with_retries(1));
+    match answered {
+        Ok(_) => match identify(bus, id) {
+            Err(e) if e.is_timeout() => Ok(Found::unknown(id, baud)),
+            other => other,
+        },
+        Err(e) => Err(e),
+    }
 }
 
 impl Scan {

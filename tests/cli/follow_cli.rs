@@ -179,9 +179,10 @@ fn follow_with_its_leader_killed_mid_run_writes_the_log_the_recording_and_the_re
         "--record",
         common::arg(&take),
     ]);
-    // 3.5 s into the leader's simulator (a few seconds of following), it is
-    // killed: the leader's port just goes.
-    leader.wait_until(3.5);
+    // 6 s into the leader's simulator (a few seconds of following, after
+    // the follower's start-up, which takes more than 3 s on a loaded
+    // machine), it is killed: the leader's port just goes.
+    leader.wait_until(6.0);
     drop(leader);
     let (status, stdout, stderr) = follow.finish();
     assert_eq!(status.code(), Some(1), "stdout {stdout} stderr {stderr}");

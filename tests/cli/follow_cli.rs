@@ -58,12 +58,15 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     // swing of the hand, about 150 deg/s, is 3 deg in 20 ms, and a cycle
     // late on a loaded machine adds its own. Measured with a debug build
     // while other tests ran: 5.7-7.7 deg worst, 1.3-2.0 deg RMS (the lift
-    // or the base). Bounds: 12 deg worst, 3 deg RMS; the following itself
-    // is held to 2 deg of the leader, one interval and the servo's lag
-    // before, in virtual time (live_follow.rs).
+    // or the base); in the gate, with three CLI tests at once on 2 cores,
+    // once 18.4 deg worst and 6.4 deg RMS (the lift): readings late under
+    // load stop the follower at the newest one. Bounds: 30 deg worst, 10
+    // deg RMS, a check that the follower follows at all; how closely it
+    // follows is held in virtual time (live_follow.rs: 2 deg of the leader,
+    // one interval and the servo's lag before).
     for j in joints {
-        assert!(common::num(j, "max_error") < 12.0, "{j}");
-        assert!(common::num(j, "rms_error") < 3.0, "{j}");
+        assert!(common::num(j, "max_error") < 30.0, "{j}");
+        assert!(common::num(j, "rms_error") < 10.0, "{j}");
     }
     // The take: a header and one row per follower cycle, in degrees.
     let text = std::fs::read_to_string(&take).expect("the take is written");

@@ -17,6 +17,8 @@ Fault injection: comma-separated items, applied to every reply independently.
   corrupt=P     one byte of a reply is corrupted, with probability P
   delay=P       a reply starts late, with probability P ...
   delay_us=N    ... by N microseconds (default 2000)
+  hold=P        a reply sent on time reaches the host late (a loaded machine), with probability P ...
+  hold_us=N     ... by N microseconds (default 2000)
   seed=N        seed of the random source (default 0): same seed, same faults
   echo          echo every request back (same as --echo)
   vanish=ID     servo ID is disconnected (repeatable)

@@ -212,23 +212,29 @@ pub fn scan<T: Transport, C: Clock>(
     }
     for &baud in &asked {
         switch_baud(bus, baud)?;
-        // IDs whose reply came late, in the next ID's turn (a loaded
-        // machine): asked once more at the end of the pass.
-        let mut late = Vec::new();
+        let first = out.found.len();
+        let mut late = LateReplies::new(bus);
         for id in 0..=MAX_ID {
-            let result = ask(bus, id, baud);
+            let result = ask(bus, id, baud, 0);
             if let Err(BusError::WrongId { actual, .. }) = &result {
-                if *actual < id && !late.contains(actual) {
-                    late.push(*actual);
-                }
+                late.note(*actual);
             }
             out.sort(result, (id, baud))?;
         }
-        for id in late {
-            if !out.knows(id, baud) {
-                let result = ask(bus, id, baud);
+        // A servo whose reply came late (a loaded machine) answered: it is
+        // asked again, with retries, a few rounds at most.
+        for _ in 0..LATE_ROUNDS {
+            let again = late.take(bus, &out, baud)?;
+            if again.is_empty() {
+                break;
+            }
+            for id in again {
+                let result = ask(bus, id, baud, LATE_RETRIES);
                 out.sort(result, (id, baud))?;
             }
+        }
+        if let Some(at_baud) = out.found.get_mut(first..) {
+            at_baud.sort_by_key(|f| f.id);
         }
     }
     if learn_latency {
@@ -239,12 +245,81 @@ pub fn scan<T: Transport, C: Clock>(
     Ok(out)
 }
 
-/// Asks servo `id` at `baud` once (an absent ID is not asked again) and,
-/// when it answers, what it is.
-fn ask<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8, baud: u32) -> Result<Found, BusError> {
+/// Rounds of asking again the IDs whose replies came late.
+const LATE_ROUNDS: usize = 3;
+/// Retries of the PING to an ID whose reply came late.
+const LATE_RETRIES: u8 = 2;
+/// How long the end of a pass waits for replies still on their way.
+const LATE_WAIT: Duration = Duration::from_millis(5);
+
+/// The IDs whose replies came after their deadlines during a pass: in the
+/// next ID's turn ([`BusError::WrongId`]), or counted by the bus as it
+/// drained the line before the next request.
+struct LateReplies {
+    /// Each ID's late-reply count when the pass began.
+    seen: Vec<u64>,
+    /// IDs whose replies came in another ID's turn.
+    wrong_turn: Vec<u8>,
+}
+
+impl LateReplies {
+    fn new<T: Transport, C: Clock>(bus: &Bus<T, C>) -> LateReplies {
+        LateReplies {
+            seen: (0..=MAX_ID)
+                .map(|id| bus.servo_counters(id).late_replies)
+                .collect(),
+            wrong_turn: Vec::new(),
+        }
+    }
+
+    fn note(&mut self, id: u8) {
+        if !self.wrong_turn.contains(&id) {
+            self.wrong_turn.push(id);
+        }
+    }
+
+    /// The late IDs not yet found at `baud`, after waiting for replies still
+    /// on their way; each is returned once per late reply.
+    fn take<T: Transport, C: Clock>(
+        &mut self,
+        bus: &mut Bus<T, C>,
+        out: &Scan,
+        baud: u32,
+    ) -> Result<Vec<u8>, ScanError> {
+        bus.await_late_replies(LATE_WAIT)
+            .map_err(|source| ScanError::Stopped {
+                id: BROADCAST_ID,
+                source,
+            })?;
+        let mut ids = std::mem::take(&mut self.wrong_turn);
+        for id in 0..=MAX_ID {
+            let now = bus.servo_counters(id).late_replies;
+            if let Some(seen) = self.seen.get_mut(usize::from(id)) {
+                if now > *seen {
+                    *seen = now;
+                    if !ids.contains(&id) {
+                        ids.push(id);
+                    }
+                }
+            }
+        }
+        ids.retain(|&id| !out.knows(id, baud));
+        ids.sort_unstable();
+        Ok(ids)
+    }
+}
+
+/// Asks servo `id` at `baud` (an absent ID once, with `retries` 0: that is
+/// what makes a scan fast) and, when it answers, what it is.
+fn ask<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    id: u8,
+    baud: u32,
+    retries: u8,
+) -> Result<Found, BusError> {
     let mut s = *bus.settings();
     s.series = Series::Sts;
-    s.retries = 0;
+    s.retries = retries;
     bus.set_settings(s);
     let answered = bus.ping(id);
     bus.set_settings(s.with_retries(1));

@@ -32,6 +32,8 @@ pub struct SimStats {
     pub corrupted: u64,
     /// Replies the fault injector delayed.
     pub delayed: u64,
+    /// Replies the fault injector held on the host's side.
+    pub held: u64,
     /// Bytes that collided with another servo's bytes.
     pub collided_bytes: u64,
     /// Request bytes echoed back to the host.
@@ -67,6 +69,9 @@ pub(crate) struct Engine {
     pub turnaround: Option<Duration>,
     /// The host adapter's latency: added to every byte's readiness.
     pub latency: Duration,
+    /// Until when the host's side holds what arrives (a held reply, see
+    /// [`Faults::hold`]): nothing is readable before the bytes held.
+    held_until: Duration,
     pub stats: SimStats,
     pub disconnected: bool,
     /// When the bus heard its first byte (the origin of
@@ -89,6 +94,7 @@ impl Engine {
             in_last: Duration::ZERO,
             turnaround: None,
             latency: Duration::ZERO,
+            held_until: Duration::ZERO,
             stats: SimStats::default(),
             disconnected: false,
             first_heard: None,
@@ -152,7 +158,7 @@ impl Engine {
         for (i, &b) in bytes.iter().enumerate() {
             end = t0 + self.link.wire_time(i + 1);
             if self.faults.echo {
-                self.push_rx(end, b);
+                self.push_rx(end, b, Duration::ZERO);
                 self.stats.echoed_bytes += 1;
             }
             self.inbuf.push(b);
@@ -241,7 +247,7 @@ impl Engine {
             }
             _ => false,
         };
-        let mut burst: Vec<(Duration, Vec<u8>)> = Vec::new();
+        let mut burst: Vec<(Duration, Vec<u8>, Duration)> = Vec::new();
         let mut cursor = t;
         let mut k = 0;
         while k < replies.len() {
@@ -258,12 +264,13 @@ impl Engine {
             for (_, delay, reply) in replies[k..slot_end].iter_mut() {
                 let mut start = cursor + *delay;
                 let mut bytes = std::mem::take(reply);
-                if !self.fault(&mut bytes, &mut start) {
+                let mut held = Duration::ZERO;
+                if !self.fault(&mut bytes, &mut start, &mut held) {
                     continue;
                 }
                 let end = start + self.link.wire_time(bytes.len());
                 next = next.max(end);
-                burst.push((start, bytes));
+                burst.push((start, bytes, held));
             }
             cursor = next;
             k = slot_end;
@@ -272,8 +279,10 @@ impl Engine {
         self.put_on_wire(burst);
     }
 
-    /// Applies the random faults to one reply; false when it is dropped.
-    fn fault(&mut self, bytes: &mut [u8], start: &mut Duration) -> bool {
+    /// Applies the random faults to one reply: corrupts it, delays its
+    /// `start` on the wire, or sets how long the host's side holds it
+    /// (`held`); false when it is dropped.
+    fn fault(&mut self, bytes: &mut [u8], start: &mut Duration, held: &mut Duration) -> bool {
         let f = &self.faults;
         if !f.any_random() {
             return true;
@@ -292,14 +301,18 @@ impl Engine {
             *start += by;
             self.stats.delayed += 1;
         }
+        if f.hold > 0.0 && self.rng.gen_bool(f.hold) {
+            *held = f.hold_by;
+            self.stats.held += 1;
+        }
         true
     }
 
     /// Serialises transmissions onto the wire: bytes that overlap in time
     /// collide into one corrupted byte (the line is wired-AND: a 0 bit wins).
-    fn put_on_wire(&mut self, burst: Vec<(Duration, Vec<u8>)>) {
+    fn put_on_wire(&mut self, burst: Vec<(Duration, Vec<u8>, Duration)>) {
         let mut bytes: Vec<(Duration, u8, usize)> = Vec::new();
-        for (src, (start, frame)) in burst.iter().enumerate() {
+        for (src, (start, frame, _)) in burst.iter().enumerate() {
             for (i, &b) in frame.iter().enumerate() {
                 bytes.push((*start + self.link.wire_time(i + 1), b, src));
             }
@@ -319,13 +332,31 @@ impl Engine {
                 _ => out.push((end, b, src)),
             }
         }
-        for (end, b, _) in out {
-            self.push_rx(end, b);
+        for (end, b, src) in out {
+            // A held reply is handed over whole, once it is all in and the
+            // hold is over (a reader woken late finds it buffered).
+            let held = burst
+                .get(src)
+                .map_or(Duration::ZERO, |(start, frame, held)| {
+                    if held.is_zero() {
+                        Duration::ZERO
+                    } else {
+                        (*start + self.link.wire_time(frame.len())).saturating_sub(end) + *held
+                    }
+                });
+            self.push_rx(end, b, held);
         }
     }
 
-    fn push_rx(&mut self, arrived: Duration, byte: u8) {
-        let ready = arrived + self.latency;
+    fn push_rx(&mut self, arrived: Duration, byte: u8, held: Duration) {
+        let mut ready = arrived + self.latency;
+        if held > Duration::ZERO {
+            ready += held;
+            self.held_until = self.held_until.max(ready);
+        }
+        // The host's side hands bytes over in order: none overtakes one
+        // it holds.
+        ready = ready.max(self.held_until);
         let rx = RxByte { ready, byte };
         if self.rx.back().is_some_and(|last| last.ready > ready) {
             // Rare (a delayed reply overtaken by a later one): keep the queue

@@ -31,6 +31,14 @@ pub struct Faults {
     pub delay: f64,
     /// How late a delayed reply starts.
     pub delay_by: Duration,
+    /// Probability that a reply reaches the host late, by
+    /// [`Faults::hold_by`]: it left the servo on time, but the host's side
+    /// held it (a loaded machine descheduling the reader, a USB adapter's
+    /// latency spike, the kernel's hand-off on a pseudo-terminal). Its
+    /// bytes stay in order, and nothing behind them is readable earlier.
+    pub hold: f64,
+    /// How long a held reply is held.
+    pub hold_by: Duration,
     /// Echo every request back to the host, as a half-duplex adapter
     /// without direction control does.
     pub echo: bool,
@@ -76,6 +84,8 @@ impl Faults {
             corrupt: 0.0,
             delay: 0.0,
             delay_by: Self::DEFAULT_DELAY,
+            hold: 0.0,
+            hold_by: Self::DEFAULT_DELAY,
             echo: false,
             vanish: Vec::new(),
             vanish_after: Vec::new(),
@@ -115,6 +125,15 @@ impl Faults {
     pub fn delay(mut self, p: f64, by: Duration) -> Faults {
         self.delay = p;
         self.delay_by = by;
+        self
+    }
+
+    /// The same faults with replies held on the host's side by `by` with
+    /// probability `p` (see [`Faults::hold`]).
+    #[must_use]
+    pub fn hold(mut self, p: f64, by: Duration) -> Faults {
+        self.hold = p;
+        self.hold_by = by;
         self
     }
 
@@ -217,7 +236,7 @@ impl Faults {
 
     /// Whether any reply can be altered (so the random source is used).
     pub fn any_random(&self) -> bool {
-        self.drop > 0.0 || self.corrupt > 0.0 || self.delay > 0.0
+        self.drop > 0.0 || self.corrupt > 0.0 || self.delay > 0.0 || self.hold > 0.0
     }
 }
 
@@ -226,7 +245,7 @@ impl Faults {
 #[non_exhaustive]
 pub enum FaultSpecError {
     /// A key the syntax does not have.
-    #[error("unknown fault `{key}` (known: drop, corrupt, delay, delay_us, seed, echo, vanish, block, overheat, supply, firmware, baud, duplicate)")]
+    #[error("unknown fault `{key}` (known: drop, corrupt, delay, delay_us, hold, hold_us, seed, echo, vanish, block, overheat, supply, firmware, baud, duplicate)")]
     UnknownKey {
         /// The key as written.
         key: String,
@@ -247,7 +266,8 @@ impl FromStr for Faults {
     type Err = FaultSpecError;
 
     /// Parses `key=value` items separated by commas:
-    /// `drop=P`, `corrupt=P`, `delay=P` (probabilities 0..=1), `delay_us=N`,
+    /// `drop=P`, `corrupt=P`, `delay=P`, `hold=P` (probabilities 0..=1),
+    /// `delay_us=N`, `hold_us=N`,
     /// `seed=N`, `echo` (or `echo=true`), and `vanish=ID` (or `vanish=ID@SECONDS`:
     /// silent from that long after the bus's first byte), `block=ID`,
     /// `overheat=ID` (repeatable); `supply=V` (every servo) or
@@ -283,6 +303,11 @@ impl FromStr for Faults {
                 "delay_us" => {
                     let us = value.parse::<u64>().map_err(|_| bad("microseconds"))?;
                     f.delay_by = Duration::from_micros(us);
+                }
+                "hold" => f.hold = prob()?,
+                "hold_us" => {
+                    let us = value.parse::<u64>().map_err(|_| bad("microseconds"))?;
+                    f.hold_by = Duration::from_micros(us);
                 }
                 "seed" => f.seed = value.parse().map_err(|_| bad("an unsigned integer"))?,
                 "echo" => {
@@ -376,7 +401,7 @@ mod tests {
     #[test]
     fn spec_parses_every_key_and_refuses_nonsense() {
         let f: Faults =
-            "drop=0.5, corrupt=0.25,delay=0.1,delay_us=300,seed=9,echo,block=2,overheat=4"
+            "drop=0.5, corrupt=0.25,delay=0.1,delay_us=300,hold=0.2,hold_us=700,seed=9,echo,block=2,overheat=4"
                 .parse()
                 .unwrap();
         assert_eq!(
@@ -385,6 +410,7 @@ mod tests {
                 .drop(0.5)
                 .corrupt(0.25)
                 .delay(0.1, Duration::from_micros(300))
+                .hold(0.2, Duration::from_micros(700))
                 .echo(true)
                 .block(2)
                 .overheat(4)

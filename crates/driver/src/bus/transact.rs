@@ -52,6 +52,16 @@ impl Sink for Single<'_> {
             self.late_len += 1;
             return false;
         }
+        if !other
+            && params.len() != self.expect.len
+            && std::mem::take(&mut self.owed[usize::from(id)])
+        {
+            // This servo's late reply to an earlier request of another
+            // length (a retried read's first try, say).
+            self.late[self.late_len] = id;
+            self.late_len += 1;
+            return false;
+        }
         let err = if other {
             BusError::WrongId {
                 expected: self.expect.id,
@@ -99,6 +109,9 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             if !expect.reply {
                 return Ok(None);
             }
+            // Overdue at the start: the reply taken may be the late one
+            // to an earlier try, with this try's still to come.
+            let owed_before = self.io.overdue_flags()[id];
             let mut sink = Single {
                 expect,
                 out: &mut self.reply,
@@ -120,7 +133,11 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             self.count_late();
             self.account(id, &tally, wrong_count);
             if let Some((flags, at)) = got {
-                self.io.answered(expect.id);
+                if owed_before {
+                    self.io.answered_in_doubt(expect.id);
+                } else {
+                    self.io.answered(expect.id);
+                }
                 let rtt = at.saturating_sub(start);
                 self.last_rtt = rtt;
                 self.counters.rtt.record(rtt);

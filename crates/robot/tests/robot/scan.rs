@@ -7,7 +7,7 @@ use std::time::Duration;
 use servobus_driver::{Bus, BusSettings, ManualClock};
 use servobus_protocol::registers::{addr, Series};
 use servobus_robot::scan::{scan, table_bauds, ScanError, SlowLink};
-use servobus_sim::{SimBus, SimServo};
+use servobus_sim::{Faults, SimBus, SimServo};
 
 /// An STS3215 that answers at once (no return delay).
 fn sts(id: u8) -> SimServo {
@@ -66,5 +66,24 @@ fn an_adapter_slower_than_assumed_is_reported_and_the_silent_ids_asked_again(
     assert!(measured >= Duration::from_micros(150), "{measured:?}");
     assert_eq!(found.found.len(), 1);
     assert_eq!(found.found[0].id, 3);
+    Ok(())
+}
+
+#[test]
+fn servos_whose_replies_come_late_are_asked_again_and_found() -> Result<(), ScanError> {
+    // A loaded machine: replies now and then reach the host after their
+    // deadline. Each servo that answered late is asked again; none is lost.
+    let ids = [1u8, 2, 3, 5, 8, 13];
+    for seed in 0..6 {
+        let faults = Faults::seeded(seed).hold(0.3, Duration::from_micros(400));
+        let sim = SimBus::new(ManualClock::new(), 1_000_000)
+            .with_servos(ids.map(sts))
+            .with_faults(faults);
+        let mut bus = bus(&sim);
+        let found = scan(&mut bus, &[1_000_000], false)?;
+        let got: Vec<u8> = found.found.iter().map(|f| f.id).collect();
+        assert_eq!(got, ids, "seed {seed}: {found:?}");
+        assert!(found.collisions.is_empty(), "seed {seed}: {found:?}");
+    }
     Ok(())
 }

@@ -218,3 +218,21 @@ fn adapter_latency_delays_every_byte() {
     assert_eq!(bus.read(&mut buf, Duration::from_secs(1)).unwrap(), 6);
     assert_eq!(now(&bus), (120 + T) * US + MS);
 }
+
+#[test]
+fn a_held_reply_is_handed_over_whole_after_the_hold() {
+    // Sent on time, held on the host's side (a loaded machine): nothing is
+    // readable until the whole reply is, 1 ms after its last byte arrived.
+    let mut bus = bus_with(&[1]).with_faults(Faults::seeded(1).hold(1.0, MS));
+    bus.write_all(&ping(1)).unwrap();
+    let mut buf = [0u8; 16];
+    assert!(matches!(
+        bus.read(&mut buf, (120 + T) * US + MS - US),
+        Err(TransportError::TimedOut)
+    ));
+    let n = bus.read(&mut buf, Duration::from_secs(1)).unwrap();
+    assert_eq!(&buf[..n], &status(1, 0, &[])[..]);
+    assert_eq!(now(&bus), (120 + T) * US + MS);
+    assert_eq!(bus.stats().held, 1);
+    assert_eq!(bus.stats().delayed, 0);
+}

@@ -71,3 +71,31 @@ fn piped_targets_are_followed_a_bad_line_is_reported_and_the_end_stops() {
     let lift = |s: &serde_json::Value| s["commanded"]["shoulder_lift"].as_f64();
     assert_eq!(lift(end), lift(&samples[0]));
 }
+
+#[test]
+fn a_stream_that_brought_no_target_still_reports_its_live_section() {
+    // Only bad lines, then the end of input: nothing was followed, and the
+    // report says so instead of leaving its live section out.
+    let mut child = Command::new(BIN)
+        .args(["stream", "--robot", "so101", "--json"])
+        .current_dir(common::repo(""))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("servobus runs");
+    let mut stdin = child.stdin.take().expect("a pipe");
+    writeln!(stdin, "not json").expect("servobus reads its input");
+    writeln!(stdin, "{{\"joints\": ").expect("servobus reads its input");
+    drop(stdin);
+    let out = child.wait_with_output().expect("servobus ends");
+    let (stdout, _) = common::exited(&out, 0);
+    let last: serde_json::Value = stdout
+        .lines()
+        .last()
+        .and_then(|l| serde_json::from_str(l).ok())
+        .expect("the report is the last line");
+    let live = &last["report"]["live"];
+    assert_eq!(live["received"], 0, "{last}");
+    assert!(live["envelope"].is_array(), "{last}");
+}

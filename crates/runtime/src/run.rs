@@ -138,6 +138,7 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         })
         .collect();
     let timeout = o.target_timeout.as_secs_f64();
+    let live_session = trajectory.is_none();
     let mut timeline = match trajectory {
         Some(trajectory) => Timeline::new(
             plain,
@@ -158,6 +159,9 @@ pub(crate) fn prepare<T: Transport, C: Clock>(
         inboxes(loops.len(), o.command_capacity, o.target_capacity);
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let counters = Arc::new(Counters::new(names.clone(), units));
+    if live_session {
+        counters.live_session();
+    }
     let targets = TargetSender::new(target_tx, names, limits, Arc::clone(&counters));
     let board = Arc::new(FaultBoard::default());
     let lanes = loops

@@ -12,7 +12,7 @@
 //! joint's limits is clamped (counted). Targets travel on a bounded
 //! channel; the loop takes every target waiting at the start of a cycle.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -224,6 +224,9 @@ pub(crate) struct Counters {
     timeouts: AtomicU64,
     resumes: AtomicU64,
     followed: AtomicU64,
+    /// Set once anything can send targets (a live session): its report
+    /// then has its live section, even when nothing came.
+    live: AtomicBool,
     /// From a target's taking to the goals on the wire. Made with the
     /// counters, before the run starts: the loop only records into it.
     latency: Mutex<Histogram>,
@@ -244,6 +247,12 @@ impl Counters {
             units,
             ..Counters::default()
         }
+    }
+
+    /// Marks the run as a live session: its report has a live section even
+    /// when no target came.
+    pub fn live_session(&self) {
+        self.live.store(true, Ordering::Relaxed);
     }
 
     /// Takes in the envelope figures of every joint, from the control
@@ -269,6 +278,7 @@ impl Default for Counters {
             timeouts: AtomicU64::default(),
             resumes: AtomicU64::default(),
             followed: AtomicU64::default(),
+            live: AtomicBool::new(false),
             latency: Mutex::new(Histogram::new(LATENCY_SPAN)),
         }
     }
@@ -327,7 +337,8 @@ impl Counters {
                     .collect()
             },
         };
-        (r.received > 0 || get(&self.followed) > 0).then_some(r)
+        let live = self.live.load(Ordering::Relaxed);
+        (live || r.received > 0 || get(&self.followed) > 0).then_some(r)
     }
 }
 

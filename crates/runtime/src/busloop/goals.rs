@@ -181,6 +181,22 @@ impl GoalWriter {
         PortGone::check(bus.sync_write(self.reg.address, &self.ids, &self.data)).map(|_| ())
     }
 
+    /// Turns off every servo's own motion profile (its acceleration ramp,
+    /// and the move time and speed that cap a goal): the run's path is
+    /// already within the joints' limits, and a ramp in the firmware on
+    /// top of it would only make the servo trail the path. These are RAM
+    /// registers (no EEPROM write); a power cycle clears them too.
+    pub fn release_profiles<T: Transport, C: Clock>(
+        &self,
+        bus: &mut Bus<T, C>,
+    ) -> Result<(), BusError> {
+        // Zeroes: one byte per servo for the ramp, four for time and speed.
+        let ramp = &self.torque[0];
+        bus.sync_write(addr::ACCELERATION, &self.ids, ramp)?;
+        let none = vec![0u8; self.ids.len() * 4];
+        bus.sync_write(addr::GOAL_TIME, &self.ids, &none)
+    }
+
     /// Enables or disables torque on every servo of the bus.
     pub fn torque<T: Transport, C: Clock>(
         &self,

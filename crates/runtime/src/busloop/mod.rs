@@ -164,7 +164,9 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     }
 
     /// Reads every servo's position patiently, sets the goals there
-    /// (clamped into the limits) and, when asked, enables torque.
+    /// (clamped into the limits) and, when asked, turns the servos' own
+    /// motion profiles off ([`GoalWriter::release_profiles`]) and enables
+    /// torque.
     ///
     /// # Errors
     ///
@@ -191,6 +193,9 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
         self.goals
             .send_checked(&mut self.bus)
             .map_err(failed("setting the goals to the present positions"))?;
+        self.goals
+            .release_profiles(&mut self.bus)
+            .map_err(failed("turning off the servos' own acceleration ramps"))?;
         self.goals
             .torque(&mut self.bus, true)
             .map_err(failed("enabling torque"))

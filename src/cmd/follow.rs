@@ -78,6 +78,46 @@ pub struct Args {
     /// Print the report as one JSON object (no live line).
     #[arg(long)]
     pub json: bool,
+    /// The follower's speed, acceleration and jerk limits: `model`, what
+    /// each servo's model can do (its top speed and fastest ramp), so that
+    /// it keeps up with the leader the way raw goal writes do; or `robot`,
+    /// the robot file's (gentler, for choreography). The robot file's
+    /// position limits hold either way.
+    #[arg(long, value_enum, default_value_t = FollowLimits::Model)]
+    pub limits: FollowLimits,
+}
+
+/// Whose speed, acceleration and jerk limits the follower keeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FollowLimits {
+    /// What each servo's model can do.
+    Model,
+    /// The robot file's.
+    Robot,
+}
+
+/// With model limits, each joint reaches its acceleration limit in this
+/// long (its jerk limit): short enough to keep up with raw goal writes,
+/// long enough that the acceleration never steps.
+const JERK_RAMP_S: f64 = 0.05;
+
+/// `robot` with each joint's speed, acceleration and jerk limits raised to
+/// what its servo's model can do (a model with no stated ramp keeps the
+/// robot file's).
+fn with_model_limits(mut robot: Robot) -> Robot {
+    let units = robot.units;
+    for joint in robot.buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
+        if let Some((v, a)) = joint.model.fastest_profile() {
+            let (v, a) = (
+                units.from_rad(v.to_radians()),
+                units.from_rad(a.to_radians()),
+            );
+            joint.max_velocity = v;
+            joint.max_acceleration = a;
+            joint.max_jerk = Some(a / JERK_RAMP_S);
+        }
+    }
+    robot
 }
 
 /// Errors of the follower against the leader are counted from this time
@@ -161,6 +201,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &args.robot.path,
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
     )?;
+    let robot = match args.limits {
+        FollowLimits::Model => with_model_limits(robot),
+        FollowLimits::Robot => robot,
+    };
     let leader_path = args.leader_robot.as_ref().unwrap_or(&args.robot.path);
     let leader_robot = load_robot(
         leader_path,
@@ -527,4 +571,29 @@ fn finish(
         }
     }
     Ok(super::exit::of_finish(report.finish))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn model_limits_are_the_servos_top_speed_and_fastest_ramp_in_the_robots_units() {
+        let robot = load_robot(
+            &crate::cmd::robot_arg("so101").unwrap_or_default(),
+            &RobotOptions::default().calibration(None),
+        )
+        .expect("the built-in arm loads");
+        let before: Vec<(f64, f64)> = robot.joints().map(|j| (j.min, j.max)).collect();
+        let fast = with_model_limits(robot.clone());
+        for ((j, slow), range) in fast.joints().zip(robot.joints()).zip(&before) {
+            let (v, a) = j.model.fastest_profile().expect("STS servos");
+            assert!((robot.units.to_rad(j.max_velocity) - v.to_radians()).abs() < 1e-9);
+            assert!((robot.units.to_rad(j.max_acceleration) - a.to_radians()).abs() < 1e-9);
+            assert_eq!(j.max_jerk, Some(j.max_acceleration / JERK_RAMP_S));
+            assert!(j.max_velocity > slow.max_velocity, "{}", j.name);
+            // The position limits are the robot file's.
+            assert_eq!((j.min, j.max), *range, "{}", j.name);
+        }
+    }
 }

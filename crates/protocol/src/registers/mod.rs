@@ -71,8 +71,8 @@ pub use baud::{
     FACTORY_RETURN_DELAY, MAX_SERVO_BAUD, RETURN_DELAY_UNIT,
 };
 pub use models::{
-    model_by_name, model_by_number, model_by_register, Model, MODELS, REPLY_TURNAROUND,
-    RESPONSE_LAG, SCS0009, SCS15, SM8512BL, STS3215, STS3250,
+    model_by_name, model_by_number, model_by_register, Model, FASTEST_PROFILE, MODELS,
+    REPLY_TURNAROUND, RESPONSE_LAG, SCS0009, SCS15, SM8512BL, STS3215, STS3250,
 };
 pub use reply::return_delay_register;
 pub use status_level::StatusLevel;

@@ -26,6 +26,11 @@ pub const REPLY_TURNAROUND: Duration = Duration::from_micros(50);
 /// uses this one figure until one is measured.
 pub const RESPONSE_LAG: Duration = Duration::from_millis(10);
 
+/// The `acceleration` register's value of the fastest limited motion
+/// profile: what LeRobot's `configure_motors` writes to an SO-101's servos,
+/// and the highest Feetech's tools offer (0 means no limit at all).
+pub const FASTEST_PROFILE: f64 = 254.0;
+
 /// A servo model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Model {
@@ -59,6 +64,26 @@ impl Model {
     /// Degrees per position tick.
     pub fn deg_per_tick(&self) -> f64 {
         self.range_deg / f64::from(self.resolution)
+    }
+
+    /// What the model can do in its fastest limited motion profile: top
+    /// speed (deg/s) and the acceleration of its `acceleration` register
+    /// at [`FASTEST_PROFILE`] (deg/s^2), where that register's unit is
+    /// stated in steps/s^2 (the STS and SMS series); `None` otherwise.
+    pub fn fastest_profile(&self) -> Option<(f64, f64)> {
+        let reg = self.map().get("acceleration")?;
+        let (scale, unit) = reg.unit.trim().split_once(' ')?;
+        let scale: f64 = scale
+            .parse()
+            .ok()
+            .filter(|s: &f64| s.is_finite() && *s > 0.0)?;
+        (unit.trim() == "steps/s^2").then(|| {
+            let deg = self.deg_per_tick();
+            (
+                f64::from(self.max_speed) * deg,
+                scale * FASTEST_PROFILE * deg,
+            )
+        })
     }
 
     /// The highest position value (`resolution - 1`).
@@ -142,4 +167,19 @@ pub fn model_by_register(bytes: [u8; 2]) -> Option<&'static Model> {
 /// (`sts3215`, `STS-3215`).
 pub fn model_by_name(name: &str) -> Option<&'static Model> {
     MODELS.iter().find(|m| super::same_name(m.name, name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fastest_profile_is_top_speed_and_the_ramp_at_254() {
+        let (v, a) = STS3215.fastest_profile().expect("an STS ramp in steps/s^2");
+        let deg = 360.0 / 4096.0;
+        assert!((v - 3400.0 * deg).abs() < 1e-9, "{v}");
+        assert!((a - 25_400.0 * deg).abs() < 1e-9, "{a}");
+        // The SCS series' ramp has no stated unit: no figure is made up.
+        assert_eq!(SCS0009.fastest_profile(), None);
+    }
 }

@@ -280,15 +280,17 @@ def run_follow(servobus: str, leader: SimArm, follower: SimArm, until: float) ->
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     while time.time() < until and proc.poll() is None:
         time.sleep(0.1)
-    if proc.poll() is None:
+    early = proc.poll() is not None
+    if not early:
         proc.send_signal(signal.SIGINT)
     try:
         out, err = proc.communicate(timeout=15)
     except subprocess.TimeoutExpired:
         proc.kill()
         out, err = proc.communicate()
-    if proc.returncode not in (0, 1):
-        print(f"  (follow exited {proc.returncode}: {err.strip().splitlines()[-1:] if err else ''})",
+    if early or proc.returncode not in (0, 1):
+        when = "before the motion's end" if early else ""
+        print(f"  (follow exited {proc.returncode} {when}: {err.strip().splitlines()[-3:] if err else ''})",
               file=sys.stderr)
     return {}
 

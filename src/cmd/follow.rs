@@ -30,7 +30,6 @@ use std::time::{Duration, Instant};
 
 use against::{Figures, FollowErrors, LeaderTrail};
 
-use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::config::{load_robot, JointMap, Robot, RobotOptions};
 use servobus_runtime::sim::{Hand, SimRobot};
@@ -124,6 +123,10 @@ fn with_model_limits(mut robot: Robot) -> Robot {
 /// on, s (the follower first catches up with wherever the leader is).
 const ERRORS_FROM: f64 = 0.5;
 
+/// How long a leader joint's readings may fail (late or garbled replies)
+/// before the leader counts as lost.
+const LEADER_PATIENCE: Duration = Duration::from_millis(500);
+
 /// The highest rate the leader is read at, Hz.
 const LEADER_HZ: f64 = 50.0;
 
@@ -135,12 +138,16 @@ struct LeaderJoint {
     map: JointMap,
     /// The follower's joint index.
     to: usize,
+    /// When its readings began to fail, while they do.
+    missing_since: Option<Instant>,
 }
 
 /// The leader arm: read only.
 struct Leader<T: Transport, C: Clock> {
     buses: Vec<Bus<T, C>>,
     joints: Vec<LeaderJoint>,
+    /// Readings skipped for a late or garbled reply.
+    missed: u64,
 }
 
 impl<T: Transport, C: Clock> Leader<T, C> {
@@ -155,6 +162,7 @@ impl<T: Transport, C: Clock> Leader<T, C> {
                         id: j.id,
                         map: JointMap::new(j, leader.units),
                         to,
+                        missing_since: None,
                     });
                 }
             }
@@ -165,19 +173,57 @@ impl<T: Transport, C: Clock> Leader<T, C> {
                 leader.name, follower.name
             )));
         }
-        Ok(Leader { buses, joints })
+        Ok(Leader {
+            buses,
+            joints,
+            missed: 0,
+        })
     }
 
-    /// Every matched joint's angle now (rad), in `out` by follower index,
-    /// and into `trail` with the time its servo took it (s on the bus's
-    /// clock, the process's one).
-    fn read(&mut self, out: &mut [Option<f64>], trail: &mut LeaderTrail) -> anyhow::Result<()> {
-        for j in &self.joints {
+    /// Every matched joint's angle now (rad), in `out` by follower index
+    /// (`None` for a reading missed), and into `trail` with the time its
+    /// servo took it (s on the bus's clock, the process's one).
+    ///
+    /// A reading lost to a late or garbled reply (a loaded machine, a
+    /// noisy cable) is skipped and counted: the follower keeps to the
+    /// last target of that joint. Only a joint whose readings have failed
+    /// for [`LEADER_PATIENCE`], or a port that fails, loses the leader.
+    fn read(
+        &mut self,
+        out: &mut [Option<f64>],
+        trail: &mut LeaderTrail,
+        now: Instant,
+    ) -> anyhow::Result<()> {
+        for j in &mut self.joints {
             let bus = &mut self.buses[j.bus];
-            let angle = read_angle(bus, j.id, &j.map)
-                .with_context(|| format!("reading the leader's {} (ID {})", j.name, j.id))?;
-            out[j.to] = Some(angle);
-            trail.push(j.to, bus.heard().as_secs_f64(), angle);
+            let read = read_angle(bus, j.id, &j.map);
+            match read {
+                Ok(angle) => {
+                    j.missing_since = None;
+                    out[j.to] = Some(angle);
+                    trail.push(j.to, bus.heard().as_secs_f64(), angle);
+                }
+                Err(e)
+                    if e.is_retryable()
+                        && now.duration_since(*j.missing_since.get_or_insert(now))
+                            < LEADER_PATIENCE =>
+                {
+                    self.missed += 1;
+                    out[j.to] = None;
+                }
+                Err(e) => {
+                    let what = match j.missing_since {
+                        Some(since) if e.is_retryable() => format!(
+                            "reading the leader's {} (ID {}), silent for {:.1} s",
+                            j.name,
+                            j.id,
+                            now.duration_since(since).as_secs_f64()
+                        ),
+                        _ => format!("reading the leader's {} (ID {})", j.name, j.id),
+                    };
+                    return Err(anyhow::Error::new(e).context(what));
+                }
+            }
         }
         Ok(())
     }
@@ -353,7 +399,8 @@ fn drive<T: Transport, C: Clock>(
         if runner.is_finished() || args.seconds.is_some_and(|s| t >= s.as_secs_f64()) {
             break;
         }
-        if let Err(e) = leader.read(&mut pose, &mut trail) {
+        pose.fill(None);
+        if let Err(e) = leader.read(&mut pose, &mut trail, Instant::now()) {
             // The follower stops below and everything captured is kept.
             lost = Some(format!(
                 "the leader was lost at {t:.1} s: {}",
@@ -363,13 +410,19 @@ fn drive<T: Transport, C: Clock>(
         }
         let taken = Instant::now();
         reads += 1;
-        let joints = names
+        let joints: Vec<(String, f64)> = names
             .iter()
             .zip(&pose)
             .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
             .collect();
         let stamp = taken.duration_since(started).as_secs_f64();
-        if let Err(e) = send(&targets, Target::named(stamp, joints).taken_at(taken)) {
+        // A reading whose every joint was missed sends nothing.
+        let sent = if joints.is_empty() {
+            Ok(())
+        } else {
+            send(&targets, Target::named(stamp, joints).taken_at(taken))
+        };
+        if let Err(e) = sent {
             lost = Some(format!("at {t:.1} s: {e}"));
             break;
         }
@@ -392,6 +445,13 @@ fn drive<T: Transport, C: Clock>(
     }
     if !args.json {
         errln!();
+    }
+    if leader.missed > 0 {
+        errln!(
+            "warning: {} leader readings were skipped (a late or garbled reply); \
+             the follower kept to each joint's last target meanwhile",
+            leader.missed
+        );
     }
     // The follower stops (jerk limited) and the run ends.
     let _ = runner.commands().send(Command::Stop);

@@ -208,3 +208,28 @@ fn follow_with_its_leader_killed_mid_run_writes_the_log_the_recording_and_the_re
     );
     assert!(lines.count() as f64 >= cycles * 0.9, "{cycles} cycles");
 }
+
+#[test]
+fn a_leader_that_drops_replies_is_followed_and_the_skipped_readings_are_counted() {
+    // A loaded machine or a noisy cable: one leader reply in ten is lost.
+    // A lost reading is skipped (the follower keeps to that joint's last
+    // target), counted, and does not end the session.
+    let dir = common::scratch("follow-leader-drops");
+    let leader = common::Sim::start_with(&dir, &["--faults", "drop=0.1,seed=3"]);
+    let follow = common::Running::start(&[
+        "follow",
+        "--robot",
+        "so101",
+        "--leader",
+        leader.port(),
+        "--seconds",
+        "3",
+        "--json",
+    ]);
+    let (status, stdout, stderr) = follow.finish();
+    assert_eq!(status.code(), Some(0), "stdout {stdout} stderr {stderr}");
+    assert!(stderr.contains("leader readings were skipped"), "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).expect("the report, as JSON");
+    assert_eq!(report["finish"], "stopped", "{report}");
+    assert!(report["follow"]["leader_lost"].is_null(), "{report}");
+}

@@ -231,7 +231,8 @@ class Stream:
         past are skipped). Single targets (:meth:`send`) and chunks mix in
         one stream. Returns how many positions were clamped to the limits.
         Raises :class:`servobus.UsageError` for a bad chunk (lengths that
-        differ, times not increasing, an unknown joint, NaN)."""
+        differ, times not increasing or more than an hour from now, an
+        unknown joint, NaN)."""
         if isinstance(positions, Mapping):
             joints = [(str(k), [float(x) for x in np.asarray(v, dtype=float).ravel()])
                       for k, v in positions.items()]

@@ -207,12 +207,15 @@ impl Stream {
             }
             // As dt only when every joint has one position per time: the
             // runtime then still refuses lengths that differ.
-            (None, Some(times)) => match even_spacing(&times)
-                .filter(|_| joints.iter().all(|(_, q)| q.len() == times.len()))
-            {
-                Some((first, dt)) => Chunk::named(Some(stamp + first), dt, joints),
-                None => Chunk::timed(times.into_iter().map(|t| stamp + t).collect(), joints),
-            },
+            (None, Some(times)) => {
+                chunk_times(&times)?;
+                match even_spacing(&times)
+                    .filter(|_| joints.iter().all(|(_, q)| q.len() == times.len()))
+                {
+                    Some((first, dt)) => Chunk::named(Some(stamp + first), dt, joints),
+                    None => Chunk::timed(times.into_iter().map(|t| stamp + t).collect(), joints),
+                }
+            }
             _ => {
                 return Err(
                     Failure::usage("send_chunk: give either dt (s) or times (s from now)").into(),
@@ -248,7 +251,7 @@ impl Stream {
     #[getter]
     fn finished(&self) -> PyResult<bool> {
         let runner = self.runner.lock().map_err(poisoned)?;
-        Ok(runner.as_ref().map_or(true, Runner::is_finished))
+        Ok(runner.as_ref().is_none_or(Runner::is_finished))
     }
 
     /// Stops the joints (jerk limited), ends the run and returns its report
@@ -267,6 +270,26 @@ impl Stream {
 /// Checks a chunk's interval: finite, positive, at most an hour.
 fn chunk_interval(dt: f64) -> Outcome<()> {
     crate::checks::timeout("the chunk's dt", dt).map(drop)
+}
+
+/// Checks a chunk's times (s from now): each a number within an hour of
+/// now, as a timeout is ([`crate::checks::MAX_TIMEOUT_S`]); a point due
+/// 1e300 s from now is no point of a chunk. Whether they increase is the
+/// loop's check, as for every sender.
+fn chunk_times(times: &[f64]) -> Outcome<()> {
+    use crate::checks::MAX_TIMEOUT_S;
+    match times
+        .iter()
+        .find(|t| !(-MAX_TIMEOUT_S..=MAX_TIMEOUT_S).contains(*t))
+    {
+        None => Ok(()),
+        Some(&t) => Err(Failure::usage(format!(
+            "the chunk's time {} s is outside -{MAX_TIMEOUT_S} to {MAX_TIMEOUT_S} s from now \
+             (an hour either way)",
+            servobus_config::limits::Rounded(t)
+        ))
+        .with("value", crate::errors::Field::Float(t))),
+    }
 }
 
 /// `(first, dt)` when `times` are evenly spaced (to a microsecond), at

@@ -103,6 +103,22 @@ def test_a_calibration_timeout_out_of_range_is_a_usage_error(timeout):
         robot.calibrate(hand="so101-first-arm-hand", timeout=timeout)
 
 
+@pytest.mark.parametrize("times", [
+    [0.0, 1e300],
+    [-1e300, 0.0],
+    [0.0, 0.1, 3601.0],
+    [0.0, math.inf],
+    [math.nan, 0.1],
+])
+def test_a_chunk_time_beyond_an_hour_or_not_a_number_is_a_usage_error(times):
+    with servobus.Robot("so101").stream(timeout=1.0) as stream:
+        with pytest.raises(servobus.UsageError) as caught:
+            stream.send_chunk(times, {"shoulder_pan": [0.0] * len(times)})
+        assert "-3600 to 3600 s from now" in str(caught.value)
+        # Refused whole: the stream goes on taking chunks.
+        assert stream.send_chunk([0.0, 0.1], {"shoulder_pan": [0.0, 1.0]}) == 0
+
+
 def test_calibrate_refuses_a_directory_as_output_before_it_starts(tmp_path):
     steps = []
     robot = servobus.Robot("so101")

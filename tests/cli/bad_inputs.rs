@@ -149,6 +149,66 @@ fn a_small_file_cannot_ask_for_unbounded_work() {
     );
 }
 
+/// Every duration in a file is checked at parse time against a range the
+/// message gives (issue 36): a walk segment's, a keyframe's `at` below 0,
+/// a hand's keyframe 1e300 s after the simulator's start.
+#[test]
+fn a_duration_in_a_file_is_refused_with_its_range() {
+    refused(
+        &["plan", "motion-walk-duration-huge.yaml"],
+        &[
+            "motion-walk-duration-huge.yaml:13:88: keyframes[1].walk.segments[0].duration",
+            "a time above 0 and up to 3600 s, got 1e300",
+        ],
+        &[],
+    );
+    refused(
+        &["plan", "motion-at-negative.yaml"],
+        &[
+            "motion-at-negative.yaml:5:9: keyframes[1].at",
+            "from 0 to 86400 s (a day), got -1",
+        ],
+        &[],
+    );
+    // Refused before it serves: a hand taken would serve until the
+    // safety net.
+    refused(
+        &["sim", "--robot", "so101", "--hand", "hand-at-1e300.yaml"],
+        &[
+            "hand-at-1e300.yaml:5:10: keyframes[1].at",
+            "from 0 to 86400 s (a day) from the simulator's start, got 1e300",
+        ],
+        &[],
+    );
+}
+
+/// A recording of more rows than the limit is refused at the first row
+/// past it, before the rows are kept (issue 36: every generator of
+/// samples checks its count before it allocates). 2,000,001 rows 10 us
+/// apart are 20 s: without the row limit it would play.
+#[test]
+fn a_recording_of_more_rows_than_the_limit_is_refused_at_the_row() {
+    let mut text = String::from("time_s,pan\n");
+    for i in 0..=2_000_000u32 {
+        text.push_str(&format!("{i}e-5,0\n"));
+    }
+    let rec = temp_file("bad-inputs", "rows.csv", &text);
+    refused(
+        &[
+            "play",
+            "--fast",
+            common::arg(&rec),
+            "--robot",
+            "robot-tiny.yaml",
+        ],
+        &[
+            "rows.csv:2000002:1",
+            "more than 2000000 rows, the limit for a recording",
+        ],
+        &[],
+    );
+}
+
 #[test]
 fn ports_that_are_no_serial_port_say_what_they_are() {
     refused(

@@ -425,3 +425,54 @@ fn a_plot_is_what_its_name_says_or_refused() {
         assert!(!path.exists(), "{args:?} wrote {}", path.display());
     }
 }
+
+/// A run that ends on a fault (a servo of the pty simulator stops
+/// answering 2 s in) still writes its log and plot whole, prints its
+/// report, and exits 1 (issue 36: nothing recorded is lost). Whichever
+/// fault a loaded machine makes of it (the servo missing, or the whole
+/// bus silent), the run ends on it, long before arm-wave's end.
+#[test]
+fn a_play_ended_by_a_fault_writes_its_log_and_plot_whole() {
+    let dir = empty("outputs-fault");
+    let sim = Sim::start_with(&dir, &["--faults", "vanish=4@2.0"]);
+    let out = play_logged(
+        &dir,
+        &["--robot", arg(&repo(SO101)), "--port", sim.port(), "--json"],
+        ("run.csv", "run.svg"),
+    );
+    sim.stop();
+    let (text, err) = exited(&out, 1);
+    let report: serde_json::Value = serde_json::from_str(&text).expect("the report, as JSON");
+    assert!(report["fault"]["kind"].is_string(), "{report} {err}");
+    let fault_s = common::num(&report["fault"], "time_s");
+    // The log: its header and whole rows up to the fault, no temporary.
+    let log = std::fs::read_to_string(dir.join("run.csv")).expect("the log is written");
+    assert!(log.ends_with('\n'), "the log's last row is cut");
+    let mut lines = log.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    assert_eq!(header.first(), Some(&"time_s"), "{header:?}");
+    let mut last_s = 0.0;
+    let mut rows = 0;
+    for line in lines {
+        assert_eq!(line.split(',').count(), header.len(), "a cut row: {line}");
+        last_s = line
+            .split(',')
+            .next()
+            .and_then(|t| t.parse::<f64>().ok())
+            .expect("a time");
+        rows += 1;
+    }
+    assert!(rows > 100, "{rows} rows");
+    assert!(
+        last_s >= fault_s - 0.1,
+        "rows up to {last_s} s, the fault at {fault_s} s"
+    );
+    // The plot: a whole SVG.
+    let plot = std::fs::read_to_string(dir.join("run.svg")).expect("the plot is written");
+    assert!(plot.trim_end().ends_with("</svg>"), "the plot is cut");
+    let left: Vec<String> = names(&dir)
+        .into_iter()
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporaries left: {left:?}");
+}

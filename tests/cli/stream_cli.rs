@@ -99,3 +99,108 @@ fn a_stream_that_brought_no_target_still_reports_its_live_section() {
     assert_eq!(live["received"], 0, "{last}");
     assert!(live["envelope"].is_array(), "{last}");
 }
+
+/// A line that is not UTF-8 and one longer than 1 MiB are each reported
+/// with their number and skipped (issue 36): neither ends the input, the
+/// lines after them keep their numbers, and their targets are followed.
+#[test]
+fn a_line_not_utf8_or_longer_than_1_mib_is_skipped_and_the_input_goes_on() {
+    let mut child = Command::new(BIN)
+        .args(["stream", "--robot", "so101", "--json"])
+        .current_dir(common::repo(""))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("servobus runs");
+    let mut stdin = child.stdin.take().expect("a pipe");
+    let target = |pan: u32| format!("{{\"joints\": {{\"shoulder_pan\": {pan}}}}}\n");
+    let mut input = target(1).into_bytes();
+    // Line 2: a target behind two bytes that are no UTF-8.
+    input.extend_from_slice(b"\xff\xfe");
+    input.extend_from_slice(target(2).as_bytes());
+    // Line 3: 2 MiB of spaces.
+    input.extend_from_slice(&vec![b' '; 2 << 20]);
+    input.push(b'\n');
+    input.extend_from_slice(target(3).as_bytes());
+    input.extend_from_slice(b"{\"joints\": \n");
+    input.extend_from_slice(target(4).as_bytes());
+    // Only the report comes out on stdout: the whole input goes in first.
+    stdin.write_all(&input).expect("servobus reads its input");
+    drop(stdin);
+    let out = child.wait_with_output().expect("servobus ends");
+    let (stdout, stderr) = common::exited(&out, 0);
+    for said in [
+        "line 2: not UTF-8 text; skipped",
+        "line 3: longer than 1 MiB; skipped",
+        "line 5: not JSON",
+    ] {
+        assert!(stderr.contains(said), "{said:?} in {stderr}");
+    }
+    assert_eq!(stderr.matches("skipped").count(), 3, "{stderr}");
+    let last: serde_json::Value = stdout
+        .lines()
+        .last()
+        .and_then(|l| serde_json::from_str(l).ok())
+        .expect("the report is the last line");
+    let live = &last["report"]["live"];
+    assert_eq!(live["received"], 3, "lines 1, 4 and 6: {last}");
+    assert_eq!(live["refused"], 0, "{last}");
+}
+
+/// `stream < /dev/zero`: one line without end. Its buffer is capped at
+/// 1 MiB, so after 256 MiB read the process's peak memory is still under
+/// 128 MiB (it grew past 1.1 GB in 4 s before the cap); Ctrl-C then ends
+/// the run as usual. Bounded: the reading is awaited 120 s at most (it
+/// reads about 200 MB/s on a slow machine), the end 60 s.
+#[cfg(target_os = "linux")]
+#[test]
+fn stream_from_dev_zero_keeps_its_memory_under_a_ceiling() {
+    const READ: u64 = 256 << 20;
+    const CEILING_KB: u64 = 128 << 10;
+    let zero = std::fs::File::open("/dev/zero").expect("/dev/zero");
+    let mut child = Command::new(BIN)
+        .args(["stream", "--robot", "so101"])
+        .current_dir(common::repo(""))
+        .stdin(Stdio::from(zero))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("servobus runs");
+    let proc_field = |file: &str, key: &str| -> Option<u64> {
+        let text = std::fs::read_to_string(format!("/proc/{}/{file}", child.id())).ok()?;
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        line[key.len()..].split_whitespace().next()?.parse().ok()
+    };
+    let started = std::time::Instant::now();
+    let mut read = 0;
+    while read < READ && started.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(100));
+        read = proc_field("io", "rchar:").unwrap_or(0);
+    }
+    let peak_kb = proc_field("status", "VmHWM:");
+    assert!(common::signal(&child, "INT"), "kill -INT");
+    let ended = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if ended.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("servobus stream did not end 60 s after Ctrl-C");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut stderr = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        let _ = std::io::Read::read_to_string(&mut e, &mut stderr);
+    }
+    assert!(read >= READ, "only {read} bytes read in 120 s: {stderr}");
+    let peak_kb = peak_kb.expect("VmHWM in /proc/PID/status");
+    assert!(
+        peak_kb < CEILING_KB,
+        "peak memory {peak_kb} kB after {read} bytes of one line: {stderr}"
+    );
+    assert_eq!(status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -10,6 +10,9 @@
 //! place in one of the two lists fails this test. Numbers given as
 //! positional arguments are listed in [`POSITIONAL`].
 //!
+//! Built with `--features zenoh`, `serve` and `play --zenoh-group` are
+//! swept too ([`ZENOH_NUMERIC`]).
+//!
 //! Bounds: every run is on the built-in simulator (virtual time where the
 //! command has it) or on a port that does not exist; one still running
 //! after [`BOUND`] is sent SIGTERM (as a user would stop a server) and
@@ -92,6 +95,56 @@ const NUMERIC: &[(&str, &str, &str)] = &[
     ("sim --robot so101 --link O", "--faults", "seed=V"),
 ];
 
+/// With `--features zenoh` (the gate's Zenoh step runs this sweep so
+/// built): `serve`'s numeric options, and `play --zenoh-group`'s. Each
+/// node listens on a loopback port the system picks (`:0`), so that four
+/// run at once, and lingers for no time after the SIGTERM that ends it.
+/// The conductor connects to a loopback port where nothing serves (9,
+/// discard): it finds no robot and ends.
+#[cfg(feature = "zenoh")]
+const ZENOH_NUMERIC: &[(&str, &str, &str)] = &[
+    (
+        "serve --robot so101 --listen tcp/127.0.0.1:0 --linger 0",
+        "--state-hz",
+        "V",
+    ),
+    (
+        "serve --robot so101 --listen tcp/127.0.0.1:0 --linger 0 --ros2",
+        "--ros-domain",
+        "V",
+    ),
+    (
+        "serve --robot so101 --listen tcp/127.0.0.1:0 --linger 0",
+        "--rate",
+        "V",
+    ),
+    (
+        "serve --robot so101 --listen tcp/127.0.0.1:0 --linger 0",
+        "--timeout",
+        "V",
+    ),
+    (
+        "serve --robot so101 --listen tcp/127.0.0.1:0",
+        "--linger",
+        "V",
+    ),
+    (
+        "play arm-wave --zenoh-group g --connect tcp/127.0.0.1:9",
+        "--start-in",
+        "V",
+    ),
+];
+
+/// Without the `zenoh` feature there is no `serve` and no group play.
+#[cfg(not(feature = "zenoh"))]
+const ZENOH_NUMERIC: &[(&str, &str, &str)] = &[];
+
+/// Every numeric option swept in this build: [`NUMERIC`], and
+/// [`ZENOH_NUMERIC`] when the build has them.
+fn numeric() -> impl Iterator<Item = &'static (&'static str, &'static str, &'static str)> {
+    NUMERIC.iter().chain(ZENOH_NUMERIC)
+}
+
 /// Numbers given as positional arguments: `(command line, with V for the
 /// number)`.
 const POSITIONAL: &[&str] = &[
@@ -125,7 +178,16 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("follow", "--leader-calibration"),
     ("follow", "--leader-hand"),
     ("follow", "--record"),
+    ("follow", "--limits"),
     ("ik", "--frame"),
+    // `serve` and `play`'s group options (built with --features zenoh).
+    ("serve", "--zenoh-config"),
+    ("serve", "--listen"),
+    ("serve", "--connect"),
+    ("serve", "--name"),
+    ("serve", "--group"),
+    ("play", "--zenoh-group"),
+    ("play", "--connect"),
 ];
 
 /// The commands `servobus --help` lists.
@@ -162,7 +224,7 @@ fn every_option_that_takes_a_value_is_swept_or_takes_no_number() {
     let mut unlisted = Vec::new();
     for command in &commands {
         for option in value_options(command) {
-            let swept = NUMERIC.iter().any(|(line, o, _)| {
+            let swept = numeric().any(|(line, o, _)| {
                 *o == option && line.split_whitespace().next() == Some(command.as_str())
             });
             let named = NOT_NUMERIC
@@ -178,7 +240,7 @@ fn every_option_that_takes_a_value_is_swept_or_takes_no_number() {
         "options neither swept nor named as taking no number: {unlisted:?}"
     );
     // And the other way: each option swept is one the command has.
-    for (line, option, _) in NUMERIC {
+    for (line, option, _) in numeric() {
         let command = line.split_whitespace().next().unwrap_or("");
         assert!(
             value_options(command).iter().any(|o| o == option),
@@ -259,7 +321,7 @@ fn cases(dir: &Path) -> Vec<Vec<String>> {
             .collect()
     };
     let mut all = Vec::new();
-    for (n, (line, option, value)) in NUMERIC.iter().enumerate() {
+    for (n, (line, option, value)) in numeric().enumerate() {
         for v in HOSTILE {
             let mut args = words(line, &format!("out-{n}-{v}"));
             args.push(format!("{option}={}", value.replace('V', v)));

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::error::{ConfigError, Source};
-use super::limits::{check_duration, check_segments};
+use super::limits::{check_duration, check_segments, Rounded, MAX_MOTION_DURATION_S};
 use super::locate::FieldPath;
 use super::motion_poses::{list, PoseList, PoseRef, Resolver};
 use super::robot::{self, Robot};
@@ -296,7 +296,13 @@ pub fn load_motion_calibrated(
         let kp = root.key("keyframes").index(i);
         if let Some(at) = rk.at {
             if !(at.is_finite() && at >= 0.0) {
-                return Err(src.error(&kp.key("at"), format!("must be a time >= 0 s, got {at}")));
+                return Err(src.error(
+                    &kp.key("at"),
+                    format!(
+                        "must be a time from 0 to {MAX_MOTION_DURATION_S} s (a day), got {}",
+                        Rounded(at)
+                    ),
+                ));
             }
             if let Err(e) = check_duration(at) {
                 return Err(src.error(&kp.key("at"), e.to_string()));

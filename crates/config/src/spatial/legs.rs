@@ -157,7 +157,11 @@ impl Context<'_> {
             positive("duration", s.duration).map_err(|_| {
                 self.src.error(
                     &sp.key("duration"),
-                    format!("must be a positive time in s, got {}", s.duration),
+                    format!(
+                        "must be a time above 0 and up to {} s, got {}",
+                        super::MAX_SPATIAL_S,
+                        Rounded(s.duration)
+                    ),
                 )
             })?;
             if !(s.velocity.iter().all(|v| v.is_finite()) && s.turn.is_finite()) {

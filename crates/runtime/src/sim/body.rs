@@ -23,6 +23,7 @@ use rand::{Rng, SeedableRng};
 use serde::Deserialize;
 use servobus_sim::{HandPath, Mount};
 
+use crate::config::limits::{Rounded, MAX_MOTION_DURATION_S};
 use crate::config::seam::turn_ticks;
 use crate::config::{ConfigError, FieldPath, JointConfig, JointMap, Robot, Source};
 
@@ -213,6 +214,11 @@ fn limits_deg(robot: &Robot, j: &JointConfig) -> (f64, f64) {
     (deg(j.min), deg(j.max))
 }
 
+/// The latest time a hand file's keyframe may be at, s: a day, as the
+/// longest motion ([`MAX_MOTION_DURATION_S`]); a hand is a person's
+/// moves during one session with the simulator.
+pub const MAX_HAND_S: f64 = MAX_MOTION_DURATION_S;
+
 /// A hand's path for every joint it names, in the robot's joint order.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Hand {
@@ -258,8 +264,8 @@ impl Hand {
     ///
     /// # Errors
     /// [`ConfigError`] naming the file, line, column and field of the first
-    /// problem: an unknown joint, a time that is negative or not after the
-    /// previous keyframe's, an angle that is not a number.
+    /// problem: an unknown joint, a time outside 0 to [`MAX_HAND_S`] or not
+    /// after the previous keyframe's, an angle that is not a number.
     pub fn load(path: &Path, robot: &Robot) -> Result<Hand, ConfigError> {
         let src = Source::read(path)?;
         let raw: RawHand = src.parse()?;
@@ -269,8 +275,15 @@ impl Hand {
         let mut last = f64::NEG_INFINITY;
         for (k, key) in raw.keyframes.iter().enumerate() {
             let field = root.index(k);
-            if !(key.at.is_finite() && key.at >= 0.0) {
-                return Err(src.error(&field.key("at"), "must be seconds >= 0"));
+            if !(0.0..=MAX_HAND_S).contains(&key.at) {
+                return Err(src.error(
+                    &field.key("at"),
+                    format!(
+                        "must be a time from 0 to {MAX_HAND_S} s (a day) from the simulator's \
+                         start, got {}",
+                        Rounded(key.at)
+                    ),
+                ));
             }
             if key.at <= last {
                 return Err(src.error(

@@ -91,11 +91,7 @@ fn main() {
         let tick = pacer.wait();
         let expected = period * u32::try_from(tick.index - last.index).unwrap_or(u32::MAX);
         let interval = tick.woke - last.woke;
-        period_error.record(if interval > expected {
-            interval - expected
-        } else {
-            expected - interval
-        });
+        period_error.record(interval.abs_diff(expected));
         lateness.record(tick.lateness());
         if tick.index < tenth {
             early.record(tick.lateness());

@@ -50,7 +50,7 @@ impl Samples {
     /// Records a cycle sample of the first bus as a new row; other buses'
     /// samples fill the row of the same cycle.
     fn add(&mut self, c: &servobus_runtime::CycleSample) {
-        if c.bus == 0 && c.joints().first().map_or(true, |j| j.joint == 0) {
+        if c.bus == 0 && c.joints().first().is_none_or(|j| j.joint == 0) {
             self.time.push(c.time_s);
             for column in self
                 .commanded

@@ -111,7 +111,7 @@ fn parse_hex(args: &[String]) -> anyhow::Result<Vec<u8>> {
     if digits.is_empty() {
         return Err(input("no hex digits given"));
     }
-    if digits.len() % 2 != 0 {
+    if !digits.len().is_multiple_of(2) {
         return Err(input(format!(
             "odd number of hex digits ({}): each byte needs two",
             digits.len()

@@ -133,10 +133,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     );
     match taken {
         Ok(_) => {
-            errln!(
-                "{written}; play it with `servobus play {}`",
-                args.output.display()
-            );
+            // The port the take was on, named: `play` without `--port` on a
+            // robot file without `port:` moves the simulator, not this arm.
+            let replay = match port {
+                Some(port) => format!("servobus play {} --port {port}", args.output.display()),
+                None => format!("servobus play {}", args.output.display()),
+            };
+            errln!("{written}; play it on the same servos with `{replay}`");
             Ok(ExitCode::SUCCESS)
         }
         Err((_, e)) => Err(explain(e, Some(&written))),
@@ -249,7 +252,7 @@ fn take<T: Transport, C: Clock>(
     let mut next = start;
     let mut next_view = start;
     let mut missed = 0;
-    while !stop.load(Ordering::SeqCst) && end.map_or(true, |e| teacher.now() < e) {
+    while !stop.load(Ordering::SeqCst) && end.is_none_or(|e| teacher.now() < e) {
         next += period;
         let now = teacher.now();
         if next < now {

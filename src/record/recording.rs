@@ -128,7 +128,7 @@ pub fn read_recording(
         .unwrap_or_default();
     let mut times: Vec<f64> = Vec::with_capacity(base.len());
     for &(t, _) in &base {
-        if times.last().map_or(true, |&l| t > l) {
+        if times.last().is_none_or(|&l| t > l) {
             times.push(t);
         }
     }

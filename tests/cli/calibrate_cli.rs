@@ -177,14 +177,16 @@ fn play_refuses_servos_that_do_not_match_the_calibration() {
 }
 
 /// The Python with LeRobot (SERVOBUS_LEROBOT_PYTHON, as prepared by
-/// `scripts/python_clients.sh`); the test is skipped loudly without it,
-/// and fails under CI=true.
-fn lerobot_python() -> Option<std::ffi::OsString> {
-    if let Some(python) = std::env::var_os("SERVOBUS_LEROBOT_PYTHON") {
-        return Some(python);
-    }
-    let why = "no Python with LeRobot: run `eval \"$(scripts/python_clients.sh)\"`";
-    common::missing_outside(why)
+/// `scripts/python_clients.sh`). The test that needs it is ignored in the
+/// default run; asked for (`--ignored`, as the gate does), it fails without
+/// it rather than pass without running.
+fn lerobot_python() -> std::ffi::OsString {
+    std::env::var_os("SERVOBUS_LEROBOT_PYTHON").unwrap_or_else(|| {
+        panic!(
+            "no Python with LeRobot: run `eval \"$(bash scripts/python_clients.sh)\"` \
+             (it sets SERVOBUS_LEROBOT_PYTHON), then run this test again"
+        )
+    })
 }
 
 /// A LeRobot calibration imported and written to the servos, exported
@@ -192,12 +194,11 @@ fn lerobot_python() -> Option<std::ffi::OsString> {
 /// RANGE_M100_100 and RANGE_0_100 readings of the servos are what servobus
 /// says they are.
 #[test]
+#[ignore = "needs LeRobot 0.6.1: `eval \"$(bash scripts/python_clients.sh)\"` sets SERVOBUS_LEROBOT_PYTHON, then `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
     use servobus_runtime::calibrate::{lerobot_value, NormMode};
     use servobus_runtime::config::{load_robot, JointMap, RobotOptions};
-    let Some(python) = lerobot_python() else {
-        return;
-    };
+    let python = lerobot_python();
     let dir = scratch("calib-lerobot-check");
     let sim = Sim::start(&dir);
     let port = sim.port();

@@ -136,7 +136,7 @@ fn speed(rows: &[(f64, f64, Option<f64>)], i: usize) -> f64 {
 fn max_jerk(rows: &[(f64, f64, Option<f64>)], from: f64, to: f64) -> f64 {
     let mut pts: Vec<(f64, f64)> = Vec::new();
     for r in rows.iter().filter(|r| r.0 >= from && r.0 <= to) {
-        if pts.last().map_or(true, |p| r.0 - p.0 >= 0.08 - 1e-9) {
+        if pts.last().is_none_or(|p| r.0 - p.0 >= 0.08 - 1e-9) {
             pts.push((r.0, r.1));
         }
     }

@@ -49,7 +49,7 @@ fn write_recording(path: &Path, noisy: bool) {
         let t = i as f64 * 0.01;
         let (a, b) = if noisy {
             // Steps of 60 deg every 1.5 s and a fast swing, with noise.
-            let step = if (t / 1.5) as u32 % 2 == 0 {
+            let step = if ((t / 1.5) as u32).is_multiple_of(2) {
                 -30.0
             } else {
                 30.0

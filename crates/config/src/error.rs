@@ -107,7 +107,7 @@ impl ConfigError {
 /// A byte count as `1 MiB` when it is a whole number of MiB.
 fn bytes_text(bytes: u64) -> String {
     const MIB: u64 = 1 << 20;
-    if bytes >= MIB && bytes % MIB == 0 {
+    if bytes >= MIB && bytes.is_multiple_of(MIB) {
         format!("{} MiB", bytes / MIB)
     } else {
         format!("{bytes} bytes")

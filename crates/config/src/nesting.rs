@@ -73,9 +73,7 @@ impl Scan {
             self.block_depth = self.indents.len();
             i = indent;
             // Each `- ` opening a list on this line is one more level.
-            while i < bytes.len()
-                && bytes[i] == b'-'
-                && bytes.get(i + 1).map_or(true, |b| *b == b' ')
+            while i < bytes.len() && bytes[i] == b'-' && bytes.get(i + 1).is_none_or(|b| *b == b' ')
             {
                 self.block_depth += 1;
                 i += 1;
@@ -109,7 +107,7 @@ impl Scan {
                     // Where a quote or a bracket opens something, not the
                     // middle of a plain scalar (`x[1]`).
                     let starters: &[u8] = if self.flow > 0 { b"[{,:-?" } else { b":-?" };
-                    let token_start = prev.map_or(true, |p| starters.contains(&p));
+                    let token_start = prev.is_none_or(|p| starters.contains(&p));
                     match b {
                         b'#' if i == 0 || bytes[i - 1] == b' ' || bytes[i - 1] == b'\t' => break,
                         b'"' if token_start => self.quote = Some(Quote::Double),

@@ -192,7 +192,7 @@ impl LegIk {
                     continue;
                 }
                 let dist: f64 = (0..3).map(|k| (q[k] - previous[k]).powi(2)).sum();
-                if best.map_or(true, |(_, d0)| dist < d0) {
+                if best.is_none_or(|(_, d0)| dist < d0) {
                     best = Some((q, dist));
                 }
             }

@@ -307,7 +307,7 @@ pub fn measure_on<T: Transport, C: Clock>(
         elapsed / u32::try_from(cycles).unwrap_or(u32::MAX)
     };
     for p in &period_list {
-        errors.record(if *p > mean { *p - mean } else { mean - *p });
+        errors.record(p.abs_diff(mean));
     }
     // An overrun: a cycle that took longer than the plan says a full cycle
     // takes (the period it would have at the maximum rate).

@@ -115,8 +115,7 @@ static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 /// A method of [`Trajectory`] that is `sample_hot_any` compiled for one
 /// vector extension of x86-64. The arithmetic is the same, operation for
 /// operation (no fused multiply-add), so the samples are the same to the
-/// bit. An `unsafe fn` (the caller checks the CPU), not a safe one with a
-/// target feature, which needs Rust 1.86: the crate builds on 1.80.
+/// bit. An `unsafe fn`: the caller checks the CPU.
 macro_rules! sample_hot_for {
     ($(#[$doc:meta])* $name:ident, $feature:literal) => {
         $(#[$doc])*

@@ -130,7 +130,7 @@ fn bus(
     if let Err(e) = check_baud(rb.baud) {
         return Err(src.error(&bp.key("baud"), e.to_string()));
     }
-    if rb.return_delay_us > MAX_RETURN_DELAY_US || rb.return_delay_us % 2 != 0 {
+    if rb.return_delay_us > MAX_RETURN_DELAY_US || !rb.return_delay_us.is_multiple_of(2) {
         return Err(src.error(
             &bp.key("return_delay_us"),
             format!(

@@ -103,7 +103,7 @@ pub fn spatial_summary(
         for (j, &v) in q.iter().enumerate() {
             if let Some((lo, hi)) = model.limits(j) {
                 let gap = (v - lo).min(hi - v);
-                if closest.map_or(true, |(_, g)| gap < g) {
+                if closest.is_none_or(|(_, g)| gap < g) {
                     closest = Some((j, gap));
                 }
             }

@@ -22,7 +22,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     /// sent, even when the ID would be in a later frame);
     /// [`BusError::Transport`].
     pub fn sync_write(&mut self, address: u8, ids: &[u8], data: &[u8]) -> Result<(), BusError> {
-        if ids.is_empty() || data.is_empty() || data.len() % ids.len() != 0 {
+        if ids.is_empty() || data.is_empty() || !data.len().is_multiple_of(ids.len()) {
             return Err(BusError::InvalidRequest(
                 "SYNC WRITE data must be one equal block per servo",
             ));

@@ -51,11 +51,7 @@ impl Counters {
             let n = u32::try_from(timing.index.saturating_sub(last.index)).unwrap_or(u32::MAX);
             let expected = period * n;
             let interval = timing.woke.saturating_sub(last.woke);
-            self.period_error.record(if interval > expected {
-                interval - expected
-            } else {
-                expected - interval
-            });
+            self.period_error.record(interval.abs_diff(expected));
         }
         self.first_woke.get_or_insert(timing.woke);
         self.overruns += timing.skipped;

@@ -110,7 +110,7 @@ fn follow(run: &mut VirtualRun<SimBus>, seconds: f64, mut act: impl FnMut(u64)) 
     for _ in 0..cycles {
         let k = run.cycle();
         let t = k as f64 * PERIOD;
-        if k % 4 == 0 {
+        if k.is_multiple_of(4) {
             let mut q: Vec<f64> = POSE.iter().map(|a| a.to_radians()).collect();
             q[GRIPPER] = gripper_target(t).to_radians();
             // A target refused at the end of a run is no failure here.

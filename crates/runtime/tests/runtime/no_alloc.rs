@@ -81,7 +81,7 @@ fn counted_cycles(
             // A consumer reading in the same thread, every few cycles, so
             // that both the full-channel and the sending paths are
             // exercised.
-            if run.cycle() % 7 == 0 {
+            if run.cycle().is_multiple_of(7) {
                 while let Ok(Telemetry::Cycle(_)) = telemetry.try_recv() {
                     samples += 1;
                 }

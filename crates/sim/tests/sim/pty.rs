@@ -153,11 +153,13 @@ fn python_check(python: &std::ffi::OsStr, script: &str, args: &[&str], ok: &str)
 /// The Python named by the environment variable `var` (set by
 /// `scripts/python_clients.sh`), or `fallback` when it has `module`.
 ///
-/// Without one, the check cannot run: under `CI=true` that fails the test,
-/// since the gate must prove the claim; elsewhere it is skipped, loudly.
-fn client_python(var: &str, fallback: Option<&str>, module: &str) -> Option<std::ffi::OsString> {
+/// These tests are ignored in the default run, since they need software
+/// from outside the workspace; the gate runs them (`--ignored`) with the
+/// clients installed. Once asked for, a missing client fails the test: a
+/// check that did not run must not count as passed.
+fn client_python(var: &str, fallback: Option<&str>, module: &str) -> std::ffi::OsString {
     if let Some(python) = std::env::var_os(var) {
-        return Some(python);
+        return python;
     }
     let found = fallback.filter(|python| {
         Command::new(python)
@@ -165,46 +167,38 @@ fn client_python(var: &str, fallback: Option<&str>, module: &str) -> Option<std:
             .output()
             .is_ok_and(|o| o.status.success())
     });
-    if let Some(python) = found {
-        return Some(python.into());
+    match found {
+        Some(python) => python.into(),
+        None => panic!(
+            "no Python with `{module}`: run `eval \"$(bash scripts/python_clients.sh)\"` \
+             (it sets {var}), then run this test again"
+        ),
     }
-    let why = format!(
-        "no Python with `{module}`: run `eval \"$(scripts/python_clients.sh)\"` to set {var}"
-    );
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("{why} (required under CI=true)");
-    }
-    eprintln!("\n*** SKIPPED: {why} ***\n");
-    None
 }
 
 /// Feetech's Python SDK against the simulator, unchanged.
 #[test]
+#[ignore = "needs Feetech's Python SDK (scservo_sdk): `eval \"$(bash scripts/python_clients.sh)\"` sets SERVOBUS_FEETECH_PYTHON, then `cargo test -p servobus-sim --test sim -- --ignored` (the gate runs it)"]
 fn feetech_python_sdk_works_unchanged() {
-    let Some(python) = client_python("SERVOBUS_FEETECH_PYTHON", Some("python3"), "scservo_sdk")
-    else {
-        return;
-    };
+    let python = client_python("SERVOBUS_FEETECH_PYTHON", Some("python3"), "scservo_sdk");
     python_check(&python, "scservo_check.py", &[], "OK 6 servos");
 }
 
 /// LeRobot's `FeetechMotorsBus` against the simulator, unchanged: handshake,
 /// pings, calibration, sync read and write, torque.
 #[test]
+#[ignore = "needs LeRobot 0.6.1: `eval \"$(bash scripts/python_clients.sh)\"` sets SERVOBUS_LEROBOT_PYTHON, then `cargo test -p servobus-sim --test sim -- --ignored` (the gate runs it)"]
 fn lerobot_motors_bus_works_unchanged() {
-    let Some(python) = client_python("SERVOBUS_LEROBOT_PYTHON", None, "lerobot") else {
-        return;
-    };
+    let python = client_python("SERVOBUS_LEROBOT_PYTHON", None, "lerobot");
     python_check(&python, "lerobot_check.py", &[], "OK 6 motors");
 }
 
 /// LeRobot's `scan_port`, which tries every baud rate it knows, finds the six
 /// servos at 1 Mbps and at no other rate.
 #[test]
+#[ignore = "needs LeRobot 0.6.1: `eval \"$(bash scripts/python_clients.sh)\"` sets SERVOBUS_LEROBOT_PYTHON, then `cargo test -p servobus-sim --test sim -- --ignored` (the gate runs it)"]
 fn lerobot_finds_the_servos_at_their_baud_rate_only() {
-    let Some(python) = client_python("SERVOBUS_LEROBOT_PYTHON", None, "lerobot") else {
-        return;
-    };
+    let python = client_python("SERVOBUS_LEROBOT_PYTHON", None, "lerobot");
     python_check(&python, "lerobot_check.py", &["--scan"], "OK 6 motors");
 }
 

@@ -34,7 +34,11 @@ fn noisy_recording_with_steps_is_played_within_every_limit() {
     for i in 0..=1000 {
         // 10 s at 100 Hz: steps of 1 rad every 2 s, 0.05 rad of noise.
         let t = i as f64 * 0.01;
-        let step = if (t / 2.0) as u32 % 2 == 0 { -0.5 } else { 0.5 };
+        let step = if ((t / 2.0) as u32).is_multiple_of(2) {
+            -0.5
+        } else {
+            0.5
+        };
         let a = step + 0.05 * noise.next();
         let b = (0.8 * (t * 3.0).sin() + 0.03 * noise.next()).clamp(-1.5, 1.5);
         times.push(t);

@@ -24,7 +24,10 @@ pub(crate) struct Counters {
     pub busy_max: Duration,
     /// Deviation of each start interval from the period(s) it spans.
     pub period_error: Histogram,
-    first_woke: Option<Duration>,
+    /// When the first cycle was due: the achieved rate is counted from it, so
+    /// that a first cycle woken late (a loaded machine) does not make the
+    /// rate look higher than the plan.
+    first_due: Option<Duration>,
     last: Option<CycleTiming>,
 }
 
@@ -36,7 +39,7 @@ impl Counters {
             busy_total: Duration::ZERO,
             busy_max: Duration::ZERO,
             period_error: Histogram::new(Duration::from_millis(100)),
-            first_woke: None,
+            first_due: None,
             last: None,
         }
     }
@@ -53,7 +56,7 @@ impl Counters {
             let interval = timing.woke.saturating_sub(last.woke);
             self.period_error.record(interval.abs_diff(expected));
         }
-        self.first_woke.get_or_insert(timing.woke);
+        self.first_due.get_or_insert(timing.deadline);
         self.overruns += timing.skipped;
         self.cycles += 1;
         self.last = Some(*timing);
@@ -67,6 +70,6 @@ impl Counters {
 
     /// `(first woke, last woke, last deadline)` of the cycles run.
     pub fn span(&self) -> Option<(Duration, Duration, Duration)> {
-        Some((self.first_woke?, self.last?.woke, self.last?.deadline))
+        Some((self.first_due?, self.last?.woke, self.last?.deadline))
     }
 }

@@ -1,0 +1,202 @@
+//! How faithfully the live follower follows what users send, measured in
+//! virtual time on the simulated SO-101: a table of overshoot beyond the
+//! 0.5 s target envelope, lag, RMS error at that lag and RMS jerk of the
+//! commanded pan, per input class (triangle wiggles with abrupt turns,
+//! sine wiggles), target rate and limits (the servo model's, as `follow`
+//! and the LeRobot plugin use, or the robot file's gentler ones).
+//!
+//! A measurement for working on the follower, not a test: run it before
+//! and after a change and compare.
+//!
+//! ```text
+//! cargo run --release -p servobus-runtime --features sim --example live_quality
+//! ```
+
+use std::path::Path;
+
+use servobus_runtime::config::{load_robot, Robot, RobotOptions};
+use servobus_runtime::sim::SimRobot;
+use servobus_runtime::{Lead, RunOptions, Target, Telemetry, VirtualRun};
+
+/// The loop's period, s (the SO-101's 200 Hz).
+const PERIOD: f64 = 0.005;
+/// Cycles run per case (4 s).
+const CYCLES: u64 = 800;
+/// Figures are taken from this time on, s (after the start).
+const FROM: f64 = 1.0;
+/// The envelope window, s.
+const WINDOW: f64 = 0.5;
+
+/// One input class: its name and the pan's target at time t, deg.
+struct Case {
+    name: &'static str,
+    source: fn(f64) -> f64,
+}
+
+fn triangle(t: f64, amplitude: f64, hz: f64) -> f64 {
+    if t < 0.2 {
+        return 0.0;
+    }
+    let p = ((t - 0.2) * hz).fract();
+    let x = if p < 0.25 {
+        4.0 * p
+    } else if p < 0.75 {
+        2.0 - 4.0 * p
+    } else {
+        4.0 * p - 4.0
+    };
+    amplitude * x
+}
+
+fn sine(t: f64, amplitude: f64, hz: f64) -> f64 {
+    if t < 0.2 {
+        0.0
+    } else {
+        amplitude * (2.0 * std::f64::consts::PI * hz * (t - 0.2)).sin()
+    }
+}
+
+const CASES: [Case; 4] = [
+    Case {
+        name: "triangle 12 deg at 2 Hz",
+        source: |t| triangle(t, 12.0, 2.0),
+    },
+    Case {
+        name: "triangle 20 deg at 1 Hz",
+        source: |t| triangle(t, 20.0, 1.0),
+    },
+    Case {
+        name: "sine 20 deg at 1 Hz",
+        source: |t| sine(t, 20.0, 1.0),
+    },
+    Case {
+        name: "sine 20 deg at 0.5 Hz",
+        source: |t| sine(t, 20.0, 0.5),
+    },
+];
+
+/// `robot` with every joint's speed, acceleration and jerk limits at what
+/// its servo model can do (a 50 ms jerk ramp), as `follow` does.
+fn with_model_limits(mut robot: Robot) -> Robot {
+    let units = robot.units;
+    for j in robot.buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
+        if let Some((v, a)) = j.model.fastest_profile() {
+            j.max_velocity = units.from_rad(v.to_radians());
+            j.max_acceleration = units.from_rad(a.to_radians());
+            j.max_jerk = Some(j.max_acceleration / 0.05);
+        }
+    }
+    robot
+}
+
+/// The commanded pan (the robot file's units: degrees), one per cycle, following `source` sent at
+/// `hz`, stamped with each slot's time.
+fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, String> {
+    let sim = SimRobot::builder(robot)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        ..RunOptions::default()
+    };
+    let mut run =
+        VirtualRun::live(robot, sim.driver_buses(), options).map_err(|e| e.to_string())?;
+    let tx = run.targets();
+    let telemetry = run.telemetry();
+    let mut pan = Vec::new();
+    let mut slot = 1u32;
+    for _ in 0..CYCLES {
+        let now = run.cycle() as f64 * PERIOD;
+        while f64::from(slot) / hz <= now + 1e-9 {
+            let s = f64::from(slot) / hz;
+            let q = source(s).to_radians();
+            tx.send(Target::named(s, vec![("shoulder_pan".into(), q)]))
+                .map_err(|e| e.to_string())?;
+            slot += 1;
+        }
+        let going = run.step();
+        while let Ok(m) = telemetry.try_recv() {
+            if let Telemetry::Cycle(c) = m {
+                if let Some(j) = c.joints().iter().find(|j| j.joint == 0) {
+                    pan.push(j.commanded);
+                }
+            }
+        }
+        if !going {
+            break;
+        }
+    }
+    Ok(pan)
+}
+
+/// Overshoot beyond the envelope of the targets sent in the last
+/// [`WINDOW`], best lag, RMS error at it, RMS jerk (k deg/s^3).
+fn figures(pan: &[f64], hz: f64, source: fn(f64) -> f64) -> (f64, f64, f64, f64) {
+    let sent = |t: f64| source((t * hz).floor() / hz);
+    let mut over = 0.0f64;
+    for (k, &q) in pan.iter().enumerate() {
+        let t = k as f64 * PERIOD;
+        if t < FROM {
+            continue;
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut s = t - WINDOW;
+        while s <= t {
+            lo = lo.min(sent(s));
+            hi = hi.max(sent(s));
+            s += PERIOD;
+        }
+        over = over.max(q - hi).max(lo - q);
+    }
+    let rms = |lag: f64| {
+        let (mut sum, mut n) = (0.0, 0.0);
+        for (k, &q) in pan.iter().enumerate() {
+            let t = k as f64 * PERIOD;
+            if t >= FROM {
+                let e = q - source(t - lag);
+                sum += e * e;
+                n += 1.0;
+            }
+        }
+        (sum / f64::max(n, 1.0)).sqrt()
+    };
+    let lag = (0..300)
+        .map(|ms| f64::from(ms) * 1e-3)
+        .min_by(|a, b| rms(*a).total_cmp(&rms(*b)))
+        .unwrap_or(0.0);
+    let from = (FROM / PERIOD) as usize;
+    let (mut sum, mut n) = (0.0, 0.0);
+    for w in pan.get(from..).unwrap_or(&[]).windows(4) {
+        let j = (w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0]) / PERIOD.powi(3);
+        sum += j * j;
+        n += 1.0;
+    }
+    (over, lag, rms(lag), (sum / f64::max(n, 1.0)).sqrt() / 1e3)
+}
+
+fn main() -> Result<(), String> {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots/so101.yaml");
+    let gentle = load_robot(&file, &RobotOptions::default()).map_err(|e| e.to_string())?;
+    let model = with_model_limits(gentle.clone());
+    println!(
+        "{:<26}{:>6}{:>8}{:>8}{:>8}{:>8}{:>10}",
+        "input (pan)", "Hz", "limits", "over", "lag ms", "rms", "jerk k/s3"
+    );
+    for case in &CASES {
+        for (hz, limits, robot) in [
+            (50.0, "model", &model),
+            (30.0, "model", &model),
+            (30.0, "file", &gentle),
+        ] {
+            let pan = follow(robot, hz, case.source)?;
+            let (over, lag, rms, jerk) = figures(&pan, hz, case.source);
+            println!(
+                "{:<26}{hz:>6.0}{limits:>8}{over:>8.1}{:>8.0}{rms:>8.2}{jerk:>10.0}",
+                case.name,
+                lag * 1e3
+            );
+        }
+    }
+    Ok(())
+}

@@ -135,7 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let report = summarise(&robot, args.seconds.as_secs_f64(), buses);
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
+        outln!("{}", super::json::pretty(&report)?)?;
     } else {
         print_text(&report)?;
     }

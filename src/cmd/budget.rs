@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         out.buses.push(budget);
     }
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&out)?)?;
+        outln!("{}", super::json::pretty(&out)?)?;
     } else {
         out!("{text}")?;
     }

@@ -188,7 +188,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
             "collisions": coll,
             "elapsed_s": elapsed.as_secs_f64(),
         });
-        outln!("{out}")?;
+        outln!("{}", super::json::line(&out)?)?;
     } else {
         if !found.is_empty() {
             outln!(

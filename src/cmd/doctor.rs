@@ -180,7 +180,7 @@ fn print_text(
     Ok(())
 }
 
-fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> Result<(), StdoutError> {
+fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> anyhow::Result<()> {
     let json_findings = |fs: &[Finding]| -> Vec<serde_json::Value> {
         fs.iter()
             .map(|f| {
@@ -224,6 +224,6 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> Result<(), St
         "buses": buses,
         "exit": status,
     });
-    outln!("{out}")?;
+    outln!("{}", super::json::line(&out)?)?;
     Ok(())
 }

@@ -124,7 +124,7 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
         let out = FkOut {
             frames: rows.into_iter().collect(),
         };
-        outln!("{}", serde_json::to_string(&out)?)?;
+        outln!("{}", super::json::line(&out)?)?;
     } else {
         let u = robot.units;
         outln!(
@@ -236,7 +236,7 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
         }
     };
     if args.json {
-        outln!("{}", serde_json::to_string(&out)?)?;
+        outln!("{}", super::json::line(&out)?)?;
     } else if let Some(joints) = &out.joints {
         for (name, angle) in joints {
             outln!("{name:<22} {:>9.3} {}", shown(*angle, 3), robot.units)?;

@@ -592,7 +592,7 @@ fn finish(
         if let Some(obj) = value.as_object_mut() {
             obj.insert("follow".into(), follow);
         }
-        outln!("{}", serde_json::to_string_pretty(&value)?)?;
+        outln!("{}", crate::cmd::json::pretty(&value)?)?;
     } else {
         let mut out = std::io::stdout().lock();
         super::play::write_report(&mut out, report, false)?;

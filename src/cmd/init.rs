@@ -33,7 +33,24 @@ pub struct Args {
 /// Runs `servobus init`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot(&args.robot, &RobotOptions::default())?;
-    let robot_text = robot_text(&args.robot)?;
+    // The file as the user names it from here (`robot.yaml`, not
+    // `./robot.yaml`): the commands in its comments name it so.
+    let here = args.dir == Path::new(".");
+    let robot_file = if here {
+        PathBuf::from("robot.yaml")
+    } else {
+        args.dir.join("robot.yaml")
+    };
+    let dir_prefix = if here {
+        String::new()
+    } else {
+        format!("{}/", args.dir.display().to_string().trim_end_matches('/'))
+    };
+    let robot_text = commands_for(
+        &robot_text(&args.robot)?,
+        &robot_file.display().to_string(),
+        &dir_prefix,
+    );
     let files = [
         (args.dir.join("robot.yaml"), robot_text),
         (args.dir.join("motion.yaml"), starter_motion(&robot)),
@@ -84,6 +101,75 @@ fn robot_text(path: &Path) -> anyhow::Result<String> {
         return Ok(b.text.to_owned());
     }
     std::fs::read_to_string(path).map_err(|e| input(format!("cannot read {}: {e}", path.display())))
+}
+
+/// `text` with the `servobus` commands in its comments made for the copy
+/// written at `robot_file`: the `--robot` of each names `robot_file`, and
+/// its `-o` file goes beside it (`dir_prefix`, empty for the current
+/// directory), where the copy's `calibration: ... # relative to this file`
+/// looks. A command may wrap onto the next comment line; the YAML itself
+/// is not touched.
+fn commands_for(text: &str, robot_file: &str, dir_prefix: &str) -> String {
+    /// What the previous token of the comment asked for.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Next {
+        Word,
+        Robot,
+        Output,
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut next = Next::Word;
+    // Inside a `servobus ...` command whose robot has been renamed.
+    let mut command = false;
+    for line in text.split_inclusive('\n') {
+        let Some(start) = line.find('#').filter(|&i| line[..i].trim().is_empty()) else {
+            // Not a comment line: a command does not go on past it.
+            (next, command) = (Next::Word, false);
+            out.push_str(line);
+            continue;
+        };
+        out.push_str(&line[..start]);
+        let mut rest = &line[start..];
+        while !rest.is_empty() {
+            let gap = rest
+                .find(|c: char| !c.is_whitespace())
+                .unwrap_or(rest.len());
+            out.push_str(&rest[..gap]);
+            rest = &rest[gap..];
+            let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+            let (token, after) = rest.split_at(end);
+            rest = after;
+            if token.is_empty() {
+                continue;
+            }
+            // A token may close a parenthesis or a sentence: `file.yaml)`.
+            let word = token.trim_end_matches([')', ',', ';']);
+            let tail = &token[word.len()..];
+            match next {
+                Next::Robot if word != "#" => {
+                    out.push_str(robot_file);
+                    out.push_str(tail);
+                    (next, command) = (Next::Word, true);
+                    continue;
+                }
+                Next::Output if word != "#" => {
+                    out.push_str(dir_prefix);
+                    out.push_str(token);
+                    next = Next::Word;
+                    continue;
+                }
+                _ => {}
+            }
+            match word {
+                "servobus" => command = false,
+                "--robot" => next = Next::Robot,
+                "-o" | "--output" if command => next = Next::Output,
+                _ => {}
+            }
+            out.push_str(token);
+        }
+    }
+    out
 }
 
 /// Joints the starter motion moves one at a time (the rest stay still), so

@@ -23,6 +23,7 @@ pub mod exit;
 mod fk;
 mod follow;
 mod init;
+mod json;
 mod link;
 mod list;
 mod monitor;
@@ -31,6 +32,8 @@ mod plan;
 mod play;
 #[cfg(feature = "zenoh")]
 mod serve;
+#[cfg(not(feature = "zenoh"))]
+mod serve_hint;
 mod sim;
 mod stream;
 mod teach;
@@ -108,6 +111,10 @@ enum Command {
     /// Run the robot live as a Zenoh node: state out, targets and commands in (--features zenoh).
     #[cfg(feature = "zenoh")]
     Serve(serve::Args),
+    /// Not in this build: says how to build `serve` (--features zenoh).
+    #[cfg(not(feature = "zenoh"))]
+    #[command(hide = true)]
+    Serve(serve_hint::Args),
 }
 
 /// The command line's definition, with the exit codes and the note on
@@ -171,6 +178,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Ik(args) => fk::ik(args),
         #[cfg(feature = "zenoh")]
         Command::Serve(args) => serve::run(args),
+        #[cfg(not(feature = "zenoh"))]
+        Command::Serve(args) => serve_hint::run(args),
     }
 }
 

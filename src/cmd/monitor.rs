@@ -270,7 +270,7 @@ fn watch<T: Transport, C: Clock>(
         let frame = poller.frame(bus.clock(), note.clone());
         problem |= frame.has_problem();
         match &mut screen {
-            None => outln!("{}", serde_json::to_string(&frame)?)?,
+            None => outln!("{}", super::json::line(&frame)?)?,
             Some(s) => {
                 s.0.draw(|f| view::draw(f, &frame, title))?;
             }

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
-use servobus_io::AtomicFile;
+use servobus_io::OutputError;
 use servobus_runtime::config::{load_robot, RobotOptions};
 use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
@@ -69,14 +69,18 @@ pub struct Args {
     #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg)]
     pub hand: Option<std::path::PathBuf>,
     /// Write the physical joint angles (deg) to this CSV, `time_s,<joint>,...`,
-    /// 100 rows a second while the simulator runs; the file appears (or
-    /// replaces an earlier one) when the simulator stops.
+    /// 100 rows a second, as a live stream: whole rows, flushed at least
+    /// every 100 ms while the simulator runs (`tail -f` follows it). The
+    /// file is created (or an earlier one truncated) only once the
+    /// simulator serves: a simulator refused at start leaves it untouched.
     #[arg(long, value_name = "T.csv")]
     pub truth: Option<std::path::PathBuf>,
 }
 
-/// How often the truth file is written to (rows are sampled every 10 ms).
-const TRUTH_FLUSH: std::time::Duration = std::time::Duration::from_millis(100);
+/// How long the truth writer sleeps between passes (rows are sampled every
+/// 10 ms): half the 100 ms within which `--help` promises a row is in the
+/// file, so that a pass's own time and a late wake-up stay inside it.
+const TRUTH_PASS: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// Runs `servobus sim`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -98,12 +102,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.hand {
         builder = builder.hand(Hand::load(path, &robot)?);
     }
-    // The truth file's temporary is created before anything is served, so
-    // that a bad path fails at once; it becomes the truth file when the
-    // simulator stops (an earlier file there stays whole until then).
+    // The truth is a stream that others follow while the simulator runs,
+    // so it is written in place, not atomically. Its path is checked now
+    // (a directory, a missing directory: refused before anything is
+    // served), and the file opened only once the simulator serves (below),
+    // so that a simulator refused at start leaves an earlier file as it was.
+    if let Some(path) = &args.truth {
+        servobus_io::check_output(path)?;
+    }
     let truth = match &args.truth {
         Some(path) => {
-            let file = AtomicFile::create(path)?;
             // One column per served joint.
             let truth = match args.bus.as_deref() {
                 Some(name) => Truth::new(
@@ -118,7 +126,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 None => new_truth(&robot),
             };
             builder = builder.truth(&truth);
-            Some((truth, file, path.clone()))
+            Some((truth, path.clone()))
         }
         None => None,
     };
@@ -135,6 +143,22 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         // Bodies move (and the truth is sampled) while no client talks.
         server.set_tick(Some(servobus_runtime::sim::TRUTH_PERIOD));
     }
+    // Started: the truth file is created (or truncated) now, its header
+    // written before the simulator says it serves, so that a reader who
+    // opens it then finds at least the header. An error here drops the
+    // server, which removes the link.
+    let truth = match truth {
+        Some((truth, path)) => {
+            let write_err = |source| OutputError::Write {
+                path: path.clone(),
+                source,
+            };
+            let mut file = std::fs::File::create(&path).map_err(write_err)?;
+            writeln!(file, "{}", truth.csv_header()).map_err(write_err)?;
+            Some((truth, file, path))
+        }
+        None => None,
+    };
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -151,11 +175,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let stop = Arc::clone(&stop);
         let done = Arc::new(AtomicBool::new(false));
         let finished = Arc::clone(&done);
+        let name = path.clone();
         let handle = std::thread::spawn(move || -> anyhow::Result<()> {
-            let mut out = std::io::BufWriter::new(out);
-            write_truth(&truth, &mut out, &stop, &finished)?;
-            out.into_inner().map_err(|e| e.into_error())?.commit()?;
-            Ok(())
+            let mut out = out;
+            write_truth(&truth, &mut out, &stop, &finished)
+                .map_err(|source| OutputError::Write { path: name, source }.into())
         });
         (handle, done, path)
     });
@@ -174,37 +198,49 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Streams the truth's complete rows to `out` until `done`, flushing every
-/// [`TRUTH_FLUSH`] (to the truth file's temporary: memory does not grow
-/// with a long session).
+/// Streams the truth's complete rows to `out` until `done`, every
+/// [`TRUTH_PASS`]. Each pass's rows are formatted first and handed to
+/// `out` in one write, unbuffered: a reader following the file sees whole
+/// rows only, and memory does not grow with a long session.
 fn write_truth(
     truth: &Truth,
     out: &mut impl Write,
     stop: &AtomicBool,
     done: &AtomicBool,
 ) -> std::io::Result<()> {
-    writeln!(out, "{}", truth.csv_header())?;
+    let mut text = String::new();
     loop {
         // `done` is set after the server's last step: one more pass then
         // writes every row up to the end.
         let last = done.load(Ordering::SeqCst);
+        text.clear();
         for row in truth.take_rows() {
-            write!(out, "{:.3}", row.time_s)?;
-            for a in &row.angles_deg {
-                write!(out, ",{a:.3}")?;
-            }
-            writeln!(out)?;
+            push_row(&mut text, row.time_s, &row.angles_deg);
         }
-        out.flush()?;
+        if !text.is_empty() {
+            out.write_all(text.as_bytes())?;
+            out.flush()?;
+        }
         if last {
             return Ok(());
         }
         if !stop.load(Ordering::SeqCst) {
-            std::thread::sleep(TRUTH_FLUSH);
+            std::thread::sleep(TRUTH_PASS);
         } else {
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
     }
+}
+
+/// Appends one truth row, `time_s,<angle>,...` and its newline, to `text`.
+fn push_row(text: &mut String, time_s: f64, angles_deg: &[f64]) {
+    use std::fmt::Write as _;
+    // Writing to a String cannot fail.
+    let _ = write!(text, "{time_s:.3}");
+    for a in angles_deg {
+        let _ = write!(text, ",{a:.3}");
+    }
+    text.push('\n');
 }
 
 /// The servos to serve and the baud rate to serve them at

@@ -218,7 +218,8 @@ fn watch(runner: &Runner, names: &[String], mut telemetry: bool) -> anyhow::Resu
             "measured": map(measured),
             "faults": faults,
         });
-        writeln!(out, "{line}")?;
+        let text = crate::cmd::json::line(&line).map_err(std::io::Error::other)?;
+        writeln!(out, "{text}")?;
         out.flush()
     };
     for m in rx.iter() {
@@ -271,7 +272,10 @@ fn watch(runner: &Runner, names: &[String], mut telemetry: bool) -> anyhow::Resu
 /// code: 0 once stopped, 1 after a fault.
 fn finish(report: &Report, json: bool) -> anyhow::Result<ExitCode> {
     if json {
-        outln!("{}", serde_json::json!({ "report": report }))?;
+        outln!(
+            "{}",
+            crate::cmd::json::line(&serde_json::json!({ "report": report }))?
+        )?;
     } else {
         let mut err = std::io::stderr().lock();
         super::play::write_report(&mut err, report, false)?;

@@ -116,11 +116,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     };
     let (taught, taken) = taught;
-    let robot_file = args
-        .robot
-        .path
-        .canonicalize()
-        .unwrap_or_else(|_| args.robot.path.clone());
+    // A built-in robot by its name, a file relative to the motion: the
+    // motion plays again where it is moved with its robot file.
+    let robot_file = servobus::builtin::motion_robot_field(&args.robot.path, &args.output);
     let yaml = motion_yaml(&robot, &robot_file, &taught);
     // Whole or not at all: a failed write leaves no partial motion file,
     // and an earlier file at the path as it was.

@@ -159,6 +159,19 @@ pub fn advice_text(advice: &Advice) -> String {
              plug the others back in",
             fix_line(fix)
         ),
+        Advice::UnplugOthersOneOf(silent) => {
+            let each: Vec<String> = silent
+                .iter()
+                .map(|s| format!("joint `{}`'s: `{}`", s.joint, fix_line(&s.fix)))
+                .collect();
+            format!(
+                "connect the silent servos one at a time, each alone on the bus (unplug the \
+                 others), and run its command ({}); the one on the shared ID takes its own ID \
+                 back, the others find no servo there and nothing changes; then plug the others \
+                 back in",
+                each.join("; ")
+            )
+        }
         Advice::OneAtATime(fix) => format!(
             "connect them one at a time and give all but one a free ID: {}",
             fix_line(fix)

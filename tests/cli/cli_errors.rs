@@ -329,3 +329,91 @@ fn every_subcommand_help_documents_the_exit_codes() {
         assert!(sub.contains(codes), "{c}: {sub}");
     }
 }
+
+/// A default build has no `serve`: asking for it (with arguments, or for
+/// its help) says which feature it needs and how to build it, exit 2.
+#[cfg(not(feature = "zenoh"))]
+#[test]
+fn serve_in_a_default_build_says_how_to_build_it() {
+    for args in [
+        &["serve"][..],
+        &["serve", "--robot", "so101", "--listen", "tcp/127.0.0.1:0"],
+        &["serve", "--help"],
+    ] {
+        let out = servobus(args);
+        let (_, err) = common::exited(&out, 2);
+        says(
+            &err,
+            &[
+                "`servobus serve`",
+                "the `zenoh` feature",
+                "cargo install --path . --features zenoh",
+            ],
+        );
+        assert!(!err.contains("unrecognized"), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    }
+    // The commands this build has are listed; `serve` is not among them.
+    let help = stdout(&servobus(&["--help"]));
+    assert!(
+        !help.lines().any(|l| l.trim_start().starts_with("serve ")),
+        "{help}"
+    );
+}
+
+/// The word after `flag` in the comments of `text` (a command may wrap
+/// onto the next comment line), without a closing `)`.
+fn comment_word_after<'a>(text: &'a str, flag: &str) -> &'a str {
+    let words: Vec<&str> = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with('#'))
+        .flat_map(str::split_whitespace)
+        .filter(|w| *w != "#")
+        .collect();
+    let at = words
+        .iter()
+        .position(|w| *w == flag)
+        .unwrap_or_else(|| panic!("no {flag} in the comments of {text}"));
+    words.get(at + 1).map_or("", |w| w.trim_end_matches(')'))
+}
+
+#[test]
+fn init_names_the_file_it_wrote_in_its_commands() {
+    for (robot, dir) in [("so101", "arm"), ("hexapod", "."), ("hexapod-2bus", "a/hx")] {
+        let root = scratch(&format!("init-commands-{robot}"));
+        let out = servobus_in(&root, &["init", "--robot", robot, dir]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let written = root.join(dir).join("robot.yaml");
+        let text = std::fs::read_to_string(&written).expect("robot.yaml");
+        assert!(text.contains("servobus calibrate --robot"), "{text}");
+        assert!(
+            !text.contains("configs/robots") && !text.contains("THIS_FILE"),
+            "{text}"
+        );
+        // The calibrate command, run where init ran, reads the file written
+        // and writes the calibration beside it, where `calibration:` looks.
+        let named = comment_word_after(&text, "--robot");
+        assert_eq!(
+            root.join(named).canonicalize().expect("the file named"),
+            written.canonicalize().expect("the file written"),
+            "{robot}: {named}"
+        );
+        let calibration = comment_word_after(&text, "-o");
+        assert_eq!(
+            root.join(calibration).parent().map(|p| p.to_path_buf()),
+            written.parent().map(|p| p.to_path_buf()),
+            "{robot}: -o {calibration}"
+        );
+        // Only comments changed: the YAML is the built-in robot's.
+        let shipped =
+            std::fs::read_to_string(common::repo(&format!("configs/robots/{robot}.yaml")))
+                .expect("the shipped file");
+        let yaml = |t: &str| -> Vec<String> {
+            t.lines()
+                .filter(|l| !l.trim_start().starts_with('#'))
+                .map(str::to_owned)
+                .collect()
+        };
+        assert_eq!(yaml(&text), yaml(&shipped), "{robot}");
+    }
+}

@@ -115,7 +115,7 @@ fn installed_binary_works_from_an_empty_directory() {
     assert_eq!(entries, 2, "only init's two files were written");
 
     // The README's simulator with a body, by names only, from an empty
-    // directory: it serves, and the truth file appears when it stops.
+    // directory: it serves, and writes its truth file.
     let sim_dir = scratch("install-sim");
     let link = sim_dir.join("arm");
     let truth = sim_dir.join("truth.csv");

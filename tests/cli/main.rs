@@ -54,6 +54,7 @@ mod follow_cli;
 mod human_output;
 mod install;
 mod interpolation_cli;
+mod json_output;
 mod kinematics_cli;
 mod missing_pty;
 mod monitor;

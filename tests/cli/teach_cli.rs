@@ -162,3 +162,52 @@ fn a_continuous_take_stopped_with_ctrl_c_mid_move_is_reduced_and_plays() {
     // `play` accepts it as it is.
     servobus_ok(&["plan", arg(&out)]);
 }
+
+/// The `robot:` line of the motion file `text`.
+fn robot_line(text: &str) -> &str {
+    text.lines()
+        .find(|l| l.starts_with("robot:"))
+        .unwrap_or_else(|| panic!("no robot: in {text}"))
+}
+
+#[test]
+fn a_taught_file_names_its_robot_as_given_and_plays_where_it_is_moved() {
+    let dir = scratch("teach-cli-moved");
+    let arm = dir.join("arm");
+    std::fs::create_dir_all(arm.join("motions")).expect("the folder");
+    let robot = arm.join("robot.yaml");
+    std::fs::copy(repo("configs/robots/so101.yaml"), &robot).expect("a robot file");
+    let sim = Sim::start_robot(&dir, std::path::Path::new("so101"), 6, &[]);
+    // The arm is still: each take is its starting pose.
+    let teach = |robot: &str, out: &std::path::Path| {
+        let run = Command::new(BIN)
+            .args(["teach", "--robot", robot, "--port", sim.port()])
+            .args(["--yes", "--duration", "1.5", "-o"])
+            .arg(out)
+            .stdin(Stdio::null())
+            .output()
+            .expect("runs teach");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "teach --robot {robot}: {err}");
+        std::fs::read_to_string(out).expect("the motion file")
+    };
+    // A built-in robot stays a name; a file is named relative to the motion.
+    let by_name = arm.join("by-name.yaml");
+    let text = teach("so101", &by_name);
+    assert_eq!(robot_line(&text), "robot: so101", "{text}");
+    let by_file = arm.join("motions/by-file.yaml");
+    let text = teach(arg(&robot), &by_file);
+    assert_eq!(robot_line(&text), "robot: ../robot.yaml", "{text}");
+    sim.stop();
+
+    // The folder moved elsewhere: both play from there, from another
+    // working directory, on the simulator.
+    let moved = dir.join("moved");
+    std::fs::rename(&arm, &moved).expect("move the folder");
+    for file in ["by-name.yaml", "motions/by-file.yaml"] {
+        let path = moved.join(file);
+        let out = common::servobus_in(&dir, &["play", arg(&path), "--fast", "--json"]);
+        let report = common::json(&common::succeeded(out, &["play", file]));
+        assert_eq!(report["finish"], "completed", "{file}: {report}");
+    }
+}

@@ -129,6 +129,50 @@ fn two_servos_on_one_id_and_a_silent_servo_is_a_swapped_id() {
 }
 
 #[test]
+fn a_shared_id_with_two_silent_servos_names_both_and_blames_neither() {
+    // Servo 6 answers as ID 5, and servo 3 is gone: either silent servo
+    // may be the second one on ID 5, and the bus cannot say which.
+    let mut arm = Arm::tuned("duplicate=6:5,vanish=3".parse().expect("faults"));
+    let findings = arm.examine();
+    let f = must(&findings, 5, Some("id"));
+    assert_eq!(f.severity, Severity::Error);
+    common::says(
+        &f.problem,
+        &[
+            "two servos answer as ID 5 and servos 3 (joint `elbow_flex`) and 6 (joint `gripper`) \
+             are silent: one of them probably has ID 5, and one does not answer at any baud rate",
+        ],
+    );
+    // Each silent servo, alone on the bus, gets its own command.
+    let fix = f.fix_text();
+    common::says(
+        &fix,
+        &[
+            "one at a time, each alone on the bus",
+            "joint `elbow_flex`'s: `servobus set-id --port /dev/ttyACM0 --id 5 3`",
+            "joint `gripper`'s: `servobus set-id --port /dev/ttyACM0 --id 5 6`",
+            "plug the others back in",
+        ],
+    );
+    assert_eq!(f.command_line(), None, "it takes hands");
+    let doctor::Advice::UnplugOthersOneOf(silent) = &f.advice else {
+        panic!("{:?}", f.advice);
+    };
+    let ids: Vec<u8> = silent.iter().map(|s| s.id).collect();
+    assert_eq!(ids, [3, 6]);
+    // Neither is told it is the one, nor that it is simply unplugged.
+    for id in [3, 6] {
+        assert!(
+            about(&findings, id, None).is_none(),
+            "servo {id}:\n{}",
+            show(&findings)
+        );
+    }
+    assert!(!f.problem.contains("servo 3 probably"), "{}", f.problem);
+    assert_eq!(doctor::exit_status(&findings), 2);
+}
+
+#[test]
 fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint() {
     let mut arm = Arm::tuned(Faults::none());
     // 1400 ticks from the middle: 123 degrees by the robot file's design,

@@ -165,6 +165,71 @@ pub fn motion_path_or_name(arg: &Path) -> PathBuf {
     path_or_name(Kind::Motion, arg)
 }
 
+/// The robot file a motion file at `motion` names with `robot: <robot>`,
+/// by the rule of a `--robot` argument ([`robot_path_or_name`]), taken
+/// beside the motion: the file `robot` relative to the motion's directory
+/// when it exists (a built-in motion's `../robots/so101.yaml` included),
+/// else the built-in robot of that name (`robot: so101`), else that
+/// relative path (whose absence the loader then reports).
+pub fn motion_robot_path(motion: &Path, robot: &str) -> PathBuf {
+    let beside = crate::files::tidy(motion.parent().unwrap_or(Path::new("")).join(robot));
+    if beside.exists() || crate::files::builtin_text(&beside).is_some() {
+        return beside;
+    }
+    match find(Kind::Robot, robot) {
+        Some(b) => b.path(),
+        None => beside,
+    }
+}
+
+/// How a motion file written at `motion` names the robot file `robot` in
+/// its `robot:`, so that [`motion_robot_path`] finds it again: a built-in
+/// robot by its name (`so101`), any other file by its path relative to the
+/// motion's directory (a folder holding both can be moved), or, when no
+/// such path can be made (the motion's directory cannot be resolved, or is
+/// on another drive), by its absolute path.
+pub fn motion_robot_field(robot: &Path, motion: &Path) -> PathBuf {
+    if let Some(name) = builtin_name(robot) {
+        return PathBuf::from(name);
+    }
+    let Ok(target) = robot.canonicalize() else {
+        return robot.to_owned();
+    };
+    let dir = motion.parent().filter(|d| !d.as_os_str().is_empty());
+    let from = dir.unwrap_or(Path::new(".")).canonicalize();
+    match from.ok().and_then(|from| relative_path(&from, &target)) {
+        Some(rel) => rel,
+        None => target,
+    }
+}
+
+/// The path of `target` seen from the directory `from`, both absolute and
+/// free of `.`, `..` and symbolic links (canonical); `None` when they share
+/// no root (two Windows drives).
+fn relative_path(from: &Path, target: &Path) -> Option<PathBuf> {
+    let mut from_parts = from.components().peekable();
+    let mut target_parts = target.components().peekable();
+    match (from_parts.peek(), target_parts.peek()) {
+        (Some(a), Some(b)) if a == b => {}
+        _ => return None,
+    }
+    while let (Some(a), Some(b)) = (from_parts.peek(), target_parts.peek()) {
+        if a != b {
+            break;
+        }
+        from_parts.next();
+        target_parts.next();
+    }
+    let mut rel = PathBuf::new();
+    for _ in from_parts {
+        rel.push("..");
+    }
+    for part in target_parts {
+        rel.push(part);
+    }
+    Some(rel)
+}
+
 /// The file to load for an argument that takes a file or a built-in of
 /// `kind`: `arg` itself when it is an existing file (or not a built-in
 /// name), else the built-in of that name.
@@ -264,6 +329,34 @@ mod tests {
         assert_eq!(robot_path_or_name(&file), file);
         assert!(robot_path_or_name(Path::new("so101")).starts_with("<built-in>"));
         assert_eq!(robot_path_or_name(Path::new("nope")), Path::new("nope"));
+    }
+
+    #[test]
+    fn relative_paths_climb_to_the_common_directory() {
+        let rel = |from: &str, to: &str| relative_path(Path::new(from), Path::new(to));
+        assert_eq!(rel("/a/b", "/a/b/r.yaml"), Some("r.yaml".into()));
+        assert_eq!(rel("/a/b/m", "/a/b/r.yaml"), Some("../r.yaml".into()));
+        assert_eq!(rel("/a/x/y", "/a/b/r.yaml"), Some("../../b/r.yaml".into()));
+        assert_eq!(rel("/", "/a/r.yaml"), Some("a/r.yaml".into()));
+        assert_eq!(rel("a", "/a/r.yaml"), None);
+    }
+
+    #[test]
+    fn a_motion_names_a_builtin_robot_by_name_and_a_file_relative_to_it() {
+        let so101 = robot_path_or_name(Path::new("so101"));
+        let motion = Path::new("anywhere/taught.yaml");
+        assert_eq!(motion_robot_field(&so101, motion), Path::new("so101"));
+        // A file: relative to the motion's directory, which finds it again.
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robot = dir.join("../../configs/robots/so101.yaml");
+        let motion = dir.join("src/taught.yaml");
+        let field = motion_robot_field(&robot, &motion);
+        assert_eq!(field, Path::new("../../../configs/robots/so101.yaml"));
+        let found = motion_robot_path(&motion, field.to_str().expect("UTF-8"));
+        assert_eq!(
+            found.canonicalize().expect("found"),
+            robot.canonicalize().expect("the robot")
+        );
     }
 
     #[test]

@@ -221,13 +221,16 @@ pub fn load_motion_calibrated(
     let src = Source::read(path)?;
     let raw: RawMotion = src.parse()?;
     let root = FieldPath::root();
-    let robot_path = match (robot_override, &raw.robot) {
-        (Some(p), _) => p.to_owned(),
-        (None, Some(rel)) => super::files::tidy(path.parent().unwrap_or(Path::new("")).join(rel)),
-        (None, None) => {
-            return Err(src.error(&root, "no robot: add `robot: FILE` (relative to this file)"))
-        }
-    };
+    let robot_path =
+        match (robot_override, &raw.robot) {
+            (Some(p), _) => p.to_owned(),
+            (None, Some(robot)) => super::builtin::motion_robot_path(path, robot),
+            (None, None) => return Err(src.error(
+                &root,
+                "no robot: add `robot: FILE` (relative to this file) or a built-in robot's name \
+                 (`robot: so101`)",
+            )),
+        };
     let (robot, robot_src) =
         robot::load_calibrated(&robot_path, calibration).map_err(|e| match e {
             // The robot the motion names cannot be read: point at the
@@ -239,8 +242,9 @@ pub fn load_motion_calibrated(
                 src.error(
                     &root.key("robot"),
                     format!(
-                        "{e}; fix this `robot:` (it is relative to this motion file) or pass \
-                         --robot"
+                        "{e}; fix this `robot:` (a file relative to this motion file, or a \
+                         built-in robot: {}) or pass --robot",
+                        super::builtin::names(super::builtin::Kind::Robot)
                     ),
                 )
             }

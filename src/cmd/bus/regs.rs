@@ -123,7 +123,7 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
             "unit": reg.unit,
             "status": flags.bits(),
         });
-        outln!("{out}")?;
+        outln!("{}", crate::cmd::json::line(&out)?)?;
     } else {
         outln!("{} = {}", reg.name, human_value(value, reg))?;
     }

@@ -143,7 +143,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
     }
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
+        outln!("{}", crate::cmd::json::pretty(&report)?)?;
     } else {
         print_text(&report, &motion)?;
         if let Some(path) = &args.plot {

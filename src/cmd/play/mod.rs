@@ -281,7 +281,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
             obj.insert("recording".into(), r.json(motion.units));
         }
-        writeln!(text, "{}", serde_json::to_string_pretty(&value)?)?;
+        writeln!(text, "{}", crate::cmd::json::pretty(&value)?)?;
     } else {
         write_report(&mut text, &report, robot.lead.is_none())?;
         if let Some(r) = &recording {

@@ -65,3 +65,49 @@ fn robot_override_and_units_conversion() {
     let e = load_motion(&p, None).expect_err("no such robot");
     assert!(e.to_string().contains("does-not-exist.yaml"), "{e}");
 }
+
+#[test]
+fn a_builtin_robot_name_in_a_motion_file_is_the_builtin_robot() {
+    let motion = "robot: so101\nkeyframes:\n  - pose: {shoulder_pan: 10}\n  - {at: 1, pose: {shoulder_pan: -10}}\n";
+    let p = write("builtin-name", "m.yaml", motion);
+    let (m, r) = load_motion(&p, None).expect("robot: so101 loads");
+    assert_eq!(r.name, "so101");
+    assert_eq!(m.robot_path, PathBuf::from("<built-in>/robots/so101.yaml"));
+    assert_eq!(m.joints.len(), 6);
+    // With the `.yaml`, as `--robot` takes it.
+    let p = write(
+        "builtin-name-yaml",
+        "m.yaml",
+        &motion.replace("so101", "so101.yaml"),
+    );
+    let (m, _) = load_motion(&p, None).expect("robot: so101.yaml loads");
+    assert_eq!(m.robot_path, PathBuf::from("<built-in>/robots/so101.yaml"));
+}
+
+#[test]
+fn a_file_beside_the_motion_wins_over_a_builtin_name() {
+    // A robot file called `so101` next to the motion: it is the robot.
+    let robot = write("builtin-shadowed", "so101", ROBOT);
+    let p = write(
+        "builtin-shadowed",
+        "m.yaml",
+        "robot: so101\nkeyframes:\n  - pose: {a: 1}\n",
+    );
+    let (m, r) = load_motion(&p, None).expect("the file beside it loads");
+    assert_eq!(r.name, "three");
+    assert_eq!(m.robot_path, robot);
+}
+
+#[test]
+fn a_robot_that_is_neither_a_file_nor_a_builtin_is_refused_at_its_line() {
+    let p = write(
+        "builtin-unknown",
+        "m.yaml",
+        "keyframes:\n  - pose: {a: 1}\nrobot: so102\n",
+    );
+    let err = load_motion(&p, None)
+        .expect_err("no such robot")
+        .to_string();
+    assert!(err.contains("m.yaml:3:"), "{err}");
+    assert!(err.contains("so102") && err.contains("so101"), "{err}");
+}

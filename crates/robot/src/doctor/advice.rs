@@ -143,6 +143,20 @@ pub struct Edit {
     pub change: Change,
 }
 
+/// One of the robot's silent servos that may be answering on another
+/// servo's ID ([`Advice::UnplugOthersOneOf`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[non_exhaustive]
+pub struct SilentServo {
+    /// Its ID in the robot file.
+    pub id: u8,
+    /// Its joint.
+    pub joint: String,
+    /// The change from the shared ID back to `id`, run with this servo
+    /// alone on the bus.
+    pub fix: Fix,
+}
+
 /// What to do about a finding.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -182,6 +196,12 @@ pub enum Advice {
         /// The ID change, with only that servo on the bus.
         fix: Fix,
     },
+    /// Two servos on one ID while several of the robot's servos are
+    /// silent: one of these most likely has the shared ID, and which one
+    /// the bus cannot tell (their replies collide). Each is connected alone
+    /// and its fix run: the one on the shared ID takes its own ID back, the
+    /// others find no servo on it and nothing changes (it takes hands).
+    UnplugOthersOneOf(Vec<SilentServo>),
     /// Two servos on one ID: connect them one at a time and give all but
     /// one a free ID with `fix` (it takes hands).
     OneAtATime(Fix),
@@ -256,6 +276,7 @@ impl Advice {
             Advice::None
             | Advice::IdOfItsJoint { .. }
             | Advice::UnplugOthers { .. }
+            | Advice::UnplugOthersOneOf(_)
             | Advice::OneAtATime(_)
             | Advice::FitModel { .. }
             | Advice::Supply { .. }

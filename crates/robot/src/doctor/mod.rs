@@ -28,7 +28,7 @@ use serde::Serialize;
 use servobus_config::Robot;
 use servobus_protocol::registers::{Register, Series};
 
-pub use advice::{Advice, Change, Edit, Fix, NewId, RobotFile, TOOLS_DEFAULT_BAUD};
+pub use advice::{Advice, Change, Edit, Fix, NewId, RobotFile, SilentServo, TOOLS_DEFAULT_BAUD};
 pub use checks::{rated_voltage_dv, ServoState};
 pub use fix::{apply, change_baud, Applied, FixError, FixOutcome};
 pub use probe::fix_all_command;

@@ -13,7 +13,9 @@ use servobus_protocol::MAX_ID;
 
 use super::bus_checks;
 use super::checks::{read_len, ServoState};
-use super::{Action, Advice, Change, Finding, Fix, NewId, SetupStep as Step, Severity};
+use super::{
+    Action, Advice, Change, Finding, Fix, NewId, SetupStep as Step, Severity, SilentServo,
+};
 
 /// The longest return delay a servo can have (register 7 at 255, 2 us
 /// units): the doctor waits this long so that it hears servos still at
@@ -232,15 +234,29 @@ fn examine_inner<T: Transport, C: Clock>(
         bus.set_settings(base);
     }
     // Two servos on one ID while an expected servo is silent: the silent
-    // one most likely has that ID.
-    for &id in &collided {
-        let silent = missing.first().copied();
-        missing.retain(|&m| Some(m) != silent);
-        findings.push(collision(
-            ctx,
-            id,
-            silent.and_then(|s| Some((s, expected(s)?))),
-        ));
+    // one most likely has that ID. With several silent, any of them may be
+    // the one (the colliding replies do not say whose they are): each
+    // collision names them all, and none is blamed alone.
+    if !collided.is_empty() && missing.len() > 1 {
+        let silent: Vec<(u8, &JointConfig)> = missing
+            .iter()
+            .filter_map(|&m| Some((m, expected(m)?)))
+            .collect();
+        missing.clear();
+        let absent_too = silent.len().saturating_sub(collided.len());
+        for &id in &collided {
+            findings.push(collision_among(ctx, id, &silent, absent_too));
+        }
+    } else {
+        for &id in &collided {
+            let silent = missing.first().copied();
+            missing.retain(|&m| Some(m) != silent);
+            findings.push(collision(
+                ctx,
+                id,
+                silent.and_then(|s| Some((s, expected(s)?))),
+            ));
+        }
     }
     for &id in &missing {
         let joint = expected(id).map_or("?", |j| j.name.as_str());
@@ -356,6 +372,48 @@ fn collision(ctx: &Ctx<'_>, id: u8, silent: Option<(u8, &JointConfig)>) -> Findi
             f.advice = Advice::OneAtATime(set_id(NewId::Free));
         }
     }
+    f
+}
+
+/// Two servos answer as `id` while the robot's servos `silent` (their IDs
+/// and joints) do not answer: one of those most likely has `id`, and
+/// `absent_too` of them are missing for another reason (more are silent
+/// than IDs collide).
+fn collision_among(
+    ctx: &Ctx<'_>,
+    id: u8,
+    silent: &[(u8, &JointConfig)],
+    absent_too: usize,
+) -> Finding {
+    let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), Some("id"));
+    let named: Vec<String> = silent
+        .iter()
+        .map(|(want, joint)| format!("{want} (joint `{}`)", joint.name))
+        .collect();
+    let named = match named.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => String::new(),
+    };
+    let rest = match absent_too {
+        0 => String::new(),
+        1 => ", and one does not answer at any baud rate".to_owned(),
+        n => format!(", and {n} do not answer at any baud rate"),
+    };
+    f.problem = format!(
+        "two servos answer as ID {id} and servos {named} are silent: one of them probably has \
+         ID {id}{rest}"
+    );
+    f.advice = Advice::UnplugOthersOneOf(
+        silent
+            .iter()
+            .map(|(want, joint)| SilentServo {
+                id: *want,
+                joint: joint.name.clone(),
+                fix: ctx.target.set_id_command(id, NewId::Id(*want)),
+            })
+            .collect(),
+    );
     f
 }
 

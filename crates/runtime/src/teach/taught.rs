@@ -382,9 +382,12 @@ fn paced_plan(robot: &Robot, keyframes: &[TimedPose]) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
-/// A commented motion file of `taught` for `robot` (loaded from
-/// `robot_file`), angles in the robot's units. Nothing is clamped: every
-/// pose was checked against the limits ([`check_pose`]).
+/// A commented motion file of `taught` for `robot`, angles in the robot's
+/// units, whose `robot:` is `robot_file` as given: a built-in's name or a
+/// path relative to where the motion is written
+/// ([`motion_robot_field`](servobus_config::builtin::motion_robot_field)
+/// makes one). Nothing is clamped: every pose was checked against the
+/// limits ([`check_pose`]).
 pub fn motion_yaml(robot: &Robot, robot_file: &Path, taught: &Taught) -> String {
     let mut y = String::new();
     let _ = writeln!(y, "# Taught by hand with `servobus teach`.");
@@ -397,7 +400,11 @@ pub fn motion_yaml(robot: &Robot, robot_file: &Path, taught: &Taught) -> String 
         taught.keyframes.len(),
         robot.name
     );
-    let _ = writeln!(y, "robot: {}", robot_file.display());
+    let _ = writeln!(
+        y,
+        "robot: {}",
+        yaml_scalar(&robot_file.display().to_string())
+    );
     let _ = writeln!(y, "units: {}", robot.units);
     if taught.cubic {
         let _ = writeln!(y, "interpolation: cubic");
@@ -417,4 +424,20 @@ pub fn motion_yaml(robot: &Robot, robot_file: &Path, taught: &Taught) -> String 
         let _ = writeln!(y, "{line}");
     }
     y
+}
+
+/// `text` as a YAML scalar: as it is when it is plainly a path or a name,
+/// else single-quoted (a space before `#`, a `: `, a leading `*` or `'` would
+/// otherwise change what YAML reads).
+fn yaml_scalar(text: &str) -> String {
+    let plain = !text.is_empty()
+        && text
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '/' | '-' | '<' | '>'))
+        && !text.starts_with(['-', '<']);
+    if plain {
+        text.to_owned()
+    } else {
+        format!("'{}'", text.replace('\'', "''"))
+    }
 }

@@ -8,14 +8,16 @@
 //! robot file's units ([`servobus_robot::stream`]); a line may name some
 //! joints only (the others keep their targets). A malformed line, one
 //! longer than 1 MiB or one that is not UTF-8 is reported on standard
-//! error with its number and skipped. End of input stops the robot
-//! (jerk limited) and ends the run with its report: on standard error, or
-//! with `--json` as the last line of standard output, `{"report": {...}}`.
+//! error with its number, skipped and counted. End of input stops the
+//! robot (jerk limited) and ends the run with its report: on standard
+//! error, or with `--json` as the last line of standard output,
+//! `{"report": {...}, "skipped_lines": <count>}`.
 //! With `--telemetry`, one JSON line per control cycle on standard output:
 //! `{"t", "commanded": {..}, "measured": {.. or null}, "faults": [..]}`.
 
 use std::io::{BufRead, Write};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
@@ -72,16 +74,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let units = robot.units;
     // Standard input on a thread of its own: the telemetry is written
     // meanwhile. End of input stops the run.
+    let skipped = std::sync::Arc::new(AtomicU64::new(0));
+    let skips = std::sync::Arc::clone(&skipped);
     std::thread::Builder::new()
         .name("servobus-stdin".into())
         .spawn(move || {
-            read_targets(std::io::stdin().lock(), &targets, units);
+            read_targets(std::io::stdin().lock(), &targets, units, &skips);
             let _ = commands.send(Command::Stop);
         })?;
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let lost = watch(&runner, &names, args.telemetry)?;
     let report = runner.join()?;
-    let code = finish(&report, args.json && !lost)?;
+    let skipped = skipped.load(Ordering::Relaxed);
+    let code = finish(&report, skipped, args.json && !lost)?;
     if lost {
         return Ok(ExitCode::from(super::exit::PROBLEM));
     }
@@ -145,9 +150,15 @@ fn next_line(input: &mut impl BufRead, buf: &mut Vec<u8>) -> Result<(), bool> {
 }
 
 /// Sends every target and chunk line of `input`; reports the malformed
-/// and refused ones on stderr with their line numbers. Returns at the end
-/// of input (or when the run has ended).
-fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
+/// and refused ones on stderr with their line numbers, and counts them in
+/// `skipped`. Returns at the end of input (or when the run has ended).
+fn read_targets(
+    mut input: impl BufRead,
+    targets: &TargetSender,
+    units: Units,
+    skipped: &AtomicU64,
+) {
+    let skip = || skipped.fetch_add(1, Ordering::Relaxed);
     let started = Instant::now();
     let mut buf = Vec::new();
     for n in 1usize.. {
@@ -158,12 +169,14 @@ fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
                     "line {n}: longer than {} MiB; skipped",
                     MAX_LINE_BYTES >> 20
                 );
+                skip();
                 continue;
             }
             Err(false) => return,
         }
         let Ok(line) = std::str::from_utf8(&buf) else {
             errln!("line {n}: not UTF-8 text; skipped");
+            skip();
             continue;
         };
         if line.trim().is_empty() {
@@ -174,6 +187,7 @@ fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
             Ok(parsed) => parsed,
             Err(why) => {
                 errln!("line {n}: {why}; skipped");
+                skip();
                 continue;
             }
         };
@@ -181,7 +195,10 @@ fn read_targets(mut input: impl BufRead, targets: &TargetSender, units: Units) {
             Ok(0) => {}
             Ok(k) => errln!("line {n}: {k} angle(s) beyond the joint limits, clamped"),
             Err(servobus_runtime::TargetError::Ended) => return,
-            Err(why) => errln!("line {n}: {why}; skipped"),
+            Err(why) => {
+                errln!("line {n}: {why}; skipped");
+                skip();
+            }
         }
     }
 }
@@ -268,21 +285,21 @@ fn watch(runner: &Runner, names: &[String], mut telemetry: bool) -> anyhow::Resu
     Ok(lost)
 }
 
-/// The report (stderr, or the last stdout line with `json`) and the exit
-/// code: 0 once stopped, 1 after a fault.
-fn finish(report: &Report, json: bool) -> anyhow::Result<ExitCode> {
+/// The report (stderr, or the last stdout line with `json`, with the
+/// count of input lines skipped) and the exit code: 0 once stopped, 1
+/// after a fault.
+fn finish(report: &Report, skipped: u64, json: bool) -> anyhow::Result<ExitCode> {
     if json {
-        outln!(
-            "{}",
-            crate::cmd::json::line(&serde_json::json!({ "report": report }))?
-        )?;
+        let value = serde_json::json!({ "report": report, "skipped_lines": skipped });
+        outln!("{}", crate::cmd::json::line(&value)?)?;
     } else {
         let mut err = std::io::stderr().lock();
         super::play::write_report(&mut err, report, false)?;
         if let Some(l) = &report.live {
             writeln!(
                 err,
-                "  targets: {} received, {} refused, {} clamped; {} timeouts, {} resumed",
+                "  targets: {} received, {} refused, {} clamped; {} timeouts, {} resumed; \
+                 {skipped} input line(s) skipped",
                 l.received, l.refused, l.clamped, l.timeouts, l.resumes
             )?;
             for j in l.envelope.iter().filter(|j| j.overshoot > 0.05) {

@@ -51,6 +51,7 @@ fn piped_targets_are_followed_a_bad_line_is_reported_and_the_end_stops() {
     assert_eq!(report["finish"], "stopped", "{report}");
     assert_eq!(report["live"]["received"], sent, "{report}");
     assert_eq!(report["live"]["refused"], 0, "{report}");
+    assert_eq!(last["skipped_lines"], 1, "{last}");
     // At least 50 samples a second, each with every joint.
     let span = common::num(&samples[samples.len() - 1], "t") - common::num(&samples[0], "t");
     assert!(
@@ -97,6 +98,7 @@ fn a_stream_that_brought_no_target_still_reports_its_live_section() {
         .expect("the report is the last line");
     let live = &last["report"]["live"];
     assert_eq!(live["received"], 0, "{last}");
+    assert_eq!(last["skipped_lines"], 2, "{last}");
     assert!(live["envelope"].is_array(), "{last}");
 }
 
@@ -146,6 +148,7 @@ fn a_line_not_utf8_or_longer_than_1_mib_is_skipped_and_the_input_goes_on() {
     let live = &last["report"]["live"];
     assert_eq!(live["received"], 3, "lines 1, 4 and 6: {last}");
     assert_eq!(live["refused"], 0, "{last}");
+    assert_eq!(last["skipped_lines"], 3, "{last}");
 }
 
 /// `stream < /dev/zero`: one line without end. Its buffer is capped at

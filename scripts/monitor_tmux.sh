@@ -81,6 +81,8 @@ echo "PASS: servo 3 shows the overheat flag"
 echo "$screen1" | grep -q "keys: q quit   Space torque OFF" || fail "the keys are not shown"
 echo "PASS: the keys are on screen"
 echo "$screen1" | grep -Eq "read rate [0-9.]+ Hz   bus utilisation [0-9.]+ %" || fail "no bus summary"
+echo "$screen1" | grep -q "figures: read from the bus by the monitor" || fail "the summary does not say where its figures come from"
+echo "$screen1" | grep -q "reply p99 us" || fail "the reply column has no unit"
 echo "PASS: the bus summary is on screen"
 
 # Five refreshes at least (the monitor refreshes at 10 Hz or more).
@@ -125,7 +127,7 @@ echo "PASS: a panic restores the terminal (main screen, cursor, stty settings) a
 # play --monitor: the same view of a running motion, from its telemetry.
 tmux send-keys -t "$session" "clear; $bin play $root/configs/motions/arm-wave.yaml --monitor; echo play-exit=\$?" Enter
 wait_for "so101 (play)" || fail "play --monitor shows no view"
-wait_for "(telemetry)" || fail "play --monitor does not say its figures come from telemetry"
+wait_for "figures: the running motion's telemetry" || fail "play --monitor does not say its figures come from telemetry"
 sleep 0.5
 p1=$(tmux capture-pane -p -t "$session")
 sleep 0.5

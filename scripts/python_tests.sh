@@ -24,6 +24,23 @@ say() { printf '%s\n' "$*" >&2; }
 # The build and test tools, pinned: maturin as in python/pyproject.toml.
 tools=('maturin==1.16.0' 'pytest==8.3.4' 'numpy==2.2.6')
 
+# What this run creates and runs, before any of it.
+if [ -e "$venv/.ready" ]; then
+    say "python_tests.sh: uses the kept virtualenv $venv (SERVOBUS_VENVS sets where)"
+else
+    say "python_tests.sh: creates the virtualenv $venv (SERVOBUS_VENVS sets where; kept for later runs)"
+    say "  and installs ${tools[*]} into it with pip"
+fi
+say "  then runs: cargo fmt --check, clippy and cargo test --lib in python/;"
+say "  pip wheel + pip install ./python into that virtualenv (extension built in ${CARGO_TARGET_DIR:-$PWD/target});"
+say "  pytest python/tests;"
+if [ -n "${SERVOBUS_LEROBOT_PYTHON:-}" ]; then
+    say "  and installs the wheel, python/lerobot_robot_servobus and pytest==8.3.4 into LeRobot's"
+    say "  virtualenv ($SERVOBUS_LEROBOT_PYTHON), then runs pytest python/lerobot_robot_servobus/tests"
+else
+    say "  the LeRobot check is left out: SERVOBUS_LEROBOT_PYTHON is not set"
+fi
+
 if [ ! -e "$venv/.ready" ]; then
     py=${SERVOBUS_PYTHON:-python3}
     if ! "$py" -c 'import sys; sys.exit(sys.version_info < (3, 10))' 2>/dev/null; then

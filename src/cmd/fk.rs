@@ -157,13 +157,24 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
 struct IkOut {
     frame: String,
     #[serde(skip_serializing_if = "Option::is_none")]
-    joints: Option<BTreeMap<String, f64>>,
+    joints: Option<InOrder>,
     #[serde(skip_serializing_if = "Option::is_none")]
     error: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     short_mm: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     joint: Option<String>,
+}
+
+/// Joint angles by name, kept in the robot's joint order (a JSON object
+/// whose keys come in that order).
+#[derive(Debug)]
+struct InOrder(Vec<(String, f64)>);
+
+impl Serialize for InOrder {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(name, angle)| (name, angle)))
+    }
 }
 
 /// The chain's angles (radians) that put `frame` at the target, from the
@@ -219,10 +230,13 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
     };
     let code = match &answer {
         Ok(q) => {
+            // The model's joint indices are the robot file's joint order.
+            let mut q = q.clone();
+            q.sort_by_key(|&(j, _)| j);
             let angles = q.iter().filter_map(|&(j, a)| {
                 Some((model.joint_name(j)?.to_owned(), robot.units.from_rad(a)))
             });
-            out.joints = Some(angles.collect());
+            out.joints = Some(InOrder(angles.collect()));
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -238,8 +252,14 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
     if args.json {
         outln!("{}", super::json::line(&out)?)?;
     } else if let Some(joints) = &out.joints {
-        for (name, angle) in joints {
-            outln!("{name:<22} {:>9.3} {}", shown(*angle, 3), robot.units)?;
+        // YAML, as `fk --pose` reads it: `fk --pose "$(servobus ik ...)"`.
+        outln!(
+            "# joint angles in {}, in the robot's order; `fk --pose` takes these lines as they are",
+            robot.units
+        )?;
+        for (name, angle) in &joints.0 {
+            let key = format!("{name}:");
+            outln!("{key:<23} {:>9.3}", shown(*angle, 3))?;
         }
     } else if let Some(e) = &out.error {
         outln!("no joint angles put `{}` there: {e}", args.frame)?;

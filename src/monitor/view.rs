@@ -15,8 +15,8 @@ pub const KEYS: &str = "q quit   Space torque OFF on every servo";
 /// READ asks every servo and they answer in turn, so a later servo's reply
 /// comes after the earlier ones' and its figure is larger without the
 /// servo being slower.
-pub const REPLY_COLUMN: &str = "reply p99: request sent to this servo's reply received, p99; \
-     servos answer one SYNC READ in turn, so later ones wait for earlier ones";
+pub const REPLY_COLUMN: &str = "reply p99 us: request sent to this servo's reply received, \
+     p99 in microseconds; servos answer one SYNC READ in turn, so later ones wait for earlier ones";
 
 const HEADER: [&str; 15] = [
     "ID",
@@ -33,10 +33,60 @@ const HEADER: [&str; 15] = [
     "status",
     "replies",
     "timeouts",
-    "reply p99",
+    "reply p99 us",
 ];
 
-const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, 22, 8, 8, 9];
+/// The status column's width, in cells.
+const STATUS_WIDTH: u16 = 24;
+
+const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, STATUS_WIDTH, 8, 8, 12];
+
+/// Where the figures on the screen come from, in words, for a frame's
+/// `source` (`bus` or `telemetry`).
+pub fn source_text(source: &str) -> &str {
+    match source {
+        "bus" => "read from the bus by the monitor",
+        "telemetry" => "the running motion's telemetry",
+        other => other,
+    }
+}
+
+/// `text` within `width` characters, cut only between words: as many whole
+/// words as fit, then `…`.
+fn fit_words(text: &str, width: usize) -> String {
+    if text.chars().count() <= width {
+        return text.to_string();
+    }
+    let mut kept = String::new();
+    for word in text.split(' ') {
+        let with = if kept.is_empty() {
+            word.to_string()
+        } else {
+            format!("{kept} {word}")
+        };
+        if with.chars().count() + 1 > width {
+            break;
+        }
+        kept = with;
+    }
+    format!("{kept}…")
+}
+
+/// The status flags within `width` characters: whole names only, and
+/// `+N` for the ones left out.
+fn fit_flags(flags: &[&str], width: usize) -> String {
+    let names: Vec<String> = flags.iter().map(|f| f.to_uppercase()).collect();
+    for kept in (1..=names.len()).rev() {
+        let mut text = names[..kept].join(", ");
+        if kept < names.len() {
+            text.push_str(&format!(" +{}", names.len() - kept));
+        }
+        if text.chars().count() <= width {
+            return text;
+        }
+    }
+    fit_words(&names.join(", "), width)
+}
 
 fn opt(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "-".to_string(), |v| format!("{v:.decimals$}"))
@@ -46,14 +96,14 @@ fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
     let (status, status_style) = if r.is_missing() {
         let why = r.missing.as_deref().unwrap_or("no reply");
         (
-            format!("MISSING ({why})"),
+            fit_words(&format!("MISSING ({why})"), usize::from(STATUS_WIDTH)),
             Style::default().fg(Color::Red).add_modifier(Modifier::BOLD),
         )
     } else if r.flags.is_empty() {
         ("ok".to_string(), Style::default().fg(Color::Green))
     } else {
         (
-            r.flags.join(" ").to_uppercase(),
+            fit_flags(&r.flags, usize::from(STATUS_WIDTH)),
             Style::default()
                 .fg(Color::White)
                 .bg(Color::Red)
@@ -108,11 +158,11 @@ pub fn draw(f: &mut ratatui::Frame<'_>, frame: &Frame, title: &str) {
             Style::default().add_modifier(Modifier::BOLD),
         ),
         Span::raw(format!(
-            "   t {:.1} s   read rate {:.1} Hz   bus utilisation {:.1} %   ({})",
+            "   t {:.1} s   read rate {:.1} Hz   bus utilisation {:.1} %   figures: {}",
             frame.time_s,
             frame.read_rate_hz,
             100.0 * frame.utilisation,
-            frame.source
+            source_text(frame.source)
         )),
     ]);
     f.render_widget(Paragraph::new(summary), top);

@@ -7,7 +7,7 @@ use crate::common;
 
 use std::process::Command;
 
-use common::{is_root, servobus_as_nobody, stderr, stdout, Sim};
+use common::{is_root, repo, servobus_unprivileged, stderr, stdout, Sim};
 
 #[test]
 fn bus_commands_say_what_to_do() {
@@ -67,22 +67,17 @@ fn bus_commands_say_what_to_do() {
         let pty = std::fs::canonicalize(sim.port()).expect("the link's pty");
         let opened = Command::new("chmod").arg("666").arg(&pty).status();
         assert!(opened.is_ok_and(|s| s.success()));
-        servobus_as_nobody(&["ping", "--id", "1", "--port", sim.port()])
+        servobus_unprivileged(&repo(""), &["ping", "--id", "1", "--port", sim.port()])
     } else {
-        Some(sim.run(&["ping", "--id", "1"]))
+        sim.run(&["ping", "--id", "1"])
     };
-    match out {
-        Some(out) => {
-            let err = stderr(&out);
-            assert_eq!(out.status.code(), Some(2), "{err}");
-            assert!(
-                err.contains("the port is busy") && err.contains("close it and retry"),
-                "{err}"
-            );
-            assert_eq!(err.matches("busy").count(), 1, "{err}");
-        }
-        None => eprintln!("skipped the busy port: root, and no setpriv"),
-    }
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("the port is busy") && err.contains("close it and retry"),
+        "{err}"
+    );
+    assert_eq!(err.matches("busy").count(), 1, "{err}");
     drop(held);
     assert!(
         sim.run(&["ping", "--id", "1"]).status.success(),

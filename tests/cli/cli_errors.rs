@@ -7,7 +7,7 @@ use crate::common;
 use std::process::{Command, Output};
 
 use common::{
-    arg, error, is_root, json, says, scratch, servobus, servobus_as_nobody, servobus_in, stderr,
+    arg, error, is_root, json, says, scratch, servobus, servobus_in, servobus_unprivileged, stderr,
     stdout, write_file as write, BIN,
 };
 
@@ -138,10 +138,7 @@ fn a_port_without_permission_names_the_group_and_the_command() {
     let ping = ["ping", "--port", port, "--id", "1"];
     let out = if is_root() {
         // Root may open anything: run as `nobody`, with no groups.
-        let Some(out) = servobus_as_nobody(&ping) else {
-            return;
-        };
-        out
+        servobus_unprivileged(&common::repo(""), &ping)
     } else {
         servobus(&ping)
     };
@@ -184,6 +181,37 @@ fn a_file_named_like_a_builtin_wins() {
     assert_eq!(
         v["buses"][0]["servos"], 18,
         "a name with no such file is built in"
+    );
+}
+
+#[test]
+fn list_off_a_terminal_gives_whole_descriptions_and_each_motion_s_robot() {
+    let out = servobus(&["list"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let list = stdout(&out);
+    assert!(!list.contains("..."), "{list}");
+    let line = |name: &str| {
+        list.lines()
+            .find(|l| l.starts_with(&format!("  {name} ")))
+            .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
+            .unwrap_or_default()
+    };
+    assert_eq!(
+        line("hexapod-walk-turn"),
+        "hexapod-walk-turn hexapod Walk forward 30 cm, turn 90 deg to the left on the spot, \
+         then step 10 cm to the right, in a tripod gait"
+    );
+    assert!(
+        line("arm-wave").starts_with("arm-wave so101 The SO-101 arm"),
+        "{list}"
+    );
+    assert!(
+        line("scs-mini-nod").starts_with("scs-mini-nod scs-mini "),
+        "{list}"
+    );
+    assert!(
+        line("hexapod-2bus").ends_with("(left and right), one adapter each"),
+        "{list}"
     );
 }
 

@@ -159,3 +159,40 @@ fn installed_binary_works_from_an_empty_directory() {
     let _ = std::fs::remove_dir_all(&empty);
     let _ = std::fs::remove_dir_all(&sim_dir);
 }
+
+#[test]
+fn python_tests_sh_says_what_it_creates_and_runs_before_it_starts() {
+    // A fresh SERVOBUS_VENVS and a Python that does not exist: the script
+    // stops at its first step, after saying what it would have done.
+    let venvs = common::scratch("python-tests-plan");
+    let out = Command::new("bash")
+        .arg(common::repo("scripts/python_tests.sh"))
+        .env("SERVOBUS_VENVS", &venvs)
+        .env("SERVOBUS_PYTHON", "/nonexistent/python3")
+        .env_remove("SERVOBUS_LEROBOT_PYTHON")
+        .output()
+        .expect("bash runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    let venv = venvs.join("python-servobus");
+    let first = err.lines().next().unwrap_or_default();
+    assert_eq!(
+        first,
+        format!(
+            "python_tests.sh: creates the virtualenv {} (SERVOBUS_VENVS sets where; kept for later runs)",
+            venv.display()
+        ),
+        "{err}"
+    );
+    for said in [
+        "installs maturin==1.16.0 pytest==8.3.4 numpy==2.2.6 into it with pip",
+        "pip install ./python into that virtualenv",
+        "pytest python/tests",
+        "the LeRobot check is left out: SERVOBUS_LEROBOT_PYTHON is not set",
+        "FAIL the Python package needs Python >= 3.10",
+    ] {
+        assert!(err.contains(said), "missing {said:?} in:\n{err}");
+    }
+    assert!(!venv.exists(), "nothing created before the Python check");
+    let _ = std::fs::remove_dir_all(&venvs);
+}

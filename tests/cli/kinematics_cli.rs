@@ -99,6 +99,40 @@ fn ik_answers_put_the_tool_where_asked() {
 }
 
 #[test]
+fn ik_prints_the_robot_s_joint_order_in_a_form_fk_pose_takes() {
+    let out = ik("so101", "tool", "250,50,120", &["--pitch", "30"]);
+    let (text, _) = exited(&out, 0);
+    let names: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .filter_map(|l| l.split(':').next())
+        .collect();
+    // The robot file's order (the arm's chain; the gripper is not in it).
+    let order = [
+        "shoulder_pan",
+        "shoulder_lift",
+        "elbow_flex",
+        "wrist_flex",
+        "wrist_roll",
+    ];
+    assert_eq!(names, order, "{text}");
+    // The text as it is, given to fk: the tool is back where ik put it.
+    let f = servobus_json(&["fk", "--robot", "so101", "--pose", &text, "--json"]);
+    close(xyz(&f["frames"]["tool"]), [250.0, 50.0, 120.0], 0.05);
+    let rpy = f["frames"]["tool"]["rpy"].as_array().expect("rpy");
+    let pitch = rpy[1].as_f64().expect("pitch");
+    assert!((pitch - 30.0).abs() < 0.01, "{rpy:?}");
+    // The JSON's keys come in the same order.
+    let out = ik("so101", "tool", "250,50,120", &["--pitch", "30", "--json"]);
+    let (line, _) = exited(&out, 0);
+    let at: Vec<usize> = order
+        .iter()
+        .map(|j| line.find(&format!("\"{j}\"")).unwrap_or(usize::MAX))
+        .collect();
+    assert!(at.windows(2).all(|w| w[0] < w[1]), "{line}");
+}
+
+#[test]
 fn ik_places_a_hexapod_foot_with_negative_coordinates() {
     // Middle right hip at (0, -90, 0); 200 out and 40 down from it.
     let v = ik_json("hexapod", "foot_middle_right", "0,-290,-40", &["--json"]);

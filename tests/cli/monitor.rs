@@ -181,13 +181,87 @@ fn the_view_shows_flags_missing_servos_and_keys() {
     assert!(line_of("1").contains(" ok "), "{lines:#?}");
     assert!(lines.iter().any(|l| l.contains(view::KEYS)), "{lines:#?}");
     // The reply column says what it measures (it grows along the bus).
-    assert!(lines.iter().any(|l| l.contains("reply p99")), "{lines:#?}");
+    assert!(
+        lines.iter().any(|l| l.contains("reply p99 us")),
+        "{lines:#?}"
+    );
     assert!(
         lines
             .iter()
             .any(|l| l.contains("servos answer one SYNC READ in turn")),
         "{lines:#?}"
     );
+}
+
+/// The screen `frame` draws on a `width` by 14 terminal, line by line.
+fn screen(frame: &Frame, width: u16) -> Vec<String> {
+    let mut terminal = Terminal::new(TestBackend::new(width, 14)).expect("terminal");
+    terminal
+        .draw(|f| view::draw(f, frame, "so101"))
+        .expect("drawn");
+    let buffer = terminal.backend().buffer();
+    (0..buffer.area.height)
+        .map(|y| {
+            (0..buffer.area.width)
+                .map(|x| buffer[(x, y)].symbol().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn the_view_gives_units_and_sources_and_cuts_no_status_mid_word() {
+    let arm = robot("so101.yaml");
+    let (_sim, mut bus) = virtual_bus(&arm, Faults::default());
+    let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
+    let mut frame = poll(&mut poller, &mut bus, 4);
+    // Servo 2 with every flag set, servo 4 missing for the longest reason.
+    let all_flags = [
+        "voltage",
+        "angle sensor",
+        "overheat",
+        "over-current",
+        "overload",
+    ];
+    frame.servos[1].flags = all_flags.to_vec();
+    let four = &mut frame.servos[3];
+    four.present = false;
+    four.position_ticks = None;
+    four.missing = Some("reply of the wrong length".into());
+    let lines = screen(&frame, 160);
+    let header = lines
+        .iter()
+        .find(|l| l.starts_with("ID "))
+        .cloned()
+        .unwrap_or_default();
+    assert!(header.contains("reply p99 us"), "{lines:#?}");
+    // The summary names where the figures come from, in words.
+    assert!(!lines[0].contains("(bus)"), "{lines:#?}");
+    assert!(
+        lines[0].contains("figures: read from the bus by the monitor"),
+        "{lines:#?}"
+    );
+    // The status column: from its header to the next column's.
+    let (Some(from), Some(to)) = (header.find("status"), header.find("replies")) else {
+        panic!("no status column in {header:?}");
+    };
+    let status = |id: &str| -> String {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(&format!("{id:<4}")))
+            .cloned()
+            .unwrap_or_default();
+        line.chars()
+            .skip(from)
+            .take(to - from)
+            .collect::<String>()
+            .trim()
+            .to_string()
+    };
+    // Whole flag names, and how many did not fit.
+    assert_eq!(status("2"), "VOLTAGE, ANGLE SENSOR +3", "{lines:#?}");
+    // Whole words of the reason, and a mark that there is more.
+    assert_eq!(status("4"), "MISSING (reply of the…", "{lines:#?}");
 }
 
 #[test]

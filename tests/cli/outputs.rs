@@ -8,8 +8,8 @@ use crate::common;
 use std::path::Path;
 
 use common::{
-    arg, exited, is_root, repo, says, scratch, servobus, servobus_as_nobody, servobus_in,
-    servobus_ok, stdout, write_file, Sim,
+    arg, exited, repo, says, scratch, servobus, servobus_in, servobus_ok, servobus_unprivileged,
+    stdout, write_file, Sim,
 };
 
 const WAVE: &str = "configs/motions/arm-wave.yaml";
@@ -233,27 +233,22 @@ fn a_directory_given_as_an_output_is_an_input_error() {
 
 #[test]
 fn a_directory_no_file_can_be_created_in_refuses_before_the_run() {
-    if !is_root() {
-        assert!(
-            std::env::var("CI").is_err(),
-            "CI=true: this check needs root to drop to `nobody`"
-        );
-        eprintln!("\n*** SKIPPED: needs root to drop to `nobody` ***\n");
-        return;
-    }
-    // A directory only root may write to, holding a log anyone may write
-    // to: the log can be opened, but not replaced by a new file beside it.
+    // A directory the run may not write to, holding a log it may write to:
+    // the log can be opened, but not replaced by a new file beside it. The
+    // tests' user owns the directory; the run is not root (as root it runs
+    // as `nobody`, see `servobus_unprivileged`), so mode 0555 holds it.
     let dir = empty("outputs-nobody");
     let old = yesterday(&dir);
     use std::os::unix::fs::PermissionsExt;
     let open = std::fs::Permissions::from_mode(0o666);
     std::fs::set_permissions(dir.join("prev.csv"), open).expect("mode");
-    let dir_mode = std::fs::Permissions::from_mode(0o755);
-    std::fs::set_permissions(&dir, dir_mode).expect("mode");
+    let shut = std::fs::Permissions::from_mode(0o555);
+    std::fs::set_permissions(&dir, shut).expect("mode");
     let log = dir.join("prev.csv");
-    let Some(out) = servobus_as_nobody(&["play", "arm-wave", "--fast", "--log", arg(&log)]) else {
-        return;
-    };
+    let args = ["play", "arm-wave", "--fast", "--log", arg(&log)];
+    let out = servobus_unprivileged(&repo(""), &args);
+    let writable = std::fs::Permissions::from_mode(0o755);
+    std::fs::set_permissions(&dir, writable).expect("mode");
     let (_, err) = exited(&out, 2);
     says(
         &err,

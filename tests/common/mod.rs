@@ -249,20 +249,39 @@ pub fn is_root() -> bool {
     unsafe { libc::geteuid() == 0 }
 }
 
-/// Runs `servobus ARGS` as `nobody` (uid and gid 65534, no groups), which
-/// needs root; `None` (and a loud note) where `setpriv` is missing, a
-/// failure under `CI=true`.
-pub fn servobus_as_nobody(args: &[&str]) -> Option<Output> {
-    let out = Command::new("setpriv")
-        .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
-        .args(args)
-        .output();
-    if out.is_err() {
-        assert!(
-            std::env::var("CI").is_err(),
-            "CI=true: root, and no setpriv to drop privileges (install util-linux)"
-        );
-        eprintln!("\n*** SKIPPED: root, and no setpriv to drop privileges ***\n");
+/// Runs `servobus ARGS` in `dir` without privileges: its real-time
+/// priority limit (`RLIMIT_RTPRIO`) is 0, so SCHED_FIFO is refused, and when
+/// the tests run as root it runs as `nobody` (uid and gid 65534, no
+/// groups), which also drops root's capabilities (CAP_SYS_NICE, CAP_DAC_*).
+/// Arranged in the child between fork and exec: no outside program needed.
+pub fn servobus_unprivileged(dir: &Path, args: &[&str]) -> Output {
+    use std::os::unix::process::CommandExt;
+    let root = is_root();
+    let mut command = Command::new(BIN);
+    command.args(args).current_dir(dir);
+    // SAFETY: between fork and exec the closure calls only setrlimit,
+    // setgroups, setgid and setuid (async-signal-safe system calls) and
+    // allocates nothing.
+    unsafe {
+        command.pre_exec(move || {
+            let none = libc::rlimit {
+                rlim_cur: 0,
+                rlim_max: 0,
+            };
+            if libc::setrlimit(libc::RLIMIT_RTPRIO, &none) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            if root
+                && (libc::setgroups(0, std::ptr::null()) != 0
+                    || libc::setgid(65534) != 0
+                    || libc::setuid(65534) != 0)
+            {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
     }
-    out.ok()
+    command
+        .output()
+        .expect("the servobus binary runs unprivileged")
 }

@@ -89,9 +89,8 @@ impl Builtin {
         builtin_path(self.rel)
     }
 
-    /// The first sentence of its leading comment (what it is), at most
-    /// about 70 characters, cut at a word.
-    pub fn summary(&self) -> String {
+    /// The first sentence of its leading comment (what it is), whole.
+    pub fn sentence(&self) -> String {
         let comment: Vec<&str> = self
             .text
             .lines()
@@ -105,15 +104,37 @@ impl Builtin {
             .into_iter()
             .flatten()
             .min();
-        let sentence = match end {
-            Some(i) => &text[..i],
-            None => text.trim_end_matches(['.', ':']),
-        };
+        match end {
+            Some(i) => text[..i].to_owned(),
+            None => text.trim_end_matches(['.', ':']).to_owned(),
+        }
+    }
+
+    /// [`Builtin::sentence`] in at most about 70 characters, cut at a
+    /// word.
+    pub fn summary(&self) -> String {
+        let sentence = self.sentence();
         if sentence.len() <= 72 {
-            return sentence.to_owned();
+            return sentence;
         }
         let cut = sentence[..72].rfind(' ').unwrap_or(72);
         format!("{}...", &sentence[..cut])
+    }
+
+    /// For a motion, the robot its `robot:` names: a built-in robot's name
+    /// (`so101`) where it is one, else the path as written. `None` for the
+    /// other kinds, or a motion that names no robot.
+    pub fn robot(&self) -> Option<String> {
+        if self.kind != Kind::Motion {
+            return None;
+        }
+        let doc: serde_yaml::Value = serde_yaml::from_str(self.text).ok()?;
+        let named = doc.get("robot")?.as_str()?;
+        let stem = Path::new(named).file_stem().and_then(|s| s.to_str());
+        match stem.and_then(|s| find(Kind::Robot, s)) {
+            Some(robot) => Some(robot.name.to_owned()),
+            None => Some(named.to_owned()),
+        }
     }
 }
 
@@ -319,6 +340,21 @@ mod tests {
         }
         let arm = find(Kind::Robot, "so101").expect("so101");
         assert_eq!(arm.summary(), "SO-101-style 6-joint arm");
+    }
+
+    #[test]
+    fn every_motion_names_its_built_in_robot() {
+        for b in all() {
+            let robot = b.robot();
+            if b.kind == Kind::Motion {
+                let name = robot.unwrap_or_default();
+                assert!(find(Kind::Robot, &name).is_some(), "{}: {name:?}", b.name);
+            } else {
+                assert_eq!(robot, None, "{}", b.name);
+            }
+        }
+        let walk = find(Kind::Motion, "hexapod-walk-turn").expect("walk");
+        assert_eq!(walk.robot().as_deref(), Some("hexapod"));
     }
 
     #[test]

@@ -186,7 +186,20 @@ pub(crate) mod cut {
     /// The bus of the simulator at `port`, opened by the test itself
     /// (patient: [`SLOW`] delays every reply).
     pub(crate) fn bus(port: &str) -> Bus<SerialTransport<SystemClock>, SystemClock> {
-        let transport = SerialTransport::open(port, 1_000_000, SystemClock::new()).expect("pty");
+        // A command the test just cut may still be exiting, holding the
+        // port (it is refused as busy then): tried again for 10 s at most.
+        let mut tries = 0;
+        let transport = loop {
+            match SerialTransport::open(port, 1_000_000, SystemClock::new()) {
+                Ok(t) => break t,
+                Err(e) if tries < 100 => {
+                    tries += 1;
+                    let _ = e;
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+                Err(e) => panic!("pty {port}: {e:?}"),
+            }
+        };
         let settings = BusSettings::new(Series::Sts)
             .with_latency(Duration::from_millis(40))
             .with_retries(3);

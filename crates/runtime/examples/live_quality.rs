@@ -56,7 +56,69 @@ fn sine(t: f64, amplitude: f64, hz: f64) -> f64 {
     }
 }
 
-const CASES: [Case; 4] = [
+/// The hand's ease between keyframes (zero speed and acceleration at
+/// each, as the simulator's scripted hand moves a leader arm).
+fn ease(s: f64) -> f64 {
+    let s = s.clamp(0.0, 1.0);
+    s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
+}
+
+/// Keyframes `(at, deg)` eased in turn; before the first, its position.
+fn eased(t: f64, keys: &[(f64, f64)]) -> f64 {
+    let mut last = keys[0];
+    for &(at, q) in keys {
+        if t < at {
+            return last.1 + (q - last.1) * ease((t - last.0) / (at - last.0));
+        }
+        last = (at, q);
+    }
+    last.1
+}
+
+/// An eased wiggle between +-`amplitude`: from 0 at 0.2 s to the first
+/// peak in a quarter period, then a peak every half period.
+fn eased_wiggle(t: f64, amplitude: f64, hz: f64) -> f64 {
+    let (start, half) = (0.2, 0.5 / hz);
+    if t < start + 0.5 * half {
+        return eased(t, &[(start, 0.0), (start + 0.5 * half, amplitude)]);
+    }
+    let k = ((t - start - 0.5 * half) / half).floor();
+    let peak = |k: f64| {
+        if k % 2.0 == 0.0 {
+            amplitude
+        } else {
+            -amplitude
+        }
+    };
+    let s = (t - start - 0.5 * half - k * half) / half;
+    peak(k) + (peak(k + 1.0) - peak(k)) * ease(s)
+}
+
+const CASES: [Case; 7] = [
+    Case {
+        name: "eased 12 deg at 2 Hz",
+        source: |t| eased_wiggle(t, 12.0, 2.0),
+    },
+    Case {
+        name: "eased 20 deg at 1 Hz",
+        source: |t| eased_wiggle(t, 20.0, 1.0),
+    },
+    Case {
+        name: "swing -100/+100 deg",
+        source: |t| {
+            eased(
+                t,
+                &[
+                    (0.2, 0.0),
+                    (0.9, -100.0),
+                    (1.2, -100.0),
+                    (2.1, 100.0),
+                    (2.4, 100.0),
+                    (3.1, 0.0),
+                ],
+            )
+        },
+    },
     Case {
         name: "triangle 12 deg at 2 Hz",
         source: |t| triangle(t, 12.0, 2.0),

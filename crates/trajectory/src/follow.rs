@@ -292,6 +292,112 @@ impl Follower {
     }
 }
 
+/// How far a stop may end beyond its bound before the bound steps in, in
+/// units of the bound's size (rounding of equal stops).
+const BOUND_SLACK: f64 = 1e-9;
+
+impl Follower {
+    /// [`Follower::step`], kept from running past the places it was told
+    /// to go. `bounds` (least, greatest) is where the goal has been told to
+    /// go and has not left behind (a live reference's points).
+    ///
+    /// The quickest stop from the state reached must end within `bounds`,
+    /// or no further than the goal's own quickest stop (where the step
+    /// ends; less what the joint is ahead of the goal in the goal's
+    /// direction). Where the step's stop would end further on, the step is
+    /// the blend nearest the plan of it and the time-optimal way to rest on
+    /// the bound whose stop is within (both keep the limits, and so does
+    /// any blend of them); where even that cannot stop within (a target
+    /// that turned back faster than the limits allow), the joint brakes as
+    /// hard as its limits let it and comes back. So a joint on its goal
+    /// is not held back (but for the few microseconds of its motion that
+    /// an acceleration kept within those stops costs), one catching up after a turn does it no faster
+    /// than it could stop where the goal would, and does not run past the
+    /// next turn; one that has turned back already is left to its plan.
+    pub fn step_within(
+        &mut self,
+        lim: &JointLimits,
+        goal: Goal,
+        dt: f64,
+        bounds: (f64, f64),
+    ) -> JointState {
+        let from = self.state;
+        let s = self.step(lim, goal, dt);
+        if s == from || !(bounds.0 <= bounds.1) {
+            return s;
+        }
+        let end = stop_position(lim, &s);
+        // The goal where the step ends, as the state is.
+        let goal = capped(lim, goal).after(dt);
+        let own = stop_position(
+            lim,
+            &JointState {
+                position: goal.position,
+                velocity: goal.velocity,
+                acceleration: goal.acceleration,
+            },
+        );
+        // A joint ahead of its goal (in the goal's direction) has that
+        // much less room: the goal comes to it, and it does not run on
+        // past the places it was told to match the goal's speed.
+        let dir = if goal.velocity > 0.0 {
+            1.0
+        } else if goal.velocity < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        let ahead = ((s.position - goal.position) * dir).max(0.0);
+        let own = own - ahead * dir;
+        let (lo, hi) = (bounds.0.min(own), bounds.1.max(own));
+        let slack = BOUND_SLACK * (1.0 + lo.abs().max(hi.abs()));
+        // Only a stop further on than the state itself.
+        let edge = if end > hi + slack && end > s.position {
+            hi
+        } else if end < lo - slack && end < s.position {
+            lo
+        } else {
+            return s;
+        };
+        self.plan.renew(lim, &from, Goal::at(edge));
+        self.plan.tau += dt;
+        let rest = self.plan.at(lim.max_jerk.is_some());
+        let within = |x: &JointState| {
+            let e = stop_position(lim, x);
+            e <= hi + slack && e >= lo - slack
+        };
+        if within(&rest) {
+            // The step nearest its plan whose stop is within: both steps
+            // start from `from` and keep the limits over `dt`, and so does
+            // any blend of them (the jerk of a blend is the blend of the
+            // jerks).
+            let blend = |k: f64| JointState {
+                position: rest.position + k * (s.position - rest.position),
+                velocity: rest.velocity + k * (s.velocity - rest.velocity),
+                acceleration: rest.acceleration + k * (s.acceleration - rest.acceleration),
+            };
+            let (mut ok, mut bad) = (0.0, 1.0);
+            for _ in 0..BLEND_STEPS {
+                let k = 0.5 * (ok + bad);
+                if within(&blend(k)) {
+                    ok = k;
+                } else {
+                    bad = k;
+                }
+            }
+            self.state = blend(ok);
+            // The state is on neither plan: the next step plans anew.
+            self.planned = false;
+        } else {
+            self.state = rest;
+        }
+        self.state
+    }
+}
+
+/// Halvings of the blend between a step and the bound's ([`Follower::step_within`]).
+const BLEND_STEPS: usize = 8;
+
 /// `goal` with its acceleration and its speed over its horizon capped at
 /// [`TARGET_SPEED_SHARE`] of the limits.
 fn capped(lim: &JointLimits, goal: Goal) -> Goal {
@@ -385,6 +491,83 @@ mod tests {
         // After the step the target is at 0.2 + 0.5 * 2.0.
         assert!((s.position - 1.2).abs() < 1e-6, "{s:?}");
         assert!((s.velocity - 0.5).abs() < 1e-6, "{s:?}");
+    }
+
+    #[test]
+    fn a_joint_on_its_goal_is_not_held_back_by_its_bounds() {
+        let dt = 0.005;
+        let (mut free, mut bound) = (
+            Follower::new(JointState::at_rest(0.0)),
+            Follower::new(JointState::at_rest(0.0)),
+        );
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let goal = Goal {
+                position: 0.5 * t,
+                velocity: 0.5,
+                acceleration: 0.0,
+                horizon: 1.0,
+            };
+            // The places told: from where the goal is to one interval
+            // (30 ms) ahead of it.
+            let a = free.step(&lim(), goal, dt);
+            let b = bound.step_within(&lim(), goal, dt, (0.5 * t, 0.5 * (t + 0.03)));
+            if k > 300 {
+                // Caught up (no faster than it could stop where the goal
+                // would: later than without bounds), on the goal within
+                // half a millisecond of its motion, moving with it.
+                assert!((b.position - a.position).abs() < 2.5e-4, "{k}: {a:?} {b:?}");
+                assert!((b.velocity - 0.5).abs() < 1e-3, "{k}: {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_turn_is_overrun_by_no_more_than_the_stop_it_forces() {
+        // A goal moving up at 1.5 units/s that turns back at 1.0: told
+        // nothing beyond 1.0, the joint goes past it by its quickest stop
+        // from where it was when the turn came, and not further (without
+        // bounds it catches up with the goal's speed and goes further).
+        let dt = 0.005;
+        let mut f = Follower::new(JointState::at_rest(0.0));
+        let (mut turned, mut highest) = (None, f64::NEG_INFINITY);
+        for k in 0..600 {
+            let t = k as f64 * dt;
+            let (goal, bounds) = if 1.5 * t < 1.0 {
+                (
+                    Goal {
+                        position: 1.5 * t,
+                        velocity: 1.5,
+                        acceleration: 0.0,
+                        horizon: 1.0,
+                    },
+                    (0.0, (1.5 * t + 0.05).min(1.0)),
+                )
+            } else {
+                let back = 1.0 - 1.5 * (t - 1.0 / 1.5);
+                (
+                    Goal {
+                        position: back,
+                        velocity: -1.5,
+                        acceleration: 0.0,
+                        horizon: 1.0,
+                    },
+                    (back - 0.05, 1.0),
+                )
+            };
+            if turned.is_none() && 1.5 * t >= 1.0 {
+                turned = Some(stop_position(&lim(), &f.state()));
+            }
+            let s = f.step_within(&lim(), goal, dt, bounds);
+            if k % 50 == 0 {
+                // The speed limit is kept (the goal's own is 1.5 of 2).
+                assert!(s.velocity.abs() <= 2.0 + 1e-9, "{s:?}");
+            }
+            highest = highest.max(s.position);
+        }
+        let allowed = turned.expect("it turned");
+        assert!(allowed > 1.0, "{allowed}");
+        assert!(highest <= allowed + 1e-9, "{highest} beyond {allowed}");
     }
 
     #[test]

@@ -244,6 +244,18 @@ impl LivePath {
         self.references[j].goal(x, &self.limits[j])
     }
 
+    /// Where joint `j`'s reference was told to go and has not left behind
+    /// ([`Reference::reach`]): its follower's stop is kept within, or
+    /// within where the reference itself would stop
+    /// ([`Follower::step_within`]). Unbounded while stopping (timeout,
+    /// pause).
+    fn bounds(&self, j: usize) -> (f64, f64) {
+        if self.mode != Mode::Following {
+            return (f64::NEG_INFINITY, f64::INFINITY);
+        }
+        self.references[j].reach()
+    }
+
     /// Begins the cycle of time `now`: the timeout is judged by it.
     pub fn begin_cycle(&mut self, now: f64) {
         self.now = now;
@@ -267,7 +279,8 @@ impl LivePath {
             // there.
             for j in 0..self.cmd.len() {
                 let g = self.goal(j, self.last);
-                let s = self.followers[j].step(&self.limits[j], g, dt);
+                let bounds = self.bounds(j);
+                let s = self.followers[j].step_within(&self.limits[j], g, dt, bounds);
                 self.cmd[j] = s;
                 self.envelopes[j].commanded(&self.limits[j], x, s);
             }

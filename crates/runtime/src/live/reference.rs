@@ -169,9 +169,20 @@ impl Reference {
                 let speed = (p1 - p0) / span;
                 let cap = TARGET_SPEED_SHARE * lim.max_velocity;
                 if speed.abs() > cap {
-                    // Faster than the joint may follow: as fast as the
-                    // limits allow to the piece's end.
-                    return Goal::at(p1);
+                    // Faster than the joint may follow: the reference's
+                    // place, moving at the share of the speed limit a
+                    // target is taken at, so that the joint goes as fast as
+                    // its limits allow after it (told to rest at the
+                    // piece's end instead, it would brake for it every
+                    // piece); its stop is kept within the points by the
+                    // follower's bounds.
+                    let tau = (x - t0).clamp(0.0, span);
+                    return Goal {
+                        position: p0 + speed * tau,
+                        velocity: cap.copysign(speed),
+                        acceleration: 0.0,
+                        horizon: (t1 - x).max(BEND_HORIZON),
+                    };
                 }
                 // The piece bends as the speed changes from the piece
                 // before (a parabola through both ends), so that a
@@ -208,6 +219,17 @@ impl Reference {
                 Goal::at(self.from.1)
             }
         }
+    }
+
+    /// The least and greatest position the reference has between where
+    /// its current piece starts and its last point ahead: every place it
+    /// was told to go and has not left behind.
+    pub fn reach(&self) -> (f64, f64) {
+        self.ahead
+            .iter()
+            .fold((self.from.1, self.from.1), |(lo, hi), &(_, p)| {
+                (lo.min(p), hi.max(p))
+            })
     }
 
     /// Passes the points due by `x`.

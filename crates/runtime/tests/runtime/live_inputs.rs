@@ -212,9 +212,17 @@ fn reversal_wiggles_at_1_and_2_hz_stay_in_the_envelope() {
                 20.0 * (2.0 * std::f64::consts::PI * f * (t - 0.2)).sin()
             }
         };
-        let (rec, sent) = stream_30hz(800, wiggle);
+        let (rec, sent, pan) = stream_30hz_reported(800, wiggle);
         let worst = check(&rec, &sent);
-        println!("{f} Hz: largest excess over the envelope {worst:.2} deg");
+        println!("{f} Hz: largest excess over the envelope {worst:.2} deg, reported {pan:?}");
+        if f == 2.0 {
+            // 20 deg at 2 Hz (251 deg/s) is beyond the pan's limits: the
+            // run reports its excursions beyond the targets, each within
+            // the stopping allowance it reports with it.
+            assert!(pan.overshoot > 1.0, "{pan:?}");
+            assert!(pan.allowance >= pan.overshoot - TOLERANCE, "{pan:?}");
+            assert!(pan.beyond_allowance <= TOLERANCE, "{pan:?}");
+        }
         if f == 1.0 {
             // 20 deg at 1 Hz takes 126 deg/s and 790 deg/s^2 of the pan's
             // 900: the follower is left little to correct with, and lags
@@ -251,14 +259,11 @@ fn a_flick_out_and_back_turns_back_within_its_stopping_distance() {
     };
     let (rec, sent, pan) = stream_30hz_reported(300, flick);
     let worst = check(&rec, &sent);
-    // The run reports the excursion and its allowance as measured here
-    // (its envelope also counts where the joint was at the oldest target
-    // of the window, this test where it was 0.5 s before).
+    // The run's report agrees with what is measured here (its envelope
+    // also counts where the joint was at the oldest target of the window,
+    // this test's where it was 0.5 s before: it is never the larger).
     println!("flick: {pan:?}, measured {worst:.3}");
-    assert!(
-        pan.overshoot > 1.0 && pan.allowance >= pan.overshoot - TOLERANCE,
-        "{pan:?}"
-    );
+    assert!(pan.overshoot <= worst + 1e-6, "{pan:?}");
     assert!(pan.beyond_allowance <= TOLERANCE, "{pan:?}");
     let c = rec.commanded(0);
     // It went out (toward the flick's far end) and came back.
@@ -279,14 +284,14 @@ fn a_target_beyond_a_limit_is_followed_to_the_limit_only() {
 
 #[test]
 fn a_stream_that_stalls_stops_within_its_envelope_and_allowance() {
-    // A ramp at 60 deg/s that stops coming at 0.6 s.
+    // A ramp at 60 deg/s that stops coming at 1 s.
     let mut run = live_run();
     let tx = run.targets();
     let mut sent = Vec::new();
     let mut slot = 1u32;
-    let rec = record(&mut run, 300, |k| {
+    let rec = record(&mut run, 380, |k| {
         let now = k as f64 * PERIOD;
-        while f64::from(slot) / 30.0 <= now + 1e-9 && f64::from(slot) / 30.0 < 0.6 {
+        while f64::from(slot) / 30.0 <= now + 1e-9 && f64::from(slot) / 30.0 < 1.0 {
             let s = f64::from(slot) / 30.0;
             send(&tx, s, 60.0 * s);
             sent.push((now, 60.0 * s, 60.0 * s));
@@ -295,9 +300,11 @@ fn a_stream_that_stalls_stops_within_its_envelope_and_allowance() {
     });
     let worst = check(&rec, &sent);
     println!("stall: largest excess over the envelope {worst:.2} deg");
-    // Once caught up with the abrupt start (60 deg/s at once, 0.45 s at
-    // the pan's jerk limit), one interval behind until the stall.
-    let (l, _) = lag_until(&rec, |t| 60.0 * t, 0.45, 0.6);
+    // Once caught up with the abrupt start (60 deg/s at once: the
+    // follower catches up no faster than it could stop where the
+    // reference would, about 0.6 s at the pan's gentle limits), one
+    // interval behind until the stall.
+    let (l, _) = lag_until(&rec, |t| 60.0 * t, 0.6, 1.0);
     assert!(l <= LAG_BOUND, "lag {l}");
 }
 
@@ -332,8 +339,10 @@ fn a_jittered_30_hz_stream_of_a_smooth_path_is_followed_one_interval_behind() {
     let (l, e) = lag(&rec, source, 0.3);
     println!("jittered: lag {:.0} ms, RMS {e:.2} deg", l * 1e3);
     assert!(l <= LAG_BOUND + 0.005, "lag {l}");
-    // (0.5 deg without the gap: the gap's targets come late.)
-    assert!(e <= 0.75, "RMS {e}");
+    // (0.5 deg without the gap: the gap's targets come late, and the
+    // follower catches up after it no faster than it could stop where its
+    // reference would: 3 deg behind for 0.2 s.)
+    assert!(e <= 1.2, "RMS {e}");
 }
 
 /// A uniform number in [-1, 1) from a simple generator (repeatable).

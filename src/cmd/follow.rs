@@ -95,30 +95,6 @@ pub enum FollowLimits {
     Robot,
 }
 
-/// With model limits, each joint reaches its acceleration limit in this
-/// long (its jerk limit): short enough to keep up with raw goal writes,
-/// long enough that the acceleration never steps.
-const JERK_RAMP_S: f64 = 0.05;
-
-/// `robot` with each joint's speed, acceleration and jerk limits raised to
-/// what its servo's model can do (a model with no stated ramp keeps the
-/// robot file's).
-fn with_model_limits(mut robot: Robot) -> Robot {
-    let units = robot.units;
-    for joint in robot.buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
-        if let Some((v, a)) = joint.model.fastest_profile() {
-            let (v, a) = (
-                units.from_rad(v.to_radians()),
-                units.from_rad(a.to_radians()),
-            );
-            joint.max_velocity = v;
-            joint.max_acceleration = a;
-            joint.max_jerk = Some(a / JERK_RAMP_S);
-        }
-    }
-    robot
-}
-
 /// Errors of the follower against the leader are counted from this time
 /// on, s (the follower first catches up with wherever the leader is).
 const ERRORS_FROM: f64 = 0.5;
@@ -248,7 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
     )?;
     let robot = match args.limits {
-        FollowLimits::Model => with_model_limits(robot),
+        FollowLimits::Model => robot.with_model_limits(),
         FollowLimits::Robot => robot,
     };
     let leader_path = args.leader_robot.as_ref().unwrap_or(&args.robot.path);
@@ -636,6 +612,7 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use servobus_runtime::config::MODEL_JERK_RAMP_S;
 
     #[test]
     fn model_limits_are_the_servos_top_speed_and_fastest_ramp_in_the_robots_units() {
@@ -645,12 +622,12 @@ mod tests {
         )
         .expect("the built-in arm loads");
         let before: Vec<(f64, f64)> = robot.joints().map(|j| (j.min, j.max)).collect();
-        let fast = with_model_limits(robot.clone());
+        let fast = robot.clone().with_model_limits();
         for ((j, slow), range) in fast.joints().zip(robot.joints()).zip(&before) {
             let (v, a) = j.model.fastest_profile().expect("STS servos");
             assert!((robot.units.to_rad(j.max_velocity) - v.to_radians()).abs() < 1e-9);
             assert!((robot.units.to_rad(j.max_acceleration) - a.to_radians()).abs() < 1e-9);
-            assert_eq!(j.max_jerk, Some(j.max_acceleration / JERK_RAMP_S));
+            assert_eq!(j.max_jerk, Some(j.max_acceleration / MODEL_JERK_RAMP_S));
             assert!(j.max_velocity > slow.max_velocity, "{}", j.name);
             // The position limits are the robot file's.
             assert_eq!((j.min, j.max), *range, "{}", j.name);

@@ -67,7 +67,7 @@ pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, M
 pub use pose_arg::{parse_pose, PoseError};
 pub use robot::{
     load_robot, BusConfig, CalibrationChoice, JointConfig, Robot, RobotCalibration, RobotOptions,
-    RobotSource,
+    RobotSource, MODEL_JERK_RAMP_S,
 };
 pub use spatial::{spatial_summary, FeetSummary, SpatialSummary, ToolSummary};
 pub use tool::{ik_reason, TOOL_FRAME};

@@ -137,20 +137,6 @@ const CASES: [Case; 7] = [
     },
 ];
 
-/// `robot` with every joint's speed, acceleration and jerk limits at what
-/// its servo model can do (a 50 ms jerk ramp), as `follow` does.
-fn with_model_limits(mut robot: Robot) -> Robot {
-    let units = robot.units;
-    for j in robot.buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
-        if let Some((v, a)) = j.model.fastest_profile() {
-            j.max_velocity = units.from_rad(v.to_radians());
-            j.max_acceleration = units.from_rad(a.to_radians());
-            j.max_jerk = Some(j.max_acceleration / 0.05);
-        }
-    }
-    robot
-}
-
 /// The commanded pan (the robot file's units: degrees), one per cycle, following `source` sent at
 /// `hz`, stamped with each slot's time.
 fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, String> {
@@ -240,7 +226,7 @@ fn figures(pan: &[f64], hz: f64, source: fn(f64) -> f64) -> (f64, f64, f64, f64)
 fn main() -> Result<(), String> {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots/so101.yaml");
     let gentle = load_robot(&file, &RobotOptions::default()).map_err(|e| e.to_string())?;
-    let model = with_model_limits(gentle.clone());
+    let model = gentle.clone().with_model_limits();
     println!(
         "{:<26}{:>6}{:>8}{:>8}{:>8}{:>8}{:>10}",
         "input (pan)", "Hz", "limits", "over", "lag ms", "rms", "jerk k/s3"

@@ -192,9 +192,8 @@ pub(crate) mod cut {
         let transport = loop {
             match SerialTransport::open(port, 1_000_000, SystemClock::new()) {
                 Ok(t) => break t,
-                Err(e) if tries < 100 => {
+                Err(_) if tries < 100 => {
                     tries += 1;
-                    let _ = e;
                     std::thread::sleep(Duration::from_millis(100));
                 }
                 Err(e) => panic!("pty {port}: {e:?}"),

@@ -323,7 +323,12 @@ impl Follower {
     ) -> JointState {
         let from = self.state;
         let s = self.step(lim, goal, dt);
-        if s == from || !(bounds.0 <= bounds.1) {
+        // (Bounds that are not numbers, or crossed, bound nothing.)
+        let ordered = matches!(
+            bounds.0.partial_cmp(&bounds.1),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        );
+        if s == from || !ordered {
             return s;
         }
         let end = stop_position(lim, &s);

@@ -13,12 +13,26 @@ pub struct Recording {
     pub samples: Vec<Vec<f64>>,
     /// Robot joints the file does not name (held at their rest position).
     pub missing: Vec<String>,
+    /// The largest rounding error of the positions as written, rad: half
+    /// a unit of the finest decimal in the file (0 for numbers written in
+    /// exponent form, taken as exact).
+    pub resolution: f64,
+    /// What was read of a `play --log` file: its `planned_<unit>` column,
+    /// or (an older log) `measured_<unit>`; `None` for `time_s,<joint>...`.
+    pub column: Option<String>,
 }
 
 /// Reads a recorded path for `robot`: either the CSV that `play --log`
-/// writes (one row per cycle and joint; the measured position where there
-/// is one, else the commanded one) or a CSV of `time_s,<joint>...` (a
+/// writes (one row per cycle and joint) or a CSV of `time_s,<joint>...` (a
 /// column per joint, in degrees, or in radians when named `<joint>_rad`).
+///
+/// Of a log, the `planned_<unit>` column is read: the path that run
+/// played, within every limit by construction, on the run's own clock.
+/// The `measured_<unit>` column is what the servos did of it, a tracking
+/// error and a position tick (0.09 deg on an STS3215) away, and
+/// `commanded_<unit>` is the same path sent `lead` early; a log without a
+/// planned column (an older one) gives its measured positions, else the
+/// commanded ones.
 pub fn read_recording(
     path: &Path,
     robot: &servobus_runtime::config::Robot,
@@ -58,6 +72,11 @@ pub fn read_recording(
             )
         })
     };
+    // The finest decimal place of a position read (None: exponent form),
+    // the unit they are in, and which column of a log was read.
+    let mut decimals: Option<u32> = Some(0);
+    let mut file_units = Units::Deg;
+    let mut column = None;
     let Some(time_col) = col("time_s") else {
         return Err(refuse(1, 1, "no `time_s` column".to_owned()).into());
     };
@@ -72,6 +91,9 @@ pub fn read_recording(
             let what = "a `play --log` file needs a commanded_<unit> column";
             return Err(refuse(1, 1, what.to_owned()).into());
         };
+        let planned = unit_of("planned_");
+        file_units = units;
+        column = Some(header[planned.or(measured).map_or(cmd, |(c, _)| c)].clone());
         for (i, row) in reader.records().enumerate() {
             let row = row.map_err(|e| refuse(i + 2, 1, e.to_string()))?;
             check_rows(path, i)?;
@@ -83,10 +105,13 @@ pub fn read_recording(
             else {
                 continue;
             };
-            let value = match measured.map(|(c, _)| num(c)).transpose()?.flatten() {
-                Some(v) => v,
-                None => num(cmd)?.ok_or_else(|| bad(i + 2, "no position"))?,
+            let first = planned.or(measured).map(|(c, _)| c);
+            let (c, value) = match first.map(|c| num(c).map(|v| v.map(|v| (c, v)))) {
+                Some(Ok(Some(found))) => found,
+                Some(Err(e)) => return Err(e.into()),
+                _ => (cmd, num(cmd)?.ok_or_else(|| bad(i + 2, "no position"))?),
             };
+            decimals = finest(decimals, row.get(c));
             series[j].push((t, units.to_rad(value)));
         }
     } else {
@@ -115,6 +140,8 @@ pub fn read_recording(
             for (j, c) in cols.iter().enumerate() {
                 if let Some((c, u)) = c {
                     let v = num(*c)?.ok_or_else(|| bad(i + 2, "a position is missing"))?;
+                    decimals = finest(decimals, row.get(*c));
+                    file_units = *u;
                     series[j].push((t, u.to_rad(v)));
                 }
             }
@@ -147,11 +174,29 @@ pub fn read_recording(
         .filter(|(_, s)| s.is_empty())
         .map(|(n, _)| n.to_string())
         .collect();
+    // Half a unit of the finest decimal place: the most any number was
+    // rounded by (in exponent form, taken as exact).
+    let resolution = decimals.map_or(0.0, |d| {
+        file_units.to_rad(0.5 * 10f64.powi(-(d.min(300) as i32)))
+    });
     Ok(Recording {
         times,
         samples,
         missing,
+        resolution,
+        column,
     })
+}
+
+/// The finest decimal place so far (`None` once a number in exponent form
+/// was read: its rounding is not told by its places) and that of `text`.
+fn finest(so_far: Option<u32>, text: Option<&str>) -> Option<u32> {
+    let text = text.unwrap_or_default().trim();
+    if text.contains(['e', 'E']) {
+        return None;
+    }
+    let places = text.split_once('.').map_or(0, |(_, f)| f.len() as u32);
+    so_far.map(|d| d.max(places))
 }
 
 /// Refuses row `index` (0-based, after the header) past

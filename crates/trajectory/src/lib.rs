@@ -27,9 +27,12 @@
 //!   keyframe, joint, peak and limit ([`PlanError::LimitExceeded`],
 //!   [`PlanError::TooSoon`]) unless [`OnLimit::Stretch`] is set.
 //! - Mixed timed and untimed keyframes, and repeats ([`PlanOptions`]).
-//! - **Recorded paths** ([`track`]): a dense recording filtered to the
-//!   limits by time-optimal tracking, forwards and backwards, so that the
-//!   result is not late.
+//! - **Recorded paths** ([`track`], [`track_with`]): a dense recording
+//!   played as a cubic B-spline through its samples, exactly where it keeps
+//!   within the limits (to the resolution of its numbers), and tracked
+//!   forwards and backwards where it does not, so that the result is not
+//!   late; each stretch off the recording is a [`Departure`] naming the
+//!   limit broken there.
 //! - **Online changes** from any state: [`retarget`] (to a new target,
 //!   synchronised, jerk limited) and [`stop`] (to rest in minimal time).
 //!
@@ -110,5 +113,5 @@ pub use limits::JointLimits;
 pub use online::{retarget, stop};
 pub use plan::{plan, Keyframe, OnLimit, PlanOptions};
 pub use spline::TimedShape;
-pub use track::{track, Tracked};
+pub use track::{track, track_with, Departure, TrackOptions, Tracked};
 pub use trajectory::{Cursor, JointState, JointSummary, SegmentTiming, Trajectory};

@@ -96,6 +96,47 @@ impl Piece {
         lo.abs().max(hi.abs())
     }
 
+    /// The coefficients of this polynomial about absolute time `t`:
+    /// `q(y) = p(t + y)` (a Taylor shift, by Horner's scheme).
+    pub fn about(&self, t: f64) -> [f64; 6] {
+        let x0 = t - self.t0;
+        let mut c = self.c;
+        if x0 != 0.0 {
+            for i in 0..5 {
+                for k in (i..5).rev() {
+                    c[k] += x0 * c[k + 1];
+                }
+            }
+        }
+        c
+    }
+
+    /// The same polynomial on `[t0, t1]` (a part of the piece, or beyond
+    /// it).
+    pub fn part(&self, t0: f64, t1: f64) -> Piece {
+        Piece {
+            t0,
+            t1,
+            c: self.about(t0),
+        }
+    }
+
+    /// The piece with time reversed about `end / 2`: `q(s) = p(end - s)`,
+    /// on `[end - t1, end - t0]`.
+    pub fn mirrored(&self, end: f64) -> Piece {
+        let mut c = self.about(self.t1);
+        for (k, ck) in c.iter_mut().enumerate() {
+            if k % 2 == 1 {
+                *ck = -*ck;
+            }
+        }
+        Piece {
+            t0: end - self.t1,
+            t1: end - self.t0,
+            c,
+        }
+    }
+
     /// The same piece with time stretched by `s` around `origin`:
     /// `q(t) = p(origin + (t - origin) / s)`.
     pub fn stretched(&self, origin: f64, s: f64) -> Self {
@@ -251,6 +292,27 @@ mod tests {
                 shi = shi.max(y);
             }
             assert!((lo - slo).abs() < 1e-6 && (hi - shi).abs() < 1e-6, "k={k}");
+        }
+    }
+
+    #[test]
+    fn shifted_and_mirrored_pieces_are_the_same_polynomial() {
+        let p = Piece {
+            t0: 0.5,
+            t1: 1.5,
+            c: [0.3, -1.0, 0.5, 2.0, -1.7, 0.4],
+        };
+        let part = p.part(0.8, 1.2);
+        let mirrored = p.mirrored(3.0);
+        for i in 0..=10 {
+            let t = 0.8 + 0.04 * i as f64;
+            let (a, b) = (p.eval_local(t - p.t0), part.eval_local(t - part.t0));
+            assert!((a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12);
+            assert!((a.2 - b.2).abs() < 1e-12);
+            // Reversed time: the same position, the opposite velocity.
+            let m = mirrored.eval_local(3.0 - t - mirrored.t0);
+            assert!((a.0 - m.0).abs() < 1e-12 && (a.1 + m.1).abs() < 1e-12);
+            assert!((a.2 - m.2).abs() < 1e-12);
         }
     }
 

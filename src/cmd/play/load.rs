@@ -20,7 +20,17 @@ pub(super) fn check_outputs(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A recording played back: what the filter did to it.
+/// Departures from a recording smaller than this are not reported, deg:
+/// half a position tick of a 4096-tick servo (0.088 deg), below what the
+/// servos can show, and far above what the rounding of a log's numbers
+/// makes the filter leave the recording by (about 1e-6 deg).
+const REPORTED_DEPARTURE_DEG: f64 = 0.044;
+
+/// The most departures the text report names; the JSON report has them
+/// all.
+const NAMED_DEPARTURES: usize = 3;
+
+/// A recording played back: how closely, and where and why it departs.
 pub(super) struct RecordingInfo {
     samples: usize,
     span_s: f64,
@@ -28,27 +38,73 @@ pub(super) struct RecordingInfo {
     max_rad: Vec<f64>,
     rms_rad: Vec<f64>,
     missing: Vec<String>,
+    /// The log's column read, if a log.
+    column: Option<String>,
+    /// How long the path moves before the recording's first sample, s.
+    lead_s: f64,
+    /// Departures above [`REPORTED_DEPARTURE_DEG`], largest first.
+    departures: Vec<servobus_trajectory::Departure>,
 }
 
 impl RecordingInfo {
-    /// The worst joint's departure, in one line.
+    /// The worst joint's departure, and where and why the path leaves the
+    /// recording, in one line.
     pub(super) fn describe(&self, u: Units) -> String {
         let worst = (0..self.max_rad.len())
             .max_by(|&a, &b| self.max_rad[a].total_cmp(&self.max_rad[b]))
             .unwrap_or(0);
+        let what = self
+            .column
+            .as_deref()
+            .map_or_else(String::new, |c| format!(" of {c}"));
         let mut text = format!(
-            "recording: {} samples over {:.2} s, filtered to the limits; departs from it by at \
-             most {:.2} {u} ({}), rms {:.2} {u}",
+            "recording: {} samples{what} over {:.2} s, played through them within the limits; \
+             departs from it by at most {:.2} {u} ({}), rms {:.2} {u}",
             self.samples,
             self.span_s,
             u.from_rad(self.max_rad.get(worst).copied().unwrap_or(0.0)),
             self.names.get(worst).map_or("?", String::as_str),
             u.from_rad(self.rms_rad.get(worst).copied().unwrap_or(0.0)),
         );
+        if self.departures.is_empty() {
+            text += ", nowhere by more than a position tick";
+        } else {
+            let named: Vec<String> = self
+                .departures
+                .iter()
+                .take(NAMED_DEPARTURES)
+                .map(|d| self.departure(d, u))
+                .collect();
+            text += &format!("; where it breaks a limit: {}", named.join("; "));
+            let more = self.departures.len().saturating_sub(NAMED_DEPARTURES);
+            if more > 0 {
+                text += &format!("; and {more} more (--json lists them)");
+            }
+        }
+        if self.lead_s > 0.0 {
+            text += &format!(
+                "; the path starts {:.3} s before its first sample",
+                self.lead_s
+            );
+        }
         if !self.missing.is_empty() {
             text += &format!("; not recorded, held at rest: {}", self.missing.join(", "));
         }
         text
+    }
+
+    /// One departure in words: joint, when, which limit, how far.
+    fn departure(&self, d: &servobus_trajectory::Departure, u: Units) -> String {
+        let (peak, limit, unit) = magnitudes(d, u);
+        format!(
+            "{} {:.2}-{:.2} s, {} {peak:.1} beyond its limit {limit:.1} {unit} (off by up to {:.2} {u} at {:.2} s)",
+            self.names.get(d.joint).map_or("?", String::as_str),
+            d.start,
+            d.end,
+            d.quantity,
+            u.from_rad(d.max_departure),
+            d.at,
+        )
     }
 
     pub(super) fn json(&self, u: Units) -> serde_json::Value {
@@ -64,12 +120,44 @@ impl RecordingInfo {
                 })
             })
             .collect();
+        let departures: Vec<serde_json::Value> = self
+            .departures
+            .iter()
+            .map(|d| {
+                let (peak, limit, unit) = magnitudes(d, u);
+                serde_json::json!({
+                    "joint": self.names.get(d.joint).map_or("?", String::as_str),
+                    "start_s": d.start,
+                    "end_s": d.end,
+                    "limit": d.quantity.to_string(),
+                    "peak": peak,
+                    "max": limit,
+                    "unit": unit,
+                    "max_departure": u.from_rad(d.max_departure),
+                    "at_s": d.at,
+                })
+            })
+            .collect();
         serde_json::json!({
             "samples": self.samples,
             "span_s": self.span_s,
+            "column": self.column,
+            "lead_s": self.lead_s,
             "joints": joints,
+            "departures": departures,
         })
     }
+}
+
+/// A departure's peak and limit in the robot's units, and their unit.
+fn magnitudes(d: &servobus_trajectory::Departure, u: Units) -> (f64, f64, String) {
+    let unit = match d.quantity {
+        servobus_trajectory::Quantity::Position => u.to_string(),
+        servobus_trajectory::Quantity::Velocity => format!("{u}/s"),
+        servobus_trajectory::Quantity::Acceleration => format!("{u}/s^2"),
+        _ => format!("{u}/s^3"),
+    };
+    (u.from_rad(d.peak), u.from_rad(d.limit), unit)
 }
 
 pub(super) type Loaded = (Motion, Robot, Trajectory, Option<RecordingInfo>, f64);
@@ -130,10 +218,21 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         )));
     }
     let limits = servobus_runtime::config::joint_limits(&robot);
-    let tracked = servobus_trajectory::track(&limits, &rec.times, &rec.samples, 1.0 / rate_hz)
+    let options = servobus_trajectory::TrackOptions {
+        step: 1.0 / rate_hz,
+        resolution: rec.resolution,
+    };
+    let tracked = servobus_trajectory::track_with(&limits, &rec.times, &rec.samples, &options)
         .map_err(|e| {
             anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
         })?;
+    let reported = Units::Deg.to_rad(REPORTED_DEPARTURE_DEG);
+    let mut departures: Vec<_> = tracked
+        .departures
+        .into_iter()
+        .filter(|d| d.max_departure > reported)
+        .collect();
+    departures.sort_by(|a, b| b.max_departure.total_cmp(&a.max_departure));
     let info = RecordingInfo {
         samples: rec.times.len(),
         span_s: rec.times[rec.times.len() - 1] - rec.times[0],
@@ -141,6 +240,9 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         max_rad: tracked.max_deviation,
         rms_rad: tracked.rms_deviation,
         missing: rec.missing,
+        column: rec.column,
+        lead_s: tracked.recording_start,
+        departures,
     };
     Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
 }

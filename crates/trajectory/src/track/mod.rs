@@ -1,93 +1,204 @@
 //! Recorded paths: a dense recording (a hand-guided take, a logged run)
-//! filtered into a path that respects every velocity, acceleration and
-//! jerk limit without lagging behind the recording.
+//! played as a timed path through its samples, departing from it only
+//! where it breaks a limit, and saying where and why.
 //!
 //! Method, per joint:
 //!
-//! 1. **Forward tracker.** Every `step` seconds, the quickest jerk-limited
-//!    move from the tracker's state to the recording's position then
-//!    ([`retarget`](crate::retarget): time-optimal, ends at rest) is
-//!    planned, and its first `step` is kept. The tracker follows the
-//!    recording as closely as the limits allow, but a little late: it
-//!    only reacts to what it has seen.
-//! 2. **Backward tracker.** The same on the recording played backwards:
-//!    in forward time it is early by about as much.
-//! 3. **Average.** The path is the mean of the two. Velocity, acceleration
+//! 1. **Reference.** The C2 cubic spline through every sample at its time,
+//!    at rest at both ends ([`TimedShape::Cubic`](crate::TimedShape)): the
+//!    smoothest path that passes through the recording, with no filter,
+//!    delay or resampling.
+//! 2. **Forward pass.** A step at a time, the reference's own pieces where
+//!    they keep within the velocity, acceleration, jerk and position
+//!    limits (and end where the joint can still keep within them);
+//!    elsewhere a time-optimal pursuit of the reference that rejoins it
+//!    exactly as soon as the limits let it (`pass`). It is exactly the
+//!    recording where the recording is within the limits, and late where
+//!    it is not: it only reacts to what it has reached.
+//! 3. **Backward pass.** The same on the reference played backwards: in
+//!    forward time it is early by about as much where it departs.
+//! 4. **Average.** The path is the mean of the two. Velocity, acceleration
 //!    and jerk limits are symmetric bounds, so the mean of two paths within
-//!    them is within them too; the lateness of one and the earliness of the
-//!    other cancel (exactly so for a steady ramp), so the result is not
-//!    delayed. It starts at rest at the recording's first position and
-//!    ends at rest at its last.
+//!    them is within them too; where both are on the reference, so is the
+//!    mean; where the recording breaks a limit, the lateness of one and
+//!    the earliness of the other cancel (exactly so for a steady ramp). It
+//!    starts at rest at the recording's first position and ends at rest at
+//!    its last.
 //!
-//! Unlike a moving average, nothing here trades accuracy for smoothness:
-//! where the recording is within the limits the trackers follow it, and
-//! only steps and noise beyond them are rounded off.
+//! Nothing is smoothed that the limits allow: the departures are exactly
+//! the stretches where one pass or the other had to leave the recording,
+//! each with the limit the recording breaks there ([`Departure`]). Rounding
+//! in a recording's numbers also breaks a limit now and then, by a hair
+//! and for a step, which costs a departure far below any servo's
+//! resolution: a caller says which departures are worth showing.
+
+mod pass;
+mod reference;
+mod report;
 
 use crate::error::{PlanError, Quantity};
 use crate::limits::{check_keyframe, validate_all};
-use crate::online::{finish, stop_phases};
+use crate::online::finish;
 use crate::piece::Piece;
-use crate::profile::{Acc, Phases};
-use crate::{retarget, JointLimits, JointState, Trajectory};
+use crate::{JointLimits, Trajectory};
+use pass::Reference;
 
-/// A recording filtered by [`track`], with how far it departs from the
-/// recording.
+/// A recording played by [`track`], with how far it departs from the
+/// recording, where and why.
 #[derive(Debug, Clone)]
 pub struct Tracked {
-    /// The filtered path, from rest at the first sample to rest at the last.
+    /// The path, from rest at the first sample to rest at the last.
     pub trajectory: Trajectory,
-    /// Time in the path of the recording's first sample, s: the path may
-    /// start moving a little earlier, to be on time for what follows.
+    /// Time in the path of the recording's first sample, s: the path
+    /// starts moving this much earlier when the recording starts with more
+    /// than the limits allow from rest (0 for one that starts at rest).
     pub recording_start: f64,
     /// Per joint, the largest distance between the path and the recording
-    /// (linearly interpolated) over the recording's time span.
+    /// at the recording's samples.
     pub max_deviation: Vec<f64>,
-    /// Per joint, the root mean square of that distance.
+    /// Per joint, the root mean square of that distance over the samples.
     pub rms_deviation: Vec<f64>,
+    /// Every stretch where the path leaves the recording, by joint then
+    /// time, however small (see the module documentation).
+    pub departures: Vec<Departure>,
 }
 
-/// Filters a recording (`times[i]` in s, increasing; `samples[i][j]` the
-/// position of joint `j` then) into a path within `limits`, re-planned
-/// every `step` s (the control period is a good choice).
+/// A stretch of one joint's path off the recording, and why: the limit
+/// the recording breaks there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Departure {
+    /// Joint index.
+    pub joint: usize,
+    /// Start and end of the stretch, s, in the recording's time (as its
+    /// samples' times are given). The path leaves the recording a little
+    /// before the place it breaks the limit, to keep to it on time.
+    pub start: f64,
+    /// End of the stretch, s (recording time).
+    pub end: f64,
+    /// The limit the recording breaks in the stretch: of those it breaks,
+    /// the one of lowest order (position, then velocity, acceleration,
+    /// jerk), the cause of the others.
+    pub quantity: Quantity,
+    /// The recording's peak of that quantity in the stretch (as a
+    /// magnitude; a position for [`Quantity::Position`]).
+    pub peak: f64,
+    /// The limit it breaks.
+    pub limit: f64,
+    /// The largest distance between the path and the recording's samples
+    /// in the stretch.
+    pub max_departure: f64,
+    /// When it is, s (recording time).
+    pub at: f64,
+}
+
+/// Options of [`track_with`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackOptions {
+    /// The tracking step, s (the control period is a good choice; not
+    /// finite or not positive: 5 ms).
+    pub step: f64,
+    /// The largest rounding error of a sample's numbers, in the samples'
+    /// unit (half a unit of the last decimal written: 0.00005 for numbers
+    /// with four decimals); 0 for exact numbers. Differences of samples
+    /// within this of each other cannot be told apart, so the recording is
+    /// followed where it keeps within the limits widened by what that
+    /// rounding makes of its differences: `2 r / h` in speed, `4 r / h^2`
+    /// in acceleration, `8 r / h^3` in jerk, samples `h` apart.
+    pub resolution: f64,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions {
+            step: 0.005,
+            resolution: 0.0,
+        }
+    }
+}
+
+/// Plays a recording (`times[i]` in s, increasing; `samples[i][j]` the
+/// position of joint `j` then) as a path within `limits` through its
+/// samples, tracked in steps of `step` s (the control period is a good
+/// choice); its numbers taken as exact ([`track_with`] says otherwise).
 ///
 /// # Errors
 ///
-/// Invalid limits; fewer than two samples, times not increasing or not
-/// finite, a sample of the wrong length ([`PlanError::WrongJointCount`]),
-/// not finite or outside the position limits ([`PlanError::OutOfRange`],
-/// with the sample's index as `keyframe`); a filtered path that would leave
-/// the position limits (a recording pressed against a limit with a step
-/// towards it) as [`PlanError::LimitExceeded`].
+/// As [`track_with`].
 pub fn track(
     limits: &[JointLimits],
     times: &[f64],
     samples: &[Vec<f64>],
     step: f64,
 ) -> Result<Tracked, PlanError> {
-    validate(limits, times, samples)?;
-    let step = if step.is_finite() && step > 0.0 {
-        step
-    } else {
-        0.005
+    let options = TrackOptions {
+        step,
+        ..TrackOptions::default()
     };
-    let (t0, end) = (times[0], times[times.len() - 1] - times[0]);
+    track_with(limits, times, samples, &options)
+}
+
+/// [`track`] with its options.
+///
+/// # Errors
+///
+/// Invalid limits; fewer than two samples, times not increasing or not
+/// finite, a sample of the wrong length ([`PlanError::WrongJointCount`]),
+/// not finite or outside the position limits ([`PlanError::OutOfRange`],
+/// with the sample's index as `keyframe`).
+pub fn track_with(
+    limits: &[JointLimits],
+    times: &[f64],
+    samples: &[Vec<f64>],
+    options: &TrackOptions,
+) -> Result<Tracked, PlanError> {
+    validate(limits, times, samples)?;
+    let step = if options.step.is_finite() && options.step > 0.0 {
+        options.step
+    } else {
+        TrackOptions::default().step
+    };
+    let t0 = times[0];
+    let rel: Vec<f64> = times.iter().map(|t| t - t0).collect();
+    let end = rel[rel.len() - 1];
+    let grid = reference::Grid::of(&rel, samples);
+    let resolution = if options.resolution.is_finite() {
+        options.resolution.max(0.0)
+    } else {
+        0.0
+    };
+
+    let mut reference = Vec::with_capacity(limits.len());
     let mut per_joint = Vec::with_capacity(limits.len());
-    let mut tail: f64 = 0.0;
+    let mut off = Vec::with_capacity(limits.len());
     let mut lead = Vec::with_capacity(limits.len());
+    let mut shown = Vec::with_capacity(limits.len());
+    let mut tail: f64 = 0.0;
     for (j, lim) in limits.iter().enumerate() {
-        let forward = |t: f64| reference(times, samples, j, t0 + t);
-        let backward = |t: f64| reference(times, samples, j, t0 + end - t);
-        let f = follow(lim, &forward, end, step)?;
-        let b = follow(lim, &backward, end, step)?;
-        // The backward path, in forward time, spans [end - b_len, end].
-        let b_len = b.last().map_or(0.0, |p| p.t1);
-        let f_len = f.last().map_or(0.0, |p| p.t1);
+        let lims = pass::Limits {
+            strict: *lim,
+            shown: widened(lim, resolution, grid.h),
+        };
+        let mut forward = reference::build(&grid, j, &lims.shown);
+        if let Some(last) = forward.last_mut() {
+            last.t1 = end;
+        }
+        let backward: Vec<Piece> = forward.iter().rev().map(|p| p.mirrored(end)).collect();
+        let (first, last) = (samples[0][j], samples[samples.len() - 1][j]);
+        let f = pass::run(&lims, &Reference::new(&forward, end), step, (first, last))?;
+        let b = pass::run(&lims, &Reference::new(&backward, end), step, (last, first))?;
+        // The backward pass, in forward time, spans [end - b_len, end].
+        let b_len = b.pieces.last().map_or(0.0, |p| p.t1);
+        let f_len = f.pieces.last().map_or(0.0, |p| p.t1);
         let start = (end - b_len).min(0.0);
-        let b_fwd: Vec<Piece> = b.iter().rev().map(|p| reversed(p, end)).collect();
-        let mean = average(&f, &b_fwd, start, f_len.max(end));
+        let b_fwd: Vec<Piece> = b.pieces.iter().rev().map(|p| p.mirrored(end)).collect();
+        per_joint.push(average(&f.pieces, &b_fwd, start, f_len.max(end)));
+        let mut stretches = f.off;
+        stretches.extend(b.off.iter().map(|&(a, z)| (end - z, end - a)));
+        off.push(stretches);
         lead.push(-start);
         tail = tail.max(f_len.max(end));
-        per_joint.push(mean);
+        reference.push(forward);
+        shown.push(lims.shown);
     }
     // Every joint starts at the same instant: the earliest start.
     let shift = lead.iter().copied().fold(0.0, f64::max);
@@ -109,13 +220,35 @@ pub fn track(
     // slowest one is done.
     let trajectory = finish(per_joint, &samples[samples.len() - 1], duration);
     check_positions(limits, &trajectory)?;
-    let (max_deviation, rms_deviation) = deviation(&trajectory, times, samples, shift, step);
+    let errors = report::errors(&trajectory, &rel, samples, shift);
+    let (max_deviation, rms_deviation) = report::summary(&errors, limits.len());
+    let context = report::Context {
+        limits,
+        shown: &shown,
+        reference: &reference,
+        rel: &rel,
+        t0,
+    };
+    let departures = report::departures(&context, &errors, &mut off);
     Ok(Tracked {
         trajectory,
         recording_start: shift,
         max_deviation,
         rms_deviation,
+        departures,
     })
+}
+
+/// `lim` widened by what a rounding of `resolution` makes of the
+/// differences of samples `h` apart.
+fn widened(lim: &JointLimits, resolution: f64, h: f64) -> JointLimits {
+    let r = resolution;
+    JointLimits {
+        max_velocity: lim.max_velocity + 2.0 * r / h,
+        max_acceleration: lim.max_acceleration + 4.0 * r / (h * h),
+        max_jerk: lim.max_jerk.map(|jm| jm + 8.0 * r / (h * h * h)),
+        ..*lim
+    }
 }
 
 fn validate(limits: &[JointLimits], times: &[f64], samples: &[Vec<f64>]) -> Result<(), PlanError> {
@@ -149,166 +282,8 @@ fn validate(limits: &[JointLimits], times: &[f64], samples: &[Vec<f64>]) -> Resu
     Ok(())
 }
 
-/// The recording of joint `j` at absolute time `t`, linearly interpolated
-/// and held before the first and after the last sample.
-fn reference(times: &[f64], samples: &[Vec<f64>], j: usize, t: f64) -> f64 {
-    let i = times.partition_point(|&x| x <= t);
-    if i == 0 {
-        return samples[0][j];
-    }
-    if i >= times.len() {
-        return samples[times.len() - 1][j];
-    }
-    let (ta, tb) = (times[i - 1], times[i]);
-    let (a, b) = (samples[i - 1][j], samples[i][j]);
-    a + (b - a) * (t - ta) / (tb - ta)
-}
-
-/// One tracker pass over `[0, end]` then on to rest at `r(end)`: pieces
-/// from time 0, starting at rest at `r(0)`. Each step of `step` s has one
-/// jerk (one acceleration without a jerk limit), the first of a short list
-/// (full jerk towards the target, half, none, half and full away) that
-/// keeps acceleration and speed within the limits and the quickest stop
-/// from the new state short of the target: a time-optimal bang-bang
-/// pursuit. When none does, the joint brakes along its quickest stop.
-fn follow(
-    lim: &JointLimits,
-    r: &dyn Fn(f64) -> f64,
-    end: f64,
-    step: f64,
-) -> Result<Vec<Piece>, PlanError> {
-    let steps = (end / step).ceil() as usize;
-    let mut out = Vec::with_capacity(steps + 16);
-    let mut scratch = Vec::with_capacity(16);
-    let mut x = JointState::at_rest(r(0.0));
-    let mut t = 0.0;
-    for k in 1..=steps {
-        let target = r((k as f64 * step).min(end));
-        let before = out.len();
-        x = pursue(lim, x, target, t, step, &mut scratch, &mut out);
-        debug_assert!(out.len() > before);
-        t += step;
-    }
-    // On to rest at the last position, quickest jerk-limited way.
-    let path = retarget(&[*lim], &[x], &[r(end)])?;
-    for p in &path.pieces[0] {
-        out.push(Piece {
-            t0: t + p.t0,
-            t1: t + p.t1,
-            c: p.c,
-        });
-    }
-    Ok(out)
-}
-
-/// Where the quickest stop from `x` ends.
-fn stop_position(lim: &JointLimits, x: JointState, scratch: &mut Vec<Piece>) -> f64 {
-    quickest_stop(lim, x, 0.0, scratch)
-}
-
-/// Replaces `scratch` with the pieces of the quickest stop from `x`, starting
-/// at time `t`; returns where it ends.
-fn quickest_stop(lim: &JointLimits, x: JointState, t: f64, scratch: &mut Vec<Piece>) -> f64 {
-    let mut ph = Phases::new();
-    stop_phases(x.velocity, x.acceleration, &Acc::of(lim), &mut ph);
-    scratch.clear();
-    ph.emit_from(t, &x, lim, scratch).1
-}
-
-/// One step of the pursuit from `x` at time `t`; appends its pieces and
-/// returns the state at `t + dt`.
-fn pursue(
-    lim: &JointLimits,
-    x: JointState,
-    target: f64,
-    t: f64,
-    dt: f64,
-    scratch: &mut Vec<Piece>,
-    out: &mut Vec<Piece>,
-) -> JointState {
-    let (vm, am) = (lim.max_velocity, lim.max_acceleration);
-    let tol = 1.0 + 1e-12;
-    let gap = target - stop_position(lim, x, scratch);
-    let s = if gap > 0.0 { 1.0 } else { -1.0 };
-    for f in [1.0, 0.5, 0.0, -0.5, -1.0] {
-        let piece = match lim.max_jerk {
-            Some(jm) => {
-                // Jerk, clamped so the acceleration ends within its limit.
-                let u = (f * s * jm).clamp((-am - x.acceleration) / dt, (am - x.acceleration) / dt);
-                Piece::jerk(t, dt, x.position, x.velocity, x.acceleration, u)
-            }
-            None => {
-                // Acceleration, clamped so the speed ends within its limit.
-                let a = (f * s * am).clamp((-vm - x.velocity) / dt, (vm - x.velocity) / dt);
-                Piece::jerk(t, dt, x.position, x.velocity, a, 0.0)
-            }
-        };
-        let (p, v, a) = piece.eval_local(dt);
-        let next = JointState {
-            position: p,
-            velocity: v,
-            acceleration: if lim.max_jerk.is_some() { a } else { 0.0 },
-        };
-        // Speed within the limit now and once the acceleration is ramped
-        // to zero (it is monotone over the step, so the ends suffice).
-        let ramp = lim.max_jerk.map_or(0.0, |jm| a * a.abs() / (2.0 * jm));
-        let peak_a = piece.peak(2);
-        if v.abs() > vm * tol || (v + ramp).abs() > vm * tol || peak_a > am * tol {
-            continue;
-        }
-        if piece.peak(1) > vm * tol {
-            continue;
-        }
-        let stop = stop_position(lim, next, scratch);
-        if (target - stop) * s >= 0.0 || (f == 0.0 && gap.abs() < 1e-12) {
-            out.push(piece);
-            return next;
-        }
-    }
-    // Brake along the quickest stop (first `dt` of it), then hold.
-    quickest_stop(lim, x, t, scratch);
-    let finite = lim.max_jerk.is_some();
-    let mut end = JointState::at_rest(x.position);
-    let mut covered = t;
-    for p in scratch.iter() {
-        if p.t0 >= t + dt {
-            break;
-        }
-        let q = Piece {
-            t0: p.t0,
-            t1: p.t1.min(t + dt),
-            c: p.c,
-        };
-        let (pp, vv, aa) = q.eval_local(q.duration());
-        end = JointState {
-            position: pp,
-            velocity: vv,
-            acceleration: if finite { aa } else { 0.0 },
-        };
-        covered = q.t1;
-        out.push(q);
-    }
-    if covered < t + dt {
-        out.push(Piece::hold(covered, t + dt, end.position));
-        end = JointState::at_rest(end.position);
-    }
-    end
-}
-
-/// Piece `p` with time reversed about `t = end / 2`: `q(s) = p(end - s)`.
-fn reversed(p: &Piece, end: f64) -> Piece {
-    let len = p.duration();
-    let (pos, vel, acc) = p.eval_local(len);
-    let jerk = 6.0 * p.c[3];
-    Piece {
-        t0: end - p.t1,
-        t1: end - p.t0,
-        c: [pos, -vel, 0.5 * acc, -jerk / 6.0, 0.0, 0.0],
-    }
-}
-
-/// The mean of two piecewise-cubic paths over `[from, to]`, each held at
-/// its end state outside its pieces (at rest, by construction).
+/// The mean of two piecewise-polynomial paths over `[from, to]`, each held
+/// at its end position outside its pieces (at rest, by construction).
 fn average(a: &[Piece], b: &[Piece], from: f64, to: f64) -> Vec<Piece> {
     let mut cuts: Vec<f64> = a
         .iter()
@@ -324,10 +299,10 @@ fn average(a: &[Piece], b: &[Piece], from: f64, to: f64) -> Vec<Piece> {
     for w in cuts.windows(2) {
         let (u0, u1) = (w[0], w[1]);
         let mid = 0.5 * (u0 + u1);
-        let ca = taylor(a, &mut ia, mid, u0);
-        let cb = taylor(b, &mut ib, mid, u0);
+        let ca = about(a, &mut ia, mid, u0);
+        let cb = about(b, &mut ib, mid, u0);
         let mut c = [0.0; 6];
-        for k in 0..4 {
+        for k in 0..6 {
             c[k] = 0.5 * (ca[k] + cb[k]);
         }
         out.push(Piece { t0: u0, t1: u1, c });
@@ -335,25 +310,27 @@ fn average(a: &[Piece], b: &[Piece], from: f64, to: f64) -> Vec<Piece> {
     out
 }
 
-/// Cubic coefficients, about `at`, of the piece of `ps` holding `mid`
-/// (`i`: a cursor moving forward); outside the pieces, the held end.
-fn taylor(ps: &[Piece], i: &mut usize, mid: f64, at: f64) -> [f64; 4] {
+/// Coefficients, about `at`, of the piece of `ps` holding `mid` (`i`: a
+/// cursor moving forward); outside the pieces, the held end.
+fn about(ps: &[Piece], i: &mut usize, mid: f64, at: f64) -> [f64; 6] {
     while *i + 1 < ps.len() && ps[*i].t1 < mid {
         *i += 1;
     }
     let Some(p) = ps.get(*i) else {
-        return [0.0; 4];
+        return [0.0; 6];
     };
+    let held = |x: f64| [p.eval_local(x).0, 0.0, 0.0, 0.0, 0.0, 0.0];
     if mid < p.t0 {
-        return [p.eval_local(0.0).0, 0.0, 0.0, 0.0];
+        held(0.0)
+    } else if mid > p.t1 {
+        held(p.duration())
+    } else {
+        p.about(at)
     }
-    if mid > p.t1 {
-        return [p.eval_local(p.duration()).0, 0.0, 0.0, 0.0];
-    }
-    let (pos, vel, acc) = p.eval_local(at - p.t0);
-    [pos, vel, 0.5 * acc, p.c[3]]
 }
 
+/// A guard: the passes keep their quickest stops inside the position
+/// limits, so the path never leaves them.
 fn check_positions(limits: &[JointLimits], t: &Trajectory) -> Result<(), PlanError> {
     for (j, l) in limits.iter().enumerate() {
         let Some(s) = t.joint_summary(j) else {
@@ -375,32 +352,4 @@ fn check_positions(limits: &[JointLimits], t: &Trajectory) -> Result<(), PlanErr
         }
     }
     Ok(())
-}
-
-/// Max and RMS distance between the path (shifted by `shift`) and the
-/// recording, sampled every `step` over the recording.
-fn deviation(
-    t: &Trajectory,
-    times: &[f64],
-    samples: &[Vec<f64>],
-    shift: f64,
-    step: f64,
-) -> (Vec<f64>, Vec<f64>) {
-    let n = t.joints();
-    let (mut max, mut sum) = (vec![0.0f64; n], vec![0.0; n]);
-    let mut out = vec![JointState::default(); n];
-    let mut cursor = t.cursor();
-    let span = times[times.len() - 1] - times[0];
-    let count = (span / step).ceil() as usize + 1;
-    for k in 0..count {
-        let x = (k as f64 * step).min(span);
-        t.sample_with(&mut cursor, shift + x, &mut out);
-        for j in 0..n {
-            let e = out[j].position - reference(times, samples, j, times[0] + x);
-            max[j] = max[j].max(e.abs());
-            sum[j] += e * e;
-        }
-    }
-    let rms = sum.iter().map(|s| (s / count as f64).sqrt()).collect();
-    (max, rms)
 }

@@ -117,3 +117,77 @@ fn smooth_recording_is_reproduced_closely_and_on_time() {
         );
     }
 }
+
+#[test]
+fn a_time_optimal_path_sampled_and_rounded_is_played_as_it_is_and_on_time() {
+    use servobus_trajectory::{plan, track_with, Keyframe, PlanOptions, Quantity, TrackOptions};
+    // Untimed keyframes ride every limit (jerk phases switching between
+    // samples, cruises at full speed): the hardest recording to replay.
+    let lim = limits();
+    let keyframes = [
+        Keyframe::new([0.0, 0.0]),
+        Keyframe::new([1.5, -1.0]),
+        Keyframe::new([-1.0, 0.5]),
+        Keyframe::new([0.2, 0.0]),
+    ];
+    let path = plan(&lim, &keyframes, &PlanOptions::default()).expect("plan");
+    let step = 0.005;
+    let resolution = 0.5e-4;
+    let round = |x: f64| (x / (2.0 * resolution)).round() * 2.0 * resolution;
+    let (mut times, mut samples) = (Vec::new(), Vec::new());
+    let mut s = vec![JointState::default(); 2];
+    let n = (path.duration() / step).ceil() as usize;
+    for i in 0..=n {
+        let t = i as f64 * step;
+        path.sample(t, &mut s);
+        times.push(t);
+        samples.push(s.iter().map(|x| round(x.position)).collect::<Vec<_>>());
+    }
+    let options = TrackOptions { step, resolution };
+    let tracked = track_with(&lim, &times, &samples, &options).expect("played");
+    println!(
+        "time-optimal recording: max deviation {:?}, rms {:?}, {} departures",
+        tracked.max_deviation,
+        tracked.rms_deviation,
+        tracked.departures.len()
+    );
+    assert_eq!(tracked.recording_start, 0.0, "not on time");
+    // Off the samples only by the B-spline's a h^2 / 6 (15 * 25e-6 / 6).
+    for j in 0..2 {
+        assert!(
+            tracked.max_deviation[j] < 1e-4,
+            "{:?}",
+            tracked.max_deviation
+        );
+    }
+    assert!(tracked.departures.is_empty(), "{:?}", tracked.departures);
+    // Within the limits as the rounding lets samples `h` apart show them.
+    let shown = |h: f64| -> Vec<JointLimits> {
+        lim.iter()
+            .map(|l| JointLimits {
+                max_velocity: l.max_velocity + 2.0 * resolution / h,
+                max_acceleration: l.max_acceleration + 4.0 * resolution / (h * h),
+                max_jerk: l.max_jerk.map(|j| j + 8.0 * resolution / (h * h * h)),
+                ..*l
+            })
+            .collect()
+    };
+    common::check(&tracked.trajectory, &shown(step), &samples[n], true);
+
+    // The same path played twice as fast breaks the speed limit: the
+    // report says where and why.
+    let fast: Vec<f64> = times.iter().map(|t| t / 2.0).collect();
+    let tracked = track_with(&lim, &fast, &samples, &options).expect("played");
+    common::check(&tracked.trajectory, &shown(step / 2.0), &samples[n], true);
+    let worst = tracked
+        .departures
+        .iter()
+        .max_by(|a, b| a.max_departure.total_cmp(&b.max_departure))
+        .expect("a departure");
+    assert_eq!(worst.quantity, Quantity::Velocity, "{worst:?}");
+    assert!(
+        worst.peak > lim[worst.joint].max_velocity * 1.5,
+        "{worst:?}"
+    );
+    assert!(worst.start < worst.at && worst.at < worst.end, "{worst:?}");
+}

@@ -7,25 +7,26 @@
 //! that keeps its range off the 4095 -> 0 seam. `play` and `bench` use the
 //! refusal check at the end of this file before they move anything.
 
-use std::io::{BufRead, IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_runtime::calibrate::{
-    calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, LiveJoint, Operator,
-    ProcedureOptions, Refusal, Step, Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
+    calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, ProcedureOptions, Refusal,
+    Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
 };
 use servobus_runtime::config::{
     load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
 
 use super::link::{every_port, Allowance, Ports, SerialBus};
-use super::out::{errln, out, outln};
+use super::out::{errln, outln};
+
+mod screen;
+
+use screen::Terminal;
 
 /// Arguments of `servobus calibrate`.
 #[derive(Debug, clap::Args)]
@@ -348,137 +349,6 @@ fn print_summary(robot: &Robot, output: &Path) -> Result<(), super::out::StdoutE
         )?;
     }
     Ok(())
-}
-
-/// The person at the terminal (or, without one, the robot's stillness).
-struct Terminal {
-    names: Vec<String>,
-    deg_per_tick: Vec<f64>,
-    pose: String,
-    interactive: bool,
-    live: bool,
-    entered: Arc<AtomicBool>,
-    shown: Option<Duration>,
-    lines: usize,
-    /// Without a terminal: the latest readings, summed up once when the
-    /// step ends (a log, not a redrawn table).
-    latest: Vec<LiveJoint>,
-}
-
-impl Terminal {
-    fn new(robot: &Robot, interactive: bool) -> Self {
-        let entered = Arc::new(AtomicBool::new(false));
-        if interactive {
-            let flag = Arc::clone(&entered);
-            std::thread::spawn(move || {
-                for line in std::io::stdin().lock().lines() {
-                    if line.is_err() {
-                        break;
-                    }
-                    flag.store(true, Ordering::SeqCst);
-                }
-            });
-        }
-        let pose = robot
-            .joints()
-            .zip(&robot.calibration_pose)
-            .map(|(j, p)| format!("{} {p}", j.name))
-            .collect::<Vec<_>>()
-            .join(", ");
-        Terminal {
-            names: robot.joints().map(|j| j.name.clone()).collect(),
-            deg_per_tick: robot.joints().map(|j| j.model.deg_per_tick()).collect(),
-            pose: format!("{pose} ({})", robot.units),
-            interactive,
-            live: std::io::stdout().is_terminal(),
-            entered,
-            shown: None,
-            lines: 0,
-            latest: Vec::new(),
-        }
-    }
-
-    /// One line per joint: its measured ticks and how far it was swept.
-    fn table(&self, joints: &[LiveJoint], end_of_line: &str) -> String {
-        let mut out = String::new();
-        for ((name, j), dpt) in self.names.iter().zip(joints).zip(&self.deg_per_tick) {
-            out.push_str(&format!(
-                "  {name:<16} min {:>6}  max {:>6}  now {:>6}  ({:.0} deg swept){end_of_line}\n",
-                j.min,
-                j.max,
-                j.now,
-                (j.max - j.min) as f64 * dpt
-            ));
-        }
-        out
-    }
-
-    fn ends(&self) -> &'static str {
-        if self.interactive {
-            "Press Enter when done."
-        } else {
-            "The step ends once the robot has moved and then been held still for 2 s."
-        }
-    }
-}
-
-impl Operator for Terminal {
-    fn step(&mut self, step: Step) {
-        self.shown = None;
-        self.lines = 0;
-        if !self.latest.is_empty() {
-            // The step that ended, as it ended.
-            let latest = std::mem::take(&mut self.latest);
-            // The live display: a reader gone does not stop the
-            // calibration (its result is saved and said on stderr).
-            let _ = out!("{}", self.table(&latest, ""));
-        }
-        let text = match step {
-            Step::TorqueOff => {
-                "1. Torque is off on every servo: the joints move freely. Support the robot."
-                    .to_owned()
-            }
-            Step::HoldPose => format!(
-                "2. Hold the robot in its calibration pose (see the robot file): {}. {}",
-                self.pose,
-                self.ends()
-            ),
-            Step::Sweep => format!(
-                "3. Move every joint first towards positive angles, then through its whole range, \
-                 end stop to end stop; then back to the pose. {}",
-                self.ends()
-            ),
-            Step::Done => "4. Done: writing the calibration.".to_owned(),
-        };
-        let _ = outln!("{text}");
-        let _ = std::io::stdout().flush();
-    }
-
-    fn watch(&mut self, at: Duration, joints: &[LiveJoint]) {
-        if !self.live {
-            self.latest = joints.to_vec();
-            return;
-        }
-        if self
-            .shown
-            .is_some_and(|s| at < s + Duration::from_millis(100))
-        {
-            return;
-        }
-        self.shown = Some(at);
-        let mut out = String::new();
-        if self.lines > 0 {
-            out.push_str(&format!("\x1b[{}A", self.lines));
-        }
-        out.push_str(&self.table(joints, "\x1b[K"));
-        self.lines = joints.len();
-        let _ = out!("{out}");
-        let _ = std::io::stdout().flush();
-    }
-
-    fn confirmed(&mut self) -> bool {
-        self.entered.swap(false, Ordering::SeqCst)
-    }
 }
 
 /// Before any command reads or moves joints through the calibration on real

@@ -67,7 +67,7 @@ pub struct Args {
     /// Write one CSV row per cycle and joint of the follower (as play's).
     #[arg(long)]
     pub log: Option<PathBuf>,
-    /// Draw the follower's commanded vs measured positions (.svg or .png).
+    /// Draw the leader against the follower (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Save the follower's commanded path as a recording `time_s,<joint>...`
@@ -340,10 +340,11 @@ fn drive<T: Transport, C: Clock>(
         .collect();
     let mut seen = Seen {
         log,
-        plot: args
-            .plot
-            .as_ref()
-            .map(|_| PlotData::new(names.clone(), bus_of).with_frames(robot.geometry(), units)),
+        plot: args.plot.as_ref().map(|_| {
+            PlotData::new(names.clone(), bus_of)
+                .following()
+                .with_frames(robot.geometry(), units)
+        }),
         take: Vec::new(),
         errors: FollowErrors::new(names.len()),
         commanded: vec![0.0; names.len()],

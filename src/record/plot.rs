@@ -13,6 +13,8 @@ use servobus_runtime::CycleSample;
 use super::frames::FrameTracker;
 use super::space;
 
+mod keyframes;
+
 #[derive(Default)]
 struct Series {
     /// The planned path (what the joint should be at; the log's
@@ -34,6 +36,18 @@ pub struct PlotData {
     approach: f64,
     /// The named frames' measured paths, when the robot has a geometry.
     space: Option<SpacePaths>,
+    /// What each joint's two lines are.
+    key: Key,
+}
+
+/// What a joint's two lines are (said in the charts' captions).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Key {
+    /// A run (`play`): the planned path and the measured positions.
+    Run,
+    /// `follow`: the leader's pose, which the follower steps towards (its
+    /// planned path), and the follower's measured positions.
+    Follow,
 }
 
 /// The measured paths of the named frames (tool, feet).
@@ -52,36 +66,6 @@ const SPACE_STEP_S: f64 = 0.01;
 /// The height of the row of views in space, px.
 const SPACE_ROW: u32 = 430;
 
-/// Above this many keyframes, they are marked by ticks along the top of
-/// each chart only: full-height lines that close together would grey the
-/// whole chart out and hide the curves.
-const KEYFRAME_LINES_UP_TO: usize = 60;
-
-/// One colour per joint, distinct from its neighbours (a qualitative
-/// palette of 20: ten hues, each dark then light).
-const PALETTE: [(u8, u8, u8); 20] = [
-    (31, 119, 180),
-    (255, 127, 14),
-    (44, 160, 44),
-    (214, 39, 40),
-    (148, 103, 189),
-    (140, 86, 75),
-    (227, 119, 194),
-    (127, 127, 127),
-    (188, 189, 34),
-    (23, 190, 207),
-    (174, 199, 232),
-    (255, 187, 120),
-    (152, 223, 138),
-    (255, 152, 150),
-    (197, 176, 213),
-    (196, 156, 148),
-    (247, 182, 210),
-    (199, 199, 199),
-    (219, 219, 141),
-    (158, 218, 229),
-];
-
 impl PlotData {
     /// Empty series for the joints `names`, each on the bus named in
     /// `bus_of`.
@@ -94,6 +78,7 @@ impl PlotData {
             keyframes: Vec::new(),
             approach: 0.0,
             space: None,
+            key: Key::Run,
         }
     }
 
@@ -112,6 +97,14 @@ impl PlotData {
                 tracker,
                 last: f64::NEG_INFINITY,
             });
+        self
+    }
+
+    /// The plot of `follow`: the planned path is the leader's pose (the
+    /// follower's goal), the measured one the follower's, and the captions
+    /// say leader and follower.
+    pub fn following(mut self) -> Self {
+        self.key = Key::Follow;
         self
     }
 
@@ -230,7 +223,10 @@ impl PlotData {
             let name = self.names.get(j).map_or("?", String::as_str);
             let range = span(series.planned.iter().chain(&series.measured));
             // The key is in the caption: a legend box would cover curves.
-            let caption = format!("{name}  (blue dashes: planned, red line: measured)");
+            let caption = match self.key {
+                Key::Run => format!("{name}  (blue dashes: planned, red line: measured)"),
+                Key::Follow => format!("{name}  (blue dashes: leader, red line: follower)"),
+            };
             let mut chart = self.panel(
                 area,
                 (&caption, 15),
@@ -260,13 +256,10 @@ impl PlotData {
         let (_, bw) = (0, bottom.dim_in_pixel().0);
         let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
         let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
+        let caption = self.error_caption();
         let mut chart = self.panel(
             &left,
-            (
-                "tracking error (planned minus measured); grey band: approach, black line: \
-                 first keyframe, grey: keyframes",
-                16,
-            ),
+            (&caption, 16),
             36,
             range,
             format!("error ({units})"),
@@ -367,59 +360,11 @@ impl PlotData {
         Ok(chart)
     }
 
-    /// The approach as a light band, the first keyframe as a black line,
-    /// the others as thin grey lines (as ticks along the top only when
-    /// there are more than [`KEYFRAME_LINES_UP_TO`]).
-    fn draw_keyframes<DB: plotters::prelude::DrawingBackend>(
-        &self,
-        chart: &mut Chart<'_, DB>,
-        range: &std::ops::Range<f64>,
-    ) -> anyhow::Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        use plotters::prelude::*;
-        if self.approach > 0.0 {
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(0.0, range.start), (self.approach, range.end)],
-                    RGBColor(225, 225, 225).filled(),
-                )))
-                .map_err(plot_err)?;
-        }
-        let grey = RGBColor(150, 150, 150).stroke_width(1);
-        let (first, rest) = match self.keyframes.split_first() {
-            Some((first, rest)) => (Some(*first), rest),
-            None => (None, &[][..]),
-        };
-        let tick = range.end - (range.end - range.start) * 0.06;
-        let from = if self.keyframes.len() > KEYFRAME_LINES_UP_TO {
-            tick
-        } else {
-            range.start
-        };
-        chart
-            .draw_series(
-                rest.iter()
-                    .map(|&t| PathElement::new([(t, from), (t, range.end)], grey)),
-            )
-            .map_err(plot_err)?;
-        if let Some(t) = first {
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    [(t, range.start), (t, range.end)],
-                    BLACK.stroke_width(2),
-                )))
-                .map_err(plot_err)?;
-        }
-        Ok(())
-    }
-
     /// A colour of its own for every joint (the palette repeats past 20).
     fn colours(&self) -> Vec<plotters::style::RGBColor> {
         (0..self.names.len())
             .map(|j| {
-                let (r, g, b) = PALETTE[j % PALETTE.len()];
+                let (r, g, b) = space::PALETTE[j % space::PALETTE.len()];
                 plotters::style::RGBColor(r, g, b)
             })
             .collect()
@@ -440,4 +385,32 @@ fn span<'a>(points: impl Iterator<Item = &'a (f64, f64)>) -> std::ops::Range<f64
     }
     let pad = ((hi - lo) * 0.05).max(0.05);
     (lo - pad)..(hi + pad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn svg(plot: &PlotData) -> String {
+        let bytes = plot.render(false, "t", "deg").expect("drawn");
+        String::from_utf8(bytes).expect("SVG text")
+    }
+
+    #[test]
+    fn the_follow_plot_says_which_line_is_the_leader_and_which_the_follower() {
+        let names = vec!["elbow".to_owned()];
+        let bus = vec!["arm".to_owned()];
+        let play = svg(&PlotData::new(names.clone(), bus.clone()));
+        assert!(play.contains("blue dashes: planned, red line: measured"));
+        let follow = svg(&PlotData::new(names, bus).following());
+        assert!(
+            follow.contains("elbow  (blue dashes: leader, red line: follower)"),
+            "{follow}"
+        );
+        assert!(follow.contains("error against its leader"), "{follow}");
+        // Nothing of a planned run is said: no keyframes, no approach.
+        for word in ["planned", "keyframe", "approach"] {
+            assert!(!follow.contains(word), "`{word}` in the follow plot");
+        }
+    }
 }

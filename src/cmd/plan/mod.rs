@@ -1,7 +1,6 @@
 //! `servobus plan`: plan a motion without moving anything, and show its
 //! timing, peaks and ranges per joint (or exactly why it cannot be played).
 
-use std::path::Path;
 use std::process::ExitCode;
 
 use serde::Serialize;
@@ -12,6 +11,8 @@ use servobus_trajectory::{JointState, Trajectory};
 
 use super::out::{outln, StdoutError};
 use crate::record::space;
+
+mod plot;
 
 /// Arguments of `servobus plan`.
 #[derive(Debug, clap::Args)]
@@ -140,7 +141,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let spatial = spatial_summary(&motion, &robot, &traj, 1.0 / motion.rate_hz(&robot));
     report.spatial = spatial.as_ref().map(|s| SpatialJson::new(s, motion.units));
     if let Some(path) = &args.plot {
-        plot(&motion, &traj, &space::paths(spatial.as_ref()), path)?;
+        let paths = space::paths(spatial.as_ref());
+        plot::write(&motion, robot.geometry().as_ref(), &traj, &paths, path)?;
     }
     if args.json {
         outln!("{}", crate::cmd::json::pretty(&report)?)?;
@@ -369,98 +371,5 @@ in space:"
     if let (Some(j), Some(g)) = (&sp.closest_limit_joint, sp.closest_limit) {
         outln!("  closest to a limit: `{j}`, {g:.1} {u} from it")?;
     }
-    Ok(())
-}
-
-/// Position and velocity of every joint over time, one chart above the
-/// other, drawn as SVG and written to `path` whole.
-fn plot(
-    motion: &Motion,
-    traj: &Trajectory,
-    paths: &space::Paths,
-    path: &Path,
-) -> anyhow::Result<()> {
-    let mut svg = String::new();
-    draw_plot(motion, traj, paths, &mut svg)?;
-    servobus_io::write_atomic(path, svg.as_bytes())?;
-    Ok(())
-}
-
-/// The SVG of [`plot`], drawn into `svg`.
-/// With `paths` (a tool's or feet's positions), a third row shows them
-/// from above and from the side.
-fn draw_plot(
-    motion: &Motion,
-    traj: &Trajectory,
-    paths: &space::Paths,
-    svg: &mut String,
-) -> anyhow::Result<()> {
-    use plotters::prelude::*;
-
-    let u = motion.units;
-    let n = traj.joints();
-    let duration = traj.duration().max(1e-3);
-    let samples = 1000usize;
-    let mut out = vec![JointState::default(); n];
-    let mut pos: Vec<Vec<(f64, f64)>> = vec![Vec::with_capacity(samples + 1); n];
-    let mut vel: Vec<Vec<(f64, f64)>> = vec![Vec::with_capacity(samples + 1); n];
-    let mut cursor = traj.cursor();
-    for k in 0..=samples {
-        let t = duration * k as f64 / samples as f64;
-        traj.sample_with(&mut cursor, t, &mut out);
-        for (j, s) in out.iter().enumerate() {
-            pos[j].push((t, u.from_rad(s.position)));
-            vel[j].push((t, u.from_rad(s.velocity)));
-        }
-    }
-    let range = |series: &[Vec<(f64, f64)>]| {
-        let (lo, hi) = series
-            .iter()
-            .flatten()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, y)| {
-                (lo.min(y), hi.max(y))
-            });
-        let pad = ((hi - lo) * 0.05).max(1e-3);
-        (lo - pad)..(hi + pad)
-    };
-
-    let row = 430u32;
-    let rows = if paths.is_empty() { 2 } else { 3 };
-    let height = 40 + row * rows;
-    let root = SVGBackend::with_string(svg, (1200, height)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let title = format!(
-        "{} — planned path, {:.2} s",
-        motion
-            .path
-            .file_name()
-            .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
-        traj.duration()
-    );
-    let root = root.titled(&title, ("sans-serif", 24))?;
-    let (top, rest) = root.split_vertically(row);
-    let (bottom, space_row) = rest.split_vertically(row);
-    if !paths.is_empty() {
-        space::draw(&space_row, paths)?;
-    }
-    for (area, series, what, unit) in [
-        (&top, &pos, "Position", u.to_string()),
-        (&bottom, &vel, "Velocity", format!("{u}/s")),
-    ] {
-        let lines = series.iter().enumerate().map(|(j, points)| {
-            (
-                motion.joints.get(j).cloned().unwrap_or_default(),
-                points.iter().copied(),
-            )
-        });
-        space::line_chart(
-            area,
-            &format!("{what} of every joint"),
-            (0.0..duration, range(series)),
-            ("time (s)", &format!("{} ({unit})", what.to_lowercase())),
-            lines,
-        )?;
-    }
-    root.present()?;
     Ok(())
 }

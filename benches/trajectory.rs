@@ -114,6 +114,27 @@ pub fn benches(c: &mut Criterion) {
             followers[0].state().position
         })
     });
+    // The same cycle as the live loop runs it: each step kept within the
+    // places its reference was told to go (here tight enough that the
+    // bound steps in and the blend is searched, the costly case).
+    let mut bounded: Vec<Follower> = state.iter().map(|s| Follower::new(*s)).collect();
+    let mut flip = 1.0;
+    c.bench_function("trajectory/follow_within_18", |b| {
+        b.iter(|| {
+            flip = -flip;
+            for ((f, lim), t) in bounded.iter_mut().zip(&limits).zip(target.iter()) {
+                let goal = Goal {
+                    position: t + 0.01 * flip,
+                    velocity: 0.1 * flip,
+                    acceleration: 0.5 * flip,
+                    horizon: 0.033,
+                };
+                let here = f.state().position;
+                f.step_within(lim, black_box(goal), 0.005, (here - 1e-4, here + 1e-4));
+            }
+            bounded[0].state().position
+        })
+    });
     // The same cycle with the goal held (the plan is kept): most cycles of
     // a 30 Hz stream followed at 200 Hz.
     let goals: [Goal; JOINTS] = std::array::from_fn(|j| Goal {

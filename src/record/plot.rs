@@ -22,6 +22,9 @@ struct Series {
     planned: Vec<(f64, f64)>,
     measured: Vec<(f64, f64)>,
     error: Vec<(f64, f64)>,
+    /// The recording the run replays (`play FILE.csv`), at run times;
+    /// empty for a motion, or a joint the recording does not name.
+    recording: Vec<(f64, f64)>,
 }
 
 /// Planned and measured positions and tracking errors over time.
@@ -65,6 +68,10 @@ const SPACE_STEP_S: f64 = 0.01;
 
 /// The height of the row of views in space, px.
 const SPACE_ROW: u32 = 430;
+
+/// The colour of a replayed recording's line: a wide grey under the
+/// planned and measured ones.
+const RECORDING: plotters::style::RGBColor = plotters::style::RGBColor(128, 128, 128);
 
 impl PlotData {
     /// Empty series for the joints `names`, each on the bus named in
@@ -116,6 +123,21 @@ impl PlotData {
     /// Marks the approach to the first keyframe, from the start to `end` s.
     pub fn mark_approach(&mut self, end: f64) {
         self.approach = end.max(0.0);
+    }
+
+    /// Draws the recording a run replays beside it: per joint (robot
+    /// order), its `(time, position)` samples on the path's clock, the
+    /// path starting `start` s into the run (after the approach). A joint
+    /// with no samples (not recorded) gets no recording line.
+    pub fn mark_recording(&mut self, per_joint: &[Vec<(f64, f64)>], start: f64) {
+        for (s, samples) in self.joints.iter_mut().zip(per_joint) {
+            s.recording = samples.iter().map(|&(t, q)| (t + start, q)).collect();
+        }
+    }
+
+    /// Whether a recording is drawn beside the run.
+    fn has_recording(&self) -> bool {
+        self.joints.iter().any(|s| !s.recording.is_empty())
     }
 
     /// Adds the joints of `sample`.
@@ -219,11 +241,21 @@ impl PlotData {
         let (_, h) = root.dim_in_pixel();
         let (grid, bottom) = root.split_vertically(h.saturating_sub(340));
         let cells = grid.split_evenly((rows, cols));
+        let replay = self.has_recording();
         for (j, (series, area)) in self.joints.iter().zip(cells.iter()).enumerate() {
             let name = self.names.get(j).map_or("?", String::as_str);
-            let range = span(series.planned.iter().chain(&series.measured));
+            let range = span(
+                series
+                    .planned
+                    .iter()
+                    .chain(&series.measured)
+                    .chain(&series.recording),
+            );
             // The key is in the caption: a legend box would cover curves.
             let caption = match self.key {
+                Key::Run if replay => {
+                    format!("{name}  (blue dashes: planned, red: measured, grey: recording)")
+                }
                 Key::Run => format!("{name}  (blue dashes: planned, red line: measured)"),
                 Key::Follow => format!("{name}  (blue dashes: leader, red line: follower)"),
             };
@@ -235,6 +267,16 @@ impl PlotData {
                 format!("position ({units})"),
                 2,
             )?;
+            // Under the others: where the replay keeps to the recording,
+            // the grey shows either side of the planned and measured lines.
+            if !series.recording.is_empty() {
+                chart
+                    .draw_series(LineSeries::new(
+                        series.recording.iter().copied(),
+                        RECORDING.stroke_width(4),
+                    ))
+                    .map_err(plot_err)?;
+            }
             chart
                 .draw_series(DashedLineSeries::new(
                     series.planned.iter().copied(),
@@ -412,5 +454,25 @@ mod tests {
         for word in ["planned", "keyframe", "approach"] {
             assert!(!follow.contains(word), "`{word}` in the follow plot");
         }
+    }
+
+    #[test]
+    fn a_replayed_recording_is_drawn_beside_the_run_and_said_in_the_key() {
+        let names = vec!["elbow".to_owned(), "wrist".to_owned()];
+        let bus = vec!["arm".to_owned(); 2];
+        let plain = svg(&PlotData::new(names.clone(), bus.clone()));
+        assert!(!plain.contains("recording"), "{plain}");
+        assert!(!plain.contains("#808080"), "{plain}");
+        let mut replay = PlotData::new(names, bus);
+        // The wrist not recorded: no line of its own.
+        replay.mark_recording(&[vec![(0.0, 1.0), (0.5, 2.0)], Vec::new()], 0.25);
+        assert_eq!(replay.joints[0].recording, [(0.25, 1.0), (0.75, 2.0)]);
+        assert!(replay.joints[1].recording.is_empty());
+        let drawn = svg(&replay);
+        assert!(
+            drawn.contains("elbow  (blue dashes: planned, red: measured, grey: recording)"),
+            "{drawn}"
+        );
+        assert_eq!(drawn.matches("stroke=\"#808080\"").count(), 1, "{drawn}");
     }
 }

@@ -161,3 +161,44 @@ fn a_recording_beyond_a_limit_is_played_within_it_and_the_report_says_where_and_
         "{text}"
     );
 }
+
+#[test]
+fn the_plot_of_a_replay_draws_the_recording_beside_it_and_a_motion_s_does_not() {
+    let dir = scratch("replay_log_plot");
+    let (take, replay_svg, plain_svg) =
+        (dir.join("take.csv"), dir.join("x.svg"), dir.join("y.svg"));
+    let path = |p: &Path| p.to_str().expect("utf-8").to_owned();
+    let take_s = path(&take);
+    servobus_ok(&["play", "arm-wave", "--fast", "--log", &take_s]);
+    servobus_ok(&[
+        "play",
+        &take_s,
+        "--robot",
+        "so101",
+        "--fast",
+        "--plot",
+        &path(&replay_svg),
+    ]);
+    servobus_ok(&["play", "arm-wave", "--fast", "--plot", &path(&plain_svg)]);
+
+    // The recording's grey line (a wide one) per joint, and the key says it.
+    let replay = std::fs::read_to_string(&replay_svg).expect("replay plot");
+    assert!(
+        replay.contains("shoulder_pan  (blue dashes: planned, red: measured, grey: recording)"),
+        "no recording in the key"
+    );
+    let line = "stroke=\"#808080\" stroke-width=\"4\"";
+    assert_eq!(
+        replay.matches(line).count(),
+        6,
+        "a recording line per joint"
+    );
+    // A motion's plot is as it was: no recording.
+    let plain = std::fs::read_to_string(&plain_svg).expect("plain plot");
+    assert!(
+        !plain.contains("recording"),
+        "a recording in a motion's plot"
+    );
+    assert!(!plain.contains(line), "a recording line in a motion's plot");
+    assert!(plain.contains("shoulder_pan  (blue dashes: planned, red line: measured)"));
+}

@@ -44,6 +44,10 @@ pub(super) struct RecordingInfo {
     lead_s: f64,
     /// Departures above [`REPORTED_DEPARTURE_DEG`], largest first.
     departures: Vec<servobus_trajectory::Departure>,
+    /// Per robot joint, the recording's `(time, position)` samples on the
+    /// path's clock (its own times shifted by `lead_s`), in the motion's
+    /// units; empty for a joint not recorded. Drawn on `--plot`.
+    pub(super) series: Vec<Vec<(f64, f64)>>,
 }
 
 impl RecordingInfo {
@@ -233,16 +237,33 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         .filter(|d| d.max_departure > reported)
         .collect();
     departures.sort_by(|a, b| b.max_departure.total_cmp(&a.max_departure));
+    let lead_s = tracked.recording_start;
+    let names = names_of(&robot);
+    let series = names
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            if rec.missing.contains(name) {
+                return Vec::new();
+            }
+            rec.times
+                .iter()
+                .zip(&rec.samples)
+                .map(|(t, q)| (t - rec.times[0] + lead_s, motion.units.from_rad(q[j])))
+                .collect()
+        })
+        .collect();
     let info = RecordingInfo {
         samples: rec.times.len(),
         span_s: rec.times[rec.times.len() - 1] - rec.times[0],
-        names: names_of(&robot),
+        names,
         max_rad: tracked.max_deviation,
         rms_rad: tracked.rms_deviation,
         missing: rec.missing,
         column: rec.column,
-        lead_s: tracked.recording_start,
+        lead_s,
         departures,
+        series,
     };
     Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
 }

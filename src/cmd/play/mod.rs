@@ -231,6 +231,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         approach: runner.approach().as_secs_f64(),
         settle: SETTLE.as_secs_f64(),
         geometry: robot.geometry(),
+        recording: recording.as_ref().map(|r| r.series.as_slice()),
     };
     let outcome = if args.monitor {
         super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {

@@ -13,7 +13,7 @@ pub(super) const SETTLE: Duration = servobus_robot::SETTLE;
 pub(super) const APPROACH: f64 = servobus_robot::APPROACH;
 
 /// What the live view and the plot show besides the telemetry.
-pub(super) struct Shown {
+pub(super) struct Shown<'a> {
     pub(super) names: Vec<String>,
     /// The name of each joint's bus.
     pub(super) bus_of: Vec<String>,
@@ -25,6 +25,9 @@ pub(super) struct Shown {
     pub(super) settle: f64,
     /// The robot's geometry, for the plot's views in space.
     pub(super) geometry: Option<servobus_kinematics::Geometry>,
+    /// The recording replayed, per joint on the path's clock (see
+    /// `RecordingInfo::series`): drawn beside the run on the plot.
+    pub(super) recording: Option<&'a [Vec<(f64, f64)>]>,
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
@@ -90,6 +93,9 @@ pub(super) fn follow(
                     if let Some(plot) = &mut plot {
                         plot.mark_approach(approach);
                         plot.mark_keyframes(shown.keyframes.iter().map(|t| t + approach));
+                        if let Some(recording) = shown.recording {
+                            plot.mark_recording(recording, approach);
+                        }
                     }
                 }
                 if let Some(log) = &mut log {

@@ -5,7 +5,8 @@
     python examples/python/zenoh_sine.py tcp/127.0.0.1:7447 so101
 
 It prints the robot's state as it comes and sends a sine of targets to the
-elbow for ten seconds at 30 Hz, then `stop`, and prints the report.
+elbow for ten seconds at 30 Hz, then `shutdown` (which ends the node, as
+Ctrl-C does), and prints the report.
 """
 
 import json

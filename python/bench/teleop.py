@@ -5,7 +5,7 @@ Run by hand, for a note (not a timed test), in LeRobot's venv with servobus
 and lerobot_robot_servobus installed (``eval "$(bash scripts/python_clients.sh)"``;
 ``$SERVOBUS_LEROBOT_PYTHON python/bench/teleop.py``):
 
-    python/bench/teleop.py [--servobus target/release/servobus] [--rounds 2] [--keep DIR]
+    python/bench/teleop.py [--servobus target/release/servobus] [--rounds 2] [--keep DIR] [--by-class]
 
 Each run starts two simulated SO-101 arms on pseudo-terminals with
 ``servobus sim``: the leader, moved by a scripted hand (a hand file this
@@ -30,6 +30,11 @@ Per follower and joint it prints: worst and RMS error against the leader
 overshoot beyond the envelope of the leader's positions over the last
 0.5 s, RMS jerk and peak acceleration of the follower's physical motion,
 and, for the LeRobot followers, send_action / get_observation p50 and p99.
+``--by-class`` adds the same figures per motion class, for the joints the
+hand moves in it: where a follower gains or loses is seen there. With
+``--keep``, each run's directory also holds ``started.json`` (the wall
+times both simulators started serving), so its truths can be compared
+again later.
 """
 
 from __future__ import annotations
@@ -327,8 +332,28 @@ def figures(lt, lq, ft, fq, t0, t1) -> dict:
             "worst": float(np.max(np.abs(err))), "rms": float(np.sqrt(np.mean(err**2))),
             "lag_ms": lag * 1000.0, "overshoot": max(0.0, over),
             "rms_jerk": float(np.sqrt(np.mean(jerk**2))), "peak_acc": float(np.max(np.abs(acc))),
+            "span": float(np.ptp(lead)),
         }
     return out
+
+
+def print_by_class(classes, kinds, results) -> None:
+    """The figures of each motion class, for the joints the hand moves in
+    it (the leader's span over the class above 2 deg), means over rounds."""
+    print("\nper motion class (joints the hand moves in it):")
+    print(f"{'class':<26}{'joint':<14}{'follower':<16}{'worst':>8}{'rms':>7}{'lag':>6}{'over':>7}{'jerk':>8}")
+    for name, _, _ in classes:
+        for j in JOINTS:
+            rows = []
+            for kind in kinds:
+                runs = [c[name][j] for _, _, c in results[kind] if name in c]
+                if runs:
+                    rows.append((kind, {key: statistics.fmean(x[key] for x in runs) for key in runs[0]}))
+            if not rows or max(r["span"] for _, r in rows) < 2.0:
+                continue
+            for kind, m in rows:
+                print(f"{name:<26}{j:<14}{kind:<16}{m['worst']:8.1f}{m['rms']:7.2f}{m['lag_ms']:6.0f}"
+                      f"{m['overshoot']:7.1f}{m['rms_jerk'] / 1000:8.1f}")
 
 
 def quantiles(samples: list[float]) -> str:
@@ -346,6 +371,8 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=1, help="rounds of the three followers, alternated")
     ap.add_argument("--followers", default="stock,so101_servobus,follow")
     ap.add_argument("--keep", type=Path, help="keep the truth CSVs and hand file here")
+    ap.add_argument("--by-class", action="store_true",
+                    help="also print the figures of each motion class, per joint that moves in it")
     args = ap.parse_args()
     if not 1 <= args.rounds <= 20:
         ap.error("--rounds: 1 to 20")
@@ -377,10 +404,13 @@ def main() -> int:
             finally:
                 follower.stop()
                 leader.stop()
+            (run / "started.json").write_text(json.dumps({"leader": leader.started, "follower": follower.started}))
             lt, lq = read_truth(leader.truth, leader.started)
             ft, fq = read_truth(follower.truth, follower.started)
             t0, t1 = leader.started + motion_start, min(leader.started + motion_end, ft[-1], lt[-1])
-            results[kind].append((figures(lt, lq, ft, fq, t0, t1), timings))
+            spans = [(name, leader.started + a, min(leader.started + b, t1)) for name, a, b in classes]
+            per_class = {name: figures(lt, lq, ft, fq, a, b) for name, a, b in spans if b - a > 0.2}
+            results[kind].append((figures(lt, lq, ft, fq, t0, t1), timings, per_class))
     print(f"\nteleop at {FPS} Hz, {args.rounds} round(s); motion classes: "
           + "; ".join(f"{n} ({b - a:.1f} s)" for n, a, b in classes))
     print("angles in deg; worst/RMS error; lag ms; overshoot beyond the 0.5 s envelope deg; "
@@ -388,15 +418,17 @@ def main() -> int:
     print(f"{'joint':<14}{'follower':<16}{'worst':>8}{'rms':>7}{'lag':>6}{'over':>7}{'jerk':>8}{'acc':>8}")
     for j in JOINTS:
         for kind in kinds:
-            runs = [f[j] for f, _ in results[kind]]
+            runs = [f[j] for f, _, _ in results[kind]]
             mean = {key: statistics.fmean(x[key] for x in runs) for key in runs[0]}
             print(f"{j:<14}{kind:<16}{mean['worst']:8.1f}{mean['rms']:7.2f}{mean['lag_ms']:6.0f}"
                   f"{mean['overshoot']:7.1f}{mean['rms_jerk'] / 1000:8.1f}{mean['peak_acc']:8.0f}")
     print("\nsend_action / get_observation, ms p50/p99:")
     for kind in kinds:
-        sends = [s for _, t in results[kind] for s in t.get("send_action", [])]
-        obs = [s for _, t in results[kind] for s in t.get("get_observation", [])]
+        sends = [s for _, t, _ in results[kind] for s in t.get("send_action", [])]
+        obs = [s for _, t, _ in results[kind] for s in t.get("get_observation", [])]
         print(f"  {kind:<16} {quantiles(sends):>14} {quantiles(obs):>14}")
+    if args.by_class:
+        print_by_class(classes, kinds, results)
     print(f"\n(files in {work})")
     return 0
 

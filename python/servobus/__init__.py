@@ -7,7 +7,9 @@
 - :class:`Robot`: plan and play motions, stream live targets, calibrate.
 - :class:`Calibration`: a robot's calibration, from and to LeRobot's files.
 - :class:`Checkup`: what ``Robot.doctor()`` finds, as typed findings.
-- :func:`model_limits`: a servo model's top speed and acceleration, deg.
+- :func:`model_limits`: a servo model's top speed and acceleration, deg;
+  ``MODEL_JERK_RAMP_S``: how long live following's jerk limit takes to
+  reach that acceleration (as ``servobus follow``), s.
 
 Every call that waits on a bus releases the GIL. Errors are subclasses of
 :class:`Error`.
@@ -15,7 +17,7 @@ Every call that waits on a bus releases the GIL. Errors are subclasses of
 
 from . import _errors
 from ._native import Sim, __version__
-from ._native import model_limits
+from ._native import MODEL_JERK_RAMP_S, model_limits
 from ._errors import *  # noqa: F401,F403 (the exception classes, listed in _errors.__all__)
 from ._bus import Bus, Missing, SyncRead
 from ._calibration import Calibration, JointCalibration
@@ -43,5 +45,6 @@ __all__ = [
     "SyncRead",
     "Missing",
     "model_limits",
+    "MODEL_JERK_RAMP_S",
     "__version__",
 ] + _errors.__all__

@@ -136,6 +136,9 @@ class Robot:
 
 def model_limits(model: str) -> Tuple[float, float]:
     """A servo model's (max_velocity deg/s, max_acceleration deg/s^2)."""
+
+MODEL_JERK_RAMP_S: float
+"""How long live following's jerk limit takes to reach a model's acceleration, s."""
 def calibration_from_lerobot(robot: str, json: str) -> str:
     """The calibration (JSON text) a LeRobot calibration file describes."""
 def calibration_to_lerobot(calibration: str) -> str:

@@ -1,40 +1,29 @@
 //! What a servo model can do, for Python: its top speed and the fastest
-//! acceleration its motion profile is set to, in degrees, from the
-//! protocol crate's per-model facts and control table. The LeRobot
+//! acceleration its motion profile is set to, in degrees
+//! ([`Model::fastest_profile`], the protocol crate's per-model facts), and
+//! the jerk ramp of live following ([`MODEL_JERK_RAMP_S`]). The LeRobot
 //! plugin's live limits default to these, so that the live loop keeps up
-//! the way LeRobot's raw goal writes do.
-//!
-//! | figure                  | from                                                        |
-//! |-------------------------|-------------------------------------------------------------|
-//! | `max_velocity` (deg/s)  | [`Model::max_speed`] (steps/s) x degrees per step          |
-//! | `max_acceleration`      | the `acceleration` register's unit x [`PROFILE_ACCELERATION`] x degrees per step |
+//! the way LeRobot's raw goal writes do, with the same limits as
+//! `servobus follow`.
 
 use pyo3::prelude::*;
+use servobus_config::MODEL_JERK_RAMP_S;
 use servobus_protocol::registers::{model_by_name, Model};
 
 use crate::errors::{Failure, Outcome};
 
-/// The value of the `acceleration` register (41) that LeRobot's
-/// `configure_motors` writes to every servo of an SO-101 (and Feetech's
-/// tools offer as the fastest limited profile; 0 means no limit at all):
-/// 254 x 100 steps/s^2 on STS servos.
-pub(crate) const PROFILE_ACCELERATION: f64 = 254.0;
-
 /// `(max_velocity, max_acceleration)` of `model`, in degrees per second
 /// and per second squared.
 fn limits_of(model: &Model) -> Outcome<(f64, f64)> {
-    let deg = model.deg_per_tick();
-    let register = model.map().get("acceleration").ok_or_else(|| {
+    model.fastest_profile().ok_or_else(|| {
         Failure::new(
             "Error",
-            format!("{} has no acceleration register", model.name),
+            format!(
+                "{} states no acceleration in steps/s^2: give the live limits",
+                model.name
+            ),
         )
-    })?;
-    let (per_unit, _) = crate::units::physical(register);
-    Ok((
-        f64::from(model.max_speed) * deg,
-        per_unit * PROFILE_ACCELERATION * deg,
-    ))
+    })
 }
 
 /// What servo `model` (a name such as `"sts3215"`) can do: `(max_velocity
@@ -49,9 +38,11 @@ pub(crate) fn model_limits(model: &str) -> PyResult<(f64, f64)> {
     Ok(limits_of(found)?)
 }
 
-/// Registers the module's functions.
+/// Registers the module's functions and `MODEL_JERK_RAMP_S`: how long live
+/// following's jerk limit takes to reach a model's acceleration, s.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model_limits, m)?)?;
+    m.add("MODEL_JERK_RAMP_S", MODEL_JERK_RAMP_S)?;
     Ok(())
 }
 

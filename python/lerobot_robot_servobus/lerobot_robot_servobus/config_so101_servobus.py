@@ -31,7 +31,7 @@ class SO101ServobusConfig(SOFollowerRobotConfig):
     """Lower live acceleration limits, deg/s^2, by motor name."""
     max_jerk: dict[str, float] = field(default_factory=dict)
     """Live jerk limits, deg/s^3, by motor name (default: each joint's
-    acceleration limit reached in 50 ms)."""
+    acceleration limit reached in 20 ms, ``servobus.MODEL_JERK_RAMP_S``)."""
     live: bool = True
     """``send_action`` through servobus's live loop (jerk-limited motion
     towards each action); False: goal positions written as LeRobot does."""

@@ -50,9 +50,10 @@ from lerobot.utils.errors import DeviceNotConnectedError
 MIN_RETRIES = 1
 
 # The live limits' jerk: each joint reaches its acceleration limit in this
-# long (50 ms, two cycles of a 30 Hz teleoperator), so the physical motion
-# has no acceleration steps while the loop keeps up with raw writes.
-JERK_RAMP_S = 0.05
+# long (servobus's ramp for live following, as `servobus follow` keeps), so
+# the physical motion has no acceleration steps while the loop keeps up
+# with raw writes.
+JERK_RAMP_S = servobus.MODEL_JERK_RAMP_S
 
 # The live loop's position limits: a turn less a degree each side; LeRobot's
 # calibrated range then bounds each joint (servobus keeps a few degrees

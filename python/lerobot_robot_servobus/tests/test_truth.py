@@ -129,7 +129,9 @@ def test_live_limits_default_to_what_the_servo_model_can_do(robot):
         v, a, j = limits[m]
         assert v == pytest.approx(STS3215_DEG_S)
         assert a == pytest.approx(STS3215_DEG_S2)
-        assert j == pytest.approx(STS3215_DEG_S2 / 0.05)
+        # Reached in 20 ms, as `servobus follow` (MODEL_JERK_RAMP_S).
+        assert j == pytest.approx(STS3215_DEG_S2 / 0.02)
+        assert servobus.MODEL_JERK_RAMP_S == pytest.approx(0.02)
 
 
 def test_a_user_lowers_the_live_limits_in_the_config(sim, tmp_path):

@@ -148,9 +148,13 @@ pub struct JointConfig {
 }
 
 /// How long the jerk limit of [`Robot::with_model_limits`] takes to reach
-/// the acceleration limit, s: a 50 ms ramp, which halves the RMS jerk of
-/// raw goal writes while costing a live follower a few milliseconds.
-pub const MODEL_JERK_RAMP_S: f64 = 0.05;
+/// the acceleration limit, s. The servo itself has no jerk limit, and a
+/// follower's stop from full speed is longer by the speed times half the
+/// ramp: 20 ms keeps the physical motion's RMS jerk below that of raw goal
+/// writes while a flick or a 2 Hz reversal is overrun by about two degrees
+/// more than raw writes would, where 50 ms overran them by ten
+/// (`python/bench/teleop.py --by-class` measures both).
+pub const MODEL_JERK_RAMP_S: f64 = 0.02;
 
 impl Robot {
     /// This robot with every joint's speed and acceleration limits at what

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use criterion::Criterion;
 use servobus_driver::{Bus, ManualClock};
+use servobus_robot::sim::SimRobot;
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
-use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Finish, RunOptions, VirtualRun};
 use servobus_sim::SimBus;
 use servobus_trajectory::Trajectory;

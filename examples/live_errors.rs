@@ -29,7 +29,7 @@ fn watch(_arg: &str, path: &Path) -> Outcome {
     let (motion, robot) = load_motion(path, None)?;
     let trajectory = plan_motion(&motion, &robot)?;
 
-    let buses = servobus_runtime::sim::virtual_buses(&robot)?;
+    let buses = servobus_robot::sim::virtual_buses(&robot)?;
     let options = RunOptions {
         units: Some(motion.units),
         ..RunOptions::default()

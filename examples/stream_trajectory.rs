@@ -8,8 +8,8 @@
 //! cargo run --example stream_trajectory
 //! ```
 
+use servobus_robot::sim::SimRobot;
 use servobus_runtime::config::{joint_limits, load_robot, RobotOptions};
-use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{RunOptions, VirtualRun};
 use servobus_trajectory::{plan, Keyframe, PlanOptions};
 

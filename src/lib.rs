@@ -3,7 +3,7 @@
 //! checks are [`servobus_robot::doctor`]'s) and the live view of
 //! `servobus monitor`, kept in the library so that they are tested on the
 //! simulator in virtual time. The glue between a robot file
-//! and the built-in simulator lives in [`servobus_runtime::sim`].
+//! and the built-in simulator lives in [`servobus_robot::sim`].
 #![warn(missing_docs)]
 
 /// The shipped robots, motions and simulator examples, by name (the

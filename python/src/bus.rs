@@ -9,7 +9,7 @@ use servobus_driver::registers::{read_uint, write_uint, Register};
 use servobus_driver::{Bus as DriverBus, Series, SystemClock, PROBE_CEILING, PROBE_PINGS};
 use servobus_protocol::MAX_ID;
 use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
-use servobus_runtime::sim::SimRobot;
+use servobus_robot::sim::SimRobot;
 use servobus_sim::WallBus;
 
 use crate::checks;

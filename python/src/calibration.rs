@@ -9,12 +9,12 @@ use std::time::Duration;
 
 use pyo3::prelude::*;
 use servobus_config::Calibration;
-use servobus_robot::ports::{every_port, open_buses, Allowance};
-use servobus_runtime::calibrate::{
+use servobus_robot::calibrate::{
     calibrate, from_lerobot, to_lerobot, LiveJoint, Operator, ProcedureOptions, Step, PATIENCE,
     PATIENT_RETRIES,
 };
-use servobus_runtime::sim::SimRobot;
+use servobus_robot::ports::{every_port, open_buses, Allowance};
+use servobus_robot::sim::SimRobot;
 
 use crate::errors::{chain, Failure, Field, Outcome};
 use crate::load::load_design;

@@ -180,8 +180,8 @@ impl From<servobus_runtime::RunError> for Failure {
     }
 }
 
-impl From<servobus_runtime::sim::SimRobotError> for Failure {
-    fn from(e: servobus_runtime::sim::SimRobotError) -> Self {
+impl From<servobus_robot::sim::SimRobotError> for Failure {
+    fn from(e: servobus_robot::sim::SimRobotError) -> Self {
         Failure::new("ConfigError", chain(&e))
     }
 }

@@ -8,7 +8,7 @@ use std::thread::JoinHandle;
 
 use pyo3::prelude::*;
 use servobus_config::builtin::{path_or_name, Kind};
-use servobus_runtime::sim::{Hand, Mounting, SimRobot, SimRobotBuilder};
+use servobus_robot::sim::{Hand, Mounting, SimRobot, SimRobotBuilder};
 use servobus_sim::{Faults, PtyServer};
 
 use crate::errors::{chain, poisoned, Failure, Outcome};
@@ -80,7 +80,7 @@ fn start(
     server.set_faults(faults);
     if moved_by_hand {
         // Bodies move while no client talks.
-        server.set_tick(Some(servobus_runtime::sim::TRUTH_PERIOD));
+        server.set_tick(Some(servobus_robot::sim::TRUTH_PERIOD));
     }
     let port = server.client_path().display().to_string();
     let stop = Arc::new(AtomicBool::new(false));

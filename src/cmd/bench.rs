@@ -154,7 +154,7 @@ fn bench_bus(
     let (path, server, backend) = match &port {
         Some(port) => (port.clone(), None, format!("serial port {port}")),
         None => {
-            let servos = servobus_runtime::sim::bus_servos(robot, bus)?;
+            let servos = servobus_robot::sim::bus_servos(robot, bus)?;
             let mut server = PtyServer::open(bus.baud, servos)
                 .with_context(|| format!("bus `{}`: cannot start the simulator", bus.name))?;
             let path = server.path().to_string_lossy().into_owned();

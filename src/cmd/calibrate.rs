@@ -1,6 +1,6 @@
 //! `servobus calibrate`: where one physical robot's joints really are.
 //!
-//! Runs the procedure of [`servobus_runtime::calibrate`] on the robot's
+//! Runs the procedure of [`servobus_robot::calibrate`] on the robot's
 //! servos (torque off, the calibration pose held, every joint swept) and
 //! writes the calibration file; or imports one from LeRobot. With
 //! `--write-servos` it also stores in each servo's EEPROM the homing offset
@@ -13,7 +13,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_runtime::calibrate::{
+use servobus_robot::calibrate::{
     calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, ProcedureOptions, Refusal,
     Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
 };

@@ -11,8 +11,8 @@ use std::process::ExitCode;
 
 use servobus_driver::OpenError;
 use servobus_io::OutputError;
+use servobus_robot::teach::TeachError;
 use servobus_runtime::config::{is_builtin_path, ConfigError};
-use servobus_runtime::teach::TeachError;
 use servobus_sim::{FaultSpecError, PtyError};
 
 /// Exit code: a problem was found.

@@ -31,9 +31,9 @@ use std::time::{Duration, Instant};
 use against::{Figures, FollowErrors, LeaderTrail};
 
 use servobus_driver::{Bus, Clock, Transport};
+use servobus_robot::sim::{Hand, SimRobot};
+use servobus_robot::teach::read_angle;
 use servobus_runtime::config::{load_robot, JointMap, Robot, RobotOptions};
-use servobus_runtime::sim::{Hand, SimRobot};
-use servobus_runtime::teach::read_angle;
 use servobus_runtime::{
     Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
 };

@@ -117,7 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         (None, Some(r), Some(c)) => {
             let index = r.buses.iter().position(|b| b.name == c.name).unwrap_or(0);
-            let mut buses = servobus_runtime::sim::virtual_buses(r)?;
+            let mut buses = servobus_robot::sim::virtual_buses(r)?;
             let mut bus = buses.swap_remove(index);
             let poller = Poller::new(Watched::of_bus(c, r.units));
             let title = format!("{} (built-in simulator)", r.name);

@@ -11,7 +11,9 @@ use servobus_node::node::{
     group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
 };
 use servobus_node::zenoh::Wait;
-use servobus_runtime::config::{load_motion_calibrated, load_robot, plan_motion, RobotOptions};
+use servobus_runtime::config::{
+    load_motion_calibrated, load_motion_text, load_robot, plan_motion, RobotOptions,
+};
 use servobus_runtime::{Command, Lead, RunOptions};
 
 use super::out::{errln, outln};
@@ -159,47 +161,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 /// The command that plays `motion` (a built-in motion's name, a file, or
 /// YAML text) on this robot.
 fn plan_command(motion: &str, robot: &Path, calibration: Option<&Path>) -> Result<Command, String> {
-    let scratch;
-    let path = if motion.contains('\n') || motion.trim_start().starts_with('{') {
-        // YAML text: read through the same loader as files, with errors
-        // pointing at its lines.
-        scratch = Scratch::write(motion).map_err(|e| format!("the motion text: {e}"))?;
-        scratch.path.clone()
+    let (m, r) = if motion.contains('\n') || motion.trim_start().starts_with('{') {
+        // YAML text: the same checks as a file's, errors pointing at its
+        // lines.
+        load_motion_text(Path::new("<motion text>"), motion, Some(robot), calibration)
     } else {
-        servobus::builtin::motion_path_or_name(Path::new(motion.trim()))
-    };
-    let (m, r) =
-        load_motion_calibrated(&path, Some(robot), calibration).map_err(|e| e.to_string())?;
+        let path = servobus::builtin::motion_path_or_name(Path::new(motion.trim()));
+        load_motion_calibrated(&path, Some(robot), calibration)
+    }
+    .map_err(|e| e.to_string())?;
     let trajectory = plan_motion(&m, &r).map_err(|e| e.to_string())?;
     Ok(Command::replace(trajectory))
-}
-
-/// A motion given as text, in a file of its own while it is read.
-struct Scratch {
-    dir: PathBuf,
-    path: PathBuf,
-}
-
-impl Scratch {
-    fn write(text: &str) -> std::io::Result<Self> {
-        use std::sync::atomic::{AtomicU64, Ordering};
-        static N: AtomicU64 = AtomicU64::new(0);
-        let dir = std::env::temp_dir().join(format!(
-            "servobus-serve-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir)?;
-        let path = dir.join("command.yaml");
-        std::fs::write(&path, text)?;
-        Ok(Scratch { dir, path })
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
 }
 
 /// Parses a duration: seconds (`2`, `0.5`), or with a unit (`2s`, `500ms`).

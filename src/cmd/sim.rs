@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use servobus_io::OutputError;
+use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_runtime::config::{load_robot, RobotOptions};
-use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\
@@ -121,7 +121,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                         .filter(|b| b.name == name)
                         .flat_map(|b| b.joints.iter().map(|j| j.name.clone()))
                         .collect(),
-                    servobus_runtime::sim::TRUTH_PERIOD,
+                    servobus_robot::sim::TRUTH_PERIOD,
                 ),
                 None => new_truth(&robot),
             };
@@ -141,7 +141,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     server.set_faults(faults);
     if bodies || truth.is_some() {
         // Bodies move (and the truth is sampled) while no client talks.
-        server.set_tick(Some(servobus_runtime::sim::TRUTH_PERIOD));
+        server.set_tick(Some(servobus_robot::sim::TRUTH_PERIOD));
     }
     // Started: the truth file is created (or truncated) now, its header
     // written before the simulator says it serves, so that a reader who

@@ -9,10 +9,10 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_driver::{Clock, Transport};
-use servobus_runtime::config::{load_robot, LimitOrigin, Robot, RobotOptions};
-use servobus_runtime::teach::{
+use servobus_robot::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
+use servobus_runtime::config::{load_robot, LimitOrigin, Robot, RobotOptions};
 
 use super::link::{bus_ports, every_port, Allowance, SerialBus};
 use super::out::{err, errln};

@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 use common::{arg, exited, repo, says, scratch, servobus, servobus_ok, stdout, write_file, Sim};
 
-const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
+const LEROBOT: &str = "crates/robot/tests/data/so101-lerobot.json";
 const SO101: &str = "configs/robots/so101.yaml";
 
 /// `servobus calibrate --from-lerobot FROM -o TO` for the SO-101.
@@ -196,7 +196,7 @@ fn lerobot_python() -> std::ffi::OsString {
 #[test]
 #[ignore = "needs LeRobot 0.6.1: `eval \"$(bash scripts/python_clients.sh)\"` sets SERVOBUS_LEROBOT_PYTHON, then `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn lerobot_accepts_the_exported_calibration_and_reads_the_same_pose() {
-    use servobus_runtime::calibrate::{lerobot_value, NormMode};
+    use servobus_robot::calibrate::{lerobot_value, NormMode};
     use servobus_runtime::config::{load_robot, JointMap, RobotOptions};
     let python = lerobot_python();
     let dir = scratch("calib-lerobot-check");

@@ -51,7 +51,7 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     // target by its lead ran 5-14 deg worst and 1.9-5.4 deg RMS. The bounds
     // are twice the issue's figure worst and half of it RMS; the close
     // following itself is held in virtual time
-    // (crates/runtime/tests/runtime/live_follow.rs).
+    // (crates/robot/tests/robot/live_follow.rs).
     // Since the follower no longer extrapolates past the newest reading
     // (issue 35: it never goes beyond what it was told), it trails the
     // leader by one 50 Hz reading interval by design: the base's fastest

@@ -14,7 +14,7 @@ use common::{
 
 const WAVE: &str = "configs/motions/arm-wave.yaml";
 const SO101: &str = "configs/robots/so101.yaml";
-const LEROBOT: &str = "crates/runtime/tests/data/so101-lerobot.json";
+const LEROBOT: &str = "crates/robot/tests/data/so101-lerobot.json";
 
 /// The names in `dir`, sorted (temporaries, which start with `.`, included).
 fn names(dir: &Path) -> Vec<String> {

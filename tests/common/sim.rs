@@ -31,7 +31,7 @@ pub fn read_truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 pub fn virtual_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, ManualClock>) {
     let cfg = &robot.buses[0];
     let clock = ManualClock::new();
-    let servos = servobus_runtime::sim::bus_servos(robot, cfg).expect("servos");
+    let servos = servobus_robot::sim::bus_servos(robot, cfg).expect("servos");
     let sim = SimBus::new(clock.clone(), cfg.baud)
         .with_servos(servos)
         .with_faults(faults);

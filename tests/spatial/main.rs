@@ -13,8 +13,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use servobus_kinematics::Geometry;
+use servobus_robot::sim::{new_truth, SimRobot};
 use servobus_runtime::config::{load_motion, plan_motion};
-use servobus_runtime::sim::{new_truth, SimRobot};
 use servobus_runtime::{Finish, RunOptions, VirtualRun};
 use servobus_trajectory::JointState;
 

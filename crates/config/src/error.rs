@@ -199,6 +199,21 @@ impl Source {
         })
     }
 
+    /// A text that is no file, called `name` in errors, of at most
+    /// [`MAX_FILE_BYTES`] as a file would be.
+    pub(crate) fn text(name: &Path, text: &str) -> Result<Self, ConfigError> {
+        if text.len() as u64 > MAX_FILE_BYTES {
+            return Err(ConfigError::TooLarge {
+                path: name.to_owned(),
+                limit: MAX_FILE_BYTES,
+            });
+        }
+        Ok(Source {
+            path: name.to_owned(),
+            text: text.to_owned(),
+        })
+    }
+
     /// Deserializes the whole text, turning serde_yaml's error into ours.
     /// A text nested deeper than [`MAX_NESTING`] is refused before serde_yaml
     /// sees it.

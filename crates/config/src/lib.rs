@@ -63,7 +63,9 @@ pub use files::{builtin_path, is_builtin_path, BuiltinFile, BUILTIN_DIR};
 pub use error::Source;
 pub use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
-pub use motion::{load_motion, load_motion_calibrated, Interpolation, Keyframe, Motion, OnLimit};
+pub use motion::{
+    load_motion, load_motion_calibrated, load_motion_text, Interpolation, Keyframe, Motion, OnLimit,
+};
 pub use pose_arg::{parse_pose, PoseError};
 pub use robot::{
     load_robot, BusConfig, CalibrationChoice, JointConfig, Robot, RobotCalibration, RobotOptions,

@@ -218,7 +218,33 @@ pub fn load_motion_calibrated(
     robot_override: Option<&Path>,
     calibration: Option<&Path>,
 ) -> Result<(Motion, Robot), ConfigError> {
-    let src = Source::read(path)?;
+    load_motion_source(Source::read(path)?, robot_override, calibration)
+}
+
+/// Loads a motion given as YAML `text` (a message, a form): the same
+/// checks as [`load_motion_calibrated`], its errors naming `name` with the
+/// line and column in the text. A `robot:` path in it is taken relative to
+/// `name`'s directory (the current one for a bare name such as `<text>`).
+///
+/// # Errors
+/// As [`load_motion_calibrated`]; [`ConfigError::TooLarge`] for a text
+/// longer than a motion file may be.
+pub fn load_motion_text(
+    name: &Path,
+    text: &str,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
+    load_motion_source(Source::text(name, text)?, robot_override, calibration)
+}
+
+fn load_motion_source(
+    src: Source,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<(Motion, Robot), ConfigError> {
+    let path = src.path.clone();
+    let path = path.as_path();
     let raw: RawMotion = src.parse()?;
     let root = FieldPath::root();
     let robot_path =

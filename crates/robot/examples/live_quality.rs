@@ -9,13 +9,13 @@
 //! and after a change and compare.
 //!
 //! ```text
-//! cargo run --release -p servobus-runtime --features sim --example live_quality
+//! cargo run --release -p servobus-robot --example live_quality
 //! ```
 
 use std::path::Path;
 
+use servobus_robot::sim::SimRobot;
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
-use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Lead, RunOptions, Target, Telemetry, VirtualRun};
 
 /// The loop's period, s (the SO-101's 200 Hz).

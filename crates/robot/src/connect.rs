@@ -4,10 +4,10 @@
 use std::fmt;
 use std::time::Duration;
 
+use crate::calibrate::prepare_bus;
+use crate::sim::SimRobot;
 use servobus_config::Robot;
 use servobus_driver::FtdiLatency;
-use servobus_runtime::calibrate::prepare_bus;
-use servobus_runtime::sim::SimRobot;
 use servobus_runtime::{Lead, RunOptions};
 
 use crate::ports::{every_port, open_bus, slow_adapter, system_clock, Allowance, SerialBus};

@@ -1,8 +1,8 @@
 //! Why opening, connecting to or playing a robot failed.
 
+use crate::calibrate::Refusal;
+use crate::sim::SimRobotError;
 use servobus_config::ConfigError;
-use servobus_runtime::calibrate::Refusal;
-use servobus_runtime::sim::SimRobotError;
 use servobus_runtime::RunError;
 
 use crate::ports::OpenError;

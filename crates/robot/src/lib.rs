@@ -64,8 +64,17 @@
 //! }
 //! # Ok::<(), servobus_robot::Error>(())
 //! ```
+//!
+//! Below the [`Robot`] and its [`Connection`], for programs that drive the
+//! steps themselves: [`calibrate`] holds the procedure `servobus calibrate`
+//! runs and the check that refuses to move a robot whose calibration does
+//! not fit its servos, [`teach`] turns poses or a path taught by hand into a
+//! motion file, and [`sim`] builds a robot file's servos on the simulator,
+//! with a body (mounting, hand, truth recorder) when asked: the glue the
+//! command line, the examples and the tests share.
 
 pub mod bench;
+pub mod calibrate;
 mod connect;
 pub mod doctor;
 mod error;
@@ -73,7 +82,9 @@ pub mod monitor;
 pub mod ports;
 mod run;
 pub mod scan;
+pub mod sim;
 pub mod stream;
+pub mod teach;
 
 use std::path::{Path, PathBuf};
 
@@ -81,10 +92,10 @@ pub use connect::{Connection, SlowAdapter, Target, APPROACH, SETTLE};
 pub use error::Error;
 pub use run::{Play, Run};
 
+pub use calibrate::Refusal;
 /// The robot, motion and calibration files ([`servobus_config`]).
 pub use servobus_config as config;
 pub use servobus_config::Motion;
-pub use servobus_runtime::calibrate::Refusal;
 pub use servobus_runtime::{
     Chunk, Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Target as LiveTarget,
     TargetSender, Telemetry,
@@ -261,6 +272,27 @@ impl Robot {
         let path = servobus_config::builtin::motion_path_or_name(name_or_path.as_ref());
         let (motion, _) = servobus_config::load_motion_calibrated(
             &path,
+            Some(&self.config.path),
+            self.options.calibration.as_deref(),
+        )?;
+        Ok(motion)
+    }
+
+    /// Loads a motion given as YAML `text` (a message, a form; errors call
+    /// it `<motion text>`, with the line and column in it) for this robot,
+    /// as [`Robot::motion`] loads a file.
+    ///
+    /// # Errors
+    /// As [`Robot::motion`].
+    pub fn motion_from_yaml(&self, text: &str) -> Result<Motion, Error> {
+        if self.from_text {
+            return Err(Error::NoRobotFile {
+                robot: self.config.name.clone(),
+            });
+        }
+        let (motion, _) = servobus_config::load_motion_text(
+            Path::new("<motion text>"),
+            text,
             Some(&self.config.path),
             self.options.calibration.as_deref(),
         )?;

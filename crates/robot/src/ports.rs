@@ -260,7 +260,7 @@ mod tests {
     #[test]
     fn a_pty_gets_its_allowance_and_the_robot_file_s_larger_figure_wins() {
         let mut robot = two_buses([None, None]);
-        let servos = servobus_runtime::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
+        let servos = crate::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
         let server = servobus_sim::PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
         let path = server.path().to_string_lossy().into_owned();
         let pty = open_port(&path, robot.buses[0].baud).expect("the pty opens");
@@ -283,7 +283,7 @@ mod tests {
     fn every_bus_opens_with_the_tries_asked_for_or_its_own() {
         let mut robot = two_buses([None, None]);
         robot.buses.truncate(1);
-        let servos = servobus_runtime::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
+        let servos = crate::sim::bus_servos(&robot, &robot.buses[0]).expect("servos");
         let server = servobus_sim::PtyServer::open(robot.buses[0].baud, servos).expect("a pty");
         let path = vec![server.path().to_string_lossy().into_owned()];
         let own = servobus_runtime::bus_settings(&robot.buses[0]).retries;

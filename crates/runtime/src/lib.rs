@@ -10,20 +10,18 @@
 //!   [`Telemetry`] out over bounded channels, a [`Report`] at the end.
 //!   Both run one cycle function per bus; they differ only in the clock and
 //!   the pacing, so a test in virtual time runs the code of a real run.
-//! - [`sim`] builds a robot file's servos on the simulator (the glue the
-//!   command line, the examples and the tests share).
+//!
+//! Calibration, teaching and the glue that builds a robot file's servos on
+//! the simulator are not the scheduler's: they are in `servobus-robot`
+//! (`servobus_robot::{calibrate, teach, sim}`).
 #![warn(missing_docs)]
 
-pub mod calibrate;
 /// The robot, motion and calibration files (the `servobus-config` crate).
 pub use servobus_config as config;
 
 pub mod pacer;
 pub mod rt;
-#[cfg(feature = "sim")]
-pub mod sim;
 pub mod stats;
-pub mod teach;
 
 // The scheduler: runs a robot + trajectory on its buses, tracks, reacts to
 // faults. `lane` holds the one cycle function; `virtual_run` steps the lanes

@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use servobus_runtime::calibrate::{LiveJoint, Operator, Step};
+use servobus_robot::calibrate::{LiveJoint, Operator, Step};
 use servobus_runtime::config::Robot;
 
 use crate::cmd::out::{out, outln};

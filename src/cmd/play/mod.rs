@@ -195,7 +195,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .collect();
     let runner = match &backend {
         Backend::Fast => {
-            let buses = servobus_runtime::sim::SimRobot::builder(&robot)
+            let buses = servobus_robot::sim::SimRobot::builder(&robot)
                 .pose(&pose)
                 .build()?
                 .driver_buses();
@@ -205,7 +205,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             // In this process, paced by the wall clock: no pty between the
             // runtime and its servos (see `servobus_sim::WallBus`).
             let clock = super::link::system_clock();
-            let buses = servobus_runtime::sim::SimRobot::builder(&robot)
+            let buses = servobus_robot::sim::SimRobot::builder(&robot)
                 .pose(&pose)
                 .build()?
                 .wall_buses(&clock);

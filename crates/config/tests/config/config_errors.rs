@@ -6,7 +6,7 @@ mod config_check;
 
 use std::path::{Path, PathBuf};
 
-use servobus_config::{load_motion, load_robot, ConfigError, RobotOptions};
+use servobus_config::{load_motion, load_motion_text, load_robot, ConfigError, RobotOptions};
 
 /// Writes `text` to a fresh file named `name` in a directory of its own.
 /// The robot file at `path`, which must be valid.
@@ -283,7 +283,34 @@ fn motion_errors_name_the_file_line_column_and_field() {
     for (test, motion, (line, column), field, reason) in cases {
         let (p, e) = motion_error(test, motion);
         expect(&e, &p, line, column, field, reason);
+        // The same text given as text (a message, no file): the same error,
+        // located in the text under the name it was given.
+        let robot = p.with_file_name("robot.yaml");
+        let name = Path::new("<motion text>");
+        let e = load_motion_text(name, motion, Some(&robot), None)
+            .expect_err("the motion text must be refused");
+        expect(&e, name, line, column, field, reason);
     }
+}
+
+#[test]
+fn a_motion_given_as_text_loads_as_its_file_does() {
+    let dir = "m_text";
+    let robot = write(dir, "robot.yaml", ROBOT);
+    let text =
+        "robot: robot.yaml\nkeyframes:\n  - pose: {a: 0}\n  - {at: 1, pose: {a: 20, b: -10}}\n";
+    let file = write(dir, "motion.yaml", text);
+    let (from_file, _) = load_motion(&file, None).expect("the file loads");
+    let (from_text, r) =
+        load_motion_text(Path::new("<text>"), text, Some(&robot), None).expect("the text loads");
+    assert_eq!(from_text.keyframes, from_file.keyframes);
+    assert_eq!(from_text.path, Path::new("<text>"));
+    assert_eq!(r.name, "two");
+    // Longer than a motion file may be: refused before it is parsed.
+    let huge = format!("robot: robot.yaml\n#{}\n", "x".repeat(2 << 20));
+    let e =
+        load_motion_text(Path::new("<text>"), &huge, Some(&robot), None).expect_err("too large");
+    assert!(matches!(e, ConfigError::TooLarge { .. }), "{e}");
 }
 
 #[test]

@@ -9,8 +9,8 @@ use servobus_driver::{
 };
 use servobus_protocol::registers::addr;
 
+use crate::calibrate::{prepare_bus, Refusal};
 use servobus_protocol::registers::Series;
-use servobus_runtime::calibrate::{prepare_bus, Refusal};
 
 use super::probe::MAX_RETURN_DELAY;
 use super::{Action, Advice, Finding, Fixing};

@@ -81,7 +81,7 @@ pub fn check<S: AsRef<str>>(
         unchecked: Vec::new(),
     };
     if ports.iter().all(Option::is_none) {
-        let buses = servobus_runtime::sim::virtual_buses(robot).map_err(Error::Simulator)?;
+        let buses = crate::sim::virtual_buses(robot).map_err(Error::Simulator)?;
         for (index, (mut bus, cfg)) in buses.into_iter().zip(&robot.buses).enumerate() {
             let target = BusPort {
                 port: None,

@@ -4,11 +4,13 @@
 //!
 //! This is the one place where a robot file becomes simulated servos: the
 //! command line (`servobus sim`, `play` and `bench` without `--port`), the
-//! examples and the tests all build their simulator here.
+//! Python bindings, the examples and the tests all build their simulator
+//! here (the scheduler's own tests, in `servobus-runtime`, put bare
+//! servos on `servobus-sim` buses themselves).
 //!
 //! ```
-//! use servobus_runtime::config::{load_robot, RobotOptions};
-//! use servobus_runtime::sim::SimRobot;
+//! use servobus_robot::config::{load_robot, RobotOptions};
+//! use servobus_robot::sim::SimRobot;
 //!
 //! # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
 //! let robot = load_robot(&dir.join("so101.yaml"), &RobotOptions::default())?;
@@ -22,9 +24,9 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use crate::bus_settings;
 use crate::config::{BusConfig, JointMap, Robot};
 use servobus_driver::{Bus, Clock, ManualClock, Transport};
+use servobus_runtime::bus_settings;
 use servobus_sim::{SimBus, SimModel, SimServo, Truth, WallBus};
 
 mod body;
@@ -135,9 +137,10 @@ pub fn bus_servos(robot: &Robot, bus: &BusConfig) -> Result<Vec<SimServo>, SimRo
 }
 
 /// The robot's buses simulated in virtual time, ready for
-/// [`crate::VirtualRun`]: one [`SimBus`] per robot bus, each with its own
-/// [`ManualClock`] (the runtime moves them in step) and the driver settings
-/// of the robot file. Shorthand for `SimRobot::builder(robot).build()?.driver_buses()`.
+/// [`VirtualRun`](servobus_runtime::VirtualRun): one [`SimBus`] per robot
+/// bus, each with its own [`ManualClock`] (the runtime moves them in step)
+/// and the driver settings of the robot file. Shorthand for
+/// `SimRobot::builder(robot).build()?.driver_buses()`.
 ///
 /// # Errors
 /// [`SimRobotError`] when a servo cannot be simulated.
@@ -150,8 +153,8 @@ pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus, ManualClock>>, Sim
 /// Build one with [`SimRobot::builder`]; its options give the robot a body:
 ///
 /// ```
-/// use servobus_runtime::config::{load_robot, RobotOptions};
-/// use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
+/// use servobus_robot::config::{load_robot, RobotOptions};
+/// use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot};
 ///
 /// # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots");
 /// let robot = load_robot(&dir.join("so101.yaml"), &RobotOptions::default())?;
@@ -209,15 +212,16 @@ impl SimRobot {
     }
 
     /// Driver buses on the simulated buses (each on its bus's own clock,
-    /// with the robot file's settings), ready for [`crate::VirtualRun`].
+    /// with the robot file's settings), ready for
+    /// [`VirtualRun`](servobus_runtime::VirtualRun).
     pub fn driver_buses(&self) -> Vec<Bus<SimBus, ManualClock>> {
         self.buses_on(SimBus::clone)
     }
 
     /// Driver buses on the simulated buses paced by the wall clock `clock`
     /// ([`WallBus`]: the servos answer in real time, in this process), with
-    /// the robot file's settings, ready for [`crate::spawn`]. Give the run
-    /// the same clock.
+    /// the robot file's settings, ready for [`spawn`](servobus_runtime::spawn).
+    /// Give the run the same clock.
     pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>, C>> {
         self.buses_on(|sim| WallBus::new(sim.clone(), clock.clone()))
     }

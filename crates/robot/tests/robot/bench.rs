@@ -6,8 +6,8 @@ use std::time::Duration;
 
 use servobus_driver::{MissingReason, PATIENT_TRIES};
 use servobus_robot::bench::{measure, BenchError};
+use servobus_robot::sim::virtual_buses;
 use servobus_robot::Robot;
-use servobus_runtime::sim::virtual_buses;
 
 #[test]
 fn the_arm_s_bus_runs_full_cycles_with_every_servo_answering() {

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use servobus_driver::{Bus, ManualClock};
-use servobus_runtime::calibrate::ProcedureOptions;
+use servobus_robot::calibrate::ProcedureOptions;
 use servobus_runtime::config::{load_motion_calibrated, plan_motion, Robot};
 use servobus_runtime::{Finish, RunOptions, Telemetry, VirtualRun};
 use servobus_sim::SimBus;

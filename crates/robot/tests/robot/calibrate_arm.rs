@@ -17,7 +17,7 @@ use std::time::Duration;
 use calib_play::Played;
 use servobus_driver::{Bus, Clock, ManualClock};
 use servobus_protocol::registers::sign_magnitude;
-use servobus_runtime::calibrate::{
+use servobus_robot::calibrate::{
     calibrate, prepare_servos, store_in_servos, write_homing, LiveJoint, Operator, Step, Store,
     StoreEnd,
 };

@@ -12,11 +12,11 @@ use std::path::Path;
 use std::time::Duration;
 
 use servobus_driver::{Bus, Clock, ManualClock};
-use servobus_runtime::calibrate::{calibrate, prepare_servos, LiveJoint, Operator, Step};
+use servobus_robot::calibrate::{calibrate, prepare_servos, LiveJoint, Operator, Step};
+use servobus_robot::sim::Mounting;
 use servobus_runtime::config::{
     load_robot, save_calibration, Calibration, JointMap, Robot, RobotOptions,
 };
-use servobus_runtime::sim::Mounting;
 use servobus_runtime::{bus_settings, Finish};
 use servobus_sim::body::{HandPath, Mount};
 use servobus_sim::{SimBus, SimServo};

@@ -15,7 +15,7 @@ use crate::common;
 
 use std::path::{Path, PathBuf};
 
-use servobus_runtime::calibrate::{from_lerobot, lerobot_value, to_lerobot, NormMode};
+use servobus_robot::calibrate::{from_lerobot, lerobot_value, to_lerobot, NormMode};
 use servobus_runtime::config::{load_calibration, save_calibration, JointMap};
 
 fn data(name: &str) -> PathBuf {

@@ -12,8 +12,8 @@ use std::time::Duration;
 
 use common::robot;
 use servobus_driver::Clock;
+use servobus_robot::sim::{new_truth, SimRobot, TRUTH_PERIOD};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::sim::{new_truth, SimRobot, TRUTH_PERIOD};
 use servobus_runtime::{Command, Lead, RunOptions, Target, VirtualRun};
 use servobus_sim::Truth;
 

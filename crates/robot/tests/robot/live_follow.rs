@@ -11,8 +11,8 @@ use crate::common;
 
 use common::{config, record, robot};
 use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_robot::sim::{Hand, SimRobot};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::sim::{Hand, SimRobot};
 use servobus_runtime::{Lead, RunOptions, Target, VirtualRun};
 use servobus_sim::SimBus;
 

@@ -8,8 +8,8 @@
 use std::path::PathBuf;
 
 use servobus_protocol::StatusFlags;
+use servobus_robot::sim::{Mounting, SimRobot};
 use servobus_runtime::config::Robot;
-use servobus_runtime::sim::{Mounting, SimRobot};
 use servobus_runtime::{
     Command, FaultKind, Finish, Lead, RunOptions, Target, Telemetry, VirtualRun,
 };

@@ -133,3 +133,29 @@ fn a_new_path_for_another_robot_is_rejected_with_its_joint_counts() {
     let report = run.join().expect("a report");
     assert_eq!(report.finish, Finish::Stopped);
 }
+
+#[test]
+fn a_motion_given_as_text_plays_as_its_file_does() {
+    let robot = Robot::open("so101").expect("the built-in arm");
+    let text = "robot: so101\nkeyframes:\n  - pose: {shoulder_pan: 0}\n  - {at: 0.5, pose: {shoulder_pan: 10}}\n";
+    let motion = robot.motion_from_yaml(text).expect("the text is a motion");
+    assert_eq!(motion.keyframes.len(), 2);
+    let connection = robot.connect(Target::VirtualSimulator).expect("connects");
+    let options = connection.options();
+    let report = connection
+        .play(&motion, options)
+        .expect("starts")
+        .join()
+        .expect("a report");
+    assert_eq!(report.finish, Finish::Completed);
+    // A bad one is located in the text.
+    let err = robot
+        .motion_from_yaml("keyframes:\n  - pose: {elbow: 5}\n")
+        .expect_err("no such joint");
+    let Error::Config(config) = err else {
+        panic!("expected a configuration error, got {err:?}");
+    };
+    assert_eq!(config.file(), std::path::Path::new("<motion text>"));
+    assert_eq!(config.position().map(|(line, _)| line), Some(2), "{config}");
+    assert!(config.to_string().contains("elbow"), "{config}");
+}

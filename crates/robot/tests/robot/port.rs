@@ -3,8 +3,8 @@
 //! calibration before anything is read through it or moves.
 
 use crate::common::{self, repo, Pty};
+use servobus_robot::sim::Mounting;
 use servobus_robot::{Error, Finish, Refusal, Robot, Target};
-use servobus_runtime::sim::Mounting;
 
 #[test]
 fn arm_wave_plays_to_the_end_on_a_pty() {

@@ -1,13 +1,14 @@
-//! The simulated robot's body through the runtime's glue: mounting and hand
-//! files, random units, the truth recorder, in virtual time.
+//! The simulated robot's body through the facade's simulator glue
+//! (`servobus_robot::sim`): mounting and hand files, random units, the
+//! truth recorder, in virtual time.
 
 use crate::common;
 
 use std::time::Duration;
 
 use servobus_protocol::registers::addr;
+use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot};
 use servobus_runtime::config::ConfigError;
-use servobus_runtime::sim::{new_truth, Hand, Mounting, SimRobot};
 use servobus_runtime::VirtualRun;
 use servobus_trajectory::JointState;
 

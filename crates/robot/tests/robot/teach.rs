@@ -7,12 +7,12 @@ use crate::common;
 use std::time::Duration;
 
 use servobus_driver::ManualClock;
-use servobus_runtime::config::{load_motion, plan_motion, Robot};
-use servobus_runtime::sim::{new_truth, Hand, SimRobot};
-use servobus_runtime::teach::{
+use servobus_robot::sim::{new_truth, Hand, SimRobot};
+use servobus_robot::teach::{
     check_pose, merge_identical, motion_yaml, reduce, trim_idle, StillCapture, Taught, TeachError,
     Teacher, TimedPose,
 };
+use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::VirtualRun;
 use servobus_sim::{SimBus, Truth};
 
@@ -140,7 +140,7 @@ fn pose_and_pause_with_the_hand_then_play_passes_every_keyframe() {
     for (_, k) in &taught {
         let closest = rows
             .iter()
-            .map(|r| servobus_runtime::teach::distance(&r.angles_deg, k))
+            .map(|r| servobus_robot::teach::distance(&r.angles_deg, k))
             .fold(f64::INFINITY, f64::min);
         assert!(closest <= 0.5, "the body passes {k:?} within {closest} deg");
     }

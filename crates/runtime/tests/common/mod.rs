@@ -3,13 +3,12 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, ManualClock, Transport, TransportError};
+use servobus_driver::{Bus, Clock, ManualClock, Transport, TransportError};
 use servobus_runtime::config::{
     load_motion, load_robot, plan_motion, JointMap, Robot, RobotOptions,
 };
-use servobus_runtime::sim::SimRobot;
-use servobus_runtime::RunOptions;
-use servobus_sim::SimBus;
+use servobus_runtime::{bus_settings, RunOptions};
+use servobus_sim::{SimBus, SimModel, SimServo, WallBus};
 use servobus_trajectory::{JointState, Trajectory};
 
 // The shipped files and scratch files, as the configuration's tests have
@@ -34,13 +33,6 @@ pub const SO101_LIMITS: [(f64, f64, f64); 6] = [
 pub fn robot(name: &str) -> Robot {
     load_robot(&config(&format!("robots/{name}")), &RobotOptions::default())
         .expect("robot file loads")
-}
-
-/// A robot file under `configs/robots/` with the calibration file
-/// `calibration` applied.
-pub fn calibrated(name: &str, calibration: &std::path::Path) -> Robot {
-    let options = RobotOptions::default().calibration(Some(calibration));
-    load_robot(&config(&format!("robots/{name}")), &options).expect("the calibration applies")
 }
 
 /// A motion under `configs/motions/`, planned, with its robot.
@@ -73,9 +65,8 @@ pub fn fastest_cycle(path: &Trajectory, j: usize, period: f64) -> u64 {
     best.1
 }
 
-/// One simulated bus per robot bus (the runtime's simulator glue), each with
-/// its own clock, every servo at the middle of its range (tick 2048 on an
-/// STS3215).
+/// One simulated bus per robot bus, each with its own clock, every servo
+/// at the middle of its range (tick 2048 on an STS3215).
 pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
     let mid: Vec<f64> = robot
         .joints()
@@ -85,16 +76,67 @@ pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) 
             robot.units.from_rad(map.from_ticks(mid))
         })
         .collect();
-    split(
-        SimRobot::builder(robot)
-            .pose(&mid)
-            .build()
-            .expect("the robot simulates"),
-    )
+    split(robot, simulated(robot, &mid))
 }
 
-fn split(sim: SimRobot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
-    (sim.driver_buses(), sim.buses().to_vec())
+/// Driver buses on `sims` (in virtual time), with the simulated buses.
+fn split(robot: &Robot, sims: Vec<SimBus>) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+    (buses_on(robot, &sims, SimBus::clone), sims)
+}
+
+/// `robot`'s servos as bare shafts at `pose` (one angle per joint in the
+/// robot's units, at the robot file's ticks), one [`SimBus`] per robot bus
+/// on its own clock, each servo with its ID and model, the bus's return
+/// delay and baud rate: what `servobus_robot::sim::SimRobot` builds without
+/// a body. The scheduler carries no simulator glue; its tests put the
+/// servos on the simulator here.
+pub fn simulated(robot: &Robot, pose: &[f64]) -> Vec<SimBus> {
+    assert_eq!(pose.len(), robot.joint_count(), "one angle per joint");
+    robot
+        .buses
+        .iter()
+        .map(|bus| {
+            let baud =
+                servobus_protocol::registers::baud_index(bus.baud).expect("a servo baud rate");
+            let servos = bus.joints.iter().map(|joint| {
+                let model = SimModel::by_number(joint.model.number)
+                    .or_else(|| SimModel::by_name(joint.model.name))
+                    .expect("the simulator has the model");
+                let angle = robot
+                    .joints()
+                    .position(|j| j.name == joint.name)
+                    .map_or(joint.rest(), |i| pose[i]);
+                let map = JointMap::new(joint, robot.units);
+                SimServo::new(model, joint.id)
+                    .with_return_delay(bus.return_delay)
+                    .with_byte(servobus_sim::addr::BAUD_RATE, baud)
+                    .with_position(map.to_ticks(robot.units.to_rad(angle)))
+            });
+            SimBus::new(ManualClock::new(), bus.baud).with_servos(servos)
+        })
+        .collect()
+}
+
+/// One driver bus per simulated bus of `robot`, on the transport `on` makes
+/// of it, with the robot file's driver settings.
+fn buses_on<T: Transport>(
+    robot: &Robot,
+    sims: &[SimBus],
+    on: impl Fn(&SimBus) -> T,
+) -> Vec<Bus<T, T::Clock>> {
+    sims.iter()
+        .zip(&robot.buses)
+        .map(|(sim, bus)| Bus::new(on(sim), bus_settings(bus)))
+        .collect()
+}
+
+/// Driver buses on `robot`'s servos at `pose` ([`simulated`]) paced by the
+/// wall clock `clock` ([`WallBus`]: the servos answer in real time, in this
+/// process). Give the run the same clock.
+pub fn wall_buses<C: Clock>(robot: &Robot, pose: &[f64], clock: &C) -> Vec<Bus<WallBus<C>, C>> {
+    buses_on(robot, &simulated(robot, pose), |sim| {
+        WallBus::new(sim.clone(), clock.clone())
+    })
 }
 
 /// Seconds as a Duration.
@@ -107,12 +149,7 @@ pub fn sim_buses_at(
     robot: &Robot,
     path: &Trajectory,
 ) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
-    split(
-        SimRobot::builder(robot)
-            .pose(&start_pose(robot, path))
-            .build()
-            .expect("the robot simulates"),
-    )
+    split(robot, simulated(robot, &start_pose(robot, path)))
 }
 
 /// Where `path` starts, per joint in the robot's units.

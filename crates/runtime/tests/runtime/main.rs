@@ -1,19 +1,11 @@
 //! The runtime integration tests, one binary: each module was a test
 //! file of its own (linking one binary instead of many).
 
-#[path = "../calib_play/mod.rs"]
-mod calib_play;
 #[path = "../common/mod.rs"]
 mod common;
 
-mod calibrate_arm;
-mod calibrate_body;
-mod calibrate_lerobot;
 mod link_silence;
-mod live_compare;
-mod live_follow;
 mod live_inputs;
-mod live_stall;
 mod live_switch;
 mod live_targets;
 mod no_alloc;
@@ -26,6 +18,4 @@ mod run_link;
 mod run_robots;
 mod run_same_cycle;
 mod run_threads;
-mod sim_body;
 mod sim_budget;
-mod teach;

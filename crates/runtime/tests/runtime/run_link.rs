@@ -115,11 +115,7 @@ fn the_goals_wire_time_is_not_taken_for_the_adapters_latency() {
     // WRITE of the goals (6 x 7 bytes of data, about 0.5 ms at 1 Mbaud).
     let (path, robot) = common::motion("arm-wave.yaml");
     let wall = servobus_driver::ManualClock::new();
-    let buses = servobus_runtime::sim::SimRobot::builder(&robot)
-        .pose(&common::start_pose(&robot, &path))
-        .build()
-        .expect("the robot simulates")
-        .wall_buses(&wall);
+    let buses = common::wall_buses(&robot, &common::start_pose(&robot, &path), &wall);
     let mut run = VirtualRun::new(&robot, path, buses, RunOptions::default()).expect("starts");
     while run.step() {}
     assert_eq!(run.finished(), Some(Finish::Completed));

@@ -255,6 +255,14 @@ fn watch<T: Transport, C: Clock>(
 ) -> anyhow::Result<ExitCode> {
     let period = Duration::from_secs_f64(1.0 / args.rate);
     let mut screen = if live { Some(Screen::open()?) } else { None };
+    if screen.is_none() {
+        // Without a screen (a pipe, a log) Ctrl-C, SIGTERM and SIGHUP end
+        // the watch after the line being written: a reader never gets half
+        // a line, and the exit status is the watch's own.
+        if let Err(e) = servobus_driver::catch_stop_signals() {
+            errln!("warning: signals cannot be caught ({e}): Ctrl-C may cut the last line");
+        }
+    }
     let mut problem = false;
     let mut note: Option<String> = None;
     let mut refreshes = 0u64;
@@ -275,7 +283,7 @@ fn watch<T: Transport, C: Clock>(
                 s.0.draw(|f| view::draw(f, &frame, title))?;
             }
         }
-        if args.count.is_some_and(|n| refreshes >= n) {
+        if args.count.is_some_and(|n| refreshes >= n) || stopped(screen.is_none()) {
             break;
         }
         next += period;
@@ -283,7 +291,11 @@ fn watch<T: Transport, C: Clock>(
         loop {
             let left = next.saturating_duration_since(Instant::now());
             if screen.is_none() {
-                std::thread::sleep(left);
+                // In short naps, so that a stop signal ends the watch soon.
+                let until = Instant::now() + left;
+                while !stopped(true) && Instant::now() < until {
+                    std::thread::sleep(until.saturating_duration_since(Instant::now()).min(NAP));
+                }
                 break;
             }
             match key(left)? {
@@ -302,6 +314,14 @@ fn watch<T: Transport, C: Clock>(
         }
     }
     Ok(exit_code(problem))
+}
+
+/// The longest sleep between checks for a stop signal without a screen.
+const NAP: Duration = Duration::from_millis(20);
+
+/// Whether a stop signal came, where they are caught (without a screen).
+fn stopped(caught: bool) -> bool {
+    caught && servobus_driver::stop_signal().is_some()
 }
 
 /// 1 when a problem was seen, else 0.

@@ -72,6 +72,33 @@ fn monitor_without_a_terminal_prints_json_lines_and_says_so() {
 }
 
 #[test]
+fn ctrl_c_ends_a_monitor_without_a_terminal_after_a_whole_line() {
+    let dir = scratch("no-terminal-monitor-int");
+    let sim = Sim::start(&dir);
+    let args = sim.arm_args(&["monitor"], &["--rate", "50"]);
+    let mut monitor = common::Running::start_bin(std::path::Path::new(BIN), Some(&repo("")), &args);
+    // A few refreshes, then Ctrl-C (SIGINT) as a shell sends it.
+    monitor.wait_for(false, "a first JSON line", |l| l.contains("\"servos\""));
+    monitor.wait_for(false, "a second JSON line", |l| l.contains("\"servos\""));
+    monitor.interrupt();
+    let (status, stdout, stderr) = monitor.finish();
+    // The watch's own end: no servo missing or flagged, so 0.
+    assert_eq!(status.code(), Some(0), "{status}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // Every line whole: the last one too.
+    let mut frames = 0;
+    for line in stdout.lines() {
+        let frame: serde_json::Value =
+            serde_json::from_str(line).expect("one whole JSON object per line");
+        assert!(frame["servos"].is_array(), "{frame}");
+        frames += 1;
+    }
+    assert!(frames >= 2, "{stdout}");
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn play_monitor_without_a_terminal_refuses_before_any_torque() {
     let dir = scratch("no-terminal-play");
     let sim = Sim::start(&dir);

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use pyo3::prelude::*;
 use servobus_config::Units;
-use servobus_runtime::{
-    Chunk, Command, RunOptions, Runner, Target, TargetError, TargetSender, Telemetry,
+use servobus_robot::{
+    Chunk, Command, LiveTarget as Target, Run, RunOptions, TargetError, TargetSender, Telemetry,
 };
 
 use crate::errors::{chain, poisoned, Failure, Outcome};
@@ -49,7 +49,7 @@ pub(crate) struct LiveOptions {
 /// A live run of a robot, fed targets from Python.
 #[pyclass(module = "servobus._native", name = "Stream")]
 pub struct Stream {
-    runner: Mutex<Option<Runner>>,
+    runner: Mutex<Option<Run>>,
     targets: TargetSender,
     units: Units,
     started: Instant,
@@ -81,7 +81,7 @@ impl Stream {
             options.faults.following_error = f64::INFINITY;
             options.faults.stall_error = f64::INFINITY;
         }
-        let runner = connection.live(options)?.into_runner();
+        let runner = connection.live(options)?;
         let n = config.joints().count();
         let state = Arc::new(Mutex::new(State {
             position: vec![f64::NAN; n],
@@ -251,7 +251,7 @@ impl Stream {
     #[getter]
     fn finished(&self) -> PyResult<bool> {
         let runner = self.runner.lock().map_err(poisoned)?;
-        Ok(runner.as_ref().is_none_or(Runner::is_finished))
+        Ok(runner.as_ref().is_none_or(Run::is_finished))
     }
 
     /// Stops the joints (jerk limited), ends the run and returns its report

@@ -355,7 +355,7 @@ fn drive<T: Transport, C: Clock>(
         live_line: !args.json,
     };
     let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(&runner);
+    super::play::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let telemetry = runner.telemetry();
     let started = Instant::now();

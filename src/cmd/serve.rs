@@ -109,7 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
     let runner = super::stream::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(&runner);
+    super::play::install_ctrl_c(runner.commands());
     let info = RobotInfo {
         name: args.name.clone().unwrap_or_else(|| robot.name.clone()),
         joints: robot.joints().map(|j| j.name.clone()).collect(),

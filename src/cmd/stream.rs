@@ -20,10 +20,8 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+use servobus_robot::{Command, Lead, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
-use servobus_runtime::{
-    Command, Lead, LiveEvent, Report, RunOptions, Runner, TargetSender, Telemetry,
-};
 
 use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
 
@@ -68,7 +66,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..RunOptions::default()
     };
     let runner = start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(&runner);
+    super::play::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let commands = runner.commands();
     let units = robot.units;
@@ -100,14 +98,14 @@ pub(crate) fn start_live(
     robot: &Robot,
     port: Option<&str>,
     options: RunOptions,
-) -> anyhow::Result<Runner> {
+) -> anyhow::Result<Run> {
     let target = match every_port(robot, port.as_slice()) {
         Ports::None => servobus_robot::Target::Simulator,
         Ports::Every(ports) => servobus_robot::Target::Ports(ports),
         Ports::Missing(bus) => return Err(super::link::no_port(robot, &bus.name, None)),
     };
     let connection = super::link::connect(robot, target)?;
-    Ok(connection.live(options)?.into_runner())
+    Ok(connection.live(options)?)
 }
 
 /// Reads lines of at most [`MAX_LINE_BYTES`] from `input`: each line (without
@@ -206,7 +204,7 @@ fn read_targets(
 /// One telemetry line per cycle (all buses' joints) while the run goes on.
 /// Returns whether the telemetry could not all be written (the run was
 /// then stopped).
-fn watch(runner: &Runner, names: &[String], mut telemetry: bool) -> anyhow::Result<bool> {
+fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<bool> {
     let mut lost = false;
     let rx = runner.telemetry();
     let n = names.len();

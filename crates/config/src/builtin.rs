@@ -297,7 +297,7 @@ mod tests {
             }
         }
         assert_eq!(on_disk, all().count());
-        // (The simulator's mountings and hands load in the runtime's
+        // (The simulator's mountings and hands load in the facade's
         // `sim_body` tests.)
         for b in all() {
             match b.kind {

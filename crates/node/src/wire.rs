@@ -159,7 +159,7 @@ fn target_of(obj: &Object) -> Result<TargetMessage, WireError> {
 /// `{"chunk": {"t0": <s, optional>, "dt": <s>, "joints": {"<name>": [<angle>, ...]}}}`.
 /// Its shape is checked here: `dt` a positive number, `t0` a number, at
 /// least one joint, every joint the same number of angles (1 to
-/// [`MAX_CHUNK_POINTS`](servobus_runtime::MAX_CHUNK_POINTS)); whether the
+/// [`MAX_CHUNK_POINTS`](servobus_robot::MAX_CHUNK_POINTS)); whether the
 /// names are joints is the target stream's to check.
 pub fn parse_chunk(payload: &[u8]) -> Result<ChunkMessage, WireError> {
     chunk_of(&object(payload)?)
@@ -193,7 +193,7 @@ fn chunk_of(obj: &Object) -> Result<ChunkMessage, WireError> {
     if joints.is_empty() {
         return Err(bad("`joints` names no joint".into()));
     }
-    let most = servobus_runtime::MAX_CHUNK_POINTS;
+    let most = servobus_robot::MAX_CHUNK_POINTS;
     let mut out = Vec::with_capacity(joints.len());
     let mut points = None;
     for (name, angles) in joints {

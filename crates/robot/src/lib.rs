@@ -97,8 +97,9 @@ pub use calibrate::Refusal;
 pub use servobus_config as config;
 pub use servobus_config::Motion;
 pub use servobus_runtime::{
-    Chunk, Command, Finish, Lead, Rejection, Report, RunError, RunOptions, Target as LiveTarget,
-    TargetSender, Telemetry,
+    Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, Rejection,
+    Report, RunError, RunOptions, StallEvent, Target as LiveTarget, TargetError, TargetSender,
+    Telemetry, MAX_CHUNK_POINTS,
 };
 pub use servobus_trajectory::Trajectory;
 

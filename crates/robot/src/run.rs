@@ -6,8 +6,8 @@ use std::time::Duration;
 use crossbeam_channel::Receiver;
 use servobus_config::Motion;
 use servobus_runtime::{
-    spawn, spawn_live, spawn_virtual, spawn_virtual_live, Command, Report, RunOptions, Runner,
-    TargetSender, Telemetry,
+    spawn, spawn_live, spawn_virtual, spawn_virtual_live, Command, CommandSender, Report,
+    RunOptions, Runner, TargetSender, Telemetry,
 };
 use servobus_trajectory::Trajectory;
 
@@ -104,6 +104,12 @@ impl Run {
     /// been read.
     pub fn telemetry(&self) -> Receiver<Telemetry> {
         self.runner.telemetry()
+    }
+
+    /// A sender of commands to the run, for another thread (a Ctrl-C
+    /// handler, a network callback); [`Run::send`] from this one.
+    pub fn commands(&self) -> CommandSender {
+        self.runner.commands()
     }
 
     /// Where a live run ([`Connection::live`]) takes its targets.

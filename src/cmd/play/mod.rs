@@ -219,7 +219,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     };
 
-    install_ctrl_c(&runner);
+    install_ctrl_c(runner.commands());
     let shown = Shown {
         names: names.clone(),
         bus_of: robot

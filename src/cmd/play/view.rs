@@ -31,9 +31,9 @@ pub(super) struct Shown<'a> {
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
-pub(crate) fn install_ctrl_c(runner: &Runner) {
+/// `commands` is the run's ([`Runner::commands`], `servobus_robot::Run::commands`).
+pub(crate) fn install_ctrl_c(commands: CommandSender) {
     let seen = AtomicU32::new(0);
-    let commands = runner.commands();
     let installed = ctrlc::set_handler(move || {
         let n = seen.fetch_add(1, Ordering::SeqCst);
         let command = if n == 0 {

@@ -6,8 +6,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use servobus_runtime::config::Units;
-use servobus_runtime::{Command, Report, Runner, Telemetry};
+use servobus_robot::config::Units;
+use servobus_robot::{Command, Report, Run, Telemetry};
 use zenoh::bytes::Encoding;
 use zenoh::Wait;
 
@@ -110,7 +110,7 @@ fn unix_ns(t: SystemTime) -> i64 {
         .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
 }
 
-/// Runs `runner` as a Zenoh node on `session` until the run ends, then
+/// Runs `run` (a live run of the facade, [`servobus_robot::Connection::live`]) as a Zenoh node on `session` until the run ends, then
 /// keeps answering `report` for `linger`. See the crate docs for the keys.
 ///
 /// # Errors
@@ -119,7 +119,7 @@ fn unix_ns(t: SystemTime) -> i64 {
 pub fn serve(
     session: &zenoh::Session,
     robot: &RobotInfo,
-    runner: Runner,
+    runner: Run,
     planner: Box<Planner>,
     config: &NodeConfig,
     linger: Duration,

@@ -20,8 +20,10 @@
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant, SystemTime};
 
-use servobus_runtime::config::Units;
-use servobus_runtime::{Chunk, Command, CommandSender, Target, TargetError, TargetSender};
+use servobus_robot::config::Units;
+use servobus_robot::{
+    Chunk, Command, CommandSender, LiveTarget as Target, TargetError, TargetSender,
+};
 
 use super::{lock, unix_ns, Planner, Shared};
 use crate::wire::{parse_command, parse_live, LiveMessage, NodeCommand};

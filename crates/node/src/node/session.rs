@@ -40,7 +40,7 @@ pub enum NodeError {
     Zenoh(String),
     /// The run could not be joined.
     #[error(transparent)]
-    Run(#[from] servobus_runtime::RunError),
+    Run(#[from] servobus_robot::Error),
 }
 
 pub(super) fn zerr(e: impl std::fmt::Display) -> NodeError {

@@ -3,7 +3,7 @@
 
 use std::time::SystemTime;
 
-use servobus_runtime::config::Units;
+use servobus_robot::config::Units;
 use zenoh::Wait;
 
 use super::{unix_ns, zerr, NodeError, RobotInfo};
@@ -48,7 +48,7 @@ impl Watch {
     }
 
     /// Takes a sample; returns the previous cycle once a new one begins.
-    pub(super) fn cycle(&mut self, c: &servobus_runtime::CycleSample) -> Option<Done> {
+    pub(super) fn cycle(&mut self, c: &servobus_robot::CycleSample) -> Option<Done> {
         let mut done = None;
         if let Some((k, t)) = self.cycle.filter(|(k, _)| *k != c.cycle) {
             let mut msg = self.msg.clone();

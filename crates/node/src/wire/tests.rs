@@ -79,7 +79,7 @@ fn a_chunk_is_a_timed_list_per_joint() {
 fn malformed_chunks_say_why() {
     let too_long = format!(
         r#"{{"chunk": {{"dt": 0.02, "joints": {{"elbow_flex": [{}]}}}}}}"#,
-        vec!["1"; servobus_runtime::MAX_CHUNK_POINTS + 1].join(",")
+        vec!["1"; servobus_robot::MAX_CHUNK_POINTS + 1].join(",")
     );
     for (bad, why) in [
         (r#"{"chunk": 3}"#, "not a JSON object"),

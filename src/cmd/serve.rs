@@ -10,6 +10,7 @@ use std::time::Duration;
 use servobus_node::node::{
     group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
 };
+use servobus_node::wire::NodeCommand;
 use servobus_node::zenoh::Wait;
 use servobus_runtime::config::{
     load_motion_calibrated, load_motion_text, load_robot, plan_motion, RobotOptions,
@@ -244,11 +245,12 @@ pub(crate) fn announce(
     let at_s = at
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64());
+    let command = NodeCommand::Play {
+        motion: what,
+        at: Some(at),
+    };
     session
-        .put(
-            group_command_key(group),
-            format!("play {what} at {at_s:.6}"),
-        )
+        .put(group_command_key(group), command.to_string())
         .wait()
         .map_err(|e| super::exit::input(format!("zenoh: {e}")))?;
     // Let the put leave before the session closes.

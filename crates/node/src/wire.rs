@@ -253,6 +253,30 @@ pub enum NodeCommand {
     Shutdown,
 }
 
+impl std::fmt::Display for NodeCommand {
+    /// The command as [`parse_command`] reads it (a start time as UNIX
+    /// seconds to the microsecond): what a conductor sends.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NodeCommand::Play { motion, at: None } => write!(f, "play {motion}"),
+            NodeCommand::Play {
+                motion,
+                at: Some(at),
+            } => {
+                let secs = at
+                    .duration_since(UNIX_EPOCH)
+                    .map_or(0.0, |d| d.as_secs_f64());
+                write!(f, "play {motion} at {secs:.6}")
+            }
+            NodeCommand::Stop => f.write_str("stop"),
+            NodeCommand::Pause => f.write_str("pause"),
+            NodeCommand::Resume => f.write_str("resume"),
+            NodeCommand::TorqueOff => f.write_str("torque_off"),
+            NodeCommand::Shutdown => f.write_str("shutdown"),
+        }
+    }
+}
+
 /// Parses a command: `play <motion> [at <UTC time>]`, `stop`, `pause`,
 /// `resume`, `torque_off`, `shutdown`. The time is RFC 3339 in UTC
 /// (`2026-11-25T20:00:00.250Z`) or UNIX seconds.

@@ -180,6 +180,56 @@ fn commands_parse() {
 }
 
 #[test]
+fn a_formatted_command_parses_back_to_itself() {
+    let at = UNIX_EPOCH + Duration::from_micros(1_764_100_800_250_123);
+    let yaml = "robot: so101\nkeyframes:\n  - pose: {elbow_flex: 10}\n".to_string();
+    let commands = [
+        NodeCommand::Stop,
+        NodeCommand::Pause,
+        NodeCommand::Resume,
+        NodeCommand::TorqueOff,
+        NodeCommand::Shutdown,
+        NodeCommand::Play {
+            motion: "arm-wave".into(),
+            at: None,
+        },
+        NodeCommand::Play {
+            motion: "arm-wave".into(),
+            at: Some(at),
+        },
+        NodeCommand::Play {
+            motion: yaml.clone(),
+            at: Some(at),
+        },
+    ];
+    for c in commands {
+        let text = c.to_string();
+        let back = parse_command(text.as_bytes()).expect("what is formatted parses");
+        match (&c, &back) {
+            (
+                NodeCommand::Play {
+                    motion: m0,
+                    at: Some(a0),
+                },
+                NodeCommand::Play {
+                    motion: m1,
+                    at: Some(a1),
+                },
+            ) => {
+                // YAML text keeps its lines (its trailing newline aside);
+                // the time its microseconds.
+                assert_eq!(m0.trim_end(), m1, "{text:?}");
+                let d = a0
+                    .duration_since(*a1)
+                    .or_else(|e| Ok::<_, ()>(e.duration()));
+                assert!(d.is_ok_and(|d| d < Duration::from_micros(1)), "{text:?}");
+            }
+            _ => assert_eq!(back, c, "{text:?}"),
+        }
+    }
+}
+
+#[test]
 fn utc_times_by_hand() {
     // 2000-03-01T00:00:00Z is 951868800 s after the epoch.
     assert_eq!(

@@ -11,18 +11,9 @@
 
 use std::time::Duration;
 
-use crate::{Bus, BusError, Clock, Transport, TransportError};
+use crate::{Bus, BusError, Clock, Transport};
 
 impl<T: Transport, C: Clock> Bus<T, C> {
-    /// Sends the request in the send buffer (after looking at what arrived
-    /// since the last wait for late replies), and returns the time it
-    /// started on the wire.
-    pub(crate) fn send(&mut self) -> Result<Duration, TransportError> {
-        let start = self.io.send(&self.settings.link);
-        self.count_late();
-        start
-    }
-
     /// Marks servo `id`'s reply as timed out: counted, and overdue until
     /// it comes.
     pub(crate) fn timed_out(&mut self, id: u8) {

@@ -1,12 +1,24 @@
-//! One single-servo transaction: send, wait for the reply until the
-//! deadline, try again, count.
+//! Sending a request, and one single-servo transaction: send, wait for
+//! the reply until the deadline, try again, count.
 
 use std::time::Duration;
 
 use servobus_protocol::{Packet, StatusFlags, MAX_PARAMS};
 
 use crate::io::{Sink, Tally};
-use crate::{Bus, BusError, Clock, Transport};
+use crate::{Bus, BusError, Clock, Transport, TransportError};
+
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// Sends the request in the send buffer (after counting the late
+    /// replies that arrived since the last look, [`Bus::await_late_replies`]),
+    /// and returns the time it started on the wire: every request goes out
+    /// here.
+    pub(crate) fn send(&mut self) -> Result<Duration, TransportError> {
+        let start = self.io.send(&self.settings.link);
+        self.count_late();
+        start
+    }
+}
 
 /// What a single-servo transaction waits for.
 #[derive(Debug, Clone, Copy)]

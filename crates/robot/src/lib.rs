@@ -1,10 +1,10 @@
 //! servobus-robot: the library a program drives a robot with.
 //!
 //! What the `servobus` command line does with a robot, a Rust program does
-//! here (and the coming Python bindings will sit on it): open a robot file
-//! (a path, a built-in name or a YAML text), connect to its buses — the
-//! serial ports of the robot file, ports given by the program, or the
-//! built-in simulator — with the calibration checked before anything is
+//! here, as the Python bindings (`python/`) and the Zenoh node do: open a
+//! robot file (a path, a built-in name or a YAML text), connect to its
+//! buses — the serial ports of the robot file, ports given by the program,
+//! or the built-in simulator — with the calibration checked before anything is
 //! read or moved, then plan and play motions with telemetry and commands
 //! (stop, pause, resume, torque off) and a report at the end. A robot
 //! opens, plays and stops the same way on the simulator and on a port.

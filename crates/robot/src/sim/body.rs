@@ -264,7 +264,7 @@ impl Hand {
     ///
     /// # Errors
     /// [`ConfigError`] naming the file, line, column and field of the first
-    /// problem: an unknown joint, a time outside 0 to [`MAX_HAND_S`] or not
+    /// problem: an unknown joint, a time outside 0 to a day or not
     /// after the previous keyframe's, an angle that is not a number.
     pub fn load(path: &Path, robot: &Robot) -> Result<Hand, ConfigError> {
         let src = Source::read(path)?;

@@ -142,7 +142,7 @@ fn split_longest(chosen: &[usize]) -> Option<(usize, usize)> {
 /// first. A recording that ends while the robot moves (a take stopped with
 /// Ctrl-C) cannot stop at its last sample within the limits: its last pose
 /// is then held a moment later ([`Reduced::settle_s`]), the shortest of
-/// [`SETTLE_TRIES_S`] that plays.
+/// 0.25, 0.5, 1, 2 and 4 s that plays.
 ///
 /// # Errors
 /// [`TeachError::OutsideLimits`] for a sample outside the limits;

@@ -9,20 +9,22 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use servobus_robot::config::{
-    load_motion, load_robot, plan_motion, Robot as RobotFile, RobotOptions,
-};
+use servobus_robot::config::{load_robot, Robot as RobotFile, RobotOptions};
 use servobus_robot::sim::{Mounting, SimRobot};
-use servobus_robot::{Connection, Report, Robot, RunOptions, Telemetry};
-use servobus_runtime::{Fault, VirtualRun};
+use servobus_robot::{Connection, Report, Robot, Telemetry};
 use servobus_sim::PtyServer;
-use servobus_trajectory::{JointState, Trajectory};
 
 // The shipped files and scratch files, as the configuration's tests have
 // them.
 #[path = "../../../config/tests/common/mod.rs"]
 mod files;
 pub use files::{config, temp_path};
+
+// Robot files, planned motions and recorded telemetry, as the runtime's
+// tests have them.
+#[path = "../../../runtime/tests/common/runs.rs"]
+mod runs;
+pub use runs::{motion, quiet, record, robot, start_pose};
 
 /// A file of the repository.
 pub fn repo(rel: &str) -> PathBuf {
@@ -93,85 +95,9 @@ pub fn stopped_after_some_cycles(robot: &Robot, connection: Connection) -> Repor
     run.join().expect("a report")
 }
 
-/// A robot file under `configs/robots/`.
-pub fn robot(name: &str) -> RobotFile {
-    load_robot(&config(&format!("robots/{name}")), &RobotOptions::default())
-        .expect("robot file loads")
-}
-
 /// A robot file under `configs/robots/` with the calibration file
 /// `calibration` applied.
 pub fn calibrated(name: &str, calibration: &std::path::Path) -> RobotFile {
     let options = RobotOptions::default().calibration(Some(calibration));
     load_robot(&config(&format!("robots/{name}")), &options).expect("the calibration applies")
-}
-
-/// A motion under `configs/motions/`, planned, with its robot.
-pub fn motion(name: &str) -> (Trajectory, RobotFile) {
-    let (m, r) = load_motion(&config(&format!("motions/{name}")), None).expect("motion loads");
-    let t = plan_motion(&m, &r).expect("motion plans");
-    (t, r)
-}
-
-/// Where `path` starts, per joint in the robot's units.
-pub fn start_pose(robot: &RobotFile, path: &Trajectory) -> Vec<f64> {
-    let mut start = vec![JointState::default(); robot.joint_count()];
-    path.sample(0.0, &mut start);
-    start
-        .iter()
-        .map(|s| robot.units.from_rad(s.position))
-        .collect()
-}
-
-/// Run options without telemetry, for tests that read only the report.
-pub fn quiet() -> RunOptions {
-    RunOptions {
-        telemetry_capacity: 0,
-        ..RunOptions::default()
-    }
-}
-
-/// Every telemetry cycle sample of a run, collected by stepping it.
-pub struct Recorded {
-    /// `(cycle, joint, commanded, error, measured)` in report units.
-    pub rows: Vec<(u64, usize, f64, f64, Option<f64>)>,
-    /// Faults published.
-    pub faults: Vec<Fault>,
-}
-
-/// Steps `run` until it ends or `max` cycles pass, calling `each(cycle)`
-/// before every step, and records the telemetry.
-pub fn record<T: servobus_driver::Transport>(
-    run: &mut VirtualRun<T>,
-    max: u64,
-    mut each: impl FnMut(u64),
-) -> Recorded {
-    let rx = run.telemetry();
-    let mut rec = Recorded {
-        rows: Vec::new(),
-        faults: Vec::new(),
-    };
-    let drain = |rec: &mut Recorded| {
-        while let Ok(m) = rx.try_recv() {
-            match m {
-                Telemetry::Cycle(c) => {
-                    for j in c.joints() {
-                        rec.rows
-                            .push((c.cycle, j.joint, j.commanded, j.error, j.measured));
-                    }
-                }
-                Telemetry::Fault(f) => rec.faults.push(f),
-                _ => {}
-            }
-        }
-    };
-    for _ in 0..max {
-        each(run.cycle());
-        let going = run.step();
-        drain(&mut rec);
-        if !going {
-            break;
-        }
-    }
-    rec
 }

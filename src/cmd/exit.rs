@@ -130,9 +130,16 @@ pub fn message(err: &anyhow::Error) -> String {
     let mut text = parts.join(": ");
     if let Some(ConfigError::Read { path, error }) = err.downcast_ref::<ConfigError>() {
         if error.kind() == std::io::ErrorKind::NotFound && !is_builtin_path(path) {
-            text.push_str(
-                "; give a file path or the name of a built-in robot or motion (`servobus list`)",
-            );
+            match path.to_str().and_then(servobus::builtin::nearest) {
+                Some(b) => text.push_str(&format!(
+                    "; did you mean the built-in {} `{}`? (`servobus list` lists them)",
+                    b.kind.word(),
+                    b.name
+                )),
+                None => text.push_str(
+                    "; give a file path or the name of a built-in robot or motion (`servobus list`)",
+                ),
+            }
         }
     }
     text

@@ -23,7 +23,7 @@
 
 mod against;
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -352,7 +352,7 @@ fn drive<T: Transport, C: Clock>(
         faults: Vec::new(),
         names: names.clone(),
         stalls: Vec::new(),
-        live_line: !args.json,
+        live_line: !args.json && std::io::stderr().is_terminal(),
     };
     let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
     super::play::install_ctrl_c(runner.commands());
@@ -368,6 +368,9 @@ fn drive<T: Transport, C: Clock>(
     let mut next = started;
     let mut reads = 0u64;
     let mut shown = started;
+    // The live line: every 0.5 s on a terminal, every 5 s in a log.
+    let terminal = std::io::stderr().is_terminal();
+    let live_every = Duration::from_millis(if terminal { 500 } else { 5000 });
     // Why the session ended early on the leader's side, if it did.
     let mut lost = None;
     loop {
@@ -407,10 +410,18 @@ fn drive<T: Transport, C: Clock>(
             take_message(&mut seen, m, args.record.is_some());
         }
         seen.errors.settle(&trail, units);
-        if !args.json && now.duration_since(shown) >= Duration::from_millis(500) {
+        if !args.json && now.duration_since(shown) >= live_every {
             shown = now;
             let errors = seen.errors.figures();
-            live_line(&targets, t, reads, seen.cycles, errors, units.to_string());
+            let line = live_line(&targets, t, reads, seen.cycles, errors, units.to_string());
+            let mut err = std::io::stderr().lock();
+            // On a terminal one line rewritten in place; in a log a line
+            // of its own each time (no carriage returns in the file).
+            let _ = if terminal {
+                write!(err, "\r{line}   ")
+            } else {
+                writeln!(err, "{line}")
+            };
         }
         next += period;
         let after = Instant::now();
@@ -420,7 +431,7 @@ fn drive<T: Transport, C: Clock>(
             next = after;
         }
     }
-    if !args.json {
+    if seen.live_line {
         errln!();
     }
     if leader.missed > 0 {
@@ -482,7 +493,7 @@ fn take_message(seen: &mut Seen, m: Telemetry, record: bool) {
     }
 }
 
-/// The live line on stderr: rates, latency so far, worst error.
+/// The live line for stderr: rates, latency so far, worst error.
 fn live_line(
     targets: &TargetSender,
     t: f64,
@@ -490,19 +501,17 @@ fn live_line(
     cycles: u64,
     errors: &[Figures],
     units: String,
-) {
+) -> String {
     let latency = targets.so_far().and_then(|l| l.latency_ms).map_or_else(
         || "-".to_owned(),
         |q| format!("{:.1} ms (p99 {:.1})", q.p50, q.p99),
     );
     let worst = errors.iter().map(|e| e.1).fold(0.0, f64::max);
-    let mut err = std::io::stderr().lock();
-    let _ = write!(
-        err,
-        "\r{t:6.1} s  leader {:.0} Hz  follower {:.0} Hz  latency {latency}  error max {worst:.2} {units}   ",
+    format!(
+        "{t:6.1} s  leader {:.0} Hz  follower {:.0} Hz  latency {latency}  error max {worst:.2} {units}",
         reads as f64 / t.max(1e-3),
         cycles as f64 / t.max(1e-3),
-    );
+    )
 }
 
 /// The outputs and the report; exit 0 once stopped, 1 after a fault.

@@ -78,6 +78,29 @@ fn refused_in(dir: &Path, args: &[&str], words: &[&str], never: &[&str]) -> Stri
 }
 
 #[test]
+fn a_mistyped_built_in_name_is_answered_with_the_nearest_one() {
+    refused(
+        &["budget", "--robot", "so100"],
+        &[
+            "so100: cannot read",
+            "did you mean the built-in robot `so101`?",
+        ],
+        &[],
+    );
+    refused(
+        &["plan", "arm_wave"],
+        &["did you mean the built-in motion `arm-wave`?"],
+        &[],
+    );
+    // Nothing near: the general hint, no guess.
+    refused(
+        &["budget", "--robot", "quadruped-9"],
+        &["give a file path or the name of a built-in robot or motion"],
+        &["did you mean"],
+    );
+}
+
+#[test]
 fn a_small_file_cannot_ask_for_unbounded_work() {
     refused(
         &["plan", "motion-repeat-billion.yaml"],

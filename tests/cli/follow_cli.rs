@@ -233,3 +233,26 @@ fn a_leader_that_drops_replies_is_followed_and_the_skipped_readings_are_counted(
     assert_eq!(report["finish"], "stopped", "{report}");
     assert!(report["follow"]["leader_lost"].is_null(), "{report}");
 }
+
+#[test]
+fn off_a_terminal_the_live_line_is_whole_lines_without_carriage_returns() {
+    // Stderr to a pipe (a log): the live line comes every 5 s, each on a
+    // line of its own, not rewritten in place with `\r`.
+    let out = common::servobus(&[
+        "follow",
+        "--robot",
+        "so101",
+        "--leader-hand",
+        "so101-hand",
+        "--seconds",
+        "6",
+    ]);
+    let (_, stderr) = common::exited(&out, 0);
+    assert!(!stderr.contains('\r'), "{stderr:?}");
+    let live: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains(" s  leader ") && l.contains(" Hz  follower "))
+        .collect();
+    assert_eq!(live.len(), 1, "one live line in 6 s: {stderr}");
+    assert!(live[0].contains("error max"), "{stderr}");
+}

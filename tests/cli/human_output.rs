@@ -170,3 +170,31 @@ fn examples_print_sentences_not_debug() {
     assert!(jitter.contains("pinned to core 0"), "{jitter}");
     no_debug_forms(&jitter);
 }
+
+#[test]
+fn a_run_too_short_to_identify_the_lag_does_not_suggest_a_lead_for_the_robot_file() {
+    // 0.15 s of a 1 deg move: too little motion to identify the lag; the
+    // lead in force is the servos' response lag, and the report says so
+    // instead of offering it as a measured `lead_ms`.
+    let dir = scratch("short-lead");
+    let m = dir.join("short.yaml");
+    std::fs::write(
+        &m,
+        "robot: so101\nunits: deg\nkeyframes:\n\
+         \x20 - pose: {shoulder_pan: 0, shoulder_lift: -90, elbow_flex: 90, wrist_flex: 45, wrist_roll: 0, gripper: 10}\n\
+         \x20 - pose: {shoulder_pan: 1}\n",
+    )
+    .expect("motion");
+    let short = stdout(&servobus(&["play", "--fast", common::arg(&m)]));
+    assert!(
+        short.contains("too little motion to identify it"),
+        "{short}"
+    );
+    assert!(!short.contains("in the robot file applies it"), "{short}");
+    // The wave moves long enough: the identified lead is offered.
+    let wave = stdout(&servobus(&["play", "--fast", "arm-wave"]));
+    assert!(
+        wave.contains("identified while moving (`lead_ms: "),
+        "{wave}"
+    );
+}

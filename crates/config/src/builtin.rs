@@ -34,6 +34,17 @@ impl Kind {
     /// Every kind, in the order `servobus list` shows them.
     pub const ALL: [Kind; 4] = [Kind::Robot, Kind::Motion, Kind::Mounting, Kind::Hand];
 
+    /// The kind in one word, as messages name it (`robot`, `motion`,
+    /// `mounting`, `hand`).
+    pub fn word(self) -> &'static str {
+        match self {
+            Kind::Robot => "robot",
+            Kind::Motion => "motion",
+            Kind::Mounting => "mounting",
+            Kind::Hand => "hand",
+        }
+    }
+
     /// The kind of the shipped file `rel` (`sim/so101-hand.yaml`).
     fn of(rel: &str) -> Kind {
         match rel.split_once('/') {
@@ -163,6 +174,45 @@ pub fn find(kind: Kind, name: &str) -> Option<Builtin> {
     all().find(|b| b.kind == kind && b.name == name)
 }
 
+/// The built-in whose name is nearest to `arg` (a mistyped name: `so100`,
+/// `arm_wave`), when one is within two edits and `arg` is not already a
+/// path with a directory; the first of equally near ones.
+pub fn nearest(arg: &str) -> Option<Builtin> {
+    if arg.contains('/') {
+        return None;
+    }
+    let name = arg.strip_suffix(".yaml").unwrap_or(arg);
+    all()
+        .map(|b| (edits(name, b.name), b))
+        .filter(|(d, _)| *d <= 2 && *d < name.chars().count())
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, b)| b)
+}
+
+/// The Levenshtein distance between `a` and `b` (by characters, case
+/// and `_`/`-` alike).
+fn edits(a: &str, b: &str) -> usize {
+    let norm = |c: char| {
+        if c == '_' {
+            '-'
+        } else {
+            c.to_ascii_lowercase()
+        }
+    };
+    let b: Vec<char> = b.chars().map(norm).collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().map(norm).enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (k, cb) in b.iter().enumerate() {
+            let up = row[k + 1];
+            row[k + 1] = (diag + usize::from(ca != *cb)).min(up + 1).min(row[k] + 1);
+            diag = up;
+        }
+    }
+    row[b.len()]
+}
+
 /// The names of the built-ins of `kind`, comma-separated (for messages).
 pub fn names(kind: Kind) -> String {
     all()
@@ -280,6 +330,19 @@ pub fn argument(path: &Path) -> String {
 mod tests {
     use super::*;
     use crate::{load_motion, load_robot, RobotOptions};
+
+    #[test]
+    fn a_mistyped_name_finds_the_nearest_built_in() {
+        let name = |arg: &str| nearest(arg).map(|b| b.name);
+        assert_eq!(name("so100"), Some("so101"));
+        assert_eq!(name("SO101.yaml"), Some("so101"));
+        assert_eq!(name("arm_wave"), Some("arm-wave"));
+        assert_eq!(name("hexapd"), Some("hexapod"));
+        // Far from every name, or a path: no guess.
+        assert_eq!(name("quadruped"), None);
+        assert_eq!(name("configs/so100"), None);
+        assert_eq!(name("x"), None);
+    }
 
     #[test]
     fn every_shipped_file_is_built_in_and_loads() {

@@ -128,6 +128,10 @@ pub struct Report {
     pub drift_us: f64,
     /// The lead in use at the end, ms.
     pub lead_ms: f64,
+    /// Whether that lead was identified from the run's motion (`lead_ms:
+    /// auto` and enough motion); false for a fixed lead or one still at
+    /// its prior from the servos' response lag.
+    pub lead_identified: bool,
     /// The angle unit of every joint figure.
     pub units: &'static str,
     /// Tracking error per joint, in the robot's joint order.

@@ -288,6 +288,7 @@ pub(crate) fn assemble(mut outcomes: Vec<Outcome>, e: Ending) -> Report {
         duration_s: duration,
         drift_us: drift,
         lead_ms: first.map_or(0.0, |o| o.lead_s * 1e3),
+        lead_identified: first.is_some_and(|o| o.lead_identified),
         units: e.units.name(),
         joints,
         buses: outcomes.into_iter().map(|o| o.bus).collect(),

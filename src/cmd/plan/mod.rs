@@ -149,7 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         print_text(&report, &motion)?;
         if let Some(path) = &args.plot {
-            outln!("plot written to {}", path.display())?;
+            outln!("plot: {}", path.display())?;
         }
     }
     Ok(ExitCode::SUCCESS)

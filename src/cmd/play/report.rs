@@ -30,12 +30,21 @@ pub(super) fn print_plan(
         robot.buses.len(),
         if robot.buses.len() == 1 { "" } else { "es" },
     )?;
-    outln!(
-        "  path {:.2} s, {} keyframes x {}, at {rate_hz} Hz",
-        trajectory.duration(),
-        motion.keyframes.len(),
-        motion.repeat
-    )?;
+    if motion.keyframes.is_empty() {
+        // A recording has samples, not keyframes (its figures follow the
+        // plan).
+        outln!(
+            "  path {:.2} s through a recording, at {rate_hz} Hz",
+            trajectory.duration()
+        )?;
+    } else {
+        outln!(
+            "  path {:.2} s, {} keyframes x {}, at {rate_hz} Hz",
+            trajectory.duration(),
+            motion.keyframes.len(),
+            motion.repeat
+        )?;
+    }
     for bus in &robot.buses {
         let plan = bus.plan(rate_hz)?;
         let every = if plan.read_every() > 1 {
@@ -111,12 +120,20 @@ pub(crate) fn write_report(
             b.name, b.latency_us, b.latency_p99_us, b.reply_deadline_us
         )?;
     }
-    if identified && r.lead_ms > 0.0 {
+    if identified && r.lead_identified && r.lead_ms > 0.0 {
         writeln!(
             out,
             "  lag compensation lead {:.1} ms, identified while moving \
              (`lead_ms: {:.0}` in the robot file applies it from the first cycle)",
             r.lead_ms, r.lead_ms
+        )?;
+    } else if identified && r.lead_ms > 0.0 {
+        // Too short a run, or too little motion, to identify the lag: no
+        // figure worth putting in the robot file.
+        writeln!(
+            out,
+            "  lag compensation lead {:.1} ms (the servos' response lag; too little motion to identify it)",
+            r.lead_ms
         )?;
     } else {
         writeln!(out, "  lag compensation lead {:.1} ms", r.lead_ms)?;

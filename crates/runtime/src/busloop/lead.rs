@@ -53,6 +53,8 @@ enum State {
         /// Readings since the estimate was last updated.
         n: u32,
         ramp: Ramp,
+        /// Whether an estimate was made (else the lead is the prior).
+        estimated: bool,
     },
 }
 
@@ -88,6 +90,7 @@ impl LeadEstimator {
                         x0: 0.0,
                     }
                 },
+                estimated: false,
             },
         })
     }
@@ -98,6 +101,18 @@ impl LeadEstimator {
             State::Fixed(l) => *l,
             State::Auto { ramp, .. } => ramp.at(x),
         }
+    }
+
+    /// Whether the lead was identified from the run's motion (at least one
+    /// estimate made); a fixed lead, or one still at its prior, was not.
+    pub fn identified(&self) -> bool {
+        matches!(
+            self.0,
+            State::Auto {
+                estimated: true,
+                ..
+            }
+        )
     }
 
     /// Learns from one cycle's `(error, planned velocity)` readings at time
@@ -111,6 +126,7 @@ impl LeadEstimator {
             svv,
             n,
             ramp,
+            estimated,
         } = &mut self.0
         else {
             return;
@@ -132,6 +148,7 @@ impl LeadEstimator {
         // has finished; small changes are not worth a ramp.
         if *n >= IDENTIFY_READINGS && *svv > 0.0 && ramp.done(t) {
             *n = 0;
+            *estimated = true;
             let lag = (*sev / *svv).clamp(0.0, *max);
             if (lag - ramp.to).abs() > LEAD_STEP {
                 *ramp = Ramp {

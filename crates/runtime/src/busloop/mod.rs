@@ -448,6 +448,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             cycles: self.counters.cycles,
             dropped: self.out.dropped,
             lead_s: self.lead.at(t),
+            lead_identified: self.lead.identified(),
         }
     }
 
@@ -519,4 +520,6 @@ pub(crate) struct Outcome {
     pub dropped: u64,
     /// The lead in use at the end, s.
     pub lead_s: f64,
+    /// Whether that lead was identified from the run's motion.
+    pub lead_identified: bool,
 }

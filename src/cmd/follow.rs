@@ -283,7 +283,8 @@ struct Seen {
     names: Vec<String>,
     /// Stall events: joint index, held (or let go), time s, position.
     stalls: Vec<(usize, bool, f64, f64)>,
-    /// A live line is on stderr (a warning starts a line of its own).
+    /// A live line rewritten in place is on stderr (a terminal): a warning
+    /// starts a line of its own.
     live_line: bool,
 }
 
@@ -338,6 +339,10 @@ fn drive<T: Transport, C: Clock>(
         .iter()
         .flat_map(|b| b.joints.iter().map(|_| b.name.clone()))
         .collect();
+    // The live line: every 0.5 s on a terminal, rewritten in place; every
+    // 5 s in a log, a line of its own.
+    let terminal = std::io::stderr().is_terminal();
+    let live_every = Duration::from_millis(if terminal { 500 } else { 5000 });
     let mut seen = Seen {
         log,
         plot: args.plot.as_ref().map(|_| {
@@ -352,7 +357,7 @@ fn drive<T: Transport, C: Clock>(
         faults: Vec::new(),
         names: names.clone(),
         stalls: Vec::new(),
-        live_line: !args.json && std::io::stderr().is_terminal(),
+        live_line: !args.json && terminal,
     };
     let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
     super::play::install_ctrl_c(runner.commands());
@@ -368,9 +373,6 @@ fn drive<T: Transport, C: Clock>(
     let mut next = started;
     let mut reads = 0u64;
     let mut shown = started;
-    // The live line: every 0.5 s on a terminal, every 5 s in a log.
-    let terminal = std::io::stderr().is_terminal();
-    let live_every = Duration::from_millis(if terminal { 500 } else { 5000 });
     // Why the session ended early on the leader's side, if it did.
     let mut lost = None;
     loop {
@@ -415,8 +417,6 @@ fn drive<T: Transport, C: Clock>(
             let errors = seen.errors.figures();
             let line = live_line(&targets, t, reads, seen.cycles, errors, units.to_string());
             let mut err = std::io::stderr().lock();
-            // On a terminal one line rewritten in place; in a log a line
-            // of its own each time (no carriage returns in the file).
             let _ = if terminal {
                 write!(err, "\r{line}   ")
             } else {

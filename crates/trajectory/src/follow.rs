@@ -304,16 +304,22 @@ impl Follower {
     /// The quickest stop from the state reached must end within `bounds`,
     /// or no further than the goal's own quickest stop (where the step
     /// ends; less what the joint is ahead of the goal in the goal's
-    /// direction). Where the step's stop would end further on, the step is
-    /// the blend nearest the plan of it and the time-optimal way to rest on
-    /// the bound whose stop is within (both keep the limits, and so does
+    /// direction). The goal's stop is taken with the jerk limit alone: a
+    /// stream's targets may slow down harder than the joint can, and a
+    /// joint allowed the goal's stop at its own acceleration limit would,
+    /// catching up, run on past a goal that then braked. Where the step's
+    /// stop would end further on, the step is the blend nearest the plan
+    /// of it and the time-optimal way to rest on the bound whose stop is
+    /// within (both keep the limits, and so does
     /// any blend of them); where even that cannot stop within (a target
     /// that turned back faster than the limits allow), the joint brakes as
     /// hard as its limits let it and comes back. So a joint on its goal
-    /// is not held back (but for the few microseconds of its motion that
-    /// an acceleration kept within those stops costs), one catching up after a turn does it no faster
-    /// than it could stop where the goal would, and does not run past the
-    /// next turn; one that has turned back already is left to its plan.
+    /// is held back only where its speed is beyond what its jerk limit
+    /// stops without reaching its acceleration limit (`a^2 / j`), by the
+    /// difference of those stops; one catching up after a turn does it no
+    /// faster than it could stop where the goal would, and does not run
+    /// past the next turn; one that has turned back already is left to its
+    /// plan.
     pub fn step_within(
         &mut self,
         lim: &JointLimits,
@@ -334,8 +340,19 @@ impl Follower {
         let end = stop_position(lim, &s);
         // The goal where the step ends, as the state is.
         let goal = capped(lim, goal).after(dt);
+        // A stream's targets may slow down harder than the joint can: the
+        // goal's own stop is taken with its jerk limit alone (no
+        // acceleration limit), so that a joint catching up with a goal
+        // that then brakes hard does not run on past it.
+        let hard = match lim.max_jerk {
+            Some(_) => JointLimits {
+                max_acceleration: f64::INFINITY,
+                ..*lim
+            },
+            None => *lim,
+        };
         let own = stop_position(
-            lim,
+            &hard,
             &JointState {
                 position: goal.position,
                 velocity: goal.velocity,

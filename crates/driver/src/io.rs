@@ -5,19 +5,28 @@
 //! Invariants kept here, for every transaction kind:
 //! - input is drained (transport and decoder) before each request, so a late
 //!   reply to an earlier request cannot be taken for the current one;
-//! - a frame identical to the current or the previous request (a half-duplex
-//!   echo, possibly a late one) and any frame with the broadcast ID (only the
-//!   host sends those) is never handed to the sink as a reply;
+//! - on a port that may echo, one frame identical to the current request
+//!   (a half-duplex echo) and any frame identical to the previous one (a
+//!   late echo, while one can still come) are never handed to the sink as
+//!   a reply, nor is any frame with the broadcast ID (only the host sends
+//!   those); once the port is known not to echo, a frame identical to the
+//!   request is its reply (a PING answered with status 0x01 is);
+//! - whether the port echoes is learned from what comes back (see
+//!   [`PortEcho`]): an echo is recognised only where it cannot be a reply,
+//!   so a missing servo behind an echoing adapter is never answered by its
+//!   own request;
 //! - every byte received is accounted for: in a reply, an echo, or the
 //!   discarded count.
 
 use std::time::Duration;
 
-use servobus_protocol::{Decoder, Event, Packet, BROADCAST_ID, MAX_FRAME_LEN};
+use servobus_protocol::{
+    parse_frame, Decoder, Event, Instruction, Packet, BROADCAST_ID, MAX_FRAME_LEN,
+};
 
 use servobus_timing::Link;
 
-use crate::{Clock, Transport, TransportError};
+use crate::{Bus, Clock, Transport, TransportError};
 
 /// Receives what the engine finds while waiting.
 pub(crate) trait Sink {
@@ -42,6 +51,103 @@ pub(crate) struct Tally {
     /// Bytes of a frame still incomplete at the deadline (a late reply).
     pub truncated_bytes: u64,
     pub checksum_errors: u64,
+    /// Whether a copy of the request was skipped as its echo on a port not
+    /// yet known to echo, where the copy could have been the reply itself
+    /// (a PING answered with status 0x01): whether it was cannot be told
+    /// from this wait.
+    pub ambiguous_copy: bool,
+    /// When the last copy of the request taken for its echo arrived.
+    pub copy_at: Option<Duration>,
+}
+
+/// How many replies in a row must come with no echo before them for the
+/// port to be taken as one that does not echo. An echoing adapter echoes
+/// every request before any reply can come, so one echo lost to noise does
+/// not make it look silent; three in a row without one does.
+pub(crate) const SILENT_AFTER: u8 = 3;
+
+/// What the bus knows about whether its port echoes requests back.
+///
+/// Learned from the traffic: a copy of a request that cannot be its own
+/// reply (a WRITE, a READ of other than 2 bytes, anything to the broadcast
+/// ID), or a copy followed by the reply, shows an echo; [`SILENT_AFTER`]
+/// replies in a row with no copy of the request before them show none. A
+/// copy of a request that could be its reply (a PING; a servo with status
+/// 0x01 answers it with its own bytes) shows nothing either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct PortEcho {
+    /// `Some(true)`: the port echoes; `Some(false)`: it does not; `None`:
+    /// not known yet.
+    pub known: Option<bool>,
+    /// Replies in a row that came with no echo before them, while unknown.
+    silent_replies: u8,
+}
+
+impl PortEcho {
+    /// Nothing known.
+    pub const UNKNOWN: PortEcho = PortEcho {
+        known: None,
+        silent_replies: 0,
+    };
+
+    /// Known not to echo.
+    pub const SILENT: PortEcho = PortEcho {
+        known: Some(false),
+        silent_replies: 0,
+    };
+
+    /// Takes in what one wait showed: `Some(true)` an echo, `Some(false)` a
+    /// reply with no echo before it.
+    fn learn(&mut self, shown: Option<bool>) {
+        match shown {
+            Some(true) => {
+                *self = PortEcho {
+                    known: Some(true),
+                    silent_replies: 0,
+                }
+            }
+            Some(false) if self.known.is_none() => {
+                self.silent_replies = self.silent_replies.saturating_add(1);
+                if self.silent_replies >= SILENT_AFTER {
+                    self.known = Some(false);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Whether a copy of `request` could be its own reply, byte for byte: a
+/// status frame carries the servo's ID, the flags where the request has its
+/// instruction, and as many parameters as the instruction returns. A PING
+/// (no parameters) is answered by a status frame of the same size; so is a
+/// READ of 2 bytes, or an ACTION or RESET. A WRITE (parameters, none in the
+/// reply), any other READ and anything to the broadcast ID (no servo sends
+/// that ID) cannot be. A frame that cannot be parsed, or an instruction
+/// whose reply is not known, could.
+fn may_be_own_reply(request: &[u8]) -> bool {
+    let Ok((packet, _)) = parse_frame(request) else {
+        return true;
+    };
+    if packet.is_broadcast() {
+        return false;
+    }
+    let params = packet.params();
+    let reply_params = match packet.instruction() {
+        Some(Instruction::Read) => params.get(1).map(|&n| usize::from(n)),
+        Some(
+            Instruction::Ping
+            | Instruction::Write
+            | Instruction::RegWrite
+            | Instruction::Action
+            | Instruction::Reset,
+        ) => Some(0),
+        _ => None,
+    };
+    match reply_params {
+        Some(n) => n == params.len(),
+        None => true,
+    }
 }
 
 /// Transport, clock, decoder and the reused frame buffers.
@@ -56,8 +162,18 @@ pub(crate) struct Io<T, C> {
     prev: [u8; MAX_FRAME_LEN],
     prev_len: usize,
     rx: [u8; 256],
-    /// Whether the adapter may echo requests (see `BusSettings::echo`).
+    /// Whether the adapter may echo requests (see `BusSettings::echo`):
+    /// off, nothing is taken for an echo and nothing is learned.
     pub echo: bool,
+    /// Whether this port echoes, as far as it has shown.
+    pub port_echo: PortEcho,
+    /// How many times the current request was sent, and how many copies of
+    /// it were taken for its echo: while fewer were seen than sent, a late
+    /// echo of it may still come once it is the previous request.
+    sends: u32,
+    echoes_seen: u32,
+    /// Whether a late echo of the previous request may still come.
+    prev_echo_owed: bool,
     /// Decoder totals at the start of the current request.
     base_discarded: u64,
     base_echoes: u64,
@@ -92,6 +208,10 @@ impl<T: Transport, C: Clock> Io<T, C> {
             prev_len: 0,
             rx: [0; 256],
             echo: true,
+            port_echo: PortEcho::UNKNOWN,
+            sends: 0,
+            echoes_seen: 0,
+            prev_echo_owed: false,
             base_discarded: 0,
             base_echoes: 0,
             base_checksum: 0,
@@ -111,6 +231,15 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.prev[..self.tx_len].copy_from_slice(&self.tx[..self.tx_len]);
         self.prev_len = self.tx_len;
         self.tx_len = 0;
+        self.prev_echo_owed = self.echoes_seen < self.sends;
+        self.sends = 0;
+        self.echoes_seen = 0;
+    }
+
+    /// Whether a copy of the request may be the port's echo: the bus lets
+    /// the adapter echo and this port is not known not to.
+    pub fn may_echo(&self) -> bool {
+        self.echo && self.port_echo.known != Some(false)
     }
 
     /// Drains input, then sends `tx[..tx_len]` on `wire`. Returns the time
@@ -145,7 +274,8 @@ impl<T: Transport, C: Clock> Io<T, C> {
         let wire_time = wire.wire_time(self.tx_len);
         let start = before.max(self.clock.now().saturating_sub(wire_time));
         self.line_free = start + wire_time;
-        if self.echo {
+        self.sends = self.sends.saturating_add(1);
+        if self.may_echo() {
             self.decoder.expect_echo(&self.tx[..self.tx_len]);
         }
         Ok(start)
@@ -266,13 +396,19 @@ impl<T: Transport, C: Clock> Io<T, C> {
         sink: &mut S,
     ) -> Result<Tally, TransportError> {
         let mut tally = Tally::default();
+        let may_echo = self.may_echo();
+        let tx = &self.tx[..self.tx_len];
         let mut own = Own {
-            tx: &self.tx[..self.tx_len],
+            tx,
             prev: &self.prev[..self.prev_len],
             // Without echo, no frame of ours is expected back: behave as if
             // the echo had already been skipped, and trust identical frames.
-            echo_seen: !self.echo,
-            prev_is_echo: self.echo,
+            echo_seen: !may_echo,
+            prev_is_echo: may_echo && self.prev_echo_owed,
+            learn: self.echo,
+            tx_may_be_reply: may_be_own_reply(tx),
+            copies: 0,
+            shown: None,
         };
         'wait: loop {
             let n = match read_through_signals(&mut self.transport, &mut self.rx, deadline) {
@@ -302,6 +438,13 @@ impl<T: Transport, C: Clock> Io<T, C> {
                 }
             }
         }
+        self.echoes_seen = self.echoes_seen.saturating_add(own.copies);
+        tally.ambiguous_copy = own.learn
+            && own.copies > 0
+            && own.tx_may_be_reply
+            && own.shown.is_none()
+            && self.port_echo.known.is_none();
+        self.port_echo.learn(own.shown);
         let stats = self.decoder.stats();
         let window = stats.discarded_bytes - self.base_discarded;
         tally.garbage_bytes = window.saturating_sub(tally.truncated_bytes);
@@ -316,14 +459,27 @@ impl<T: Transport, C: Clock> Io<T, C> {
     }
 }
 
-/// The frames this host sent last. One copy of the current request is its
-/// echo; a second identical copy can only be a reply that happens to have
-/// the same bytes (e.g. a PING answered with status 0x01).
+/// The frames this host sent last. On a port that may echo, one copy of
+/// the current request is its echo; a second identical copy can only be a
+/// reply that happens to have the same bytes (e.g. a PING answered with
+/// status 0x01). It also notes what the wait shows about the port's echo.
 struct Own<'a> {
     tx: &'a [u8],
     prev: &'a [u8],
+    /// Whether the copy of `tx` taken for its echo has come (or none is
+    /// expected).
     echo_seen: bool,
+    /// Whether a copy of `prev` is a late echo.
     prev_is_echo: bool,
+    /// Whether echo is looked for and learned at all (`BusSettings::echo`).
+    learn: bool,
+    /// Whether a copy of `tx` could be the reply to it ([`may_be_own_reply`]).
+    tx_may_be_reply: bool,
+    /// Copies of `tx` taken for its echo in this wait.
+    copies: u32,
+    /// What this wait showed: `Some(true)` an echo, `Some(false)` the
+    /// awaited reply with no copy of the request before it.
+    shown: Option<bool>,
 }
 
 impl Own<'_> {
@@ -338,15 +494,32 @@ impl Own<'_> {
         match ev {
             Event::Packet { packet, .. } => {
                 let bytes = packet.bytes();
-                let echo = bytes == self.tx && !self.echo_seen;
-                self.echo_seen |= echo;
-                if echo || (self.prev_is_echo && bytes == self.prev) || packet.id() == BROADCAST_ID
-                {
+                let copy = bytes == self.tx;
+                // The expected echo; or, on any port servobus looks for echo
+                // on, a copy that cannot be a reply: an echo even on a port
+                // taken for one that does not echo (it does, then).
+                if copy && (!self.echo_seen || (self.learn && !self.tx_may_be_reply)) {
+                    self.echoed();
+                    tally.copy_at = Some(clock.now());
+                    tally.echoes += 1;
+                    return false;
+                }
+                if (self.prev_is_echo && bytes == self.prev) || packet.id() == BROADCAST_ID {
                     tally.echoes += 1;
                     return false;
                 }
                 let done = sink.packet(&packet, clock.now());
                 tally.done |= done;
+                if done && self.learn && !copy {
+                    // The reply, unlike the request: the copy before it was
+                    // no reply but the echo; with none before it, the port
+                    // did not echo this request.
+                    if self.copies > 0 {
+                        self.shown = Some(true);
+                    } else {
+                        self.shown.get_or_insert(false);
+                    }
+                }
                 done
             }
             Event::ChecksumError { id, .. } => {
@@ -354,11 +527,48 @@ impl Own<'_> {
                 false
             }
             Event::Echo { .. } => {
-                self.echo_seen = true;
+                self.echoed();
+                tally.copy_at = Some(clock.now());
                 false
             }
             Event::Discarded { .. } => false,
         }
+    }
+}
+
+impl Own<'_> {
+    /// A copy of the request was taken for its echo: it shows the port
+    /// echoes when it cannot have been the reply.
+    fn echoed(&mut self) {
+        self.echo_seen = true;
+        self.copies = self.copies.saturating_add(1);
+        if self.learn && !self.tx_may_be_reply {
+            self.shown = Some(true);
+        }
+    }
+}
+
+impl<T: Transport, C: Clock> Bus<T, C> {
+    /// Whether this bus's port echoes requests, as it has shown so far:
+    /// `Some(true)` it does, `Some(false)` it does not, `None` not known yet
+    /// (see [`BusSettings::echo`](crate::BusSettings::echo)). While it is
+    /// not known, a frame identical to the request is skipped as its echo.
+    pub fn port_echoes(&self) -> Option<bool> {
+        self.io.port_echo.known
+    }
+
+    /// Tells the bus whether its port echoes (`Some`), or has it learn that
+    /// again from the traffic (`None`). With echo on in its settings: told
+    /// `Some(true)`, it skips one copy of each request for good; told `Some(false)`, it takes a frame
+    /// identical to the request for the reply, until a copy of a request
+    /// that cannot be a reply comes back (the port echoes after all). To
+    /// take nothing for an echo whatever comes back, turn
+    /// [`BusSettings::echo`](crate::BusSettings::echo) off.
+    pub fn set_port_echoes(&mut self, echoes: Option<bool>) {
+        self.io.port_echo = PortEcho {
+            known: echoes,
+            silent_replies: 0,
+        };
     }
 }
 

@@ -53,11 +53,22 @@ pub struct BusSettings {
     /// 8). Replies are waited for only where this level sends them.
     pub replies: StatusLevel,
     /// Whether the adapter may echo requests back (half-duplex adapters
-    /// without automatic direction control). When on (the default), one copy
-    /// of each request and any copy of the previous request are skipped;
-    /// turn it off on an adapter known not to echo, so that a reply which
-    /// happens to be byte-identical to its request (a PING answered with
-    /// status 0x01) is not taken for an echo.
+    /// without automatic direction control). When on (the default), the bus
+    /// learns from the traffic whether this port echoes: a copy of a request
+    /// that cannot be its reply (a WRITE, say), or a copy before a reply,
+    /// shows that it does; a few replies in a row with no copy of the
+    /// request before them show that it does not. Where a copy that could be
+    /// the reply is all that came back (a PING to a servo whose status is
+    /// 0x01, or a missing servo behind an echoing adapter), the bus asks
+    /// that servo for one byte, whose copy cannot be its reply, and so
+    /// tells the two apart at once. Until it knows, and once
+    /// it knows the port echoes, one copy of each request (and any late copy
+    /// of the previous one) is skipped; once it knows the port does not, a
+    /// reply byte-identical to its request (a PING answered with status
+    /// 0x01) is taken as the reply. Turn it off on an adapter known not to
+    /// echo: nothing is then skipped, from the first request on. What the
+    /// bus has learned is [`Bus::port_echoes`](crate::Bus::port_echoes); it
+    /// can be told with [`Bus::set_port_echoes`](crate::Bus::set_port_echoes).
     pub echo: bool,
     /// Whether a reply with error flags set fails the transaction
     /// ([`BusError::Status`](crate::BusError::Status)) instead of returning
@@ -67,7 +78,8 @@ pub struct BusSettings {
 
 impl BusSettings {
     /// Settings for a bus of `series` servos: no adapter latency, return
-    /// delay 0, one retry, every instruction answered, echo skipped. The
+    /// delay 0, one retry, every instruction answered, echo looked for
+    /// (see [`BusSettings::echo`]). The
     /// link's baud rate is the transport's, filled in by the bus.
     pub fn new(series: Series) -> Self {
         BusSettings {

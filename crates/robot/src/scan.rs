@@ -215,7 +215,7 @@ pub fn scan<T: Transport, C: Clock>(
         let first = out.found.len();
         let mut late = LateReplies::new(bus);
         for id in 0..=MAX_ID {
-            let result = ask(bus, id, baud, 0);
+            let result = ask_past_garbles(bus, id, baud);
             if let Err(BusError::WrongId { actual, .. }) = &result {
                 late.note(*actual);
             }
@@ -306,6 +306,51 @@ impl LateReplies {
         ids.retain(|&id| !out.knows(id, baud));
         ids.sort_unstable();
         Ok(ids)
+    }
+}
+
+/// How many times an ID whose reply came garbled is asked in all before
+/// the scan calls it a collision.
+pub const COLLISION_ASKS: usize = 3;
+
+/// Whether an answer came garbled: a corrupt frame, or one of the wrong
+/// length (two servos answering at once garble each other's replies).
+fn garbled(result: &Result<Found, BusError>) -> bool {
+    matches!(
+        result,
+        Err(BusError::Corrupt { .. } | BusError::WrongLength { .. })
+    )
+}
+
+/// [`ask`], and when the answer came garbled, asks again: two servos sharing
+/// an ID garble each other every time, noise on the line (a reply cut by
+/// a simulator just starting, a loose cable) now and then. Of at most
+/// [`COLLISION_ASKS`] asks, a majority garbled is a collision (the garbled
+/// answer is returned); otherwise the answer of the last clean ask is.
+fn ask_past_garbles<T: Transport, C: Clock>(
+    bus: &mut Bus<T, C>,
+    id: u8,
+    baud: u32,
+) -> Result<Found, BusError> {
+    let first = ask(bus, id, baud, 0);
+    if !garbled(&first) {
+        return first;
+    }
+    let need = COLLISION_ASKS / 2 + 1;
+    let (mut garbles, mut cleans) = (1, 0);
+    let mut last_clean = None;
+    while garbles < need && cleans < need {
+        let again = ask(bus, id, baud, 0);
+        if garbled(&again) {
+            garbles += 1;
+        } else {
+            cleans += 1;
+            last_clean = Some(again);
+        }
+    }
+    match last_clean {
+        Some(clean) if cleans >= need => clean,
+        _ => first,
     }
 }
 

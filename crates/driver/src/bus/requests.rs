@@ -23,20 +23,10 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         let expect = self.expect_reply(id, 0, Transaction::Ping)?;
         self.io.begin();
         self.io.tx_len = encode::ping(&mut self.io.tx, id)?;
-        let echoes = self.counters.echoes;
-        match self.transact(expect) {
-            Ok(flags) => Ok(flags.unwrap_or_default()),
-            // A servo whose status is exactly 0x01 (the voltage flag) answers
-            // a PING with the PING's own bytes, which were skipped as the
-            // adapter's echo. Ask it something whose answer cannot look like
-            // the request before calling it silent.
-            Err(e) if e.is_timeout() && self.counters.echoes > echoes => {
-                let mut byte = [0u8; 1];
-                self.read(id, servobus_protocol::registers::addr::ID, &mut byte)
-                    .map_err(|_| e)
-            }
-            Err(e) => Err(e),
-        }
+        // A servo whose status is exactly 0x01 (the voltage flag) answers a
+        // PING with the PING's own bytes: the transaction tells that reply
+        // from an echo (see `Bus::port_echoes`).
+        Ok(self.transact(expect)?.unwrap_or_default())
     }
 
     /// READ `out.len()` bytes from `address` of servo `id` into `out`.

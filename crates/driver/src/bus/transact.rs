@@ -3,9 +3,11 @@
 
 use std::time::Duration;
 
-use servobus_protocol::{Packet, StatusFlags, MAX_PARAMS};
+use servobus_protocol::registers::addr;
+use servobus_protocol::{encode, parse_frame, Packet, StatusFlags, MAX_FRAME_LEN, MAX_PARAMS};
+use servobus_timing::Transaction;
 
-use crate::io::{Sink, Tally};
+use crate::io::{PortEcho, Sink, Tally};
 use crate::{Bus, BusError, Clock, Transport, TransportError};
 
 impl<T: Transport, C: Clock> Bus<T, C> {
@@ -144,6 +146,12 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             }
             self.count_late();
             self.account(id, &tally, wrong_count);
+            let got = match got {
+                None if tally.ambiguous_copy && !corrupt && wrong.is_none() => {
+                    self.resolve_copy(expect, tally.copy_at.unwrap_or(start))?
+                }
+                got => got,
+            };
             if let Some((flags, at)) = got {
                 if owed_before {
                     self.io.answered_in_doubt(expect.id);
@@ -187,6 +195,71 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             id: expect.id,
             waited: expect.timeout,
         }))
+    }
+
+    /// Decides whether the copy of the request skipped as its echo was the
+    /// reply itself, on a port not yet known to echo (a servo with status
+    /// 0x01 answers a PING with the PING's own bytes): asks servo
+    /// `expect.id` for one byte, a request whose copy cannot be its reply.
+    /// A copy of that shows the port echoes, and the skipped copy was the
+    /// echo (the servo is silent); a clean reply with nothing before it
+    /// shows the port does not, and the skipped copy was the reply, which
+    /// is returned as arrived at `copy_at`. Anything else leaves the port
+    /// unknown and the request unanswered. The request is left in the send
+    /// buffer for a retry.
+    fn resolve_copy(
+        &mut self,
+        expect: Expect,
+        copy_at: Duration,
+    ) -> Result<Option<(StatusFlags, Duration)>, BusError> {
+        let mut saved = [0u8; MAX_FRAME_LEN];
+        let n = self.io.tx_len;
+        saved[..n].copy_from_slice(&self.io.tx[..n]);
+        let probe = self.expect(expect.id, expect.id, 1, Transaction::Read { len: 1 });
+        self.io.begin();
+        self.io.tx_len = encode::read(&mut self.io.tx, expect.id, addr::ID, 1)?;
+        let start = self.send()?;
+        let mut byte = [0u8; MAX_PARAMS];
+        let mut byte_len = 0;
+        let mut sink = Single {
+            expect: probe,
+            out: &mut byte,
+            out_len: &mut byte_len,
+            got: None,
+            wrong: None,
+            wrong_count: 0,
+            corrupt: false,
+            owed: self.io.overdue_flags(),
+            late: [0; 256],
+            late_len: 0,
+        };
+        let tally = self.io.exchange(start + probe.timeout, &mut sink)?;
+        let (answered, wrong_count) = (sink.got.is_some(), sink.wrong_count);
+        for &late in &sink.late[..sink.late_len] {
+            self.io.late_reply(late);
+        }
+        self.count_late();
+        self.account(usize::from(expect.id), &tally, wrong_count);
+        if answered && tally.echoes == 0 && tally.garbage_bytes == 0 && tally.checksum_errors == 0 {
+            self.io.port_echo = PortEcho::SILENT;
+        }
+        // The request back in the send buffer, for a retry.
+        self.io.begin();
+        self.io.tx[..n].copy_from_slice(&saved[..n]);
+        self.io.tx_len = n;
+        if self.io.port_echo.known != Some(false) {
+            return Ok(None);
+        }
+        let Ok((packet, _)) = parse_frame(&saved[..n]) else {
+            return Ok(None);
+        };
+        let params = packet.params();
+        if packet.id() != expect.id || params.len() != expect.len {
+            return Ok(None);
+        }
+        self.reply[..params.len()].copy_from_slice(params);
+        self.reply_len = params.len();
+        Ok(Some((packet.status(), copy_at)))
     }
 
     /// Adds what one wait saw to the bus counters and to servo `id`'s.

@@ -473,6 +473,105 @@ fn scs_servos_are_big_endian_and_read_one_by_one() -> Result<(), BusError> {
     Ok(())
 }
 
+/// A servo with the voltage flag alone, on a port that does not echo: its
+/// PING reply is the PING's own bytes. The first PING on a fresh bus cannot
+/// tell that copy from an echo; it asks the servo for one byte, learns the
+/// port does not echo, and takes the copy as the reply: no timeout, no
+/// retry. From then on a PING is answered at the first wait.
+#[test]
+fn a_port_that_does_not_echo_takes_a_ping_reply_identical_to_the_request() -> Result<(), BusError> {
+    let (mut bus, sim) = setup(&[1, 2]);
+    sim.servo(2, |s| s.set_supply_voltage(Some(30)));
+    assert_eq!(bus.port_echoes(), None);
+    assert_eq!(bus.ping(2)?.0, 0x01);
+    assert_eq!(bus.port_echoes(), Some(false));
+    let c = *bus.counters();
+    assert_eq!((c.timeouts, c.retries, c.failures), (0, 0, 0), "{c:?}");
+    // Known now: the next PING is one exchange, well under a millisecond
+    // at 1 Mbaud (a wait to the deadline would be longer).
+    let before = bus.clock().now();
+    assert_eq!(bus.ping(2)?.0, 0x01);
+    let took = bus.clock().now() - before;
+    assert!(took < Duration::from_micros(400), "{took:?}");
+    assert_eq!(bus.counters().echoes, c.echoes);
+    // A servo that is not there is still not there.
+    assert!(bus.ping(3).is_err_and(|e| e.is_timeout()));
+    Ok(())
+}
+
+/// Replies with no copy of the request before them teach the bus that the
+/// port does not echo; a copy of a WRITE (which no servo sends back) that
+/// it does.
+#[test]
+fn the_bus_learns_whether_its_port_echoes_from_the_traffic() -> Result<(), BusError> {
+    let (mut bus, _sim) = setup(&[1]);
+    let mut pos = [0u8; 2];
+    for _ in 0..3 {
+        assert_eq!(bus.port_echoes(), None);
+        bus.read(1, addr::PRESENT_POSITION, &mut pos)?;
+    }
+    assert_eq!(bus.port_echoes(), Some(false));
+
+    let (mut bus, sim) = setup(&[1]);
+    sim.set_faults(Faults::none().echo(true));
+    bus.write(1, addr::ACCELERATION, &[5])?;
+    assert_eq!(bus.port_echoes(), Some(true));
+    for _ in 0..5 {
+        bus.read(1, addr::PRESENT_POSITION, &mut pos)?;
+    }
+    assert_eq!(bus.port_echoes(), Some(true));
+    assert_eq!(bus.counters().wrong_replies, 0);
+    Ok(())
+}
+
+/// Behind an echoing adapter a missing servo's PING comes back as its
+/// echo alone: that copy is never taken for a reply, whether the bus has
+/// learned the port echoes yet or not. A servo with the voltage flag
+/// answers after the echo, and that second copy is its reply.
+#[test]
+fn an_echoing_adapter_never_answers_for_a_missing_servo() -> Result<(), BusError> {
+    for learned in [false, true] {
+        let (mut bus, sim) = setup(&[1, 2]);
+        sim.set_faults(Faults::none().echo(true));
+        sim.servo(2, |s| s.set_supply_voltage(Some(30)));
+        if learned {
+            bus.write(1, addr::ACCELERATION, &[5])?;
+            assert_eq!(bus.port_echoes(), Some(true));
+        }
+        for _ in 0..3 {
+            let r = bus.ping(7);
+            assert!(
+                r.as_ref().is_err_and(|e| e.is_timeout()),
+                "learned {learned}: {r:?}"
+            );
+        }
+        assert_eq!(bus.port_echoes(), Some(true), "learned {learned}");
+        let before = bus.counters().retries;
+        assert_eq!(bus.ping(2)?.0, 0x01, "learned {learned}");
+        assert_eq!(bus.counters().retries, before, "learned {learned}");
+        assert!(bus.ping(1)?.is_ok());
+    }
+    Ok(())
+}
+
+/// With echo handling turned off in the settings nothing is skipped and
+/// nothing is learned: the voltage-flagged PING is answered first try.
+#[test]
+fn with_echo_off_a_ping_reply_identical_to_the_request_is_taken_at_once() -> Result<(), BusError> {
+    let clock = ManualClock::new();
+    let sim = SimBus::new(clock.clone(), BAUD).with_servos([servo(2)]);
+    sim.servo(2, |s| s.set_supply_voltage(Some(30)));
+    let settings = BusSettings::new(Series::Sts)
+        .with_retries(2)
+        .with_echo(false);
+    let mut bus = Bus::new(sim.clone(), settings);
+    assert_eq!(bus.ping(2)?.0, 0x01);
+    let c = *bus.counters();
+    assert_eq!((c.timeouts, c.retries, c.echoes), (0, 0, 0), "{c:?}");
+    assert_eq!(bus.port_echoes(), None);
+    Ok(())
+}
+
 /// A servo whose only status flag is the voltage one (0x01) answers a PING
 /// with the PING's own bytes, which the driver skips as the adapter's echo:
 /// the ping must still find it, with its flag.

@@ -4,7 +4,9 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, BusSettings, ManualClock};
+use servobus_driver::scripted::{Received, Script, ScriptedPort};
+use servobus_driver::{Bus, BusSettings, ManualClock, Transport, TransportError};
+use servobus_protocol::parse_frame;
 use servobus_protocol::registers::{addr, Series};
 use servobus_robot::scan::{scan, table_bauds, ScanError, SlowLink};
 use servobus_sim::{Faults, SimBus, SimServo};
@@ -85,5 +87,82 @@ fn servos_whose_replies_come_late_are_asked_again_and_found() -> Result<(), Scan
         assert_eq!(got, ids, "seed {seed}: {found:?}");
         assert!(found.collisions.is_empty(), "seed {seed}: {found:?}");
     }
+    Ok(())
+}
+
+/// Garbles the first `left` replies from servo `id` (a flipped checksum
+/// byte), as noise on a line that has just come up does.
+struct GarbleFirst {
+    inner: SimBus,
+    id: u8,
+    left: usize,
+}
+
+impl Script for GarbleFirst {
+    fn write(&mut self, _clock: &ManualClock, bytes: &[u8]) -> Result<(), TransportError> {
+        self.inner.write_all(bytes)
+    }
+    fn read(&mut self, _clock: &ManualClock, buf: &mut [u8], deadline: Duration) -> Received {
+        let n = self.inner.read(buf, deadline)?;
+        if self.left > 0 {
+            if let Ok((p, len)) = parse_frame(&buf[..n]) {
+                if p.id() == self.id {
+                    buf[len - 1] ^= 0xFF;
+                    self.left -= 1;
+                }
+            }
+        }
+        Ok(n)
+    }
+    fn discard(&mut self, _clock: &ManualClock) {
+        // The simulated bus's input is memory: dropping it cannot fail.
+        let _ = self.inner.discard_input();
+    }
+}
+
+/// One garbled reply is noise, not two servos sharing an ID: the ID is
+/// asked again and the servo found. Garbled at every ask, it is a collision.
+#[test]
+fn one_garbled_reply_is_asked_again_and_a_collision_takes_more() -> Result<(), ScanError> {
+    for (garbles, collision) in [(1, false), (2, true), (usize::MAX, true)] {
+        let clock = ManualClock::new();
+        let sim = SimBus::new(clock.clone(), 1_000_000).with_servos([1, 4, 6].map(sts));
+        let port = ScriptedPort::new(
+            &clock,
+            GarbleFirst {
+                inner: sim,
+                id: 4,
+                left: garbles,
+            },
+        );
+        let mut bus = Bus::new(port, BusSettings::new(Series::Sts));
+        let found = scan(&mut bus, &[1_000_000], false)?;
+        let got: Vec<u8> = found.found.iter().map(|f| f.id).collect();
+        if collision {
+            assert_eq!(got, [1, 6], "{garbles} garbled: {found:?}");
+            assert_eq!(found.collisions, [(4, 1_000_000)], "{garbles} garbled");
+        } else {
+            assert_eq!(got, [1, 4, 6], "{garbles} garbled: {found:?}");
+            assert!(found.collisions.is_empty(), "{garbles} garbled: {found:?}");
+        }
+    }
+    Ok(())
+}
+
+/// Two servos that really share an ID are still a collision, however often
+/// they are asked.
+#[test]
+fn two_servos_sharing_an_id_are_a_collision() -> Result<(), ScanError> {
+    let sim = SimBus::new(ManualClock::new(), 1_000_000).with_servos([
+        sts(1),
+        sts(4).with_position(0x0F0F),
+        sts(4).with_position(0x00F0),
+        sts(6),
+    ]);
+    let mut bus = bus(&sim);
+    let found = scan(&mut bus, &[1_000_000], false)?;
+    let got: Vec<u8> = found.found.iter().map(|f| f.id).collect();
+    assert_eq!(got, [1, 6], "{found:?}");
+    assert_eq!(found.collisions, [(4, 1_000_000)], "{found:?}");
     Ok(())
 }

@@ -174,8 +174,8 @@ impl From<servobus_robot::Error> for Failure {
     }
 }
 
-impl From<servobus_runtime::RunError> for Failure {
-    fn from(e: servobus_runtime::RunError) -> Self {
+impl From<servobus_robot::RunError> for Failure {
+    fn from(e: servobus_robot::RunError) -> Self {
         Failure::new("Error", chain(&e))
     }
 }

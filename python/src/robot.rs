@@ -49,7 +49,7 @@ impl Samples {
 
     /// Records a cycle sample of the first bus as a new row; other buses'
     /// samples fill the row of the same cycle.
-    fn add(&mut self, c: &servobus_runtime::CycleSample) {
+    fn add(&mut self, c: &servobus_robot::CycleSample) {
         if c.bus == 0 && c.joints().first().is_none_or(|j| j.joint == 0) {
             self.time.push(c.time_s);
             for column in self

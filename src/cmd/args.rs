@@ -22,7 +22,7 @@
 
 use std::time::Duration;
 
-use servobus_runtime::config::limits::{self, Rounded};
+use servobus_config::limits::{self, Rounded};
 
 /// The longest run a command takes (`--seconds`, `--duration`): a day, as
 /// long as one motion may be ([`limits::MAX_MOTION_DURATION_S`]).

@@ -26,8 +26,8 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use serde::Serialize;
-use servobus_runtime::config::{load_robot, BusConfig, Robot, RobotOptions};
-use servobus_runtime::Quantiles;
+use servobus_config::{load_robot, BusConfig, Robot, RobotOptions};
+use servobus_robot::bench::Quantiles;
 use servobus_sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance};

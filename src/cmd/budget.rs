@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use serde::Serialize;
+use servobus_config::{load_robot, BusConfig, RobotOptions};
 use servobus_robot::bench::{measure_link, MeasuredLink};
-use servobus_runtime::config::{load_robot, BusConfig, RobotOptions};
 use servobus_timing::{floor_rate_hz, Change, Link, Plan};
 
 use super::link::{open_bus, Allowance};

@@ -12,13 +12,13 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
+use servobus_config::{
+    load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
+};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_robot::calibrate::{
     calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, ProcedureOptions, Refusal,
     Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
-};
-use servobus_runtime::config::{
-    load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
 
 use super::link::{every_port, Allowance, Ports, SerialBus};
@@ -289,7 +289,7 @@ fn how_to_use(robot: &Path, output: &Path) -> String {
         "give --calibration {} to the commands that move or read joints",
         output.display()
     );
-    if servobus_runtime::config::is_builtin_path(robot) {
+    if servobus_config::is_builtin_path(robot) {
         return format!(
             "{flag} (or `servobus init` for a robot file of your own, and              `calibration: FILE` in it)"
         );

@@ -8,8 +8,8 @@
 use std::process::ExitCode;
 
 use servobus::doctor::{self, BusCheck, Finding, Shown};
+use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::doctor::FixError;
-use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 use super::out::{errln, outln, StdoutError};
 

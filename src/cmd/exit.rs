@@ -9,10 +9,10 @@
 
 use std::process::ExitCode;
 
+use servobus_config::{is_builtin_path, ConfigError};
 use servobus_driver::OpenError;
 use servobus_io::OutputError;
 use servobus_robot::teach::TeachError;
-use servobus_runtime::config::{is_builtin_path, ConfigError};
 use servobus_sim::{FaultSpecError, PtyError};
 
 /// Exit code: a problem was found.
@@ -46,11 +46,9 @@ pub fn invalid(err: anyhow::Error) -> anyhow::Error {
 
 /// The exit code of a run that ended as `finish`: 0 when it completed or
 /// was stopped as asked, 1 when a fault (or torque off) ended it.
-pub fn of_finish(finish: servobus_runtime::Finish) -> ExitCode {
+pub fn of_finish(finish: servobus_robot::Finish) -> ExitCode {
     match finish {
-        servobus_runtime::Finish::Completed | servobus_runtime::Finish::Stopped => {
-            ExitCode::SUCCESS
-        }
+        servobus_robot::Finish::Completed | servobus_robot::Finish::Stopped => ExitCode::SUCCESS,
         _ => ExitCode::from(PROBLEM),
     }
 }

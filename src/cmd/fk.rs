@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use serde::Serialize;
+use servobus_config::{ik_reason, load_robot, Robot, RobotOptions, Units};
 use servobus_kinematics::{ArmIk, ArmTarget, Geometry, IkError, LegIk, Point3, Poses};
-use servobus_runtime::config::{ik_reason, load_robot, Robot, RobotOptions, Units};
 
 use super::exit::{input, PROBLEM};
 use super::out::outln;
@@ -87,7 +87,7 @@ fn geometry(path: &std::path::Path) -> anyhow::Result<(Robot, Geometry)> {
 
 /// `--pose` as joint angles in radians, robot order.
 fn pose(robot: &Robot, text: &str) -> anyhow::Result<Vec<f64>> {
-    servobus_runtime::config::parse_pose(robot, text).map_err(|e| input(format!("--pose: {e}")))
+    servobus_config::parse_pose(robot, text).map_err(|e| input(format!("--pose: {e}")))
 }
 
 fn frame_pose(units: Units, pose: &servobus_kinematics::Isometry3<f64>) -> FramePose {

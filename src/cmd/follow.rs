@@ -30,12 +30,12 @@ use std::time::{Duration, Instant};
 
 use against::{Figures, FollowErrors, LeaderTrail};
 
+use servobus_config::{load_robot, JointMap, Robot, RobotOptions};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
-use servobus_runtime::config::{load_robot, JointMap, Robot, RobotOptions};
-use servobus_runtime::{
-    Command, CycleSample, Lead, Report, RunOptions, Target, TargetSender, Telemetry,
+use servobus_robot::{
+    Command, CycleSample, Lead, LiveTarget as Target, Report, RunOptions, TargetSender, Telemetry,
 };
 
 use super::link::{every_port, Allowance, Ports};
@@ -460,7 +460,7 @@ fn drive<T: Transport, C: Clock>(
 
 fn send(targets: &TargetSender, target: Target) -> anyhow::Result<()> {
     match targets.send(target) {
-        Ok(_) | Err(servobus_runtime::TargetError::Ended) => Ok(()),
+        Ok(_) | Err(servobus_robot::TargetError::Ended) => Ok(()),
         Err(e) => Err(anyhow::anyhow!("the leader's reading was refused: {e}")),
     }
 }
@@ -622,7 +622,7 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use servobus_runtime::config::MODEL_JERK_RAMP_S;
+    use servobus_config::MODEL_JERK_RAMP_S;
 
     #[test]
     fn model_limits_are_the_servos_top_speed_and_fastest_ramp_in_the_robots_units() {

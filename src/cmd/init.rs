@@ -6,8 +6,8 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_io::AtomicFile;
-use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 
 use super::exit::input;
 use super::out::outln;

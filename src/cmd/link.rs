@@ -3,9 +3,9 @@
 
 use std::time::Duration;
 
+use servobus_config::{BusConfig, Robot};
 use servobus_driver::{SerialTransport, Series, SystemClock};
 use servobus_robot::{ports, Connection, Target};
-use servobus_runtime::config::{BusConfig, Robot};
 
 use super::out::errln;
 

@@ -222,7 +222,7 @@ pub(crate) fn motion_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible>
 
 /// A rate that does not fit a bus, with the library's advice and this
 /// command line's own switch for a round-robin read.
-pub(crate) fn rate_advice(why: &servobus_runtime::config::RateError) -> String {
+pub(crate) fn rate_advice(why: &servobus_config::RateError) -> String {
     let flag = if why.round_robin_helps() {
         " (for one run: --round-robin)"
     } else {

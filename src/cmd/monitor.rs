@@ -11,10 +11,10 @@ use anyhow::{bail, Context};
 use crossbeam_channel::TryRecvError;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
+use servobus_config::{load_robot, Robot, RobotOptions, Units};
 use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
-use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
-use servobus_runtime::{Command, Runner, Telemetry};
+use servobus_robot::{Command, Telemetry};
 use std::io::IsTerminal;
 
 use super::link::{open_bus, open_plain_bus, Allowance};
@@ -336,7 +336,12 @@ fn exit_code(problem: bool) -> ExitCode {
 /// `servobus play --monitor`: the monitor's view of a running motion, from
 /// its telemetry only. `q` stops the motion (jerk-limited) and Space turns
 /// the torque off; the view ends with the run.
-pub fn watch_run(runner: &Runner, robot: &Robot, units: Units, rate_hz: f64) -> anyhow::Result<()> {
+pub fn watch_run(
+    runner: &servobus_robot::Run,
+    robot: &Robot,
+    units: Units,
+    rate_hz: f64,
+) -> anyhow::Result<()> {
     let shown =
         Screen::open().and_then(|mut screen| show_run(&mut screen, runner, robot, units, rate_hz));
     if shown.is_err() {
@@ -351,7 +356,7 @@ pub fn watch_run(runner: &Runner, robot: &Robot, units: Units, rate_hz: f64) -> 
 /// The view of [`watch_run`] on `screen`, until the run ends.
 fn show_run(
     screen: &mut Screen,
-    runner: &Runner,
+    runner: &servobus_robot::Run,
     robot: &Robot,
     units: Units,
     rate_hz: f64,

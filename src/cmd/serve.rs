@@ -7,15 +7,15 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
+use servobus_config::{
+    load_motion_calibrated, load_motion_text, load_robot, plan_motion, RobotOptions,
+};
 use servobus_node::node::{
     group_command_key, group_member_key, open_session, serve, NodeConfig, RobotInfo,
 };
 use servobus_node::wire::NodeCommand;
 use servobus_node::zenoh::Wait;
-use servobus_runtime::config::{
-    load_motion_calibrated, load_motion_text, load_robot, plan_motion, RobotOptions,
-};
-use servobus_runtime::{Command, Lead, RunOptions};
+use servobus_robot::{Command, Lead, RunOptions};
 
 use super::out::{errln, outln};
 

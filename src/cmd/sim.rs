@@ -6,9 +6,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
+use servobus_config::{load_robot, RobotOptions};
 use servobus_io::OutputError;
 use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
-use servobus_runtime::config::{load_robot, RobotOptions};
 use servobus_sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\

@@ -20,8 +20,8 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+use servobus_config::{load_robot, Robot, RobotOptions, Units};
 use servobus_robot::{Command, Lead, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry};
-use servobus_runtime::config::{load_robot, Robot, RobotOptions, Units};
 
 use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
 
@@ -192,7 +192,7 @@ fn read_targets(
         match input.send(targets) {
             Ok(0) => {}
             Ok(k) => errln!("line {n}: {k} angle(s) beyond the joint limits, clamped"),
-            Err(servobus_runtime::TargetError::Ended) => return,
+            Err(servobus_robot::TargetError::Ended) => return,
             Err(why) => {
                 errln!("line {n}: {why}; skipped");
                 skip();

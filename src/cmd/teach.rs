@@ -8,11 +8,11 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+use servobus_config::{load_robot, LimitOrigin, Robot, RobotOptions};
 use servobus_driver::{Clock, Transport};
 use servobus_robot::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
-use servobus_runtime::config::{load_robot, LimitOrigin, Robot, RobotOptions};
 
 use super::link::{bus_ports, every_port, Allowance, SerialBus};
 use super::out::{err, errln};

@@ -2,9 +2,9 @@
 //! `foot_<leg>`) are during a run, by forward kinematics of the measured
 //! joint angles: the log's spatial columns and the plot's views in space.
 
+use servobus_config::Units;
 use servobus_kinematics::{Geometry, Poses};
-use servobus_runtime::config::Units;
-use servobus_runtime::CycleSample;
+use servobus_robot::CycleSample;
 
 /// Forward kinematics of the latest measured angle of every joint, kept
 /// up to date one cycle sample at a time.

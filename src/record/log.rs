@@ -11,10 +11,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use servobus_config::Units;
 use servobus_io::AtomicFile;
 use servobus_kinematics::Geometry;
-use servobus_runtime::config::Units;
-use servobus_runtime::CycleSample;
+use servobus_robot::CycleSample;
 
 use super::frames::FrameTracker;
 

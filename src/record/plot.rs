@@ -6,9 +6,9 @@ use std::path::Path;
 
 use anyhow::Context;
 
+use servobus_config::Units;
 use servobus_kinematics::Geometry;
-use servobus_runtime::config::Units;
-use servobus_runtime::CycleSample;
+use servobus_robot::CycleSample;
 
 use super::frames::FrameTracker;
 use super::space;

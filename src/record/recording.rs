@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use servobus_runtime::config::{limits, ConfigError, Units};
+use servobus_config::{limits, ConfigError, Units};
 
 /// A recorded path read back for `servobus play`: sample times and every
 /// robot joint's position, in radians.
@@ -33,10 +33,7 @@ pub struct Recording {
 /// `commanded_<unit>` is the same path sent `lead` early; a log without a
 /// planned column (an older one) gives its measured positions, else the
 /// commanded ones.
-pub fn read_recording(
-    path: &Path,
-    robot: &servobus_runtime::config::Robot,
-) -> anyhow::Result<Recording> {
+pub fn read_recording(path: &Path, robot: &servobus_config::Robot) -> anyhow::Result<Recording> {
     let bytes = limits::read_capped(path, limits::MAX_RECORDING_BYTES)?;
     // Every refusal is an input error (exit 2) at its place in the file.
     let refuse = |line: usize, column: usize, what: String| {

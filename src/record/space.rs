@@ -9,8 +9,8 @@
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use servobus_config::SpatialSummary;
 use servobus_kinematics::FOOT_PREFIX;
-use servobus_runtime::config::SpatialSummary;
 
 mod world;
 

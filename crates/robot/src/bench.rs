@@ -14,7 +14,7 @@ use servobus_driver::{
 };
 use servobus_protocol::registers::{addr, ValueError};
 use servobus_runtime::stats::Histogram;
-use servobus_runtime::Quantiles;
+pub use servobus_runtime::Quantiles;
 use servobus_timing::{CycleError, Link};
 
 /// One servo's round trip, us.

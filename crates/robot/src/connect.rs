@@ -111,17 +111,7 @@ impl Connection {
             Target::RobotFile => resolve(robot, &[])?,
             Target::Ports(p) => resolve(robot, &p)?,
             Target::VirtualSimulator | Target::Simulator => {
-                let sim = SimRobot::builder(robot).build()?;
-                let buses = if target == Target::Simulator {
-                    Buses::Wall(sim)
-                } else {
-                    Buses::Virtual(sim)
-                };
-                return Ok(Connection {
-                    robot: robot.clone(),
-                    buses,
-                    slow: Vec::new(),
-                });
+                return Connection::simulated(robot, target == Target::Simulator, None);
             }
         };
         let mut buses = Vec::with_capacity(ports.len());
@@ -147,6 +137,31 @@ impl Connection {
             robot: robot.clone(),
             buses: Buses::Serial(buses),
             slow,
+        })
+    }
+
+    /// The built-in simulator of `robot`, paced by the wall clock or in
+    /// virtual time, its shafts at `pose` (one angle per joint, in the
+    /// robot file's units) or at rest.
+    pub(crate) fn simulated(
+        robot: &Robot,
+        wall_clock: bool,
+        pose: Option<&[f64]>,
+    ) -> Result<Connection, Error> {
+        let mut builder = SimRobot::builder(robot);
+        if let Some(pose) = pose {
+            builder = builder.pose(pose);
+        }
+        let sim = builder.build()?;
+        let buses = if wall_clock {
+            Buses::Wall(sim)
+        } else {
+            Buses::Virtual(sim)
+        };
+        Ok(Connection {
+            robot: robot.clone(),
+            buses,
+            slow: Vec::new(),
         })
     }
 

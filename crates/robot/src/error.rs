@@ -60,6 +60,10 @@ pub enum Error {
         #[source]
         source: servobus_driver::BusError,
     },
+    /// A starting pose was given for real servos, which start where they
+    /// are ([`Robot::connect_at`](crate::Robot::connect_at)).
+    #[error("a starting pose sets where the simulator starts; real servos start where they are")]
+    PoseOnHardware,
     /// A motion file names its robot by path; a robot given as text has
     /// none, so its motions are planned by the caller
     /// ([`Robot::plan`](crate::Robot::plan) of a motion loaded for a robot

@@ -96,6 +96,8 @@ pub use calibrate::Refusal;
 /// The robot, motion and calibration files ([`servobus_config`]).
 pub use servobus_config as config;
 pub use servobus_config::Motion;
+/// Where a run's bus threads run (core, SCHED_FIFO priority).
+pub use servobus_runtime::rt::RtOptions;
 pub use servobus_runtime::{
     Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, Rejection,
     Report, RunError, RunOptions, StallEvent, Target as LiveTarget, TargetError, TargetSender,
@@ -318,6 +320,24 @@ impl Robot {
     /// simulated.
     pub fn connect(&self, target: Target) -> Result<Connection, Error> {
         Connection::open(&self.config, target)
+    }
+
+    /// Connects to the robot's built-in simulator (`target` is
+    /// [`Target::VirtualSimulator`] or [`Target::Simulator`]) with every
+    /// shaft at `pose` instead of at rest: one angle per joint, in the
+    /// robot's joint order and the robot file's units. Real servos start
+    /// where they are: any other target is [`Error::PoseOnHardware`].
+    ///
+    /// # Errors
+    /// [`Error::PoseOnHardware`]; [`Error::Simulator`] when the robot
+    /// cannot be simulated, or `pose` does not fit it.
+    pub fn connect_at(&self, target: Target, pose: &[f64]) -> Result<Connection, Error> {
+        match target {
+            Target::VirtualSimulator | Target::Simulator => {
+                Connection::simulated(&self.config, target == Target::Simulator, Some(pose))
+            }
+            Target::RobotFile | Target::Ports(_) => Err(Error::PoseOnHardware),
+        }
     }
 
     /// Checks every bus of the robot with the doctor ([`doctor::check`]):

@@ -170,12 +170,6 @@ impl Run {
         self.runner.is_finished()
     }
 
-    /// The runtime's handle of the run, for a program that drives it with
-    /// the runtime's own tools (a live view reading its telemetry).
-    pub fn into_runner(self) -> Runner {
-        self.runner
-    }
-
     /// Waits for the end of the run and returns its report.
     ///
     /// # Errors

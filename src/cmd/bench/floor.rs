@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use anyhow::Context;
-use servobus_runtime::config::BusConfig;
+use servobus_config::BusConfig;
 use servobus_sim::{pty_floor, FloorCycle};
 use servobus_timing::{sync_write_bytes, Block};
 

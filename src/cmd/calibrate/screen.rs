@@ -14,8 +14,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+use servobus_config::Robot;
 use servobus_robot::calibrate::{LiveJoint, Operator, Step};
-use servobus_runtime::config::Robot;
 
 use crate::cmd::out::{out, outln};
 

@@ -11,8 +11,8 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use servobus_runtime::config::Units;
-use servobus_runtime::CycleSample;
+use servobus_config::Units;
+use servobus_robot::CycleSample;
 
 /// How much of the leader's past is kept, s: a follower reading older than
 /// that when it is looked at is not counted (the live channel delivers

@@ -4,7 +4,7 @@
 use std::process::ExitCode;
 
 use serde::Serialize;
-use servobus_runtime::config::{
+use servobus_config::{
     load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
 };
 use servobus_trajectory::{JointState, Trajectory};
@@ -105,7 +105,7 @@ struct SpatialJson {
 }
 
 impl SpatialJson {
-    fn new(s: &SpatialSummary, units: servobus_runtime::config::Units) -> Self {
+    fn new(s: &SpatialSummary, units: servobus_config::Units) -> Self {
         SpatialJson {
             body_distance_mm: s.feet.as_ref().and_then(|f| f.distance_mm),
             body_turn: s

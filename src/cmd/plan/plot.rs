@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
+use servobus_config::Motion;
 use servobus_kinematics::{Geometry, FOOT_PREFIX};
-use servobus_runtime::config::Motion;
 use servobus_trajectory::{JointState, Trajectory};
 
 use crate::record::space;
@@ -255,11 +255,7 @@ type Series = Vec<Vec<(f64, f64)>>;
 
 /// Each joint's position and velocity (the motion's units) at
 /// [`SAMPLES`] + 1 times from 0 to `duration`.
-fn sample(
-    traj: &Trajectory,
-    u: servobus_runtime::config::Units,
-    duration: f64,
-) -> (Series, Series) {
+fn sample(traj: &Trajectory, u: servobus_config::Units, duration: f64) -> (Series, Series) {
     let n = traj.joints();
     let mut out = vec![JointState::default(); n];
     let mut pos: Series = vec![Vec::with_capacity(SAMPLES + 1); n];

@@ -180,9 +180,9 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
                 args.motion.display()
             )));
         };
-        let robot = servobus_runtime::config::load_robot(
+        let robot = servobus_config::load_robot(
             robot_path,
-            &servobus_runtime::config::RobotOptions::default()
+            &servobus_config::RobotOptions::default()
                 .calibration(args.hardware.calibration.as_deref())
                 .to_play(),
         )?;
@@ -221,7 +221,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
             args.motion.display()
         )));
     }
-    let limits = servobus_runtime::config::joint_limits(&robot);
+    let limits = servobus_config::joint_limits(&robot);
     let options = servobus_trajectory::TrackOptions {
         step: 1.0 / rate_hz,
         resolution: rec.resolution,

@@ -14,15 +14,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
-use servobus_runtime::config::{
+use servobus_config::{
     check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
 };
-use servobus_runtime::rt::RtOptions;
-use servobus_runtime::{
-    spawn, spawn_virtual, Command, CommandSender, Finish, Lead, Report, RunOptions, Runner,
-    Telemetry,
+use servobus_robot::Trajectory;
+use servobus_robot::{
+    Command, CommandSender, Finish, Lead, Report, RtOptions, Run, RunOptions, Telemetry,
 };
-use servobus_trajectory::Trajectory;
 
 use super::link::{every_port, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
@@ -194,28 +192,24 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .chain(trajectory.segments().iter().map(|s| s.end))
         .collect();
     let runner = match &backend {
-        Backend::Fast => {
-            let buses = servobus_robot::sim::SimRobot::builder(&robot)
-                .pose(&pose)
-                .build()?
-                .driver_buses();
-            spawn_virtual(&robot, trajectory, buses, options)?
-        }
-        Backend::Simulated => {
-            // In this process, paced by the wall clock: no pty between the
-            // runtime and its servos (see `servobus_sim::WallBus`).
-            let clock = super::link::system_clock();
-            let buses = servobus_robot::sim::SimRobot::builder(&robot)
-                .pose(&pose)
-                .build()?
-                .wall_buses(&clock);
-            spawn(&robot, trajectory, buses, options)?
+        // The built-in simulator in this process: in virtual time, or
+        // paced by the wall clock with no pty between the run and its
+        // servos.
+        Backend::Fast | Backend::Simulated => {
+            let target = if matches!(backend, Backend::Fast) {
+                servobus_robot::Target::VirtualSimulator
+            } else {
+                servobus_robot::Target::Simulator
+            };
+            servobus_robot::Robot::from(robot.clone())
+                .connect_at(target, &pose)?
+                .play(trajectory, options)?
         }
         Backend::Hardware(ports) => {
             let mut connection =
                 super::link::connect(&robot, servobus_robot::Target::Ports(ports.to_vec()))?;
             check_measured_rates(&mut connection, ports, rate_hz)?;
-            connection.play(trajectory, options)?.into_runner()
+            connection.play(trajectory, options)?
         }
     };
 

@@ -20,7 +20,7 @@ pub(super) struct Shown<'a> {
     /// Path times of the keyframes.
     pub(super) keyframes: Vec<f64>,
     /// The approach to the path's start as the run planned it
-    /// ([`Runner::approach`]), s: the path's times shift by it.
+    /// ([`Run::approach`]), s: the path's times shift by it.
     pub(super) approach: f64,
     pub(super) settle: f64,
     /// The robot's geometry, for the plot's views in space.
@@ -31,7 +31,7 @@ pub(super) struct Shown<'a> {
 }
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
-/// `commands` is the run's ([`Runner::commands`], `servobus_robot::Run::commands`).
+/// `commands` is the run's ([`Run::commands`]).
 pub(crate) fn install_ctrl_c(commands: CommandSender) {
     let seen = AtomicU32::new(0);
     let installed = ctrlc::set_handler(move || {
@@ -66,7 +66,7 @@ pub(super) struct Followed {
 /// Reads the telemetry until the run ends: progress, log, plot series.
 #[allow(clippy::too_many_arguments)] // the run, its outputs and what they show
 pub(super) fn follow(
-    runner: &Runner,
+    runner: &Run,
     args: &Args,
     mut log: Option<CsvLog>,
     shown: &Shown,
@@ -177,7 +177,7 @@ impl Progress {
         }
     }
 
-    pub(super) fn cycle(&mut self, sample: &servobus_runtime::CycleSample) {
+    pub(super) fn cycle(&mut self, sample: &servobus_robot::CycleSample) {
         for j in sample.joints() {
             if j.measured.is_some() && !j.stale {
                 self.worst = self.worst.max(j.error.abs());

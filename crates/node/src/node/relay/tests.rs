@@ -8,8 +8,8 @@ use std::rc::Rc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+use servobus_robot::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
 use servobus_robot::sim::virtual_buses;
-use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
 use servobus_runtime::{Command, Finish, Lead, RunOptions, Telemetry, VirtualRun};
 
 use super::{take_command, take_target, Inputs};

@@ -11,6 +11,7 @@
 
 mod cmd;
 mod record;
+mod shared;
 
 fn main() -> std::process::ExitCode {
     let cli = cmd::parse();

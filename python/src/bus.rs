@@ -5,12 +5,12 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use pyo3::prelude::*;
-use servobus_driver::registers::{read_uint, write_uint, Register};
-use servobus_driver::{Bus as DriverBus, Series, SystemClock, PROBE_CEILING, PROBE_PINGS};
 use servobus_protocol::MAX_ID;
+use servobus_robot::bus::registers::{read_uint, write_uint, Register};
+use servobus_robot::bus::{Bus as DriverBus, Series, SystemClock, PROBE_CEILING, PROBE_PINGS};
 use servobus_robot::ports::{open_plain_bus, system_clock, SerialBus};
 use servobus_robot::sim::SimRobot;
-use servobus_sim::WallBus;
+use servobus_robot::sim::WallBus;
 
 use crate::checks;
 use crate::errors::{poisoned, Failure, Field, Outcome};
@@ -434,7 +434,7 @@ impl Bus {
         for ((id, value), block) in values.iter().zip(data.chunks_mut(size)) {
             ids.push(servo_id(id)?);
             reg.encode(value_of(value, reg, self.series)?, order, block)
-                .map_err(|e| Failure::from(servobus_driver::BusError::Value(e)))?;
+                .map_err(|e| Failure::from(servobus_robot::bus::BusError::Value(e)))?;
         }
         if ids.is_empty() {
             return Ok(());

@@ -5,7 +5,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use servobus_config::ConfigError;
-use servobus_driver::BusError;
+use servobus_robot::bus::BusError;
 
 /// A field of an exception: a Python attribute.
 #[derive(Debug, Clone)]
@@ -186,8 +186,8 @@ impl From<servobus_robot::sim::SimRobotError> for Failure {
     }
 }
 
-impl From<servobus_sim::PtyError> for Failure {
-    fn from(e: servobus_sim::PtyError) -> Self {
+impl From<servobus_robot::sim::PtyError> for Failure {
+    fn from(e: servobus_robot::sim::PtyError) -> Self {
         Failure::new("PortError", chain(&e))
     }
 }

@@ -8,8 +8,8 @@ use std::thread::JoinHandle;
 
 use pyo3::prelude::*;
 use servobus_config::builtin::{path_or_name, Kind};
+use servobus_robot::sim::{Faults, PtyServer};
 use servobus_robot::sim::{Hand, Mounting, SimRobot, SimRobotBuilder};
-use servobus_sim::{Faults, PtyServer};
 
 use crate::errors::{chain, poisoned, Failure, Outcome};
 use crate::load::load_robot;

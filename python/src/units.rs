@@ -4,7 +4,7 @@
 //! Positions stay in ticks (the tables' `steps`); registers without a unit
 //! (flags, modes, indices, gains) are plain numbers.
 
-use servobus_driver::registers::Register;
+use servobus_robot::bus::registers::Register;
 
 /// What Python calls the tables' units.
 const NAMES: &[(&str, &str)] = &[
@@ -38,7 +38,7 @@ pub(crate) fn physical(reg: &Register) -> (f64, &'static str) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use servobus_driver::Series;
+    use servobus_robot::bus::Series;
 
     #[test]
     fn units_split_into_scale_and_unit_and_positions_stay_in_ticks() {

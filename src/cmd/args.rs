@@ -187,6 +187,28 @@ pub(crate) fn latency_us_arg(arg: &str) -> Result<u64, String> {
         .map_err(|e| e.to_string())
 }
 
+/// Parses a duration: seconds (`2`, `0.5`), or with a unit (`2s`, `500ms`).
+#[cfg(feature = "zenoh")]
+pub(crate) fn duration_arg(arg: &str) -> Result<std::time::Duration, String> {
+    let arg = arg.trim();
+    let (num, scale) = if let Some(n) = arg.strip_suffix("ms") {
+        (n, 1e-3)
+    } else if let Some(n) = arg.strip_suffix('s') {
+        (n, 1.0)
+    } else {
+        (arg, 1.0)
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{arg}` is not a duration: give e.g. 2s or 500ms"))?;
+    let secs = v * scale;
+    if !(0.0..=3600.0).contains(&secs) {
+        return Err(format!("`{arg}`: give 0 to 3600 s"));
+    }
+    std::time::Duration::try_from_secs_f64(secs).map_err(|_| format!("`{arg}`: give 0 to 3600 s"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,7 +12,7 @@
 //! pseudo-terminal, paced at the wire rate, and reached through the same
 //! serial-port code as real servos. There, once the bench is done, the
 //! pseudo-terminal's own request/reply floor for the same bytes is measured
-//! too (`floor_rate_hz`, [`servobus_sim::pty_floor`]), and `floor_ratio` is
+//! too (`floor_rate_hz`, [`servobus_robot::sim::pty_floor`]), and `floor_ratio` is
 //! achieved / floor: both are mean rates, cycles per second.
 //!
 //! `overruns` counts the cycles whose period exceeded the planned full cycle
@@ -28,7 +28,7 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use servobus_config::{load_robot, BusConfig, Robot, RobotOptions};
 use servobus_robot::bench::Quantiles;
-use servobus_sim::PtyServer;
+use servobus_robot::sim::PtyServer;
 
 use super::link::{bus_ports, open_bus, Allowance};
 use super::out::{outln, StdoutError};
@@ -169,7 +169,7 @@ fn bench_bus(
     // opened once.
     let result = open_bus(bus, &path, Allowance::Assumed).and_then(|mut servo_bus| {
         if let Some(port) = &port {
-            super::calibrate::check_bus(robot, index, &mut servo_bus, port)?;
+            crate::shared::check_bus(robot, index, &mut servo_bus, port)?;
         }
         // On a port, the cycle is planned on the adapter as measured (the
         // probe `budget --port` runs); on the simulator, as `budget` plans.

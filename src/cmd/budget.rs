@@ -7,7 +7,7 @@ use anyhow::Context;
 use serde::Serialize;
 use servobus_config::{load_robot, BusConfig, RobotOptions};
 use servobus_robot::bench::{measure_link, MeasuredLink};
-use servobus_timing::{floor_rate_hz, Change, Link, Plan};
+use servobus_robot::timing::{floor_rate_hz, Change, Link, Plan};
 
 use super::link::{open_bus, Allowance};
 use super::out::{errln, out, outln};

@@ -2,7 +2,7 @@
 //! `servobus registers`, the register names they take.
 //!
 //! Each opens the serial port (or the simulator's pty), builds a driver
-//! [`Bus`](servobus_driver::Bus) with reply deadlines derived from the baud rate and the adapter
+//! [`Bus`](servobus_robot::bus::Bus) with reply deadlines derived from the baud rate and the adapter
 //! latency, and reports in one line per fact. Errors are one line and a
 //! non-zero exit code.
 
@@ -289,7 +289,7 @@ fn open_servo(servo: &ServoArgs) -> anyhow::Result<(SerialBus, Found)> {
         let series = bus.settings().series;
         let s = bus
             .settings()
-            .with_replies(servobus_driver::StatusLevel::from_register(
+            .with_replies(servobus_robot::bus::StatusLevel::from_register(
                 series, level[0],
             ));
         bus.set_settings(s);

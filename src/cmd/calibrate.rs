@@ -15,10 +15,9 @@ use anyhow::Context;
 use servobus_config::{
     load_calibration, load_robot, save_calibration, utc_now, Calibration, Robot, RobotOptions,
 };
-use servobus_driver::{Bus, Clock, Transport};
 use servobus_robot::calibrate::{
-    calibrate, from_lerobot, prepare_bus, store_in_servos, to_lerobot, ProcedureOptions, Refusal,
-    Store, StoreEnd, Stored, PATIENCE, PATIENT_RETRIES,
+    calibrate, from_lerobot, store_in_servos, to_lerobot, ProcedureOptions, Store, StoreEnd,
+    Stored, PATIENCE, PATIENT_RETRIES,
 };
 
 use super::link::{every_port, Allowance, Ports, SerialBus};
@@ -146,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn write_lerobot(cal: &Calibration, out: &Path) -> anyhow::Result<()> {
-    servobus_io::write_atomic(out, to_lerobot(cal).as_bytes())?;
+    servobus_robot::files::write_atomic(out, to_lerobot(cal).as_bytes())?;
     outln!("LeRobot calibration: {}", out.display())?;
     Ok(())
 }
@@ -239,7 +238,7 @@ fn write_imported(robot: &Robot, ports: &[String], cal: Calibration) -> anyhow::
 /// From here on SIGINT, SIGTERM and SIGHUP only set the flag the store
 /// reads between two servos.
 fn catch_signals() {
-    if let Err(e) = servobus_driver::catch_stop_signals() {
+    if let Err(e) = servobus_robot::bus::catch_stop_signals() {
         errln!("warning: a signal will end the program between two servos ({e})");
     }
 }
@@ -349,49 +348,6 @@ fn print_summary(robot: &Robot, output: &Path) -> Result<(), super::out::StdoutE
         )?;
     }
     Ok(())
-}
-
-/// Before any command reads or moves joints through the calibration on real
-/// servos: the library's one check ([`prepare_bus`]), with what to run when
-/// it refuses.
-pub(crate) fn check_bus<T: Transport, C: Clock>(
-    robot: &Robot,
-    index: usize,
-    bus: &mut Bus<T, C>,
-    port: &str,
-) -> anyhow::Result<()> {
-    prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
-}
-
-/// [`check_bus`] for every bus.
-pub(crate) fn check_buses<T: Transport, C: Clock>(
-    robot: &Robot,
-    buses: &mut [Bus<T, C>],
-    ports: &[String],
-) -> anyhow::Result<()> {
-    for (i, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {
-        check_bus(robot, i, bus, port)?;
-    }
-    Ok(())
-}
-
-pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
-    if let Refusal::Unlocked { .. } = refusal {
-        return anyhow::anyhow!(
-            "{refusal}\nnothing was moved. Find what was left half-written and mend it first:\n  \
-             servobus doctor --robot {} --port {port} --fix",
-            servobus::builtin::argument(&robot.path)
-        );
-    }
-    let file = robot.calibration.file().map_or_else(
-        || PathBuf::from(format!("{}.calibration.yaml", robot.name)),
-        Path::to_owned,
-    );
-    anyhow::anyhow!(
-        "{refusal}\nnothing was moved. Calibrate this robot first:\n  servobus calibrate --robot {} --port {port} -o {}",
-        robot.path.display(),
-        file.display()
-    )
 }
 
 #[cfg(test)]

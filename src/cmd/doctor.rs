@@ -67,7 +67,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
     if args.fix {
         // A signal during a fix is acted on once the servo is locked again;
         // the fixes applied and the ones not begun are then said.
-        if let Err(e) = servobus_driver::catch_stop_signals() {
+        if let Err(e) = servobus_robot::bus::catch_stop_signals() {
             errln!("warning: a signal will end doctor without a report ({e})");
         }
     }
@@ -87,7 +87,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
         errln!("warning: bus `{bus}` has no port: not checked");
     }
     let standing = checkup.standing();
-    let stopped = servobus_driver::stop_signal();
+    let stopped = servobus_robot::bus::stop_signal();
     let status = match stopped {
         Some(_) => UNFINISHED,
         None => doctor::exit_status(&standing),

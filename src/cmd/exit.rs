@@ -10,10 +10,10 @@
 use std::process::ExitCode;
 
 use servobus_config::{is_builtin_path, ConfigError};
-use servobus_driver::OpenError;
-use servobus_io::OutputError;
+use servobus_robot::bus::OpenError;
+use servobus_robot::files::OutputError;
+use servobus_robot::sim::{FaultSpecError, PtyError};
 use servobus_robot::teach::TeachError;
-use servobus_sim::{FaultSpecError, PtyError};
 
 /// Exit code: a problem was found.
 pub const PROBLEM: u8 = 1;
@@ -185,7 +185,7 @@ mod tests {
     fn a_cause_is_said_once() {
         let io = std::io::Error::new(std::io::ErrorKind::NotFound, "x: gone");
         let err =
-            anyhow::Error::new(servobus_driver::TransportError::Io(io)).context("cannot use x");
+            anyhow::Error::new(servobus_robot::bus::TransportError::Io(io)).context("cannot use x");
         assert_eq!(message(&err), "cannot use x: x: gone");
         assert_eq!(code(&err), PROBLEM);
         assert_eq!(code(&input("bad")), USAGE);
@@ -202,7 +202,7 @@ mod tests {
             "servo 42 at 1000000 baud (scan to find it): no reply within 300 us"
         );
         let gone = std::io::Error::other("I/O error");
-        let err = anyhow::Error::new(servobus_driver::TransportError::Io(gone));
+        let err = anyhow::Error::new(servobus_robot::bus::TransportError::Io(gone));
         assert_eq!(message(&err), "I/O error");
     }
 

@@ -31,7 +31,7 @@ use std::time::{Duration, Instant};
 use against::{Figures, FollowErrors, LeaderTrail};
 
 use servobus_config::{load_robot, JointMap, Robot, RobotOptions};
-use servobus_driver::{Bus, Clock, Transport};
+use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
 use servobus_robot::{
@@ -251,7 +251,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 super::link::open_buses(&leader_robot, &ports, Allowance::Assumed, None)?;
             // Angles go through the leader's calibration: its servos must
             // match it.
-            super::calibrate::check_buses(&leader_robot, &mut buses, &ports)?;
+            crate::shared::check_buses(&leader_robot, &mut buses, &ports)?;
             let leader = Leader::new(&leader_robot, &robot, buses)?;
             drive(&args, &robot, leader, options)
         }
@@ -359,8 +359,8 @@ fn drive<T: Transport, C: Clock>(
         stalls: Vec::new(),
         live_line: !args.json && terminal,
     };
-    let runner = super::stream::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(runner.commands());
+    let runner = super::link::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
+    crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let telemetry = runner.telemetry();
     let started = Instant::now();
@@ -542,7 +542,7 @@ fn finish(
             text += &format!("{t:.4},{}\n", cells.join(","));
         }
         // Whole or not at all, as every output.
-        servobus_io::write_atomic(path, text.as_bytes())?;
+        servobus_robot::files::write_atomic(path, text.as_bytes())?;
     }
     let joints: Vec<serde_json::Value> = names
         .iter()
@@ -581,7 +581,7 @@ fn finish(
         outln!("{}", crate::cmd::json::pretty(&value)?)?;
     } else {
         let mut out = std::io::stdout().lock();
-        super::play::write_report(&mut out, report, false)?;
+        crate::shared::write_report(&mut out, report, false)?;
         if let Some(q) = latency {
             writeln!(
                 out,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use servobus_config::{load_robot, Robot, RobotOptions};
-use servobus_io::AtomicFile;
+use servobus_robot::files::AtomicFile;
 
 use super::exit::input;
 use super::out::outln;

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use servobus_config::{BusConfig, Robot};
-use servobus_driver::{SerialTransport, Series, SystemClock};
+use servobus_robot::bus::{SerialTransport, Series, SystemClock};
 use servobus_robot::{ports, Connection, Target};
 
 use super::out::errln;
@@ -106,7 +106,7 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
         .connect(target)
         .map_err(|e| match e {
             servobus_robot::Error::Refused { port, refusal, .. } => {
-                super::calibrate::refused(robot, &refusal, &port)
+                crate::shared::refused(robot, &refusal, &port)
             }
             servobus_robot::Error::NoPort { bus } => no_port(robot, &bus, None),
             e => e.into(),
@@ -117,4 +117,21 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
         }
     }
     Ok(connection)
+}
+
+/// Starts a live run of `robot` through the library's connection: on its
+/// ports (`port` for the first bus), through its calibration, or on the
+/// built-in simulator in real time.
+pub(crate) fn start_live(
+    robot: &Robot,
+    port: Option<&str>,
+    options: servobus_robot::RunOptions,
+) -> anyhow::Result<servobus_robot::Run> {
+    let target = match every_port(robot, port.as_slice()) {
+        Ports::None => servobus_robot::Target::Simulator,
+        Ports::Every(ports) => servobus_robot::Target::Ports(ports),
+        Ports::Missing(bus) => return Err(no_port(robot, &bus.name, None)),
+    };
+    let connection = connect(robot, target)?;
+    Ok(connection.live(options)?)
 }

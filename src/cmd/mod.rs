@@ -273,12 +273,12 @@ pub(crate) fn check_plot_format(path: &std::path::Path, formats: &[&str]) -> any
 /// Fails at once, before anything moves, when the file `path` given with
 /// `flag` could not be written after the run: a directory, a missing
 /// directory, a read-only file, a directory in which no file can be created
-/// ([`servobus_io::check_output`]). Nothing is created or changed: an
+/// ([`servobus_robot::files::check_output`]). Nothing is created or changed: an
 /// existing file stays as it is until the run's new one replaces it whole.
 ///
 /// # Errors
 /// An input error (exit 2) naming the flag and the file.
 pub(crate) fn check_writable(flag: &str, path: &std::path::Path) -> anyhow::Result<()> {
-    servobus_io::check_output(path)
+    servobus_robot::files::check_output(path)
         .map_err(|e| exit::input(format!("{flag}: {e}; nothing was moved")))
 }

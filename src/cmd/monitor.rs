@@ -12,8 +12,8 @@ use crossbeam_channel::TryRecvError;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_config::{load_robot, Robot, RobotOptions, Units};
-use servobus_driver::{Bus, Clock, Transport};
 use servobus_protocol::registers::Series;
+use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::{Command, Telemetry};
 use std::io::IsTerminal;
 
@@ -104,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 // Angles are shown through the calibration: the servos must
                 // match it (and hold its session offsets) first.
                 let index = r.buses.iter().position(|b| b.name == c.name).unwrap_or(0);
-                super::calibrate::check_bus(r, index, &mut bus, &port)?;
+                crate::shared::check_bus(r, index, &mut bus, &port)?;
             }
             let servos = match (robot.as_ref(), cfg) {
                 (Some(r), Some(c)) => Watched::of_bus(c, r.units),
@@ -259,7 +259,7 @@ fn watch<T: Transport, C: Clock>(
         // Without a screen (a pipe, a log) Ctrl-C, SIGTERM and SIGHUP end
         // the watch after the line being written: a reader never gets half
         // a line, and the exit status is the watch's own.
-        if let Err(e) = servobus_driver::catch_stop_signals() {
+        if let Err(e) = servobus_robot::bus::catch_stop_signals() {
             errln!("warning: signals cannot be caught ({e}): Ctrl-C may cut the last line");
         }
     }
@@ -321,7 +321,7 @@ const NAP: Duration = Duration::from_millis(20);
 
 /// Whether a stop signal came, where they are caught (without a screen).
 fn stopped(caught: bool) -> bool {
-    caught && servobus_driver::stop_signal().is_some()
+    caught && servobus_robot::bus::stop_signal().is_some()
 }
 
 /// 1 when a problem was seen, else 0.

@@ -109,8 +109,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..RunOptions::default()
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
-    let runner = super::stream::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(runner.commands());
+    let runner = super::link::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
+    crate::shared::install_ctrl_c(runner.commands());
     let info = RobotInfo {
         name: args.name.clone().unwrap_or_else(|| robot.name.clone()),
         joints: robot.joints().map(|j| j.name.clone()).collect(),
@@ -144,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         )?;
     } else {
         let mut err = std::io::stderr().lock();
-        super::play::write_report(&mut err, &served.report, false)?;
+        crate::shared::write_report(&mut err, &served.report, false)?;
         errln!(
             "  node: {} targets, {} malformed, {} commands, {} states published",
             served.targets,
@@ -173,27 +173,6 @@ fn plan_command(motion: &str, robot: &Path, calibration: Option<&Path>) -> Resul
     .map_err(|e| e.to_string())?;
     let trajectory = plan_motion(&m, &r).map_err(|e| e.to_string())?;
     Ok(Command::replace(trajectory))
-}
-
-/// Parses a duration: seconds (`2`, `0.5`), or with a unit (`2s`, `500ms`).
-pub(crate) fn duration_arg(arg: &str) -> Result<Duration, String> {
-    let arg = arg.trim();
-    let (num, scale) = if let Some(n) = arg.strip_suffix("ms") {
-        (n, 1e-3)
-    } else if let Some(n) = arg.strip_suffix('s') {
-        (n, 1.0)
-    } else {
-        (arg, 1.0)
-    };
-    let v: f64 = num
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{arg}` is not a duration: give e.g. 2s or 500ms"))?;
-    let secs = v * scale;
-    if !(0.0..=3600.0).contains(&secs) {
-        return Err(format!("`{arg}`: give 0 to 3600 s"));
-    }
-    Duration::try_from_secs_f64(secs).map_err(|_| format!("`{arg}`: give 0 to 3600 s"))
 }
 
 /// `play MOTION --zenoh-group NAME`: tells every robot serving in the

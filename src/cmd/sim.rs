@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use servobus_config::{load_robot, RobotOptions};
-use servobus_io::OutputError;
+use servobus_robot::files::OutputError;
 use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
-use servobus_sim::{Faults, PtyServer, SimServo, Truth};
+use servobus_robot::sim::{Faults, PtyServer, SimServo, Truth};
 
 const FAULTS_HELP: &str = "\
 Fault injection: comma-separated items, applied to every reply independently.
@@ -108,7 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // served), and the file opened only once the simulator serves (below),
     // so that a simulator refused at start leaves an earlier file as it was.
     if let Some(path) = &args.truth {
-        servobus_io::check_output(path)?;
+        servobus_robot::files::check_output(path)?;
     }
     let truth = match &args.truth {
         Some(path) => {

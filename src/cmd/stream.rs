@@ -20,12 +20,12 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use servobus_config::{load_robot, Robot, RobotOptions, Units};
+use servobus_config::{load_robot, RobotOptions, Units};
 use servobus_robot::{Command, Lead, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry};
 
 use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
 
-use super::link::{every_port, Ports};
+use super::link::start_live;
 use super::out::{errln, outln};
 
 /// Arguments of `servobus stream`.
@@ -66,7 +66,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..RunOptions::default()
     };
     let runner = start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
-    super::play::install_ctrl_c(runner.commands());
+    crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let commands = runner.commands();
     let units = robot.units;
@@ -89,23 +89,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(super::exit::PROBLEM));
     }
     Ok(code)
-}
-
-/// Starts a live run of `robot` through the library's connection: on its
-/// ports (`port` for the first bus), through its calibration, or on the
-/// built-in simulator in real time.
-pub(crate) fn start_live(
-    robot: &Robot,
-    port: Option<&str>,
-    options: RunOptions,
-) -> anyhow::Result<Run> {
-    let target = match every_port(robot, port.as_slice()) {
-        Ports::None => servobus_robot::Target::Simulator,
-        Ports::Every(ports) => servobus_robot::Target::Ports(ports),
-        Ports::Missing(bus) => return Err(super::link::no_port(robot, &bus.name, None)),
-    };
-    let connection = super::link::connect(robot, target)?;
-    Ok(connection.live(options)?)
 }
 
 /// Reads lines of at most [`MAX_LINE_BYTES`] from `input`: each line (without
@@ -292,7 +275,7 @@ fn finish(report: &Report, skipped: u64, json: bool) -> anyhow::Result<ExitCode>
         outln!("{}", crate::cmd::json::line(&value)?)?;
     } else {
         let mut err = std::io::stderr().lock();
-        super::play::write_report(&mut err, report, false)?;
+        crate::shared::write_report(&mut err, report, false)?;
         if let Some(l) = &report.live {
             writeln!(
                 err,

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_config::{load_robot, LimitOrigin, Robot, RobotOptions};
-use servobus_driver::{Clock, Transport};
+use servobus_robot::bus::{Clock, Transport};
 use servobus_robot::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
@@ -81,7 +81,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 .into_iter()
                 .flatten()
                 .next();
-            super::calibrate::refused(&robot, &refusal, port.as_deref().unwrap_or("PORT"))
+            crate::shared::refused(&robot, &refusal, port.as_deref().unwrap_or("PORT"))
         }
         e => e.into(),
     })?;
@@ -122,7 +122,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let yaml = motion_yaml(&robot, &robot_file, &taught);
     // Whole or not at all: a failed write leaves no partial motion file,
     // and an earlier file at the path as it was.
-    servobus_io::write_atomic(&args.output, yaml.as_bytes())?;
+    servobus_robot::files::write_atomic(&args.output, yaml.as_bytes())?;
     let written = format!(
         "wrote {} keyframe{} to {}",
         taught.keyframes.len(),

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use servobus_config::Units;
-use servobus_io::AtomicFile;
 use servobus_kinematics::Geometry;
+use servobus_robot::files::AtomicFile;
 use servobus_robot::CycleSample;
 
 use super::frames::FrameTracker;

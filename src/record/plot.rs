@@ -183,7 +183,7 @@ impl PlotData {
         let bytes = self
             .render(png, title, units)
             .with_context(|| format!("cannot draw {}", path.display()))?;
-        servobus_io::write_atomic(path, &bytes)?;
+        servobus_robot::files::write_atomic(path, &bytes)?;
         Ok(())
     }
 

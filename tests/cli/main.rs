@@ -57,6 +57,7 @@ mod install;
 mod interpolation_cli;
 mod json_output;
 mod kinematics_cli;
+mod layers;
 mod missing_pty;
 mod monitor;
 mod monitor_tmux;

@@ -72,19 +72,32 @@
 //! motion file, and [`sim`] builds a robot file's servos on the simulator,
 //! with a body (mounting, hand, truth recorder) when asked: the glue the
 //! command line, the examples and the tests share.
+//!
+//! And below a robot, for tools that work on one bus or one file: [`bus`]
+//! is a servo bus by itself (transactions by ID, registers, stop signals),
+//! [`timing`] the baud budget of a control cycle, [`path`] a planned
+//! path's states and how a recording is followed within the limits, and
+//! [`files`] the output files written whole or not at all. The command
+//! line, the Python bindings and the Zenoh node use this crate and the
+//! data crates it re-exports ([`config`], `servobus-protocol`,
+//! `servobus-kinematics`) and nothing else of servobus.
 
 pub mod bench;
+pub mod bus;
 pub mod calibrate;
 mod connect;
 pub mod doctor;
 mod error;
+pub mod files;
 pub mod monitor;
+pub mod path;
 pub mod ports;
 mod run;
 pub mod scan;
 pub mod sim;
 pub mod stream;
 pub mod teach;
+pub mod timing;
 
 use std::path::{Path, PathBuf};
 
@@ -101,7 +114,7 @@ pub use servobus_runtime::rt::RtOptions;
 pub use servobus_runtime::{
     Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, Rejection,
     Report, RunError, RunOptions, StallEvent, Target as LiveTarget, TargetError, TargetSender,
-    Telemetry, MAX_CHUNK_POINTS,
+    Telemetry, VirtualRun, MAX_CHUNK_POINTS,
 };
 pub use servobus_trajectory::Trajectory;
 

@@ -5,8 +5,8 @@ use std::time::Duration;
 
 use anyhow::Context;
 use servobus_config::BusConfig;
-use servobus_sim::{pty_floor, FloorCycle};
-use servobus_timing::{sync_write_bytes, Block};
+use servobus_robot::sim::{pty_floor, FloorCycle};
+use servobus_robot::timing::{sync_write_bytes, Block};
 
 /// Bytes of a status packet's frame around its data (header 2, ID, length,
 /// error, checksum), and of a request around its parameters (header 2, ID,

@@ -5,8 +5,8 @@
 use std::process::ExitCode;
 
 use anyhow::{bail, Context};
-use servobus_driver::BusError;
 use servobus_protocol::registers::{self, addr, Access, Register, Series};
+use servobus_robot::bus::BusError;
 
 use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
 use crate::cmd::exit::input;
@@ -17,7 +17,7 @@ use crate::cmd::out::{errln, outln};
 /// the servo is locked and what was done is said; one that comes before
 /// it means nothing is written ([`before_eeprom_write`]).
 fn catch_signals() {
-    if let Err(e) = servobus_driver::catch_stop_signals() {
+    if let Err(e) = servobus_robot::bus::catch_stop_signals() {
         crate::cmd::out::errln!("warning: signals cannot be caught ({e})");
     }
 }
@@ -25,7 +25,7 @@ fn catch_signals() {
 /// Right before an EEPROM transaction: a stop signal caught so far ends
 /// the command with nothing written.
 fn before_eeprom_write() -> anyhow::Result<()> {
-    match servobus_driver::stop_signal() {
+    match servobus_robot::bus::stop_signal() {
         Some(signal) => bail!("stopped by {signal} before writing: nothing was written"),
         None => Ok(()),
     }
@@ -34,7 +34,7 @@ fn before_eeprom_write() -> anyhow::Result<()> {
 /// After a write: the error to end with when a stop signal came during it
 /// (the servo was finished first); `what` says what was done.
 fn after_eeprom_write(what: &str) -> anyhow::Result<()> {
-    match servobus_driver::stop_signal() {
+    match servobus_robot::bus::stop_signal() {
         Some(signal) => bail!("stopped by {signal}: {what}; nothing else was done"),
         None => Ok(()),
     }
@@ -294,7 +294,7 @@ pub fn set_id(args: SetIdArgs) -> anyhow::Result<ExitCode> {
     refuse_taken(&mut bus, args.new_id)?;
     before_eeprom_write()?;
     let w = bus.write_eeprom(args.servo.id, addr::ID, &[args.new_id])?;
-    if servobus_driver::stop_signal().is_none() {
+    if servobus_robot::bus::stop_signal().is_none() {
         bus.ping(w.id)
             .with_context(|| format!("servo does not answer at its new ID {}", w.id))?;
     }

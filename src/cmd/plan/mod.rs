@@ -7,7 +7,7 @@ use serde::Serialize;
 use servobus_config::{
     load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
 };
-use servobus_trajectory::{JointState, Trajectory};
+use servobus_robot::{path::JointState, Trajectory};
 
 use super::out::{outln, StdoutError};
 use crate::record::space;
@@ -165,7 +165,7 @@ fn summarise(motion: &Motion, robot: &Robot, traj: &Trajectory) -> PlanJson {
         .enumerate()
         .map(|(j, name)| {
             let s = traj.joint_summary(j);
-            let f = |get: fn(&servobus_trajectory::JointSummary) -> f64| {
+            let f = |get: fn(&servobus_robot::path::JointSummary) -> f64| {
                 s.as_ref().map_or(0.0, |s| u.from_rad(get(s)))
             };
             let jerk = f(|s| s.peak_jerk);

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use servobus_config::Motion;
 use servobus_kinematics::{Geometry, FOOT_PREFIX};
-use servobus_trajectory::{JointState, Trajectory};
+use servobus_robot::{path::JointState, Trajectory};
 
 use crate::record::space;
 
@@ -50,7 +50,7 @@ pub(super) fn write(
 ) -> anyhow::Result<()> {
     let mut svg = String::new();
     draw(motion, &groups(motion, geometry), traj, paths, &mut svg)?;
-    servobus_io::write_atomic(path, svg.as_bytes())?;
+    servobus_robot::files::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
 

@@ -43,7 +43,7 @@ pub(super) struct RecordingInfo {
     /// How long the path moves before the recording's first sample, s.
     lead_s: f64,
     /// Departures above [`REPORTED_DEPARTURE_DEG`], largest first.
-    departures: Vec<servobus_trajectory::Departure>,
+    departures: Vec<servobus_robot::path::Departure>,
     /// Per robot joint, the recording's `(time, position)` samples on the
     /// path's clock (its own times shifted by `lead_s`), in the motion's
     /// units; empty for a joint not recorded. Drawn on `--plot`.
@@ -98,7 +98,7 @@ impl RecordingInfo {
     }
 
     /// One departure in words: joint, when, which limit, how far.
-    fn departure(&self, d: &servobus_trajectory::Departure, u: Units) -> String {
+    fn departure(&self, d: &servobus_robot::path::Departure, u: Units) -> String {
         let (peak, limit, unit) = magnitudes(d, u);
         format!(
             "{} {:.2}-{:.2} s, {} {peak:.1} beyond its limit {limit:.1} {unit} (off by up to {:.2} {u} at {:.2} s)",
@@ -154,11 +154,11 @@ impl RecordingInfo {
 }
 
 /// A departure's peak and limit in the robot's units, and their unit.
-fn magnitudes(d: &servobus_trajectory::Departure, u: Units) -> (f64, f64, String) {
+fn magnitudes(d: &servobus_robot::path::Departure, u: Units) -> (f64, f64, String) {
     let unit = match d.quantity {
-        servobus_trajectory::Quantity::Position => u.to_string(),
-        servobus_trajectory::Quantity::Velocity => format!("{u}/s"),
-        servobus_trajectory::Quantity::Acceleration => format!("{u}/s^2"),
+        servobus_robot::path::Quantity::Position => u.to_string(),
+        servobus_robot::path::Quantity::Velocity => format!("{u}/s"),
+        servobus_robot::path::Quantity::Acceleration => format!("{u}/s^2"),
         _ => format!("{u}/s^3"),
     };
     (u.from_rad(d.peak), u.from_rad(d.limit), unit)
@@ -222,11 +222,11 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         )));
     }
     let limits = servobus_config::joint_limits(&robot);
-    let options = servobus_trajectory::TrackOptions {
+    let options = servobus_robot::path::TrackOptions {
         step: 1.0 / rate_hz,
         resolution: rec.resolution,
     };
-    let tracked = servobus_trajectory::track_with(&limits, &rec.times, &rec.samples, &options)
+    let tracked = servobus_robot::path::track_with(&limits, &rec.times, &rec.samples, &options)
         .map_err(|e| {
             anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
         })?;

@@ -10,7 +10,6 @@
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::RecvTimeoutError;
@@ -18,9 +17,7 @@ use servobus_config::{
     check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
 };
 use servobus_robot::Trajectory;
-use servobus_robot::{
-    Command, CommandSender, Finish, Lead, Report, RtOptions, Run, RunOptions, Telemetry,
-};
+use servobus_robot::{Command, CommandSender, Lead, RtOptions, Run, RunOptions, Telemetry};
 
 use super::link::{every_port, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
@@ -33,11 +30,11 @@ mod report;
 mod setup;
 mod view;
 
+use crate::shared::install_ctrl_c;
+use crate::shared::write_report;
 use load::{check_outputs, load};
-pub(crate) use report::write_report;
 use report::{file_name, print_plan};
 use setup::{backend, check_measured_rates, sim_pose};
-pub(crate) use view::install_ctrl_c;
 use view::{follow, Followed, Shown, APPROACH, SETTLE};
 
 use super::out::{err, out, outln};
@@ -113,7 +110,7 @@ pub struct Args {
     pub zenoh_group: Option<String>,
     /// With --zenoh-group: when the robots start, from now (`2s`, `500ms`).
     #[cfg(feature = "zenoh")]
-    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = super::serve::duration_arg)]
+    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = super::args::duration_arg)]
     pub start_in: std::time::Duration,
     /// With --zenoh-group: a robot's endpoint to connect to (repeatable),
     /// e.g. tcp/127.0.0.1:7447.

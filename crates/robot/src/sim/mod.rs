@@ -27,12 +27,18 @@ use std::time::Duration;
 use crate::config::{BusConfig, JointMap, Robot};
 use servobus_driver::{Bus, Clock, ManualClock, Transport};
 use servobus_runtime::bus_settings;
-use servobus_sim::{SimBus, SimModel, SimServo, Truth, WallBus};
+use servobus_sim::{SimBus, SimModel};
 
 mod body;
 mod served;
 
 pub use body::{Hand, Mounting};
+/// The simulated servos and buses themselves: a servo, a fault set, the
+/// pseudo-terminal server other programs connect to, a bus paced by the
+/// wall clock, the truth recorder, and the fastest cycle a pty can carry.
+pub use servobus_sim::{
+    pty_floor, FaultSpecError, Faults, FloorCycle, PtyError, PtyServer, SimServo, Truth, WallBus,
+};
 
 /// How often the truth is sampled: 100 Hz, twice the 50 Hz a reader of the
 /// truth may count on.

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use servobus_robot::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
 use servobus_robot::sim::virtual_buses;
-use servobus_runtime::{Command, Finish, Lead, RunOptions, Telemetry, VirtualRun};
+use servobus_robot::{Command, Finish, Lead, RunOptions, Telemetry, VirtualRun};
 
 use super::{take_command, take_target, Inputs};
 use crate::node::{Planner, Shared};

@@ -1,0 +1,53 @@
+//! A robot refused because its servos do not match its calibration (or an
+//! EEPROM write was left half done), said with the command that mends it.
+
+use std::path::{Path, PathBuf};
+
+use servobus_config::Robot;
+use servobus_robot::bus::{Bus, Clock, Transport};
+use servobus_robot::calibrate::prepare_bus;
+use servobus_robot::Refusal;
+
+/// Before any command reads or moves joints through the calibration on real
+/// servos: the library's one check ([`prepare_bus`]), with what to run when
+/// it refuses.
+pub(crate) fn check_bus<T: Transport, C: Clock>(
+    robot: &Robot,
+    index: usize,
+    bus: &mut Bus<T, C>,
+    port: &str,
+) -> anyhow::Result<()> {
+    prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
+}
+
+/// [`check_bus`] for every bus.
+pub(crate) fn check_buses<T: Transport, C: Clock>(
+    robot: &Robot,
+    buses: &mut [Bus<T, C>],
+    ports: &[String],
+) -> anyhow::Result<()> {
+    for (i, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {
+        check_bus(robot, i, bus, port)?;
+    }
+    Ok(())
+}
+
+/// The error for `refusal` of `robot` on `port`, with what to run.
+pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::Error {
+    if let Refusal::Unlocked { .. } = refusal {
+        return anyhow::anyhow!(
+            "{refusal}\nnothing was moved. Find what was left half-written and mend it first:\n  \
+             servobus doctor --robot {} --port {port} --fix",
+            servobus::builtin::argument(&robot.path)
+        );
+    }
+    let file = robot.calibration.file().map_or_else(
+        || PathBuf::from(format!("{}.calibration.yaml", robot.name)),
+        Path::to_owned,
+    );
+    anyhow::anyhow!(
+        "{refusal}\nnothing was moved. Calibrate this robot first:\n  servobus calibrate --robot {} --port {port} -o {}",
+        robot.path.display(),
+        file.display()
+    )
+}

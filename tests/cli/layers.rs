@@ -1,0 +1,122 @@
+//! The front ends (the command line, the Python bindings, the Zenoh node)
+//! drive the robot through the facade alone: their manifests name no
+//! servobus crate below it but the pure-data ones it re-exports anyway,
+//! and their sources import none.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::repo;
+
+/// The crates a front end may depend on: the facade, the pure-data crates
+/// it re-exports, and (for the command line's `zenoh` feature) the node.
+const ALLOWED: [&str; 5] = [
+    "servobus-robot",
+    "servobus-config",
+    "servobus-protocol",
+    "servobus-kinematics",
+    "servobus-node",
+];
+
+/// The crates below the facade that no front end may name.
+const BELOW: [&str; 6] = ["runtime", "driver", "sim", "io", "timing", "trajectory"];
+
+/// `(package, its normal servobus dependencies)` of the manifest at `path`.
+fn normal_deps(manifest: &Path) -> Vec<(String, Vec<String>)> {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| env!("CARGO").into());
+    let out = Command::new(cargo)
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .arg("--manifest-path")
+        .arg(manifest)
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let metadata: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let packages = metadata["packages"].as_array().expect("packages");
+    packages
+        .iter()
+        .map(|p| {
+            let name = p["name"].as_str().expect("a name").to_owned();
+            let deps = p["dependencies"]
+                .as_array()
+                .expect("dependencies")
+                .iter()
+                .filter(|d| d["kind"].is_null())
+                .filter_map(|d| d["name"].as_str())
+                .filter(|d| d.starts_with("servobus"))
+                .map(str::to_owned)
+                .collect();
+            (name, deps)
+        })
+        .collect()
+}
+
+#[test]
+fn the_front_ends_depend_on_the_facade_and_the_data_crates_alone() {
+    let mut checked = Vec::new();
+    let workspace = normal_deps(&repo("Cargo.toml"));
+    let python = normal_deps(&repo("python/Cargo.toml"));
+    for (name, deps) in workspace.iter().chain(&python) {
+        if !matches!(
+            name.as_str(),
+            "servobus" | "servobus-node" | "servobus-python"
+        ) {
+            continue;
+        }
+        let beyond: Vec<&String> = deps
+            .iter()
+            .filter(|d| !ALLOWED.contains(&d.as_str()))
+            .collect();
+        assert!(beyond.is_empty(), "{name} depends on {beyond:?}");
+        assert!(
+            deps.iter().any(|d| d == "servobus-robot"),
+            "{name}: {deps:?}"
+        );
+        checked.push(name.clone());
+    }
+    checked.sort();
+    assert_eq!(checked, ["servobus", "servobus-node", "servobus-python"]);
+}
+
+/// Every `.rs` file under `dir`.
+fn sources(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("a source directory") {
+        let path = entry.expect("an entry").path();
+        if path.is_dir() {
+            sources(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn the_front_ends_import_nothing_below_the_facade() {
+    let mut files = Vec::new();
+    for dir in ["src", "python/src", "crates/node/src"] {
+        sources(&repo(dir), &mut files);
+    }
+    assert!(files.len() > 50, "{} files", files.len());
+    let mut found = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).expect("a source file");
+        for (n, line) in text.lines().enumerate() {
+            for below in BELOW {
+                if line.contains(&format!("servobus_{below}::")) {
+                    found.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}

@@ -152,6 +152,13 @@ pub fn parse() -> Cli {
 /// Runs the parsed command line and returns the process exit code.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        // A group's play is announced to the robots serving the group, not
+        // played here.
+        #[cfg(feature = "zenoh")]
+        Command::Play(args) if args.zenoh_group.is_some() => {
+            let group = args.zenoh_group.as_deref().unwrap_or_default();
+            serve::announce(&args.motion, group, args.start_in, &args.connect)
+        }
         Command::Play(args) => play::run(args),
         Command::Plan(args) => plan::run(args),
         Command::Budget(args) => budget::run(args),

@@ -8,22 +8,17 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use crossbeam_channel::TryRecvError;
-use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
-use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
-use servobus_config::{load_robot, Robot, RobotOptions, Units};
+use servobus::monitor::{self, view, Poller, Watched};
+use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_protocol::registers::Series;
 use servobus_robot::bus::{Bus, Clock, Transport};
-use servobus_robot::{Command, Telemetry};
-use std::io::IsTerminal;
 
 use super::link::{open_bus, open_plain_bus, Allowance};
 use super::out::{errln, outln};
+use crate::shared::screen::{key, terminal_available, test_panic_after, Key, Screen, TEST_PANIC};
 
 /// Baud rate a scan without a robot file uses (the servos' factory rate).
 const SCAN_BAUD: u32 = 1_000_000;
-/// Refreshes per second of `play --monitor`'s view.
-const PLAY_REFRESH_HZ: f64 = 20.0;
 
 /// Arguments of `servobus monitor`.
 #[derive(Debug, clap::Args)]
@@ -148,100 +143,6 @@ fn no_such_bus(robot: &Robot, name: Option<&str>) -> anyhow::Error {
     }
 }
 
-/// Whether the live view can run: standard output is a terminal, and keys
-/// can be read from one (standard input, or the controlling terminal
-/// `/dev/tty`, as the terminal library reads them). Not under cron, CI,
-/// `ssh` without `-t`, or with the output redirected.
-pub(crate) fn terminal_available() -> bool {
-    std::io::stdout().is_terminal()
-        && (std::io::stdin().is_terminal()
-            || std::fs::OpenOptions::new()
-                .read(true)
-                .write(true)
-                .open("/dev/tty")
-                .is_ok())
-}
-
-/// `play --monitor` without a terminal: refused before anything moves.
-///
-/// # Errors
-/// An input error (exit 2) when [`terminal_available`] is false.
-pub(crate) fn check_play_terminal() -> anyhow::Result<()> {
-    if terminal_available() {
-        return Ok(());
-    }
-    Err(super::exit::input(
-        "--monitor needs a terminal (stdin and stdout must be one) and there is none; \
-         nothing was moved. Play without --monitor (progress lines), or run `servobus \
-         monitor --json` beside it",
-    ))
-}
-
-/// Restores the terminal when dropped (the view ends, an error returns);
-/// ratatui's panic hook restores it on a panic too.
-struct Screen(ratatui::DefaultTerminal);
-
-impl Screen {
-    /// Takes the terminal (raw mode, alternate screen).
-    ///
-    /// # Errors
-    /// When the terminal refuses; it is left as it was.
-    fn open() -> anyhow::Result<Screen> {
-        match ratatui::try_init() {
-            Ok(terminal) => Ok(Screen(terminal)),
-            Err(e) => {
-                ratatui::restore();
-                Err(anyhow::Error::new(e).context("cannot take over the terminal"))
-            }
-        }
-    }
-}
-
-impl Drop for Screen {
-    fn drop(&mut self) {
-        // While unwinding, ratatui's panic hook has restored the terminal
-        // already; leaving the alternate screen twice would move the cursor
-        // back over the panic message.
-        if !std::thread::panicking() {
-            ratatui::restore();
-        }
-    }
-}
-
-/// Makes the monitor panic after this many refreshes: how
-/// `scripts/monitor_tmux.sh` shows that a panic restores the terminal.
-const TEST_PANIC: &str = "SERVOBUS_MONITOR_TEST_PANIC";
-
-fn test_panic_after() -> Option<u64> {
-    std::env::var(TEST_PANIC).ok()?.parse().ok()
-}
-
-/// What a key asks for.
-enum Key {
-    Quit,
-    TorqueOff,
-    Other,
-}
-
-/// Waits up to `timeout` for a key.
-fn key(timeout: Duration) -> anyhow::Result<Option<Key>> {
-    if !event::poll(timeout)? {
-        return Ok(None);
-    }
-    let Event::Key(k) = event::read()? else {
-        return Ok(Some(Key::Other));
-    };
-    if k.kind != KeyEventKind::Press {
-        return Ok(Some(Key::Other));
-    }
-    Ok(Some(match k.code {
-        KeyCode::Char('q') | KeyCode::Esc => Key::Quit,
-        KeyCode::Char('c') if k.modifiers.contains(KeyModifiers::CONTROL) => Key::Quit,
-        KeyCode::Char(' ') => Key::TorqueOff,
-        _ => Key::Other,
-    }))
-}
-
 /// Watches the servos until `q` or `--count` refreshes: on the screen when
 /// `live`, else one JSON line per refresh. Exits 1 when any refresh saw a
 /// servo missing or reporting a status flag.
@@ -330,72 +231,5 @@ fn exit_code(problem: bool) -> ExitCode {
         ExitCode::from(super::exit::PROBLEM)
     } else {
         ExitCode::SUCCESS
-    }
-}
-
-/// `servobus play --monitor`: the monitor's view of a running motion, from
-/// its telemetry only. `q` stops the motion (jerk-limited) and Space turns
-/// the torque off; the view ends with the run.
-pub fn watch_run(
-    runner: &servobus_robot::Run,
-    robot: &Robot,
-    units: Units,
-    rate_hz: f64,
-) -> anyhow::Result<()> {
-    let shown =
-        Screen::open().and_then(|mut screen| show_run(&mut screen, runner, robot, units, rate_hz));
-    if shown.is_err() {
-        // The terminal failed (refused, or gone mid-run): stop the motion
-        // (jerk-limited) rather than let it run on unwatched; the caller
-        // joins the run and reports.
-        let _ = runner.send(Command::Stop);
-    }
-    shown
-}
-
-/// The view of [`watch_run`] on `screen`, until the run ends.
-fn show_run(
-    screen: &mut Screen,
-    runner: &servobus_robot::Run,
-    robot: &Robot,
-    units: Units,
-    rate_hz: f64,
-) -> anyhow::Result<()> {
-    let mut rows = TelemetryRows::new(robot, units, 1.0 / rate_hz);
-    let telemetry = runner.telemetry();
-    let period = Duration::from_secs_f64(1.0 / PLAY_REFRESH_HZ);
-    let mut note: Option<String> = None;
-    let title = format!("{} (play)", robot.name);
-    loop {
-        let mut ended = false;
-        loop {
-            match telemetry.try_recv() {
-                Ok(Telemetry::Cycle(sample)) => rows.record(&sample),
-                Ok(Telemetry::Fault(fault)) => note = Some(format!("fault: {fault}")),
-                Ok(Telemetry::Finished(_)) => ended = true,
-                Ok(_) => {}
-                Err(TryRecvError::Empty) => break,
-                Err(TryRecvError::Disconnected) => {
-                    ended = true;
-                    break;
-                }
-            }
-        }
-        let frame: Frame = rows.frame(note.clone());
-        screen.0.draw(|f| view::draw(f, &frame, &title))?;
-        if ended || (runner.is_finished() && telemetry.is_empty()) {
-            return Ok(());
-        }
-        match key(period)? {
-            Some(Key::Quit) => {
-                let _ = runner.send(Command::Stop);
-                note = Some("stopping".into());
-            }
-            Some(Key::TorqueOff) => {
-                let _ = runner.send(Command::TorqueOff);
-                note = Some("torque OFF".into());
-            }
-            _ => {}
-        }
     }
 }

@@ -120,3 +120,66 @@ fn the_front_ends_import_nothing_below_the_facade() {
     }
     assert!(found.is_empty(), "{}", found.join("\n"));
 }
+
+/// The command modules under `src/cmd/`: each is a command (or a family,
+/// like `bus` and `fk`), and none imports another.
+const COMMANDS: [&str; 18] = [
+    "bench",
+    "budget",
+    "bus",
+    "calibrate",
+    "decode",
+    "docs",
+    "doctor",
+    "fk",
+    "follow",
+    "init",
+    "list",
+    "monitor",
+    "plan",
+    "play",
+    "serve",
+    "sim",
+    "stream",
+    "teach",
+];
+
+#[test]
+fn no_command_imports_another() {
+    let cmd = repo("src/cmd");
+    let mut files = Vec::new();
+    sources(&cmd, &mut files);
+    let mut found = Vec::new();
+    let mut commands_seen = 0;
+    for file in &files {
+        let rel = file.strip_prefix(&cmd).expect("under src/cmd");
+        let first = rel.components().next().expect("a component");
+        let own = first.as_os_str().to_string_lossy();
+        let own = own.trim_end_matches(".rs");
+        if !COMMANDS.contains(&own) {
+            continue;
+        }
+        commands_seen += 1;
+        let text = std::fs::read_to_string(file).expect("a source file");
+        for (n, line) in text.lines().enumerate() {
+            for other in COMMANDS.iter().filter(|&&c| c != own) {
+                let by_super = format!("super::{other}::");
+                let by_crate = format!("crate::cmd::{other}::");
+                let by_parent = format!("super::super::{other}::");
+                // `super::` in a command's own submodule is the command.
+                let nested = rel.components().count() > 1;
+                if (!nested && line.contains(&by_super))
+                    || line.contains(&by_crate)
+                    || line.contains(&by_parent)
+                {
+                    found.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(
+        commands_seen >= COMMANDS.len(),
+        "{commands_seen} command files"
+    );
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}

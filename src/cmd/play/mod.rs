@@ -130,15 +130,13 @@ enum Backend {
 }
 
 /// Runs `servobus play`.
+/// (`--zenoh-group` is the group's play, which the dispatcher hands to
+/// `serve`'s conductor instead.)
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    #[cfg(feature = "zenoh")]
-    if let Some(group) = &args.zenoh_group {
-        return super::serve::announce(&args.motion, group, args.start_in, &args.connect);
-    }
     if args.monitor {
         // The live view needs a terminal: without one, refuse before
         // anything is opened or moved.
-        super::monitor::check_play_terminal()?;
+        crate::shared::screen::check_play_terminal()?;
     }
     check_outputs(&args)?;
     let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
@@ -225,7 +223,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         recording: recording.as_ref().map(|r| r.series.as_slice()),
     };
     let outcome = if args.monitor {
-        super::monitor::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
+        crate::shared::screen::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
             log: None,
             plot: None,
             stdout: None,

@@ -13,7 +13,7 @@ use servobus_robot::sim::SimRobot;
 use servobus_robot::sim::WallBus;
 
 use crate::checks;
-use crate::errors::{poisoned, Failure, Field, Outcome};
+use crate::errors::{poisoned, Class, Failure, Field, Outcome};
 use crate::load::load_robot;
 
 /// The in-process simulator's bus, paced by the wall clock.
@@ -85,7 +85,7 @@ fn raw_value(value: &Bound<'_, PyAny>, length: usize) -> Outcome<u32> {
     match value.extract::<i64>() {
         Ok(v) if (0..=i64::from(max)).contains(&v) => Ok(v as u32),
         _ => Err(Failure::new(
-            "LimitError",
+            Class::LimitError,
             format!("value {} does not fit {length} byte(s)", shown(value)),
         )
         .with("value", Field::Float(as_float(value)))
@@ -119,7 +119,7 @@ fn raw_bytes(value: u32, length: usize, series: Series) -> Outcome<Vec<u8>> {
     };
     if value > max {
         return Err(Failure::new(
-            "LimitError",
+            Class::LimitError,
             format!("value {value} does not fit {length} byte(s)"),
         )
         .with("value", Field::Float(f64::from(value)))
@@ -192,7 +192,7 @@ fn value_of(value: &Bound<'_, PyAny>, reg: &Register, series: Series) -> Outcome
         return Ok(v);
     }
     let mut failure = Failure::new(
-        "LimitError",
+        Class::LimitError,
         format!(
             "{}: {} is not a value the register can hold",
             reg.name,
@@ -238,7 +238,10 @@ impl Bus {
         let mut guard = self.inner.lock().map_err(poisoned)?;
         match guard.as_mut() {
             Some(bus) => f(bus),
-            None => Err(Failure::new("Error", format!("{} is closed", self.label))),
+            None => Err(Failure::new(
+                Class::Error,
+                format!("{} is closed", self.label),
+            )),
         }
     }
 }
@@ -287,7 +290,7 @@ impl Bus {
             sim.wall_buses(&system_clock())
                 .into_iter()
                 .next()
-                .ok_or_else(|| Failure::new("ConfigError", "the robot has no bus"))
+                .ok_or_else(|| Failure::new(Class::ConfigError, "the robot has no bus"))
         })?;
         let series = bus.settings().series;
         Ok(Bus {

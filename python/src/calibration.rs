@@ -16,7 +16,7 @@ use servobus_robot::calibrate::{
 use servobus_robot::ports::{every_port, open_buses, Allowance};
 use servobus_robot::sim::SimRobot;
 
-use crate::errors::{chain, Failure, Field, Outcome};
+use crate::errors::{chain, Class, Failure, Field, Outcome};
 use crate::load::load_design;
 use crate::sim::with_bodies;
 
@@ -51,7 +51,10 @@ fn from_json(text: &str) -> Outcome<Calibration> {
 }
 
 fn not_json(e: serde_json::Error) -> Failure {
-    Failure::new("Error", format!("the calibration does not serialise: {e}"))
+    Failure::new(
+        Class::Error,
+        format!("the calibration does not serialise: {e}"),
+    )
 }
 
 fn bad_json(e: serde_json::Error) -> Failure {
@@ -69,7 +72,7 @@ pub(crate) fn calibration_from_lerobot(
     Ok(py.allow_threads(|| -> Outcome<String> {
         let design = load_design(robot)?;
         let cal = from_lerobot(&design, json, "imported from LeRobot")
-            .map_err(|e| Failure::new("ConfigError", chain(&e)))?;
+            .map_err(|e| Failure::new(Class::ConfigError, chain(&e)))?;
         to_json(&cal)
     })?)
 }
@@ -86,7 +89,9 @@ pub(crate) fn calibration_to_lerobot(calibration: &str) -> PyResult<String> {
 pub(crate) fn save_calibration(py: Python<'_>, calibration: &str, path: &str) -> PyResult<()> {
     let cal = from_json(calibration)?;
     py.allow_threads(|| servobus_config::save_calibration(&cal, Path::new(path)))
-        .map_err(|e| Failure::new("Error", chain(&e)).with("file", Field::Str(path.to_owned())))?;
+        .map_err(|e| {
+            Failure::new(Class::Error, chain(&e)).with("file", Field::Str(path.to_owned()))
+        })?;
     Ok(())
 }
 
@@ -212,7 +217,7 @@ fn measure(robot: &str, at: &Where<'_>, operator: &mut Unattended) -> Outcome<Ca
             calibrate(&design, &mut buses, operator, &options)
         }
     };
-    measured.map_err(|e| Failure::new("CalibrationError", chain(&e)))
+    measured.map_err(|e| Failure::new(Class::CalibrationError, chain(&e)))
 }
 
 /// Registers the module's calibration functions.

@@ -18,7 +18,7 @@ use std::time::Duration;
 use pyo3::prelude::*;
 use servobus_config::limits::{self, Rounded};
 
-use crate::errors::{Failure, Field, Outcome};
+use crate::errors::{Class, Failure, Field, Outcome};
 
 /// The shortest timeout, s: below a millisecond a wait is shorter than one
 /// exchange on any bus (the command line's `MIN_TIMEOUT_S`).
@@ -42,7 +42,7 @@ pub(crate) fn baud(value: &Bound<'_, PyAny>) -> Outcome<u32> {
 /// A baud rate refused, shown as `shown`.
 fn refused_baud(shown: String) -> Failure {
     Failure::new(
-        "ConfigError",
+        Class::ConfigError,
         format!(
             "{shown} baud is not a rate the servos can be set to; use one of {}",
             baud_list()

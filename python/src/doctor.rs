@@ -4,7 +4,7 @@
 
 use servobus_robot::doctor::{exit_status, Applied, BusCheck, CheckOptions, Checkup, Finding};
 
-use crate::errors::{Failure, Outcome};
+use crate::errors::{Class, Failure, Outcome};
 
 /// One finding: its fields, the advice as data, and whether the doctor
 /// can apply its fix.
@@ -89,5 +89,5 @@ pub(crate) fn doctor(
 }
 
 fn json_failure(e: serde_json::Error) -> Failure {
-    Failure::new("Error", format!("the doctor's findings as JSON: {e}"))
+    Failure::new(Class::Error, format!("the doctor's findings as JSON: {e}"))
 }

@@ -18,11 +18,63 @@ pub(crate) enum Field {
     Float(f64),
 }
 
-/// Why a call failed: the name of its Python exception class, its message
-/// and its fields.
+/// The Python exception classes of `servobus._errors` a failure is raised
+/// as (a test checks each is defined there).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Class {
+    /// `servobus.Error`: the base of them all.
+    Error,
+    /// A robot, motion or calibration file that is invalid or unreadable.
+    ConfigError,
+    /// A port that cannot be opened or failed.
+    PortError,
+    /// Servos that do not match the calibration, or a calibration that
+    /// could not be measured.
+    CalibrationError,
+    /// A servo that did not answer as asked.
+    MissingServo,
+    /// A servo that did not answer at all.
+    TimeoutError,
+    /// A value beyond a register's or a joint's limits.
+    LimitError,
+    /// A bad argument.
+    UsageError,
+}
+
+impl Class {
+    /// Every class.
+    #[cfg(test)]
+    const ALL: [Class; 8] = [
+        Class::Error,
+        Class::ConfigError,
+        Class::PortError,
+        Class::CalibrationError,
+        Class::MissingServo,
+        Class::TimeoutError,
+        Class::LimitError,
+        Class::UsageError,
+    ];
+
+    /// The class's name in `servobus._errors`.
+    fn name(self) -> &'static str {
+        match self {
+            Class::Error => "Error",
+            Class::ConfigError => "ConfigError",
+            Class::PortError => "PortError",
+            Class::CalibrationError => "CalibrationError",
+            Class::MissingServo => "MissingServo",
+            Class::TimeoutError => "TimeoutError",
+            Class::LimitError => "LimitError",
+            Class::UsageError => "UsageError",
+        }
+    }
+}
+
+/// Why a call failed: its Python exception class, its message and its
+/// fields.
 #[derive(Debug, Clone)]
 pub(crate) struct Failure {
-    class: &'static str,
+    class: Class,
     message: String,
     fields: Vec<(&'static str, Field)>,
 }
@@ -32,7 +84,7 @@ pub(crate) type Outcome<T> = Result<T, Failure>;
 
 impl Failure {
     /// A failure raised as `servobus.<class>` with `message`.
-    pub(crate) fn new(class: &'static str, message: impl Into<String>) -> Self {
+    pub(crate) fn new(class: Class, message: impl Into<String>) -> Self {
         Failure {
             class,
             message: message.into(),
@@ -42,7 +94,7 @@ impl Failure {
 
     /// A bad argument (`servobus.UsageError`, also a `ValueError`).
     pub(crate) fn usage(message: impl Into<String>) -> Self {
-        Failure::new("UsageError", message)
+        Failure::new(Class::UsageError, message)
     }
 
     /// Adds the attribute `name`.
@@ -54,7 +106,7 @@ impl Failure {
     /// The Python exception, made with the GIL held.
     fn to_py(&self, py: Python<'_>) -> PyErr {
         let made = (|| -> PyResult<PyErr> {
-            let class = py.import("servobus._errors")?.getattr(self.class)?;
+            let class = py.import("servobus._errors")?.getattr(self.class.name())?;
             let kwargs = PyDict::new(py);
             for (name, value) in &self.fields {
                 match value {
@@ -88,23 +140,23 @@ impl From<ConfigError> for Failure {
                 column,
                 field,
                 ..
-            } => Failure::new("ConfigError", message)
+            } => Failure::new(Class::ConfigError, message)
                 .with("file", Field::Str(file.display().to_string()))
                 .with("line", Field::Int(line as i64))
                 .with("column", Field::Int(column as i64))
                 .with("field", Field::Str(field)),
             ConfigError::Read { path, .. } | ConfigError::TooLarge { path, .. } => {
-                Failure::new("ConfigError", message)
+                Failure::new(Class::ConfigError, message)
                     .with("file", Field::Str(path.display().to_string()))
             }
-            _ => Failure::new("ConfigError", message),
+            _ => Failure::new(Class::ConfigError, message),
         }
     }
 }
 
 /// A servo that did not answer as asked (`MissingServo`, or its subclass
 /// `TimeoutError` for no reply at all).
-fn missing(class: &'static str, message: String, id: u8, reason: &str) -> Failure {
+fn missing(class: Class, message: String, id: u8, reason: &str) -> Failure {
     Failure::new(class, message)
         .with("id", Field::Int(i64::from(id)))
         .with("reason", Field::Str(reason.to_owned()))
@@ -114,20 +166,28 @@ impl From<BusError> for Failure {
     fn from(e: BusError) -> Self {
         let message = e.to_string();
         match e {
-            BusError::Timeout { id, .. } => missing("TimeoutError", message, id, "no reply"),
-            BusError::Corrupt { id } => missing("MissingServo", message, id, "corrupted reply"),
-            BusError::WrongId { expected, .. } => {
-                missing("MissingServo", message, expected, "reply from another ID")
+            BusError::Timeout { id, .. } => missing(Class::TimeoutError, message, id, "no reply"),
+            BusError::Corrupt { id } => {
+                missing(Class::MissingServo, message, id, "corrupted reply")
             }
-            BusError::WrongLength { id, .. } => {
-                missing("MissingServo", message, id, "reply of the wrong length")
-            }
+            BusError::WrongId { expected, .. } => missing(
+                Class::MissingServo,
+                message,
+                expected,
+                "reply from another ID",
+            ),
+            BusError::WrongLength { id, .. } => missing(
+                Class::MissingServo,
+                message,
+                id,
+                "reply of the wrong length",
+            ),
             BusError::Value(servobus_protocol::registers::ValueError::OutOfRange {
                 value,
                 min,
                 max,
                 ..
-            }) => Failure::new("LimitError", message)
+            }) => Failure::new(Class::LimitError, message)
                 .with("value", Field::Float(f64::from(value)))
                 .with("min", Field::Float(f64::from(min)))
                 .with("max", Field::Float(f64::from(max))),
@@ -138,8 +198,8 @@ impl From<BusError> for Failure {
             | BusError::Encode(_)
             | BusError::InvalidRequest(_)
             | BusError::BufferLength { .. } => Failure::usage(message),
-            BusError::Transport(_) => Failure::new("PortError", message),
-            _ => Failure::new("Error", message),
+            BusError::Transport(_) => Failure::new(Class::PortError, message),
+            _ => Failure::new(Class::Error, message),
         }
     }
 }
@@ -151,7 +211,7 @@ impl From<servobus_robot::ports::OpenError> for Failure {
             OpenError::Bus { port, .. } | OpenError::Port { port, .. } => port.clone(),
             _ => String::new(),
         };
-        Failure::new("PortError", chain(&e)).with("port", Field::Str(port))
+        Failure::new(Class::PortError, chain(&e)).with("port", Field::Str(port))
     }
 }
 
@@ -162,33 +222,33 @@ impl From<servobus_robot::Error> for Failure {
             Error::Config(c) => c.into(),
             Error::Open(o) => o.into(),
             Error::NoPort { .. } | Error::TooManyPorts { .. } => {
-                Failure::new("PortError", e.to_string())
+                Failure::new(Class::PortError, e.to_string())
             }
             Error::Refused { ref port, .. } => {
                 let port = port.clone();
-                Failure::new("CalibrationError", chain(&e)).with("port", Field::Str(port))
+                Failure::new(Class::CalibrationError, chain(&e)).with("port", Field::Str(port))
             }
             Error::Run(r) => r.into(),
-            other => Failure::new("Error", chain(&other)),
+            other => Failure::new(Class::Error, chain(&other)),
         }
     }
 }
 
 impl From<servobus_robot::RunError> for Failure {
     fn from(e: servobus_robot::RunError) -> Self {
-        Failure::new("Error", chain(&e))
+        Failure::new(Class::Error, chain(&e))
     }
 }
 
 impl From<servobus_robot::sim::SimRobotError> for Failure {
     fn from(e: servobus_robot::sim::SimRobotError) -> Self {
-        Failure::new("ConfigError", chain(&e))
+        Failure::new(Class::ConfigError, chain(&e))
     }
 }
 
 impl From<servobus_robot::sim::PtyError> for Failure {
     fn from(e: servobus_robot::sim::PtyError) -> Self {
-        Failure::new("PortError", chain(&e))
+        Failure::new(Class::PortError, chain(&e))
     }
 }
 
@@ -209,5 +269,29 @@ pub(crate) fn chain(e: &dyn std::error::Error) -> String {
 
 /// A lock whose holder panicked: the object is no longer usable.
 pub(crate) fn poisoned<T>(_: T) -> Failure {
-    Failure::new("Error", "an earlier call panicked while using this object")
+    Failure::new(
+        Class::Error,
+        "an earlier call panicked while using this object",
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Class;
+
+    /// Each class a failure can be raised as is defined in `_errors.py`,
+    /// under `Error`.
+    #[test]
+    fn every_class_is_defined_in_the_python_errors() {
+        let python = include_str!("../servobus/_errors.py");
+        for class in Class::ALL {
+            let name = class.name();
+            let defined = python.lines().any(|l| {
+                l.strip_prefix("class ")
+                    .and_then(|rest| rest.strip_prefix(name))
+                    .is_some_and(|rest| rest.starts_with('(') || rest.starts_with(':'))
+            });
+            assert!(defined, "class {name} is not in servobus/_errors.py");
+        }
+    }
 }

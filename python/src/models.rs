@@ -10,14 +10,14 @@ use pyo3::prelude::*;
 use servobus_config::MODEL_JERK_RAMP_S;
 use servobus_protocol::registers::{model_by_name, Model};
 
-use crate::errors::{Failure, Outcome};
+use crate::errors::{Class, Failure, Outcome};
 
 /// `(max_velocity, max_acceleration)` of `model`, in degrees per second
 /// and per second squared.
 fn limits_of(model: &Model) -> Outcome<(f64, f64)> {
     model.fastest_profile().ok_or_else(|| {
         Failure::new(
-            "Error",
+            Class::Error,
             format!(
                 "{} states no acceleration in steps/s^2: give the live limits",
                 model.name

@@ -10,7 +10,7 @@ use servobus_robot::ports::{bus_ports, open_bus, Allowance};
 use servobus_robot::{Motion, Target, Telemetry};
 
 use crate::calibration::{calibrate_robot, to_json, Calibrated, Where};
-use crate::errors::{Failure, Outcome};
+use crate::errors::{Class, Failure, Outcome};
 use crate::load::load_robot;
 use crate::stream::{LiveOptions, Stream};
 
@@ -297,8 +297,9 @@ impl Robot {
             }
         }
         let report = py.allow_threads(|| run.join().map_err(Failure::from))?;
-        let json = serde_json::to_string(&report)
-            .map_err(|e| Failure::new("Error", format!("the report does not serialise: {e}")))?;
+        let json = serde_json::to_string(&report).map_err(|e| {
+            Failure::new(Class::Error, format!("the report does not serialise: {e}"))
+        })?;
         Ok((
             json,
             samples.time,
@@ -387,7 +388,7 @@ impl Robot {
             for (bus, port) in config.buses.iter().zip(bus_ports(config, &[port])) {
                 let Some(port) = port else {
                     return Err(Failure::new(
-                        "PortError",
+                        Class::PortError,
                         format!(
                             "bus `{}` has no port: give it a `port:` in the robot file",
                             bus.name
@@ -401,7 +402,7 @@ impl Robot {
                     .map()
                     .get("torque_enable")
                     .ok_or_else(|| {
-                        Failure::new("Error", "the servos have no torque_enable register")
+                        Failure::new(Class::Error, "the servos have no torque_enable register")
                     })?;
                 serial.write(BROADCAST_ID, torque.address, &[0])?;
             }

@@ -11,7 +11,7 @@ use servobus_config::builtin::{path_or_name, Kind};
 use servobus_robot::sim::{Faults, PtyServer};
 use servobus_robot::sim::{Hand, Mounting, SimRobot, SimRobotBuilder};
 
-use crate::errors::{chain, poisoned, Failure, Outcome};
+use crate::errors::{chain, poisoned, Class, Failure, Outcome};
 use crate::load::load_robot;
 
 /// The serving thread and the flag that stops it.
@@ -94,7 +94,12 @@ fn start(
             server.settle();
             served
         })
-        .map_err(|e| Failure::new("Error", format!("cannot start the simulator's thread: {e}")))?;
+        .map_err(|e| {
+            Failure::new(
+                Class::Error,
+                format!("cannot start the simulator's thread: {e}"),
+            )
+        })?;
     // A client's first request is answered in time only once the thread
     // serves: wait for it to start (a thread that died says so at close).
     let _ = started.recv_timeout(std::time::Duration::from_secs(5));
@@ -115,8 +120,11 @@ impl Sim {
         serving.stop.store(true, Ordering::SeqCst);
         match serving.thread.take().map(JoinHandle::join) {
             None | Some(Ok(Ok(()))) => Ok(()),
-            Some(Ok(Err(why))) => Err(Failure::new("PortError", why)),
-            Some(Err(_)) => Err(Failure::new("Error", "the simulator's thread panicked")),
+            Some(Ok(Err(why))) => Err(Failure::new(Class::PortError, why)),
+            Some(Err(_)) => Err(Failure::new(
+                Class::Error,
+                "the simulator's thread panicked",
+            )),
         }
     }
 }

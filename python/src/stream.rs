@@ -10,7 +10,7 @@ use servobus_robot::{
     Chunk, Command, LiveTarget as Target, Run, RunOptions, TargetError, TargetSender, Telemetry,
 };
 
-use crate::errors::{chain, poisoned, Failure, Outcome};
+use crate::errors::{chain, poisoned, Class, Failure, Outcome};
 
 /// The latest state of every joint, in the robot's units.
 #[derive(Debug, Clone, Default)]
@@ -118,7 +118,7 @@ impl Stream {
                     }
                 }
             })
-            .map_err(|e| Failure::new("Error", format!("cannot start a thread: {e}")))?;
+            .map_err(|e| Failure::new(Class::Error, format!("cannot start a thread: {e}")))?;
         Ok(Stream {
             targets: runner.targets(),
             runner: Mutex::new(Some(runner)),
@@ -152,7 +152,7 @@ impl Stream {
         }
         serde_json::to_string(&report)
             .map(Some)
-            .map_err(|e| Failure::new("Error", format!("the report does not serialise: {e}")))
+            .map_err(|e| Failure::new(Class::Error, format!("the report does not serialise: {e}")))
     }
 }
 
@@ -173,7 +173,9 @@ impl Stream {
         let sent = py.allow_threads(|| self.targets.send(Target::named(stamp, joints)));
         match sent {
             Ok(clamped) => Ok(clamped),
-            Err(TargetError::Ended) => Err(Failure::new("Error", "the stream has ended").into()),
+            Err(TargetError::Ended) => {
+                Err(Failure::new(Class::Error, "the stream has ended").into())
+            }
             Err(e) => Err(Failure::usage(chain(&e)).into()),
         }
     }
@@ -225,7 +227,9 @@ impl Stream {
         let sent = py.allow_threads(|| self.targets.send_chunk(chunk));
         match sent {
             Ok(clamped) => Ok(clamped),
-            Err(TargetError::Ended) => Err(Failure::new("Error", "the stream has ended").into()),
+            Err(TargetError::Ended) => {
+                Err(Failure::new(Class::Error, "the stream has ended").into())
+            }
             Err(e) => Err(Failure::usage(chain(&e)).into()),
         }
     }

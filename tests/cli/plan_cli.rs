@@ -327,3 +327,22 @@ fn plot_draws_titles_axes_and_a_legend() {
         ],
     );
 }
+
+/// The segment list gives a keyframe's time to the millisecond, whether
+/// the motion file wrote it (`at: 1.5`) or the planner chose it for a
+/// spatial keyframe (an f64 of 16 digits).
+#[test]
+fn keyframe_times_are_printed_to_the_millisecond() {
+    let out = stdout(&servobus_ok(&["plan", "arm-line"]));
+    let times: Vec<&str> = out
+        .split(", at: ")
+        .skip(1)
+        .filter_map(|rest| rest.split(')').next())
+        .collect();
+    assert!(!times.is_empty(), "arm-line has timed keyframes: {out}");
+    for t in &times {
+        let decimals = t.split_once('.').map_or(0, |(_, d)| d.len());
+        assert!(decimals <= 3, "`at: {t}` in {out}");
+        assert!(t.parse::<f64>().is_ok(), "`at: {t}` in {out}");
+    }
+}

@@ -317,7 +317,12 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
         };
         let timed = match kf.and_then(|k| k.at) {
             _ if count > 1 => format!(", {count} samples"),
-            Some(at) => format!(", at: {at}"),
+            // A time the planner chose for a spatial keyframe is as long
+            // as an f64 prints; a written one is short: both to the ms.
+            Some(at) => {
+                let ms = format!("{at:.3}");
+                format!(", at: {}", ms.trim_end_matches('0').trim_end_matches('.'))
+            }
             None => String::new(),
         };
         let what = if count > 1 { "in space" } else { what.as_str() };

@@ -406,7 +406,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
             echo_seen: !may_echo,
             prev_is_echo: may_echo && self.prev_echo_owed,
             learn: self.echo,
-            tx_may_be_reply: may_be_own_reply(tx),
+            tx_may_be_reply: None,
             copies: 0,
             shown: None,
         };
@@ -441,7 +441,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
         self.echoes_seen = self.echoes_seen.saturating_add(own.copies);
         tally.ambiguous_copy = own.learn
             && own.copies > 0
-            && own.tx_may_be_reply
+            && own.tx_may_be_reply == Some(true)
             && own.shown.is_none()
             && self.port_echo.known.is_none();
         self.port_echo.learn(own.shown);
@@ -473,8 +473,9 @@ struct Own<'a> {
     prev_is_echo: bool,
     /// Whether echo is looked for and learned at all (`BusSettings::echo`).
     learn: bool,
-    /// Whether a copy of `tx` could be the reply to it ([`may_be_own_reply`]).
-    tx_may_be_reply: bool,
+    /// Whether a copy of `tx` could be the reply to it ([`may_be_own_reply`]),
+    /// once a copy came (see `Own::may_be_reply`).
+    tx_may_be_reply: Option<bool>,
     /// Copies of `tx` taken for its echo in this wait.
     copies: u32,
     /// What this wait showed: `Some(true)` an echo, `Some(false)` the
@@ -498,7 +499,7 @@ impl Own<'_> {
                 // The expected echo; or, on any port servobus looks for echo
                 // on, a copy that cannot be a reply: an echo even on a port
                 // taken for one that does not echo (it does, then).
-                if copy && (!self.echo_seen || (self.learn && !self.tx_may_be_reply)) {
+                if copy && (!self.echo_seen || (self.learn && !self.may_be_reply())) {
                     self.echoed();
                     tally.copy_at = Some(clock.now());
                     tally.echoes += 1;
@@ -537,12 +538,21 @@ impl Own<'_> {
 }
 
 impl Own<'_> {
+    /// Whether a copy of `tx` could be its reply ([`may_be_own_reply`]),
+    /// worked out at the first copy: most waits see none.
+    fn may_be_reply(&mut self) -> bool {
+        let tx = self.tx;
+        *self
+            .tx_may_be_reply
+            .get_or_insert_with(|| may_be_own_reply(tx))
+    }
+
     /// A copy of the request was taken for its echo: it shows the port
     /// echoes when it cannot have been the reply.
     fn echoed(&mut self) {
         self.echo_seen = true;
         self.copies = self.copies.saturating_add(1);
-        if self.learn && !self.tx_may_be_reply {
+        if self.learn && !self.may_be_reply() {
             self.shown = Some(true);
         }
     }

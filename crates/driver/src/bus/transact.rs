@@ -55,6 +55,30 @@ struct Single<'a> {
     late_len: usize,
 }
 
+impl<'a> Single<'a> {
+    /// Waiting for `expect`, the reply's data into `out`; `owed`: the
+    /// servos whose reply to an earlier request is overdue.
+    fn new(
+        expect: Expect,
+        out: &'a mut [u8; MAX_PARAMS],
+        out_len: &'a mut usize,
+        owed: [bool; 256],
+    ) -> Self {
+        Single {
+            expect,
+            out,
+            out_len,
+            got: None,
+            wrong: None,
+            wrong_count: 0,
+            corrupt: false,
+            owed,
+            late: [0; 256],
+            late_len: 0,
+        }
+    }
+}
+
 impl Sink for Single<'_> {
     fn packet(&mut self, packet: &Packet<'_>, now: Duration) -> bool {
         let id = packet.id();
@@ -126,18 +150,8 @@ impl<T: Transport, C: Clock> Bus<T, C> {
             // Overdue at the start: the reply taken may be the late one
             // to an earlier try, with this try's still to come.
             let owed_before = self.io.overdue_flags()[id];
-            let mut sink = Single {
-                expect,
-                out: &mut self.reply,
-                out_len: &mut self.reply_len,
-                got: None,
-                wrong: None,
-                wrong_count: 0,
-                corrupt: false,
-                owed: self.io.overdue_flags(),
-                late: [0; 256],
-                late_len: 0,
-            };
+            let owed = self.io.overdue_flags();
+            let mut sink = Single::new(expect, &mut self.reply, &mut self.reply_len, owed);
             let tally = self.io.exchange(start + expect.timeout, &mut sink)?;
             let (got, wrong, wrong_count, corrupt) =
                 (sink.got, sink.wrong, sink.wrong_count, sink.corrupt);
@@ -221,18 +235,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         let start = self.send()?;
         let mut byte = [0u8; MAX_PARAMS];
         let mut byte_len = 0;
-        let mut sink = Single {
-            expect: probe,
-            out: &mut byte,
-            out_len: &mut byte_len,
-            got: None,
-            wrong: None,
-            wrong_count: 0,
-            corrupt: false,
-            owed: self.io.overdue_flags(),
-            late: [0; 256],
-            late_len: 0,
-        };
+        let mut sink = Single::new(probe, &mut byte, &mut byte_len, self.io.overdue_flags());
         let tally = self.io.exchange(start + probe.timeout, &mut sink)?;
         let (answered, wrong_count) = (sink.got.is_some(), sink.wrong_count);
         for &late in &sink.late[..sink.late_len] {

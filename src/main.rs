@@ -17,12 +17,12 @@ fn main() -> std::process::ExitCode {
     let cli = cmd::parse();
     let code = match cmd::run(cli) {
         Ok(code) => code,
-        Err(err) => return cmd::exit::report(&err),
+        Err(err) => return shared::exit::report(&err),
     };
     // What stdout still buffers is written now, where a failure can still
     // change the exit code (at exit it would be dropped unsaid).
-    match cmd::out::flush() {
+    match shared::out::flush() {
         Ok(()) => code,
-        Err(err) => cmd::exit::report(&err.into()),
+        Err(err) => shared::exit::report(&err.into()),
     }
 }

@@ -30,8 +30,8 @@ use servobus_config::{load_robot, BusConfig, Robot, RobotOptions};
 use servobus_robot::bench::Quantiles;
 use servobus_robot::sim::PtyServer;
 
-use super::link::{bus_ports, open_bus, Allowance};
-use super::out::{outln, StdoutError};
+use crate::shared::out::{outln, StdoutError};
+use crate::shared::ports::{bus_ports, open_bus, Allowance};
 use servobus_robot::bench::{measure_link, measure_on, BenchError, BusBench};
 
 mod floor;
@@ -47,7 +47,7 @@ pub struct Args {
     #[command(flatten)]
     pub hardware: super::HardwareArgs,
     /// How long to measure, in seconds.
-    #[arg(long, default_value = "5", value_parser = super::args::measure_seconds_arg)]
+    #[arg(long, default_value = "5", value_parser = crate::shared::args::measure_seconds_arg)]
     pub seconds: Duration,
     /// Print one JSON object.
     #[arg(long)]
@@ -108,7 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bus.round_robin |= args.round_robin;
         if let Err(why) = bus.check_rate(robot.rate_hz) {
             let why = super::rate_advice(&why);
-            return Err(super::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "robot `{}`, bus `{}`: its rate {}",
                 robot.name, bus.name, why
             )));
@@ -135,7 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let report = summarise(&robot, args.seconds.as_secs_f64(), buses);
     if args.json {
-        outln!("{}", super::json::pretty(&report)?)?;
+        outln!("{}", crate::shared::json::pretty(&report)?)?;
     } else {
         print_text(&report)?;
     }

@@ -9,8 +9,8 @@ use servobus_config::{load_robot, BusConfig, RobotOptions};
 use servobus_robot::bench::{measure_link, MeasuredLink};
 use servobus_robot::timing::{floor_rate_hz, Change, Link, Plan};
 
-use super::link::{open_bus, Allowance};
-use super::out::{errln, out, outln};
+use crate::shared::out::{errln, out, outln};
+use crate::shared::ports::{open_bus, Allowance};
 
 /// Arguments of `servobus budget`.
 #[derive(Debug, clap::Args)]
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         out.buses.push(budget);
     }
     if args.json {
-        outln!("{}", super::json::pretty(&out)?)?;
+        outln!("{}", crate::shared::json::pretty(&out)?)?;
     } else {
         out!("{text}")?;
     }

@@ -11,13 +11,13 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 
-use super::exit::input;
-use super::out::{errln, outln};
+use crate::shared::exit::input;
+use crate::shared::out::{errln, outln};
 
 mod regs;
 pub use regs::{list as registers, read, set_id, write};
 
-use super::link::{open_plain_bus, SerialBus};
+use crate::shared::ports::{open_plain_bus, SerialBus};
 use servobus_protocol::registers::{addr, Series};
 use servobus_protocol::MAX_ID;
 use servobus_robot::scan::{self, adapt_latency, identify, table_bauds, Found, Scan, ScanError};
@@ -188,7 +188,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
             "collisions": coll,
             "elapsed_s": elapsed.as_secs_f64(),
         });
-        outln!("{}", super::json::line(&out)?)?;
+        outln!("{}", crate::shared::json::line(&out)?)?;
     } else {
         if !found.is_empty() {
             outln!(
@@ -244,7 +244,7 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     }
     if !collisions.is_empty() {
         // A shared ID is a problem found: the servos on it cannot be used.
-        return Ok(ExitCode::from(super::exit::PROBLEM));
+        return Ok(ExitCode::from(crate::shared::exit::PROBLEM));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -20,8 +20,8 @@ use servobus_robot::calibrate::{
     Stored, PATIENCE, PATIENT_RETRIES,
 };
 
-use super::link::{every_port, Allowance, Ports, SerialBus};
-use super::out::{errln, outln};
+use crate::shared::out::{errln, outln};
+use crate::shared::ports::{every_port, Allowance, Ports, SerialBus};
 
 mod screen;
 
@@ -83,16 +83,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let (cal, unfinished) = if let Some(json) = &args.from_lerobot {
         if args.write_servos && ports.is_none() {
-            return Err(super::exit::input(
+            return Err(crate::shared::exit::input(
                 "--write-servos needs the servos' --port",
             ));
         }
         let text = std::fs::read_to_string(json)
             .with_context(|| format!("--from-lerobot: cannot read {}", json.display()))
-            .map_err(super::exit::invalid)?;
+            .map_err(crate::shared::exit::invalid)?;
         let cal = from_lerobot(&design, &text, &format!("imported from {}", json.display()))
             .with_context(|| json.display().to_string())
-            .map_err(super::exit::invalid)?;
+            .map_err(crate::shared::exit::invalid)?;
         match (&ports, args.write_servos) {
             (Some(ports), true) => write_imported(&design, ports, cal)?,
             _ => (cal, None),
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .clone()
             .or(named)
             .ok_or_else(|| {
-                super::exit::input(
+                crate::shared::exit::input(
                     "--to-lerobot alone exports a calibration: give --calibration FILE \
                  (the robot file names none)",
                 )
@@ -116,7 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         write_lerobot(&cal, out)?;
         return Ok(ExitCode::SUCCESS);
     } else {
-        return Err(super::exit::input(
+        return Err(crate::shared::exit::input(
             "nothing to calibrate on: give --port (the servos' serial port), \
              or --from-lerobot FILE to import a LeRobot calibration",
         ));
@@ -160,14 +160,14 @@ fn ports(args: &Args, robot: &Robot) -> anyhow::Result<Option<Vec<String>>> {
     match every_port(robot, args.robot.hardware.port.as_slice()) {
         Ports::None => Ok(None),
         Ports::Every(ports) => Ok(Some(ports)),
-        Ports::Missing(bus) => Err(super::link::no_port(robot, &bus.name, None)),
+        Ports::Missing(bus) => Err(crate::shared::ports::no_port(robot, &bus.name, None)),
     }
 }
 
 /// The robot's buses on `ports`, patient: calibrating is not timed.
 fn open(robot: &Robot, ports: &[String]) -> anyhow::Result<Vec<SerialBus>> {
     let patient = Allowance::AtLeast(PATIENCE);
-    super::link::open_buses(robot, ports, patient, Some(PATIENT_RETRIES))
+    crate::shared::ports::open_buses(robot, ports, patient, Some(PATIENT_RETRIES))
 }
 
 /// A store in the servos that ended before the last servo.
@@ -324,7 +324,7 @@ fn relative(base: &Path, target: &Path) -> PathBuf {
     out
 }
 
-fn print_summary(robot: &Robot, output: &Path) -> Result<(), super::out::StdoutError> {
+fn print_summary(robot: &Robot, output: &Path) -> Result<(), crate::shared::out::StdoutError> {
     outln!("calibration: {}", output.display())?;
     for joint in robot.joints() {
         let Some(c) = &joint.calibration else {

@@ -11,8 +11,8 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 
-use super::exit::input;
-use super::out::outln;
+use crate::shared::exit::input;
+use crate::shared::out::outln;
 use serde_json::{json, Map, Value};
 use servobus_protocol::registers::{self, RegisterMap};
 use servobus_protocol::{Command, Decoder, DiscardReason, Event, Packet, FRAME_OVERHEAD};
@@ -70,7 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(if packets == items.len() && packets > 0 {
         ExitCode::SUCCESS
     } else {
-        ExitCode::from(super::exit::PROBLEM)
+        ExitCode::from(crate::shared::exit::PROBLEM)
     })
 }
 

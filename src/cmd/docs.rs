@@ -27,7 +27,7 @@ pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
     // Generated into memory: clap_complete panics on a failed write.
     let mut script = Vec::new();
     clap_complete::generate(args.shell, &mut cmd, "servobus", &mut script);
-    super::out::bytes(&script)?;
+    crate::shared::out::bytes(&script)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -47,7 +47,7 @@ pub fn man(_args: ManArgs) -> anyhow::Result<ExitCode> {
         }
         writeln!(out, ".fi")?;
     }
-    super::out::bytes(&out)?;
+    crate::shared::out::bytes(&out)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -11,7 +11,7 @@ use servobus::doctor::{self, BusCheck, Finding, Shown};
 use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::doctor::FixError;
 
-use super::out::{errln, outln, StdoutError};
+use crate::shared::out::{errln, outln, StdoutError};
 
 /// Arguments of `servobus doctor`.
 #[derive(Debug, clap::Args)]
@@ -51,7 +51,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match examine_robot(&args) {
         Ok(code) => Ok(code),
         Err(e) => {
-            super::exit::report(&e);
+            crate::shared::exit::report(&e);
             Ok(ExitCode::from(UNFINISHED))
         }
     }
@@ -224,6 +224,6 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> anyhow::Resul
         "buses": buses,
         "exit": status,
     });
-    outln!("{}", super::json::line(&out)?)?;
+    outln!("{}", crate::shared::json::line(&out)?)?;
     Ok(())
 }

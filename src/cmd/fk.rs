@@ -12,8 +12,8 @@ use serde::Serialize;
 use servobus_config::{ik_reason, load_robot, Robot, RobotOptions, Units};
 use servobus_kinematics::{ArmIk, ArmTarget, Geometry, IkError, LegIk, Point3, Poses};
 
-use super::exit::{input, PROBLEM};
-use super::out::outln;
+use crate::shared::exit::{input, PROBLEM};
+use crate::shared::out::outln;
 
 /// Arguments of `servobus fk`.
 #[derive(Debug, clap::Args)]
@@ -45,14 +45,14 @@ pub struct IkArgs {
         required = true,
         value_delimiter = ',',
         allow_hyphen_values = true,
-        value_parser = super::args::mm_arg
+        value_parser = crate::shared::args::mm_arg
     )]
     pub xyz: Vec<f64>,
     /// The frame's pitch, in the robot file's units.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::args::angle_arg)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::shared::args::angle_arg)]
     pub pitch: Option<f64>,
     /// The frame's roll, in the robot file's units.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::args::angle_arg)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::shared::args::angle_arg)]
     pub roll: Option<f64>,
     /// Print one JSON object: `{"frame", "joints": {"<name>": angle}}`, or
     /// `{"frame", "error", "short_mm"?, "joint"?}` when there is no answer.
@@ -124,7 +124,7 @@ pub fn fk(args: FkArgs) -> anyhow::Result<ExitCode> {
         let out = FkOut {
             frames: rows.into_iter().collect(),
         };
-        outln!("{}", super::json::line(&out)?)?;
+        outln!("{}", crate::shared::json::line(&out)?)?;
     } else {
         let u = robot.units;
         outln!(
@@ -250,7 +250,7 @@ pub fn ik(args: IkArgs) -> anyhow::Result<ExitCode> {
         }
     };
     if args.json {
-        outln!("{}", super::json::line(&out)?)?;
+        outln!("{}", crate::shared::json::line(&out)?)?;
     } else if let Some(joints) = &out.joints {
         // YAML, as `fk --pose` reads it: `fk --pose "$(servobus ik ...)"`.
         outln!(

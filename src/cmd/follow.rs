@@ -38,9 +38,9 @@ use servobus_robot::{
     Command, CycleSample, Lead, LiveTarget as Target, Report, RunOptions, TargetSender, Telemetry,
 };
 
-use super::link::{every_port, Allowance, Ports};
-use super::out::{errln, outln};
 use crate::record::{CsvLog, PlotData};
+use crate::shared::out::{errln, outln};
+use crate::shared::ports::{every_port, Allowance, Ports};
 
 /// Arguments of `servobus follow`.
 #[derive(Debug, clap::Args)]
@@ -62,7 +62,7 @@ pub struct Args {
     #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg, conflicts_with = "leader")]
     pub leader_hand: Option<PathBuf>,
     /// Stop after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_parser = super::args::run_seconds_arg)]
+    #[arg(long, value_parser = crate::shared::args::run_seconds_arg)]
     pub seconds: Option<Duration>,
     /// Write one CSV row per cycle and joint of the follower (as play's).
     #[arg(long)]
@@ -144,7 +144,7 @@ impl<T: Transport, C: Clock> Leader<T, C> {
             }
         }
         if joints.is_empty() {
-            return Err(super::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "the leader {} and the follower {} have no joint name in common",
                 leader.name, follower.name
             )));
@@ -242,13 +242,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let ports = match every_port(&leader_robot, &[port]) {
                 Ports::Every(ports) => ports,
                 _ => {
-                    return Err(super::exit::input(
+                    return Err(crate::shared::exit::input(
                         "--leader sets the leader's first bus; give the others a `port:` in its robot file",
                     ))
                 }
             };
             let mut buses =
-                super::link::open_buses(&leader_robot, &ports, Allowance::Assumed, None)?;
+                crate::shared::ports::open_buses(&leader_robot, &ports, Allowance::Assumed, None)?;
             // Angles go through the leader's calibration: its servos must
             // match it.
             crate::shared::check_buses(&leader_robot, &mut buses, &ports)?;
@@ -256,7 +256,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             drive(&args, &robot, leader, options)
         }
         None => {
-            let clock = super::link::system_clock();
+            let clock = crate::shared::ports::system_clock();
             let mut sim = SimRobot::builder(&leader_robot);
             if let Some(path) = &args.leader_hand {
                 sim = sim.hand(Hand::load(path, &leader_robot)?);
@@ -359,14 +359,15 @@ fn drive<T: Transport, C: Clock>(
         stalls: Vec::new(),
         live_line: !args.json && terminal,
     };
-    let runner = super::link::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
+    let runner =
+        crate::shared::ports::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
     crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let telemetry = runner.telemetry();
     let started = Instant::now();
     // Counted from ERRORS_FROM on, on the clock both arms' readings are
     // stamped on.
-    let from = super::link::system_clock().now().as_secs_f64() + ERRORS_FROM;
+    let from = crate::shared::ports::system_clock().now().as_secs_f64() + ERRORS_FROM;
     seen.errors.count_from(from);
     let mut trail = LeaderTrail::new(names.len());
     let mut pose: Vec<Option<f64>> = vec![None; names.len()];
@@ -386,7 +387,7 @@ fn drive<T: Transport, C: Clock>(
             // The follower stops below and everything captured is kept.
             lost = Some(format!(
                 "the leader was lost at {t:.1} s: {}",
-                super::exit::message(&e)
+                crate::shared::exit::message(&e)
             ));
             break;
         }
@@ -578,7 +579,7 @@ fn finish(
         if let Some(obj) = value.as_object_mut() {
             obj.insert("follow".into(), follow);
         }
-        outln!("{}", crate::cmd::json::pretty(&value)?)?;
+        outln!("{}", crate::shared::json::pretty(&value)?)?;
     } else {
         let mut out = std::io::stdout().lock();
         crate::shared::write_report(&mut out, report, false)?;
@@ -616,7 +617,7 @@ fn finish(
             }
         }
     }
-    Ok(super::exit::of_finish(report.finish))
+    Ok(crate::shared::exit::of_finish(report.finish))
 }
 
 #[cfg(test)]

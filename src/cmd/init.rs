@@ -9,8 +9,8 @@ use std::process::ExitCode;
 use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::files::AtomicFile;
 
-use super::exit::input;
-use super::out::outln;
+use crate::shared::exit::input;
+use crate::shared::out::outln;
 
 /// Arguments of `servobus init`.
 #[derive(Debug, clap::Args)]
@@ -64,7 +64,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     std::fs::create_dir_all(&args.dir).map_err(|e| {
-        let why = super::exit::os_text(&e);
+        let why = crate::shared::exit::os_text(&e);
         input(format!("cannot create {}: {why}", args.dir.display()))
     })?;
     // Both files are written in full (to temporaries) before either

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use servobus::builtin::{self, Kind};
 
-use super::out::outln;
+use crate::shared::out::outln;
 
 /// Arguments of `servobus list`.
 #[derive(Debug, clap::Args)]

@@ -4,14 +4,13 @@
 //! [`Command`] and a line in [`run`]. A robot or motion argument takes
 //! `value_parser = super::robot_arg` (or `motion_arg`) to accept built-in
 //! names as well as files; a number takes one of the range-checked
-//! parsers of [`args`] (`rate_arg`, `run_seconds_arg`, ...).
+//! parsers of [`crate::shared::args`] (`rate_arg`, `run_seconds_arg`, ...).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-pub(crate) mod args;
 mod bench;
 mod budget;
 mod bus;
@@ -19,15 +18,11 @@ mod calibrate;
 mod decode;
 mod docs;
 mod doctor;
-pub mod exit;
 mod fk;
 mod follow;
 mod init;
-mod json;
-mod link;
 mod list;
 mod monitor;
-pub mod out;
 mod plan;
 mod play;
 #[cfg(feature = "zenoh")]
@@ -38,7 +33,7 @@ mod sim;
 mod stream;
 mod teach;
 
-pub(crate) use args::{baud_arg, latency_us_arg, rate_arg};
+pub(crate) use crate::shared::args::{baud_arg, latency_us_arg, rate_arg};
 
 const EXIT_STATUS: &str = "\
 Exit status:
@@ -270,7 +265,7 @@ pub(crate) fn check_plot_format(path: &std::path::Path, formats: &[&str]) -> any
         .iter()
         .map(|f| format!("{} (.{f})", f.to_ascii_uppercase()))
         .collect();
-    Err(exit::input(format!(
+    Err(crate::shared::exit::input(format!(
         "--plot {}: plots are written as {}; give one of those",
         path.display(),
         names.join(" or ")
@@ -287,5 +282,5 @@ pub(crate) fn check_plot_format(path: &std::path::Path, formats: &[&str]) -> any
 /// An input error (exit 2) naming the flag and the file.
 pub(crate) fn check_writable(flag: &str, path: &std::path::Path) -> anyhow::Result<()> {
     servobus_robot::files::check_output(path)
-        .map_err(|e| exit::input(format!("{flag}: {e}; nothing was moved")))
+        .map_err(|e| crate::shared::exit::input(format!("{flag}: {e}; nothing was moved")))
 }

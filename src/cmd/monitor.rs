@@ -13,8 +13,8 @@ use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_protocol::registers::Series;
 use servobus_robot::bus::{Bus, Clock, Transport};
 
-use super::link::{open_bus, open_plain_bus, Allowance};
-use super::out::{errln, outln};
+use crate::shared::out::{errln, outln};
+use crate::shared::ports::{open_bus, open_plain_bus, Allowance};
 use crate::shared::screen::{key, terminal_available, test_panic_after, Key, Screen, TEST_PANIC};
 
 /// Baud rate a scan without a robot file uses (the servos' factory rate).
@@ -45,10 +45,10 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Refreshes per second.
-    #[arg(long, default_value = "20", value_parser = super::args::refresh_rate_arg)]
+    #[arg(long, default_value = "20", value_parser = crate::shared::args::refresh_rate_arg)]
     pub rate: f64,
     /// Stop after this many refreshes (default: until `q`, or Ctrl-C).
-    #[arg(long, value_parser = super::args::count_arg)]
+    #[arg(long, value_parser = crate::shared::args::count_arg)]
     pub count: Option<u64>,
     /// The robot file's bus to watch (default: the first).
     #[arg(long)]
@@ -123,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 b.clock().advance_to(started.elapsed());
             })
         }
-        _ => Err(super::exit::input(
+        _ => Err(crate::shared::exit::input(
             "give --robot FILE, --port PATH, or both",
         )),
     }
@@ -135,11 +135,11 @@ fn no_such_bus(robot: &Robot, name: Option<&str>) -> anyhow::Error {
     let names: Vec<&str> = robot.buses.iter().map(|b| b.name.as_str()).collect();
     let file = robot.path.display();
     match name {
-        Some(name) => super::exit::input(format!(
+        Some(name) => crate::shared::exit::input(format!(
             "--bus {name}: {file} has no such bus (buses: {})",
             names.join(", ")
         )),
-        None => super::exit::input(format!("{file}: the robot has no bus")),
+        None => crate::shared::exit::input(format!("{file}: the robot has no bus")),
     }
 }
 
@@ -179,7 +179,7 @@ fn watch<T: Transport, C: Clock>(
         let frame = poller.frame(bus.clock(), note.clone());
         problem |= frame.has_problem();
         match &mut screen {
-            None => outln!("{}", super::json::line(&frame)?)?,
+            None => outln!("{}", crate::shared::json::line(&frame)?)?,
             Some(s) => {
                 s.0.draw(|f| view::draw(f, &frame, title))?;
             }
@@ -228,7 +228,7 @@ fn stopped(caught: bool) -> bool {
 /// 1 when a problem was seen, else 0.
 fn exit_code(problem: bool) -> ExitCode {
     if problem {
-        ExitCode::from(super::exit::PROBLEM)
+        ExitCode::from(crate::shared::exit::PROBLEM)
     } else {
         ExitCode::SUCCESS
     }

@@ -17,7 +17,7 @@ use servobus_node::wire::NodeCommand;
 use servobus_node::zenoh::Wait;
 use servobus_robot::{Command, Lead, RunOptions};
 
-use super::out::{errln, outln};
+use crate::shared::out::{errln, outln};
 
 /// Arguments of `servobus serve`.
 #[derive(Debug, clap::Args)]
@@ -55,7 +55,7 @@ pub struct Args {
     #[arg(long)]
     pub group: Option<String>,
     /// How often `state` is published, Hz.
-    #[arg(long, default_value = "50", value_parser = super::args::refresh_rate_arg)]
+    #[arg(long, default_value = "50", value_parser = crate::shared::args::refresh_rate_arg)]
     pub state_hz: f64,
     /// Also publish sensor_msgs/msg/JointState for ROS 2 over rmw_zenoh.
     #[arg(long)]
@@ -68,7 +68,7 @@ pub struct Args {
     pub rate: Option<f64>,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.
-    #[arg(long, default_value = "0.25", value_parser = super::args::timeout_arg)]
+    #[arg(long, default_value = "0.25", value_parser = crate::shared::args::timeout_arg)]
     pub timeout: Duration,
     /// Seconds the node keeps answering `report` after the run ends.
     #[arg(long, default_value_t = 2.0)]
@@ -81,7 +81,7 @@ pub struct Args {
 /// Runs `servobus serve`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(args.linger.is_finite() && args.linger >= 0.0 && args.linger <= 3600.0) {
-        return Err(super::exit::input(format!(
+        return Err(crate::shared::exit::input(format!(
             "--linger {}: give 0 to 3600 seconds",
             args.linger
         )));
@@ -100,7 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         group: args.group.clone(),
     };
     // The network first: a node that cannot join never moves the robot.
-    let session = open_session(&config).map_err(|e| super::exit::input(e.to_string()))?;
+    let session = open_session(&config).map_err(|e| crate::shared::exit::input(e.to_string()))?;
     let options = RunOptions {
         rate_hz: args.rate,
         lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
@@ -109,7 +109,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..RunOptions::default()
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
-    let runner = super::link::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
+    let runner =
+        crate::shared::ports::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
     crate::shared::install_ctrl_c(runner.commands());
     let info = RobotInfo {
         name: args.name.clone().unwrap_or_else(|| robot.name.clone()),
@@ -156,7 +157,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             errln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
         }
     }
-    Ok(super::exit::of_finish(served.report.finish))
+    Ok(crate::shared::exit::of_finish(served.report.finish))
 }
 
 /// The command that plays `motion` (a built-in motion's name, a file, or
@@ -188,7 +189,7 @@ pub(crate) fn announce(
     let what = match servobus::builtin::builtin_name(motion) {
         Some(name) => name.to_string(),
         None => std::fs::read_to_string(motion)
-            .map_err(|e| super::exit::input(format!("{}: {e}", motion.display())))?,
+            .map_err(|e| crate::shared::exit::input(format!("{}: {e}", motion.display())))?,
     };
     let config = NodeConfig {
         connect: connect.to_vec(),
@@ -203,7 +204,7 @@ pub(crate) fn announce(
         .get(group_member_key(group, "*"))
         .timeout(Duration::from_secs(2))
         .wait()
-        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?
+        .map_err(|e| crate::shared::exit::input(format!("zenoh: {e}")))?
         .iter()
         .filter_map(|r| {
             r.result().ok().map(|s| {
@@ -231,7 +232,7 @@ pub(crate) fn announce(
     session
         .put(group_command_key(group), command.to_string())
         .wait()
-        .map_err(|e| super::exit::input(format!("zenoh: {e}")))?;
+        .map_err(|e| crate::shared::exit::input(format!("zenoh: {e}")))?;
     // Let the put leave before the session closes.
     std::thread::sleep(Duration::from_millis(300));
     outln!(
@@ -247,9 +248,9 @@ pub(crate) fn announce(
 /// multicast, connected to `config.connect`.
 fn open_conductor(config: &NodeConfig) -> anyhow::Result<servobus_node::zenoh::Session> {
     if config.connect.is_empty() {
-        return Err(super::exit::input(
+        return Err(crate::shared::exit::input(
             "--zenoh-group needs --connect ENDPOINT for each robot (or a router)".to_string(),
         ));
     }
-    servobus_node::node::open_peer(config).map_err(|e| super::exit::input(e.to_string()))
+    servobus_node::node::open_peer(config).map_err(|e| crate::shared::exit::input(e.to_string()))
 }

@@ -27,5 +27,5 @@ pub const NEEDS_ZENOH: &str = "`servobus serve` (the robot as a Zenoh node) is n
 
 /// Refuses, naming the feature and the command that builds it.
 pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    Err(super::exit::input(NEEDS_ZENOH))
+    Err(crate::shared::exit::input(NEEDS_ZENOH))
 }

@@ -165,11 +165,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
         .context("cannot install the SIGINT/SIGTERM handler")?;
 
-    super::out::outln!(
+    crate::shared::out::outln!(
         "serving {count} servos on {}",
         server.client_path().display()
     )?;
-    super::out::flush()?;
+    crate::shared::out::flush()?;
 
     let writer = truth.map(|(truth, out, path)| {
         let stop = Arc::clone(&stop);
@@ -252,10 +252,10 @@ fn servos_of(
 ) -> anyhow::Result<(u32, Vec<SimServo>)> {
     builder.served(only).map_err(|e| match e {
         SimRobotError::SharedId { .. } => {
-            super::exit::input(format!("{e}; serve one bus at a time with --bus"))
+            crate::shared::exit::input(format!("{e}; serve one bus at a time with --bus"))
         }
         SimRobotError::NoBus { .. } | SimRobotError::NoSuchBus { .. } => {
-            super::exit::input(e.to_string())
+            crate::shared::exit::input(e.to_string())
         }
         other => other.into(),
     })

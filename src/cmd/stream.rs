@@ -25,8 +25,8 @@ use servobus_robot::{Command, Lead, LiveEvent, Report, Run, RunOptions, TargetSe
 
 use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
 
-use super::link::start_live;
-use super::out::{errln, outln};
+use crate::shared::out::{errln, outln};
+use crate::shared::ports::start_live;
 
 /// Arguments of `servobus stream`.
 #[derive(Debug, clap::Args)]
@@ -44,11 +44,11 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long, value_parser = super::args::rate_arg)]
+    #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.
-    #[arg(long, default_value = "0.25", value_parser = super::args::timeout_arg)]
+    #[arg(long, default_value = "0.25", value_parser = crate::shared::args::timeout_arg)]
     pub timeout: std::time::Duration,
 }
 
@@ -86,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let skipped = skipped.load(Ordering::Relaxed);
     let code = finish(&report, skipped, args.json && !lost)?;
     if lost {
-        return Ok(ExitCode::from(super::exit::PROBLEM));
+        return Ok(ExitCode::from(crate::shared::exit::PROBLEM));
     }
     Ok(code)
 }
@@ -216,7 +216,7 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
             "measured": map(measured),
             "faults": faults,
         });
-        let text = crate::cmd::json::line(&line).map_err(std::io::Error::other)?;
+        let text = crate::shared::json::line(&line).map_err(std::io::Error::other)?;
         writeln!(out, "{text}")?;
         out.flush()
     };
@@ -272,7 +272,7 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
 fn finish(report: &Report, skipped: u64, json: bool) -> anyhow::Result<ExitCode> {
     if json {
         let value = serde_json::json!({ "report": report, "skipped_lines": skipped });
-        outln!("{}", crate::cmd::json::line(&value)?)?;
+        outln!("{}", crate::shared::json::line(&value)?)?;
     } else {
         let mut err = std::io::stderr().lock();
         crate::shared::write_report(&mut err, report, false)?;
@@ -295,5 +295,5 @@ fn finish(report: &Report, skipped: u64, json: bool) -> anyhow::Result<ExitCode>
             }
         }
     }
-    Ok(super::exit::of_finish(report.finish))
+    Ok(crate::shared::exit::of_finish(report.finish))
 }

@@ -14,8 +14,8 @@ use servobus_robot::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
 
-use super::link::{bus_ports, every_port, Allowance, SerialBus};
-use super::out::{err, errln};
+use crate::shared::out::{err, errln};
+use crate::shared::ports::{bus_ports, every_port, Allowance, SerialBus};
 
 /// How often the pose is read in pose-and-pause mode.
 const POSE_RATE_HZ: f64 = 50.0;
@@ -51,10 +51,10 @@ pub struct Args {
     pub continuous: bool,
     /// With --continuous: how closely the keyframes must reproduce the
     /// path, degrees.
-    #[arg(long, default_value = "0.5", value_name = "DEG", value_parser = super::args::tolerance_deg_arg)]
+    #[arg(long, default_value = "0.5", value_name = "DEG", value_parser = crate::shared::args::tolerance_deg_arg)]
     pub tolerance: f64,
     /// Stop after this many seconds.
-    #[arg(long, value_name = "S", value_parser = super::args::run_seconds_arg)]
+    #[arg(long, value_name = "S", value_parser = crate::shared::args::run_seconds_arg)]
     pub duration: Option<Duration>,
     /// No keyboard: capture a keyframe whenever the robot has moved and
     /// then been held still for 0.7 s (also when stdin is not a terminal).
@@ -166,7 +166,10 @@ fn explain(e: anyhow::Error, written: Option<&str>) -> anyhow::Error {
                  teach again ({widen})."
             )
         }
-        _ => anyhow::anyhow!("{}\nThe take stopped and {kept}.", super::exit::message(&e)),
+        _ => anyhow::anyhow!(
+            "{}\nThe take stopped and {kept}.",
+            crate::shared::exit::message(&e)
+        ),
     }
 }
 
@@ -196,11 +199,11 @@ fn open_buses(robot: &Robot, port: Option<&str>) -> anyhow::Result<Vec<SerialBus
                     "a simulated robot: `servobus sim --robot {} --hand H.yaml --link L`",
                     robot.path.display()
                 );
-                super::link::no_port(robot, &bus, Some(&sim))
+                crate::shared::ports::no_port(robot, &bus, Some(&sim))
             }
             e => e.into(),
         })?;
-    super::link::open_buses(robot, &ports, Allowance::Assumed, Some(RETRIES))
+    crate::shared::ports::open_buses(robot, &ports, Allowance::Assumed, Some(RETRIES))
 }
 
 /// Lines typed on stdin, read on their own thread.

@@ -4,7 +4,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use servobus_robot::{Command, CommandSender};
 
-use crate::cmd::out::errln;
+use crate::shared::out::errln;
 
 /// Ctrl-C once: a jerk-limited stop, then hold and report. Twice: torque off.
 /// `commands` is the run's

@@ -36,7 +36,7 @@ pub(crate) fn check_play_terminal() -> anyhow::Result<()> {
     if terminal_available() {
         return Ok(());
     }
-    Err(crate::cmd::exit::input(
+    Err(crate::shared::exit::input(
         "--monitor needs a terminal (stdin and stdout must be one) and there is none; \
          nothing was moved. Play without --monitor (progress lines), or run `servobus \
          monitor --json` beside it",

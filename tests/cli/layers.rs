@@ -122,8 +122,9 @@ fn the_front_ends_import_nothing_below_the_facade() {
 }
 
 /// The command modules under `src/cmd/`: each is a command (or a family,
-/// like `bus` and `fk`), and none imports another.
-const COMMANDS: [&str; 18] = [
+/// like `bus` and `fk`; `serve_hint` is `serve` in a build without Zenoh),
+/// and none imports another.
+const COMMANDS: [&str; 19] = [
     "bench",
     "budget",
     "bus",
@@ -139,10 +140,34 @@ const COMMANDS: [&str; 18] = [
     "plan",
     "play",
     "serve",
+    "serve_hint",
     "sim",
     "stream",
     "teach",
 ];
+
+#[test]
+fn src_cmd_holds_one_module_per_command_and_nothing_else() {
+    let mut others = Vec::new();
+    let mut seen = 0;
+    for entry in std::fs::read_dir(repo("src/cmd")).expect("src/cmd") {
+        let name = entry.expect("an entry").file_name();
+        let name = name.to_string_lossy();
+        if name == "mod.rs" {
+            continue;
+        }
+        if COMMANDS.contains(&name.trim_end_matches(".rs")) {
+            seen += 1;
+        } else {
+            others.push(name.into_owned());
+        }
+    }
+    assert!(seen >= COMMANDS.len(), "{seen} command entries");
+    assert!(
+        others.is_empty(),
+        "not a command (shared code goes to src/shared/): {others:?}"
+    );
+}
 
 #[test]
 fn no_command_imports_another() {

@@ -19,7 +19,7 @@ use servobus_timing::Link;
 
 use crate::engine::{Engine, SimStats};
 use crate::{Faults, SimServo};
-pub use link::Server;
+pub use owner::Server;
 
 /// Why the pty server could not start or stopped.
 #[derive(Debug, thiserror::Error)]
@@ -60,8 +60,8 @@ pub enum PtyError {
     Io(#[source] io::Error),
 }
 
-#[path = "link.rs"]
-mod link;
+#[path = "owner.rs"]
+mod owner;
 
 /// Waits for a reply shorter than this are timed precisely (sleep, then spin).
 const SHORT_WAIT: Duration = Duration::from_millis(2);
@@ -141,7 +141,7 @@ impl PtyServer {
                 return Err(PtyError::LinkOccupied(link.to_owned()));
             }
             if let Ok(pty) = std::fs::read_link(link) {
-                if let Some(server) = link::server_of(&pty) {
+                if let Some(server) = owner::server_of(&pty) {
                     return Err(PtyError::LinkServed {
                         link: link.to_owned(),
                         pty,

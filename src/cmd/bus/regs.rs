@@ -9,8 +9,8 @@ use servobus_protocol::registers::{self, addr, Access, Register, Series};
 use servobus_robot::bus::BusError;
 
 use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
-use crate::cmd::exit::input;
-use crate::cmd::out::{errln, outln};
+use crate::shared::exit::input;
+use crate::shared::out::{errln, outln};
 
 /// Catches SIGINT, SIGTERM and SIGHUP from the start of a command that
 /// writes: one that comes during its EEPROM transaction is acted on once
@@ -18,7 +18,7 @@ use crate::cmd::out::{errln, outln};
 /// it means nothing is written ([`before_eeprom_write`]).
 fn catch_signals() {
     if let Err(e) = servobus_robot::bus::catch_stop_signals() {
-        crate::cmd::out::errln!("warning: signals cannot be caught ({e})");
+        crate::shared::out::errln!("warning: signals cannot be caught ({e})");
     }
 }
 
@@ -123,7 +123,7 @@ pub fn read(args: ReadArgs) -> anyhow::Result<ExitCode> {
             "unit": reg.unit,
             "status": flags.bits(),
         });
-        outln!("{}", crate::cmd::json::line(&out)?)?;
+        outln!("{}", crate::shared::json::line(&out)?)?;
     } else {
         outln!("{} = {}", reg.name, human_value(value, reg))?;
     }

@@ -17,7 +17,7 @@ use std::time::Duration;
 use servobus_config::Robot;
 use servobus_robot::calibrate::{LiveJoint, Operator, Step};
 
-use crate::cmd::out::{out, outln};
+use crate::shared::out::{out, outln};
 
 /// Without a terminal, a swept joint's line is written again each time its
 /// range has grown by this much since its last line, deg: a sweep end to

@@ -9,8 +9,8 @@ use servobus_config::{
 };
 use servobus_robot::{path::JointState, Trajectory};
 
-use super::out::{outln, StdoutError};
 use crate::record::space;
+use crate::shared::out::{outln, StdoutError};
 
 mod plot;
 
@@ -145,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         plot::write(&motion, robot.geometry().as_ref(), &traj, &paths, path)?;
     }
     if args.json {
-        outln!("{}", crate::cmd::json::pretty(&report)?)?;
+        outln!("{}", crate::shared::json::pretty(&report)?)?;
     } else {
         print_text(&report, &motion)?;
         if let Some(path) = &args.plot {

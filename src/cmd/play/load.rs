@@ -175,7 +175,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (motion, mut robot) = if recorded {
         let Some(robot_path) = &args.robot else {
-            return Err(crate::cmd::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "{}: a recorded path names no robot; give --robot FILE",
                 args.motion.display()
             )));
@@ -201,7 +201,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         bus.busy_poll |= args.busy_poll;
         if let Err(why) = bus.check_rate(rate_hz) {
             let why = crate::cmd::rate_advice(&why);
-            return Err(crate::cmd::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "bus `{}`: {why}",
                 bus.name
             )));
@@ -213,10 +213,10 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         return Ok((motion, robot, trajectory, None, rate_hz));
     }
     // A recording that cannot be read is a bad input file (exit 2).
-    let rec = read_recording(&args.motion, &robot).map_err(crate::cmd::exit::invalid)?;
+    let rec = read_recording(&args.motion, &robot).map_err(crate::shared::exit::invalid)?;
     let span_s = rec.times[rec.times.len() - 1] - rec.times[0];
     if let Err(e) = limits::check_recording(span_s, rate_hz, robot.joint_count()) {
-        return Err(crate::cmd::exit::input(format!(
+        return Err(crate::shared::exit::input(format!(
             "{}: the recording is too long to play: {e}",
             args.motion.display()
         )));

@@ -19,8 +19,8 @@ use servobus_config::{
 use servobus_robot::Trajectory;
 use servobus_robot::{Command, CommandSender, Lead, RtOptions, Run, RunOptions, Telemetry};
 
-use super::link::{every_port, Ports};
 use crate::record::{read_recording, CsvLog, PlotData};
+use crate::shared::ports::{every_port, Ports};
 
 // `run` below is the order of events; each step's details live by concern:
 // reading the inputs, where the run happens, what is shown while it runs
@@ -37,7 +37,7 @@ use report::{file_name, print_plan};
 use setup::{backend, check_measured_rates, sim_pose};
 use view::{follow, Followed, Shown, APPROACH, SETTLE};
 
-use super::out::{err, out, outln};
+use crate::shared::out::{err, out, outln};
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
@@ -110,7 +110,7 @@ pub struct Args {
     pub zenoh_group: Option<String>,
     /// With --zenoh-group: when the robots start, from now (`2s`, `500ms`).
     #[cfg(feature = "zenoh")]
-    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = super::args::duration_arg)]
+    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = crate::shared::args::duration_arg)]
     pub start_in: std::time::Duration,
     /// With --zenoh-group: a robot's endpoint to connect to (repeatable),
     /// e.g. tcp/127.0.0.1:7447.
@@ -201,8 +201,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 .play(trajectory, options)?
         }
         Backend::Hardware(ports) => {
-            let mut connection =
-                super::link::connect(&robot, servobus_robot::Target::Ports(ports.to_vec()))?;
+            let mut connection = crate::shared::ports::connect(
+                &robot,
+                servobus_robot::Target::Ports(ports.to_vec()),
+            )?;
             check_measured_rates(&mut connection, ports, rate_hz)?;
             connection.play(trajectory, options)?
         }
@@ -247,7 +249,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Ok(report) => report,
         Err(e) => {
             for failed in &failed_outputs {
-                super::exit::report(failed);
+                crate::shared::exit::report(failed);
             }
             return Err(e.into());
         }
@@ -271,7 +273,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
             obj.insert("recording".into(), r.json(motion.units));
         }
-        writeln!(text, "{}", crate::cmd::json::pretty(&value)?)?;
+        writeln!(text, "{}", crate::shared::json::pretty(&value)?)?;
     } else {
         write_report(&mut text, &report, robot.lead.is_none())?;
         if let Some(r) = &recording {
@@ -299,12 +301,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // each error is said, the last by `main` as it returns.
     let last = failed_outputs.pop();
     for e in &failed_outputs {
-        super::exit::report(e);
+        crate::shared::exit::report(e);
     }
     if let Some(e) = last {
         return Err(e);
     }
-    Ok(super::exit::of_finish(report.finish))
+    Ok(crate::shared::exit::of_finish(report.finish))
 }
 
 fn names_of(robot: &Robot) -> Vec<String> {

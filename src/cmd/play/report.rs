@@ -1,7 +1,7 @@
 //! The plan printed before a run of `servobus play` and the report after it.
 
 use super::*;
-use crate::cmd::out::outln;
+use crate::shared::out::outln;
 
 pub(super) fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(

@@ -12,12 +12,12 @@ pub(super) fn sim_pose(args: &Args, robot: &Robot, backend: &Backend) -> anyhow:
         return Ok(robot.joints().map(|j| j.rest()).collect());
     };
     if let Backend::Hardware(_) = backend {
-        return Err(crate::cmd::exit::input(
+        return Err(crate::shared::exit::input(
             "--sim-pose sets where the simulator starts; real servos start where they are",
         ));
     }
     if pose.len() != robot.joint_count() {
-        return Err(crate::cmd::exit::input(format!(
+        return Err(crate::shared::exit::input(format!(
             "--sim-pose has {} angles; {} has {} joints",
             pose.len(),
             robot.name,
@@ -26,7 +26,7 @@ pub(super) fn sim_pose(args: &Args, robot: &Robot, backend: &Backend) -> anyhow:
     }
     for (j, &a) in robot.joints().zip(pose) {
         if !(j.min..=j.max).contains(&a) {
-            return Err(crate::cmd::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "--sim-pose: {} = {a} is outside its limits {}..{}",
                 j.name, j.min, j.max
             )));
@@ -42,7 +42,7 @@ pub(super) fn backend(args: &Args, robot: &Robot) -> anyhow::Result<Backend> {
     match every_port(robot, args.hardware.port.as_slice()) {
         Ports::None => Ok(Backend::Simulated),
         Ports::Every(ports) => Ok(Backend::Hardware(ports)),
-        Ports::Missing(bus) => Err(crate::cmd::link::no_port(robot, &bus.name, None)),
+        Ports::Missing(bus) => Err(crate::shared::ports::no_port(robot, &bus.name, None)),
     }
 }
 
@@ -72,7 +72,7 @@ pub(super) fn check_measured_rates(
         let measured = servobus_robot::bench::measure_link(bus, config, pty)
             .with_context(|| format!("measuring the adapter on {port}"))?;
         if let Err(why) = config.check_rate_on(&measured.link, rate_hz) {
-            return Err(crate::cmd::exit::input(format!(
+            return Err(crate::shared::exit::input(format!(
                 "bus `{}` on {port} (adapter measured: {:.0} us a PING beyond the wire and the servo): {}",
                 config.name,
                 measured.ping_latency.as_secs_f64() * 1e6,

@@ -3,7 +3,7 @@
 //! Ctrl-C once: a jerk-limited stop, then hold and report (on stderr).
 
 use super::*;
-use crate::cmd::out::{errln, outln, StdoutError};
+use crate::shared::out::{errln, outln, StdoutError};
 
 /// How long the final position is held (and tracked) after the path.
 pub(super) const SETTLE: Duration = servobus_robot::SETTLE;

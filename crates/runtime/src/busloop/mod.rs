@@ -5,10 +5,10 @@
 //! the loop is built; a cycle allocates nothing.
 
 mod counters;
+mod deadlines;
 mod feedback;
 mod goals;
 mod lead;
-mod link;
 mod publish;
 mod tracking;
 
@@ -24,10 +24,10 @@ pub(crate) use counters::CycleTiming;
 pub(crate) use goals::reachable;
 
 use counters::Counters;
+use deadlines::{LinkLearner, Probe};
 use feedback::Feedback;
 use goals::GoalWriter;
 use lead::LeadEstimator;
-use link::{LinkLearner, Probe};
 use publish::{Publisher, SampleTiming};
 use tracking::Tracker;
 
@@ -174,7 +174,8 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
     /// the torque cannot be written.
     pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
         if self.link.learns() {
-            self.probe = link::probe(&mut self.bus, &self.clock, &mut self.link, &self.feedback);
+            self.probe =
+                deadlines::probe(&mut self.bus, &self.clock, &mut self.link, &self.feedback);
         }
         self.bus.set_latency(self.link.in_force());
         self.feedback
@@ -318,9 +319,9 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
                 .saturating_sub(self.period / 8);
             let servos = range.len();
             // What a perfect adapter would need: the read's fixed cost.
-            let model = link::modelled(self.bus.settings(), servos, self.feedback.size());
+            let model = deadlines::modelled(self.bus.settings(), servos, self.feedback.size());
             if self.link.learns() {
-                let wait = link::allowance_within(
+                let wait = deadlines::allowance_within(
                     self.bus.settings(),
                     servos,
                     self.feedback.size(),
@@ -476,7 +477,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
             startup_probe_ms: self.probe.took.as_secs_f64() * 1e3,
             latency_us: self.link.mean().as_secs_f64() * 1e6,
             latency_p99_us: self.link.p99().as_secs_f64() * 1e6,
-            reply_deadline_us: link::deadline(
+            reply_deadline_us: deadlines::deadline(
                 self.bus.settings(),
                 self.feedback.ids().len(),
                 self.feedback.size(),

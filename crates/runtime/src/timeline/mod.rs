@@ -21,7 +21,7 @@ use crate::error::RunError;
 use crate::live::{LiveEvent, LivePath};
 use crate::target::Checked;
 
-mod live;
+mod following;
 mod scale;
 
 use scale::{pause_ramp, Scale};

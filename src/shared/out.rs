@@ -15,7 +15,7 @@
 //! one left to tell, so [`errln!`] and [`err!`] drop what they cannot write.
 //!
 //! ```ignore
-//! use crate::cmd::out::outln;
+//! use crate::shared::out::outln;
 //! outln!("{} servos", n)?; // Result<(), StdoutError>
 //! ```
 
@@ -98,34 +98,34 @@ pub fn write_err(args: fmt::Arguments<'_>, newline: bool) {
 /// `println!` that returns `Result<(), StdoutError>` instead of panicking.
 macro_rules! outln {
     () => {
-        $crate::cmd::out::write(format_args!(""), true)
+        $crate::shared::out::write(format_args!(""), true)
     };
     ($($arg:tt)*) => {
-        $crate::cmd::out::write(format_args!($($arg)*), true)
+        $crate::shared::out::write(format_args!($($arg)*), true)
     };
 }
 
 /// `print!` that returns `Result<(), StdoutError>` instead of panicking.
 macro_rules! out {
     ($($arg:tt)*) => {
-        $crate::cmd::out::write(format_args!($($arg)*), false)
+        $crate::shared::out::write(format_args!($($arg)*), false)
     };
 }
 
 /// `eprintln!` that never panics: what stderr cannot take is dropped.
 macro_rules! errln {
     () => {
-        $crate::cmd::out::write_err(format_args!(""), true)
+        $crate::shared::out::write_err(format_args!(""), true)
     };
     ($($arg:tt)*) => {
-        $crate::cmd::out::write_err(format_args!($($arg)*), true)
+        $crate::shared::out::write_err(format_args!($($arg)*), true)
     };
 }
 
 /// `eprint!` that never panics: what stderr cannot take is dropped.
 macro_rules! err {
     ($($arg:tt)*) => {
-        $crate::cmd::out::write_err(format_args!($($arg)*), false)
+        $crate::shared::out::write_err(format_args!($($arg)*), false)
     };
 }
 

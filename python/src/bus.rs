@@ -17,7 +17,7 @@ use crate::errors::{poisoned, Class, Failure, Field, Outcome};
 use crate::load::load_robot;
 
 /// The in-process simulator's bus, paced by the wall clock.
-type SimDriverBus = DriverBus<WallBus<SystemClock>, SystemClock>;
+type SimDriverBus = DriverBus<WallBus<SystemClock>>;
 
 /// A bus of either kind.
 enum AnyBus {

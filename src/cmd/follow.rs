@@ -119,15 +119,15 @@ struct LeaderJoint {
 }
 
 /// The leader arm: read only.
-struct Leader<T: Transport, C: Clock> {
-    buses: Vec<Bus<T, C>>,
+struct Leader<T: Transport> {
+    buses: Vec<Bus<T>>,
     joints: Vec<LeaderJoint>,
     /// Readings skipped for a late or garbled reply.
     missed: u64,
 }
 
-impl<T: Transport, C: Clock> Leader<T, C> {
-    fn new(leader: &Robot, follower: &Robot, buses: Vec<Bus<T, C>>) -> anyhow::Result<Self> {
+impl<T: Transport> Leader<T> {
+    fn new(leader: &Robot, follower: &Robot, buses: Vec<Bus<T>>) -> anyhow::Result<Self> {
         let mut joints = Vec::new();
         for (b, bus) in leader.buses.iter().enumerate() {
             for j in &bus.joints {
@@ -311,10 +311,10 @@ impl Seen {
 
 /// Follows `leader` with the follower `robot` until Ctrl-C, `--seconds`,
 /// or the follower's run ends.
-fn drive<T: Transport, C: Clock>(
+fn drive<T: Transport>(
     args: &Args,
     robot: &Robot,
-    mut leader: Leader<T, C>,
+    mut leader: Leader<T>,
     options: RunOptions,
 ) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();

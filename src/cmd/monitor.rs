@@ -11,7 +11,7 @@ use anyhow::{bail, Context};
 use servobus::monitor::{self, view, Poller, Watched};
 use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_protocol::registers::Series;
-use servobus_robot::bus::{Bus, Clock, Transport};
+use servobus_robot::bus::{Bus, Transport};
 
 use crate::shared::out::{errln, outln};
 use crate::shared::ports::{open_bus, open_plain_bus, Allowance};
@@ -146,13 +146,13 @@ fn no_such_bus(robot: &Robot, name: Option<&str>) -> anyhow::Error {
 /// Watches the servos until `q` or `--count` refreshes: on the screen when
 /// `live`, else one JSON line per refresh. Exits 1 when any refresh saw a
 /// servo missing or reporting a status flag.
-fn watch<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn watch<T: Transport>(
+    bus: &mut Bus<T>,
     mut poller: Poller,
     args: &Args,
     live: bool,
     title: &str,
-    mut before_poll: impl FnMut(&Bus<T, C>),
+    mut before_poll: impl FnMut(&Bus<T>),
 ) -> anyhow::Result<ExitCode> {
     let period = Duration::from_secs_f64(1.0 / args.rate);
     let mut screen = if live { Some(Screen::open()?) } else { None };

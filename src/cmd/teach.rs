@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use servobus_config::{load_robot, LimitOrigin, Robot, RobotOptions};
-use servobus_robot::bus::{Clock, Transport};
+use servobus_robot::bus::Transport;
 use servobus_robot::teach::{
     check_pose, distance, motion_yaml, StillCapture, Take, TeachError, Teacher,
 };
@@ -223,10 +223,10 @@ fn stdin_lines() -> mpsc::Receiver<String> {
 type Taken = Result<Take, (Take, anyhow::Error)>;
 
 /// Reads the pose until told to stop, capturing keyframes or the path.
-fn take<T: Transport, C: Clock>(
+fn take<T: Transport>(
     args: &Args,
     robot: &Robot,
-    teacher: &mut Teacher<T, C>,
+    teacher: &mut Teacher<T>,
     stop: &AtomicBool,
     keys: Option<&mpsc::Receiver<String>>,
 ) -> Taken {

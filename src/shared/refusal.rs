@@ -4,26 +4,26 @@
 use std::path::{Path, PathBuf};
 
 use servobus_config::Robot;
-use servobus_robot::bus::{Bus, Clock, Transport};
+use servobus_robot::bus::{Bus, Transport};
 use servobus_robot::calibrate::prepare_bus;
 use servobus_robot::Refusal;
 
 /// Before any command reads or moves joints through the calibration on real
 /// servos: the library's one check ([`prepare_bus`]), with what to run when
 /// it refuses.
-pub(crate) fn check_bus<T: Transport, C: Clock>(
+pub(crate) fn check_bus<T: Transport>(
     robot: &Robot,
     index: usize,
-    bus: &mut Bus<T, C>,
+    bus: &mut Bus<T>,
     port: &str,
 ) -> anyhow::Result<()> {
     prepare_bus(robot, index, bus).map_err(|refusal| refused(robot, &refusal, port))
 }
 
 /// [`check_bus`] for every bus.
-pub(crate) fn check_buses<T: Transport, C: Clock>(
+pub(crate) fn check_buses<T: Transport>(
     robot: &Robot,
-    buses: &mut [Bus<T, C>],
+    buses: &mut [Bus<T>],
     ports: &[String],
 ) -> anyhow::Result<()> {
     for (i, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {

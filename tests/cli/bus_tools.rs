@@ -185,7 +185,7 @@ pub(crate) mod cut {
 
     /// The bus of the simulator at `port`, opened by the test itself
     /// (patient: [`SLOW`] delays every reply).
-    pub(crate) fn bus(port: &str) -> Bus<SerialTransport<SystemClock>, SystemClock> {
+    pub(crate) fn bus(port: &str) -> Bus<SerialTransport<SystemClock>> {
         // A command the test just cut may still be exiting, holding the
         // port (it is refused as busy then): tried again for 10 s at most.
         let mut tries = 0;

@@ -10,7 +10,7 @@ use std::time::Duration;
 use ratatui::backend::TestBackend;
 use ratatui::Terminal;
 use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
-use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_driver::{Bus, Clock};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
 use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
@@ -29,7 +29,7 @@ fn robot(file: &str) -> Robot {
 }
 
 /// Polls `n` times, at the next multiples of [`PERIOD`] of virtual time.
-fn poll(poller: &mut Poller, bus: &mut Bus<SimBus, ManualClock>, n: u32) -> Frame {
+fn poll(poller: &mut Poller, bus: &mut Bus<SimBus>, n: u32) -> Frame {
     for _ in 0..n {
         let k = bus.clock().now().as_nanos().div_ceil(PERIOD.as_nanos());
         bus.clock()

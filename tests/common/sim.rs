@@ -28,7 +28,7 @@ pub fn read_truth(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 /// The first bus of `robot` as `servobus sim` serves it, with `faults`, on
 /// a virtual clock: the simulator (to look into and to fault) and the
 /// driver's bus on it.
-pub fn virtual_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus, ManualClock>) {
+pub fn virtual_bus(robot: &Robot, faults: Faults) -> (SimBus, Bus<SimBus>) {
     let cfg = &robot.buses[0];
     let clock = ManualClock::new();
     let servos = servobus_robot::sim::bus_servos(robot, cfg).expect("servos");

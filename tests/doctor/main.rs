@@ -11,7 +11,7 @@ mod advice;
 use std::time::Duration;
 
 use servobus::doctor::{self, BusPort, Finding, PortKind, Severity, Shown};
-use servobus_driver::{Bus, ManualClock, StatusLevel};
+use servobus_driver::{Bus, StatusLevel};
 use servobus_protocol::registers::{addr, Series};
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
 use servobus_sim::{Faults, SimBus};
@@ -21,7 +21,7 @@ const PORT: &str = "/dev/ttyACM0";
 struct Arm {
     robot: Robot,
     sim: SimBus,
-    bus: Bus<SimBus, ManualClock>,
+    bus: Bus<SimBus>,
 }
 
 fn target() -> BusPort {

@@ -83,7 +83,7 @@ fn main() -> ExitCode {
 
 /// STS3215 servos with the IDs asked for, spread over their travel, on a
 /// simulated bus in virtual time.
-fn simulated(args: &Args) -> Servos<SimBus, ManualClock> {
+fn simulated(args: &Args) -> Servos<SimBus> {
     let clock = ManualClock::new();
     let servos = args.ids.iter().enumerate().map(|(i, &id)| {
         SimServo::sts3215(id)
@@ -95,13 +95,13 @@ fn simulated(args: &Args) -> Servos<SimBus, ManualClock> {
 }
 
 /// Degrees per step of servo `id`, from the model it reports.
-fn deg_per_step<T: Transport, C: Clock>(servos: &mut Servos<T, C>, id: u8) -> Option<f64> {
+fn deg_per_step<T: Transport>(servos: &mut Servos<T>, id: u8) -> Option<f64> {
     let number = servos.read(id, sts::MODEL_NUMBER).ok()?;
     registers::model_by_number(number).map(|m| m.deg_per_tick())
 }
 
 /// Reads every position, writes the goals, and reads again.
-fn show<T: Transport, C: Clock>(servos: &mut Servos<T, C>, args: &Args) -> Result<(), BusError> {
+fn show<T: Transport>(servos: &mut Servos<T>, args: &Args) -> Result<(), BusError> {
     let before = servos.sync_read(sts::PRESENT_POSITION, &args.ids)?;
     let mut goals = Vec::new();
     for (&id, position) in args.ids.iter().zip(&before) {

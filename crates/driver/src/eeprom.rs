@@ -17,7 +17,7 @@
 use servobus_protocol::registers::addr;
 use servobus_protocol::{StatusFlags, MAX_PARAMS};
 
-use crate::{Bus, BusError, Clock, SignalHold, Transport};
+use crate::{Bus, BusError, SignalHold, Transport};
 
 /// The outcome of [`Bus::write_eeprom`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,7 +28,7 @@ pub struct EepromWrite {
     pub flags: StatusFlags,
 }
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Writes `data` at `address` of servo `id` so that it persists:
     /// unlock, write, read back and compare, lock. When the write covers the
     /// ID register, the read-back and the lock go to the new ID.

@@ -151,9 +151,8 @@ fn may_be_own_reply(request: &[u8]) -> bool {
 }
 
 /// Transport, clock, decoder and the reused frame buffers.
-pub(crate) struct Io<T, C> {
+pub(crate) struct Io<T> {
     pub transport: T,
-    pub clock: C,
     decoder: Decoder,
     /// The request being sent: `tx[..tx_len]`.
     pub tx: [u8; MAX_FRAME_LEN],
@@ -196,11 +195,10 @@ pub(crate) struct Io<T, C> {
     pub late_len: usize,
 }
 
-impl<T: Transport, C: Clock> Io<T, C> {
-    pub fn new(transport: T, clock: C) -> Self {
+impl<T: Transport> Io<T> {
+    pub fn new(transport: T) -> Self {
         Io {
             transport,
-            clock,
             decoder: Decoder::new(),
             tx: [0; MAX_FRAME_LEN],
             tx_len: 0,
@@ -252,7 +250,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
     pub fn send(&mut self, wire: &Link) -> Result<Duration, TransportError> {
         // What arrived since the last wait is looked at before it is
         // dropped: a servo's late reply shows that it answered.
-        let now = self.clock.now();
+        let now = self.transport.clock().now();
         self.take_late(now)?;
         self.transport.discard_input()?;
         // Bytes pending in the decoder belong to an earlier exchange; they
@@ -272,7 +270,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
         // through it): the request started no earlier than its return less its
         // wire time, and a prompt write keeps the earlier stamp.
         let wire_time = wire.wire_time(self.tx_len);
-        let start = before.max(self.clock.now().saturating_sub(wire_time));
+        let start = before.max(self.transport.clock().now().saturating_sub(wire_time));
         self.line_free = start + wire_time;
         self.sends = self.sends.saturating_add(1);
         if self.may_echo() {
@@ -382,7 +380,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
     /// When a request sent now starts on the wire: now, or once the
     /// requests before it are through the transmitter.
     pub fn next_start(&self) -> Duration {
-        self.clock.now().max(self.line_free)
+        self.transport.clock().now().max(self.line_free)
     }
 
     /// Feeds received bytes to `sink` until it is satisfied or `deadline`
@@ -420,7 +418,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
                     // not garbled.
                     let before = self.decoder.stats().discarded_bytes;
                     while let Some(ev) = self.decoder.finish() {
-                        if own.handle(ev, &self.clock, sink, &mut tally) {
+                        if own.handle(ev, self.transport.clock(), sink, &mut tally) {
                             break;
                         }
                     }
@@ -431,7 +429,7 @@ impl<T: Transport, C: Clock> Io<T, C> {
             };
             let mut input = &self.rx[..n.min(self.rx.len())];
             while let Some(ev) = self.decoder.decode(&mut input) {
-                if own.handle(ev, &self.clock, sink, &mut tally) {
+                if own.handle(ev, self.transport.clock(), sink, &mut tally) {
                     // Bytes after the awaited reply are not for us.
                     tally.discarded_bytes += input.len() as u64;
                     break 'wait;
@@ -558,7 +556,7 @@ impl Own<'_> {
     }
 }
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Whether this bus's port echoes requests, as it has shown so far:
     /// `Some(true)` it does, `Some(false)` it does not, `None` not known yet
     /// (see [`BusSettings::echo`](crate::BusSettings::echo)). While it is

@@ -46,21 +46,21 @@ use crate::{Bus, BusError, Clock, EepromWrite, Missing, MissingReason, SyncRead,
 /// assert!((steps[0] - 1000).abs() <= 2 && (steps[1] - 3000).abs() <= 2);
 /// # Ok::<(), servobus_driver::BusError>(())
 /// ```
-pub struct Servos<T: Transport, C: Clock> {
-    bus: Bus<T, C>,
+pub struct Servos<T: Transport> {
+    bus: Bus<T>,
     /// Reused SYNC WRITE arguments.
     ids: Vec<u8>,
     data: Vec<u8>,
 }
 
-impl<T: Transport, C: Clock> std::fmt::Debug for Servos<T, C> {
+impl<T: Transport> std::fmt::Debug for Servos<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Servos").field("bus", &self.bus).finish()
     }
 }
 
 #[cfg(feature = "serial")]
-impl Servos<crate::SerialTransport<crate::SystemClock>, crate::SystemClock> {
+impl Servos<crate::SerialTransport<crate::SystemClock>> {
     /// Opens the serial port `path` at `baud` on the system clock, with the
     /// default settings of [`BusSettings::new`] and the latency the port
     /// calls for
@@ -92,7 +92,7 @@ impl Servos<crate::SerialTransport<crate::SystemClock>, crate::SystemClock> {
 }
 
 #[cfg(feature = "serial")]
-impl<C: Clock> Servos<crate::SerialTransport<C>, C> {
+impl<C: Clock> Servos<crate::SerialTransport<C>> {
     /// Opens the serial port `path` at `baud`, timed by `clock`, with
     /// `settings`: each fact given once (the rate and the clock go to the
     /// port, the settings carry the rest).
@@ -110,9 +110,9 @@ impl<C: Clock> Servos<crate::SerialTransport<C>, C> {
     }
 }
 
-impl<T: Transport, C: Clock> Servos<T, C> {
+impl<T: Transport> Servos<T> {
     /// Typed access to `bus`.
-    pub fn new(bus: Bus<T, C>) -> Self {
+    pub fn new(bus: Bus<T>) -> Self {
         Servos {
             bus,
             ids: Vec::new(),
@@ -121,22 +121,22 @@ impl<T: Transport, C: Clock> Servos<T, C> {
     }
 
     /// The byte-level bus underneath (counters, settings, raw frames).
-    pub fn bus(&self) -> &Bus<T, C> {
+    pub fn bus(&self) -> &Bus<T> {
         &self.bus
     }
 
     /// The byte-level bus underneath, mutably.
-    pub fn bus_mut(&mut self) -> &mut Bus<T, C> {
+    pub fn bus_mut(&mut self) -> &mut Bus<T> {
         &mut self.bus
     }
 
     /// Gives the byte-level bus back.
-    pub fn into_bus(self) -> Bus<T, C> {
+    pub fn into_bus(self) -> Bus<T> {
         self.bus
     }
 
     /// The clock the bus is timed by (to wait between commands).
-    pub fn clock(&self) -> &C {
+    pub fn clock(&self) -> &T::Clock {
         self.bus.clock()
     }
 

@@ -85,7 +85,7 @@ fn status(id: u8, flags: u8, params: &[u8]) -> Vec<u8> {
     buf[..n].to_vec()
 }
 
-fn bus(responder: Responder) -> (Bus<ScriptedPort<Scripted>, ManualClock>, ManualClock) {
+fn bus(responder: Responder) -> (Bus<ScriptedPort<Scripted>>, ManualClock) {
     let clock = ManualClock::new();
     let settings = BusSettings::new(Series::Sts).with_latency(Duration::from_millis(1));
     let port = ScriptedPort::new(&clock, Scripted::new(responder));
@@ -156,7 +156,7 @@ fn a_request_held_up_by_the_host_is_waited_for_from_when_it_left() {
     assert_eq!(bus.counters().timeouts, 2);
 }
 
-fn bus_silent() -> (Bus<ScriptedPort<Scripted>, ManualClock>, ManualClock) {
+fn bus_silent() -> (Bus<ScriptedPort<Scripted>>, ManualClock) {
     bus(Box::new(|_| vec![]))
 }
 

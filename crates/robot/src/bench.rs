@@ -159,8 +159,8 @@ pub struct MeasuredLink {
 ///
 /// # Errors
 /// [`BenchError::NoJoints`]; [`BenchError::Bus`] when no servo answers.
-pub fn measure_link<T: Transport, C: Clock>(
-    servo_bus: &mut Bus<T, C>,
+pub fn measure_link<T: Transport>(
+    servo_bus: &mut Bus<T>,
     bus: &BusConfig,
     pty: bool,
 ) -> Result<MeasuredLink, BenchError> {
@@ -192,8 +192,8 @@ pub fn measure_link<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// A [`BenchError`] naming the bus and what failed.
-pub fn measure<T: Transport, C: Clock>(
-    servo_bus: &mut Bus<T, C>,
+pub fn measure<T: Transport>(
+    servo_bus: &mut Bus<T>,
     bus: &BusConfig,
     duration: Duration,
 ) -> Result<BusBench, BenchError> {
@@ -205,8 +205,8 @@ pub fn measure<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// A [`BenchError`] naming the bus and what failed.
-pub fn measure_on<T: Transport, C: Clock>(
-    servo_bus: &mut Bus<T, C>,
+pub fn measure_on<T: Transport>(
+    servo_bus: &mut Bus<T>,
     bus: &BusConfig,
     link: &Link,
     duration: Duration,

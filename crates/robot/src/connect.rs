@@ -218,15 +218,8 @@ impl Connection {
 /// The buses a run takes, by kind.
 pub(crate) enum RunBuses {
     Serial(Vec<SerialBus>),
-    Virtual(Vec<servobus_driver::Bus<servobus_sim::SimBus, servobus_driver::ManualClock>>),
-    Wall(
-        Vec<
-            servobus_driver::Bus<
-                servobus_sim::WallBus<servobus_driver::SystemClock>,
-                servobus_driver::SystemClock,
-            >,
-        >,
-    ),
+    Virtual(Vec<servobus_driver::Bus<servobus_sim::SimBus>>),
+    Wall(Vec<servobus_driver::Bus<servobus_sim::WallBus<servobus_driver::SystemClock>>>),
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use servobus_driver::{
 use servobus_runtime::bus_settings;
 
 /// A bus on a serial port (or a simulator's pseudo-terminal).
-pub type SerialBus = Bus<SerialTransport<SystemClock>, SystemClock>;
+pub type SerialBus = Bus<SerialTransport<SystemClock>>;
 
 /// A port that cannot be opened. Its source, the driver's error, says why
 /// and what to do (a group to join, the ports present, who holds the port).

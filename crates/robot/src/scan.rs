@@ -8,7 +8,7 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, BusError, Clock, Transport};
+use servobus_driver::{Bus, BusError, Transport};
 use servobus_protocol::registers::{self, addr, Model, Series};
 use servobus_protocol::{BROADCAST_ID, MAX_ID};
 
@@ -121,7 +121,7 @@ pub fn table_bauds() -> Vec<u32> {
 ///
 /// # Errors
 /// The bus's, when the servo does not answer.
-pub fn adapt_latency<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<(), BusError> {
+pub fn adapt_latency<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<(), BusError> {
     let m = bus.measure_latency(id, LATENCY_PINGS, LATENCY_CEILING)?;
     if m.max * LATENCY_HEADROOM > bus.settings().link.latency {
         bus.set_latency(m.max * LATENCY_HEADROOM);
@@ -134,7 +134,7 @@ pub fn adapt_latency<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Res
 ///
 /// # Errors
 /// The bus's, when the servo does not answer the first read.
-pub fn identify<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<Found, BusError> {
+pub fn identify<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<Found, BusError> {
     let mut head = [0u8; 5];
     bus.read(id, addr::FIRMWARE_MAJOR, &mut head)?;
     let number = [head[3], head[4]];
@@ -186,8 +186,8 @@ pub fn identify<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<F
 /// [`ScanError::Baud`] when the port cannot take a rate;
 /// [`ScanError::Stopped`] when the bus fails otherwise than by a silent or
 /// garbled reply.
-pub fn scan<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn scan<T: Transport>(
+    bus: &mut Bus<T>,
     bauds: &[u32],
     learn_latency: bool,
 ) -> Result<Scan, ScanError> {
@@ -263,7 +263,7 @@ struct LateReplies {
 }
 
 impl LateReplies {
-    fn new<T: Transport, C: Clock>(bus: &Bus<T, C>) -> LateReplies {
+    fn new<T: Transport>(bus: &Bus<T>) -> LateReplies {
         LateReplies {
             seen: (0..=MAX_ID)
                 .map(|id| bus.servo_counters(id).late_replies)
@@ -280,9 +280,9 @@ impl LateReplies {
 
     /// The late IDs not yet found at `baud`, after waiting for replies still
     /// on their way; each is returned once per late reply.
-    fn take<T: Transport, C: Clock>(
+    fn take<T: Transport>(
         &mut self,
-        bus: &mut Bus<T, C>,
+        bus: &mut Bus<T>,
         out: &Scan,
         baud: u32,
     ) -> Result<Vec<u8>, ScanError> {
@@ -327,11 +327,7 @@ fn garbled(result: &Result<Found, BusError>) -> bool {
 /// a simulator just starting, a loose cable) now and then. Of at most
 /// [`COLLISION_ASKS`] asks, a majority garbled is a collision (the garbled
 /// answer is returned); otherwise the answer of the last clean ask is.
-fn ask_past_garbles<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    id: u8,
-    baud: u32,
-) -> Result<Found, BusError> {
+fn ask_past_garbles<T: Transport>(bus: &mut Bus<T>, id: u8, baud: u32) -> Result<Found, BusError> {
     let first = ask(bus, id, baud, 0);
     if !garbled(&first) {
         return first;
@@ -356,12 +352,7 @@ fn ask_past_garbles<T: Transport, C: Clock>(
 
 /// Asks servo `id` at `baud` (an absent ID once, with `retries` 0: that is
 /// what makes a scan fast) and, when it answers, what it is.
-fn ask<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    id: u8,
-    baud: u32,
-    retries: u8,
-) -> Result<Found, BusError> {
+fn ask<T: Transport>(bus: &mut Bus<T>, id: u8, baud: u32, retries: u8) -> Result<Found, BusError> {
     let mut s = *bus.settings();
     s.series = Series::Sts;
     s.retries = retries;
@@ -404,15 +395,15 @@ impl Scan {
 }
 
 /// Moves the port and the bus's deadlines to `baud`.
-fn switch_baud<T: Transport, C: Clock>(bus: &mut Bus<T, C>, baud: u32) -> Result<(), ScanError> {
+fn switch_baud<T: Transport>(bus: &mut Bus<T>, baud: u32) -> Result<(), ScanError> {
     bus.set_baud(baud)
         .map_err(|source| ScanError::Baud { baud, source })
 }
 
 /// Measures the latency on servo `first` and, when it exceeds the one the
 /// scan assumed, asks every silent ID again at that baud rate.
-fn rescan_if_slow<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn rescan_if_slow<T: Transport>(
+    bus: &mut Bus<T>,
     (first, baud): (u8, u32),
     out: &mut Scan,
 ) -> Result<(), ScanError> {

@@ -14,7 +14,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use servobus_driver::{Clock, Transport};
+use servobus_driver::Transport;
 use servobus_trajectory::JointState;
 
 use crate::busloop::{BusLoop, CycleTiming};
@@ -30,8 +30,8 @@ use crate::telemetry::{Finish, Telemetry};
 use crate::timeline::{Kind, Timeline};
 
 /// See the module documentation.
-pub(crate) struct Lane<T: Transport, C: Clock> {
-    pub bus: BusLoop<T, C>,
+pub(crate) struct Lane<T: Transport> {
+    pub bus: BusLoop<T>,
     /// This lane's copy of the path. Only its own joints are sent from it;
     /// every copy sees the same commands at the same cycles.
     timeline: Timeline,
@@ -55,11 +55,11 @@ pub(crate) struct Lane<T: Transport, C: Clock> {
     taken: Option<std::time::Instant>,
 }
 
-impl<T: Transport, C: Clock> Lane<T, C> {
+impl<T: Transport> Lane<T> {
     /// The lane of `bus` on `timeline` (every lane gets a clone).
     #[allow(clippy::too_many_arguments)] // what a lane shares with the others
     pub fn new(
-        bus: BusLoop<T, C>,
+        bus: BusLoop<T>,
         timeline: Timeline,
         mail: Mailbox,
         board: Arc<FaultBoard>,

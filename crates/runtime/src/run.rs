@@ -48,8 +48,8 @@ pub fn bus_settings(config: &BusConfig) -> BusSettings {
 }
 
 /// A run ready for its first cycle.
-pub(crate) struct Prepared<T: Transport, C: Clock> {
-    pub lanes: Vec<Lane<T, C>>,
+pub(crate) struct Prepared<T: Transport> {
+    pub lanes: Vec<Lane<T>>,
     /// Clock time of cycle 0, on every bus's clock.
     pub start: Duration,
     pub period: Duration,
@@ -106,12 +106,12 @@ fn check(
 /// Builds the loops, runs their start-up, plans the timeline (`None`: no
 /// path, hold and follow live targets), and wires the lanes: the first
 /// receives the user's commands and targets and forwards them.
-pub(crate) fn prepare<T: Transport, C: Clock>(
+pub(crate) fn prepare<T: Transport>(
     robot: &Robot,
     trajectory: Option<Trajectory>,
-    buses: Vec<Bus<T, C>>,
+    buses: Vec<Bus<T>>,
     o: &RunOptions,
-) -> Result<Prepared<T, C>, RunError> {
+) -> Result<Prepared<T>, RunError> {
     let (rate_hz, period) = check(robot, trajectory.as_ref(), buses.len(), o)?;
     let units = o.units.unwrap_or(robot.units);
     let (telemetry_tx, telemetry) = bounded(o.telemetry_capacity);
@@ -202,13 +202,13 @@ struct Figures {
 }
 
 /// Builds every bus's loop and runs its start-up.
-fn start_buses<T: Transport, C: Clock>(
+fn start_buses<T: Transport>(
     robot: &Robot,
-    buses: Vec<Bus<T, C>>,
+    buses: Vec<Bus<T>>,
     o: &RunOptions,
     f: Figures,
     telemetry: &Option<Sender<Telemetry>>,
-) -> Result<Vec<BusLoop<T, C>>, RunError> {
+) -> Result<Vec<BusLoop<T>>, RunError> {
     let mut loops = Vec::with_capacity(buses.len());
     let mut first_joint = 0;
     for (index, (bus, config)) in buses.into_iter().zip(&robot.buses).enumerate() {

@@ -7,7 +7,7 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use crossbeam_channel::{Receiver, Sender};
-use servobus_driver::{Bus, Clock, ManualClock, Transport};
+use servobus_driver::{Bus, ManualClock, Transport};
 use servobus_trajectory::Trajectory;
 
 use crate::busloop::Outcome;
@@ -109,10 +109,10 @@ impl Runner {
 /// # Errors
 ///
 /// As [`VirtualRun::new`].
-pub fn spawn_virtual<T: Transport + Send + 'static>(
+pub fn spawn_virtual<T: Transport<Clock = ManualClock> + Send + 'static>(
     robot: &Robot,
     trajectory: Trajectory,
-    buses: Vec<Bus<T, ManualClock>>,
+    buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     let run = VirtualRun::new(robot, trajectory, buses, options)?;
@@ -120,7 +120,9 @@ pub fn spawn_virtual<T: Transport + Send + 'static>(
 }
 
 /// A [`VirtualRun`] on a thread of its own, ending once stopped.
-fn on_thread<T: Transport + Send + 'static>(run: VirtualRun<T>) -> Result<Runner, RunError> {
+fn on_thread<T: Transport<Clock = ManualClock> + Send + 'static>(
+    run: VirtualRun<T>,
+) -> Result<Runner, RunError> {
     let commands = run.commands();
     let targets = run.targets();
     let telemetry = run.telemetry();
@@ -158,10 +160,10 @@ type LaneEnd = (Outcome, Finish, Vec<String>);
 /// # Errors
 ///
 /// As [`VirtualRun::new`]; [`RunError::Spawn`] when a thread cannot start.
-pub fn spawn<T: Transport + Send + 'static, C: Clock>(
+pub fn spawn<T: Transport + Send + 'static>(
     robot: &Robot,
     trajectory: Trajectory,
-    buses: Vec<Bus<T, C>>,
+    buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     start_threads(robot, Some(trajectory), buses, options)
@@ -175,9 +177,9 @@ pub fn spawn<T: Transport + Send + 'static, C: Clock>(
 /// # Errors
 ///
 /// As [`spawn`].
-pub fn spawn_live<T: Transport + Send + 'static, C: Clock>(
+pub fn spawn_live<T: Transport + Send + 'static>(
     robot: &Robot,
-    buses: Vec<Bus<T, C>>,
+    buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     start_threads(robot, None, buses, options)
@@ -190,19 +192,19 @@ pub fn spawn_live<T: Transport + Send + 'static, C: Clock>(
 /// # Errors
 ///
 /// As [`VirtualRun::live`].
-pub fn spawn_virtual_live<T: Transport + Send + 'static>(
+pub fn spawn_virtual_live<T: Transport<Clock = ManualClock> + Send + 'static>(
     robot: &Robot,
-    buses: Vec<Bus<T, ManualClock>>,
+    buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     on_thread(VirtualRun::live(robot, buses, options)?)
 }
 
 /// [`spawn`] of `trajectory`, or [`spawn_live`] without one.
-fn start_threads<T: Transport + Send + 'static, C: Clock>(
+fn start_threads<T: Transport + Send + 'static>(
     robot: &Robot,
     trajectory: Option<Trajectory>,
-    buses: Vec<Bus<T, C>>,
+    buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
     let p = prepare(robot, trajectory, buses, &options)?;
@@ -283,11 +285,7 @@ impl RunEnd {
 
 /// A bus thread: its real-time set-up, then the lane's cycles as the pacer
 /// releases them, until the lane's run ends.
-fn drive<T: Transport, C: Clock>(
-    mut lane: Lane<T, C>,
-    mut pacer: Pacer<C>,
-    rt: RtOptions,
-) -> LaneEnd {
+fn drive<T: Transport>(mut lane: Lane<T>, mut pacer: Pacer<T::Clock>, rt: RtOptions) -> LaneEnd {
     let warnings = crate::rt::apply(rt).warnings;
     let finish = loop {
         if let Some(f) = lane.cycle(pacer.wait()) {

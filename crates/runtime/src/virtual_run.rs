@@ -50,8 +50,8 @@ use crate::telemetry::{Finish, Telemetry};
 /// println!("{} cycles at {} Hz", report.cycles, report.achieved_rate_hz);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub struct VirtualRun<T: Transport> {
-    lanes: Vec<Lane<T, ManualClock>>,
+pub struct VirtualRun<T: Transport<Clock = ManualClock>> {
+    lanes: Vec<Lane<T>>,
     pacers: Vec<Pacer<ManualClock>>,
     board: Arc<FaultBoard>,
     command_tx: Option<CommandSender>,
@@ -71,7 +71,7 @@ pub struct VirtualRun<T: Transport> {
     finish: Option<Finish>,
 }
 
-impl<T: Transport> VirtualRun<T> {
+impl<T: Transport<Clock = ManualClock>> VirtualRun<T> {
     /// Prepares a run of `trajectory` (robot joint order, radians) on
     /// `buses` (one per robot bus, in order, each with its own
     /// [`ManualClock`]): reads every servo's position, enables torque and
@@ -87,7 +87,7 @@ impl<T: Transport> VirtualRun<T> {
     pub fn new(
         robot: &Robot,
         trajectory: Trajectory,
-        buses: Vec<Bus<T, ManualClock>>,
+        buses: Vec<Bus<T>>,
         options: RunOptions,
     ) -> Result<Self, RunError> {
         Self::prepared(robot, Some(trajectory), buses, options)
@@ -104,18 +104,14 @@ impl<T: Transport> VirtualRun<T> {
     /// # Errors
     ///
     /// As [`new`](Self::new).
-    pub fn live(
-        robot: &Robot,
-        buses: Vec<Bus<T, ManualClock>>,
-        options: RunOptions,
-    ) -> Result<Self, RunError> {
+    pub fn live(robot: &Robot, buses: Vec<Bus<T>>, options: RunOptions) -> Result<Self, RunError> {
         Self::prepared(robot, None, buses, options)
     }
 
     fn prepared(
         robot: &Robot,
         trajectory: Option<Trajectory>,
-        buses: Vec<Bus<T, ManualClock>>,
+        buses: Vec<Bus<T>>,
         options: RunOptions,
     ) -> Result<Self, RunError> {
         let p = prepare(robot, trajectory, buses, &options)?;
@@ -178,7 +174,7 @@ impl<T: Transport> VirtualRun<T> {
     }
 
     /// The bus at `index`, to inspect its counters or transport.
-    pub fn bus(&self, index: usize) -> Option<&Bus<T, ManualClock>> {
+    pub fn bus(&self, index: usize) -> Option<&Bus<T>> {
         self.lanes.get(index).map(|l| &l.bus.bus)
     }
 

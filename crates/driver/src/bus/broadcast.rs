@@ -19,7 +19,7 @@ use crate::{Bus, BusError, Clock, Transport, TransportError};
 /// still talking after this is not quiet whatever the scan waits.
 const LISTEN_CAP: Duration = Duration::from_millis(500);
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Sends a PING to the broadcast ID and tells whether any servo
     /// answered: bytes other than the request's own echo arrived within
     /// `at_least` or one PING's deadline (the bus's settings, as for a PING
@@ -64,13 +64,19 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                         }
                     }
                     if heard > 0 {
-                        deadline = self.io.clock.now().saturating_add(wait).min(cap);
+                        deadline = self
+                            .io
+                            .transport
+                            .clock()
+                            .now()
+                            .saturating_add(wait)
+                            .min(cap);
                     }
                 }
                 Err(TransportError::TimedOut) => break,
                 Err(e) => return Err(e.into()),
             }
-            if self.io.clock.now() >= cap {
+            if self.io.transport.clock().now() >= cap {
                 break;
             }
         }

@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use crate::{Bus, BusError, Clock, Transport};
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Marks servo `id`'s reply as timed out: counted, and overdue until
     /// it comes.
     pub(crate) fn timed_out(&mut self, id: u8) {
@@ -32,7 +32,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
     /// # Errors
     /// [`BusError::Transport`] when the port fails.
     pub fn await_late_replies(&mut self, within: Duration) -> Result<usize, BusError> {
-        let deadline = self.io.clock.now().saturating_add(within);
+        let deadline = self.io.transport.clock().now().saturating_add(within);
         self.io.take_late(deadline)?;
         Ok(self.count_late())
     }

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use servobus_timing::Transaction;
 
-use crate::{Bus, BusError, Clock, Transport};
+use crate::{Bus, BusError, Transport};
 
 /// PINGs of the start-up measurement of an adapter ([`Bus::probe_latency`]
 /// as a run with `latency_us: auto` and `servobus budget --port` send it).
@@ -16,7 +16,7 @@ pub const PROBE_PINGS: u32 = 32;
 /// ([`Link::PTY_LATENCY`](servobus_timing::Link::PTY_LATENCY)).
 pub const PROBE_CEILING: Duration = servobus_timing::Link::PTY_LATENCY;
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Measures the adapter's latency with `samples` PINGs of servo `id`:
     /// each round trip minus what the link model already accounts for (wire
     /// time both ways, return delay, turnaround, the link's overheads). Waits up to `ceiling` of

@@ -22,10 +22,10 @@ use crate::io::Io;
 use crate::settings::BusSettings;
 use crate::stats::BusCounters;
 use crate::sync::SyncStore;
-use crate::{BusError, Clock, Transport, TransportError};
+use crate::{BusError, Transport, TransportError};
 
 /// A client for one bus of Feetech servos over a [`Transport`], with time
-/// from a [`Clock`].
+/// from the transport's [`Clock`](crate::Clock) (`T::Clock`).
 ///
 /// Every transaction drains stale input, sends its request, skips the echo
 /// of it, and waits for the reply until a deadline derived from the
@@ -36,8 +36,8 @@ use crate::{BusError, Clock, Transport, TransportError};
 /// The bus owns its buffers: after construction, [`Bus::sync_write`] never
 /// allocates and [`Bus::sync_read`] does not either (its result storage
 /// grows only when a call needs more room than any earlier one).
-pub struct Bus<T: Transport, C: Clock> {
-    pub(crate) io: Io<T, C>,
+pub struct Bus<T: Transport> {
+    pub(crate) io: Io<T>,
     pub(crate) settings: BusSettings,
     /// Data of the last single-servo reply.
     pub(crate) reply: [u8; MAX_PARAMS],
@@ -49,7 +49,7 @@ pub struct Bus<T: Transport, C: Clock> {
     pub(crate) sync: SyncStore,
 }
 
-impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
+impl<T: Transport> std::fmt::Debug for Bus<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Bus")
             .field("settings", &self.settings)
@@ -58,20 +58,19 @@ impl<T: Transport, C: Clock> std::fmt::Debug for Bus<T, C> {
     }
 }
 
-impl<T: Transport> Bus<T, T::Clock> {
+impl<T: Transport> Bus<T> {
     /// A bus over `transport`, with `settings` for everything else.
     ///
     /// The transport owns the clock and the baud rate: the bus times its
-    /// deadlines on a clone of [`Transport::clock`] and derives them at
+    /// deadlines on [`Transport::clock`] and derives them at
     /// [`Transport::baud`] (which it writes into its settings' link, so
     /// that [`Bus::settings`] reads the rate in use). Change the rate with
     /// [`Bus::set_baud`], which moves the transport and the deadlines
     /// together.
     pub fn new(transport: T, settings: BusSettings) -> Self {
-        let clock = transport.clock().clone();
         let mut settings = settings;
         settings.link.baud = transport.baud();
-        let mut io = Io::new(transport, clock);
+        let mut io = Io::new(transport);
         io.echo = settings.echo;
         Bus {
             io,
@@ -86,7 +85,7 @@ impl<T: Transport> Bus<T, T::Clock> {
     }
 }
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// The settings in use; their link's baud rate is the transport's.
     pub fn settings(&self) -> &BusSettings {
         &self.settings
@@ -162,14 +161,14 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         &mut self.io.transport
     }
 
-    /// The clock.
-    pub fn clock(&self) -> &C {
-        &self.io.clock
+    /// The transport's clock, on which the bus times its deadlines.
+    pub fn clock(&self) -> &T::Clock {
+        self.io.transport.clock()
     }
 
-    /// Gives the transport and clock back.
-    pub fn into_parts(self) -> (T, C) {
-        (self.io.transport, self.io.clock)
+    /// Gives the transport back (its clock with it).
+    pub fn into_transport(self) -> T {
+        self.io.transport
     }
 
     /// Counters of the whole bus.

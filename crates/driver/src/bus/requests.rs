@@ -5,9 +5,9 @@ use servobus_protocol::registers::{Access, Register};
 use servobus_protocol::{encode, Command, StatusFlags, BROADCAST_ID};
 use servobus_timing::Transaction;
 
-use crate::{Bus, BusError, Clock, Transport};
+use crate::{Bus, BusError, Transport};
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// PING servo `id`: whether it is there, and its status flags.
     ///
     /// # Errors

@@ -8,9 +8,9 @@ use servobus_protocol::{encode, parse_frame, Packet, StatusFlags, MAX_FRAME_LEN,
 use servobus_timing::Transaction;
 
 use crate::io::{PortEcho, Sink, Tally};
-use crate::{Bus, BusError, Clock, Transport, TransportError};
+use crate::{Bus, BusError, Transport, TransportError};
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Sends the request in the send buffer (after counting the late
     /// replies that arrived since the last look, [`Bus::await_late_replies`]),
     /// and returns the time it started on the wire: every request goes out
@@ -130,7 +130,7 @@ impl Sink for Single<'_> {
     }
 }
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// Runs one single-servo transaction whose request is in `io.tx`, with
     /// bounded retries.
     pub(crate) fn transact(&mut self, expect: Expect) -> Result<Option<StatusFlags>, BusError> {

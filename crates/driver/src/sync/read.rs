@@ -115,7 +115,7 @@ impl Sink for Round<'_> {
         }
     }
 }
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// SYNC READ `len` bytes at `address` from the servos `ids`, asking once.
     /// Every servo gets a result; see [`SyncRead`]. On SCS servos (no SYNC
     /// READ in their firmware) each servo is read in turn instead. Does not
@@ -198,7 +198,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
         for &id in ids {
             self.servos[usize::from(id)].transactions += 1;
         }
-        let began = self.io.clock.now();
+        let began = self.io.transport.clock().now();
         let mut round = 0u8;
         loop {
             self.sync_round()?;
@@ -211,7 +211,7 @@ impl<T: Transport, C: Clock> Bus<T, C> {
                 break;
             }
             let next = self.round_timeout(self.sync.pending.len())?;
-            if self.io.clock.now() + next > began.saturating_add(budget) {
+            if self.io.transport.clock().now() + next > began.saturating_add(budget) {
                 break;
             }
             round += 1;

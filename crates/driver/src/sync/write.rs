@@ -4,9 +4,9 @@
 use servobus_protocol::{is_servo_id, EncodeError};
 use servobus_timing::{servos_per_frame, sync_write_chunks, Block, PackError};
 
-use crate::{Bus, BusError, Clock, Transport};
+use crate::{Bus, BusError, Transport};
 
-impl<T: Transport, C: Clock> Bus<T, C> {
+impl<T: Transport> Bus<T> {
     /// SYNC WRITE `data` at `address` to the servos `ids`: servo `ids[i]`
     /// gets `data[i * L..(i + 1) * L]` with `L = data.len() / ids.len()`.
     /// Nobody answers. The frames are cut and packed by

@@ -71,7 +71,7 @@ impl Script for FixedServos {
 }
 
 /// A bus over [`FixedServos`] at 1 Mbaud, and its clock.
-fn fixed_bus() -> (Bus<ScriptedPort<FixedServos>, ManualClock>, ManualClock) {
+fn fixed_bus() -> (Bus<ScriptedPort<FixedServos>>, ManualClock) {
     let clock = ManualClock::new();
     let servos = FixedServos {
         out: [0; 1024],

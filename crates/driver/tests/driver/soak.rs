@@ -81,7 +81,7 @@ impl Tally {
 
 /// One control cycle: every servo sent its goal, then asked its position.
 fn cycle(
-    bus: &mut Bus<SimBus, ManualClock>,
+    bus: &mut Bus<SimBus>,
     ids: &[u8],
     goals: &[u8],
     tally: &mut Tally,

@@ -10,7 +10,7 @@ use servobus_sim::{SimBus, SimServo};
 
 const BAUD: u32 = 1_000_000;
 
-fn servos(sim: &SimBus, series: Series) -> Servos<SimBus, ManualClock> {
+fn servos(sim: &SimBus, series: Series) -> Servos<SimBus> {
     Servos::new(Bus::new(sim.clone(), BusSettings::new(series)))
 }
 

@@ -15,7 +15,7 @@ const US: Duration = Duration::from_micros(1);
 
 /// Servos `ids` with no retries (one timeout per servo per read) and 1 ms
 /// of adapter latency in the deadlines.
-fn setup(ids: &[u8], faults: Faults) -> (Bus<SimBus, ManualClock>, SimBus, ManualClock) {
+fn setup(ids: &[u8], faults: Faults) -> (Bus<SimBus>, SimBus, ManualClock) {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD)
         .with_servos(ids.iter().map(|&id| servo(id)))
@@ -91,7 +91,7 @@ fn a_silent_servo_keeps_its_timeouts() {
 /// deadline (13 + 8 bytes, 50 us of turnaround, 1 ms of latency and 200 us
 /// of margin: 1.46 ms), but inside the next read's, sent at once. The
 /// first read is made: it timed out.
-fn first_read_late() -> (Bus<SimBus, ManualClock>, SimBus) {
+fn first_read_late() -> (Bus<SimBus>, SimBus) {
     let (mut bus, sim, _clock) = setup(&[1], Faults::none().delay(1.0, 2 * MS));
     let read = bus
         .sync_read(addr::PRESENT_POSITION, 2, &[1])

@@ -27,7 +27,7 @@ fn servo(id: u8) -> SimServo {
 }
 
 /// A simulated bus with servos `ids` and a driver bus over it.
-fn setup(ids: &[u8]) -> (Bus<SimBus, ManualClock>, SimBus) {
+fn setup(ids: &[u8]) -> (Bus<SimBus>, SimBus) {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD).with_servos(ids.iter().map(|&id| servo(id)));
     let settings = BusSettings::new(Series::Sts).with_retries(2);

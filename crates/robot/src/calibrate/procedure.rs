@@ -94,9 +94,9 @@ struct Joint<'a> {
 /// # Errors
 /// [`CalibrateError`]: a servo that does not answer or is another model, a
 /// step that does not end, a joint that was not swept, or swept a full turn.
-pub fn calibrate<T: Transport, C: Clock>(
+pub fn calibrate<T: Transport>(
     robot: &Robot,
-    buses: &mut [Bus<T, C>],
+    buses: &mut [Bus<T>],
     operator: &mut dyn Operator,
     o: &ProcedureOptions,
 ) -> Result<Calibration, CalibrateError> {
@@ -134,9 +134,9 @@ pub fn calibrate<T: Transport, C: Clock>(
     })
 }
 
-fn find_servos<'a, T: Transport, C: Clock>(
+fn find_servos<'a, T: Transport>(
     robot: &'a Robot,
-    buses: &mut [Bus<T, C>],
+    buses: &mut [Bus<T>],
 ) -> Result<Vec<Joint<'a>>, CalibrateError> {
     let mut joints = Vec::new();
     for (b, (bus, config)) in buses.iter_mut().zip(&robot.buses).enumerate() {
@@ -174,8 +174,8 @@ fn find_servos<'a, T: Transport, C: Clock>(
 /// Reads every joint each period until the step ends: on Enter, or (with
 /// `auto`) once the robot has moved and then been still for `still_for`.
 /// While sweeping, readings are unwrapped and the range kept.
-fn wait_step<T: Transport, C: Clock>(
-    buses: &mut [Bus<T, C>],
+fn wait_step<T: Transport>(
+    buses: &mut [Bus<T>],
     joints: &mut [Joint<'_>],
     operator: &mut dyn Operator,
     o: &ProcedureOptions,
@@ -249,7 +249,7 @@ fn wait_step<T: Transport, C: Clock>(
 
 /// The time on the first bus's clock (every bus's clock agrees, or is
 /// moved in step by the sleeps above).
-fn now<T: Transport, C: Clock>(buses: &[Bus<T, C>]) -> Duration {
+fn now<T: Transport>(buses: &[Bus<T>]) -> Duration {
     buses.first().map_or(Duration::ZERO, |b| b.clock().now())
 }
 

@@ -6,7 +6,7 @@
 
 use std::time::Duration;
 
-use servobus_driver::{Bus, BusError, Clock, Transport};
+use servobus_driver::{Bus, BusError, Transport};
 use servobus_protocol::registers::{addr, model_by_number, Model, Register};
 
 use crate::config::seam::turn_ticks;
@@ -54,8 +54,8 @@ pub(crate) fn register(model: &Model, name: &'static str) -> Result<&'static Reg
 /// # Errors
 /// The bus error of the first read that failed; [`BusError::UnknownModel`]
 /// for a model number servobus does not know.
-pub fn identify<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn identify<T: Transport>(
+    bus: &mut Bus<T>,
     joint: &JointConfig,
 ) -> Result<FoundServo, BusError> {
     let (number, _) = bus.read_register(joint.id, register(joint.model, "model_number")?)?;
@@ -82,10 +82,7 @@ pub fn identify<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// The read's bus error.
-pub fn present<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    joint: &JointConfig,
-) -> Result<i32, BusError> {
+pub fn present<T: Transport>(bus: &mut Bus<T>, joint: &JointConfig) -> Result<i32, BusError> {
     Ok(bus
         .read_register(joint.id, register(joint.model, "present_position")?)?
         .0)
@@ -95,8 +92,8 @@ pub fn present<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// The first servo whose write failed.
-pub fn torque_off<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn torque_off<T: Transport>(
+    bus: &mut Bus<T>,
     config: &BusConfig,
 ) -> Result<(), CalibrateError> {
     for joint in &config.joints {
@@ -127,10 +124,7 @@ pub fn torque_off<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// A [`Refusal`] naming the joint and what is wrong.
-pub fn prepare_servos<T: Transport, C: Clock>(
-    robot: &Robot,
-    buses: &mut [Bus<T, C>],
-) -> Result<(), Refusal> {
+pub fn prepare_servos<T: Transport>(robot: &Robot, buses: &mut [Bus<T>]) -> Result<(), Refusal> {
     if let RobotCalibration::Missing(path) = &robot.calibration {
         return Err(Refusal::Missing { path: path.clone() });
     }
@@ -144,10 +138,10 @@ pub fn prepare_servos<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// As [`prepare_servos`].
-pub fn prepare_bus<T: Transport, C: Clock>(
+pub fn prepare_bus<T: Transport>(
     robot: &Robot,
     index: usize,
-    bus: &mut Bus<T, C>,
+    bus: &mut Bus<T>,
 ) -> Result<(), Refusal> {
     if let RobotCalibration::Missing(path) = &robot.calibration {
         return Err(Refusal::Missing { path: path.clone() });
@@ -183,10 +177,7 @@ pub fn prepare_bus<T: Transport, C: Clock>(
 /// A servo that does not answer (or whose reply is lost) is not refused
 /// here: the checks after this one, or the run, say it is missing in their
 /// own way.
-fn refuse_unlocked<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    joint: &JointConfig,
-) -> Result<(), Refusal> {
+fn refuse_unlocked<T: Transport>(bus: &mut Bus<T>, joint: &JointConfig) -> Result<(), Refusal> {
     let mut lock = [1u8];
     match bus.read(joint.id, joint.model.map().lock_address, &mut lock) {
         Ok(_) if lock[0] == 0 => Err(Refusal::Unlocked {
@@ -197,8 +188,8 @@ fn refuse_unlocked<T: Transport, C: Clock>(
     }
 }
 
-fn prepare_joint<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn prepare_joint<T: Transport>(
+    bus: &mut Bus<T>,
     config: &BusConfig,
     joint: &JointConfig,
     cal: &JointCalibration,
@@ -249,8 +240,8 @@ fn prepare_joint<T: Transport, C: Clock>(
 /// Writes a homing offset that lasts until the servo is switched off: the
 /// lock is closed first (a write with it open would persist), then the
 /// offset is written and read back.
-fn session_offset<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn session_offset<T: Transport>(
+    bus: &mut Bus<T>,
     joint: &JointConfig,
     offset: i32,
 ) -> Result<(), BusError> {

@@ -9,7 +9,7 @@
 //! written is returned ([`Stored`]), with the calibration in the frames the
 //! servos now hold, so that it can still be saved.
 
-use servobus_driver::{stop_signal, Bus, BusError, Clock, StopSignal, Transport};
+use servobus_driver::{stop_signal, Bus, BusError, StopSignal, Transport};
 
 use crate::config::seam::{centring_offset, turn_ticks};
 use crate::config::{Calibration, JointCalibration, JointConfig, PlayFrame, Robot};
@@ -76,9 +76,9 @@ pub struct Stored {
 /// as it was) or when the program caught a stop signal
 /// ([`servobus_driver::catch_stop_signals`]); [`Stored`] says which joints
 /// were written and holds the calibration in the frames the servos hold.
-pub fn store_in_servos<T: Transport, C: Clock>(
+pub fn store_in_servos<T: Transport>(
     robot: &Robot,
-    buses: &mut [Bus<T, C>],
+    buses: &mut [Bus<T>],
     mut cal: Calibration,
     how: Store,
     mut written: impl FnMut(&JointConfig, &JointCalibration),
@@ -138,8 +138,8 @@ pub fn store_in_servos<T: Transport, C: Clock>(
 ///
 /// # Errors
 /// The failed step's bus error (the servo is then as it was).
-pub fn write_homing<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn write_homing<T: Transport>(
+    bus: &mut Bus<T>,
     joint: &JointConfig,
     cal: &JointCalibration,
 ) -> Result<JointCalibration, BusError> {
@@ -168,8 +168,8 @@ pub fn write_homing<T: Transport, C: Clock>(
 /// The failed step's bus error (the servo is then as it was);
 /// [`BusError::InvalidRequest`] when the range does not fit the position
 /// registers in that frame (nothing is written).
-pub fn write_frame<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn write_frame<T: Transport>(
+    bus: &mut Bus<T>,
     joint: &JointConfig,
     cal: &JointCalibration,
     frame: PlayFrame,

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-use servobus_driver::{Bus, BusError, Clock, Transport};
+use servobus_driver::{Bus, BusError, Transport};
 
 use super::checks::ServoState;
 use super::probe::{finding, Ctx, PortKind};
@@ -87,8 +87,8 @@ pub(crate) fn supply_drop(ctx: &Ctx<'_>, servos: &[ServoState], out: &mut Vec<Fi
 
 /// The FTDI latency timer and the measured round trip against the robot
 /// file's `latency_us`.
-pub(crate) fn latency<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub(crate) fn latency<T: Transport>(
+    bus: &mut Bus<T>,
     ctx: &Ctx<'_>,
     kind: &PortKind,
     servos: &[ServoState],

@@ -5,7 +5,7 @@
 //! [`Fixing::write_servos`] asks for EEPROM.
 
 use servobus_driver::{
-    stop_signal, Bus, BusError, Clock, StatusLevel, StopSignal, Transport, PATIENCE, PATIENT_TRIES,
+    stop_signal, Bus, BusError, StatusLevel, StopSignal, Transport, PATIENCE, PATIENT_TRIES,
 };
 use servobus_protocol::registers::addr;
 
@@ -70,8 +70,8 @@ pub struct FixOutcome {
 ///
 /// # Errors
 /// Only when the transport fails; a fix that fails is an outcome.
-pub fn apply<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn apply<T: Transport>(
+    bus: &mut Bus<T>,
     findings: &[Finding],
     how: &Fixing<'_>,
 ) -> Result<Vec<FixOutcome>, BusError> {
@@ -188,10 +188,7 @@ enum SessionError {
 
 /// Sets the homing offsets of the bus's calibrated servos for the session,
 /// with the routine play runs before it moves.
-fn session_offsets<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    how: &Fixing<'_>,
-) -> Result<(), SessionError> {
+fn session_offsets<T: Transport>(bus: &mut Bus<T>, how: &Fixing<'_>) -> Result<(), SessionError> {
     prepare_bus(how.robot, how.bus, bus).map_err(|refusal| match refusal {
         Refusal::Bus {
             source: BusError::Transport(e),
@@ -203,8 +200,8 @@ fn session_offsets<T: Transport, C: Clock>(
 
 /// Stores homing offset `value` in servo `id`'s EEPROM
 /// (unlock-write-verify-lock).
-fn store_offset<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn store_offset<T: Transport>(
+    bus: &mut Bus<T>,
     id: u8,
     value: i32,
     series: Series,
@@ -228,8 +225,8 @@ fn store_offset<T: Transport, C: Clock>(
 /// The bus's; [`BusError::Verify`] when the servo does not hold the index
 /// at the new rate; [`BusError::InvalidRequest`] for an index outside the
 /// baud table.
-pub fn change_baud<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn change_baud<T: Transport>(
+    bus: &mut Bus<T>,
     id: u8,
     baud: u32,
     index: u8,

@@ -133,8 +133,8 @@ impl Ctx<'_> {
 /// # Errors
 /// Only when the transport fails ([`BusError::Transport`]); servos that do
 /// not answer are findings, not errors.
-pub fn examine<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+pub fn examine<T: Transport>(
+    bus: &mut Bus<T>,
     robot: &Robot,
     cfg: &BusConfig,
     target: &BusPort,
@@ -152,8 +152,8 @@ pub fn examine<T: Transport, C: Clock>(
     result
 }
 
-fn examine_inner<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn examine_inner<T: Transport>(
+    bus: &mut Bus<T>,
     ctx: &Ctx<'_>,
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
@@ -313,7 +313,7 @@ fn examine_inner<T: Transport, C: Clock>(
 /// servo answers READ at every status level, so on its bus one silent READ
 /// settles it: an absent ID costs one deadline, not two (the whole scan
 /// takes half as long). Garbled replies count: two servos may share the ID.
-fn answers<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<bool, BusError> {
+fn answers<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<bool, BusError> {
     let mut number = [0u8; 2];
     let read = bus.read(id, addr::MODEL_NUMBER, &mut number);
     let ping_only_possible = bus.settings().series == Series::Scs;
@@ -419,7 +419,7 @@ fn collision_among(
 
 /// Reads servo `id`'s table from address 0, in the layout of the series its
 /// model number names (tried in both byte orders).
-fn read_state<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<ServoState, BusError> {
+fn read_state<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<ServoState, BusError> {
     let mut bytes = vec![0u8; read_len(Series::Sts)];
     let flags = bus.read(id, addr::FIRMWARE_MAJOR, &mut bytes)?;
     let number = |n: u16| registers::model_by_number(n).map(|m| m.series);
@@ -433,8 +433,8 @@ fn read_state<T: Transport, C: Clock>(bus: &mut Bus<T, C>, id: u8) -> Result<Ser
 /// Looks for the `missing` servos at every other baud rate of the servo
 /// table; those found are taken out of `missing`. The transport is back at
 /// the bus's rate afterwards.
-fn find_at_other_bauds<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn find_at_other_bauds<T: Transport>(
+    bus: &mut Bus<T>,
     ctx: &Ctx<'_>,
     base: BusSettings,
     missing: &mut Vec<u8>,

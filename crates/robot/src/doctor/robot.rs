@@ -3,7 +3,7 @@
 //! the fixes applied when asked and each bus checked again after them.
 
 use servobus_config::{BusConfig, Robot};
-use servobus_driver::{Bus, Clock, Transport};
+use servobus_driver::{Bus, Transport};
 
 use super::{apply, examine, BusPort, Examined, Finding, FixOutcome, Fixing, PortKind};
 use crate::ports::{bus_ports, open_bus, Allowance};
@@ -114,8 +114,8 @@ pub fn check<S: AsRef<str>>(
 /// Examines bus `index` of `robot` (its `cfg`) through `bus` (on a port of
 /// `kind`, whose fixes run at `target`) and, with [`CheckOptions::fix`],
 /// applies the fixes and examines it again.
-fn check_bus<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
+fn check_bus<T: Transport>(
+    bus: &mut Bus<T>,
     (robot, index, cfg): (&Robot, usize, &BusConfig),
     target: BusPort,
     kind: &PortKind,

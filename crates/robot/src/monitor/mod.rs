@@ -236,7 +236,7 @@ impl Poller {
     ///
     /// # Errors
     /// Only a transport failure.
-    pub fn scan<T: Transport, C: Clock>(bus: &mut Bus<T, C>) -> Result<Vec<Watched>, BusError> {
+    pub fn scan<T: Transport>(bus: &mut Bus<T>) -> Result<Vec<Watched>, BusError> {
         let saved = *bus.settings();
         bus.set_settings(saved.with_retries(0));
         let mut found = Vec::new();
@@ -277,7 +277,7 @@ impl Poller {
     /// # Errors
     /// Only for the read as a whole (the transport failed); missing servos
     /// are shown as missing.
-    pub fn poll<T: Transport, C: Clock>(&mut self, bus: &mut Bus<T, C>) -> Result<(), BusError> {
+    pub fn poll<T: Transport>(&mut self, bus: &mut Bus<T>) -> Result<(), BusError> {
         let first = self.started.is_none();
         self.started.get_or_insert(bus.clock().now());
         // The first read is patient (longer deadlines, the missing asked
@@ -356,7 +356,7 @@ impl Poller {
     /// refresh is the new replies' total).
     /// `keep`: false for the patient first read, whose waits are not the
     /// bus's usual latency.
-    fn record_latencies<T: Transport, C: Clock>(&mut self, bus: &Bus<T, C>, keep: bool) {
+    fn record_latencies<T: Transport>(&mut self, bus: &Bus<T>, keep: bool) {
         for (i, &id) in self.ids.iter().enumerate() {
             let rtt = &bus.servo_counters(id).rtt;
             let total = rtt.mean().map_or(0.0, |m| m.as_secs_f64() * 1e6) * rtt.count as f64;
@@ -412,7 +412,7 @@ impl Poller {
 ///
 /// # Errors
 /// The driver's, when the frame cannot be sent.
-pub fn torque_off<T: Transport, C: Clock>(bus: &mut Bus<T, C>, ids: &[u8]) -> Result<(), BusError> {
+pub fn torque_off<T: Transport>(bus: &mut Bus<T>, ids: &[u8]) -> Result<(), BusError> {
     let zeros = vec![0u8; ids.len()];
     bus.sync_write(addr::TORQUE_ENABLE, ids, &zeros)
 }

@@ -150,7 +150,7 @@ pub fn bus_servos(robot: &Robot, bus: &BusConfig) -> Result<Vec<SimServo>, SimRo
 ///
 /// # Errors
 /// [`SimRobotError`] when a servo cannot be simulated.
-pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus, ManualClock>>, SimRobotError> {
+pub fn virtual_buses(robot: &Robot) -> Result<Vec<Bus<SimBus>>, SimRobotError> {
     Ok(SimRobot::builder(robot).build()?.driver_buses())
 }
 
@@ -220,7 +220,7 @@ impl SimRobot {
     /// Driver buses on the simulated buses (each on its bus's own clock,
     /// with the robot file's settings), ready for
     /// [`VirtualRun`](servobus_runtime::VirtualRun).
-    pub fn driver_buses(&self) -> Vec<Bus<SimBus, ManualClock>> {
+    pub fn driver_buses(&self) -> Vec<Bus<SimBus>> {
         self.buses_on(SimBus::clone)
     }
 
@@ -228,13 +228,13 @@ impl SimRobot {
     /// ([`WallBus`]: the servos answer in real time, in this process), with
     /// the robot file's settings, ready for [`spawn`](servobus_runtime::spawn).
     /// Give the run the same clock.
-    pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>, C>> {
+    pub fn wall_buses<C: Clock>(&self, clock: &C) -> Vec<Bus<WallBus<C>>> {
         self.buses_on(|sim| WallBus::new(sim.clone(), clock.clone()))
     }
 
     /// One driver bus per simulated bus, on the transport `on` makes of it
     /// (and that transport's clock), with the robot file's settings.
-    fn buses_on<T: Transport>(&self, on: impl Fn(&SimBus) -> T) -> Vec<Bus<T, T::Clock>> {
+    fn buses_on<T: Transport>(&self, on: impl Fn(&SimBus) -> T) -> Vec<Bus<T>> {
         self.buses
             .iter()
             .zip(&self.settings)

@@ -105,13 +105,13 @@ struct TeachJoint {
 }
 
 /// The robot under a person's hands: torque off, poses read back.
-pub struct Teacher<T: Transport, C: Clock> {
-    buses: Vec<Bus<T, C>>,
+pub struct Teacher<T: Transport> {
+    buses: Vec<Bus<T>>,
     joints: Vec<TeachJoint>,
     units: Units,
 }
 
-impl<T: Transport, C: Clock> Teacher<T, C> {
+impl<T: Transport> Teacher<T> {
     /// A teacher of `robot` on `buses` (one per robot bus, in order), holding
     /// the joints named in `hold`. The servos are first made to match the
     /// robot's calibration ([`prepare_servos`](crate::calibrate::prepare_servos)),
@@ -120,11 +120,7 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
     /// # Errors
     /// [`TeachError::UnknownJoint`] for a name in `hold` the robot lacks;
     /// [`TeachError::Refused`] when the servos do not match the calibration.
-    pub fn new(
-        robot: &Robot,
-        mut buses: Vec<Bus<T, C>>,
-        hold: &[String],
-    ) -> Result<Self, TeachError> {
+    pub fn new(robot: &Robot, mut buses: Vec<Bus<T>>, hold: &[String]) -> Result<Self, TeachError> {
         let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
         if let Some(bad) = hold.iter().find(|h| !names.contains(&h.as_str())) {
             return Err(TeachError::UnknownJoint {
@@ -224,11 +220,7 @@ impl<T: Transport, C: Clock> Teacher<T, C> {
 /// # Errors
 /// The bus's; [`BusError::InvalidRequest`] when the bus's series has no
 /// present position register.
-pub fn read_angle<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    id: u8,
-    map: &JointMap,
-) -> Result<f64, BusError> {
+pub fn read_angle<T: Transport>(bus: &mut Bus<T>, id: u8, map: &JointMap) -> Result<f64, BusError> {
     let register = bus
         .settings()
         .series

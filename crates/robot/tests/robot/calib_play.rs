@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use servobus_driver::{Bus, ManualClock};
+use servobus_driver::Bus;
 use servobus_robot::calibrate::ProcedureOptions;
 use servobus_runtime::config::{load_motion_calibrated, plan_motion, Robot};
 use servobus_runtime::{Finish, RunOptions, Telemetry, VirtualRun};
@@ -61,7 +61,7 @@ pub fn play(
     robot_path: &Path,
     robot: &Robot,
     cal: Option<&Path>,
-    buses: Vec<Bus<SimBus, ManualClock>>,
+    buses: Vec<Bus<SimBus>>,
     truth: impl Fn() -> Vec<f64>,
 ) -> Played {
     let (motion, loaded) =

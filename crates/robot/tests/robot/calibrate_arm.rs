@@ -86,7 +86,7 @@ fn place(sim: &SimBus, id: u8, m: Mount, deg: f64) {
     sim.servo(id, |s| s.move_joint(sensor - offset_of(s)));
 }
 
-fn arm(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, SimBus) {
+fn arm(robot: &Robot) -> (Vec<Bus<SimBus>>, SimBus) {
     let bus = &robot.buses[0];
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), bus.baud).with_servos(
@@ -192,19 +192,13 @@ fn script() -> Vec<(f64, Vec<f64>)> {
     keys
 }
 
-fn calibrated_arm() -> (Robot, Vec<Bus<SimBus, ManualClock>>, SimBus, PathBuf) {
+fn calibrated_arm() -> (Robot, Vec<Bus<SimBus>>, SimBus, PathBuf) {
     let (robot, buses, sim, path, _) = measured_arm();
     (robot, buses, sim, path)
 }
 
 /// The arm calibrated by the hand, and the calibration as measured.
-fn measured_arm() -> (
-    Robot,
-    Vec<Bus<SimBus, ManualClock>>,
-    SimBus,
-    PathBuf,
-    Calibration,
-) {
+fn measured_arm() -> (Robot, Vec<Bus<SimBus>>, SimBus, PathBuf, Calibration) {
     let design = common::robot("so101.yaml");
     let (mut buses, sim) = arm(&design);
     let ids: Vec<u8> = design.joints().map(|j| j.id).collect();
@@ -302,7 +296,7 @@ fn the_hand_calibrates_a_badly_fitted_arm_and_angles_become_physical() {
 fn play_wave(
     robot: &Robot,
     cal: Option<&PathBuf>,
-    buses: Vec<Bus<SimBus, ManualClock>>,
+    buses: Vec<Bus<SimBus>>,
     sim: &SimBus,
 ) -> Played {
     let ids: Vec<u8> = robot.joints().map(|j| j.id).collect();

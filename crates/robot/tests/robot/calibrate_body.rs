@@ -76,7 +76,7 @@ fn body(
     mounts: &[Mount],
     start: &[f64],
     hands: Option<Vec<HandPath>>,
-) -> (Vec<Bus<SimBus, ManualClock>>, SimBus) {
+) -> (Vec<Bus<SimBus>>, SimBus) {
     let bus = &robot.buses[0];
     let clock = ManualClock::new();
     let mut hands = hands.map(Vec::into_iter);
@@ -130,7 +130,7 @@ fn calibrate_body(
     design: &Robot,
     mounts: &[Mount],
     start: &[f64],
-) -> (Calibration, Vec<Bus<SimBus, ManualClock>>, SimBus) {
+) -> (Calibration, Vec<Bus<SimBus>>, SimBus) {
     let (hands, end) = hand_paths(mounts, start);
     let (mut buses, sim) = body(design, mounts, start, Some(hands));
     let mut script = Script(Vec::new());
@@ -160,7 +160,7 @@ fn play_calibrated(
     cal: &Calibration,
     name: &str,
     mounts: &[Mount],
-    mut buses: Vec<Bus<SimBus, ManualClock>>,
+    mut buses: Vec<Bus<SimBus>>,
     sim: &SimBus,
     motion: &str,
 ) -> calib_play::Played {

@@ -10,7 +10,7 @@
 use crate::common;
 
 use common::{config, record, robot};
-use servobus_driver::{Bus, Clock, ManualClock};
+use servobus_driver::{Bus, Clock};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_runtime::config::{JointMap, Robot};
 use servobus_runtime::{Lead, RunOptions, Target, VirtualRun};
@@ -24,7 +24,7 @@ const PERIOD: f64 = 0.005;
 const FOLLOWED_LAG: f64 = 0.020 + 0.010;
 
 /// The leader's angles now (deg), one per joint.
-fn read_leader(robot: &Robot, bus: &mut Bus<SimBus, ManualClock>) -> Vec<f64> {
+fn read_leader(robot: &Robot, bus: &mut Bus<SimBus>) -> Vec<f64> {
     let reg = bus
         .settings()
         .series

@@ -16,7 +16,7 @@ fn sts(id: u8) -> SimServo {
     SimServo::sts3215(id).with_return_delay(Duration::ZERO)
 }
 
-fn bus(sim: &SimBus) -> Bus<SimBus, ManualClock> {
+fn bus(sim: &SimBus) -> Bus<SimBus> {
     Bus::new(sim.clone(), BusSettings::new(Series::Sts))
 }
 

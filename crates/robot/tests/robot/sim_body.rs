@@ -38,7 +38,7 @@ fn the_shipped_mounting_and_hand_read_back_raw_ticks_across_the_seam() {
         .build()
         .expect("simulates");
     let mut bus = sim.driver_buses().remove(0);
-    let read = |bus: &mut servobus_driver::Bus<_, _>, id: u8| {
+    let read = |bus: &mut servobus_driver::Bus<_>, id: u8| {
         let mut b = [0u8; 2];
         bus.read(id, addr::PRESENT_POSITION, &mut b)
             .expect("a reply");

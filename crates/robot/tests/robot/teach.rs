@@ -6,7 +6,6 @@ use crate::common;
 
 use std::time::Duration;
 
-use servobus_driver::ManualClock;
 use servobus_robot::sim::{new_truth, Hand, SimRobot};
 use servobus_robot::teach::{
     check_pose, merge_identical, motion_yaml, reduce, trim_idle, StillCapture, Taught, TeachError,
@@ -34,10 +33,7 @@ fn pose_keys(t: f64, p: &[f64]) -> (f64, Vec<(usize, f64)>) {
 
 /// The arm moved by a hand through `keys`, and a teacher on it with the
 /// torque off (the simulator is returned to keep it alive with the teacher).
-fn hand_guided(
-    robot: &Robot,
-    keys: &[(f64, Vec<(usize, f64)>)],
-) -> (SimRobot, Teacher<SimBus, ManualClock>) {
+fn hand_guided(robot: &Robot, keys: &[(f64, Vec<(usize, f64)>)]) -> (SimRobot, Teacher<SimBus>) {
     let sim = SimRobot::builder(robot)
         .hand(Hand::from_keyframes(robot, keys))
         .build()

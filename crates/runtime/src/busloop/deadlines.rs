@@ -220,9 +220,9 @@ pub(crate) fn deadline(settings: &BusSettings, servos: usize, len: usize) -> Dur
 /// ([`Bus::probe_latency`], which `servobus budget --port` runs too). Every
 /// answer teaches `learner` its lateness; a servo that does not answer is
 /// left to the start-up read, which names it.
-pub(crate) fn probe<T: Transport, C: Clock>(
-    bus: &mut Bus<T, C>,
-    clock: &C,
+pub(crate) fn probe<T: Transport>(
+    bus: &mut Bus<T>,
+    clock: &T::Clock,
     learner: &mut LinkLearner,
     feedback: &Feedback,
 ) -> Probe {

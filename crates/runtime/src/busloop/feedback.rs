@@ -41,9 +41,9 @@ impl Feedback {
     ///
     /// [`RunError::Startup`] when the bus fails, [`RunError::NoServo`] naming
     /// the first servo that gave no position.
-    pub fn startup<T: Transport, C: Clock>(
+    pub fn startup<T: Transport>(
         &self,
-        bus: &mut Bus<T, C>,
+        bus: &mut Bus<T>,
         name: &str,
         track: &mut Tracker,
     ) -> Result<(), RunError> {
@@ -89,10 +89,10 @@ impl Feedback {
     /// A reply that may be a late one to the cycle before
     /// ([`SyncReply::in_doubt`](servobus_driver::SyncReply::in_doubt)) is
     /// not used: which time its position is of cannot be told.
-    pub fn read<T: Transport, C: Clock>(
+    pub fn read<T: Transport>(
         &self,
-        bus: &mut Bus<T, C>,
-        clock: &C,
+        bus: &mut Bus<T>,
+        clock: &T::Clock,
         range: Range<usize>,
         budget: Duration,
         track: &mut Tracker,

@@ -2,7 +2,7 @@
 //! tick inside them, encoded once into a SYNC WRITE block that is reused
 //! every cycle.
 
-use servobus_driver::{Bus, BusError, Clock, Transport};
+use servobus_driver::{Bus, BusError, Transport};
 use servobus_protocol::registers::{addr, ByteOrder, Register};
 use servobus_trajectory::JointState;
 
@@ -166,17 +166,14 @@ impl GoalWriter {
     }
 
     /// Sends the goals, patiently: start-up, where any failure is an error.
-    pub fn send_checked<T: Transport, C: Clock>(
-        &mut self,
-        bus: &mut Bus<T, C>,
-    ) -> Result<(), BusError> {
+    pub fn send_checked<T: Transport>(&mut self, bus: &mut Bus<T>) -> Result<(), BusError> {
         self.encode();
         bus.sync_write(self.reg.address, &self.ids, &self.data)
     }
 
     /// Sends the goals in a cycle. Only a lost port is an error: a servo
     /// that missed its goal gets the next one a period later.
-    pub fn send<T: Transport, C: Clock>(&mut self, bus: &mut Bus<T, C>) -> Result<(), PortGone> {
+    pub fn send<T: Transport>(&mut self, bus: &mut Bus<T>) -> Result<(), PortGone> {
         self.encode();
         PortGone::check(bus.sync_write(self.reg.address, &self.ids, &self.data)).map(|_| ())
     }
@@ -186,10 +183,7 @@ impl GoalWriter {
     /// already within the joints' limits, and a ramp in the firmware on
     /// top of it would only make the servo trail the path. These are RAM
     /// registers (no EEPROM write); a power cycle clears them too.
-    pub fn release_profiles<T: Transport, C: Clock>(
-        &self,
-        bus: &mut Bus<T, C>,
-    ) -> Result<(), BusError> {
+    pub fn release_profiles<T: Transport>(&self, bus: &mut Bus<T>) -> Result<(), BusError> {
         // Zeroes: one byte per servo for the ramp, four for time and speed.
         let ramp = &self.torque[0];
         bus.sync_write(addr::ACCELERATION, &self.ids, ramp)?;
@@ -198,11 +192,7 @@ impl GoalWriter {
     }
 
     /// Enables or disables torque on every servo of the bus.
-    pub fn torque<T: Transport, C: Clock>(
-        &self,
-        bus: &mut Bus<T, C>,
-        on: bool,
-    ) -> Result<(), BusError> {
+    pub fn torque<T: Transport>(&self, bus: &mut Bus<T>, on: bool) -> Result<(), BusError> {
         let flags = &self.torque[usize::from(on)];
         bus.sync_write(addr::TORQUE_ENABLE, &self.ids, flags)
     }

@@ -57,11 +57,11 @@ pub(crate) struct LoopConfig<'a> {
 }
 
 /// One bus of a run.
-pub(crate) struct BusLoop<T: Transport, C: Clock> {
+pub(crate) struct BusLoop<T: Transport> {
     pub index: usize,
     pub name: String,
-    pub bus: Bus<T, C>,
-    clock: C,
+    pub bus: Bus<T>,
+    clock: T::Clock,
     plan: Plan,
     period: Duration,
     /// Clock time of cycle 0.
@@ -87,14 +87,14 @@ pub(crate) struct BusLoop<T: Transport, C: Clock> {
     read_at: Duration,
 }
 
-impl<T: Transport, C: Clock> BusLoop<T, C> {
+impl<T: Transport> BusLoop<T> {
     /// The loop of `c.bus` on `bus`.
     ///
     /// # Errors
     ///
     /// [`RunError::Plan`] when the rate does not fit the bus,
     /// [`RunError::Series`] when a joint's servo is not of the bus's series.
-    pub fn new(c: LoopConfig<'_>, bus: Bus<T, C>) -> Result<Self, RunError> {
+    pub fn new(c: LoopConfig<'_>, bus: Bus<T>) -> Result<Self, RunError> {
         let config = c.bus;
         let plan = config.plan(c.rate_hz).map_err(|source| RunError::Plan {
             bus: config.name.clone(),
@@ -436,7 +436,7 @@ impl<T: Transport, C: Clock> BusLoop<T, C> {
 }
 
 /// What the report needs of a bus once its run is over.
-impl<T: Transport, C: Clock> BusLoop<T, C> {
+impl<T: Transport> BusLoop<T> {
     /// The bus's share of the report, with the lead of its last cycle.
     pub fn outcome(&self) -> Outcome {
         let t = self.timing.index as f64 * self.period.as_secs_f64();

@@ -39,7 +39,7 @@ pub fn fastest_cycle(path: &Trajectory, j: usize, period: f64) -> u64 {
 
 /// One simulated bus per robot bus, each with its own clock, every servo
 /// at the middle of its range (tick 2048 on an STS3215).
-pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus>>, Vec<SimBus>) {
     let mid: Vec<f64> = robot
         .joints()
         .map(|j| {
@@ -52,7 +52,7 @@ pub fn sim_buses(robot: &Robot) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) 
 }
 
 /// Driver buses on `sims` (in virtual time), with the simulated buses.
-fn split(robot: &Robot, sims: Vec<SimBus>) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+fn split(robot: &Robot, sims: Vec<SimBus>) -> (Vec<Bus<SimBus>>, Vec<SimBus>) {
     (buses_on(robot, &sims, SimBus::clone), sims)
 }
 
@@ -95,7 +95,7 @@ fn buses_on<T: Transport>(
     robot: &Robot,
     sims: &[SimBus],
     on: impl Fn(&SimBus) -> T,
-) -> Vec<Bus<T, T::Clock>> {
+) -> Vec<Bus<T>> {
     sims.iter()
         .zip(&robot.buses)
         .map(|(sim, bus)| Bus::new(on(sim), bus_settings(bus)))
@@ -105,7 +105,7 @@ fn buses_on<T: Transport>(
 /// Driver buses on `robot`'s servos at `pose` ([`simulated`]) paced by the
 /// wall clock `clock` ([`WallBus`]: the servos answer in real time, in this
 /// process). Give the run the same clock.
-pub fn wall_buses<C: Clock>(robot: &Robot, pose: &[f64], clock: &C) -> Vec<Bus<WallBus<C>, C>> {
+pub fn wall_buses<C: Clock>(robot: &Robot, pose: &[f64], clock: &C) -> Vec<Bus<WallBus<C>>> {
     buses_on(robot, &simulated(robot, pose), |sim| {
         WallBus::new(sim.clone(), clock.clone())
     })
@@ -117,10 +117,7 @@ pub fn secs(s: f64) -> Duration {
 }
 
 /// Like [`sim_buses`], with every servo already at the path's start.
-pub fn sim_buses_at(
-    robot: &Robot,
-    path: &Trajectory,
-) -> (Vec<Bus<SimBus, ManualClock>>, Vec<SimBus>) {
+pub fn sim_buses_at(robot: &Robot, path: &Trajectory) -> (Vec<Bus<SimBus>>, Vec<SimBus>) {
     split(robot, simulated(robot, &start_pose(robot, path)))
 }
 

@@ -73,7 +73,7 @@ pub struct Recorded {
 
 /// Steps `run` until it ends or `max` cycles pass, calling `each(cycle)`
 /// before every step, and records the telemetry.
-pub fn record<T: servobus_driver::Transport>(
+pub fn record<T: servobus_driver::Transport<Clock = servobus_driver::ManualClock>>(
     run: &mut servobus_runtime::VirtualRun<T>,
     max: u64,
     mut each: impl FnMut(u64),
@@ -113,7 +113,7 @@ pub fn record<T: servobus_driver::Transport>(
 
 /// [`record`], doing `act` once, just before cycle `at` (a fault injected,
 /// a command sent).
-pub fn record_acting_at<T: servobus_driver::Transport>(
+pub fn record_acting_at<T: servobus_driver::Transport<Clock = servobus_driver::ManualClock>>(
     run: &mut servobus_runtime::VirtualRun<T>,
     max: u64,
     at: u64,

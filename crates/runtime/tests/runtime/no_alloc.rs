@@ -8,7 +8,7 @@ use crate::common;
 use std::time::Duration;
 
 use servobus_alloc_count::{allocations_during, uncounted, Counting};
-use servobus_driver::{Bus, ManualClock, Transport, TransportError};
+use servobus_driver::{Bus, Transport, TransportError};
 use servobus_runtime::config::{JointMap, Robot};
 use servobus_runtime::{RunOptions, Target, Telemetry, VirtualRun};
 use servobus_sim::SimBus;
@@ -39,13 +39,13 @@ impl<T: Transport> Transport for Uncounted<T> {
 }
 
 /// The robot's simulated buses, the simulator's work left out of counts.
-fn uncounted_buses(robot: &Robot) -> Vec<Bus<Uncounted<SimBus>, ManualClock>> {
+fn uncounted_buses(robot: &Robot) -> Vec<Bus<Uncounted<SimBus>>> {
     let (buses, _) = common::sim_buses(robot);
     buses
         .into_iter()
         .map(|b| {
             let settings = *b.settings();
-            let (t, _) = b.into_parts();
+            let t = b.into_transport();
             Bus::new(Uncounted(t), settings)
         })
         .collect()

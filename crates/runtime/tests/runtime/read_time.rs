@@ -72,11 +72,11 @@ const NO_STALLS: [Duration; 1] = [Duration::ZERO];
 fn wave(delays: &'static [Duration]) -> Report {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _) = common::sim_buses_at(&robot, &path);
-    let buses: Vec<Bus<Descheduled, ManualClock>> = buses
+    let buses: Vec<Bus<Descheduled>> = buses
         .into_iter()
         .map(|b| {
             let settings = *b.settings();
-            let (inner, _) = b.into_parts();
+            let inner = b.into_transport();
             let t = Descheduled {
                 inner,
                 delays,

@@ -10,7 +10,7 @@ use common::Tapped;
 use std::sync::{Arc, Mutex};
 
 use proptest::prelude::*;
-use servobus_driver::{Bus, ManualClock};
+use servobus_driver::Bus;
 use servobus_protocol::{parse_frame, registers::addr, Instruction};
 use servobus_runtime::config::joint_limits;
 use servobus_runtime::{Command, FaultPolicy, RunOptions, VirtualRun};
@@ -50,7 +50,7 @@ proptest! {
         let (path, robot) = common::motion("arm-wave.yaml");
         let (buses, sims) = common::sim_buses_at(&robot, &path);
         let goals = Arc::new(Mutex::new(Vec::new()));
-        let buses: Vec<Bus<Tapped, ManualClock>> = buses
+        let buses: Vec<Bus<Tapped>> = buses
             .into_iter()
             .zip(&sims)
             .map(|(b, sim)| {

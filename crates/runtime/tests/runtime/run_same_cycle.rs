@@ -11,7 +11,7 @@ use common::Tapped;
 
 use std::sync::mpsc;
 
-use servobus_driver::{Bus, ManualClock};
+use servobus_driver::Bus;
 use servobus_protocol::registers::addr;
 use servobus_protocol::{parse_frame, Instruction, StatusFlags};
 use servobus_runtime::config::Robot;
@@ -107,7 +107,7 @@ impl Scenario {
         &self,
         robot: &Robot,
         path: &Trajectory,
-    ) -> (Vec<Bus<Tapped, ManualClock>>, Vec<SimBus>, mpsc::Sender<()>) {
+    ) -> (Vec<Bus<Tapped>>, Vec<SimBus>, mpsc::Sender<()>) {
         let (buses, sims) = common::sim_buses_at(robot, path);
         let (open, gate) = mpsc::channel();
         let mut gate = Some(gate);

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use criterion::Criterion;
-use servobus_driver::{Bus, ManualClock};
+use servobus_driver::Bus;
 use servobus_robot::sim::SimRobot;
 use servobus_runtime::config::{load_motion, plan_motion, Robot};
 use servobus_runtime::{Finish, RunOptions, VirtualRun};
@@ -26,7 +26,7 @@ fn motion(motion: &str, robot: Option<&str>) -> (Trajectory, Robot) {
 }
 
 /// The robot's simulator (servos at rest), one bus per robot bus.
-fn buses(robot: &Robot) -> Vec<Bus<SimBus, ManualClock>> {
+fn buses(robot: &Robot) -> Vec<Bus<SimBus>> {
     match SimRobot::builder(robot).build() {
         Ok(sim) => sim.driver_buses(),
         Err(e) => panic!("bench robot does not simulate: {e}"),

@@ -95,7 +95,7 @@ fn examine_robot(args: &Args) -> anyhow::Result<ExitCode> {
     if args.json {
         print_json(&robot, &checkup.buses, status)?;
     } else {
-        print_text(&robot, &checkup.buses, &standing, args.fix)?;
+        print_text(&robot, &checkup.buses, &standing, args)?;
     }
     if let Some(signal) = stopped {
         errln!(
@@ -128,8 +128,8 @@ fn print_findings(findings: &[Finding]) -> Result<(), StdoutError> {
         )?;
         let fix = f.fix_text();
         if !fix.is_empty() {
-            let mark = if f.fixable() { " [--fix]" } else { "" };
-            outln!("         fix{mark}: {fix}")?;
+            let mark = f.fix_flags().map(|flags| format!(" [{flags}]"));
+            outln!("         fix{}: {fix}", mark.unwrap_or_default())?;
         }
     }
     Ok(())
@@ -139,7 +139,7 @@ fn print_text(
     robot: &Robot,
     outcomes: &[BusCheck],
     standing: &[Finding],
-    fixed: bool,
+    args: &Args,
 ) -> Result<(), StdoutError> {
     for o in outcomes {
         let port = o.at.port.as_deref().unwrap_or("the built-in simulator");
@@ -160,18 +160,37 @@ fn print_text(
                 Err(e) => outln!("FAILED   servo {}: {done} ({e})", fx.id)?,
             }
         }
+        if args.fix && !args.write_servos {
+            for f in o.first.findings.iter().filter(|f| f.needs_write_servos()) {
+                let id = f.id.map_or_else(String::new, |id| format!("servo {id}: "));
+                outln!(
+                    "skipped  {id}only an EEPROM write fixes this: give --fix --write-servos \
+                     to store it"
+                )?;
+            }
+        }
         if let Some(after) = &o.after {
             outln!("after the fixes:")?;
             print_findings(&after.findings)?;
         }
     }
     let count = |s| standing.iter().filter(|f| f.severity == s).count();
-    let fixable = standing.iter().filter(|f| f.fixable()).count();
-    let hint = if fixable > 0 && !fixed {
-        format!("; {fixable} can be fixed with --fix")
-    } else {
-        String::new()
+    // What is wrong and can be fixed; an INFO needs nothing before play.
+    let to_fix = |eeprom: bool| {
+        standing
+            .iter()
+            .filter(|f| f.severity > doctor::Severity::Info && f.fixable())
+            .filter(|f| f.needs_write_servos() == eeprom)
+            .count()
     };
+    let (plain, eeprom) = (to_fix(false), to_fix(true));
+    let mut hint = String::new();
+    if plain > 0 && !args.fix {
+        hint += &format!("; {plain} can be fixed with --fix");
+    }
+    if eeprom > 0 && !(args.fix && args.write_servos) {
+        hint += &format!("; {eeprom} with --fix --write-servos (EEPROM)");
+    }
     outln!(
         "{} error(s), {} warning(s){hint}",
         count(doctor::Severity::Error),
@@ -186,6 +205,7 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> anyhow::Resul
             .map(|f| {
                 let mut v = serde_json::to_value(f).unwrap_or_default();
                 v["fixable"] = f.fixable().into();
+                v["fix_flags"] = f.fix_flags().into();
                 v["fix"] = f.fix_text().into();
                 v["command"] = f.command_line().into();
                 v

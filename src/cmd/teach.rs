@@ -8,6 +8,7 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+use servobus_config::limits::Fixed;
 use servobus_config::{load_robot, LimitOrigin, Robot, RobotOptions};
 use servobus_robot::bus::Transport;
 use servobus_robot::teach::{
@@ -321,7 +322,7 @@ fn show(names: &[String], pose: &[f64]) -> String {
     names
         .iter()
         .zip(pose)
-        .map(|(n, v)| format!("{n} {v:.1}"))
+        .map(|(n, v)| format!("{n} {}", Fixed(*v, 1)))
         .collect::<Vec<_>>()
         .join("  ")
 }

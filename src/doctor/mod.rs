@@ -209,7 +209,8 @@ pub fn advice_text(advice: &Advice) -> String {
             fix_line(fix)
         ),
         Advice::StoreOrCalibrate { store, calibrate } => format!(
-            "if only the offset was rewritten, store the calibration's in EEPROM: {}; if the \
+            "if only the offset was rewritten, store the one the calibration plays with in \
+             EEPROM: {}; if the \
              servo or its horn was replaced, calibrate again: {}",
             fix_line(store),
             fix_line(calibrate)

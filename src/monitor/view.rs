@@ -6,6 +6,8 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Cell, Paragraph, Row as TableRow, Table};
 
+use servobus_config::limits::Fixed;
+
 use super::{Frame, Row};
 
 /// The keys and what they do, as shown at the bottom of the screen.
@@ -89,7 +91,7 @@ fn fit_flags(flags: &[&str], width: usize) -> String {
 }
 
 fn opt(v: Option<f64>, decimals: usize) -> String {
-    v.map_or_else(|| "-".to_string(), |v| format!("{v:.decimals$}"))
+    v.map_or_else(|| "-".to_string(), |v| Fixed(v, decimals).to_string())
 }
 
 fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {

@@ -11,6 +11,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use servobus_config::limits::Fixed;
 use servobus_config::Units;
 use servobus_kinematics::Geometry;
 use servobus_robot::files::AtomicFile;
@@ -97,7 +98,7 @@ impl CsvLog {
             frames.update(sample);
             let positions = frames.positions().unwrap_or_default();
             for (cell, v) in self.frame_cells.iter_mut().zip(positions.iter().flatten()) {
-                *cell = format!("{v:.3}");
+                *cell = Fixed(*v, 3).to_string();
             }
         }
         for j in sample.joints() {
@@ -107,11 +108,12 @@ impl CsvLog {
                 sample.bus.to_string(),
                 sample.cycle.to_string(),
                 name.to_string(),
-                format!("{:.4}", j.commanded),
-                format!("{:.4}", j.planned),
-                j.measured.map_or_else(String::new, |m| format!("{m:.4}")),
-                format!("{:.4}", j.error),
-                format!("{:.4}", j.velocity),
+                Fixed(j.commanded, 4).to_string(),
+                Fixed(j.planned, 4).to_string(),
+                j.measured
+                    .map_or_else(String::new, |m| Fixed(m, 4).to_string()),
+                Fixed(j.error, 4).to_string(),
+                Fixed(j.velocity, 4).to_string(),
                 format!("{:.3}", j.feedback_age.as_secs_f64() * 1e3),
                 u8::from(j.stale).to_string(),
                 u8::from(j.clamped).to_string(),

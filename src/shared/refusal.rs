@@ -45,9 +45,26 @@ pub(crate) fn refused(robot: &Robot, refusal: &Refusal, port: &str) -> anyhow::E
         || PathBuf::from(format!("{}.calibration.yaml", robot.name)),
         Path::to_owned,
     );
-    anyhow::anyhow!(
-        "{refusal}\nnothing was moved. Calibrate this robot first:\n  servobus calibrate --robot {} --port {port} -o {}",
+    let calibrate = format!(
+        "servobus calibrate --robot {} --port {port} -o {}",
         robot.path.display(),
         file.display()
-    )
+    );
+    match refusal {
+        // What the user gave names a file that is not there: an input
+        // error (exit 2), as play and doctor say it.
+        Refusal::Missing { .. } => crate::shared::exit::input(format!(
+            "{refusal}\nnothing was moved. Calibrate this robot first:\n  {calibrate}"
+        )),
+        Refusal::Offset { .. } => anyhow::anyhow!(
+            "{refusal}\nnothing was moved. If only the offset was rewritten (by another tool), \
+             store the one the calibration plays with:\n  servobus doctor --robot {} --port \
+             {port} --fix --write-servos\nif the servo or its horn was replaced, calibrate \
+             again:\n  {calibrate}",
+            servobus::builtin::argument(&robot.path)
+        ),
+        _ => anyhow::anyhow!(
+            "{refusal}\nnothing was moved. Calibrate this robot first:\n  {calibrate}"
+        ),
+    }
 }

@@ -110,7 +110,13 @@ fn plan_play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
         "--robot",
         robot,
     ]);
-    assert_refused(&out, "does not exist");
+    // A robot file naming a file that is not there: an input error, as for
+    // play (exit 2).
+    let (_, err) = exited(&out, 2);
+    says(
+        &err,
+        &["does not exist", "nothing was moved", "servobus calibrate --robot"],
+    );
     // Torque was never switched on, and the joint is where it was.
     assert_eq!(sim.read("2", "torque_enable"), 0);
     assert_eq!(sim.read("2", "present_position"), before);

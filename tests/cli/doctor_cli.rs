@@ -400,3 +400,48 @@ fn doctor_fix_cut_by_a_signal_applies_each_fix_whole_and_says_which() {
     assert!(stopped > 0, "no run was stopped");
     sim.stop();
 }
+
+#[test]
+fn an_offset_only_an_eeprom_write_fixes_is_marked_so_and_fix_alone_says_it_skipped_it() {
+    let dir = scratch("doctor-rewritten-offset");
+    let robot = so101_naming(&dir, "robot.yaml", "arm.calibration.yaml");
+    write_file(&dir, "arm.calibration.yaml", MOUNTED_CALIBRATION);
+    let robot = arg(&robot);
+    let sim = Sim::start_with(&dir, &["--mounting", "so101-mounting"]);
+    // Another tool re-homed servo 2: neither the calibration's offset nor
+    // the one it plays with.
+    sim.ok(&["write", "--id", "2", "offset", "500"]);
+    let doctor = ["doctor", "--robot", robot, "--port", sim.port()];
+    let out = servobus(&doctor);
+    let (text, _) = exited(&out, 2);
+    let store = format!("servobus write --port {} --id 2 offset", sim.port());
+    let marked = text
+        .lines()
+        .skip_while(|l| !l.contains("servo 2 offset"))
+        .nth(1)
+        .unwrap_or_default();
+    assert!(
+        marked.starts_with("         fix [--fix --write-servos]: ") && marked.contains(&store),
+        "{text}"
+    );
+    assert!(
+        text.contains("1 with --fix --write-servos (EEPROM)"),
+        "{text}"
+    );
+
+    let out = servobus(&[&doctor[..], &["--fix"]].concat());
+    let (text, _) = exited(&out, 2);
+    assert!(
+        text.contains(
+            "skipped  servo 2: only an EEPROM write fixes this: give --fix --write-servos"
+        ),
+        "{text}"
+    );
+
+    let out = servobus(&[&doctor[..], &["--fix", "--write-servos"]].concat());
+    let (text, _) = exited(&out, 0);
+    assert!(text.contains("stored in EEPROM"), "{text}");
+    assert!(!text.contains("skipped"), "{text}");
+    drop(sim);
+    let _ = std::fs::remove_dir_all(&dir);
+}

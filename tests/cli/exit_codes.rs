@@ -114,6 +114,53 @@ fn each_input_error_exits_2_with_one_line() {
 }
 
 #[test]
+fn a_calibration_file_named_but_missing_exits_2_from_every_command_that_needs_it() {
+    let dir = scratch("exit-codes-missing-calibration");
+    let so101 = std::fs::read_to_string(common::repo("configs/robots/so101.yaml")).expect("so101");
+    let robot = write_file(
+        &dir,
+        "arm.yaml",
+        &format!("calibration: gone.yaml\n{so101}"),
+    );
+    let robot = arg(&robot);
+    let taught = dir.join("taught.yaml");
+    let sim = Sim::start(&dir);
+    let port = sim.port();
+    let commands: [Vec<&str>; 5] = [
+        vec!["play", "arm-wave", "--robot", robot, "--port", port],
+        vec!["bench", "--robot", robot, "--port", port, "--seconds", "1"],
+        vec![
+            "teach",
+            "--robot",
+            robot,
+            "--port",
+            port,
+            "-o",
+            arg(&taught),
+            "--yes",
+        ],
+        vec!["doctor", "--robot", robot, "--port", port],
+        vec!["play", "arm-wave", "--robot", robot],
+    ];
+    for args in commands {
+        let out = servobus(&args);
+        let (stdout, err) = exited(&out, 2);
+        let said = format!("{stdout}{err}");
+        says(&said, &["gone.yaml"]);
+        assert!(
+            said.contains("servobus calibrate --robot"),
+            "{args:?}: {said}"
+        );
+    }
+    assert!(!taught.exists(), "teach wrote nothing");
+    for id in 1..=6 {
+        assert_eq!(sim.read(&id.to_string(), "torque_enable"), 0, "servo {id}");
+    }
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn a_file_or_a_directory_is_not_a_serial_port() {
     let dir = scratch("exit-codes-not-serial");
     let file = write_file(&dir, "port", "not a port\n");

@@ -318,6 +318,10 @@ fn a_homing_offset_or_firmware_other_than_the_calibrations_is_found() {
     common::says(&offset.problem, &["homing offset is 0"]);
     let firmware = must(&findings, 1, Some("firmware_major"));
     common::says(&firmware.problem, &["calibrated on 3.9"]);
+    // Its fix is marked as needing both flags: --fix alone leaves it.
+    assert_eq!(offset.fix_flags(), Some("--fix --write-servos"));
+    assert!(offset.needs_write_servos());
+    assert_eq!(firmware.fix_flags(), None);
     // Without --write-servos, --fix leaves an offset play refuses alone.
     let how = doctor::Fixing {
         robot: &arm.robot,

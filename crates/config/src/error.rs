@@ -256,20 +256,71 @@ impl Source {
     /// serde_yaml prints `path: message at line L column C`; split that into
     /// our fields so every error prints the same way.
     fn yaml_error(&self, e: &serde_yaml::Error) -> ConfigError {
-        let (line, column) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
+        let (mut line, mut column) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
         let mut text = e.to_string();
         let suffix = format!(" at line {line} column {column}");
         if let Some(i) = text.find(&suffix) {
             text.replace_range(i..i + suffix.len(), "");
         }
         let (field, reason) = split_path(&text);
-        let reason = user_terms(reason);
+        let mut reason = user_terms(reason);
+        // serde_yaml places a duplicate key at the start of its mapping:
+        // point at the second one, and say where the first is.
+        let duplicate = reason
+            .strip_prefix("duplicate field `")
+            .and_then(|rest| rest.split_once('`'))
+            .and_then(|(key, _)| duplicate_key(&self.text, line, column, key));
+        if let Some((first, second)) = duplicate {
+            (line, column) = second;
+            reason = format!("{reason} (first given at line {first})");
+        }
         let reason = match hint(&self.text, line) {
             Some(h) => format!("{reason} ({h})"),
             None => reason,
         };
         ConfigError::invalid(&self.path, line, column, field, reason)
     }
+}
+
+/// The lines (1-based) where `key` is given first and second in the block
+/// mapping that starts at `line`, `column`, and the second one's position:
+/// the keys at the mapping's indentation, up to the first line indented
+/// less. `None` for a flow mapping (`{a: 1, a: 2}`), or when the key is not
+/// found twice.
+fn duplicate_key(
+    text: &str,
+    line: usize,
+    column: usize,
+    key: &str,
+) -> Option<(usize, (usize, usize))> {
+    let indent = column.checked_sub(1)?;
+    let mut first = None;
+    for (n, l) in text.lines().enumerate().skip(line.checked_sub(1)?) {
+        // The mapping's first key may follow a list item's `- `.
+        let body = if n + 1 == line {
+            l.get(indent..)?
+        } else {
+            let body = l.trim_start_matches(' ');
+            if body.is_empty() || body.starts_with('#') {
+                continue;
+            }
+            match (l.len() - body.len()).cmp(&indent) {
+                std::cmp::Ordering::Less => break,
+                std::cmp::Ordering::Greater => continue,
+                std::cmp::Ordering::Equal => body,
+            }
+        };
+        let is_key = body
+            .strip_prefix(key)
+            .is_some_and(|rest| rest.trim_start_matches(' ').starts_with(':'));
+        if is_key {
+            match first {
+                None => first = Some(n + 1),
+                Some(f) => return Some((f, (n + 1, column))),
+            }
+        }
+    }
+    None
 }
 
 /// serde's messages, which follow serde_yaml's field path and `: `.

@@ -365,6 +365,23 @@ pub fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>, ConfigError> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rounded(pub f64);
 
+/// A number with a fixed count of decimals (`Fixed(v, 2)` prints as
+/// `{v:.2}` does), except that a value that rounds to zero prints without
+/// a sign: `0.00`, never `-0.00`. For the angles of logs, taught files and
+/// live views, where a joint resting at 0 reads -0.0001 as often as 0.0001.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fixed(pub f64, pub usize);
+
+impl fmt::Display for Fixed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let text = format!("{:.*}", self.1, self.0);
+        match text.strip_prefix('-') {
+            Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => f.write_str(rest),
+            _ => f.write_str(&text),
+        }
+    }
+}
+
 impl fmt::Display for Rounded {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let v = self.0;
@@ -416,6 +433,13 @@ mod tests {
         assert_eq!(Rounded(5.4e10).to_string(), "5.4e10");
         assert_eq!(Rounded(f64::INFINITY).to_string(), "inf");
         assert_eq!(Rounded(-0.0).to_string(), "0");
+        assert_eq!(Fixed(-0.0, 2).to_string(), "0.00");
+        assert_eq!(Fixed(-0.004, 2).to_string(), "0.00");
+        assert_eq!(Fixed(-0.005_1, 2).to_string(), "-0.01");
+        assert_eq!(Fixed(-12.5, 1).to_string(), "-12.5");
+        assert_eq!(Fixed(-0.3, 0).to_string(), "0");
+        assert_eq!(Fixed(f64::NAN, 1).to_string(), "NaN");
+        assert_eq!(Fixed(f64::NEG_INFINITY, 1).to_string(), "-inf");
     }
 
     #[test]

@@ -218,7 +218,7 @@ impl Operator for Terminal {
                  end stop to end stop; then back to the pose. {}",
                 self.ends()
             ),
-            Step::Done => "4. Done: writing the calibration.".to_owned(),
+            Step::Done => "4. Done: checking the sweep, then writing the calibration.".to_owned(),
         };
         let _ = outln!("{text}");
         let _ = std::io::stdout().flush();

@@ -398,7 +398,8 @@ pub(crate) fn require_calibration(robot: &Robot, source: &Source) -> Result<(), 
         &FieldPath::root().key("calibration"),
         format!(
             "the calibration file {} does not exist; motions are planned and played within \
-             the calibrated limits: calibrate first (`servobus calibrate --robot {} -o {}`), \
+             the calibrated limits: calibrate first, on the robot's servos \
+             (`servobus calibrate --robot {} --port <PORT> -o {}`), \
              or remove `calibration:` to use the robot as designed",
             file.display(),
             source.path.display(),

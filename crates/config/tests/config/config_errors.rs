@@ -481,3 +481,39 @@ fn motions_are_capped_with_the_limit_in_the_message() {
     let reason = "the motion is too long: 10000000 s is longer than the limit of 86400 s";
     expect(&e, &p, 4, 5, "keyframes[1]", reason);
 }
+
+#[test]
+fn a_duplicate_key_is_placed_at_its_second_line_and_names_the_first() {
+    // A line added twice at the end of the file (a step of a walkthrough
+    // run twice): the mapping starts at line 1, the keys follow the robot's last line.
+    let twice = format!("{ROBOT}calibration: cal.yaml\ncalibration: cal.yaml\n");
+    let p = write("duplicate_root", "robot.yaml", &twice);
+    let e = load_robot(&p, &RobotOptions::default()).expect_err("a duplicate key");
+    let lines = ROBOT.lines().count();
+    let said = format!(
+        "{}:{}:1: duplicate field `calibration` (first given at line {})",
+        p.display(),
+        lines + 2,
+        lines + 1
+    );
+    assert_eq!(e.to_string(), said);
+    // Inside a list item's mapping: the second `id:` of joint b.
+    let (p, e) = robot_error(
+        "duplicate_joint",
+        "        id: 2\n",
+        "        id: 2\n        id: 3\n",
+    );
+    expect(&e, &p, 17, 9, "buses[0].joints[1]", "duplicate field `id`");
+    assert!(e.to_string().contains("(first given at line 16)"), "{e}");
+    // A flow mapping keeps serde_yaml's place (the mapping's start).
+    let joint_b = ROBOT.split("      - name: b\n").nth(1).expect("joint b");
+    let flow = "      - {name: b, id: 2, id: 3, model: sts3215, min: -45, max: 45, \
+                max_velocity: 180, max_acceleration: 900}\n";
+    let (p, e) = robot_error(
+        "duplicate_flow",
+        &format!("      - name: b\n{joint_b}"),
+        flow,
+    );
+    expect(&e, &p, 15, 9, "buses[0].joints[1]", "duplicate field `id`");
+    assert!(!e.to_string().contains("first given"), "{e}");
+}

@@ -170,6 +170,24 @@ impl Finding {
     pub fn fixable(&self) -> bool {
         self.action.is_some()
     }
+
+    /// The flags of `servobus doctor` that apply the fix: `--fix`, or
+    /// `--fix --write-servos` where only an EEPROM write fixes it (a
+    /// homing offset play refuses); `None` when [`apply`] cannot fix it.
+    pub fn fix_flags(&self) -> Option<&'static str> {
+        match self.action? {
+            Action::Offset {
+                store_only: true, ..
+            } => Some("--fix --write-servos"),
+            _ => Some("--fix"),
+        }
+    }
+
+    /// Whether `--fix` alone leaves it alone: its fix is an EEPROM write
+    /// that `--write-servos` must ask for.
+    pub fn needs_write_servos(&self) -> bool {
+        self.fix_flags() == Some("--fix --write-servos")
+    }
 }
 
 /// The exit status of a set of findings: 0 when nothing is wrong, 1 on

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use servobus_trajectory::{self as traj, JointState, PlanOptions, TimedShape};
 
 use super::{distance, TeachError};
+use crate::config::limits::Fixed;
 use crate::config::{joint_limits, limit_origins, plan_input, Keyframe, Motion, Robot};
 
 /// A timed keyframe: seconds from the start, and every joint's angle in
@@ -418,7 +419,7 @@ pub fn motion_yaml(robot: &Robot, robot_file: &Path, taught: &Taught) -> String 
         line.push_str("pose: {");
         for (i, (v, j)) in pose.iter().zip(robot.joints()).enumerate() {
             let sep = if i == 0 { "" } else { ", " };
-            let _ = write!(line, "{sep}{}: {v:.2}", j.name);
+            let _ = write!(line, "{sep}{}: {}", j.name, Fixed(*v, 2));
         }
         line.push('}');
         let _ = writeln!(y, "{line}");

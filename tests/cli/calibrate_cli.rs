@@ -115,7 +115,11 @@ fn plan_play_and_bench_refuse_a_missing_calibration_before_moving_anything() {
     let (_, err) = exited(&out, 2);
     says(
         &err,
-        &["does not exist", "nothing was moved", "servobus calibrate --robot"],
+        &[
+            "does not exist",
+            "nothing was moved",
+            "servobus calibrate --robot",
+        ],
     );
     // Torque was never switched on, and the joint is where it was.
     assert_eq!(sim.read("2", "torque_enable"), 0);

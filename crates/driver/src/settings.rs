@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use servobus_protocol::registers::Series;
-use servobus_timing::{Link, StatusLevel};
+use servobus_timing::{LinkDelays, StatusLevel};
 
 /// `with_*` methods, each giving the settings back with one field (or a
 /// field of the link) set: `name(field.path: Type);` a line.
@@ -32,19 +32,17 @@ macro_rules! builders {
 /// ```
 ///
 /// The baud rate is not a setting: it belongs to the transport (given once,
-/// when the port or the simulator is opened), and the
-/// [`Bus`](crate::Bus) writes it into [`BusSettings::link`] when it is
-/// built and whenever the rate or the settings change.
+/// when the port or the simulator is opened, and changed with
+/// [`Bus::set_baud`](crate::Bus::set_baud)). The bus joins the two in
+/// [`Bus::link`](crate::Bus::link).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct BusSettings {
     /// The servo family: register layout and byte order of this bus.
     pub series: Series,
-    /// Adapter latency, turnaround and margin, and the transport's baud
-    /// rate: every reply deadline is derived from it. The baud rate here is
-    /// the bus's to keep (a [`Bus`](crate::Bus) sets it from its transport);
-    /// one written here is overwritten.
-    pub link: Link,
+    /// Adapter latency, turnaround and margin: with the transport's baud
+    /// rate, every reply deadline is derived from them.
+    pub link: LinkDelays,
     /// The servos' return delay (register 7; 2 us per unit).
     pub return_delay: Duration,
     /// How many times a failed transaction is tried again (0: never).
@@ -79,12 +77,11 @@ pub struct BusSettings {
 impl BusSettings {
     /// Settings for a bus of `series` servos: no adapter latency, return
     /// delay 0, one retry, every instruction answered, echo looked for
-    /// (see [`BusSettings::echo`]). The
-    /// link's baud rate is the transport's, filled in by the bus.
+    /// (see [`BusSettings::echo`]).
     pub fn new(series: Series) -> Self {
         BusSettings {
             series,
-            link: Link::new(Self::UNPLACED_BAUD),
+            link: LinkDelays::DEFAULT,
             return_delay: Duration::ZERO,
             retries: 1,
             replies: StatusLevel::All,
@@ -92,12 +89,6 @@ impl BusSettings {
             strict_status: false,
         }
     }
-
-    /// The link's baud rate in settings not yet given to a bus (a bus
-    /// replaces it with its transport's): the servos' fastest rate, index 0
-    /// of their baud table and their factory setting, so that a deadline
-    /// computed from loose settings is still a plausible one.
-    pub const UNPLACED_BAUD: u32 = servobus_protocol::registers::MAX_SERVO_BAUD;
 
     builders! {
         /// The same settings for servos of another series.
@@ -114,8 +105,7 @@ impl BusSettings {
         with_echo(echo: bool);
         /// The same settings with strict status on or off.
         with_strict_status(strict_status: bool);
-        /// The same settings with the whole link replaced (its baud rate
-        /// is the bus's to set, as for [`BusSettings::link`]).
-        with_link(link: Link);
+        /// The same settings with the link's delays replaced.
+        with_link(link: LinkDelays);
     }
 }

@@ -69,7 +69,7 @@ pub use block::Block;
 pub use cost::{floor_rate_hz, CycleCost, Servo, MAX_SYNC_READ_SERVOS};
 pub use deadline::Transaction;
 pub use fix::{Change, Fixes};
-pub use link::{Link, BITS_PER_BYTE};
+pub use link::{Link, LinkDelays, BITS_PER_BYTE};
 pub use pack::{
     pack_sync_write, servos_per_frame, sync_write_bytes, sync_write_chunks, sync_write_frames,
     Chunk, PackError, Packed,

@@ -9,6 +9,49 @@ use servobus_protocol::MAX_FRAME_LEN;
 /// Bits on the wire per byte with 8N1 framing (start, 8 data, stop).
 pub const BITS_PER_BYTE: u64 = 10;
 
+/// What a serial link adds to the wire time of every exchange, whatever
+/// its baud rate: a [`Link`] without the rate. A bus's settings hold these,
+/// and its transport the rate ([`LinkDelays::at`] joins them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LinkDelays {
+    /// The adapter's latency per transaction ([`Link::latency`]).
+    pub latency: Duration,
+    /// Gap between a request and its reply beyond the return delay
+    /// ([`Link::turnaround`]).
+    pub turnaround: Duration,
+    /// Safety margin added to every deadline ([`Link::margin`]).
+    pub margin: Duration,
+    /// Cost of each round trip beyond latency and wire ([`Link::overhead`]).
+    pub overhead: Duration,
+    /// Cost of each reply beyond its wire time ([`Link::reply_overhead`]).
+    pub reply_overhead: Duration,
+}
+
+impl LinkDelays {
+    /// No adapter latency, the default turnaround and margin, no
+    /// overheads: [`Link::new`]'s.
+    pub const DEFAULT: LinkDelays = Link::new(1).delays();
+
+    /// The link these delays make at `baud` (0 is taken as 1, as by
+    /// [`Link::new`]).
+    pub const fn at(self, baud: u32) -> Link {
+        Link {
+            baud: if baud == 0 { 1 } else { baud },
+            latency: self.latency,
+            turnaround: self.turnaround,
+            margin: self.margin,
+            overhead: self.overhead,
+            reply_overhead: self.reply_overhead,
+        }
+    }
+}
+
+impl Default for LinkDelays {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
 /// A serial link to a bus of servos.
 ///
 /// Every reply deadline is derived from these figures (never a fixed
@@ -137,6 +180,17 @@ impl Link {
     pub const fn with_turnaround(mut self, turnaround: Duration) -> Link {
         self.turnaround = turnaround;
         self
+    }
+
+    /// What the link adds to the wire, without its baud rate.
+    pub const fn delays(&self) -> LinkDelays {
+        LinkDelays {
+            latency: self.latency,
+            turnaround: self.turnaround,
+            margin: self.margin,
+            overhead: self.overhead,
+            reply_overhead: self.reply_overhead,
+        }
     }
 
     /// Wire time of `bytes` bytes in whole nanoseconds, rounded up.

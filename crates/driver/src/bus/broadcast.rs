@@ -36,8 +36,8 @@ impl<T: Transport> Bus<T> {
     pub fn anyone_answers(&mut self, at_least: Duration) -> Result<bool, BusError> {
         let s = &self.settings;
         // The deadline of a PING to one servo (the broadcast ID has none).
-        let ping = s
-            .link
+        let ping = self
+            .link()
             .deadline(Transaction::Ping, s.return_delay, s.replies);
         let wait = ping.unwrap_or(Duration::ZERO).max(at_least);
         self.io.begin();

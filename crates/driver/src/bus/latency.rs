@@ -84,7 +84,7 @@ impl<T: Transport> Bus<T> {
         self.settings.retries = 0;
         // What the link model accounts for: the PING's deadline without the
         // latency and the margin.
-        let link = self.settings.link;
+        let link = self.link();
         let modelled = link
             .deadline(Transaction::Ping, saved.return_delay, saved.replies)
             .map_or(Duration::ZERO, |d| {

@@ -13,7 +13,7 @@ mod transact;
 use std::time::Duration;
 
 use servobus_protocol::{BROADCAST_ID, MAX_PARAMS};
-use servobus_timing::Transaction;
+use servobus_timing::{Link, Transaction};
 
 pub use latency::{LatencyMeasurement, PROBE_CEILING, PROBE_PINGS};
 pub(crate) use transact::Expect;
@@ -63,13 +63,11 @@ impl<T: Transport> Bus<T> {
     ///
     /// The transport owns the clock and the baud rate: the bus times its
     /// deadlines on [`Transport::clock`] and derives them at
-    /// [`Transport::baud`] (which it writes into its settings' link, so
-    /// that [`Bus::settings`] reads the rate in use). Change the rate with
+    /// [`Transport::baud`] ([`Bus::link`]: the settings' delays at that
+    /// rate). Change the rate with
     /// [`Bus::set_baud`], which moves the transport and the deadlines
     /// together.
     pub fn new(transport: T, settings: BusSettings) -> Self {
-        let mut settings = settings;
-        settings.link.baud = transport.baud();
         let mut io = Io::new(transport);
         io.echo = settings.echo;
         Bus {
@@ -86,25 +84,29 @@ impl<T: Transport> Bus<T> {
 }
 
 impl<T: Transport> Bus<T> {
-    /// The settings in use; their link's baud rate is the transport's.
+    /// The settings in use.
     pub fn settings(&self) -> &BusSettings {
         &self.settings
     }
 
     /// Changes the settings (e.g. the latency after [`Bus::measure_latency`],
     /// or the series once a servo's model is known). The baud rate is not
-    /// one of them: the link keeps the transport's rate whatever `settings`
-    /// says (see [`Bus::set_baud`]), so settings saved before a switch can
-    /// be put back after it.
+    /// one of them: it is the transport's (see [`Bus::set_baud`]), so
+    /// settings saved before a switch can be put back after it.
     pub fn set_settings(&mut self, settings: BusSettings) {
         self.io.echo = settings.echo;
         self.settings = settings;
-        self.settings.link.baud = self.io.transport.baud();
     }
 
     /// The baud rate in use (the transport's).
     pub fn baud(&self) -> u32 {
-        self.settings.link.baud
+        self.io.transport.baud()
+    }
+
+    /// The link every deadline is derived from: the settings' delays at
+    /// the transport's baud rate.
+    pub fn link(&self) -> Link {
+        self.settings.link.at(self.io.transport.baud())
     }
 
     /// Moves the transport to `baud` and derives every deadline from then
@@ -116,7 +118,7 @@ impl<T: Transport> Bus<T> {
     /// of 0, a port that cannot run at it); the bus stays at its rate.
     pub fn set_baud(&mut self, baud: u32) -> Result<(), BusError> {
         let current = self.io.transport.baud();
-        if baud == current && baud == self.settings.link.baud {
+        if baud == current {
             return Ok(());
         }
         if baud == 0 {
@@ -126,7 +128,6 @@ impl<T: Transport> Bus<T> {
             }));
         }
         self.io.transport.set_baud(baud)?;
-        self.settings.link.baud = self.io.transport.baud();
         Ok(())
     }
 
@@ -204,7 +205,7 @@ impl<T: Transport> Bus<T> {
             return None;
         }
         let s = &self.settings;
-        s.link.deadline(tx, s.return_delay, s.replies)
+        self.link().deadline(tx, s.return_delay, s.replies)
     }
 
     /// What a request to `id` waits for: the reply of `len` data bytes to

@@ -16,7 +16,8 @@ impl<T: Transport> Bus<T> {
     /// and returns the time it started on the wire: every request goes out
     /// here.
     pub(crate) fn send(&mut self) -> Result<Duration, TransportError> {
-        let start = self.io.send(&self.settings.link);
+        let link = self.link();
+        let start = self.io.send(&link);
         self.count_late();
         start
     }

@@ -234,10 +234,10 @@ impl<T: Transport> Bus<T> {
         let len = self.sync.len;
         let deadline = if s.series.has_sync_read() {
             let tx = Transaction::SyncRead { servos, len };
-            s.link.deadline(tx, s.return_delay, s.replies)
+            self.link().deadline(tx, s.return_delay, s.replies)
         } else {
             let tx = Transaction::Read { len };
-            let each = s.link.deadline(tx, s.return_delay, s.replies);
+            let each = self.link().deadline(tx, s.return_delay, s.replies);
             each.map(|d| d * u32::try_from(servos).unwrap_or(u32::MAX))
         };
         deadline.ok_or(BusError::NotAnswered { level: s.replies })

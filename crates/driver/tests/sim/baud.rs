@@ -24,7 +24,7 @@ fn a_scan_across_two_baud_rates_finds_each_servo_at_its_own() -> Result<(), BusE
     for baud in [1_000_000, 115_200] {
         bus.set_baud(baud)?;
         assert_eq!(
-            (sim.baud(), bus.baud(), bus.settings().link.baud),
+            (sim.baud(), bus.baud(), bus.link().baud),
             (baud, baud, baud)
         );
         for id in 1..=2 {

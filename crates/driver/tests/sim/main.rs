@@ -147,7 +147,7 @@ fn sync_read_reask_recovers_dropped_replies_within_budget() -> Result<(), BusErr
     let ids: Vec<u8> = (1..=6).collect();
     let (mut bus, sim) = setup(&ids);
     sim.set_faults(Faults::seeded(7).drop(0.3));
-    let link = bus.settings().link;
+    let link = bus.link();
     let round = Transaction::SyncRead { servos: 6, len: 2 };
     let budget = link
         .deadline(round, Duration::ZERO, StatusLevel::All)
@@ -419,7 +419,7 @@ fn reply_timeouts_at_1mbps_are_a_few_milliseconds() -> Result<(), BusError> {
     let clock = ManualClock::new();
     let sim = SimBus::new(clock.clone(), BAUD);
     let settings = BusSettings::new(Series::Sts)
-        .with_link(link)
+        .with_link(link.delays())
         .with_retries(0);
     let mut bus = Bus::new(sim, settings);
     let t0 = clock.now();

@@ -333,7 +333,7 @@ impl Poller {
         }
         self.record_latencies(bus, !first);
         let now = bus.clock().now();
-        let link = bus.settings().link;
+        let link = bus.link();
         let (request, reply) = (8 + self.ids.len(), 6 + usize::from(BLOCK_LEN));
         let bytes = match self.series {
             Series::Sts => request + answered * reply,

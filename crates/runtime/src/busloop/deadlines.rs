@@ -17,7 +17,7 @@
 use std::time::Duration;
 
 use servobus_driver::{Bus, BusSettings, Clock, Transport};
-use servobus_timing::Transaction;
+use servobus_timing::{Link, Transaction};
 
 use super::feedback::Feedback;
 
@@ -167,9 +167,9 @@ fn read_of(settings: &BusSettings, servos: usize, len: usize) -> (Transaction, u
 }
 
 /// What the link model says reading `servos` positions takes, without the
-/// adapter's latency and the margin: the time a perfect adapter would need.
-pub(crate) fn modelled(settings: &BusSettings, servos: usize, len: usize) -> Duration {
-    let link = settings.link;
+/// adapter's latency and the margin: the time a perfect adapter would need,
+/// on `link` (the bus's: [`Bus::link`]).
+pub(crate) fn modelled(settings: &BusSettings, link: Link, servos: usize, len: usize) -> Duration {
     let (tx, n) = read_of(settings, servos, len);
     link.deadline(tx, settings.return_delay, settings.replies)
         .map_or(Duration::ZERO, |d| {
@@ -205,12 +205,10 @@ pub(crate) fn allowance_within(
 }
 
 /// The reply deadline in force for reading `servos` positions (the sum of
-/// the READs' on a bus without SYNC READ).
-pub(crate) fn deadline(settings: &BusSettings, servos: usize, len: usize) -> Duration {
+/// the READs' on a bus without SYNC READ), on `link`.
+pub(crate) fn deadline(settings: &BusSettings, link: Link, servos: usize, len: usize) -> Duration {
     let (tx, n) = read_of(settings, servos, len);
-    settings
-        .link
-        .deadline(tx, settings.return_delay, settings.replies)
+    link.deadline(tx, settings.return_delay, settings.replies)
         .unwrap_or(Duration::ZERO)
         .saturating_mul(n)
 }
@@ -274,7 +272,7 @@ mod tests {
         // Six positions by SYNC READ at 1 Mbps, return delay 0: a request of
         // 14 bytes and 6 replies of 8, 620 us on the wire, plus 6
         // turnarounds of 50 us: 920 us that no adapter can shorten.
-        let model = modelled(&settings, 6, 2);
+        let model = modelled(&settings, settings.link.at(1_000_000), 6, 2);
         assert_eq!(model, 920 * US);
         let fixed = model + settings.link.margin;
         let learned = 400 * US;

@@ -319,7 +319,12 @@ impl<T: Transport> BusLoop<T> {
                 .saturating_sub(self.period / 8);
             let servos = range.len();
             // What a perfect adapter would need: the read's fixed cost.
-            let model = deadlines::modelled(self.bus.settings(), servos, self.feedback.size());
+            let model = deadlines::modelled(
+                self.bus.settings(),
+                self.bus.link(),
+                servos,
+                self.feedback.size(),
+            );
             if self.link.learns() {
                 let wait = deadlines::allowance_within(
                     self.bus.settings(),
@@ -479,6 +484,7 @@ impl<T: Transport> BusLoop<T> {
             latency_p99_us: self.link.p99().as_secs_f64() * 1e6,
             reply_deadline_us: deadlines::deadline(
                 self.bus.settings(),
+                self.bus.link(),
                 self.feedback.ids().len(),
                 self.feedback.size(),
             )

@@ -147,6 +147,12 @@ impl<T: Transport> BusLoop<T> {
                     config.joints.iter().map(|j| j.model.response_lag),
                     c.period.as_secs_f64(),
                 ),
+                lead::Pace::of(
+                    config
+                        .joints
+                        .iter()
+                        .map(|j| (j.max_velocity, j.max_acceleration, j.max_jerk)),
+                ),
             ),
             counters: Counters::new(),
             out: Publisher::new(c.index, c.telemetry),

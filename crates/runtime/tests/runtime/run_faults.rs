@@ -59,12 +59,16 @@ fn the_fault(run: &VirtualRun<SimBus>, rec: &common::Recorded) -> Fault {
 /// The stop after a fault is jerk-limited: commands stay within the arm's
 /// limits (wrist_flex: 240 deg/s, 1200 deg/s^2, 12000 deg/s^3). Finite
 /// differences of a path are weighted means of its derivatives, so they
-/// keep its limits exactly; 1e-6 is float rounding.
+/// keep its limits exactly; 1e-6 is float rounding, and 1 % what a ramp of
+/// the run's identified lead may add (the runtime's `LEAD_EXCESS`).
 fn assert_smooth_from(rec: &common::Recorded, from: u64) {
     let (v, a, j) = rec.peaks(WRIST_FLEX, from, PERIOD);
     println!("wrist_flex after cycle {from}: {v:.1} deg/s, {a:.0} deg/s^2, {j:.0} deg/s^3");
-    let within = 1.0 + 1e-6;
-    assert!(v <= 240.0 * within && a <= 1200.0 * within && j <= 12_000.0 * within);
+    let within = 1.0 + 1e-6 + 0.01;
+    assert!(
+        v <= 240.0 * within && a <= 1200.0 * within && j <= 12_000.0 * within,
+        "{v} {a} {j}"
+    );
 }
 
 #[test]

@@ -98,6 +98,9 @@ fn the_scs_robot_reads_servo_by_servo() {
 /// Finite differences of a path within its limits stay within them up to
 /// float rounding (relative).
 const WITHIN: f64 = 1.0 + 1e-6;
+/// How far a ramp of the identified lead may take the goals past a path's
+/// limits (the runtime's `LEAD_EXCESS`).
+const LEAD_EXCESS: f64 = 0.01;
 
 /// Plays arm-wave from its start, sends `command` at cycle `at`, and checks
 /// the commands of every joint stay within the arm's limits around it.
@@ -105,7 +108,8 @@ const WITHIN: f64 = 1.0 + 1e-6;
 /// The limits hold exactly for finite differences too: the k-th difference
 /// of a sampled path over k periods is a weighted mean of its k-th
 /// derivative over them (mean value theorem for divided differences), so
-/// it cannot exceed a bound the path keeps; [`WITHIN`] is float rounding.
+/// it cannot exceed a bound the path keeps; [`WITHIN`] is float rounding,
+/// and [`LEAD_EXCESS`] what a ramp of the identified lead may add.
 fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report, common::Recorded) {
     let (path, robot) = common::motion("arm-wave.yaml");
     let (buses, _) = common::sim_buses_at(&robot, &path);
@@ -127,9 +131,14 @@ fn command_mid_motion(command: Command, at: u64, jerk_limited: bool) -> (Report,
     for (i, (v_max, a_max, j_max)) in limits.into_iter().enumerate() {
         let (v, a, j) = rec.peaks(i, at - 20, 0.005);
         println!("joint {i}: {v:.1} deg/s, {a:.0} deg/s^2, {j:.0} deg/s^3");
-        assert!(v <= v_max * WITHIN && a <= a_max * WITHIN, "joint {i}");
+        // The run identifies its lead: a ramp of it may add LEAD_EXCESS.
+        let within = WITHIN + LEAD_EXCESS;
+        assert!(
+            v <= v_max * within && a <= a_max * within,
+            "joint {i}: {v} {a}"
+        );
         if jerk_limited {
-            assert!(j <= j_max * WITHIN, "joint {i}");
+            assert!(j <= j_max * within, "joint {i}: {j}");
         }
     }
     (run.report(), rec)
@@ -143,6 +152,42 @@ fn a_stop_mid_motion_is_jerk_limited_and_ends_the_run() {
     // It stopped early (arm-wave lasts about 1600 cycles).
     let last = rec.rows.last().map_or(0, |r| r.0);
     assert!((300..600).contains(&last), "{last}");
+}
+
+/// A stop may come at any cycle (a Ctrl-C, a closed stdout): wherever it
+/// comes, the goals keep every limit: exactly (to float rounding) with no
+/// lead, and within [`LEAD_EXCESS`] while the identified lead ramps (the
+/// goals are the path sampled that far ahead; see the runtime's
+/// `busloop/lead.rs`). It used to be 1.6 % in jerk and 0.8 % in
+/// acceleration in the first second, and more on a loaded host.
+#[test]
+fn a_stop_at_any_cycle_keeps_every_limit() {
+    let (path, robot) = common::motion("arm-wave.yaml");
+    for (lead, within) in [
+        (servobus_runtime::Lead::None, WITHIN),
+        (servobus_runtime::Lead::default(), WITHIN + LEAD_EXCESS),
+    ] {
+        for at in (40..1050).step_by(37) {
+            let (buses, _) = common::sim_buses_at(&robot, &path);
+            let options = RunOptions { lead, ..recorded() };
+            let mut run = VirtualRun::new(&robot, path.clone(), buses, options).expect("starts");
+            let tx = run.commands();
+            let rec = common::record_acting_at(&mut run, 20_000, at, || {
+                tx.try_send(Command::Stop).expect("room for a command");
+            });
+            assert_eq!(run.report().finish, Finish::Stopped, "stop at {at}");
+            for (i, joint) in robot.joints().enumerate() {
+                let (v, a, j) = rec.peaks(i, 0, 0.005);
+                let j_max = joint.max_jerk.unwrap_or(f64::INFINITY);
+                assert!(
+                    v <= joint.max_velocity * within
+                        && a <= joint.max_acceleration * within
+                        && j <= j_max * within,
+                    "{lead:?}, stop at cycle {at}, joint {i}: {v} deg/s, {a} deg/s^2, {j} deg/s^3"
+                );
+            }
+        }
+    }
 }
 
 #[test]

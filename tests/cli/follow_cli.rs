@@ -31,12 +31,17 @@ fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() 
     // run used to be 44-47 ms: the first target, taken before the
     // follower's loop had started (its 50 ms start gap), which the figures
     // now leave out (max 3.1-5.7 ms since). The maximum is reported, not
-    // bounded: a loaded machine may hold up one cycle.
+    // bounded: a loaded machine may hold up one cycle. This runs on the
+    // wall clock, so the bound here is 10 periods, a check that the
+    // figure is a latency at all (the gate once saw p99 above 15 ms with
+    // other tests running); the 3-period figure is read from this report
+    // on a quiet host, and the latency of the path itself is held in
+    // virtual time (crates/robot/tests/robot/live_follow.rs).
     let period = common::num(follow, "period_ms");
     assert!((period - 5.0).abs() < 1e-9, "{follow}");
     let p50 = common::num(&follow["latency_ms"], "p50");
     let p99 = common::num(&follow["latency_ms"], "p99");
-    assert!(p50 <= p99 && p99 < 3.0 * period, "{follow}");
+    assert!(p50 <= p99 && p99 < 10.0 * period, "{follow}");
     let joints = follow["joints"].as_array().expect("joints");
     assert_eq!(joints.len(), 6);
     // Issue 24 asks for 2 deg. Each follower reading is compared with the

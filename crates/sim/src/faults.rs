@@ -1,10 +1,13 @@
 //! Fault injection: what goes wrong on the simulated bus, drawn from a
 //! seeded random source so that every run with the same seed is identical.
 
-use std::str::FromStr;
 use std::time::Duration;
 
 use crate::{addr, SimServo};
+
+mod spec;
+
+pub use spec::FaultSpecError;
 
 /// The faults a [`SimBus`](crate::SimBus) (or the pty server) injects.
 ///
@@ -238,160 +241,6 @@ impl Faults {
     pub fn any_random(&self) -> bool {
         self.drop > 0.0 || self.corrupt > 0.0 || self.delay > 0.0 || self.hold > 0.0
     }
-}
-
-/// Why a `--faults` specification was refused.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[non_exhaustive]
-pub enum FaultSpecError {
-    /// A key the syntax does not have.
-    #[error("unknown fault `{key}` (known: drop, corrupt, delay, delay_us, hold, hold_us, seed, echo, vanish, block, overheat, supply, firmware, baud, duplicate)")]
-    UnknownKey {
-        /// The key as written.
-        key: String,
-    },
-    /// A value that does not parse or is out of range.
-    #[error("bad value `{value}` for `{key}`: {expected}")]
-    BadValue {
-        /// The key.
-        key: String,
-        /// The value as written.
-        value: String,
-        /// What was expected.
-        expected: &'static str,
-    },
-}
-
-impl FromStr for Faults {
-    type Err = FaultSpecError;
-
-    /// Parses `key=value` items separated by commas:
-    /// `drop=P`, `corrupt=P`, `delay=P`, `hold=P` (probabilities 0..=1),
-    /// `delay_us=N`, `hold_us=N`,
-    /// `seed=N`, `echo` (or `echo=true`), and `vanish=ID` (or `vanish=ID@SECONDS`:
-    /// silent from that long after the bus's first byte), `block=ID`,
-    /// `overheat=ID` (repeatable); `supply=V` (every servo) or
-    /// `supply=ID:V` (volts), `firmware=ID:MAJOR.MINOR`, `baud=ID:RATE`
-    /// (a rate of the servo baud table) and `duplicate=FROM:TO`
-    /// (repeatable). An empty string means no faults.
-    fn from_str(spec: &str) -> Result<Faults, FaultSpecError> {
-        let mut f = Faults::none();
-        for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (key, value) = item.split_once('=').unwrap_or((item, ""));
-            let (key, value) = (key.trim(), value.trim());
-            let bad = |expected| FaultSpecError::BadValue {
-                key: key.to_owned(),
-                value: value.to_owned(),
-                expected,
-            };
-            let prob = || -> Result<f64, FaultSpecError> {
-                match value.parse::<f64>() {
-                    Ok(p) if (0.0..=1.0).contains(&p) => Ok(p),
-                    _ => Err(bad("a probability between 0 and 1")),
-                }
-            };
-            let id = || -> Result<u8, FaultSpecError> {
-                match value.parse::<u8>() {
-                    Ok(id) if id <= servobus_protocol::MAX_ID => Ok(id),
-                    _ => Err(bad("a servo ID 0..=253")),
-                }
-            };
-            match key {
-                "drop" => f.drop = prob()?,
-                "corrupt" => f.corrupt = prob()?,
-                "delay" => f.delay = prob()?,
-                "delay_us" => {
-                    let us = value.parse::<u64>().map_err(|_| bad("microseconds"))?;
-                    f.delay_by = Duration::from_micros(us);
-                }
-                "hold" => f.hold = prob()?,
-                "hold_us" => {
-                    let us = value.parse::<u64>().map_err(|_| bad("microseconds"))?;
-                    f.hold_by = Duration::from_micros(us);
-                }
-                "seed" => f.seed = value.parse().map_err(|_| bad("an unsigned integer"))?,
-                "echo" => {
-                    f.echo = match value {
-                        "" | "1" | "true" | "on" => true,
-                        "0" | "false" | "off" => false,
-                        _ => return Err(bad("true or false")),
-                    }
-                }
-                "vanish" => match value.split_once('@') {
-                    // `vanish=ID@SECONDS`: answers until then.
-                    Some((who, after)) => {
-                        let expected = "ID or ID@SECONDS, e.g. 3@1.5";
-                        let who = parse_id(who).ok_or_else(|| bad(expected))?;
-                        let after = after
-                            .parse::<f64>()
-                            .ok()
-                            .and_then(|s| Duration::try_from_secs_f64(s).ok())
-                            .ok_or_else(|| bad(expected))?;
-                        f.vanish_after.push((who, after));
-                    }
-                    None => f.vanish.push(id()?),
-                },
-                "block" => f.block.push(id()?),
-                "overheat" => f.overheat.push(id()?),
-                "supply" => {
-                    let (who, volts) = match value.split_once(':') {
-                        Some((who, v)) => (Some(parse_id(who).ok_or_else(|| bad(SUPPLY))?), v),
-                        None => (None, value),
-                    };
-                    let dv = parse_decivolts(volts).ok_or_else(|| bad(SUPPLY))?;
-                    f.supply.push((who, dv));
-                }
-                "firmware" => {
-                    let parsed = value.split_once(':').and_then(|(who, v)| {
-                        let (major, minor) = v.split_once('.')?;
-                        Some((parse_id(who)?, (major.parse().ok()?, minor.parse().ok()?)))
-                    });
-                    f.firmware
-                        .push(parsed.ok_or_else(|| bad("ID:MAJOR.MINOR, e.g. 3:3.9"))?);
-                }
-                "baud" => {
-                    let parsed = value.split_once(':').and_then(|(who, rate)| {
-                        let rate = rate.parse::<u32>().ok()?;
-                        Some((
-                            parse_id(who)?,
-                            servobus_protocol::registers::baud_index(rate)?,
-                        ))
-                    });
-                    f.baud.push(parsed.ok_or_else(|| {
-                        bad("ID:RATE with a rate of the servo baud table, e.g. 3:115200")
-                    })?);
-                }
-                "duplicate" => {
-                    let parsed = value
-                        .split_once(':')
-                        .and_then(|(from, to)| Some((parse_id(from)?, parse_id(to)?)));
-                    f.duplicate
-                        .push(parsed.ok_or_else(|| bad("FROM:TO servo IDs, e.g. 6:5"))?);
-                }
-                _ => {
-                    return Err(FaultSpecError::UnknownKey {
-                        key: key.to_owned(),
-                    })
-                }
-            }
-        }
-        Ok(f)
-    }
-}
-
-const SUPPLY: &str = "volts (0..25.5), or ID:volts";
-
-fn parse_id(text: &str) -> Option<u8> {
-    text.trim()
-        .parse::<u8>()
-        .ok()
-        .filter(|&id| id <= servobus_protocol::MAX_ID)
-}
-
-/// Volts as written to 0.1 V units, as the servo's voltage register holds them.
-fn parse_decivolts(text: &str) -> Option<u8> {
-    let v = text.trim().parse::<f64>().ok()?;
-    (0.0..=25.5).contains(&v).then(|| (v * 10.0).round() as u8)
 }
 
 #[cfg(test)]

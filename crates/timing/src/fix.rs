@@ -112,81 +112,97 @@ impl Fixes {
         if full.fits(rate_hz) {
             return Fixes::default();
         }
-        let mut items = [None; 5];
-
-        if servos.iter().any(|s| !s.return_delay.is_zero()) {
-            let zero = CycleSpec {
-                zero_return_delay: true,
-                ..*spec
-            }
-            .cost(servos);
-            if zero.fits(rate_hz) {
-                items[0] = Some(Change::ReturnDelayZero {
-                    cycle_time: zero.cycle_time,
-                });
-            }
-        }
-
-        if full.round_trips > 0 && !spec.link.latency.is_zero() {
-            // cycle = rest + trips x latency <= period.
-            let period = 1e9 / rate_hz;
-            let rest = nanos(full.cycle_time)
-                .saturating_sub(nanos(spec.link.latency).saturating_mul(full.round_trips as u64));
-            let spare = period - rest as f64;
-            if spare >= 0.0 {
-                let per_trip_us = (spare / full.round_trips as f64 / 1_000.0).floor();
-                let latency = Duration::from_micros(per_trip_us as u64);
-                if latency < spec.link.latency {
-                    items[1] = Some(Change::LowerLatency { latency });
-                }
-            }
-        }
-
-        let mut baud = spec.link.baud;
-        while let Some(next) = next_baud_above(baud) {
-            let faster = CycleSpec {
-                link: Link {
-                    baud: next,
-                    ..spec.link
-                },
-                ..*spec
-            };
-            if faster.cost(servos).fits(rate_hz) {
-                items[2] = Some(Change::HigherBaud { baud: next });
-                break;
-            }
-            baud = next;
-        }
-
-        if let Some(len) = spec.read_len {
-            // Fewer bytes never cost more: binary search for the largest
-            // length that fits, if even 1 byte does.
-            let fits = |l: u8| {
-                CycleSpec {
-                    read_len: Some(l),
-                    ..*spec
-                }
-                .cost(servos)
-                .fits(rate_hz)
-            };
-            if len > 1 && fits(1) {
-                let (mut lo, mut hi) = (1u8, len - 1); // lo fits
-                while lo < hi {
-                    let mid = lo + (hi - lo).div_ceil(2);
-                    if fits(mid) {
-                        lo = mid;
-                    } else {
-                        hi = mid - 1;
-                    }
-                }
-                items[3] = Some(Change::FewerReadBytes { len: lo });
-            }
-        }
-
-        items[4] = Some(Change::LowerRate {
-            rate_hz: full.fastest_rate_hz(),
-        });
-
+        let items = [
+            return_delay_zero(spec, servos, rate_hz),
+            lower_latency(spec, full, rate_hz),
+            higher_baud(spec, servos, rate_hz),
+            fewer_read_bytes(spec, servos, rate_hz),
+            Some(Change::LowerRate {
+                rate_hz: full.fastest_rate_hz(),
+            }),
+        ];
         Fixes { items }
     }
+}
+
+/// Return delay 0, when some servo has another and 0 makes the cycle fit.
+fn return_delay_zero(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<Change> {
+    if servos.iter().all(|s| s.return_delay.is_zero()) {
+        return None;
+    }
+    let zero = CycleSpec {
+        zero_return_delay: true,
+        ..*spec
+    }
+    .cost(servos);
+    zero.fits(rate_hz).then_some(Change::ReturnDelayZero {
+        cycle_time: zero.cycle_time,
+    })
+}
+
+/// The highest adapter latency that fits, when it is below the link's.
+fn lower_latency(spec: &CycleSpec, full: &CycleCost, rate_hz: f64) -> Option<Change> {
+    if full.round_trips == 0 || spec.link.latency.is_zero() {
+        return None;
+    }
+    // cycle = rest + trips x latency <= period.
+    let period = 1e9 / rate_hz;
+    let rest = nanos(full.cycle_time)
+        .saturating_sub(nanos(spec.link.latency).saturating_mul(full.round_trips as u64));
+    let spare = period - rest as f64;
+    if spare >= 0.0 {
+        let per_trip_us = (spare / full.round_trips as f64 / 1_000.0).floor();
+        let latency = Duration::from_micros(per_trip_us as u64);
+        if latency < spec.link.latency {
+            return Some(Change::LowerLatency { latency });
+        }
+    }
+    None
+}
+
+/// The lowest baud rate of the servos' table above the link's that fits.
+fn higher_baud(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<Change> {
+    let mut baud = spec.link.baud;
+    while let Some(next) = next_baud_above(baud) {
+        let faster = CycleSpec {
+            link: Link {
+                baud: next,
+                ..spec.link
+            },
+            ..*spec
+        };
+        if faster.cost(servos).fits(rate_hz) {
+            return Some(Change::HigherBaud { baud: next });
+        }
+        baud = next;
+    }
+    None
+}
+
+/// The most bytes read back per servo that fit, when fewer than now do.
+fn fewer_read_bytes(spec: &CycleSpec, servos: &[Servo], rate_hz: f64) -> Option<Change> {
+    let len = spec.read_len?;
+    // Fewer bytes never cost more: binary search for the largest
+    // length that fits, if even 1 byte does.
+    let fits = |l: u8| {
+        CycleSpec {
+            read_len: Some(l),
+            ..*spec
+        }
+        .cost(servos)
+        .fits(rate_hz)
+    };
+    if len <= 1 || !fits(1) {
+        return None;
+    }
+    let (mut lo, mut hi) = (1u8, len - 1); // lo fits
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    Some(Change::FewerReadBytes { len: lo })
 }

@@ -209,6 +209,39 @@ pub fn plan(
     read: Option<Block>,
     rate_hz: f64,
 ) -> Result<Plan, CycleError> {
+    check_request(servos, write, read, rate_hz)?;
+    let ids = collect_ids(servos)?;
+    let count = servos.len();
+    let spec = CycleSpec {
+        link: *link,
+        written: count,
+        write,
+        read_len: read.map(|b| b.len),
+        zero_return_delay: false,
+    };
+    let full = spec.cost(servos);
+    let (schedule, fixes) = choose_schedule(&spec, servos, &full, rate_hz)?;
+    Ok(Plan {
+        link: *link,
+        rate_hz,
+        write,
+        read,
+        full,
+        schedule,
+        fixes,
+        count,
+        ids,
+    })
+}
+
+/// Refuses an empty or oversized bus, a rate that is not positive, and a
+/// block no frame can carry.
+fn check_request(
+    servos: &[Servo],
+    write: Option<Block>,
+    read: Option<Block>,
+    rate_hz: f64,
+) -> Result<(), CycleError> {
     let count = servos.len();
     if count == 0 {
         return Err(CycleError::NoServos);
@@ -229,6 +262,12 @@ pub fn plan(
             return Err(CycleError::InvalidBlock { block });
         }
     }
+    Ok(())
+}
+
+/// The servos' IDs in order (at most [`MAX_SERVOS`] of them), refusing an
+/// invalid or repeated one.
+fn collect_ids(servos: &[Servo]) -> Result<[u8; MAX_SERVOS], CycleError> {
     let mut ids = [0u8; MAX_SERVOS];
     let mut seen = [0u64; 4];
     for (slot, s) in ids.iter_mut().zip(servos) {
@@ -242,60 +281,51 @@ pub fn plan(
         seen[word] |= bit;
         *slot = s.id;
     }
+    Ok(ids)
+}
 
-    let spec = CycleSpec {
-        link: *link,
-        written: count,
-        write,
-        read_len: read.map(|b| b.len),
-        zero_return_delay: false,
-    };
-    let full = spec.cost(servos);
-    let (schedule, fixes) = if full.fits(rate_hz) {
+/// Every servo read each cycle when the `full` cycle fits, else the
+/// round-robin schedule and the fixes; [`CycleError::Infeasible`] when no
+/// schedule fits.
+fn choose_schedule(
+    spec: &CycleSpec,
+    servos: &[Servo],
+    full: &CycleCost,
+    rate_hz: f64,
+) -> Result<(RoundRobin, Fixes), CycleError> {
+    if full.fits(rate_hz) {
         let all = RoundRobin {
             every: 1,
-            per_cycle: count,
-            worst: full,
+            per_cycle: servos.len(),
+            worst: *full,
         };
-        (all, Fixes::default())
-    } else {
-        let fixes = Fixes::find(&spec, servos, &full, rate_hz);
-        match round_robin(&spec, servos, rate_hz) {
-            Some(rr) => (rr, fixes),
-            None => {
-                // The cheapest cycle possible: everything written, the
-                // cheapest single servo read (or nothing, if nothing is read).
-                let min_cycle_time = if read.is_some() {
-                    servos
-                        .chunks(1)
-                        .map(|one| spec.cost(one).cycle_time)
-                        .min()
-                        .unwrap_or(full.cycle_time)
-                } else {
-                    full.cycle_time
-                };
-                let fix = fixes.cheapest().unwrap_or(Change::LowerRate {
-                    rate_hz: full.fastest_rate_hz(),
-                });
-                return Err(CycleError::Infeasible {
-                    rate_hz,
-                    min_cycle_time,
-                    fix,
-                });
-            }
+        return Ok((all, Fixes::default()));
+    }
+    let fixes = Fixes::find(spec, servos, full, rate_hz);
+    match round_robin(spec, servos, rate_hz) {
+        Some(rr) => Ok((rr, fixes)),
+        None => {
+            // The cheapest cycle possible: everything written, the
+            // cheapest single servo read (or nothing, if nothing is read).
+            let min_cycle_time = if spec.read_len.is_some() {
+                servos
+                    .chunks(1)
+                    .map(|one| spec.cost(one).cycle_time)
+                    .min()
+                    .unwrap_or(full.cycle_time)
+            } else {
+                full.cycle_time
+            };
+            let fix = fixes.cheapest().unwrap_or(Change::LowerRate {
+                rate_hz: full.fastest_rate_hz(),
+            });
+            Err(CycleError::Infeasible {
+                rate_hz,
+                min_cycle_time,
+                fix,
+            })
         }
-    };
-    Ok(Plan {
-        link: *link,
-        rate_hz,
-        write,
-        read,
-        full,
-        schedule,
-        fixes,
-        count,
-        ids,
-    })
+    }
 }
 
 /// The round-robin schedule with the fewest groups whose worst cycle fits,

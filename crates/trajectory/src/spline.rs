@@ -115,10 +115,136 @@ pub(crate) fn run(shape: TimedShape, times: &[f64], pos: &[&[f64]], out: &mut [V
 /// keeps the system tridiagonal. The matrix depends only on the times, so
 /// it is factored once for all joints.
 fn cubic(times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
+    let system = CubicSystem::new(times);
+    let m = system.tau.len() - 1;
+    let mut rhs = vec![0.0; m - 1];
+    let mut mm = vec![0.0; m + 1];
+    let mut q = vec![0.0; m + 1];
+    for (j, o) in out.iter_mut().enumerate() {
+        system.solve(pos, j, &mut q, &mut rhs, &mut mm);
+        system.push_pieces(&q, &mm, o);
+    }
+}
+
+/// Index of the first extra knot (the second knot).
+const FIRST_EXTRA: usize = 1;
+
+/// The knots of a cubic run and its factored tridiagonal system, shared by
+/// all joints. Rows `r = 0..n` are for knots `k = r + 1`, the unknowns
+/// `M_1..M_{m-1}` for knots `0..=m`.
+struct CubicSystem {
+    /// Knot times: the keyframes plus two extra knots.
+    tau: Vec<f64>,
+    /// Which keyframe each knot is (None for the extra ones).
+    kf: Vec<Option<usize>>,
+    /// Index of the last keyframe.
+    last_keyframe: usize,
+    /// Knot intervals, `h[i] = tau[i + 1] - tau[i]`.
+    h: Vec<f64>,
+    /// Sub-diagonal of the eliminated system.
+    sub: Vec<f64>,
+    /// Thomas factorisation: modified super-diagonal.
+    cp: Vec<f64>,
+    /// Thomas factorisation: pivots.
+    den: Vec<f64>,
+    /// The first extra knot is `q_0 + s0 * M_1`.
+    s0: f64,
+    /// The last extra knot is `q_m + sm * M_{m-1}`.
+    sm: f64,
+}
+
+impl CubicSystem {
+    /// Places the knots for `times` and factors the system.
+    fn new(times: &[f64]) -> Self {
+        let (tau, kf) = cubic_knots(times);
+        let m = tau.len() - 1; // knots 0..=m, unknowns M_1..M_{m-1}
+        let h: Vec<f64> = tau.windows(2).map(|w| w[1] - w[0]).collect();
+        let n = m - 1;
+        let s0 = h[0] * h[0] / 6.0;
+        let sm = h[m - 1] * h[m - 1] / 6.0;
+        let [sub, diag, sup] = cubic_matrix(&h, s0, sm);
+        // Thomas factorisation (the system is diagonally dominant after the
+        // elimination: the extra knots split intervals in equal halves).
+        let mut cp = vec![0.0; n];
+        let mut den = vec![0.0; n];
+        for r in 0..n {
+            let d = diag[r] - if r > 0 { sub[r] * cp[r - 1] } else { 0.0 };
+            den[r] = d;
+            cp[r] = sup[r] / d;
+        }
+        CubicSystem {
+            tau,
+            kf,
+            last_keyframe: times.len() - 1,
+            h,
+            sub,
+            cp,
+            den,
+            s0,
+            sm,
+        }
+    }
+
+    /// Solves joint `j`: knot positions into `q`, second derivatives into
+    /// `mm` (`rhs` is scratch).
+    fn solve(&self, pos: &[&[f64]], j: usize, q: &mut [f64], rhs: &mut [f64], mm: &mut [f64]) {
+        let m = self.tau.len() - 1;
+        let n = m - 1;
+        let last_extra = m - 1;
+        let (h, sub) = (&self.h, &self.sub);
+        let p0 = pos[0][j];
+        let pm = pos[self.last_keyframe][j];
+        for (k, slot) in q.iter_mut().enumerate() {
+            // Extra knots use their anchor for now (the M part was moved).
+            *slot = match self.kf[k] {
+                Some(i) => pos[i][j],
+                None if k == FIRST_EXTRA => p0,
+                None => pm,
+            };
+        }
+        for r in 0..n {
+            let k = r + 1;
+            let v = cubic_coef(h, k, k - 1) * q[k - 1]
+                + cubic_coef(h, k, k) * q[k]
+                + cubic_coef(h, k, k + 1) * q[k + 1];
+            rhs[r] = (v - if r > 0 { sub[r] * rhs[r - 1] } else { 0.0 }) / self.den[r];
+        }
+        for r in (0..n).rev() {
+            let next = if r + 1 < n { mm[r + 2] } else { 0.0 };
+            mm[r + 1] = rhs[r] - self.cp[r] * next;
+        }
+        mm[0] = 0.0;
+        mm[m] = 0.0;
+        q[FIRST_EXTRA] = p0 + self.s0 * mm[FIRST_EXTRA];
+        q[last_extra] = pm + self.sm * mm[last_extra];
+    }
+
+    /// Appends one cubic piece per knot interval from the solved `q` and `mm`.
+    fn push_pieces(&self, q: &[f64], mm: &[f64], o: &mut Vec<Piece>) {
+        let tau = &self.tau;
+        for (i, &hi) in self.h.iter().enumerate() {
+            o.push(Piece {
+                t0: tau[i],
+                t1: tau[i + 1],
+                c: [
+                    q[i],
+                    (q[i + 1] - q[i]) / hi - hi * (2.0 * mm[i] + mm[i + 1]) / 6.0,
+                    0.5 * mm[i],
+                    (mm[i + 1] - mm[i]) / (6.0 * hi),
+                    0.0,
+                    0.0,
+                ],
+            });
+        }
+    }
+}
+
+/// The cubic run's knot times and which keyframe each knot is: the
+/// keyframes plus an extra knot in the first and in the last interval
+/// (thirds of the only interval when there is one).
+fn cubic_knots(times: &[f64]) -> (Vec<f64>, Vec<Option<usize>>) {
     let m_kf = times.len() - 1;
-    // Knot times: the keyframes plus two extra knots.
     let mut tau: Vec<f64> = Vec::with_capacity(times.len() + 2);
-    // Which keyframe each knot is (None for the extra ones).
     let mut kf: Vec<Option<usize>> = Vec::with_capacity(times.len() + 2);
     if m_kf == 1 {
         let h = times[1] - times[0];
@@ -143,41 +269,41 @@ fn cubic(times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
         tau.push(times[m_kf]);
         kf.push(Some(m_kf));
     }
-    let m = tau.len() - 1; // knots 0..=m, unknowns M_1..M_{m-1}
-    let h: Vec<f64> = tau.windows(2).map(|w| w[1] - w[0]).collect();
+    (tau, kf)
+}
+
+/// Coefficient of `q_i` in the right-hand side of the row for knot `k`.
+fn cubic_coef(h: &[f64], k: usize, i: usize) -> f64 {
+    if i + 1 == k {
+        6.0 / h[k - 1]
+    } else if i == k {
+        -6.0 * (1.0 / h[k] + 1.0 / h[k - 1])
+    } else if i == k + 1 {
+        6.0 / h[k]
+    } else {
+        0.0
+    }
+}
+
+/// The tridiagonal matrix `[sub, diag, sup]` for knot intervals `h`, with
+/// the extra knots' `M`-dependent parts (`s0 * M_1`, `sm * M_{m-1}`) moved
+/// to the left-hand side.
+fn cubic_matrix(h: &[f64], s0: f64, sm: f64) -> [Vec<f64>; 3] {
+    let m = h.len();
     let n = m - 1;
-    // Tridiagonal rows r = 0..n for knot k = r + 1: sub, diag, sup.
     let mut sub = vec![0.0; n];
     let mut diag = vec![0.0; n];
     let mut sup = vec![0.0; n];
-    // RHS coefficients of the extra knots' anchors: row r gets
-    // `anchor0 * e0[r] + anchorm * em[r]` in addition to keyframe terms.
     for r in 0..n {
         let k = r + 1;
         sub[r] = h[k - 1];
         diag[r] = 2.0 * (h[k - 1] + h[k]);
         sup[r] = h[k];
     }
-    // Coefficient of q_i in the RHS of the row for knot k.
-    let coef = |k: usize, i: usize| -> f64 {
-        if i + 1 == k {
-            6.0 / h[k - 1]
-        } else if i == k {
-            -6.0 * (1.0 / h[k] + 1.0 / h[k - 1])
-        } else if i == k + 1 {
-            6.0 / h[k]
-        } else {
-            0.0
-        }
-    };
-    // Move the extra knots' M-dependent parts to the left-hand side.
-    let first_extra = 1;
     let last_extra = m - 1;
-    let s0 = h[0] * h[0] / 6.0;
-    let sm = h[m - 1] * h[m - 1] / 6.0;
-    for (i, s) in [(first_extra, s0), (last_extra, sm)] {
+    for (i, s) in [(FIRST_EXTRA, s0), (last_extra, sm)] {
         for k in i.saturating_sub(1).max(1)..=(i + 1).min(m - 1) {
-            let c = coef(k, i) * s;
+            let c = cubic_coef(h, k, i) * s;
             let r = k - 1;
             let col = i - 1; // unknown index of M_i
             if col + 1 == r {
@@ -189,58 +315,7 @@ fn cubic(times: &[f64], pos: &[&[f64]], out: &mut [Vec<Piece>]) {
             }
         }
     }
-    // Thomas factorisation (the system is diagonally dominant after the
-    // elimination: the extra knots split intervals in equal halves).
-    let mut cp = vec![0.0; n];
-    let mut den = vec![0.0; n];
-    for r in 0..n {
-        let d = diag[r] - if r > 0 { sub[r] * cp[r - 1] } else { 0.0 };
-        den[r] = d;
-        cp[r] = sup[r] / d;
-    }
-    let mut rhs = vec![0.0; n];
-    let mut mm = vec![0.0; m + 1];
-    let mut q = vec![0.0; m + 1];
-    for (j, o) in out.iter_mut().enumerate() {
-        let p0 = pos[0][j];
-        let pm = pos[m_kf][j];
-        for (k, slot) in q.iter_mut().enumerate() {
-            // Extra knots use their anchor for now (the M part was moved).
-            *slot = match kf[k] {
-                Some(i) => pos[i][j],
-                None if k == first_extra => p0,
-                None => pm,
-            };
-        }
-        for r in 0..n {
-            let k = r + 1;
-            let v = coef(k, k - 1) * q[k - 1] + coef(k, k) * q[k] + coef(k, k + 1) * q[k + 1];
-            rhs[r] = (v - if r > 0 { sub[r] * rhs[r - 1] } else { 0.0 }) / den[r];
-        }
-        for r in (0..n).rev() {
-            let next = if r + 1 < n { mm[r + 2] } else { 0.0 };
-            mm[r + 1] = rhs[r] - cp[r] * next;
-        }
-        mm[0] = 0.0;
-        mm[m] = 0.0;
-        q[first_extra] = p0 + s0 * mm[first_extra];
-        q[last_extra] = pm + sm * mm[last_extra];
-        for i in 0..m {
-            let hi = h[i];
-            o.push(Piece {
-                t0: tau[i],
-                t1: tau[i + 1],
-                c: [
-                    q[i],
-                    (q[i + 1] - q[i]) / hi - hi * (2.0 * mm[i] + mm[i + 1]) / 6.0,
-                    0.5 * mm[i],
-                    (mm[i + 1] - mm[i]) / (6.0 * hi),
-                    0.0,
-                    0.0,
-                ],
-            });
-        }
-    }
+    [sub, diag, sup]
 }
 
 #[cfg(test)]

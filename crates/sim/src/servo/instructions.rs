@@ -28,66 +28,31 @@ impl SimServo {
         }
         let inst = packet.instruction()?;
         let p = packet.params();
-        let data: Option<Vec<u8>> = match inst {
-            Instruction::Ping => Some(Vec::new()),
-            Instruction::Read => {
-                let [address, len] = *p else { return None };
-                if broadcast {
-                    return None;
-                }
-                Some(self.read(address, usize::from(len)))
-            }
+        let data = match inst {
+            Instruction::Ping => Vec::new(),
+            Instruction::Read => self.exec_read(p, broadcast)?,
             Instruction::Write => {
-                let (&address, bytes) = p.split_first()?;
-                if bytes.is_empty() {
-                    return None;
-                }
-                self.apply_write(address, bytes);
-                Some(Vec::new())
+                self.exec_write(p)?;
+                Vec::new()
             }
             Instruction::RegWrite => {
-                let (&address, bytes) = p.split_first()?;
-                if bytes.is_empty() {
-                    return None;
-                }
-                self.pending = Some((address, bytes.to_vec()));
-                self.table[usize::from(addr::ASYNC_FLAG)] = 1;
-                Some(Vec::new())
+                self.exec_reg_write(p)?;
+                Vec::new()
             }
             Instruction::Action => {
-                if let Some((address, bytes)) = self.pending.take() {
-                    self.table[usize::from(addr::ASYNC_FLAG)] = 0;
-                    self.apply_write(address, &bytes);
-                }
-                Some(Vec::new())
+                self.exec_action();
+                Vec::new()
             }
             Instruction::Reset => {
                 self.factory_reset();
-                Some(Vec::new())
+                Vec::new()
             }
             Instruction::SyncWrite => {
-                let [address, len, ref blocks @ ..] = *p else {
-                    return None;
-                };
-                let block = usize::from(len) + 1;
-                if len == 0 || !broadcast {
-                    return None;
-                }
-                if let Some(chunk) = blocks.chunks_exact(block).find(|c| c[0] == id) {
-                    self.apply_write(address, &chunk[1..]);
-                }
-                None
+                // Always a broadcast, never answered.
+                self.exec_sync_write(p, id, broadcast);
+                return None;
             }
-            Instruction::SyncRead => {
-                let [address, len, ref ids @ ..] = *p else {
-                    return None;
-                };
-                let supported = self.model.model.series.has_sync_read();
-                if !supported || !broadcast || !ids.contains(&id) || !self.answers(inst) {
-                    return None;
-                }
-                return self.status_frame(id, &self.read(address, usize::from(len)));
-            }
+            Instruction::SyncRead => return self.exec_sync_read(p, id, broadcast),
         };
         // Broadcast: only PING is answered.
         if broadcast && inst != Instruction::Ping {
@@ -98,7 +63,73 @@ impl SimServo {
         }
         // Replies come from the ID the packet was addressed to (the old ID
         // after an ID write).
-        self.status_frame(id, &data.unwrap_or_default())
+        self.status_frame(id, &data)
+    }
+
+    /// READ: the requested bytes (`None`, ignored, when malformed or broadcast).
+    fn exec_read(&self, p: &[u8], broadcast: bool) -> Option<Vec<u8>> {
+        let [address, len] = *p else { return None };
+        if broadcast {
+            return None;
+        }
+        Some(self.read(address, usize::from(len)))
+    }
+
+    /// WRITE: applies the bytes at once (`None`, ignored, when malformed).
+    fn exec_write(&mut self, p: &[u8]) -> Option<()> {
+        let (&address, bytes) = p.split_first()?;
+        if bytes.is_empty() {
+            return None;
+        }
+        self.apply_write(address, bytes);
+        Some(())
+    }
+
+    /// REG WRITE: keeps the bytes for the next ACTION (`None`, ignored, when
+    /// malformed).
+    fn exec_reg_write(&mut self, p: &[u8]) -> Option<()> {
+        let (&address, bytes) = p.split_first()?;
+        if bytes.is_empty() {
+            return None;
+        }
+        self.pending = Some((address, bytes.to_vec()));
+        self.table[usize::from(addr::ASYNC_FLAG)] = 1;
+        Some(())
+    }
+
+    /// ACTION: applies the write a REG WRITE left pending, if any.
+    fn exec_action(&mut self) {
+        if let Some((address, bytes)) = self.pending.take() {
+            self.table[usize::from(addr::ASYNC_FLAG)] = 0;
+            self.apply_write(address, &bytes);
+        }
+    }
+
+    /// SYNC WRITE: applies this servo's block, if the broadcast has one.
+    fn exec_sync_write(&mut self, p: &[u8], id: u8, broadcast: bool) {
+        let [address, len, ref blocks @ ..] = *p else {
+            return;
+        };
+        let block = usize::from(len) + 1;
+        if len == 0 || !broadcast {
+            return;
+        }
+        if let Some(chunk) = blocks.chunks_exact(block).find(|c| c[0] == id) {
+            self.apply_write(address, &chunk[1..]);
+        }
+    }
+
+    /// SYNC READ: the status frame with the requested bytes, when the model
+    /// has the instruction, the servo is in the ID list and it answers.
+    fn exec_sync_read(&self, p: &[u8], id: u8, broadcast: bool) -> Option<Vec<u8>> {
+        let [address, len, ref ids @ ..] = *p else {
+            return None;
+        };
+        let supported = self.model.model.series.has_sync_read();
+        if !supported || !broadcast || !ids.contains(&id) || !self.answers(Instruction::SyncRead) {
+            return None;
+        }
+        self.status_frame(id, &self.read(address, usize::from(len)))
     }
 
     pub(super) fn status_frame(&self, id: u8, params: &[u8]) -> Option<Vec<u8>> {

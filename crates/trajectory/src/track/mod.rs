@@ -166,6 +166,13 @@ pub fn track_with(
     } else {
         0.0
     };
+    let setup = Setup {
+        grid,
+        samples,
+        end,
+        step,
+        resolution,
+    };
 
     let mut reference = Vec::with_capacity(limits.len());
     let mut per_joint = Vec::with_capacity(limits.len());
@@ -174,48 +181,18 @@ pub fn track_with(
     let mut shown = Vec::with_capacity(limits.len());
     let mut tail: f64 = 0.0;
     for (j, lim) in limits.iter().enumerate() {
-        let lims = pass::Limits {
-            strict: *lim,
-            shown: widened(lim, resolution, grid.h),
-        };
-        let mut forward = reference::build(&grid, j, &lims.shown);
-        if let Some(last) = forward.last_mut() {
-            last.t1 = end;
-        }
-        let backward: Vec<Piece> = forward.iter().rev().map(|p| p.mirrored(end)).collect();
-        let (first, last) = (samples[0][j], samples[samples.len() - 1][j]);
-        let f = pass::run(&lims, &Reference::new(&forward, end), step, (first, last))?;
-        let b = pass::run(&lims, &Reference::new(&backward, end), step, (last, first))?;
-        // The backward pass, in forward time, spans [end - b_len, end].
-        let b_len = b.pieces.last().map_or(0.0, |p| p.t1);
-        let f_len = f.pieces.last().map_or(0.0, |p| p.t1);
-        let start = (end - b_len).min(0.0);
-        let b_fwd: Vec<Piece> = b.pieces.iter().rev().map(|p| p.mirrored(end)).collect();
-        per_joint.push(average(&f.pieces, &b_fwd, start, f_len.max(end)));
-        let mut stretches = f.off;
-        stretches.extend(b.off.iter().map(|&(a, z)| (end - z, end - a)));
-        off.push(stretches);
-        lead.push(-start);
-        tail = tail.max(f_len.max(end));
-        reference.push(forward);
-        shown.push(lims.shown);
+        let joint = setup.track_joint(j, lim)?;
+        per_joint.push(joint.pieces);
+        off.push(joint.off);
+        lead.push(joint.lead);
+        tail = tail.max(joint.tail);
+        reference.push(joint.reference);
+        shown.push(joint.shown);
     }
     // Every joint starts at the same instant: the earliest start.
     let shift = lead.iter().copied().fold(0.0, f64::max);
     let duration = shift + tail;
-    for (j, (pieces, &l)) in per_joint.iter_mut().zip(&lead).enumerate() {
-        let offset = shift - l;
-        let mut shifted = Vec::with_capacity(pieces.len() + 2);
-        if offset > 0.0 {
-            shifted.push(Piece::hold(0.0, offset, samples[0][j]));
-        }
-        shifted.extend(pieces.iter().map(|p| Piece {
-            t0: p.t0 + l + offset,
-            t1: p.t1 + l + offset,
-            c: p.c,
-        }));
-        *pieces = shifted;
-    }
+    align_starts(&mut per_joint, &lead, shift, &samples[0]);
     // Every joint then rests at the recording's last position until the
     // slowest one is done.
     let trajectory = finish(per_joint, &samples[samples.len() - 1], duration);
@@ -237,6 +214,92 @@ pub fn track_with(
         rms_deviation,
         departures,
     })
+}
+
+/// What every joint's passes share: the recording and how it is tracked.
+struct Setup<'a> {
+    /// The samples on their grid.
+    grid: reference::Grid,
+    /// The samples as given.
+    samples: &'a [Vec<f64>],
+    /// The recording's last time, s from its first.
+    end: f64,
+    /// The tracking step, s.
+    step: f64,
+    /// The samples' rounding error (finite, at least 0).
+    resolution: f64,
+}
+
+/// One joint's path before the joints are aligned, and what the report
+/// needs of it.
+struct JointTrack {
+    /// The reference spline it tracks.
+    reference: Vec<Piece>,
+    /// The mean of the two passes, starting at `-lead`.
+    pieces: Vec<Piece>,
+    /// The stretches where either pass left the reference (recording time).
+    off: Vec<(f64, f64)>,
+    /// How long before the recording's first sample the path starts, s.
+    lead: f64,
+    /// When the path ends, s (recording time).
+    tail: f64,
+    /// The limits widened by the samples' rounding.
+    shown: JointLimits,
+}
+
+impl Setup<'_> {
+    /// Tracks joint `j` within `lim`: the reference, its forward and
+    /// backward passes, and their mean.
+    fn track_joint(&self, j: usize, lim: &JointLimits) -> Result<JointTrack, PlanError> {
+        let (end, step, samples) = (self.end, self.step, self.samples);
+        let lims = pass::Limits {
+            strict: *lim,
+            shown: widened(lim, self.resolution, self.grid.h),
+        };
+        let mut forward = reference::build(&self.grid, j, &lims.shown);
+        if let Some(last) = forward.last_mut() {
+            last.t1 = end;
+        }
+        let backward: Vec<Piece> = forward.iter().rev().map(|p| p.mirrored(end)).collect();
+        let (first, last) = (samples[0][j], samples[samples.len() - 1][j]);
+        let f = pass::run(&lims, &Reference::new(&forward, end), step, (first, last))?;
+        let b = pass::run(&lims, &Reference::new(&backward, end), step, (last, first))?;
+        // The backward pass, in forward time, spans [end - b_len, end].
+        let b_len = b.pieces.last().map_or(0.0, |p| p.t1);
+        let f_len = f.pieces.last().map_or(0.0, |p| p.t1);
+        let start = (end - b_len).min(0.0);
+        let b_fwd: Vec<Piece> = b.pieces.iter().rev().map(|p| p.mirrored(end)).collect();
+        let pieces = average(&f.pieces, &b_fwd, start, f_len.max(end));
+        let mut stretches = f.off;
+        stretches.extend(b.off.iter().map(|&(a, z)| (end - z, end - a)));
+        Ok(JointTrack {
+            reference: forward,
+            pieces,
+            off: stretches,
+            lead: -start,
+            tail: f_len.max(end),
+            shown: lims.shown,
+        })
+    }
+}
+
+/// Moves every joint's path (joint `j` starting `lead[j]` before the
+/// recording) to start at 0 with the recording at `shift`, holding the
+/// first sample `first` until a joint starts moving.
+fn align_starts(per_joint: &mut [Vec<Piece>], lead: &[f64], shift: f64, first: &[f64]) {
+    for (j, (pieces, &l)) in per_joint.iter_mut().zip(lead).enumerate() {
+        let offset = shift - l;
+        let mut shifted = Vec::with_capacity(pieces.len() + 2);
+        if offset > 0.0 {
+            shifted.push(Piece::hold(0.0, offset, first[j]));
+        }
+        shifted.extend(pieces.iter().map(|p| Piece {
+            t0: p.t0 + l + offset,
+            t1: p.t1 + l + offset,
+            c: p.c,
+        }));
+        *pieces = shifted;
+    }
 }
 
 /// `lim` widened by what a rounding of `resolution` makes of the

@@ -22,6 +22,7 @@
 //! the exit code is 1.
 
 mod against;
+mod report;
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -29,13 +30,17 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use against::{Figures, FollowErrors, LeaderTrail};
+use report::finish;
 
-use servobus_config::{load_robot, JointMap, Robot, RobotOptions};
+use crossbeam_channel::Receiver;
+
+use servobus_config::{load_robot, JointMap, Robot, RobotOptions, Units};
 use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
 use servobus_robot::{
-    Command, CycleSample, Lead, LiveTarget as Target, Report, RunOptions, TargetSender, Telemetry,
+    Command, CycleSample, Lead, LiveTarget as Target, Report, Run, RunOptions, TargetSender,
+    Telemetry,
 };
 
 use crate::record::{CsvLog, PlotData};
@@ -289,6 +294,42 @@ struct Seen {
 }
 
 impl Seen {
+    /// Nothing seen yet: the log created (`--log`) and the plot's series
+    /// ready (`--plot`); `terminal`: stderr is one.
+    fn new(args: &Args, robot: &Robot, names: &[String], terminal: bool) -> anyhow::Result<Self> {
+        let units = robot.units;
+        let log = match &args.log {
+            Some(path) => Some(CsvLog::create(
+                path,
+                names.to_vec(),
+                units,
+                robot.geometry(),
+            )?),
+            None => None,
+        };
+        let bus_of = robot
+            .buses
+            .iter()
+            .flat_map(|b| b.joints.iter().map(|_| b.name.clone()))
+            .collect();
+        Ok(Seen {
+            log,
+            plot: args.plot.as_ref().map(|_| {
+                PlotData::new(names.to_vec(), bus_of)
+                    .following()
+                    .with_frames(robot.geometry(), units)
+            }),
+            take: Vec::new(),
+            errors: FollowErrors::new(names.len()),
+            commanded: vec![0.0; names.len()],
+            cycles: 0,
+            faults: Vec::new(),
+            names: names.to_vec(),
+            stalls: Vec::new(),
+            live_line: !args.json && terminal,
+        })
+    }
+
     fn sample(&mut self, s: &CycleSample, record: bool) {
         if let Some(log) = &mut self.log {
             log.record(s);
@@ -318,120 +359,23 @@ fn drive<T: Transport>(
     options: RunOptions,
 ) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    let units = robot.units;
     // The leader is read at the follower's rate up to LEADER_HZ: faster
     // readings add mostly their tick noise to the targets' speed and
     // acceleration estimates (measured on the simulator: 100 Hz follows
     // worse than 50 Hz).
     let rate = options.rate_hz.unwrap_or(robot.rate_hz).min(LEADER_HZ);
-    let period = Duration::from_secs_f64(1.0 / rate);
-    let log = match &args.log {
-        Some(path) => Some(CsvLog::create(
-            path,
-            names.clone(),
-            units,
-            robot.geometry(),
-        )?),
-        None => None,
-    };
-    let bus_of = robot
-        .buses
-        .iter()
-        .flat_map(|b| b.joints.iter().map(|_| b.name.clone()))
-        .collect();
-    // The live line: every 0.5 s on a terminal, rewritten in place; every
-    // 5 s in a log, a line of its own.
     let terminal = std::io::stderr().is_terminal();
-    let live_every = Duration::from_millis(if terminal { 500 } else { 5000 });
-    let mut seen = Seen {
-        log,
-        plot: args.plot.as_ref().map(|_| {
-            PlotData::new(names.clone(), bus_of)
-                .following()
-                .with_frames(robot.geometry(), units)
-        }),
-        take: Vec::new(),
-        errors: FollowErrors::new(names.len()),
-        commanded: vec![0.0; names.len()],
-        cycles: 0,
-        faults: Vec::new(),
-        names: names.clone(),
-        stalls: Vec::new(),
-        live_line: !args.json && terminal,
-    };
+    let mut seen = Seen::new(args, robot, &names, terminal)?;
     let runner =
         crate::shared::ports::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
     crate::shared::install_ctrl_c(runner.commands());
-    let targets = runner.targets();
-    let telemetry = runner.telemetry();
-    let started = Instant::now();
+    let mut session = Session::new(args, &names, robot.units, &runner, rate, terminal);
     // Counted from ERRORS_FROM on, on the clock both arms' readings are
     // stamped on.
     let from = crate::shared::ports::system_clock().now().as_secs_f64() + ERRORS_FROM;
     seen.errors.count_from(from);
-    let mut trail = LeaderTrail::new(names.len());
-    let mut pose: Vec<Option<f64>> = vec![None; names.len()];
-    let mut next = started;
-    let mut reads = 0u64;
-    let mut shown = started;
     // Why the session ended early on the leader's side, if it did.
-    let mut lost = None;
-    loop {
-        let now = Instant::now();
-        let t = now.duration_since(started).as_secs_f64();
-        if runner.is_finished() || args.seconds.is_some_and(|s| t >= s.as_secs_f64()) {
-            break;
-        }
-        pose.fill(None);
-        if let Err(e) = leader.read(&mut pose, &mut trail, Instant::now()) {
-            // The follower stops below and everything captured is kept.
-            lost = Some(format!(
-                "the leader was lost at {t:.1} s: {}",
-                crate::shared::exit::message(&e)
-            ));
-            break;
-        }
-        let taken = Instant::now();
-        reads += 1;
-        let joints: Vec<(String, f64)> = names
-            .iter()
-            .zip(&pose)
-            .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
-            .collect();
-        let stamp = taken.duration_since(started).as_secs_f64();
-        // A reading whose every joint was missed sends nothing.
-        let sent = if joints.is_empty() {
-            Ok(())
-        } else {
-            send(&targets, Target::named(stamp, joints).taken_at(taken))
-        };
-        if let Err(e) = sent {
-            lost = Some(format!("at {t:.1} s: {e}"));
-            break;
-        }
-        while let Ok(m) = telemetry.try_recv() {
-            take_message(&mut seen, m, args.record.is_some());
-        }
-        seen.errors.settle(&trail, units);
-        if !args.json && now.duration_since(shown) >= live_every {
-            shown = now;
-            let errors = seen.errors.figures();
-            let line = live_line(&targets, t, reads, seen.cycles, errors, units.to_string());
-            let mut err = std::io::stderr().lock();
-            let _ = if terminal {
-                write!(err, "\r{line}   ")
-            } else {
-                writeln!(err, "{line}")
-            };
-        }
-        next += period;
-        let after = Instant::now();
-        if next > after {
-            std::thread::sleep(next - after);
-        } else {
-            next = after;
-        }
-    }
+    let lost = session.follow(&runner, &mut leader, &mut seen);
     if seen.live_line {
         errln!();
     }
@@ -444,7 +388,7 @@ fn drive<T: Transport>(
     }
     // The follower stops (jerk limited) and the run ends.
     let _ = runner.commands().send(Command::Stop);
-    for m in telemetry.iter() {
+    for m in session.telemetry.iter() {
         if matches!(m, Telemetry::Finished(_)) {
             break;
         }
@@ -456,6 +400,158 @@ fn drive<T: Transport>(
         // Said last, once everything is written: exit 1.
         Some(why) => Err(anyhow::anyhow!(why)),
         None => Ok(code),
+    }
+}
+
+/// The leader's side of a session: its readings sent to the follower as
+/// live targets every leader period, the follower's telemetry taken in,
+/// and the live line.
+struct Session<'a> {
+    args: &'a Args,
+    /// The follower's joint names.
+    names: &'a [String],
+    units: Units,
+    targets: TargetSender,
+    telemetry: Receiver<Telemetry>,
+    /// The leader's readings, with the times its servos took them.
+    trail: LeaderTrail,
+    /// The newest reading by follower joint (`None`: missed).
+    pose: Vec<Option<f64>>,
+    started: Instant,
+    /// Between two readings of the leader.
+    period: Duration,
+    /// Readings of the leader so far.
+    reads: u64,
+    /// Stderr is a terminal: the live line is rewritten in place.
+    terminal: bool,
+    /// How often the live line is shown.
+    live_every: Duration,
+    /// When the live line was last shown.
+    shown: Instant,
+}
+
+impl<'a> Session<'a> {
+    /// A session starting now, reading the leader at `rate` Hz.
+    fn new(
+        args: &'a Args,
+        names: &'a [String],
+        units: Units,
+        runner: &Run,
+        rate: f64,
+        terminal: bool,
+    ) -> Self {
+        let started = Instant::now();
+        Session {
+            args,
+            names,
+            units,
+            targets: runner.targets(),
+            telemetry: runner.telemetry(),
+            trail: LeaderTrail::new(names.len()),
+            pose: vec![None; names.len()],
+            started,
+            period: Duration::from_secs_f64(1.0 / rate),
+            reads: 0,
+            terminal,
+            // The live line: every 0.5 s on a terminal, rewritten in
+            // place; every 5 s in a log, a line of its own.
+            live_every: Duration::from_millis(if terminal { 500 } else { 5000 }),
+            shown: started,
+        }
+    }
+
+    /// Reads the leader and sends its pose each period until the run
+    /// ends or `--seconds` have passed; why the leader's side ended the
+    /// session, if it did.
+    fn follow<T: Transport>(
+        &mut self,
+        runner: &Run,
+        leader: &mut Leader<T>,
+        seen: &mut Seen,
+    ) -> Option<String> {
+        let mut next = self.started;
+        loop {
+            let now = Instant::now();
+            let t = now.duration_since(self.started).as_secs_f64();
+            if runner.is_finished() || self.args.seconds.is_some_and(|s| t >= s.as_secs_f64()) {
+                return None;
+            }
+            if let Err(why) = self.step(leader, seen, t) {
+                return Some(why);
+            }
+            if !self.args.json && now.duration_since(self.shown) >= self.live_every {
+                self.shown = now;
+                self.show(seen, t);
+            }
+            next += self.period;
+            let after = Instant::now();
+            if next > after {
+                std::thread::sleep(next - after);
+            } else {
+                next = after;
+            }
+        }
+    }
+
+    /// One reading of the leader, at `t` s, sent as the follower's target,
+    /// and the follower's telemetry since taken in; why not, when the
+    /// leader is lost.
+    fn step<T: Transport>(
+        &mut self,
+        leader: &mut Leader<T>,
+        seen: &mut Seen,
+        t: f64,
+    ) -> Result<(), String> {
+        self.pose.fill(None);
+        if let Err(e) = leader.read(&mut self.pose, &mut self.trail, Instant::now()) {
+            // The follower stops and everything captured is kept.
+            return Err(format!(
+                "the leader was lost at {t:.1} s: {}",
+                crate::shared::exit::message(&e)
+            ));
+        }
+        let taken = Instant::now();
+        self.reads += 1;
+        let joints: Vec<(String, f64)> = self
+            .names
+            .iter()
+            .zip(&self.pose)
+            .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
+            .collect();
+        let stamp = taken.duration_since(self.started).as_secs_f64();
+        // A reading whose every joint was missed sends nothing.
+        let sent = if joints.is_empty() {
+            Ok(())
+        } else {
+            send(&self.targets, Target::named(stamp, joints).taken_at(taken))
+        };
+        if let Err(e) = sent {
+            return Err(format!("at {t:.1} s: {e}"));
+        }
+        while let Ok(m) = self.telemetry.try_recv() {
+            take_message(seen, m, self.args.record.is_some());
+        }
+        seen.errors.settle(&self.trail, self.units);
+        Ok(())
+    }
+
+    /// Shows the live line on stderr, `t` s into the session.
+    fn show(&self, seen: &Seen, t: f64) {
+        let errors = seen.errors.figures();
+        let line = live_line(
+            &self.targets,
+            t,
+            self.reads,
+            seen.cycles,
+            errors,
+            self.units.to_string(),
+        );
+        let mut err = std::io::stderr().lock();
+        let _ = if self.terminal {
+            write!(err, "\r{line}   ")
+        } else {
+            writeln!(err, "{line}")
+        };
     }
 }
 
@@ -513,111 +609,6 @@ fn live_line(
         reads as f64 / t.max(1e-3),
         cycles as f64 / t.max(1e-3),
     )
-}
-
-/// The outputs and the report; exit 0 once stopped, 1 after a fault.
-/// `lost`: why the leader's side ended the session, if it did.
-fn finish(
-    args: &Args,
-    robot: &Robot,
-    report: &Report,
-    seen: Seen,
-    lost: Option<&str>,
-) -> anyhow::Result<ExitCode> {
-    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    let units = robot.units;
-    if let Some(log) = seen.log {
-        log.finish()?;
-    }
-    if let (Some(plot), Some(path)) = (&seen.plot, &args.plot) {
-        let title = format!("{} following its leader", robot.name);
-        plot.draw(path, &title, &units.to_string())?;
-    }
-    if let Some(path) = &args.record {
-        let mut text = format!("time_s,{}\n", names.join(","));
-        for (t, row) in &seen.take {
-            let cells: Vec<String> = row
-                .iter()
-                .map(|a| format!("{:.4}", units.to_rad(*a).to_degrees()))
-                .collect();
-            text += &format!("{t:.4},{}\n", cells.join(","));
-        }
-        // Whole or not at all, as every output.
-        servobus_robot::files::write_atomic(path, text.as_bytes())?;
-    }
-    let joints: Vec<serde_json::Value> = names
-        .iter()
-        .zip(seen.errors.figures())
-        .map(|(n, (sq, max, k))| {
-            let rms = if *k > 0 { (sq / *k as f64).sqrt() } else { 0.0 };
-            serde_json::json!({"name": n, "rms_error": rms, "max_error": max})
-        })
-        .collect();
-    let latency = report.live.as_ref().and_then(|l| l.latency_ms);
-    let stalls: Vec<serde_json::Value> = seen
-        .stalls
-        .iter()
-        .map(|(j, held, t, position)| {
-            serde_json::json!({
-                "joint": names.get(*j),
-                "held": held,
-                "time_s": t,
-                "position": position,
-            })
-        })
-        .collect();
-    let follow = serde_json::json!({
-        "latency_ms": latency,
-        "period_ms": 1e3 / report.planned_rate_hz,
-        "errors_from_s": ERRORS_FROM,
-        "joints": joints,
-        "stalls": stalls,
-        "leader_lost": lost,
-    });
-    if args.json {
-        let mut value = serde_json::to_value(report)?;
-        if let Some(obj) = value.as_object_mut() {
-            obj.insert("follow".into(), follow);
-        }
-        outln!("{}", crate::shared::json::pretty(&value)?)?;
-    } else {
-        let mut out = std::io::stdout().lock();
-        crate::shared::write_report(&mut out, report, false)?;
-        if let Some(q) = latency {
-            writeln!(
-                out,
-                "  latency leader reading -> follower goal: p50 {:.1} ms  p99 {:.1} ms  max {:.1} ms",
-                q.p50, q.p99, q.max
-            )?;
-        }
-        writeln!(out, "  follower vs leader after {ERRORS_FROM} s ({units}):")?;
-        for j in &joints {
-            writeln!(
-                out,
-                "    {:<16} rms {:>8.3}  max {:>8.3}",
-                j["name"].as_str().unwrap_or("?"),
-                j["rms_error"].as_f64().unwrap_or(0.0),
-                j["max_error"].as_f64().unwrap_or(0.0)
-            )?;
-        }
-        for j in report.stalled_joints() {
-            writeln!(
-                out,
-                "  {} stalled {} time(s), held with bounded effort for {:.1} s",
-                j.name, j.stalls, j.stalled_s
-            )?;
-        }
-        for (flag, path) in [
-            ("log", &args.log),
-            ("plot", &args.plot),
-            ("recording", &args.record),
-        ] {
-            if let Some(path) = path {
-                writeln!(out, "{flag}: {}", path.display())?;
-            }
-        }
-    }
-    Ok(crate::shared::exit::of_finish(report.finish))
 }
 
 #[cfg(test)]

@@ -1,12 +1,13 @@
 //! `servobus sim`: serve a robot file's simulated servos on a pseudo-terminal.
 
 use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
-use servobus_config::{load_robot, RobotOptions};
+use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::files::OutputError;
 use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_robot::sim::{Faults, PtyServer, SimServo, Truth};
@@ -85,80 +86,18 @@ const TRUTH_PASS: std::time::Duration = std::time::Duration::from_millis(50);
 /// Runs `servobus sim`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot(&args.robot, &RobotOptions::default())?;
-    let mut faults = match &args.faults {
-        Some(spec) => spec
-            .parse::<Faults>()
-            .with_context(|| format!("--faults {spec}"))?,
-        None => Faults::none(),
-    };
-    faults.echo |= args.echo;
-    let mut builder = SimRobot::builder(&robot);
-    if let Some(path) = &args.mounting {
-        builder = builder.mounting(Mounting::load(path, &robot)?);
+    let faults = faults_of(&args)?;
+    let mut builder = builder_of(&args, &robot)?;
+    let truth = truth_of(&args, &robot)?;
+    if let Some((truth, _)) = &truth {
+        builder = builder.truth(truth);
     }
-    if let Some(seed) = args.unit {
-        builder = builder.mounting(Mounting::random(&robot, seed));
-    }
-    if let Some(path) = &args.hand {
-        builder = builder.hand(Hand::load(path, &robot)?);
-    }
-    // The truth is a stream that others follow while the simulator runs,
-    // so it is written in place, not atomically. Its path is checked now
-    // (a directory, a missing directory: refused before anything is
-    // served), and the file opened only once the simulator serves (below),
-    // so that a simulator refused at start leaves an earlier file as it was.
-    if let Some(path) = &args.truth {
-        servobus_robot::files::check_output(path)?;
-    }
-    let truth = match &args.truth {
-        Some(path) => {
-            // One column per served joint.
-            let truth = match args.bus.as_deref() {
-                Some(name) => Truth::new(
-                    robot
-                        .buses
-                        .iter()
-                        .filter(|b| b.name == name)
-                        .flat_map(|b| b.joints.iter().map(|j| j.name.clone()))
-                        .collect(),
-                    servobus_robot::sim::TRUTH_PERIOD,
-                ),
-                None => new_truth(&robot),
-            };
-            builder = builder.truth(&truth);
-            Some((truth, path.clone()))
-        }
-        None => None,
-    };
-    let bodies = args.mounting.is_some() || args.unit.is_some() || args.hand.is_some();
-    let (baud, servos) = servos_of(&builder, args.bus.as_deref())?;
-    let count = servos.len();
-    let mut server = PtyServer::open(baud, servos)?;
-    if let Some(link) = &args.link {
-        server.link_to(link)?;
-    }
-    server.set_pacing(!args.no_pacing);
-    server.set_faults(faults);
-    if bodies || truth.is_some() {
-        // Bodies move (and the truth is sampled) while no client talks.
-        server.set_tick(Some(servobus_robot::sim::TRUTH_PERIOD));
-    }
+    let (mut server, count) = open_server(&args, &builder, faults, truth.is_some())?;
     // Started: the truth file is created (or truncated) now, its header
     // written before the simulator says it serves, so that a reader who
     // opens it then finds at least the header. An error here drops the
     // server, which removes the link.
-    let truth = match truth {
-        Some((truth, path)) => {
-            let write_err = |source| OutputError::Write {
-                path: path.clone(),
-                source,
-            };
-            let mut file = std::fs::File::create(&path).map_err(write_err)?;
-            writeln!(file, "{}", truth.csv_header()).map_err(write_err)?;
-            Some((truth, file, path))
-        }
-        None => None,
-    };
+    let truth = truth.map(create_truth).transpose()?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -171,8 +110,122 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     )?;
     crate::shared::out::flush()?;
 
-    let writer = truth.map(|(truth, out, path)| {
-        let stop = Arc::clone(&stop);
+    let writer = truth.map(|(truth, out, path)| TruthWriter::spawn(truth, out, path, &stop));
+    let served = server.serve(&stop);
+    server.settle();
+    // Dropping the server removes the link, also after an I/O error.
+    drop(server);
+    if let Some(writer) = writer {
+        writer.finish()?;
+    }
+    served?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The faults `--faults` and `--echo` inject.
+fn faults_of(args: &Args) -> anyhow::Result<Faults> {
+    let mut faults = match &args.faults {
+        Some(spec) => spec
+            .parse::<Faults>()
+            .with_context(|| format!("--faults {spec}"))?,
+        None => Faults::none(),
+    };
+    faults.echo |= args.echo;
+    Ok(faults)
+}
+
+/// The simulated robot with its mounting (`--mounting`, `--unit`) and hand.
+fn builder_of<'a>(args: &Args, robot: &'a Robot) -> anyhow::Result<SimRobotBuilder<'a>> {
+    let mut builder = SimRobot::builder(robot);
+    if let Some(path) = &args.mounting {
+        builder = builder.mounting(Mounting::load(path, robot)?);
+    }
+    if let Some(seed) = args.unit {
+        builder = builder.mounting(Mounting::random(robot, seed));
+    }
+    if let Some(path) = &args.hand {
+        builder = builder.hand(Hand::load(path, robot)?);
+    }
+    Ok(builder)
+}
+
+/// The truth `--truth` records, one column per served joint, and its path
+/// (checked, not yet opened).
+fn truth_of(args: &Args, robot: &Robot) -> anyhow::Result<Option<(Truth, PathBuf)>> {
+    // The truth is a stream that others follow while the simulator runs,
+    // so it is written in place, not atomically. Its path is checked now
+    // (a directory, a missing directory: refused before anything is
+    // served), and the file opened only once the simulator serves (in
+    // `run`), so that a simulator refused at start leaves an earlier file
+    // as it was.
+    let Some(path) = &args.truth else {
+        return Ok(None);
+    };
+    servobus_robot::files::check_output(path)?;
+    let truth = match args.bus.as_deref() {
+        Some(name) => Truth::new(
+            robot
+                .buses
+                .iter()
+                .filter(|b| b.name == name)
+                .flat_map(|b| b.joints.iter().map(|j| j.name.clone()))
+                .collect(),
+            servobus_robot::sim::TRUTH_PERIOD,
+        ),
+        None => new_truth(robot),
+    };
+    Ok(Some((truth, path.clone())))
+}
+
+/// The pty server of the served servos, set up as the flags say, and how
+/// many servos it serves; `truth`: a truth is sampled.
+fn open_server(
+    args: &Args,
+    builder: &SimRobotBuilder<'_>,
+    faults: Faults,
+    truth: bool,
+) -> anyhow::Result<(PtyServer, usize)> {
+    let bodies = args.mounting.is_some() || args.unit.is_some() || args.hand.is_some();
+    let (baud, servos) = servos_of(builder, args.bus.as_deref())?;
+    let count = servos.len();
+    let mut server = PtyServer::open(baud, servos)?;
+    if let Some(link) = &args.link {
+        server.link_to(link)?;
+    }
+    server.set_pacing(!args.no_pacing);
+    server.set_faults(faults);
+    if bodies || truth {
+        // Bodies move (and the truth is sampled) while no client talks.
+        server.set_tick(Some(servobus_robot::sim::TRUTH_PERIOD));
+    }
+    Ok((server, count))
+}
+
+/// Creates (or truncates) the truth file and writes its header.
+fn create_truth(
+    (truth, path): (Truth, PathBuf),
+) -> Result<(Truth, std::fs::File, PathBuf), OutputError> {
+    let write_err = |source| OutputError::Write {
+        path: path.clone(),
+        source,
+    };
+    let mut file = std::fs::File::create(&path).map_err(write_err)?;
+    writeln!(file, "{}", truth.csv_header()).map_err(write_err)?;
+    Ok((truth, file, path))
+}
+
+/// The thread that streams the truth to its file while the simulator serves.
+struct TruthWriter {
+    handle: std::thread::JoinHandle<anyhow::Result<()>>,
+    /// Set once the server has made its last step.
+    done: Arc<AtomicBool>,
+    path: PathBuf,
+}
+
+impl TruthWriter {
+    /// Starts streaming `truth` to `out` (the file at `path`).
+    fn spawn(truth: Truth, out: std::fs::File, path: PathBuf, stop: &Arc<AtomicBool>) -> Self {
+        let stop = Arc::clone(stop);
         let done = Arc::new(AtomicBool::new(false));
         let finished = Arc::clone(&done);
         let name = path.clone();
@@ -181,21 +234,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             write_truth(&truth, &mut out, &stop, &finished)
                 .map_err(|source| OutputError::Write { path: name, source }.into())
         });
-        (handle, done, path)
-    });
-    let served = server.serve(&stop);
-    server.settle();
-    // Dropping the server removes the link, also after an I/O error.
-    drop(server);
-    if let Some((handle, done, path)) = writer {
-        done.store(true, Ordering::SeqCst);
-        match handle.join() {
-            Ok(result) => result?,
-            Err(_) => anyhow::bail!("{}: the truth writer failed", path.display()),
+        TruthWriter { handle, done, path }
+    }
+
+    /// Writes the last rows and waits for the thread: its error, if any.
+    fn finish(self) -> anyhow::Result<()> {
+        self.done.store(true, Ordering::SeqCst);
+        match self.handle.join() {
+            Ok(result) => result,
+            Err(_) => anyhow::bail!("{}: the truth writer failed", self.path.display()),
         }
     }
-    served?;
-    Ok(ExitCode::SUCCESS)
 }
 
 /// Streams the truth's complete rows to `out` until `done`, every

@@ -248,9 +248,16 @@ fn take<T: Transport>(
         Err(e) => return Err((take, e.into())),
     };
     take.start = Some(first.clone());
-    let mut capture = StillCapture::new(&first, robot.units);
-    let names = teacher.joint_names();
-    let view = std::io::stderr().is_terminal();
+    let mut taking = Taking {
+        args,
+        robot,
+        stop,
+        keys,
+        capture: StillCapture::new(&first, robot.units),
+        names: teacher.joint_names(),
+        view: std::io::stderr().is_terminal(),
+        take,
+    };
     let mut next = start;
     let mut next_view = start;
     let mut missed = 0;
@@ -270,52 +277,90 @@ fn take<T: Transport>(
                 missed += 1;
                 continue;
             }
-            Err(e) => return Err((take, e.into())),
+            Err(e) => return Err((taking.take, e.into())),
         };
         let t = (teacher.now() - start).as_secs_f64();
-        if args.continuous {
-            // Every sample is a point of the path: none leaves the limits.
-            if let Err(e) = check_pose(robot, &pose) {
-                return Err((take, e.into()));
-            }
-            take.samples.push((t, pose.clone()));
+        if let Err(e) = taking.sample(t, &pose) {
+            return Err((taking.take, e.into()));
         }
-        let mut captured = None;
-        if let Some(keys) = keys {
-            while let Ok(line) = keys.try_recv() {
-                let still = distance(&pose, capture.last()) <= capture.moved;
-                if args.continuous || line.trim() == "q" || (still && !take.poses.is_empty()) {
-                    stop.store(true, Ordering::SeqCst);
-                } else {
-                    capture.captured(&pose);
-                    captured = Some(pose.clone());
-                }
-            }
-        } else if !args.continuous {
-            captured = capture.push(t, &pose);
-        }
-        if let Some(k) = captured {
-            if let Err(e) = check_pose(robot, &k) {
-                return Err((take, e.into()));
-            }
-            take.poses.push((t, k.clone()));
-            errln!(
-                "{}keyframe {} at {t:.1} s: {}",
-                if view { "\r\x1b[K" } else { "" },
-                take.poses.len(),
-                show(&names, &k)
-            );
-        }
-        if view && teacher.now() >= next_view {
+        if taking.view && teacher.now() >= next_view {
             next_view = teacher.now() + VIEW_EVERY;
-            err!("\r\x1b[K{t:6.1} s  {}", show(&names, &pose));
+            err!("\r\x1b[K{t:6.1} s  {}", show(&taking.names, &pose));
             let _ = std::io::stderr().flush();
         }
     }
-    if view {
+    if taking.view {
         errln!();
     }
-    Ok(take)
+    Ok(taking.take)
+}
+
+/// A take in progress: what each pose read adds to it.
+struct Taking<'a> {
+    args: &'a Args,
+    robot: &'a Robot,
+    /// Set to end the take (Enter without moving, `q`, Ctrl-C).
+    stop: &'a AtomicBool,
+    /// Lines typed, when interactive.
+    keys: Option<&'a mpsc::Receiver<String>>,
+    capture: StillCapture,
+    names: Vec<String>,
+    /// The live view is drawn (stderr is a terminal).
+    view: bool,
+    take: Take,
+}
+
+impl Taking<'_> {
+    /// Adds the pose read at `t` s: a point of the path, a keyframe, or
+    /// nothing.
+    fn sample(&mut self, t: f64, pose: &[f64]) -> Result<(), TeachError> {
+        if self.args.continuous {
+            // Every sample is a point of the path: none leaves the limits.
+            check_pose(self.robot, pose)?;
+            self.take.samples.push((t, pose.to_vec()));
+        }
+        match self.captured(t, pose) {
+            Some(k) => self.keyframe(t, k),
+            None => Ok(()),
+        }
+    }
+
+    /// The keyframe this pose makes, if any: Enter pressed when
+    /// interactive, else the robot held still; a key may end the take.
+    fn captured(&mut self, t: f64, pose: &[f64]) -> Option<Vec<f64>> {
+        let mut captured = None;
+        if let Some(keys) = self.keys {
+            while let Ok(line) = keys.try_recv() {
+                let still = distance(pose, self.capture.last()) <= self.capture.moved;
+                if self.args.continuous
+                    || line.trim() == "q"
+                    || (still && !self.take.poses.is_empty())
+                {
+                    self.stop.store(true, Ordering::SeqCst);
+                } else {
+                    self.capture.captured(pose);
+                    captured = Some(pose.to_vec());
+                }
+            }
+        } else if !self.args.continuous {
+            captured = self.capture.push(t, pose);
+        }
+        captured
+    }
+
+    /// Adds keyframe `k`, captured at `t` s, once inside the limits, and
+    /// says so.
+    fn keyframe(&mut self, t: f64, k: Vec<f64>) -> Result<(), TeachError> {
+        check_pose(self.robot, &k)?;
+        self.take.poses.push((t, k.clone()));
+        errln!(
+            "{}keyframe {} at {t:.1} s: {}",
+            if self.view { "\r\x1b[K" } else { "" },
+            self.take.poses.len(),
+            show(&self.names, &k)
+        );
+        Ok(())
+    }
 }
 
 fn show(names: &[String], pose: &[f64]) -> String {

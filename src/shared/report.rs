@@ -10,6 +10,21 @@ pub(crate) fn write_report(
     r: &Report,
     identified: bool,
 ) -> std::io::Result<()> {
+    write_timing(out, r)?;
+    write_links(out, r)?;
+    write_lead(out, r, identified)?;
+    write_joints(out, r)?;
+    if let Some(fault) = &r.fault {
+        writeln!(out, "  fault: {fault}")?;
+    }
+    for w in &r.warnings {
+        writeln!(out, "  warning: {w}")?;
+    }
+    Ok(())
+}
+
+/// Writes how the run ended, its rate, its period errors and the buses' counters.
+fn write_timing(out: &mut impl std::io::Write, r: &Report) -> std::io::Result<()> {
     writeln!(
         out,
         "{}: {} cycles in {:.2} s, {:.1} Hz achieved of {:.1} Hz requested",
@@ -40,7 +55,11 @@ pub(crate) fn write_report(
         r.missed_replies,
         r.clamps,
         r.telemetry_dropped
-    )?;
+    )
+}
+
+/// Writes each bus's link latency, where it came from, and its reply deadline.
+fn write_links(out: &mut impl std::io::Write, r: &Report) -> std::io::Result<()> {
     for b in &r.buses {
         let how = if b.latency_learned {
             format!(
@@ -56,13 +75,18 @@ pub(crate) fn write_report(
             b.name, b.latency_us, b.latency_p99_us, b.reply_deadline_us
         )?;
     }
+    Ok(())
+}
+
+/// Writes the lag compensation lead, and whether it was identified while moving.
+fn write_lead(out: &mut impl std::io::Write, r: &Report, identified: bool) -> std::io::Result<()> {
     if identified && r.lead_identified && r.lead_ms > 0.0 {
         writeln!(
             out,
             "  lag compensation lead {:.1} ms, identified while moving \
              (`lead_ms: {:.0}` in the robot file applies it from the first cycle)",
             r.lead_ms, r.lead_ms
-        )?;
+        )
     } else if identified && r.lead_ms > 0.0 {
         // Too short a run, or too little motion, to identify the lag: no
         // figure worth putting in the robot file.
@@ -70,10 +94,14 @@ pub(crate) fn write_report(
             out,
             "  lag compensation lead {:.1} ms (the servos' response lag; too little motion to identify it)",
             r.lead_ms
-        )?;
+        )
     } else {
-        writeln!(out, "  lag compensation lead {:.1} ms", r.lead_ms)?;
+        writeln!(out, "  lag compensation lead {:.1} ms", r.lead_ms)
     }
+}
+
+/// Writes the table of each joint's tracking error.
+fn write_joints(out: &mut impl std::io::Write, r: &Report) -> std::io::Result<()> {
     // The name column fits the longest joint name.
     let w = r.joints.iter().map(|j| j.name.len()).fold(16, usize::max);
     writeln!(
@@ -87,12 +115,6 @@ pub(crate) fn write_report(
             "  {:<w$} {:>10.3} {:>10.3}",
             j.name, j.rms_error, j.max_error
         )?;
-    }
-    if let Some(fault) = &r.fault {
-        writeln!(out, "  fault: {fault}")?;
-    }
-    for w in &r.warnings {
-        writeln!(out, "  warning: {w}")?;
     }
     Ok(())
 }

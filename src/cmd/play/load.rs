@@ -174,18 +174,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (motion, mut robot) = if recorded {
-        let Some(robot_path) = &args.robot else {
-            return Err(crate::shared::exit::input(format!(
-                "{}: a recorded path names no robot; give --robot FILE",
-                args.motion.display()
-            )));
-        };
-        let robot = servobus_config::load_robot(
-            robot_path,
-            &servobus_config::RobotOptions::default()
-                .calibration(args.hardware.calibration.as_deref())
-                .to_play(),
-        )?;
+        let robot = recording_robot(args)?;
         (recording_motion(&args.motion, &robot), robot)
     } else {
         load_motion_calibrated(
@@ -196,6 +185,35 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
     };
     // `--rate` is checked by its parser, the files' rates by the loaders.
     let rate_hz = args.rate.unwrap_or_else(|| motion.rate_hz(&robot));
+    check_buses(args, &mut robot, rate_hz)?;
+    if !recorded {
+        let trajectory = plan_motion(&motion, &robot)?;
+        check_motion_length(&motion, &trajectory, rate_hz)?;
+        return Ok((motion, robot, trajectory, None, rate_hz));
+    }
+    let (trajectory, info) = load_recording(args, &motion, &robot, rate_hz)?;
+    Ok((motion, robot, trajectory, Some(info), rate_hz))
+}
+
+/// The robot a recorded path plays on: `--robot`, which it needs.
+fn recording_robot(args: &Args) -> anyhow::Result<Robot> {
+    let Some(robot_path) = &args.robot else {
+        return Err(crate::shared::exit::input(format!(
+            "{}: a recorded path names no robot; give --robot FILE",
+            args.motion.display()
+        )));
+    };
+    Ok(servobus_config::load_robot(
+        robot_path,
+        &servobus_config::RobotOptions::default()
+            .calibration(args.hardware.calibration.as_deref())
+            .to_play(),
+    )?)
+}
+
+/// Applies `--round-robin` and `--busy-poll` to every bus and checks that
+/// `rate_hz` fits each one's budget.
+fn check_buses(args: &Args, robot: &mut Robot, rate_hz: f64) -> anyhow::Result<()> {
     for bus in &mut robot.buses {
         bus.round_robin |= args.round_robin;
         bus.busy_poll |= args.busy_poll;
@@ -207,13 +225,19 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
             )));
         }
     }
-    if !recorded {
-        let trajectory = plan_motion(&motion, &robot)?;
-        check_motion_length(&motion, &trajectory, rate_hz)?;
-        return Ok((motion, robot, trajectory, None, rate_hz));
-    }
+    Ok(())
+}
+
+/// The recording `args.motion` read and played through the robot's limits
+/// at `rate_hz`: the path, and how closely it follows the recording.
+fn load_recording(
+    args: &Args,
+    motion: &Motion,
+    robot: &Robot,
+    rate_hz: f64,
+) -> anyhow::Result<(Trajectory, RecordingInfo)> {
     // A recording that cannot be read is a bad input file (exit 2).
-    let rec = read_recording(&args.motion, &robot).map_err(crate::shared::exit::invalid)?;
+    let rec = read_recording(&args.motion, robot).map_err(crate::shared::exit::invalid)?;
     let span_s = rec.times[rec.times.len() - 1] - rec.times[0];
     if let Err(e) = limits::check_recording(span_s, rate_hz, robot.joint_count()) {
         return Err(crate::shared::exit::input(format!(
@@ -221,7 +245,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
             args.motion.display()
         )));
     }
-    let limits = servobus_config::joint_limits(&robot);
+    let limits = servobus_config::joint_limits(robot);
     let options = servobus_robot::path::TrackOptions {
         step: 1.0 / rate_hz,
         resolution: rec.resolution,
@@ -230,15 +254,8 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         .map_err(|e| {
             anyhow::anyhow!("{}: cannot play this recording: {e}", args.motion.display())
         })?;
-    let reported = Units::Deg.to_rad(REPORTED_DEPARTURE_DEG);
-    let mut departures: Vec<_> = tracked
-        .departures
-        .into_iter()
-        .filter(|d| d.max_departure > reported)
-        .collect();
-    departures.sort_by(|a, b| b.max_departure.total_cmp(&a.max_departure));
     let lead_s = tracked.recording_start;
-    let names = names_of(&robot);
+    let names = names_of(robot);
     let series = names
         .iter()
         .enumerate()
@@ -255,17 +272,31 @@ pub(super) fn load(args: &Args) -> anyhow::Result<Loaded> {
         .collect();
     let info = RecordingInfo {
         samples: rec.times.len(),
-        span_s: rec.times[rec.times.len() - 1] - rec.times[0],
+        span_s,
         names,
         max_rad: tracked.max_deviation,
         rms_rad: tracked.rms_deviation,
         missing: rec.missing,
         column: rec.column,
         lead_s,
-        departures,
+        departures: reported(tracked.departures),
         series,
     };
-    Ok((motion, robot, tracked.trajectory, Some(info), rate_hz))
+    Ok((tracked.trajectory, info))
+}
+
+/// The departures worth reporting (above [`REPORTED_DEPARTURE_DEG`]),
+/// largest first.
+fn reported(
+    departures: Vec<servobus_robot::path::Departure>,
+) -> Vec<servobus_robot::path::Departure> {
+    let reported = Units::Deg.to_rad(REPORTED_DEPARTURE_DEG);
+    let mut departures: Vec<_> = departures
+        .into_iter()
+        .filter(|d| d.max_departure > reported)
+        .collect();
+    departures.sort_by(|a, b| b.max_departure.total_cmp(&a.max_departure));
+    departures
 }
 
 /// A stand-in motion for a recording (its name, the robot's joints), so the

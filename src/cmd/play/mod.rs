@@ -33,11 +33,11 @@ mod view;
 use crate::shared::install_ctrl_c;
 use crate::shared::write_report;
 use load::{check_outputs, load};
-use report::{file_name, print_plan};
-use setup::{backend, check_measured_rates, sim_pose};
+use report::{print_plan, report_text, Outputs};
+use setup::{backend, run_options, sim_pose, start};
 use view::{follow, Followed, Shown, APPROACH, SETTLE};
 
-use crate::shared::out::{err, out, outln};
+use crate::shared::out::outln;
 
 /// Arguments of `servobus play`.
 #[derive(Debug, clap::Args)]
@@ -133,15 +133,103 @@ enum Backend {
 /// (`--zenoh-group` is the group's play, which the dispatcher hands to
 /// `serve`'s conductor instead.)
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let Prepared {
+        motion,
+        robot,
+        trajectory,
+        recording,
+        rate_hz,
+        backend,
+        pose,
+        log,
+    } = prepare(&args)?;
+    let units = motion.units;
+    let duration = trajectory.duration();
+    // The first keyframe is the path's start; each segment ends at the next.
+    let keyframes: Vec<f64> = std::iter::once(0.0)
+        .chain(trajectory.segments().iter().map(|s| s.end))
+        .collect();
+    let options = run_options(&args, &robot, units, rate_hz);
+    let runner = start(&backend, &robot, &pose, trajectory, options, rate_hz)?;
+
+    install_ctrl_c(runner.commands());
+    let shown = Shown {
+        names: names_of(&robot),
+        bus_of: robot
+            .buses
+            .iter()
+            .flat_map(|bus| bus.joints.iter().map(|_| bus.name.clone()))
+            .collect(),
+        keyframes,
+        approach: runner.approach().as_secs_f64(),
+        settle: SETTLE.as_secs_f64(),
+        geometry: robot.geometry(),
+        recording: recording.as_ref().map(|r| r.series.as_slice()),
+    };
+    let outcome = if args.monitor {
+        crate::shared::screen::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
+            log: None,
+            plot: None,
+            stdout: None,
+        })
+    } else {
+        follow(&runner, &args, log, &shown, units, duration)
+    };
+    let report = runner.join();
+    let Followed { log, plot, stdout } = outcome?;
+    // The run has moved: what it logged is kept, also when it ended in an
+    // error (the error is said after the log is in place).
+    let mut outputs = Outputs::default();
+    outputs.finish_log(log);
+    let report = match report {
+        Ok(report) => report,
+        Err(e) => {
+            outputs.say_failed();
+            return Err(e.into());
+        }
+    };
+    if let (Some(plot), Some(path)) = (plot, &args.plot) {
+        outputs.draw_plot(&plot, path, &motion, &robot);
+    }
+    let text = report_text(
+        &args,
+        &report,
+        &motion,
+        &robot,
+        recording.as_ref(),
+        &outputs,
+    )?;
+    outputs.print(&text, stdout)?;
+    Ok(crate::shared::exit::of_finish(report.finish))
+}
+
+/// What is known and made before anything moves.
+struct Prepared {
+    motion: Motion,
+    robot: Robot,
+    trajectory: Trajectory,
+    recording: Option<load::RecordingInfo>,
+    rate_hz: f64,
+    backend: Backend,
+    /// Where the simulated joints start.
+    pose: Vec<f64>,
+    /// The log's temporary, with `--log`.
+    log: Option<CsvLog>,
+}
+
+/// Checks everything before anything moves: the terminal `--monitor`
+/// needs, the outputs, the inputs and where the run happens; prints the
+/// plan and creates the log's temporary.
+fn prepare(args: &Args) -> anyhow::Result<Prepared> {
     if args.monitor {
         // The live view needs a terminal: without one, refuse before
         // anything is opened or moved.
         crate::shared::screen::check_play_terminal()?;
     }
-    check_outputs(&args)?;
-    let (motion, robot, trajectory, recording, rate_hz) = load(&args)?;
-    let backend = backend(&args, &robot)?;
-    let pose = sim_pose(&args, &robot, &backend)?;
+    check_outputs(args)?;
+    let (motion, robot, trajectory, recording, rate_hz) = load(args)?;
+    let backend = backend(args, &robot)?;
+    let pose = sim_pose(args, &robot, &backend)?;
     if !args.json {
         // Stdout that cannot be written (closed, full) fails the command
         // here, before anything moves.
@@ -162,153 +250,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         )?),
         None => None,
     };
-
-    let options = RunOptions {
-        rate_hz: Some(rate_hz),
-        units: Some(motion.units),
-        settle: SETTLE,
-        // The simulated joints start at rest; real ones wherever they are.
-        // Both approach the first keyframe slowly (skipped when already
-        // there).
-        approach: Some(APPROACH),
-        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
-        rt: RtOptions {
-            core: args.core,
-            fifo_priority: args.fifo,
-        },
-        ..RunOptions::default()
-    };
-
-    let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    let units = motion.units;
-    let duration = trajectory.duration();
-    // The first keyframe is the path's start; each segment ends at the next.
-    let keyframe_times: Vec<f64> = std::iter::once(0.0)
-        .chain(trajectory.segments().iter().map(|s| s.end))
-        .collect();
-    let runner = match &backend {
-        // The built-in simulator in this process: in virtual time, or
-        // paced by the wall clock with no pty between the run and its
-        // servos.
-        Backend::Fast | Backend::Simulated => {
-            let target = if matches!(backend, Backend::Fast) {
-                servobus_robot::Target::VirtualSimulator
-            } else {
-                servobus_robot::Target::Simulator
-            };
-            servobus_robot::Robot::from(robot.clone())
-                .connect_at(target, &pose)?
-                .play(trajectory, options)?
-        }
-        Backend::Hardware(ports) => {
-            let mut connection = crate::shared::ports::connect(
-                &robot,
-                servobus_robot::Target::Ports(ports.to_vec()),
-            )?;
-            check_measured_rates(&mut connection, ports, rate_hz)?;
-            connection.play(trajectory, options)?
-        }
-    };
-
-    install_ctrl_c(runner.commands());
-    let shown = Shown {
-        names: names.clone(),
-        bus_of: robot
-            .buses
-            .iter()
-            .flat_map(|bus| bus.joints.iter().map(|_| bus.name.clone()))
-            .collect(),
-        keyframes: keyframe_times,
-        approach: runner.approach().as_secs_f64(),
-        settle: SETTLE.as_secs_f64(),
-        geometry: robot.geometry(),
-        recording: recording.as_ref().map(|r| r.series.as_slice()),
-    };
-    let outcome = if args.monitor {
-        crate::shared::screen::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
-            log: None,
-            plot: None,
-            stdout: None,
-        })
-    } else {
-        follow(&runner, &args, log, &shown, units, duration)
-    };
-    let report = runner.join();
-    let Followed { log, plot, stdout } = outcome?;
-    // The run has moved: what it logged is kept, also when it ended in an
-    // error (the error is said after the log is in place).
-    let mut failed_outputs = Vec::new();
-    let mut log_written = false;
-    if let Some(log) = log {
-        match log.finish() {
-            Ok(()) => log_written = true,
-            Err(e) => failed_outputs.push(e),
-        }
-    }
-    let report = match report {
-        Ok(report) => report,
-        Err(e) => {
-            for failed in &failed_outputs {
-                crate::shared::exit::report(failed);
-            }
-            return Err(e.into());
-        }
-    };
-
-    let mut plot_written = false;
-    if let (Some(plot), Some(path)) = (plot, &args.plot) {
-        let title = format!(
-            "{} on {}: planned vs measured",
-            file_name(&motion.path),
-            robot.name
-        );
-        match plot.draw(path, &title, &units.to_string()) {
-            Ok(()) => plot_written = true,
-            Err(e) => failed_outputs.push(e),
-        }
-    }
-    let mut text = Vec::new();
-    if args.json {
-        let mut value = serde_json::to_value(&report)?;
-        if let (Some(r), Some(obj)) = (&recording, value.as_object_mut()) {
-            obj.insert("recording".into(), r.json(motion.units));
-        }
-        writeln!(text, "{}", crate::shared::json::pretty(&value)?)?;
-    } else {
-        write_report(&mut text, &report, robot.lead.is_none())?;
-        if let Some(r) = &recording {
-            writeln!(text, "  {}", r.describe(motion.units))?;
-        }
-        if let (true, Some(path)) = (log_written, &args.log) {
-            writeln!(text, "log: {}", path.display())?;
-        }
-        if let (true, Some(path)) = (plot_written, &args.plot) {
-            writeln!(text, "plot: {}", path.display())?;
-        }
-    }
-    let text = String::from_utf8_lossy(&text);
-    // The report goes to stdout; once stdout has failed (closed by its
-    // reader, or full), to stderr, and the command exits 1 after it.
-    let stdout = match stdout {
-        Some(e) => Some(e),
-        None => out!("{text}").err(),
-    };
-    if let Some(e) = stdout {
-        err!("{text}");
-        failed_outputs.push(e.into());
-    }
-    // An output that failed fails the command (exit 1) after the report:
-    // each error is said, the last by `main` as it returns.
-    let last = failed_outputs.pop();
-    for e in &failed_outputs {
-        crate::shared::exit::report(e);
-    }
-    if let Some(e) = last {
-        return Err(e);
-    }
-    Ok(crate::shared::exit::of_finish(report.finish))
+    Ok(Prepared {
+        motion,
+        robot,
+        trajectory,
+        recording,
+        rate_hz,
+        backend,
+        pose,
+        log,
+    })
 }
 
+/// The robot's joint names, in its joint order.
 fn names_of(robot: &Robot) -> Vec<String> {
     robot.joints().map(|j| j.name.clone()).collect()
 }

@@ -82,3 +82,58 @@ pub(super) fn check_measured_rates(
     }
     Ok(())
 }
+
+/// The run's options: the rate, the units, the settling and approach, the
+/// lead, and the control threads' core and priority.
+pub(super) fn run_options(args: &Args, robot: &Robot, units: Units, rate_hz: f64) -> RunOptions {
+    RunOptions {
+        rate_hz: Some(rate_hz),
+        units: Some(units),
+        settle: SETTLE,
+        // The simulated joints start at rest; real ones wherever they are.
+        // Both approach the first keyframe slowly (skipped when already
+        // there).
+        approach: Some(APPROACH),
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        rt: RtOptions {
+            core: args.core,
+            fifo_priority: args.fifo,
+        },
+        ..RunOptions::default()
+    }
+}
+
+/// Starts playing `trajectory` where `backend` says: the simulated joints
+/// from `pose`, real servos once their measured rates are checked.
+pub(super) fn start(
+    backend: &Backend,
+    robot: &Robot,
+    pose: &[f64],
+    trajectory: Trajectory,
+    options: RunOptions,
+    rate_hz: f64,
+) -> anyhow::Result<Run> {
+    Ok(match backend {
+        // The built-in simulator in this process: in virtual time, or
+        // paced by the wall clock with no pty between the run and its
+        // servos.
+        Backend::Fast | Backend::Simulated => {
+            let target = if matches!(backend, Backend::Fast) {
+                servobus_robot::Target::VirtualSimulator
+            } else {
+                servobus_robot::Target::Simulator
+            };
+            servobus_robot::Robot::from(robot.clone())
+                .connect_at(target, pose)?
+                .play(trajectory, options)?
+        }
+        Backend::Hardware(ports) => {
+            let mut connection = crate::shared::ports::connect(
+                robot,
+                servobus_robot::Target::Ports(ports.to_vec()),
+            )?;
+            check_measured_rates(&mut connection, ports, rate_hz)?;
+            connection.play(trajectory, options)?
+        }
+    })
+}

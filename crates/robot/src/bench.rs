@@ -12,7 +12,7 @@ use servobus_config::BusConfig;
 use servobus_driver::{
     Bus, BusError, Clock, MissingReason, Transport, PATIENT_TRIES, PROBE_CEILING, PROBE_PINGS,
 };
-use servobus_protocol::registers::{addr, ValueError};
+use servobus_protocol::registers::{addr, Register, Series, ValueError};
 use servobus_runtime::stats::Histogram;
 pub use servobus_runtime::Quantiles;
 use servobus_timing::{CycleError, Link};
@@ -211,13 +211,6 @@ pub fn measure_on<T: Transport>(
     link: &Link,
     duration: Duration,
 ) -> Result<BusBench, BenchError> {
-    let failed = |what: &'static str| {
-        move |source| BenchError::Bus {
-            bus: bus.name.clone(),
-            what,
-            source,
-        }
-    };
     let ids: Vec<u8> = bus.joints.iter().map(|j| j.id).collect();
     let Some(first) = bus.joints.first() else {
         return Err(BenchError::NoJoints {
@@ -229,20 +222,66 @@ pub fn measure_on<T: Transport>(
         bus: bus.name.clone(),
         source,
     })?;
-    // Hold every servo where it is: the goals are the present positions,
-    // in the layout of this bus's series.
-    let order = series.byte_order();
     let pos = series
         .map()
         .at(addr::PRESENT_POSITION)
         .ok_or(BenchError::NoPositionRegister)?;
+    let goals = hold_goals(servo_bus, bus, &ids, pos, series)?;
+    servo_bus.reset_counters();
+    let run = run_cycles(servo_bus, bus, &ids, &goals, pos, duration)?;
+    // An overrun: a cycle that took longer than the plan says a full cycle
+    // takes (the period it would have at the maximum rate).
+    let overruns = overruns(&run.period_list, plan.full_cycle().cycle_time);
+    let counters = *servo_bus.counters();
+    Ok(BusBench {
+        name: bus.name.clone(),
+        servos: ids.len(),
+        backend: String::new(),
+        busy_poll: bus.busy_poll,
+        cycles: run.cycles,
+        achieved_rate_hz: run.achieved_rate_hz(),
+        planned_rate_hz: plan.max_rate_hz(),
+        wire_limited_rate_hz: plan.wire_limited_rate_hz(),
+        period_us: Quantiles::of(&run.periods, Duration::from_micros(1)),
+        period_error_us: Quantiles::of(&run.period_errors(), Duration::from_micros(1)),
+        overruns,
+        floor_rate_hz: 0.0,
+        floor_ratio: 0.0,
+        measured_latency_us: None,
+        timeouts: counters.timeouts,
+        late_replies: counters.late_replies,
+        retries: counters.retries,
+        missed_replies: run.missed,
+        checksum_errors: counters.checksum_errors,
+        servo_rtt: servo_rtts(servo_bus, bus),
+    })
+}
+
+/// The error of a failed `what` on `bus`, from the bus's.
+fn failed<'b>(bus: &'b BusConfig, what: &'static str) -> impl FnOnce(BusError) -> BenchError + 'b {
+    move |source| BenchError::Bus {
+        bus: bus.name.clone(),
+        what,
+        source,
+    }
+}
+
+/// The goals that hold every servo `ids` where it is: their present
+/// positions (register `pos`), in the layout of this bus's `series`.
+fn hold_goals<T: Transport>(
+    servo_bus: &mut Bus<T>,
+    bus: &BusConfig,
+    ids: &[u8],
+    pos: &Register,
+    series: Series,
+) -> Result<Vec<u8>, BenchError> {
     let len = usize::from(pos.size);
     let mut goals = vec![0u8; ids.len() * len];
     // The first read is not timed: a loaded machine or a slow adapter gets
     // a patient timeout and a few tries before a servo counts as absent.
     let read = servo_bus
-        .sync_read_patiently(pos.address, pos.size, &ids)
-        .map_err(failed("first read"))?;
+        .sync_read_patiently(pos.address, pos.size, ids)
+        .map_err(failed(bus, "first read"))?;
     for (i, reply) in read.iter().enumerate() {
         match reply {
             Ok(r) => goals[i * len..(i + 1) * len].copy_from_slice(r.data),
@@ -259,12 +298,62 @@ pub fn measure_on<T: Transport>(
     // Present and goal position share the layout, so the bytes read are
     // valid goals as they are; decoding them checks that they are.
     for chunk in goals.chunks_exact(len) {
-        pos.decode(chunk, order).map_err(BenchError::Position)?;
+        pos.decode(chunk, series.byte_order())
+            .map_err(BenchError::Position)?;
     }
-    servo_bus.reset_counters();
+    Ok(goals)
+}
 
+/// What the timed cycles measured.
+struct Cycles {
+    /// The cycles' periods.
+    periods: Histogram,
+    /// The same periods, in order.
+    period_list: Vec<Duration>,
+    /// Full cycles run.
+    cycles: u64,
+    /// Servos missing from a SYNC READ.
+    missed: u64,
+    /// From the start to the end of the last cycle.
+    elapsed: Duration,
+}
+
+impl Cycles {
+    /// Cycles per second achieved.
+    fn achieved_rate_hz(&self) -> f64 {
+        if self.elapsed.is_zero() {
+            0.0
+        } else {
+            self.cycles as f64 / self.elapsed.as_secs_f64()
+        }
+    }
+
+    /// Each cycle's period against the mean period.
+    fn period_errors(&self) -> Histogram {
+        let mean = if self.cycles == 0 {
+            Duration::ZERO
+        } else {
+            self.elapsed / u32::try_from(self.cycles).unwrap_or(u32::MAX)
+        };
+        let mut errors = Histogram::new(Duration::from_millis(100));
+        for p in &self.period_list {
+            errors.record(p.abs_diff(mean));
+        }
+        errors
+    }
+}
+
+/// Runs full cycles (a SYNC WRITE of `goals`, a SYNC READ of `pos`) on
+/// `ids` for `duration`, timing each.
+fn run_cycles<T: Transport>(
+    servo_bus: &mut Bus<T>,
+    bus: &BusConfig,
+    ids: &[u8],
+    goals: &[u8],
+    pos: &Register,
+    duration: Duration,
+) -> Result<Cycles, BenchError> {
     let mut periods = Histogram::new(Duration::from_millis(100));
-    let mut errors = Histogram::new(Duration::from_millis(100));
     let mut period_list = Vec::with_capacity(1 << 16);
     let start = servo_bus.clock().now();
     let end = start + duration;
@@ -273,11 +362,11 @@ pub fn measure_on<T: Transport>(
     let mut missed = 0u64;
     while servo_bus.clock().now() < end {
         servo_bus
-            .sync_write(addr::GOAL_POSITION, &ids, &goals)
-            .map_err(failed("SYNC WRITE"))?;
+            .sync_write(addr::GOAL_POSITION, ids, goals)
+            .map_err(failed(bus, "SYNC WRITE"))?;
         let read = servo_bus
-            .sync_read(pos.address, pos.size, &ids)
-            .map_err(failed("SYNC READ"))?;
+            .sync_read(pos.address, pos.size, ids)
+            .map_err(failed(bus, "SYNC READ"))?;
         let missing = read.missing() as u64;
         missed += missing;
         if missing > 0 {
@@ -285,7 +374,7 @@ pub fn measure_on<T: Transport>(
             // talk over it): it counts as late, not lost.
             servo_bus
                 .await_late_replies(LATE_REPLY_WAIT)
-                .map_err(failed("waiting for late replies"))?;
+                .map_err(failed(bus, "waiting for late replies"))?;
         }
         let now = servo_bus.clock().now();
         let period = now - last;
@@ -294,28 +383,18 @@ pub fn measure_on<T: Transport>(
         periods.record(period);
         period_list.push(period);
     }
-    let elapsed = last - start;
-    let achieved = if elapsed.is_zero() {
-        0.0
-    } else {
-        cycles as f64 / elapsed.as_secs_f64()
-    };
-    // Period error: each cycle's period against the mean period.
-    let mean = if cycles == 0 {
-        Duration::ZERO
-    } else {
-        elapsed / u32::try_from(cycles).unwrap_or(u32::MAX)
-    };
-    for p in &period_list {
-        errors.record(p.abs_diff(mean));
-    }
-    // An overrun: a cycle that took longer than the plan says a full cycle
-    // takes (the period it would have at the maximum rate).
-    let overruns = overruns(&period_list, plan.full_cycle().cycle_time);
+    Ok(Cycles {
+        periods,
+        period_list,
+        cycles,
+        missed,
+        elapsed: last - start,
+    })
+}
 
-    let counters = *servo_bus.counters();
-    let servo_rtt = bus
-        .joints
+/// Each servo's round trip, from the bus's counters.
+fn servo_rtts<T: Transport>(servo_bus: &Bus<T>, bus: &BusConfig) -> Vec<ServoRtt> {
+    bus.joints
         .iter()
         .map(|j| {
             let c = servo_bus.servo_counters(j.id);
@@ -329,29 +408,7 @@ pub fn measure_on<T: Transport>(
                 timeouts: c.timeouts,
             }
         })
-        .collect();
-    Ok(BusBench {
-        name: bus.name.clone(),
-        servos: ids.len(),
-        backend: String::new(),
-        busy_poll: bus.busy_poll,
-        cycles,
-        achieved_rate_hz: achieved,
-        planned_rate_hz: plan.max_rate_hz(),
-        wire_limited_rate_hz: plan.wire_limited_rate_hz(),
-        period_us: Quantiles::of(&periods, Duration::from_micros(1)),
-        period_error_us: Quantiles::of(&errors, Duration::from_micros(1)),
-        overruns,
-        floor_rate_hz: 0.0,
-        floor_ratio: 0.0,
-        measured_latency_us: None,
-        timeouts: counters.timeouts,
-        late_replies: counters.late_replies,
-        retries: counters.retries,
-        missed_replies: missed,
-        checksum_errors: counters.checksum_errors,
-        servo_rtt,
-    })
+        .collect()
 }
 
 /// Cycles whose period exceeded `planned`, the planned full cycle time.

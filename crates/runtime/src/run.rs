@@ -12,7 +12,7 @@ use std::time::Duration;
 use crossbeam_channel::{bounded, Receiver, Sender};
 use servobus_driver::{Bus, BusSettings, Clock, Transport};
 use servobus_protocol::registers::Series;
-use servobus_trajectory::Trajectory;
+use servobus_trajectory::{JointLimits, Trajectory};
 
 use crate::busloop::{reachable, BusLoop, LoopConfig, Outcome};
 use crate::config::{joint_limits, BusConfig, Robot, Units};
@@ -126,31 +126,10 @@ pub(crate) fn prepare<T: Transport>(
     for l in &loops {
         l.present(&mut present);
     }
-    // Live targets are kept where goals are sent as they are: within the
-    // ticks inside each joint's limits.
     let plain = joint_limits(robot);
-    let limits: Vec<_> = plain
-        .iter()
-        .zip(robot.joints())
-        .map(|(l, j)| {
-            let (lo, hi) = reachable(j, robot.units);
-            l.with_positions(lo.max(l.min_position), hi.min(l.max_position))
-        })
-        .collect();
-    let timeout = o.target_timeout.as_secs_f64();
+    let limits = live_limits(robot, &plain);
     let live_session = trajectory.is_none();
-    let mut timeline = match trajectory {
-        Some(trajectory) => Timeline::new(
-            plain,
-            Arc::new(trajectory),
-            &present,
-            o.approach,
-            o.autoplay,
-            APPROACH_TOLERANCE,
-        )?,
-        None => Timeline::live(limits.clone(), &present, timeout),
-    };
-    timeline.set_live(timeout, limits.clone());
+    let timeline = plan_timeline(trajectory, plain, limits.clone(), &present, o)?;
     let approach = timeline.approach();
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();
@@ -190,6 +169,44 @@ pub(crate) fn prepare<T: Transport>(
         targets,
         counters,
     })
+}
+
+/// The limits live targets are kept within: the ticks inside each joint's
+/// limits, where goals are sent as they are.
+fn live_limits(robot: &Robot, plain: &[JointLimits]) -> Vec<JointLimits> {
+    plain
+        .iter()
+        .zip(robot.joints())
+        .map(|(l, j)| {
+            let (lo, hi) = reachable(j, robot.units);
+            l.with_positions(lo.max(l.min_position), hi.min(l.max_position))
+        })
+        .collect()
+}
+
+/// The timeline from `present`: the path with its approach, or (no path)
+/// live following from the start; live targets are followed within `limits`.
+fn plan_timeline(
+    trajectory: Option<Trajectory>,
+    plain: Vec<JointLimits>,
+    limits: Vec<JointLimits>,
+    present: &[f64],
+    o: &RunOptions,
+) -> Result<Timeline, RunError> {
+    let timeout = o.target_timeout.as_secs_f64();
+    let mut timeline = match trajectory {
+        Some(trajectory) => Timeline::new(
+            plain,
+            Arc::new(trajectory),
+            present,
+            o.approach,
+            o.autoplay,
+            APPROACH_TOLERANCE,
+        )?,
+        None => Timeline::live(limits.clone(), present, timeout),
+    };
+    timeline.set_live(timeout, limits);
+    Ok(timeline)
 }
 
 /// The run's figures every bus loop is built with.

@@ -4,27 +4,25 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use servobus_robot::config::Units;
-use servobus_robot::{Command, Report, Run, Telemetry};
-use zenoh::bytes::Encoding;
-use zenoh::Wait;
+use servobus_robot::{Command, CycleSample, Report, Run, Telemetry};
 
-use crate::prefix;
-
+mod keys;
 mod relay;
 mod session;
 mod state;
 
-use relay::{take_command, take_target, Inputs, Motion};
+use keys::Keys;
+use relay::Motion;
 
 use session::zerr;
 pub use session::{
     group_command_key, group_member_key, open_peer, open_session, NodeConfig, NodeError,
     DEFAULT_LISTEN,
 };
-use state::{publish_state, Ros2, Watch};
+use state::{publish_state, Done, Watch};
 
 /// Turns the motion of a `play` command (a name, a file or YAML text) into
 /// the command that plays it; the node's owner knows the robot and plans.
@@ -124,147 +122,16 @@ pub fn serve(
     config: &NodeConfig,
     linger: Duration,
 ) -> Result<Served, NodeError> {
-    let base = prefix(&robot.name);
     let shared = Arc::new(Shared::default());
     *lock(&shared.report) = serde_json::json!({"running": true}).to_string();
-    let period = 1.0 / robot.rate_hz;
-
-    let _alive = session
-        .liveliness()
-        .declare_token(format!("{base}/alive"))
-        .wait()
-        .map_err(zerr)?;
-    let _member = match &config.group {
-        Some(g) => Some(
-            session
-                .liveliness()
-                .declare_token(group_member_key(g, &robot.name))
-                .wait()
-                .map_err(zerr)?,
-        ),
-        None => None,
-    };
-    let state = session
-        .declare_publisher(format!("{base}/state"))
-        .encoding(Encoding::APPLICATION_JSON)
-        .wait()
-        .map_err(zerr)?;
-    let _targets = {
-        let to = Inputs {
-            targets: runner.targets(),
-            commands: runner.commands(),
-        };
-        let shared = Arc::clone(&shared);
-        let units = robot.units;
-        let started = Instant::now();
-        session
-            .declare_subscriber(format!("{base}/target"))
-            .callback(move |sample| {
-                take_target(&sample.payload().to_bytes(), &to, units, started, &shared);
-            })
-            .wait()
-            .map_err(zerr)?
-    };
-    let planner: Arc<Planner> = Arc::from(planner);
-    let mut command_keys = vec![format!("{base}/command")];
-    if let Some(g) = &config.group {
-        command_keys.push(group_command_key(g));
-    }
-    let mut _commands = Vec::new();
-    for key in command_keys {
-        let to = Inputs {
-            targets: runner.targets(),
-            commands: runner.commands(),
-        };
-        let shared = Arc::clone(&shared);
-        let planner = Arc::clone(&planner);
-        _commands.push(
-            session
-                .declare_subscriber(key)
-                .callback(move |sample| {
-                    take_command(
-                        &sample.payload().to_bytes(),
-                        &to,
-                        &*planner,
-                        period,
-                        &shared,
-                    );
-                })
-                .wait()
-                .map_err(zerr)?,
-        );
-    }
-    let _report = {
-        let shared = Arc::clone(&shared);
-        session
-            .declare_queryable(format!("{base}/report"))
-            .callback(move |query| {
-                let text = lock(&shared.report).clone();
-                let key = query.key_expr().clone();
-                if let Err(e) = query
-                    .reply(key, text)
-                    .encoding(Encoding::APPLICATION_JSON)
-                    .wait()
-                {
-                    eprintln!("report: the reply could not be sent: {e}");
-                }
-            })
-            .wait()
-            .map_err(zerr)?
-    };
-    let ros = match config.ros2_domain {
-        Some(domain) => Some(Ros2::declare(session, domain, &robot.name)?),
-        None => None,
-    };
-
-    let every = ((robot.rate_hz / config.state_hz.max(0.1)).round() as u64).max(1);
-    let mut watch = Watch::new(robot);
-    let mut states = 0u64;
-    let mut offsets = Vec::new();
-    let mut ros_seq = 0i64;
+    let keys = Keys::declare(session, robot, &runner, planner, config, &shared)?;
+    let mut out = Outbound::new(&keys, robot, config, &shared);
     for m in runner.telemetry().iter() {
         match m {
-            Telemetry::Cycle(c) => {
-                if c.bus == 0 {
-                    // Cycle 0's deadline on the wall clock: the earliest
-                    // estimate wins (a sample arrives after its cycle).
-                    let now = SystemTime::now();
-                    let here = now
-                        .checked_sub(Duration::from_secs_f64(c.time_s.max(0.0)))
-                        .unwrap_or(now);
-                    let mut start = lock(&shared.start);
-                    let s = match *start {
-                        Some(s) if s <= here => s,
-                        _ => here,
-                    };
-                    *start = Some(s);
-                    drop(start);
-                    measure_starts(
-                        &shared,
-                        c.cycle,
-                        s,
-                        c.time_s + c.lateness.as_secs_f64(),
-                        &mut offsets,
-                    );
-                }
-                if let Some(done) = watch.cycle(&c) {
-                    if done.cycle % every == 0 {
-                        publish_state(&state, &done)?;
-                        states += 1;
-                        if let Some(ros) = &ros {
-                            ros_seq += 1;
-                            ros.publish(&done, robot.units, ros_seq)?;
-                        }
-                        let progress = serde_json::json!({
-                            "running": true, "cycle": done.cycle, "t": done.t,
-                        });
-                        *lock(&shared.report) = progress.to_string();
-                    }
-                }
-            }
+            Telemetry::Cycle(c) => out.cycle(&c)?,
             Telemetry::Fault(f) => {
                 eprintln!("fault: {f}");
-                watch.faults.push(f.to_string());
+                out.watch.faults.push(f.to_string());
             }
             Telemetry::Rejected(why) => eprintln!("refused: {why}"),
             Telemetry::Finished(_) => break,
@@ -278,8 +145,8 @@ pub fn serve(
         chunks: c.chunks.load(Ordering::Relaxed),
         malformed: c.malformed.load(Ordering::Relaxed),
         commands: c.commands.load(Ordering::Relaxed),
-        states,
-        start_offsets: offsets,
+        states: out.states,
+        start_offsets: out.offsets,
         report,
     };
     *lock(&shared.report) = serde_json::json!({
@@ -290,6 +157,93 @@ pub fn serve(
     .to_string();
     std::thread::sleep(linger);
     Ok(served)
+}
+
+/// The loop's telemetry on its way out: whole cycles to `state` (and to
+/// ROS 2), progress to `report`, and the timed starts measured.
+struct Outbound<'a> {
+    keys: &'a Keys,
+    shared: &'a Shared,
+    units: Units,
+    /// A state is published every this many cycles.
+    every: u64,
+    watch: Watch,
+    /// States published on `state`.
+    states: u64,
+    /// The last JointState's sequence number.
+    ros_seq: i64,
+    /// The timed starts measured, s (see [`Served::start_offsets`]).
+    offsets: Vec<f64>,
+}
+
+impl<'a> Outbound<'a> {
+    /// Nothing sent yet, on `keys`, at `config`'s state rate.
+    fn new(keys: &'a Keys, robot: &RobotInfo, config: &NodeConfig, shared: &'a Shared) -> Self {
+        Outbound {
+            keys,
+            shared,
+            units: robot.units,
+            every: ((robot.rate_hz / config.state_hz.max(0.1)).round() as u64).max(1),
+            watch: Watch::new(robot),
+            states: 0,
+            ros_seq: 0,
+            offsets: Vec::new(),
+        }
+    }
+
+    /// Takes one sample of the loop; publishes the cycle it completes when
+    /// one is due.
+    fn cycle(&mut self, c: &CycleSample) -> Result<(), NodeError> {
+        if c.bus == 0 {
+            self.note_start(c);
+        }
+        if let Some(done) = self.watch.cycle(c) {
+            if done.cycle % self.every == 0 {
+                self.publish(&done)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Estimates cycle 0's deadline on the wall clock from bus 0's sample
+    /// `c`, then measures the timed starts due by its cycle.
+    fn note_start(&mut self, c: &CycleSample) {
+        // The earliest estimate wins (a sample arrives after its cycle).
+        let now = SystemTime::now();
+        let here = now
+            .checked_sub(Duration::from_secs_f64(c.time_s.max(0.0)))
+            .unwrap_or(now);
+        let mut start = lock(&self.shared.start);
+        let s = match *start {
+            Some(s) if s <= here => s,
+            _ => here,
+        };
+        *start = Some(s);
+        drop(start);
+        measure_starts(
+            self.shared,
+            c.cycle,
+            s,
+            c.time_s + c.lateness.as_secs_f64(),
+            &mut self.offsets,
+        );
+    }
+
+    /// Publishes the whole cycle `done` on `state` (and ROS 2), and as
+    /// `report`'s progress.
+    fn publish(&mut self, done: &Done) -> Result<(), NodeError> {
+        publish_state(&self.keys.state, done)?;
+        self.states += 1;
+        if let Some(ros) = &self.keys.ros {
+            self.ros_seq += 1;
+            ros.publish(done, self.units, self.ros_seq)?;
+        }
+        let progress = serde_json::json!({
+            "running": true, "cycle": done.cycle, "t": done.t,
+        });
+        *lock(&self.shared.report) = progress.to_string();
+        Ok(())
+    }
 }
 
 /// Measures the timed starts due at `cycle`, which started `t` s after

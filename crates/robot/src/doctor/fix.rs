@@ -76,22 +76,9 @@ pub fn apply<T: Transport>(
     how: &Fixing<'_>,
 ) -> Result<Vec<FixOutcome>, BusError> {
     let saved = *bus.settings();
-    let mut todo: Vec<&Finding> = findings
-        .iter()
-        .filter(|f| match f.action {
-            Some(Action::Offset { store_only, .. }) => how.write_servos || !store_only,
-            other => other.is_some(),
-        })
-        .collect();
-    todo.sort_by_key(|f| match f.action {
-        Some(Action::Baud { .. }) => 0,
-        Some(Action::Write { register, .. }) if register.name == "lock" => 2,
-        Some(Action::Offset { .. }) if !how.write_servos => 3,
-        _ => 1,
-    });
     let mut out = Vec::new();
     let mut session_set = false;
-    for f in todo {
+    for f in fixes_in_order(findings, how) {
         let Some(action) = f.action else { continue };
         if let Some(signal) = stop_signal() {
             out.push(FixOutcome {
@@ -108,64 +95,89 @@ pub fn apply<T: Transport>(
                 .with_latency(saved.link.latency + PATIENCE)
                 .with_retries(PATIENT_TRIES - 1),
         );
-        let (id, result) = match action {
-            Action::Write {
-                id,
-                register,
-                value,
-                silent,
-                series,
-            } => {
-                let mut s = *bus.settings();
-                if silent {
-                    s.replies = StatusLevel::PingAndRead;
-                }
-                // The register's layout and the lock are the servo's series'.
-                s.series = series;
-                bus.set_settings(s);
-                (id, bus.write_register(id, register, value).map(|_| ()))
-            }
-            Action::Baud { id, baud, index } => (id, change_baud(bus, id, baud, index)),
-            Action::Offset {
-                id, value, series, ..
-            } if how.write_servos => (id, store_offset(bus, id, value, series)),
-            Action::Offset { id, .. } => {
-                // Play's own routine, once for the bus: it sets every
-                // calibrated servo's session offset.
-                let result = if session_set {
-                    Ok(())
-                } else {
-                    session_set = true;
-                    session_offsets(bus, how)
-                };
-                match result {
-                    Err(SessionError::Bus(e)) => (id, Err(e)),
-                    Err(SessionError::Refused(why)) => {
-                        out.push(FixOutcome {
-                            id,
-                            applied: done(f, how),
-                            result: Err(FixError::Refused(why)),
-                        });
-                        continue;
-                    }
-                    Ok(()) => (id, Ok(())),
-                }
-            }
-        };
-        match result {
-            Err(BusError::Transport(e)) => {
+        match run_action(bus, action, how, &mut session_set) {
+            Err(FixError::Bus(BusError::Transport(e))) => {
                 bus.set_settings(saved);
                 return Err(BusError::Transport(e));
             }
-            r => out.push(FixOutcome {
-                id,
+            result => out.push(FixOutcome {
+                id: action.id(),
                 applied: done(f, how),
-                result: r.map_err(FixError::Bus),
+                result,
             }),
         }
     }
     bus.set_settings(saved);
     Ok(out)
+}
+
+/// The findings with a fix to apply, in the order they are applied: baud
+/// rates first, the EEPROM lock last, session offsets after every EEPROM
+/// write. An offset that can only be stored is left out unless
+/// `how.write_servos`.
+fn fixes_in_order<'f>(findings: &'f [Finding], how: &Fixing<'_>) -> Vec<&'f Finding> {
+    let mut todo: Vec<&Finding> = findings
+        .iter()
+        .filter(|f| match f.action {
+            Some(Action::Offset { store_only, .. }) => how.write_servos || !store_only,
+            other => other.is_some(),
+        })
+        .collect();
+    todo.sort_by_key(|f| match f.action {
+        Some(Action::Baud { .. }) => 0,
+        Some(Action::Write { register, .. }) if register.name == "lock" => 2,
+        Some(Action::Offset { .. }) if !how.write_servos => 3,
+        _ => 1,
+    });
+    todo
+}
+
+/// Carries out one fix's `action` on the bus; the session's offsets are set
+/// once for the bus (`session_set` says whether they were already).
+fn run_action<T: Transport>(
+    bus: &mut Bus<T>,
+    action: Action,
+    how: &Fixing<'_>,
+    session_set: &mut bool,
+) -> Result<(), FixError> {
+    match action {
+        Action::Write {
+            id,
+            register,
+            value,
+            silent,
+            series,
+        } => {
+            let mut s = *bus.settings();
+            if silent {
+                s.replies = StatusLevel::PingAndRead;
+            }
+            // The register's layout and the lock are the servo's series'.
+            s.series = series;
+            bus.set_settings(s);
+            bus.write_register(id, register, value)
+                .map(|_| ())
+                .map_err(FixError::Bus)
+        }
+        Action::Baud { id, baud, index } => {
+            change_baud(bus, id, baud, index).map_err(FixError::Bus)
+        }
+        Action::Offset {
+            id, value, series, ..
+        } if how.write_servos => store_offset(bus, id, value, series).map_err(FixError::Bus),
+        Action::Offset { .. } => {
+            // Play's own routine, once for the bus: it sets every
+            // calibrated servo's session offset.
+            if *session_set {
+                return Ok(());
+            }
+            *session_set = true;
+            session_offsets(bus, how).map_err(|e| match e {
+                SessionError::Bus(e) => FixError::Bus(e),
+                SessionError::Refused(why) => FixError::Refused(why),
+            })
+        }
+    }
 }
 
 /// What applying `f`'s fix does, for the report: its fix, or for a homing

@@ -117,7 +117,12 @@ pub(crate) struct Ctx<'a> {
     pub real: bool,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The joint the robot file gives ID `id` on this bus, if any.
+    fn joint_of(&self, id: u8) -> Option<&'a JointConfig> {
+        self.bus.joints.iter().find(|j| j.id == id)
+    }
+
     /// Real servos without a calibration: their joint angles mean nothing
     /// yet (each horn sits at its own angle).
     pub(crate) fn uncalibrated(&self) -> bool {
@@ -152,12 +157,13 @@ pub fn examine<T: Transport>(
     result
 }
 
+/// [`examine`]'s work, which may leave the bus's settings changed.
 fn examine_inner<T: Transport>(
     bus: &mut Bus<T>,
     ctx: &Ctx<'_>,
     kind: &PortKind,
 ) -> Result<Examined, BusError> {
-    let (robot, cfg, target) = (ctx.robot, ctx.bus, ctx.target);
+    let cfg = ctx.bus;
     let mut findings = Vec::new();
     let base = bus.settings().with_return_delay(MAX_RETURN_DELAY);
     // The robot's own servos are waited for patiently (a loaded host or a
@@ -166,62 +172,14 @@ fn examine_inner<T: Transport>(
     let patient = base
         .with_latency(base.link.latency + PATIENCE)
         .with_retries(PATIENT_TRIES - 1);
-    let expected = |id: u8| cfg.joints.iter().find(|j| j.id == id);
-
-    // Who answers at the bus's rate (absent IDs are asked once: that keeps
-    // the scan short).
-    let mut answering = Vec::new();
-    for id in 0..=MAX_ID {
-        bus.set_settings(if expected(id).is_some() {
-            patient
-        } else {
-            base.with_retries(0)
-        });
-        match answers(bus, id) {
-            Ok(true) => answering.push(id),
-            Ok(false) => {}
-            Err(e) => return Err(e),
-        }
-    }
-
-    // Read each one whole; replies that stay garbled are two servos on one ID.
+    let answering = scan(bus, ctx, base, patient)?;
     bus.set_settings(patient);
-    let mut servos = Vec::new();
-    let mut collided = Vec::new();
-    for &id in &answering {
-        match read_state(bus, id) {
-            Ok(state) => servos.push(state),
-            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => collided.push(id),
-            Err(e) if e.is_retryable() => {
-                let mut f = finding(
-                    ctx,
-                    Severity::Error,
-                    Step::Connect,
-                    Some(id),
-                    Some("status_level"),
-                );
-                f.problem = format!(
-                    "servo {id} answers PING but not READ: its status return level is 0 (SCS)"
-                );
-                let reg = registers::SCS.get("status_level");
-                f.advice = Advice::Run(target.write_command(id, "status_level", 2));
-                f.action = reg.map(|register| Action::Write {
-                    id,
-                    register,
-                    value: 2,
-                    silent: true,
-                    series: Series::Scs,
-                });
-                findings.push(f);
-            }
-            Err(e) => return Err(e),
-        }
-    }
+    let (servos, collided) = read_servos(bus, ctx, &answering, &mut findings)?;
 
     let extras: Vec<u8> = answering
         .iter()
         .copied()
-        .filter(|&id| expected(id).is_none())
+        .filter(|&id| ctx.joint_of(id).is_none())
         .collect();
     let mut missing: Vec<u8> = cfg
         .joints
@@ -233,65 +191,18 @@ fn examine_inner<T: Transport>(
         find_at_other_bauds(bus, ctx, base, &mut missing, &mut findings)?;
         bus.set_settings(base);
     }
-    // Two servos on one ID while an expected servo is silent: the silent
-    // one most likely has that ID. With several silent, any of them may be
-    // the one (the colliding replies do not say whose they are): each
-    // collision names them all, and none is blamed alone.
-    if !collided.is_empty() && missing.len() > 1 {
-        let silent: Vec<(u8, &JointConfig)> = missing
-            .iter()
-            .filter_map(|&m| Some((m, expected(m)?)))
-            .collect();
-        missing.clear();
-        let absent_too = silent.len().saturating_sub(collided.len());
-        for &id in &collided {
-            findings.push(collision_among(ctx, id, &silent, absent_too));
-        }
-    } else {
-        for &id in &collided {
-            let silent = missing.first().copied();
-            missing.retain(|&m| Some(m) != silent);
-            findings.push(collision(
-                ctx,
-                id,
-                silent.and_then(|s| Some((s, expected(s)?))),
-            ));
-        }
-    }
+    collision_findings(ctx, &collided, &mut missing, &mut findings);
     for &id in &missing {
-        let joint = expected(id).map_or("?", |j| j.name.as_str());
-        let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
-        f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
-        match extras.first() {
-            Some(&extra) => {
-                f.advice = Advice::GiveItsId {
-                    servo: extra,
-                    joint: joint.to_owned(),
-                    fix: target.set_id_command(extra, NewId::Id(id)),
-                }
-            }
-            None => {
-                f.advice = Advice::CheckCable(Fix::ScanAllBauds {
-                    port: target.port.clone(),
-                })
-            }
-        };
-        findings.push(f);
+        findings.push(absent(ctx, id, extras.first().copied()));
     }
     for &id in &extras {
-        let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
-        f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
-        f.advice = Advice::IdOfItsJoint {
-            fix: target.set_id_command(id, NewId::OfItsJoint),
-            edit: ctx.edit_robot_file(Change::AddJoint { id }),
-        };
-        findings.push(f);
+        findings.push(unexpected(ctx, id));
     }
 
     for s in &servos {
-        findings.extend(ctx.servo_findings(s, expected(s.id)));
+        findings.extend(ctx.servo_findings(s, ctx.joint_of(s.id)));
     }
-    if robot.buses.first().is_some_and(|b| b.name == cfg.name) {
+    if ctx.robot.buses.first().is_some_and(|b| b.name == cfg.name) {
         super::calibration::robot_findings(ctx, &mut findings);
     }
     bus_checks::firmware(ctx, &servos, &mut findings);
@@ -304,6 +215,138 @@ fn examine_inner<T: Transport>(
         servos,
         expected: cfg.joints.len(),
     })
+}
+
+/// Who answers at the bus's rate: the robot's servos asked `patient`ly,
+/// absent IDs once at `base` (that keeps the scan short).
+fn scan<T: Transport>(
+    bus: &mut Bus<T>,
+    ctx: &Ctx<'_>,
+    base: BusSettings,
+    patient: BusSettings,
+) -> Result<Vec<u8>, BusError> {
+    let mut answering = Vec::new();
+    for id in 0..=MAX_ID {
+        bus.set_settings(if ctx.joint_of(id).is_some() {
+            patient
+        } else {
+            base.with_retries(0)
+        });
+        if answers(bus, id)? {
+            answering.push(id);
+        }
+    }
+    Ok(answering)
+}
+
+/// Reads each `answering` servo whole: the servos read, and the IDs whose
+/// replies stay garbled (two servos on one ID). A servo that answers PING
+/// but not READ is a finding.
+fn read_servos<T: Transport>(
+    bus: &mut Bus<T>,
+    ctx: &Ctx<'_>,
+    answering: &[u8],
+    findings: &mut Vec<Finding>,
+) -> Result<(Vec<ServoState>, Vec<u8>), BusError> {
+    let mut servos = Vec::new();
+    let mut collided = Vec::new();
+    for &id in answering {
+        match read_state(bus, id) {
+            Ok(state) => servos.push(state),
+            Err(BusError::Corrupt { .. } | BusError::WrongLength { .. }) => collided.push(id),
+            Err(e) if e.is_retryable() => findings.push(ping_only(ctx, id)),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((servos, collided))
+}
+
+/// Servo `id` answers PING but not READ: an SCS servo at status return
+/// level 0.
+fn ping_only(ctx: &Ctx<'_>, id: u8) -> Finding {
+    let mut f = finding(
+        ctx,
+        Severity::Error,
+        Step::Connect,
+        Some(id),
+        Some("status_level"),
+    );
+    f.problem = format!("servo {id} answers PING but not READ: its status return level is 0 (SCS)");
+    let reg = registers::SCS.get("status_level");
+    f.advice = Advice::Run(ctx.target.write_command(id, "status_level", 2));
+    f.action = reg.map(|register| Action::Write {
+        id,
+        register,
+        value: 2,
+        silent: true,
+        series: Series::Scs,
+    });
+    f
+}
+
+/// The findings of the `collided` IDs, blaming the `missing` servos that
+/// most likely have them; those blamed are taken out of `missing`.
+fn collision_findings(
+    ctx: &Ctx<'_>,
+    collided: &[u8],
+    missing: &mut Vec<u8>,
+    findings: &mut Vec<Finding>,
+) {
+    // Two servos on one ID while an expected servo is silent: the silent
+    // one most likely has that ID. With several silent, any of them may be
+    // the one (the colliding replies do not say whose they are): each
+    // collision names them all, and none is blamed alone.
+    if !collided.is_empty() && missing.len() > 1 {
+        let silent: Vec<(u8, &JointConfig)> = missing
+            .iter()
+            .filter_map(|&m| Some((m, ctx.joint_of(m)?)))
+            .collect();
+        missing.clear();
+        let absent_too = silent.len().saturating_sub(collided.len());
+        for &id in collided {
+            findings.push(collision_among(ctx, id, &silent, absent_too));
+        }
+    } else {
+        for &id in collided {
+            let silent = missing.first().copied();
+            missing.retain(|&m| Some(m) != silent);
+            findings.push(collision(
+                ctx,
+                id,
+                silent.and_then(|s| Some((s, ctx.joint_of(s)?))),
+            ));
+        }
+    }
+}
+
+/// The robot's servo `id` answers at no baud rate; `extra`, a servo the
+/// robot file does not name, may be it under another ID.
+fn absent(ctx: &Ctx<'_>, id: u8, extra: Option<u8>) -> Finding {
+    let joint = ctx.joint_of(id).map_or("?", |j| j.name.as_str());
+    let mut f = finding(ctx, Severity::Error, Step::Connect, Some(id), None);
+    f.problem = format!("servo {id} (joint `{joint}`) does not answer at any baud rate");
+    f.advice = match extra {
+        Some(extra) => Advice::GiveItsId {
+            servo: extra,
+            joint: joint.to_owned(),
+            fix: ctx.target.set_id_command(extra, NewId::Id(id)),
+        },
+        None => Advice::CheckCable(Fix::ScanAllBauds {
+            port: ctx.target.port.clone(),
+        }),
+    };
+    f
+}
+
+/// Servo `id` answers, but the robot file has no joint with its ID.
+fn unexpected(ctx: &Ctx<'_>, id: u8) -> Finding {
+    let mut f = finding(ctx, Severity::Warning, Step::Connect, Some(id), Some("id"));
+    f.problem = format!("servo {id} answers but the robot file has no joint with ID {id}");
+    f.advice = Advice::IdOfItsJoint {
+        fix: ctx.target.set_id_command(id, NewId::OfItsJoint),
+        edit: ctx.edit_robot_file(Change::AddJoint { id }),
+    };
+    f
 }
 
 /// Whether anything answers as `id`: a READ of the model number first,

@@ -38,6 +38,7 @@ pub mod limits;
 mod locate;
 mod mapping;
 mod motion;
+mod motion_keyframes;
 mod motion_poses;
 mod nesting;
 mod plan_terms;

@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::error::{ConfigError, Source};
-use super::limits::{check_duration, check_segments, Rounded, MAX_MOTION_DURATION_S};
+use super::limits::check_segments;
 use super::locate::FieldPath;
-use super::motion_poses::{list, PoseList, PoseRef, Resolver};
+use super::motion_keyframes::{KeyframeBuilder, RawKeyframe};
+use super::motion_poses::{PoseList, Resolver};
 use super::robot::{self, Robot};
-use super::spatial::{Context, MoveLimits, PathKind, RawBody, RawWalk};
+use super::spatial::Context;
 use super::Units;
 
 /// A choreography, resolved against its robot: every keyframe holds a
@@ -157,34 +158,6 @@ fn one() -> i64 {
     1
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-#[serde(
-    expecting = "a keyframe: a mapping with `pose:`, `tool:`, `walk:` or `body:`, and optional `at:`"
-)]
-struct RawKeyframe {
-    #[serde(default)]
-    at: Option<f64>,
-    #[serde(default)]
-    pose: Option<PoseRef>,
-    #[serde(default)]
-    tool: Option<super::tool::ToolPose>,
-    #[serde(default)]
-    path: Option<PathKind>,
-    #[serde(default)]
-    max_speed: Option<f64>,
-    #[serde(default)]
-    max_acceleration: Option<f64>,
-    #[serde(default)]
-    max_jerk: Option<f64>,
-    #[serde(default)]
-    tolerance: Option<f64>,
-    #[serde(default)]
-    walk: Option<RawWalk>,
-    #[serde(default)]
-    body: Option<RawBody>,
-}
-
 /// Loads a motion file and its robot, and validates both together.
 ///
 /// The robot is the motion's `robot:` path, taken relative to the motion
@@ -238,27 +211,93 @@ pub fn load_motion_text(
     load_motion_source(Source::text(name, text)?, robot_override, calibration)
 }
 
+/// Loads a motion from `src`: its robot, its poses and its keyframes.
 fn load_motion_source(
     src: Source,
     robot_override: Option<&Path>,
     calibration: Option<&Path>,
 ) -> Result<(Motion, Robot), ConfigError> {
-    let path = src.path.clone();
-    let path = path.as_path();
     let raw: RawMotion = src.parse()?;
     let root = FieldPath::root();
-    let robot_path =
-        match (robot_override, &raw.robot) {
-            (Some(p), _) => p.to_owned(),
-            (None, Some(robot)) => super::builtin::motion_robot_path(path, robot),
-            (None, None) => return Err(src.error(
-                &root,
-                "no robot: add `robot: FILE` (relative to this file) or a built-in robot's name \
-                 (`robot: so101`)",
-            )),
-        };
+    let robot_path = robot_path(&src, &raw, robot_override)?;
+    let robot = motion_robot(&src, &raw, &robot_path, robot_override, calibration)?;
+    let repeat = check_repeat(&src, &raw, &robot)?;
+    let resolver = Resolver {
+        src: &src,
+        robot: &robot,
+        units: raw.units,
+    };
+    for (name, pose) in &raw.poses.0 {
+        resolver.check_pose(pose, &root.key("poses").key(name), None)?;
+    }
+    if raw.keyframes.is_empty() {
+        return Err(src.error(
+            &root.key("keyframes"),
+            "a motion needs at least one keyframe",
+        ));
+    }
+    let spatial = Context {
+        src: &src,
+        robot: &robot,
+        units: raw.units,
+        interpolation: raw.interpolation,
+        on_limit: raw.on_limit,
+        body: None,
+        repeat: u64::from(repeat),
+    };
+    let mut builder = KeyframeBuilder::new(&raw.poses, spatial, raw.keyframes.len());
+    for (i, rk) in raw.keyframes.iter().enumerate() {
+        builder.add(&root.key("keyframes").index(i), i, rk)?;
+    }
+    let keyframes = builder.finish();
+    // Spatial keyframes add samples: the plan must still fit.
+    if let Err(e) = check_segments(keyframes.len(), u64::from(repeat), robot.joint_count()) {
+        return Err(src.error(&root.key("keyframes"), e.to_string()));
+    }
+    let motion = Motion {
+        path: src.path.clone(),
+        robot_path,
+        units: raw.units,
+        rate_hz: raw.rate,
+        joints: robot.joints().map(|j| j.name.clone()).collect(),
+        keyframes,
+        repeat,
+        on_limit: raw.on_limit,
+        interpolation: raw.interpolation,
+    };
+    Ok((motion, robot))
+}
+
+/// The robot file the motion uses: `robot_override`, else the motion's
+/// `robot:` (relative to the motion file, or a built-in robot).
+fn robot_path(
+    src: &Source,
+    raw: &RawMotion,
+    robot_override: Option<&Path>,
+) -> Result<PathBuf, ConfigError> {
+    match (robot_override, &raw.robot) {
+        (Some(p), _) => Ok(p.to_owned()),
+        (None, Some(robot)) => Ok(super::builtin::motion_robot_path(&src.path, robot)),
+        (None, None) => Err(src.error(
+            &FieldPath::root(),
+            "no robot: add `robot: FILE` (relative to this file) or a built-in robot's name \
+             (`robot: so101`)",
+        )),
+    }
+}
+
+/// Loads the robot at `robot_path` with its calibration, and checks that it
+/// is calibrated and that its buses carry the motion's rate (or its own).
+fn motion_robot(
+    src: &Source,
+    raw: &RawMotion,
+    robot_path: &Path,
+    robot_override: Option<&Path>,
+    calibration: Option<&Path>,
+) -> Result<Robot, ConfigError> {
+    let root = FieldPath::root();
     let (robot, robot_src) =
-        robot::load_calibrated(&robot_path, calibration).map_err(|e| match e {
+        robot::load_calibrated(robot_path, calibration).map_err(|e| match e {
             // The robot the motion names cannot be read: point at the
             // `robot:` line, which is what to fix. (Another file that cannot
             // be read, a calibration, speaks for itself.)
@@ -278,194 +317,23 @@ fn load_motion_source(
         })?;
     robot::require_calibration(&robot, &robot_src)?;
     match raw.rate {
-        Some(rate) => robot::check_rate(&robot, &src, rate, &root.key("rate"))?,
+        Some(rate) => robot::check_rate(&robot, src, rate, &root.key("rate"))?,
         None => robot::check_rate(&robot, &robot_src, robot.rate_hz, &root.key("rate"))?,
     }
+    Ok(robot)
+}
+
+/// The motion's `repeat`, checked: at least 1, and few enough that the
+/// keyframes of every repetition fit a plan.
+fn check_repeat(src: &Source, raw: &RawMotion, robot: &Robot) -> Result<u32, ConfigError> {
+    let field = FieldPath::root().key("repeat");
     if raw.repeat < 1 {
-        return Err(src.error(
-            &root.key("repeat"),
-            format!("must be at least 1, got {}", raw.repeat),
-        ));
+        return Err(src.error(&field, format!("must be at least 1, got {}", raw.repeat)));
     }
     let repeat = u64::try_from(raw.repeat).unwrap_or(u64::MAX);
     if let Err(e) = check_segments(raw.keyframes.len(), repeat, robot.joint_count()) {
-        return Err(src.error(&root.key("repeat"), e.to_string()));
+        return Err(src.error(&field, e.to_string()));
     }
     // At most MAX_PLANNED_SEGMENTS: it fits.
-    let repeat = u32::try_from(repeat).unwrap_or(u32::MAX);
-    let resolver = Resolver {
-        src: &src,
-        robot: &robot,
-        units: raw.units,
-    };
-    for (name, pose) in &raw.poses.0 {
-        resolver.check_pose(pose, &root.key("poses").key(name), None)?;
-    }
-    if raw.keyframes.is_empty() {
-        return Err(src.error(
-            &root.key("keyframes"),
-            "a motion needs at least one keyframe",
-        ));
-    }
-    let mut current: Vec<f64> = robot
-        .joints()
-        .map(|j| robot.units.convert(j.rest(), raw.units))
-        .collect();
-    let mut keyframes = Vec::with_capacity(raw.keyframes.len());
-    let mut last_at: Option<(usize, f64)> = None;
-    let mut spatial = Context {
-        src: &src,
-        robot: &robot,
-        units: raw.units,
-        interpolation: raw.interpolation,
-        on_limit: raw.on_limit,
-        body: None,
-        repeat: u64::from(repeat),
-    };
-    for (i, rk) in raw.keyframes.iter().enumerate() {
-        let kp = root.key("keyframes").index(i);
-        if let Some(at) = rk.at {
-            if !(at.is_finite() && at >= 0.0) {
-                return Err(src.error(
-                    &kp.key("at"),
-                    format!(
-                        "must be a time from 0 to {MAX_MOTION_DURATION_S} s (a day), got {}",
-                        Rounded(at)
-                    ),
-                ));
-            }
-            if let Err(e) = check_duration(at) {
-                return Err(src.error(&kp.key("at"), e.to_string()));
-            }
-            if i == 0 && at != 0.0 {
-                return Err(src.error(
-                    &kp.key("at"),
-                    format!("the first keyframe is the start, at 0 s; got {at}"),
-                ));
-            }
-            if let Some((j, prev)) = last_at {
-                if at <= prev {
-                    return Err(src.error(
-                        &kp.key("at"),
-                        format!("{at} s is not after keyframe {j} at {prev} s"),
-                    ));
-                }
-            }
-            last_at = Some((i, at));
-        }
-        check_spatial(&src, &kp, i, rk)?;
-        let (pose_name, pairs) = match &rk.pose {
-            None if rk.tool.is_none() && rk.walk.is_none() && rk.body.is_none() => {
-                return Err(src.error(&kp, "a keyframe needs a `pose`, `tool`, `walk` or `body`"))
-            }
-            None => (None, None),
-            Some(PoseRef::Name(name)) => {
-                let Some((_, pose)) = raw.poses.0.iter().find(|(n, _)| n == name) else {
-                    let known: Vec<&str> = raw.poses.0.iter().map(|(n, _)| n.as_str()).collect();
-                    return Err(src.error(
-                        &kp.key("pose"),
-                        format!("unknown pose `{name}` (poses: {})", list(&known)),
-                    ));
-                };
-                (Some(name.clone()), Some(pose))
-            }
-            Some(PoseRef::Map(map)) => {
-                resolver.check_pose(map, &kp.key("pose"), Some(i))?;
-                (None, Some(map))
-            }
-        };
-        for (joint, value) in pairs.iter().flat_map(|p| &p.0) {
-            if let Some(ix) = robot.joint_index(joint) {
-                current[ix] = *value;
-            }
-        }
-        let limits = MoveLimits {
-            max_speed: rk.max_speed,
-            max_acceleration: rk.max_acceleration,
-            max_jerk: rk.max_jerk,
-            tolerance: rk.tolerance,
-        };
-        match (&rk.walk, &rk.body, &rk.tool, rk.path) {
-            (Some(walk), ..) => {
-                spatial.walk(&kp, i, walk, &mut current, &mut keyframes)?;
-                continue;
-            }
-            (_, Some(body), ..) => {
-                spatial.body(&kp, i, body, rk.at, &limits, &mut current, &mut keyframes)?;
-                continue;
-            }
-            (_, _, Some(tool), Some(PathKind::Line)) => {
-                spatial.line(&kp, i, tool, rk.at, &limits, &mut current, &mut keyframes)?;
-                spatial.body = None;
-                continue;
-            }
-            _ => spatial.body = None,
-        }
-        // A tool pose moves the arm's joints there, from this pose.
-        if let Some(tool) = &rk.tool {
-            super::tool::resolve(&robot, raw.units, tool, &mut current)
-                .map_err(|why| src.error(&kp.key("tool"), format!("keyframe {i}: {why}")))?;
-        }
-        let (line, column) = src.position(&kp);
-        keyframes.push(Keyframe {
-            at: rk.at,
-            pose: pose_name,
-            positions: current.clone(),
-            line,
-            column,
-        });
-    }
-    // Spatial keyframes add samples: the plan must still fit.
-    if let Err(e) = check_segments(keyframes.len(), u64::from(repeat), robot.joint_count()) {
-        return Err(src.error(&root.key("keyframes"), e.to_string()));
-    }
-    let motion = Motion {
-        path: path.to_owned(),
-        robot_path,
-        units: raw.units,
-        rate_hz: raw.rate,
-        joints: robot.joints().map(|j| j.name.clone()).collect(),
-        keyframes,
-        repeat,
-        on_limit: raw.on_limit,
-        interpolation: raw.interpolation,
-    };
-    Ok((motion, robot))
-}
-
-/// Refuses spatial fields where they mean nothing: a first keyframe that
-/// is not a pose (`walk`, `body`, `path: line` start from one), `walk` or
-/// `body` with other targets, `path: line` without a `tool`, speed limits
-/// without a line or body move.
-fn check_spatial(
-    src: &Source,
-    kp: &FieldPath,
-    i: usize,
-    rk: &RawKeyframe,
-) -> Result<(), ConfigError> {
-    let line = rk.path == Some(PathKind::Line);
-    let moves = rk.walk.is_some() || rk.body.is_some() || line;
-    let why = if i == 0 && moves {
-        Some(
-            "the first keyframe is the start: give it a `pose` (walk, body and line start from it)",
-        )
-    } else if (rk.walk.is_some() || rk.body.is_some()) && (rk.pose.is_some() || rk.tool.is_some()) {
-        Some("`walk` and `body` keyframes take no `pose` or `tool`")
-    } else if rk.walk.is_some() && (rk.body.is_some() || rk.at.is_some()) {
-        Some("a `walk` takes its time from its segments: no `body` or `at` with it")
-    } else if line && (rk.tool.is_none() || rk.pose.is_some()) {
-        Some("`path: line` needs a `tool` pose and no `pose`")
-    } else if !(line || rk.body.is_some())
-        && (rk.max_speed.is_some() || rk.max_acceleration.is_some() || rk.max_jerk.is_some())
-    {
-        Some("`max_speed`, `max_acceleration` and `max_jerk` belong to `path: line` or `body`")
-    } else if !line && rk.tolerance.is_some() {
-        Some("`tolerance` belongs to `path: line`")
-    } else {
-        None
-    };
-    match why {
-        Some(why) => Err(src.error(kp, format!("keyframe {i}: {why}"))),
-        None => Ok(()),
-    }
+    Ok(u32::try_from(repeat).unwrap_or(u32::MAX))
 }

@@ -28,6 +28,7 @@ enum Quote {
     Single,
 }
 
+/// The state of the scan between lines.
 #[derive(Default)]
 struct Scan {
     /// Indentation of the block levels still open, increasing.
@@ -64,45 +65,52 @@ impl Scan {
             if blank || bytes[indent] == b'#' {
                 return None;
             }
-            while self.indents.last().is_some_and(|&top| top > indent) {
-                self.indents.pop();
-            }
-            if self.indents.last() != Some(&indent) {
-                self.indents.push(indent);
-            }
-            self.block_depth = self.indents.len();
-            i = indent;
-            // Each `- ` opening a list on this line is one more level.
-            while i < bytes.len() && bytes[i] == b'-' && bytes.get(i + 1).is_none_or(|b| *b == b' ')
-            {
-                self.block_depth += 1;
-                i += 1;
-                while bytes.get(i) == Some(&b' ') {
-                    i += 1;
-                }
-            }
+            i = self.open_blocks(bytes, indent);
             if self.block_depth > limit {
                 return Some(indent + 1);
             }
         }
+        self.scan_rest(bytes, i, indent, limit)
+    }
+
+    /// Sets the block levels open at a line indented `indent` (outside
+    /// flow brackets and quotes), counting each `- ` that opens a list on
+    /// it; returns the index of the first byte after them.
+    fn open_blocks(&mut self, bytes: &[u8], indent: usize) -> usize {
+        while self.indents.last().is_some_and(|&top| top > indent) {
+            self.indents.pop();
+        }
+        if self.indents.last() != Some(&indent) {
+            self.indents.push(indent);
+        }
+        self.block_depth = self.indents.len();
+        let mut i = indent;
+        // Each `- ` opening a list on this line is one more level.
+        while i < bytes.len() && bytes[i] == b'-' && bytes.get(i + 1).is_none_or(|b| *b == b' ') {
+            self.block_depth += 1;
+            i += 1;
+            while bytes.get(i) == Some(&b' ') {
+                i += 1;
+            }
+        }
+        i
+    }
+
+    /// Scans the line (indented `indent`) from byte `i` for quotes,
+    /// comments, flow brackets and block scalars; the 1-based column where
+    /// a bracket first takes the depth past `limit`.
+    fn scan_rest(
+        &mut self,
+        bytes: &[u8],
+        mut i: usize,
+        indent: usize,
+        limit: usize,
+    ) -> Option<usize> {
         let mut prev: Option<u8> = None;
         while i < bytes.len() {
             let b = bytes[i];
             match self.quote {
-                Some(Quote::Double) => match b {
-                    b'\\' => i += 1,
-                    b'"' => self.quote = None,
-                    _ => {}
-                },
-                Some(Quote::Single) => {
-                    if b == b'\'' {
-                        if bytes.get(i + 1) == Some(&b'\'') {
-                            i += 1;
-                        } else {
-                            self.quote = None;
-                        }
-                    }
-                }
+                Some(quote) => i = self.quoted(quote, bytes, i),
                 None => {
                     // Where a quote or a bracket opens something, not the
                     // middle of a plain scalar (`x[1]`).
@@ -132,6 +140,24 @@ impl Scan {
             i += 1;
         }
         None
+    }
+
+    /// Reads byte `i` inside a `quote`d scalar, ending the quote at its
+    /// closing mark; returns the index of the last byte read (an escape
+    /// or a doubled single quote takes two).
+    fn quoted(&mut self, quote: Quote, bytes: &[u8], i: usize) -> usize {
+        match (quote, bytes[i]) {
+            (Quote::Double, b'\\') => return i + 1,
+            (Quote::Double, b'"') => self.quote = None,
+            (Quote::Single, b'\'') => {
+                if bytes.get(i + 1) == Some(&b'\'') {
+                    return i + 1;
+                }
+                self.quote = None;
+            }
+            _ => {}
+        }
+        i
     }
 }
 

@@ -154,20 +154,24 @@ fn file_index(motion: &Motion, k: usize) -> usize {
 
 /// Turns a planner error into one pointing at the keyframe in the motion file.
 fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
+    let (keyframe, field, reason) = describe_plan_error(motion, e);
+    let (line, column) = motion
+        .keyframes
+        .get(keyframe)
+        .map_or((1, 1), |kf| (kf.line, kf.column));
+    // Fields name the file's keyframe, not the sample.
+    let field = field.replacen(
+        &format!("keyframes[{keyframe}]"),
+        &format!("keyframes[{}]", file_index(motion, keyframe)),
+        1,
+    );
+    ConfigError::invalid(&motion.path, line, column, field, reason)
+}
+
+/// A planner error in the motion's terms: the keyframe (of the motion, a
+/// sample index) it is about, the field there and the reason.
+fn describe_plan_error(motion: &Motion, e: &PlanError) -> (usize, String, String) {
     let joint_name = |j: usize| motion.joints.get(j).map_or("?", String::as_str);
-    let at_keyframe = |k: usize, field: String, reason: String| {
-        let (line, column) = motion
-            .keyframes
-            .get(k)
-            .map_or((1, 1), |kf| (kf.line, kf.column));
-        // Fields name the file's keyframe, not the sample.
-        let field = field.replacen(
-            &format!("keyframes[{k}]"),
-            &format!("keyframes[{}]", file_index(motion, k)),
-            1,
-        );
-        ConfigError::invalid(&motion.path, line, column, field, reason)
-    };
     let u = motion.units;
     match *e {
         PlanError::LimitExceeded {
@@ -176,31 +180,16 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             quantity,
             peak,
             limit,
-        } => {
-            let unit = quantity_unit(u, quantity);
-            let hint = if quantity == Quantity::Position {
-                "; the spline overshoots: add a keyframe, or leave `interpolation` out for the \
-                 default shape-preserving path"
-            } else {
-                "; give the segment more time, or set `on_limit: stretch`"
-            };
-            at_keyframe(
-                keyframe,
-                format!("keyframes[{keyframe}]"),
-                format!(
-                    "joint `{}`: the segment arriving here needs a peak {quantity} of {:.4} {unit}, \
-                     above the limit {:.4} {unit}{hint}",
-                    joint_name(joint),
-                    in_units(u, peak),
-                    in_units(u, limit),
-                ),
-            )
-        }
+        } => (
+            keyframe,
+            format!("keyframes[{keyframe}]"),
+            limit_reason(u, joint_name(joint), quantity, peak, limit),
+        ),
         PlanError::TooSoon {
             keyframe,
             needed,
             available,
-        } => at_keyframe(
+        } => (
             keyframe,
             format!("keyframes[{keyframe}].at"),
             format!(
@@ -211,7 +200,7 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
         PlanError::OutOfRange {
             keyframe, joint, ..
         }
-        | PlanError::NotFinite { keyframe, joint } => at_keyframe(
+        | PlanError::NotFinite { keyframe, joint } => (
             keyframe,
             format!("keyframes[{keyframe}].pose.{}", joint_name(joint)),
             format!("keyframe {keyframe}: {}", plan_reason(e, &motion.joints, u)),
@@ -220,7 +209,7 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             keyframe,
             at,
             previous,
-        } => at_keyframe(
+        } => (
             keyframe,
             format!("keyframes[{keyframe}]"),
             format!(
@@ -229,12 +218,30 @@ fn locate_plan_error(motion: &Motion, e: &PlanError) -> ConfigError {
             ),
         ),
         PlanError::WrongJointCount { keyframe, .. } => {
-            at_keyframe(keyframe, format!("keyframes[{keyframe}]"), e.to_string())
+            (keyframe, format!("keyframes[{keyframe}]"), e.to_string())
         }
-        _ => at_keyframe(
+        _ => (
             0,
             String::new(),
             format!("cannot plan: {}", plan_reason(e, &motion.joints, u)),
         ),
     }
+}
+
+/// Why a segment breaks `joint`'s limit on `quantity` (`peak` and `limit`
+/// rad-based), in units `u`, with what to do about it.
+fn limit_reason(u: Units, joint: &str, quantity: Quantity, peak: f64, limit: f64) -> String {
+    let unit = quantity_unit(u, quantity);
+    let hint = if quantity == Quantity::Position {
+        "; the spline overshoots: add a keyframe, or leave `interpolation` out for the \
+         default shape-preserving path"
+    } else {
+        "; give the segment more time, or set `on_limit: stretch`"
+    };
+    format!(
+        "joint `{joint}`: the segment arriving here needs a peak {quantity} of {:.4} {unit}, \
+         above the limit {:.4} {unit}{hint}",
+        in_units(u, peak),
+        in_units(u, limit),
+    )
 }

@@ -279,6 +279,31 @@ pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, Wa
     legs.feet(start, &mut poses, &mut neutral);
     let order = side_order(&neutral)?;
     let beta = walk.gait.duty();
+    check_times(walk)?;
+    check_stride(walk, &neutral, beta)?;
+    // The body stays at its height: the feet's ground is where they are.
+    let profile = Profile::new(&walk.segments, walk.period_s);
+    let (windows, end) = swing_windows(walk, &order, legs.len(), profile.stop);
+    let body = BodyPath::new(&profile, end + walk.period_s);
+    let footholds = Footholds::new(neutral, &windows, &body, beta * walk.period_s);
+    let (samples, margin) = sample_walk(legs, walk, start, &footholds, &body, end)?;
+    let last = body.pose(end, 0.0);
+    Ok(WalkPlan {
+        samples,
+        end: [
+            last.translation.x,
+            last.translation.y,
+            last.rotation.euler_angles().2,
+        ],
+        distance_mm: body.length,
+        min_margin_mm: margin.min,
+        low_margins: margin.low,
+    })
+}
+
+/// Refuses times that are not positive, and a walk that would take more
+/// swings of a leg or samples than [`MAX_WALK_SAMPLES`].
+fn check_times(walk: &Walk) -> Result<(), WalkError> {
     let period = walk.period_s;
     let positive = |t: f64| t.is_finite() && t > 0.0;
     if !(positive(period)
@@ -294,15 +319,24 @@ pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, Wa
     if count.is_nan() || count > MAX_WALK_SAMPLES as f64 {
         return Err(WalkError::TooLong { count });
     }
-    check_stride(walk, &neutral, beta)?;
-    // The body stays at its height: the feet's ground is where they are.
-    let profile = Profile::new(&walk.segments, period);
+    Ok(())
+}
+
+/// Each of the `legs` legs' swing windows `(t0, t1)`, legs in `order` (see
+/// [`side_order`]), and when the walk ends: windows of its phase that
+/// start at or after 0, until one lands where the body, stopped at
+/// `stop`, wants the foot.
+fn swing_windows(
+    walk: &Walk,
+    order: &[usize; 6],
+    legs: usize,
+    stop: f64,
+) -> (Vec<Vec<(f64, f64)>>, f64) {
+    let (beta, period) = (walk.gait.duty(), walk.period_s);
     let offsets = walk.gait.offsets();
-    // Each leg's swings: windows of its phase that start at or after 0,
-    // until one lands where the stopped body wants the foot.
-    let settle = profile.stop - 0.5 * beta * period;
-    let mut swings: Vec<Vec<(f64, f64)>> = vec![Vec::new(); legs.len()];
-    let mut end = profile.stop;
+    let settle = stop - 0.5 * beta * period;
+    let mut swings: Vec<Vec<(f64, f64)>> = vec![Vec::new(); legs];
+    let mut end = stop;
     for (slot, &leg) in order.iter().enumerate() {
         let mut m = 0usize;
         loop {
@@ -316,37 +350,71 @@ pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, Wa
             }
         }
     }
-    let body = BodyPath::new(&profile, end + period);
-    let mut planted = neutral.clone();
-    let mut plans: Vec<Vec<Swing>> = Vec::with_capacity(legs.len());
-    for (leg, windows) in swings.iter().enumerate() {
-        let mut list = Vec::with_capacity(windows.len());
-        for &(t0, t1) in windows {
-            let mid = t1 + 0.5 * beta * period;
-            let to = body.pose(mid, 0.0) * neutral[leg];
-            // A foot already where it should land stays down.
-            if (to - planted[leg]).norm() > 0.5 {
-                list.push(Swing {
-                    t0,
-                    t1,
-                    from: planted[leg],
-                    to,
-                });
-                planted[leg] = to;
+    (swings, end)
+}
+
+/// Where every foot is put down over the walk: its neutral place (ground
+/// frame, before the walk) and its swings.
+struct Footholds {
+    neutral: Vec<Point3<f64>>,
+    swings: Vec<Vec<Swing>>,
+}
+
+impl Footholds {
+    /// The swings of each leg in its `windows`: each lands where the
+    /// foot's `neutral` place will be under the `body` at the middle of
+    /// the `stance` (s) after it; a foot already there stays down.
+    fn new(
+        neutral: Vec<Point3<f64>>,
+        windows: &[Vec<(f64, f64)>],
+        body: &BodyPath,
+        stance: f64,
+    ) -> Self {
+        let mut planted = neutral.clone();
+        let mut swings: Vec<Vec<Swing>> = Vec::with_capacity(windows.len());
+        for (leg, windows) in windows.iter().enumerate() {
+            let mut list = Vec::with_capacity(windows.len());
+            for &(t0, t1) in windows {
+                let mid = t1 + 0.5 * stance;
+                let to = body.pose(mid, 0.0) * neutral[leg];
+                // A foot already where it should land stays down.
+                if (to - planted[leg]).norm() > 0.5 {
+                    list.push(Swing {
+                        t0,
+                        t1,
+                        from: planted[leg],
+                        to,
+                    });
+                    planted[leg] = to;
+                }
             }
+            swings.push(list);
         }
-        plans.push(list);
+        Footholds { neutral, swings }
     }
+}
+
+/// Samples the walk every `walk.step_s` or less up to `end`: every joint
+/// from `start` on, placing the feet of `footholds` under the `body`, and
+/// the stability margins on the way.
+fn sample_walk(
+    legs: &Legs,
+    walk: &Walk,
+    start: &[f64],
+    footholds: &Footholds,
+    body: &BodyPath,
+    end: f64,
+) -> Result<(Vec<PoseSample>, Margins), WalkError> {
     let steps = (end / walk.step_s).ceil().max(1.0) as usize;
     let mut q = start.to_vec();
     let mut samples = Vec::with_capacity(steps + 1);
-    let mut feet = neutral.clone();
+    let mut feet = footholds.neutral.clone();
     let mut margin = Margins::default();
     for k in 0..=steps {
         let t = end * k as f64 / steps as f64;
         let mut on_ground = Vec::with_capacity(legs.len());
-        for (leg, list) in plans.iter().enumerate() {
-            let (p, down) = foot_at(list, &neutral[leg], t, walk.lift_mm);
+        for (leg, list) in footholds.swings.iter().enumerate() {
+            let (p, down) = foot_at(list, &footholds.neutral[leg], t, walk.lift_mm);
             feet[leg] = p;
             if down {
                 on_ground.push(Vector2::new(p.x, p.y));
@@ -357,18 +425,7 @@ pub fn plan_walk(legs: &Legs, walk: &Walk, start: &[f64]) -> Result<WalkPlan, Wa
         legs.place_from(&pose, &feet, t, &mut q)?;
         samples.push(PoseSample { t, q: q.clone() });
     }
-    let last = body.pose(end, 0.0);
-    Ok(WalkPlan {
-        samples,
-        end: [
-            last.translation.x,
-            last.translation.y,
-            last.rotation.euler_angles().2,
-        ],
-        distance_mm: body.length,
-        min_margin_mm: margin.min,
-        low_margins: margin.low,
-    })
+    Ok((samples, margin))
 }
 
 /// Where a foot with swings `list` is at `t`, and whether it is down.

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
-use crate::spec::{Section, Spec, SpecError, BASE};
+use crate::spec::{FrameSpec, JointSpec, Section, Spec, SpecError, BASE};
 
 /// How far an axis's length may be from 1.
 const AXIS_TOLERANCE: f64 = 1e-6;
@@ -70,6 +70,7 @@ impl Poses {
     }
 }
 
+/// Whether every number of `v` is finite.
 fn finite(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -100,19 +101,7 @@ impl Geometry {
     ) -> Result<Self, SpecError> {
         let names: Vec<&str> = joint_names.into_iter().collect();
         let index: HashMap<&str, usize> = names.iter().enumerate().map(|(i, n)| (*n, i)).collect();
-        for name in spec.joints.keys() {
-            if name == BASE {
-                return Err(SpecError::NameTaken {
-                    section: Section::Joints,
-                    name: name.clone(),
-                });
-            }
-            if !index.contains_key(name.as_str()) {
-                return Err(SpecError::UnknownJoint {
-                    joint: name.clone(),
-                });
-            }
-        }
+        check_joint_names(spec, &index)?;
         let mut joints = Vec::with_capacity(names.len());
         for name in &names {
             let Some(js) = spec.joints.get(*name) else {
@@ -120,64 +109,12 @@ impl Geometry {
                     joint: (*name).to_owned(),
                 });
             };
-            let not_finite = |field| SpecError::NotFinite {
-                section: Section::Joints,
-                name: (*name).to_owned(),
-                field,
-            };
-            for (field, v) in [("xyz", &js.xyz), ("rpy", &js.rpy), ("axis", &js.axis)] {
-                if !finite(v) {
-                    return Err(not_finite(field));
-                }
-            }
-            let axis = Vector3::from(js.axis);
-            let length = axis.norm();
-            if (length - 1.0).abs() > AXIS_TOLERANCE {
-                return Err(SpecError::BadAxis {
-                    joint: (*name).to_owned(),
-                    axis: js.axis,
-                    length,
-                });
-            }
-            let parent = parent_index(&index, &js.parent, Section::Joints, name)?;
-            let rpy = js.rpy.map(|a| a * angle_to_rad);
-            joints.push(Joint {
-                name: (*name).to_owned(),
-                parent,
-                origin: origin(js.xyz, rpy),
-                axis: Unit::new_normalize(axis),
-                limits: (f64::NEG_INFINITY, f64::INFINITY),
-            });
+            joints.push(checked_joint(name, js, &index, angle_to_rad)?);
         }
         let order = topological(&joints)?;
         let mut frames = Vec::with_capacity(spec.frames.len());
         for (name, fs) in &spec.frames {
-            if name == BASE || index.contains_key(name.as_str()) {
-                return Err(SpecError::NameTaken {
-                    section: Section::Frames,
-                    name: name.clone(),
-                });
-            }
-            if fs.parent.trim().is_empty() {
-                return Err(SpecError::NoParent {
-                    frame: name.clone(),
-                });
-            }
-            for (field, v) in [("xyz", &fs.xyz), ("rpy", &fs.rpy)] {
-                if !finite(v) {
-                    return Err(SpecError::NotFinite {
-                        section: Section::Frames,
-                        name: name.clone(),
-                        field,
-                    });
-                }
-            }
-            let parent = parent_index(&index, &fs.parent, Section::Frames, name)?;
-            frames.push(Frame {
-                name: name.clone(),
-                parent,
-                origin: origin(fs.xyz, fs.rpy.map(|a| a * angle_to_rad)),
-            });
+            frames.push(checked_frame(name, fs, &index, angle_to_rad)?);
         }
         Ok(Geometry {
             joints,
@@ -266,6 +203,98 @@ impl Geometry {
         chain.reverse();
         chain
     }
+}
+
+/// Refuses geometry for a joint named `base` or one the robot (`index`)
+/// does not have.
+fn check_joint_names(spec: &Spec, index: &HashMap<&str, usize>) -> Result<(), SpecError> {
+    for name in spec.joints.keys() {
+        if name == BASE {
+            return Err(SpecError::NameTaken {
+                section: Section::Joints,
+                name: name.clone(),
+            });
+        }
+        if !index.contains_key(name.as_str()) {
+            return Err(SpecError::UnknownJoint {
+                joint: name.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Joint `name` from its entry `js`, checked: finite numbers, a unit axis,
+/// a known parent (`index`: the robot's joints).
+fn checked_joint(
+    name: &str,
+    js: &JointSpec,
+    index: &HashMap<&str, usize>,
+    angle_to_rad: f64,
+) -> Result<Joint, SpecError> {
+    for (field, v) in [("xyz", &js.xyz), ("rpy", &js.rpy), ("axis", &js.axis)] {
+        if !finite(v) {
+            return Err(SpecError::NotFinite {
+                section: Section::Joints,
+                name: name.to_owned(),
+                field,
+            });
+        }
+    }
+    let axis = Vector3::from(js.axis);
+    let length = axis.norm();
+    if (length - 1.0).abs() > AXIS_TOLERANCE {
+        return Err(SpecError::BadAxis {
+            joint: name.to_owned(),
+            axis: js.axis,
+            length,
+        });
+    }
+    let parent = parent_index(index, &js.parent, Section::Joints, name)?;
+    let rpy = js.rpy.map(|a| a * angle_to_rad);
+    Ok(Joint {
+        name: name.to_owned(),
+        parent,
+        origin: origin(js.xyz, rpy),
+        axis: Unit::new_normalize(axis),
+        limits: (f64::NEG_INFINITY, f64::INFINITY),
+    })
+}
+
+/// Named frame `name` from its entry `fs`, checked: a name no joint has,
+/// a known parent, finite numbers.
+fn checked_frame(
+    name: &str,
+    fs: &FrameSpec,
+    index: &HashMap<&str, usize>,
+    angle_to_rad: f64,
+) -> Result<Frame, SpecError> {
+    if name == BASE || index.contains_key(name) {
+        return Err(SpecError::NameTaken {
+            section: Section::Frames,
+            name: name.to_owned(),
+        });
+    }
+    if fs.parent.trim().is_empty() {
+        return Err(SpecError::NoParent {
+            frame: name.to_owned(),
+        });
+    }
+    for (field, v) in [("xyz", &fs.xyz), ("rpy", &fs.rpy)] {
+        if !finite(v) {
+            return Err(SpecError::NotFinite {
+                section: Section::Frames,
+                name: name.to_owned(),
+                field,
+            });
+        }
+    }
+    let parent = parent_index(index, &fs.parent, Section::Frames, name)?;
+    Ok(Frame {
+        name: name.to_owned(),
+        parent,
+        origin: origin(fs.xyz, fs.rpy.map(|a| a * angle_to_rad)),
+    })
 }
 
 fn parent_index(

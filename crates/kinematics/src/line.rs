@@ -222,24 +222,7 @@ pub fn sample_line(
                 pending.push((tm, s_of_t(tm)));
                 continue;
             }
-            if (0..n).any(|k| (q1[k] - q0[k]).abs() > options.max_jump_rad) {
-                return Err(solver.error(
-                    s1,
-                    IkError::Singular {
-                        what: "the arm would have to flip to another branch",
-                    },
-                ));
-            }
-            let d = arm.dexterity(&q1);
-            if d < options.min_dexterity {
-                return Err(solver.error(
-                    s1,
-                    IkError::Singular {
-                        what: "the line passes too close to a singular pose of the arm",
-                    },
-                ));
-            }
-            min_dexterity = min_dexterity.min(d);
+            min_dexterity = min_dexterity.min(solver.check_step(s1, &q0, &q1)?);
             if samples.len() >= options.max_samples {
                 return Err(solver.error(s1, too_many.clone()));
             }
@@ -282,6 +265,31 @@ impl LineSolver<'_> {
             .solve(&self.target(s), previous, &mut out[..n])
             .map_err(|e| self.error(s, e))?;
         Ok(out[..n].to_vec())
+    }
+
+    /// Refuses a step from `q0` to `q1` (at `s` along the line) that flips
+    /// the arm to another branch or passes too close to a singular pose;
+    /// the arm's dexterity at `q1` otherwise.
+    fn check_step(&self, s: f64, q0: &[f64], q1: &[f64]) -> Result<f64, LineError> {
+        let n = self.arm.joints().len();
+        if (0..n).any(|k| (q1[k] - q0[k]).abs() > self.options.max_jump_rad) {
+            return Err(self.error(
+                s,
+                IkError::Singular {
+                    what: "the arm would have to flip to another branch",
+                },
+            ));
+        }
+        let d = self.arm.dexterity(q1);
+        if d < self.options.min_dexterity {
+            return Err(self.error(
+                s,
+                IkError::Singular {
+                    what: "the line passes too close to a singular pose of the arm",
+                },
+            ));
+        }
+        Ok(d)
     }
 
     fn error(&self, s: f64, reason: IkError) -> LineError {

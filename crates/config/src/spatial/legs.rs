@@ -78,13 +78,9 @@ pub(crate) struct BodyState {
 }
 
 impl Context<'_> {
+    /// The robot's six legs; `fail` turns the reason they cannot be solved into the error.
     fn legs(&self, fail: &impl Fn(String) -> ConfigError) -> Result<Legs, ConfigError> {
-        let model = self.robot.geometry().ok_or_else(|| {
-            fail(format!(
-                "robot `{}` has no `kinematics:` section",
-                self.robot.name
-            ))
-        })?;
+        let model = self.geometry(fail)?;
         Legs::new(&model).map_err(|e| fail(e.to_string()))
     }
 
@@ -104,77 +100,8 @@ impl Context<'_> {
     ) -> Result<(), ConfigError> {
         let wp = kp.key("walk");
         let fail = |why: String| self.src.error(&wp, format!("keyframe {index}: {why}"));
-        let positive = |field: &str, v: f64| {
-            if v.is_finite() && v > 0.0 && v <= super::MAX_SPATIAL_S {
-                Ok(())
-            } else {
-                Err(self.src.error(
-                    &wp.key(field),
-                    format!(
-                        "must be a positive number up to {}, got {v}",
-                        super::MAX_SPATIAL_S
-                    ),
-                ))
-            }
-        };
-        let period_ok = (MIN_STEP_PERIOD_S..=super::MAX_SPATIAL_S).contains(&raw.period);
-        if !period_ok {
-            return Err(self.src.error(
-                &wp.key("period"),
-                format!(
-                    "must be a step period from {MIN_STEP_PERIOD_S} to {} s, got {}",
-                    super::MAX_SPATIAL_S,
-                    Rounded(raw.period)
-                ),
-            ));
-        }
-        if !(raw.lift.is_finite() && raw.lift >= 0.0) {
-            return Err(self.src.error(
-                &wp.key("lift"),
-                format!("must be a height >= 0 mm, got {}", raw.lift),
-            ));
-        }
-        if let Some(stride) = raw.stride {
-            positive("stride", stride)?;
-        }
-        if raw.segments.is_empty() {
-            return Err(self
-                .src
-                .error(&wp.key("segments"), "a walk needs at least one segment"));
-        }
-        if raw.segments.len() > MAX_WALK_SEGMENTS {
-            return Err(self.src.error(
-                &wp.key("segments"),
-                format!(
-                    "{} segments: a walk may have 1 to {MAX_WALK_SEGMENTS}",
-                    raw.segments.len()
-                ),
-            ));
-        }
-        let mut segments = Vec::with_capacity(raw.segments.len());
-        for (k, s) in raw.segments.iter().enumerate() {
-            let sp = wp.key("segments").index(k);
-            positive("duration", s.duration).map_err(|_| {
-                self.src.error(
-                    &sp.key("duration"),
-                    format!(
-                        "must be a time above 0 and up to {} s, got {}",
-                        super::MAX_SPATIAL_S,
-                        Rounded(s.duration)
-                    ),
-                )
-            })?;
-            if !(s.velocity.iter().all(|v| v.is_finite()) && s.turn.is_finite()) {
-                return Err(self
-                    .src
-                    .error(&sp, "velocity and turn must be finite numbers"));
-            }
-            segments.push(WalkSegment {
-                velocity_mm_s: s.velocity,
-                turn_rad_s: self.units.to_rad(s.turn),
-                duration_s: s.duration,
-            });
-        }
+        self.check_walk(&wp, raw)?;
+        let segments = self.walk_segments(&wp, raw)?;
         let total: f64 = segments.iter().map(|s| s.duration_s).sum();
         if total > super::MAX_SPATIAL_S {
             return Err(fail(format!(
@@ -189,11 +116,7 @@ impl Context<'_> {
         self.check_samples(&wp, index, "this walk", samples, keyframes.len())?;
         let legs = self.legs(&fail)?;
         let walk = Walk {
-            gait: match raw.gait {
-                RawGait::Tripod => Gait::Tripod,
-                RawGait::Ripple => Gait::Ripple,
-                RawGait::Wave => Gait::Wave,
-            },
+            gait: raw.gait.gait(),
             stride_mm: raw.stride,
             lift_mm: raw.lift,
             period_s: raw.period,
@@ -223,6 +146,85 @@ impl Context<'_> {
         Ok(())
     }
 
+    /// Checks a walk's (at `wp`) period, lift, stride and number of segments.
+    fn check_walk(&self, wp: &FieldPath, raw: &RawWalk) -> Result<(), ConfigError> {
+        let period_ok = (MIN_STEP_PERIOD_S..=super::MAX_SPATIAL_S).contains(&raw.period);
+        if !period_ok {
+            return Err(self.src.error(
+                &wp.key("period"),
+                format!(
+                    "must be a step period from {MIN_STEP_PERIOD_S} to {} s, got {}",
+                    super::MAX_SPATIAL_S,
+                    Rounded(raw.period)
+                ),
+            ));
+        }
+        if !(raw.lift.is_finite() && raw.lift >= 0.0) {
+            return Err(self.src.error(
+                &wp.key("lift"),
+                format!("must be a height >= 0 mm, got {}", raw.lift),
+            ));
+        }
+        if let Some(stride) = raw.stride.filter(|&v| !positive_spatial(v)) {
+            return Err(self.src.error(
+                &wp.key("stride"),
+                format!(
+                    "must be a positive number up to {}, got {stride}",
+                    super::MAX_SPATIAL_S
+                ),
+            ));
+        }
+        if raw.segments.is_empty() {
+            return Err(self
+                .src
+                .error(&wp.key("segments"), "a walk needs at least one segment"));
+        }
+        if raw.segments.len() > MAX_WALK_SEGMENTS {
+            return Err(self.src.error(
+                &wp.key("segments"),
+                format!(
+                    "{} segments: a walk may have 1 to {MAX_WALK_SEGMENTS}",
+                    raw.segments.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The segments of a walk (at `wp`), checked: a duration in range,
+    /// finite velocity and turn.
+    fn walk_segments(
+        &self,
+        wp: &FieldPath,
+        raw: &RawWalk,
+    ) -> Result<Vec<WalkSegment>, ConfigError> {
+        let mut segments = Vec::with_capacity(raw.segments.len());
+        for (k, s) in raw.segments.iter().enumerate() {
+            let sp = wp.key("segments").index(k);
+            if !positive_spatial(s.duration) {
+                return Err(self.src.error(
+                    &sp.key("duration"),
+                    format!(
+                        "must be a time above 0 and up to {} s, got {}",
+                        super::MAX_SPATIAL_S,
+                        Rounded(s.duration)
+                    ),
+                ));
+            }
+            if !(s.velocity.iter().all(|v| v.is_finite()) && s.turn.is_finite()) {
+                return Err(self
+                    .src
+                    .error(&sp, "velocity and turn must be finite numbers"));
+            }
+            segments.push(WalkSegment {
+                velocity_mm_s: s.velocity,
+                turn_rad_s: self.units.to_rad(s.turn),
+                duration_s: s.duration,
+            });
+        }
+        Ok(segments)
+    }
+
     /// Appends the keyframes of a body move, the feet planted, from the
     /// last of `keyframes` (or the body pose of the `body:` keyframe before
     /// it) to `raw`, and sets `current` to its end.
@@ -244,52 +246,14 @@ impl Context<'_> {
         let bp = kp.key("body");
         let src = self.src;
         let fail = |why: String| src.error(&bp, format!("keyframe {index}: {why}"));
-        let numbers = raw
-            .height
-            .iter()
-            .chain(raw.shift.iter().flatten())
-            .chain(&raw.roll)
-            .chain(&raw.pitch)
-            .chain(&raw.yaw);
-        if !numbers.into_iter().all(|v| v.is_finite()) {
-            return Err(fail(
-                "height, shift, roll, pitch and yaw must be finite numbers".to_owned(),
-            ));
-        }
-        if let Some(height) = raw.height {
-            if height <= 0.0 {
-                return Err(src.error(
-                    &bp.key("height"),
-                    format!(
-                        "keyframe {index}: must be a height above the ground, > 0 mm, got {}",
-                        Rounded(height)
-                    ),
-                ));
-            }
-        }
+        self.check_body(&bp, index, raw)?;
         let legs = self.legs(&fail)?;
         let start = self.radians(current);
         let state = match self.body.take() {
             Some(s) => s,
-            None => {
-                let mut poses = Poses::new(legs.model());
-                let mut feet = vec![Point3::origin(); legs.len()];
-                legs.feet(&start, &mut poses, &mut feet);
-                let height = -feet.iter().map(|p| p.z).sum::<f64>() / feet.len() as f64;
-                BodyState {
-                    feet,
-                    height,
-                    pose: Isometry3::identity(),
-                }
-            }
+            None => BodyState::standing(&legs, &start),
         };
-        let shift = raw.shift.unwrap_or([0.0, 0.0]);
-        let lift = raw.height.map_or(0.0, |h| h - state.height);
-        let angle = |a: Option<f64>| self.units.to_rad(a.unwrap_or(0.0));
-        let to = Isometry3::from_parts(
-            Vector3::new(shift[0], shift[1], lift).into(),
-            UnitQuaternion::from_euler_angles(angle(raw.roll), angle(raw.pitch), angle(raw.yaw)),
-        );
+        let to = self.body_target(raw, &state);
         let line = PoseLine::new(state.pose, to);
         let t0 = self.arrival(keyframes)?;
         let law = TimeLaw::new(line.extent_mm(), limits, at.map(|a| a - t0)).map_err(fail)?;
@@ -330,5 +294,81 @@ impl Context<'_> {
         }
         self.body = Some(BodyState { pose: to, ..state });
         Ok(())
+    }
+
+    /// Checks a body move's (at `bp`) numbers: finite, and a height above
+    /// the ground.
+    fn check_body(&self, bp: &FieldPath, index: usize, raw: &RawBody) -> Result<(), ConfigError> {
+        let numbers = raw
+            .height
+            .iter()
+            .chain(raw.shift.iter().flatten())
+            .chain(&raw.roll)
+            .chain(&raw.pitch)
+            .chain(&raw.yaw);
+        if !numbers.into_iter().all(|v| v.is_finite()) {
+            return Err(self.src.error(
+                bp,
+                format!(
+                    "keyframe {index}: height, shift, roll, pitch and yaw must be finite numbers"
+                ),
+            ));
+        }
+        if let Some(height) = raw.height {
+            if height <= 0.0 {
+                return Err(self.src.error(
+                    &bp.key("height"),
+                    format!(
+                        "keyframe {index}: must be a height above the ground, > 0 mm, got {}",
+                        Rounded(height)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The body pose `raw` asks for, relative to the ground under `state`:
+    /// its shift, its height as a lift from `state`'s, its roll, pitch and yaw.
+    fn body_target(&self, raw: &RawBody, state: &BodyState) -> Isometry3<f64> {
+        let shift = raw.shift.unwrap_or([0.0, 0.0]);
+        let lift = raw.height.map_or(0.0, |h| h - state.height);
+        let angle = |a: Option<f64>| self.units.to_rad(a.unwrap_or(0.0));
+        Isometry3::from_parts(
+            Vector3::new(shift[0], shift[1], lift).into(),
+            UnitQuaternion::from_euler_angles(angle(raw.roll), angle(raw.pitch), angle(raw.yaw)),
+        )
+    }
+}
+
+/// Whether `v` is a positive number of at most [`super::MAX_SPATIAL_S`].
+fn positive_spatial(v: f64) -> bool {
+    v.is_finite() && v > 0.0 && v <= super::MAX_SPATIAL_S
+}
+
+impl RawGait {
+    /// The gait it names.
+    fn gait(self) -> Gait {
+        match self {
+            RawGait::Tripod => Gait::Tripod,
+            RawGait::Ripple => Gait::Ripple,
+            RawGait::Wave => Gait::Wave,
+        }
+    }
+}
+
+impl BodyState {
+    /// The start of a run of body moves: `legs` at joint positions `start`
+    /// (radians), the body level at its pose then.
+    fn standing(legs: &Legs, start: &[f64]) -> Self {
+        let mut poses = Poses::new(legs.model());
+        let mut feet = vec![Point3::origin(); legs.len()];
+        legs.feet(start, &mut poses, &mut feet);
+        let height = -feet.iter().map(|p| p.z).sum::<f64>() / feet.len() as f64;
+        BodyState {
+            feet,
+            height,
+            pose: Isometry3::identity(),
+        }
     }
 }

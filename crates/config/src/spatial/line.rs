@@ -54,23 +54,8 @@ impl Context<'_> {
             self.src
                 .error(&kp.key("tool"), format!("keyframe {index}: {why}"))
         };
-        let tolerance = limits.tolerance.unwrap_or(DEFAULT_TOLERANCE_MM);
-        if !(MIN_TOLERANCE_MM..=MAX_TOLERANCE_MM).contains(&tolerance) {
-            return Err(self.src.error(
-                &kp.key("tolerance"),
-                format!(
-                    "must be a distance from {MIN_TOLERANCE_MM} to {MAX_TOLERANCE_MM} mm, got {}",
-                    Rounded(tolerance)
-                ),
-            ));
-        }
-        let model = self.robot.geometry().ok_or_else(|| {
-            fail(format!(
-                "robot `{}` has no `kinematics:` section",
-                self.robot.name
-            ))
-        })?;
-        let arm = ArmIk::new(&model, TOOL_FRAME).map_err(|e| fail(e.to_string()))?;
+        let tolerance = self.line_tolerance(kp, limits)?;
+        let arm = self.arm(&fail)?;
         let start_q = self.radians(current);
         let chain: Vec<f64> = arm.joints().iter().map(|&j| start_q[j]).collect();
         // The end: the tool pose solved from the start, as a joint move
@@ -98,45 +83,17 @@ impl Context<'_> {
         let first = (law.duration() / options.max_step_s).ceil() + 1.0;
         self.check_samples(&kp.key("tool"), index, "this line", first, keyframes.len())?;
         options.max_samples = self.samples_left(keyframes.len());
+        let tool_line = ToolLine {
+            arm,
+            line,
+            held,
+            start_q,
+            chain,
+            law,
+        };
         for _ in 0..REFINEMENTS {
-            let plan = sample_line(
-                &arm,
-                &line,
-                held,
-                &chain,
-                law.duration(),
-                |t| law.s_of_t(t),
-                &options,
-            )
-            .map_err(|e| {
-                fail(format!(
-                    "the line from the previous keyframe cannot be followed {:.1} mm along: {}",
-                    e.along_mm,
-                    ik_reason(&e.reason, self.units)
-                ))
-            })?;
-            // Whole robot poses: joints off the arm keep their values.
-            let poses: Vec<(f64, Vec<f64>)> = plan
-                .samples
-                .iter()
-                .map(|s| {
-                    let mut q = start_q.clone();
-                    for (k, &j) in arm.joints().iter().enumerate() {
-                        q[j] = s.q[k];
-                    }
-                    (s.t, q)
-                })
-                .collect();
-            let path = self
-                .plan_samples(poses.iter().map(|(t, q)| (*t, q.as_slice())))
-                .map_err(|e| {
-                    fail(format!(
-                        "the joints cannot follow the line at this speed ({e}); lower \
-                         `max_speed` or `max_acceleration`"
-                    ))
-                })?;
-            let worst = worst_deviation(&arm, &line, &path);
-            if worst <= tolerance {
+            let (poses, path) = tool_line.poses(self, &options, &fail)?;
+            if worst_deviation(&tool_line.arm, &tool_line.line, &path) <= tolerance {
                 self.push_samples(
                     kp,
                     t0,
@@ -155,6 +112,97 @@ impl Context<'_> {
             "the planned path strays more than the tolerance {tolerance} mm from the line; \
              raise `tolerance` or lower `max_speed`"
         )))
+    }
+
+    /// A line keyframe's `tolerance` (at `kp`), checked, or the default.
+    fn line_tolerance(&self, kp: &FieldPath, limits: &MoveLimits) -> Result<f64, ConfigError> {
+        let tolerance = limits.tolerance.unwrap_or(DEFAULT_TOLERANCE_MM);
+        if !(MIN_TOLERANCE_MM..=MAX_TOLERANCE_MM).contains(&tolerance) {
+            return Err(self.src.error(
+                &kp.key("tolerance"),
+                format!(
+                    "must be a distance from {MIN_TOLERANCE_MM} to {MAX_TOLERANCE_MM} mm, got {}",
+                    Rounded(tolerance)
+                ),
+            ));
+        }
+        Ok(tolerance)
+    }
+
+    /// The robot's arm up to its `tool` frame; `fail` says why there is none.
+    fn arm(&self, fail: &impl Fn(String) -> ConfigError) -> Result<ArmIk, ConfigError> {
+        let model = self.geometry(fail)?;
+        ArmIk::new(&model, TOOL_FRAME).map_err(|e| fail(e.to_string()))
+    }
+}
+
+/// Whole robot poses over a move: `(t, every joint in radians)`.
+type RobotPoses = Vec<(f64, Vec<f64>)>;
+
+/// A straight tool move to sample: the arm, the line, its time law and the
+/// joints at its start.
+struct ToolLine {
+    arm: ArmIk,
+    line: PoseLine,
+    held: Held,
+    /// Every joint of the robot at the start, radians.
+    start_q: Vec<f64>,
+    /// The arm's joints at the start, radians.
+    chain: Vec<f64>,
+    law: TimeLaw,
+}
+
+impl ToolLine {
+    /// Samples the line under `options` into whole robot poses (`(t, every
+    /// joint in radians)`) and plans them as the motion will.
+    ///
+    /// # Errors
+    /// Through `fail`: a line the arm cannot follow, or joints that cannot
+    /// follow it within their limits.
+    fn poses(
+        &self,
+        ctx: &Context<'_>,
+        options: &LineOptions,
+        fail: &impl Fn(String) -> ConfigError,
+    ) -> Result<(RobotPoses, traj::Trajectory), ConfigError> {
+        let law = &self.law;
+        let plan = sample_line(
+            &self.arm,
+            &self.line,
+            self.held,
+            &self.chain,
+            law.duration(),
+            |t| law.s_of_t(t),
+            options,
+        )
+        .map_err(|e| {
+            fail(format!(
+                "the line from the previous keyframe cannot be followed {:.1} mm along: {}",
+                e.along_mm,
+                ik_reason(&e.reason, ctx.units)
+            ))
+        })?;
+        // Whole robot poses: joints off the arm keep their values.
+        let poses: RobotPoses = plan
+            .samples
+            .iter()
+            .map(|s| {
+                let mut q = self.start_q.clone();
+                for (k, &j) in self.arm.joints().iter().enumerate() {
+                    q[j] = s.q[k];
+                }
+                (s.t, q)
+            })
+            .collect();
+        let path = ctx
+            .plan_samples(poses.iter().map(|(t, q)| (*t, q.as_slice())))
+            .map_err(|e| {
+                fail(format!(
+                    "the joints cannot follow the line at this speed ({e}); lower \
+                     `max_speed` or `max_acceleration`"
+                ))
+            })?;
+        Ok((poses, path))
     }
 }
 

@@ -265,6 +265,20 @@ impl Context<'_> {
         samples_left(keyframes, self.repeat, self.robot.joint_count())
     }
 
+    /// The robot's geometry; `fail` turns the reason there is none into
+    /// the error.
+    fn geometry(
+        &self,
+        fail: &impl Fn(String) -> ConfigError,
+    ) -> Result<servobus_kinematics::Geometry, ConfigError> {
+        self.robot.geometry().ok_or_else(|| {
+            fail(format!(
+                "robot `{}` has no `kinematics:` section",
+                self.robot.name
+            ))
+        })
+    }
+
     /// The joints of `current` (the motion's units) in radians.
     pub fn radians(&self, current: &[f64]) -> Vec<f64> {
         current.iter().map(|&v| self.units.to_rad(v)).collect()

@@ -15,7 +15,7 @@ mod common;
 
 use common::Outcome;
 use servobus_runtime::config::{load_motion, plan_motion};
-use servobus_runtime::{spawn_virtual, Finish, RunOptions, Telemetry};
+use servobus_runtime::{Finish, RunOptions, Telemetry, VirtualRun};
 
 const USAGE: &str = "usage: live_errors [MOTION]\n\
     Plays MOTION (a motion file or a built-in name; default arm-pick-place) on\n\
@@ -34,7 +34,7 @@ fn watch(_arg: &str, path: &Path) -> Outcome {
         units: Some(motion.units),
         ..RunOptions::default()
     };
-    let runner = spawn_virtual(&robot, trajectory, buses, options)?;
+    let runner = VirtualRun::new(&robot, trajectory, buses, options)?.spawn()?;
 
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     for message in runner.telemetry() {

@@ -333,8 +333,21 @@ class Robot:
         return Plan(
             duration_s=raw["duration_s"],
             units=raw["units"],
-            segments=[Segment(**s) for s in raw["segments"]],
-            joints=[JointPeaks(**j) for j in raw["joints"]],
+            segments=[
+                Segment(s["keyframe"], s["repetition"], s["start_s"], s["end_s"])
+                for s in raw["segments"]
+            ],
+            joints=[
+                JointPeaks(
+                    j["name"],
+                    j["peak_velocity"],
+                    j["peak_acceleration"],
+                    j["peak_jerk"],
+                    j["min_position"],
+                    j["max_position"],
+                )
+                for j in raw["joints"]
+            ],
         )
 
     def play(

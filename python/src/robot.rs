@@ -7,6 +7,7 @@ use crossbeam_channel::RecvTimeoutError;
 use pyo3::prelude::*;
 use servobus_protocol::BROADCAST_ID;
 use servobus_robot::ports::{bus_ports, open_bus, Allowance};
+use servobus_robot::summary::PlanSummary;
 use servobus_robot::{Motion, Target, Telemetry};
 
 use crate::calibration::{calibrate_robot, to_json, Calibrated, Where};
@@ -193,49 +194,16 @@ impl Robot {
         self.port.as_deref()
     }
 
-    /// Plans `motion` (a motion file or a built-in name): JSON text of its
-    /// duration, segments and per-joint peaks, in the robot's units.
+    /// Plans `motion` (a motion file or a built-in name): its
+    /// [`PlanSummary`] as JSON text, in the robot's units.
     fn plan(&self, py: Python<'_>, motion: &str) -> PyResult<String> {
         let json = py.allow_threads(|| -> Outcome<String> {
             let motion = self.motion(motion)?;
             let plan = self.robot.plan(&motion)?;
-            let units = self.robot.config().units;
-            let joints: Vec<_> = self
-                .robot
-                .config()
-                .joints()
-                .zip(plan.summaries())
-                .map(|(j, s)| {
-                    serde_json::json!({
-                        "name": j.name,
-                        "peak_velocity": units.from_rad(s.peak_velocity),
-                        "peak_acceleration": units.from_rad(s.peak_acceleration),
-                        "peak_jerk": if s.peak_jerk.is_finite() {
-                            Some(units.from_rad(s.peak_jerk))
-                        } else {
-                            None
-                        },
-                        "min_position": units.from_rad(s.min_position),
-                        "max_position": units.from_rad(s.max_position),
-                    })
-                })
-                .collect();
-            let segments: Vec<_> = plan
-                .segments()
-                .iter()
-                .map(|s| {
-                    serde_json::json!({
-                        "keyframe": s.keyframe, "cycle": s.cycle, "start": s.start, "end": s.end,
-                    })
-                })
-                .collect();
-            Ok(serde_json::json!({
-                "duration_s": plan.duration(),
-                "units": units.name(),
-                "segments": segments,
-                "joints": joints,
-            })
-            .to_string())
+            let config = self.robot.config();
+            let summary = PlanSummary::new(&motion, config, &plan, config.units);
+            serde_json::to_string(&summary)
+                .map_err(|e| Failure::new(Class::Error, format!("the plan's summary as JSON: {e}")))
         })?;
         Ok(json)
     }

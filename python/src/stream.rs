@@ -7,7 +7,7 @@ use std::time::Instant;
 use pyo3::prelude::*;
 use servobus_config::Units;
 use servobus_robot::{
-    Chunk, Command, LiveTarget as Target, Run, RunOptions, TargetError, TargetSender, Telemetry,
+    Chunk, Command, LiveTarget, Run, RunOptions, TargetError, TargetSender, Telemetry,
 };
 
 use crate::errors::{chain, poisoned, Class, Failure, Outcome};
@@ -170,7 +170,7 @@ impl Stream {
             .into_iter()
             .map(|(name, a)| (name, units.to_rad(a)))
             .collect();
-        let sent = py.allow_threads(|| self.targets.send(Target::named(stamp, joints)));
+        let sent = py.allow_threads(|| self.targets.send(LiveTarget::named(stamp, joints)));
         match sent {
             Ok(clamped) => Ok(clamped),
             Err(TargetError::Ended) => {

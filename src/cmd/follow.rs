@@ -39,8 +39,7 @@ use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
 use servobus_robot::{
-    Command, CycleSample, Lead, LiveTarget as Target, Report, Run, RunOptions, TargetSender,
-    Telemetry,
+    Command, CycleSample, Lead, LiveTarget, Report, Run, RunOptions, TargetSender, Telemetry,
 };
 
 use crate::record::{CsvLog, PlotData};
@@ -523,7 +522,10 @@ impl<'a> Session<'a> {
         let sent = if joints.is_empty() {
             Ok(())
         } else {
-            send(&self.targets, Target::named(stamp, joints).taken_at(taken))
+            send(
+                &self.targets,
+                LiveTarget::named(stamp, joints).taken_at(taken),
+            )
         };
         if let Err(e) = sent {
             return Err(format!("at {t:.1} s: {e}"));
@@ -555,7 +557,7 @@ impl<'a> Session<'a> {
     }
 }
 
-fn send(targets: &TargetSender, target: Target) -> anyhow::Result<()> {
+fn send(targets: &TargetSender, target: LiveTarget) -> anyhow::Result<()> {
     match targets.send(target) {
         Ok(_) | Err(servobus_robot::TargetError::Ended) => Ok(()),
         Err(e) => Err(anyhow::anyhow!("the leader's reading was refused: {e}")),

@@ -13,7 +13,7 @@ use servobus::monitor::{self, view, Frame, Poller, TelemetryRows, Watched};
 use servobus_driver::{Bus, Clock};
 use servobus_protocol::registers::addr;
 use servobus_runtime::config::{load_motion, load_robot, plan_motion, Robot, RobotOptions};
-use servobus_runtime::{spawn_virtual, RunOptions, Telemetry};
+use servobus_runtime::{RunOptions, Telemetry, VirtualRun};
 use servobus_sim::{Faults, SimBus};
 
 use common::virtual_bus;
@@ -275,7 +275,9 @@ fn play_monitor_rows_follow_the_telemetry() {
         ..RunOptions::default()
     };
     let rate = arm.rate_hz;
-    let runner = spawn_virtual(&arm, trajectory, vec![bus], options).expect("run");
+    let runner = VirtualRun::new(&arm, trajectory, vec![bus], options)
+        .and_then(VirtualRun::spawn)
+        .expect("run");
     let mut rows = TelemetryRows::new(&arm, motion.units, 1.0 / rate);
     let mut hot_seen = false;
     for message in runner.telemetry().iter() {

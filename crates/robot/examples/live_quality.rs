@@ -16,7 +16,7 @@ use std::path::Path;
 
 use servobus_robot::sim::SimRobot;
 use servobus_runtime::config::{load_robot, Robot, RobotOptions};
-use servobus_runtime::{Lead, RunOptions, Target, Telemetry, VirtualRun};
+use servobus_runtime::{Lead, LiveTarget, RunOptions, Telemetry, VirtualRun};
 
 /// The loop's period, s (the SO-101's 200 Hz).
 const PERIOD: f64 = 0.005;
@@ -159,7 +159,7 @@ fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, St
         while f64::from(slot) / hz <= now + 1e-9 {
             let s = f64::from(slot) / hz;
             let q = source(s).to_radians();
-            tx.send(Target::named(s, vec![("shoulder_pan".into(), q)]))
+            tx.send(LiveTarget::named(s, vec![("shoulder_pan".into(), q)]))
                 .map_err(|e| e.to_string())?;
             slot += 1;
         }

@@ -96,6 +96,7 @@ mod run;
 pub mod scan;
 pub mod sim;
 pub mod stream;
+pub mod summary;
 pub mod teach;
 pub mod timing;
 
@@ -112,9 +113,9 @@ pub use servobus_config::Motion;
 /// Where a run's bus threads run (core, SCHED_FIFO priority).
 pub use servobus_runtime::rt::RtOptions;
 pub use servobus_runtime::{
-    Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, Rejection,
-    Report, RunError, RunOptions, StallEvent, Target as LiveTarget, TargetError, TargetSender,
-    Telemetry, VirtualRun, MAX_CHUNK_POINTS,
+    Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, LiveTarget,
+    Rejection, Report, RunError, RunOptions, StallEvent, TargetError, TargetSender, Telemetry,
+    VirtualRun, MAX_CHUNK_POINTS,
 };
 pub use servobus_trajectory::Trajectory;
 

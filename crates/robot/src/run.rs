@@ -6,8 +6,8 @@ use std::time::Duration;
 use crossbeam_channel::Receiver;
 use servobus_config::Motion;
 use servobus_runtime::{
-    spawn, spawn_live, spawn_virtual, spawn_virtual_live, Command, CommandSender, Report,
-    RunOptions, Runner, TargetSender, Telemetry,
+    spawn, Command, CommandSender, Report, RunOptions, Runner, TargetSender, Telemetry, VirtualRun,
+    Work,
 };
 use servobus_trajectory::Trajectory;
 
@@ -62,13 +62,7 @@ impl Connection {
                 servobus_config::plan_motion(&motion, &self.robot)?
             }
         };
-        let (robot, buses) = self.into_buses();
-        let runner = match buses {
-            RunBuses::Serial(b) => spawn(&robot, trajectory, b, options)?,
-            RunBuses::Virtual(b) => spawn_virtual(&robot, trajectory, b, options)?,
-            RunBuses::Wall(b) => spawn(&robot, trajectory, b, options)?,
-        };
-        Ok(Run { runner })
+        self.start(Work::Path(trajectory), options)
     }
 
     /// Starts a live run with `options`: no path, the joints follow the
@@ -81,11 +75,17 @@ impl Connection {
     /// [`Error::Run`] when the run cannot start (a servo does not answer, a
     /// rate that does not fit a bus).
     pub fn live(self, options: RunOptions) -> Result<Run, Error> {
+        self.start(Work::Live, options)
+    }
+
+    /// Starts `work`: on the simulator in virtual time on a thread of its
+    /// own, otherwise one thread per bus on the wall clock.
+    fn start(self, work: Work, options: RunOptions) -> Result<Run, Error> {
         let (robot, buses) = self.into_buses();
         let runner = match buses {
-            RunBuses::Serial(b) => spawn_live(&robot, b, options)?,
-            RunBuses::Virtual(b) => spawn_virtual_live(&robot, b, options)?,
-            RunBuses::Wall(b) => spawn_live(&robot, b, options)?,
+            RunBuses::Serial(b) => spawn(&robot, work, b, options)?,
+            RunBuses::Virtual(b) => VirtualRun::of(&robot, work, b, options)?.spawn()?,
+            RunBuses::Wall(b) => spawn(&robot, work, b, options)?,
         };
         Ok(Run { runner })
     }

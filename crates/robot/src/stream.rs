@@ -12,7 +12,7 @@
 //! against the robot when it is sent ([`TargetSender`]).
 
 use servobus_config::Units;
-use servobus_runtime::{Chunk, Target, TargetError, TargetSender};
+use servobus_runtime::{Chunk, LiveTarget, TargetError, TargetSender};
 
 /// The longest line taken, bytes (as the longest file servobus reads).
 pub const MAX_LINE_BYTES: usize = 1 << 20;
@@ -21,7 +21,7 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Input {
     /// A target.
-    Target(Target),
+    Target(LiveTarget),
     /// An action chunk.
     Chunk(Chunk),
 }
@@ -75,7 +75,7 @@ pub fn parse_line(line: &str, units: Units, arrival: f64) -> Result<Input, LineE
             .ok_or_else(|| err(format!("joint `{name}`: the angle is not a number")))?;
         out.push((name.clone(), units.to_rad(a)));
     }
-    Ok(Input::Target(Target::named(t.unwrap_or(arrival), out)))
+    Ok(Input::Target(LiveTarget::named(t.unwrap_or(arrival), out)))
 }
 
 /// A number, absent, or null.
@@ -124,12 +124,15 @@ mod tests {
     #[test]
     fn targets_and_chunks_are_read_in_the_files_units() {
         let t = parse_line(r#"{"t": 1.5, "joints": {"a": 90}}"#, Units::Deg, 9.0);
-        let want = Target::named(1.5, vec![("a".into(), std::f64::consts::FRAC_PI_2)]);
+        let want = LiveTarget::named(1.5, vec![("a".into(), std::f64::consts::FRAC_PI_2)]);
         assert_eq!(t, Ok(Input::Target(want)));
         let t = parse_line(r#"{"joints": {"a": 1}}"#, Units::Rad, 9.0);
         assert_eq!(
             t,
-            Ok(Input::Target(Target::named(9.0, vec![("a".into(), 1.0)])))
+            Ok(Input::Target(LiveTarget::named(
+                9.0,
+                vec![("a".into(), 1.0)]
+            )))
         );
         let c = parse_line(
             r#"{"chunk": {"dt": 0.02, "joints": {"a": [0, 1]}}}"#,

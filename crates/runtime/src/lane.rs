@@ -25,7 +25,7 @@ use crate::fault::Fault;
 use crate::live::LiveEvent;
 use crate::options::Reaction;
 use crate::pacer::Tick;
-use crate::target::{Count, Counters};
+use crate::target::{Count, TargetCounts};
 use crate::telemetry::{Finish, Telemetry};
 use crate::timeline::{Kind, Timeline};
 
@@ -39,7 +39,7 @@ pub(crate) struct Lane<T: Transport> {
     board: Arc<FaultBoard>,
     /// The counts of live targets (this lane adds the followed, timed out
     /// and resumed ones when it is the first).
-    counters: Arc<Counters>,
+    counters: Arc<TargetCounts>,
     cmd: Vec<JointState>,
     reference: Vec<JointState>,
     hold: Vec<f64>,
@@ -63,7 +63,7 @@ impl<T: Transport> Lane<T> {
         timeline: Timeline,
         mail: Mailbox,
         board: Arc<FaultBoard>,
-        counters: Arc<Counters>,
+        counters: Arc<TargetCounts>,
         joints: usize,
         settle: Duration,
         period: Duration,

@@ -51,10 +51,10 @@ pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
 pub use report::{BusReport, JointReport, Quantiles, Report};
 pub use run::bus_settings;
 pub use target::{
-    Chunk, LiveJoint, LiveReport, Target, TargetError, TargetSender, MAX_CHUNK_POINTS,
+    Chunk, LiveJoint, LiveReport, LiveTarget, TargetError, TargetSender, MAX_CHUNK_POINTS,
 };
 pub use telemetry::{
     CycleSample, Finish, JointSample, LiveEvent, Rejection, StallEvent, Telemetry, SAMPLE_JOINTS,
 };
-pub use threads::{spawn, spawn_live, spawn_virtual, spawn_virtual_live, Runner};
+pub use threads::{spawn, Runner, Work};
 pub use virtual_run::VirtualRun;

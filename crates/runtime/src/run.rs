@@ -23,7 +23,7 @@ use crate::lane::Lane;
 use crate::options::RunOptions;
 use crate::report::{JointReport, Quantiles, Report};
 use crate::stats::Histogram;
-use crate::target::{Counters, LiveReport, TargetSender};
+use crate::target::{LiveReport, TargetCounts, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 use crate::timeline::Timeline;
 
@@ -66,7 +66,7 @@ pub(crate) struct Prepared<T: Transport> {
     /// The sender of live targets.
     pub targets: TargetSender,
     /// The counts of live targets, for the report.
-    pub counters: Arc<Counters>,
+    pub counters: Arc<TargetCounts>,
 }
 
 /// Checks the robot, buses and path against each other and `o`. Returns
@@ -137,7 +137,7 @@ pub(crate) fn prepare<T: Transport>(
     let (commands, target_tx, inboxes) =
         inboxes(loops.len(), o.command_capacity, o.target_capacity);
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    let counters = Arc::new(Counters::new(names.clone(), units));
+    let counters = Arc::new(TargetCounts::new(names.clone(), units));
     if live_session {
         counters.live_session();
     }

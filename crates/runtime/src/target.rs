@@ -6,7 +6,7 @@
 //! chunk): the loop follows it as a timed path through its points, and a
 //! new chunk replaces what is left of the last one.
 //!
-//! A [`TargetSender`] checks each [`Target`] and [`Chunk`] before it reaches the loop:
+//! A [`TargetSender`] checks each [`LiveTarget`] and [`Chunk`] before it reaches the loop:
 //! a value that is not finite, an unknown joint or the wrong number of
 //! joints is refused ([`TargetError`], counted); a position outside its
 //! joint's limits is clamped (counted). Targets travel on a bounded
@@ -39,17 +39,17 @@ enum Joints<T = f64> {
 /// the time they were taken (seconds on any clock the sender keeps: only
 /// differences between stamps and their arrival matter).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Target {
+pub struct LiveTarget {
     stamp: f64,
     joints: Joints,
     velocities: Option<Vec<f64>>,
     taken: Option<Instant>,
 }
 
-impl Target {
+impl LiveTarget {
     /// Every joint's position, in the robot's joint order (rad).
     pub fn all(stamp: f64, positions: Vec<f64>) -> Self {
-        Target {
+        LiveTarget {
             stamp,
             joints: Joints::All(positions),
             velocities: None,
@@ -59,7 +59,7 @@ impl Target {
 
     /// Some joints' positions by name (rad); the others keep their targets.
     pub fn named(stamp: f64, joints: Vec<(String, f64)>) -> Self {
-        Target {
+        LiveTarget {
             stamp,
             joints: Joints::Named(joints),
             velocities: None,
@@ -102,7 +102,7 @@ enum Times {
 /// path through its points, within the joints' limits. A new chunk
 /// replaces what is left of the current one from the commanded state, and
 /// its points already past are skipped. Stamps are on the sender's clock,
-/// as a [`Target`]'s.
+/// as a [`LiveTarget`]'s.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chunk {
     times: Times,
@@ -141,7 +141,7 @@ impl Chunk {
     }
 
     /// The moment the chunk's observation was taken (see
-    /// [`Target::taken_at`]).
+    /// [`LiveTarget::taken_at`]).
     pub fn taken_at(mut self, taken: Instant) -> Self {
         self.taken = Some(taken);
         self
@@ -217,7 +217,7 @@ const LATENCY_SPAN: Duration = Duration::from_millis(500);
 
 /// The counts of a run's targets.
 #[derive(Debug)]
-pub(crate) struct Counters {
+pub(crate) struct TargetCounts {
     received: AtomicU64,
     clamped: AtomicU64,
     refused: AtomicU64,
@@ -238,14 +238,14 @@ pub(crate) struct Counters {
     units: Units,
 }
 
-impl Counters {
+impl TargetCounts {
     /// The counters of a run of the joints `names`, reported in `units`.
     pub fn new(names: Vec<String>, units: Units) -> Self {
-        Counters {
+        TargetCounts {
             envelope: Mutex::new(vec![EnvelopeReport::default(); names.len()]),
             names,
             units,
-            ..Counters::default()
+            ..TargetCounts::default()
         }
     }
 
@@ -266,9 +266,9 @@ impl Counters {
     }
 }
 
-impl Default for Counters {
+impl Default for TargetCounts {
     fn default() -> Self {
-        Counters {
+        TargetCounts {
             envelope: Mutex::new(Vec::new()),
             names: Vec::new(),
             units: Units::Rad,
@@ -292,7 +292,7 @@ pub(crate) enum Count {
     Followed,
 }
 
-impl Counters {
+impl TargetCounts {
     pub fn add(&self, c: Count) {
         let n = match c {
             Count::Timeout => &self.timeouts,
@@ -374,7 +374,7 @@ pub struct LiveReport {
     pub timeouts: u64,
     /// Times targets came back after a timeout.
     pub resumes: u64,
-    /// From the taking of a target ([`Target::taken_at`]) to the first
+    /// From the taking of a target ([`LiveTarget::taken_at`]) to the first
     /// goals sent after it, ms, when targets said when they were taken.
     pub latency_ms: Option<Quantiles>,
     /// Per joint, in the robot's joint order: how far the commanded path
@@ -388,7 +388,7 @@ pub struct TargetSender {
     tx: Sender<Arc<Checked>>,
     names: Arc<Vec<String>>,
     limits: Arc<Vec<JointLimits>>,
-    counters: Arc<Counters>,
+    counters: Arc<TargetCounts>,
 }
 
 impl TargetSender {
@@ -396,7 +396,7 @@ impl TargetSender {
         tx: Sender<Arc<Checked>>,
         names: Vec<String>,
         limits: Vec<JointLimits>,
-        counters: Arc<Counters>,
+        counters: Arc<TargetCounts>,
     ) -> Self {
         TargetSender {
             tx,
@@ -424,7 +424,7 @@ impl TargetSender {
     ///
     /// [`TargetError`] when the target is refused (counted; the loop keeps
     /// its previous target) or the run has ended.
-    pub fn send(&self, target: Target) -> Result<usize, TargetError> {
+    pub fn send(&self, target: LiveTarget) -> Result<usize, TargetError> {
         self.deliver(self.check(target))
     }
 
@@ -562,7 +562,7 @@ impl TargetSender {
         ))
     }
 
-    fn check(&self, target: Target) -> Result<(Checked, usize), TargetError> {
+    fn check(&self, target: LiveTarget) -> Result<(Checked, usize), TargetError> {
         let n = self.names.len();
         if !target.stamp.is_finite() {
             return Err(TargetError::NotFinite {

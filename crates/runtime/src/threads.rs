@@ -1,6 +1,7 @@
-//! Running a robot on threads: one per bus on the buses' clock, each running
-//! the same lane cycle as [`VirtualRun`] behind a [`Pacer`], in step from a
-//! shared epoch; or a whole [`VirtualRun`] on a thread of its own.
+//! Running a robot on threads ([`spawn`]): one per bus on the buses' clock,
+//! each running the same lane cycle as [`VirtualRun`] behind a [`Pacer`], in
+//! step from a shared epoch; or a whole [`VirtualRun`] on a thread of its
+//! own ([`VirtualRun::spawn`]).
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -21,7 +22,7 @@ use crate::pacer::Pacer;
 use crate::report::Report;
 use crate::rt::RtOptions;
 use crate::run::{assemble, prepare, Ending};
-use crate::target::{Counters, TargetSender};
+use crate::target::{TargetCounts, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 use crate::virtual_run::VirtualRun;
 
@@ -103,49 +104,78 @@ impl Runner {
     }
 }
 
-/// Runs a [`VirtualRun`] on a thread of its own (for `servobus play --fast`
-/// with a progress bar reading the telemetry).
-///
-/// # Errors
-///
-/// As [`VirtualRun::new`].
-pub fn spawn_virtual<T: Transport<Clock = ManualClock> + Send + 'static>(
-    robot: &Robot,
-    trajectory: Trajectory,
-    buses: Vec<Bus<T>>,
-    options: RunOptions,
-) -> Result<Runner, RunError> {
-    let run = VirtualRun::new(robot, trajectory, buses, options)?;
-    on_thread(run)
+/// What a run does: play a planned path, or follow live targets.
+#[derive(Debug, Clone)]
+pub enum Work {
+    /// Play this path (a run playing a path switches to live targets at
+    /// the first).
+    Path(Trajectory),
+    /// No path: the joints hold where they are and follow the live targets
+    /// sent through [`Runner::targets`] (see [`VirtualRun::live`]). The run
+    /// ends on [`Command::Stop`] (a jerk-limited stop),
+    /// [`Command::TorqueOff`] or a fault.
+    Live,
 }
 
-/// A [`VirtualRun`] on a thread of its own, ending once stopped.
-fn on_thread<T: Transport<Clock = ManualClock> + Send + 'static>(
-    run: VirtualRun<T>,
-) -> Result<Runner, RunError> {
-    let commands = run.commands();
-    let targets = run.targets();
-    let telemetry = run.telemetry();
-    let approach = run.approach();
-    let handle = std::thread::Builder::new()
-        .name("servobus-virtual".into())
-        .spawn(move || Ok(run.run()))
-        .map_err(RunError::Spawn)?;
-    Ok(Runner {
-        commands,
-        targets,
-        telemetry,
-        handle,
-        approach,
-    })
+impl From<Trajectory> for Work {
+    fn from(t: Trajectory) -> Self {
+        Work::Path(t)
+    }
+}
+
+impl<T: Transport<Clock = ManualClock> + Send + 'static> VirtualRun<T> {
+    /// A run of `work` in virtual time: [`VirtualRun::new`] of a path, or
+    /// [`VirtualRun::live`].
+    ///
+    /// # Errors
+    ///
+    /// As [`VirtualRun::new`].
+    pub fn of(
+        robot: &Robot,
+        work: Work,
+        buses: Vec<Bus<T>>,
+        options: RunOptions,
+    ) -> Result<Self, RunError> {
+        match work {
+            Work::Path(trajectory) => VirtualRun::new(robot, trajectory, buses, options),
+            Work::Live => VirtualRun::live(robot, buses, options),
+        }
+    }
+
+    /// Runs this in virtual time on a thread of its own (the built-in
+    /// simulator at full speed, as `servobus play --fast` with a progress
+    /// bar reading the telemetry), until it ends.
+    ///
+    /// # Errors
+    ///
+    /// [`RunError::Spawn`] when the thread cannot start.
+    pub fn spawn(self) -> Result<Runner, RunError> {
+        let commands = self.commands();
+        let targets = self.targets();
+        let telemetry = self.telemetry();
+        let approach = self.approach();
+        let handle = std::thread::Builder::new()
+            .name("servobus-virtual".into())
+            .spawn(move || Ok(self.run()))
+            .map_err(RunError::Spawn)?;
+        Ok(Runner {
+            commands,
+            targets,
+            telemetry,
+            handle,
+            approach,
+        })
+    }
 }
 
 /// What a bus thread hands back.
 type LaneEnd = (Outcome, Finish, Vec<String>);
 
-/// Runs `trajectory` on `buses` (one per robot bus, in order) on the clock
+/// Runs `work` on `buses` (one per robot bus, in order) on the clock
 /// they were built with, one thread per bus, in step from a shared epoch:
-/// cycle `k` of every bus is due at `start + k * period`.
+/// cycle `k` of every bus is due at `start + k * period`. (A run on the
+/// built-in simulator's virtual time can also run on one thread at full
+/// speed: [`VirtualRun::spawn`].)
 ///
 /// The buses' clocks must share their time base (clones of one
 /// [`SystemClock`](servobus_driver::SystemClock)). Tests may give each bus
@@ -162,51 +192,14 @@ type LaneEnd = (Outcome, Finish, Vec<String>);
 /// As [`VirtualRun::new`]; [`RunError::Spawn`] when a thread cannot start.
 pub fn spawn<T: Transport + Send + 'static>(
     robot: &Robot,
-    trajectory: Trajectory,
+    work: impl Into<Work>,
     buses: Vec<Bus<T>>,
     options: RunOptions,
 ) -> Result<Runner, RunError> {
-    start_threads(robot, Some(trajectory), buses, options)
-}
-
-/// Like [`spawn`], with no path: the joints hold where they are and follow
-/// the live targets sent through [`Runner::targets`] (see
-/// [`VirtualRun::live`]). The run ends on [`Command::Stop`] (a jerk-limited
-/// stop), [`Command::TorqueOff`] or a fault.
-///
-/// # Errors
-///
-/// As [`spawn`].
-pub fn spawn_live<T: Transport + Send + 'static>(
-    robot: &Robot,
-    buses: Vec<Bus<T>>,
-    options: RunOptions,
-) -> Result<Runner, RunError> {
-    start_threads(robot, None, buses, options)
-}
-
-/// A live run in virtual time on a thread of its own (the built-in
-/// simulator at full speed); it ends on [`Command::Stop`],
-/// [`Command::TorqueOff`] or a fault.
-///
-/// # Errors
-///
-/// As [`VirtualRun::live`].
-pub fn spawn_virtual_live<T: Transport<Clock = ManualClock> + Send + 'static>(
-    robot: &Robot,
-    buses: Vec<Bus<T>>,
-    options: RunOptions,
-) -> Result<Runner, RunError> {
-    on_thread(VirtualRun::live(robot, buses, options)?)
-}
-
-/// [`spawn`] of `trajectory`, or [`spawn_live`] without one.
-fn start_threads<T: Transport + Send + 'static>(
-    robot: &Robot,
-    trajectory: Option<Trajectory>,
-    buses: Vec<Bus<T>>,
-    options: RunOptions,
-) -> Result<Runner, RunError> {
+    let trajectory = match work.into() {
+        Work::Path(t) => Some(t),
+        Work::Live => None,
+    };
     let p = prepare(robot, trajectory, buses, &options)?;
     let mut threads = Vec::with_capacity(p.lanes.len());
     for lane in p.lanes {
@@ -248,7 +241,7 @@ struct RunEnd {
     rate_hz: f64,
     units: Units,
     telemetry: Option<Sender<Telemetry>>,
-    counters: Arc<Counters>,
+    counters: Arc<TargetCounts>,
 }
 
 impl RunEnd {

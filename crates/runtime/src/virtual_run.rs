@@ -18,7 +18,7 @@ use crate::options::RunOptions;
 use crate::pacer::Pacer;
 use crate::report::Report;
 use crate::run::{assemble, prepare, Ending};
-use crate::target::{Counters, TargetSender};
+use crate::target::{TargetCounts, TargetSender};
 use crate::telemetry::{Finish, Telemetry};
 
 /// A run on buses in virtual time, stepped by the caller: deterministic,
@@ -56,7 +56,7 @@ pub struct VirtualRun<T: Transport<Clock = ManualClock>> {
     board: Arc<FaultBoard>,
     command_tx: Option<CommandSender>,
     targets: TargetSender,
-    counters: Arc<Counters>,
+    counters: Arc<TargetCounts>,
     telemetry: Receiver<Telemetry>,
     telemetry_tx: Option<crossbeam_channel::Sender<Telemetry>>,
     rate_hz: f64,
@@ -96,7 +96,7 @@ impl<T: Transport<Clock = ManualClock>> VirtualRun<T> {
     /// Prepares a run with no path: the joints hold where they are read at
     /// start-up and follow the live targets sent through
     /// [`targets`](Self::targets), each cycle a jerk-limited step toward
-    /// the newest (see [`Target`](crate::Target)). No target for
+    /// the newest (see [`LiveTarget`](crate::LiveTarget)). No target for
     /// [`RunOptions::target_timeout`]: a jerk-limited stop and hold; the
     /// next target resumes. The run ends on [`Command::Stop`](crate::Command::Stop),
     /// [`Command::TorqueOff`](crate::Command::TorqueOff) or a fault.

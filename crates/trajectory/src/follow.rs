@@ -338,39 +338,7 @@ impl Follower {
             return s;
         }
         let end = stop_position(lim, &s);
-        // The goal where the step ends, as the state is.
-        let goal = capped(lim, goal).after(dt);
-        // A stream's targets may slow down harder than the joint can: the
-        // goal's own stop is taken with its jerk limit alone (no
-        // acceleration limit), so that a joint catching up with a goal
-        // that then brakes hard does not run on past it.
-        let hard = match lim.max_jerk {
-            Some(_) => JointLimits {
-                max_acceleration: f64::INFINITY,
-                ..*lim
-            },
-            None => *lim,
-        };
-        let own = stop_position(
-            &hard,
-            &JointState {
-                position: goal.position,
-                velocity: goal.velocity,
-                acceleration: goal.acceleration,
-            },
-        );
-        // A joint ahead of its goal (in the goal's direction) has that
-        // much less room: the goal comes to it, and it does not run on
-        // past the places it was told to match the goal's speed.
-        let dir = if goal.velocity > 0.0 {
-            1.0
-        } else if goal.velocity < 0.0 {
-            -1.0
-        } else {
-            0.0
-        };
-        let ahead = ((s.position - goal.position) * dir).max(0.0);
-        let own = own - ahead * dir;
+        let own = goal_stop(lim, capped(lim, goal).after(dt), s.position);
         let (lo, hi) = (bounds.0.min(own), bounds.1.max(own));
         let slack = BOUND_SLACK * (1.0 + lo.abs().max(hi.abs()));
         // Only a stop further on than the state itself.
@@ -389,25 +357,7 @@ impl Follower {
             e <= hi + slack && e >= lo - slack
         };
         if within(&rest) {
-            // The step nearest its plan whose stop is within: both steps
-            // start from `from` and keep the limits over `dt`, and so does
-            // any blend of them (the jerk of a blend is the blend of the
-            // jerks).
-            let blend = |k: f64| JointState {
-                position: rest.position + k * (s.position - rest.position),
-                velocity: rest.velocity + k * (s.velocity - rest.velocity),
-                acceleration: rest.acceleration + k * (s.acceleration - rest.acceleration),
-            };
-            let (mut ok, mut bad) = (0.0, 1.0);
-            for _ in 0..BLEND_STEPS {
-                let k = 0.5 * (ok + bad);
-                if within(&blend(k)) {
-                    ok = k;
-                } else {
-                    bad = k;
-                }
-            }
-            self.state = blend(ok);
+            self.state = nearest_within(&rest, &s, within);
             // The state is on neither plan: the next step plans anew.
             self.planned = false;
         } else {
@@ -415,6 +365,71 @@ impl Follower {
         }
         self.state
     }
+}
+
+/// Where a joint at `position` may let its stop run to, following `goal`
+/// (the goal where the step ends, as the state is): the goal's own
+/// quickest stop, less what the joint is ahead of the goal in the goal's
+/// direction ([`Follower::step_within`]).
+///
+/// A stream's targets may slow down harder than the joint can: the goal's
+/// own stop is taken with its jerk limit alone (no acceleration limit), so
+/// that a joint catching up with a goal that then brakes hard does not run
+/// on past it. A joint ahead of its goal has that much less room: the goal
+/// comes to it, and it does not run on past the places it was told to
+/// match the goal's speed.
+fn goal_stop(lim: &JointLimits, goal: Goal, position: f64) -> f64 {
+    let hard = match lim.max_jerk {
+        Some(_) => JointLimits {
+            max_acceleration: f64::INFINITY,
+            ..*lim
+        },
+        None => *lim,
+    };
+    let own = stop_position(
+        &hard,
+        &JointState {
+            position: goal.position,
+            velocity: goal.velocity,
+            acceleration: goal.acceleration,
+        },
+    );
+    let dir = if goal.velocity > 0.0 {
+        1.0
+    } else if goal.velocity < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    let ahead = ((position - goal.position) * dir).max(0.0);
+    own - ahead * dir
+}
+
+/// The blend of `rest` (whose stop is `within`) and `step` nearest `step`
+/// whose stop is still within, found by halving ([`BLEND_STEPS`]). Both
+/// steps start from the same state and keep the limits over the cycle, and
+/// so does any blend of them (the jerk of a blend is the blend of the
+/// jerks).
+fn nearest_within(
+    rest: &JointState,
+    step: &JointState,
+    within: impl Fn(&JointState) -> bool,
+) -> JointState {
+    let blend = |k: f64| JointState {
+        position: rest.position + k * (step.position - rest.position),
+        velocity: rest.velocity + k * (step.velocity - rest.velocity),
+        acceleration: rest.acceleration + k * (step.acceleration - rest.acceleration),
+    };
+    let (mut ok, mut bad) = (0.0, 1.0);
+    for _ in 0..BLEND_STEPS {
+        let k = 0.5 * (ok + bad);
+        if within(&blend(k)) {
+            ok = k;
+        } else {
+            bad = k;
+        }
+    }
+    blend(ok)
 }
 
 /// Halvings of the blend between a step and the bound's ([`Follower::step_within`]).

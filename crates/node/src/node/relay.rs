@@ -21,9 +21,7 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant, SystemTime};
 
 use servobus_robot::config::Units;
-use servobus_robot::{
-    Chunk, Command, CommandSender, LiveTarget as Target, TargetError, TargetSender,
-};
+use servobus_robot::{Chunk, Command, CommandSender, LiveTarget, TargetError, TargetSender};
 
 use super::{lock, unix_ns, Planner, Shared};
 use crate::wire::{parse_command, parse_live, LiveMessage, NodeCommand};
@@ -89,7 +87,7 @@ pub(super) fn take_target(
                 .map(|(n, a)| (n, units.to_rad(a)))
                 .collect();
             let stamp = m.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
-            let target = Target::named(stamp, joints).taken_at(taken(m.sent_ns));
+            let target = LiveTarget::named(stamp, joints).taken_at(taken(m.sent_ns));
             (to.targets.send(target), "target")
         }
         LiveMessage::Chunk(m) => {
@@ -195,7 +193,7 @@ fn halt(to: &Inputs, motion: &mut Motion) -> bool {
         // A joint-less target: the path running (a motion, its approach,
         // its end's hold) gives way to live following from the commanded
         // state, which stops every joint within its limits.
-        match to.targets.send(Target::named(SWITCH_STAMP, Vec::new())) {
+        match to.targets.send(LiveTarget::named(SWITCH_STAMP, Vec::new())) {
             Ok(_) => motion.playing = false,
             Err(TargetError::Ended) => return false,
             // Not expected of a target naming no joint; the pause below

@@ -14,7 +14,7 @@ use common::robot;
 use servobus_driver::Clock;
 use servobus_robot::sim::{new_truth, SimRobot, TRUTH_PERIOD};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::{Command, Lead, RunOptions, Target, VirtualRun};
+use servobus_runtime::{Command, Lead, LiveTarget, RunOptions, VirtualRun};
 use servobus_sim::Truth;
 
 const PERIOD: f64 = 0.005;
@@ -104,7 +104,7 @@ fn streamed(robot: &Robot) -> (f64, f64) {
         let now = run.cycle() as f64 * PERIOD;
         while next < slots.len() && slots[next] <= now {
             let s = slots[next];
-            let t = Target::named(s, vec![("shoulder_pan".into(), source(s).to_radians())]);
+            let t = LiveTarget::named(s, vec![("shoulder_pan".into(), source(s).to_radians())]);
             tx.send(t).expect("a good target");
             next += 1;
         }

@@ -13,7 +13,7 @@ use common::{config, record, robot};
 use servobus_driver::{Bus, Clock};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::{Lead, RunOptions, Target, VirtualRun};
+use servobus_runtime::{Lead, LiveTarget, RunOptions, VirtualRun};
 use servobus_sim::SimBus;
 
 const PERIOD: f64 = 0.005;
@@ -82,7 +82,8 @@ fn a_follower_stays_within_2_degrees_of_a_hand_moved_leader() {
                 .zip(&pose)
                 .map(|(n, a)| (n.clone(), a.to_radians()))
                 .collect();
-            tx.send(Target::named(t, joints)).expect("a good target");
+            tx.send(LiveTarget::named(t, joints))
+                .expect("a good target");
         }
         readings.push((k, pose));
     });

@@ -11,7 +11,7 @@ use servobus_protocol::StatusFlags;
 use servobus_robot::sim::{Mounting, SimRobot};
 use servobus_runtime::config::Robot;
 use servobus_runtime::{
-    Command, FaultKind, Finish, Lead, RunOptions, Target, Telemetry, VirtualRun,
+    Command, FaultKind, Finish, Lead, LiveTarget, RunOptions, Telemetry, VirtualRun,
 };
 use servobus_sim::SimBus;
 
@@ -114,7 +114,7 @@ fn follow(run: &mut VirtualRun<SimBus>, seconds: f64, mut act: impl FnMut(u64)) 
             let mut q: Vec<f64> = POSE.iter().map(|a| a.to_radians()).collect();
             q[GRIPPER] = gripper_target(t).to_radians();
             // A target refused at the end of a run is no failure here.
-            let _ = tx.send(Target::all(t, q));
+            let _ = tx.send(LiveTarget::all(t, q));
         }
         act(k);
         going = run.step();

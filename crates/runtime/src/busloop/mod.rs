@@ -4,7 +4,7 @@
 //! ([`counters`]) and telemetry ([`publish`]). Everything is allocated when
 //! the loop is built; a cycle allocates nothing.
 
-mod counters;
+mod cycle_times;
 mod deadlines;
 mod feedback;
 mod goals;
@@ -20,10 +20,10 @@ use servobus_protocol::registers::addr;
 use servobus_timing::Plan;
 use servobus_trajectory::JointState;
 
-pub(crate) use counters::CycleTiming;
+pub(crate) use cycle_times::CycleTiming;
 pub(crate) use goals::reachable;
 
-use counters::Counters;
+use cycle_times::CycleTimes;
 use deadlines::{LinkLearner, Probe};
 use feedback::Feedback;
 use goals::GoalWriter;
@@ -73,7 +73,7 @@ pub(crate) struct BusLoop<T: Transport> {
     feedback: Feedback,
     track: Tracker,
     lead: LeadEstimator,
-    counters: Counters,
+    counters: CycleTimes,
     out: Publisher,
     timing: CycleTiming,
     /// The adapter latency in force, learned from the replies.
@@ -154,7 +154,7 @@ impl<T: Transport> BusLoop<T> {
                         .map(|j| (j.max_velocity, j.max_acceleration, j.max_jerk)),
                 ),
             ),
-            counters: Counters::new(),
+            counters: CycleTimes::new(),
             out: Publisher::new(c.index, c.telemetry),
             timing: CycleTiming {
                 index: 0,

@@ -67,7 +67,7 @@ impl Timeline {
 
     /// Hands `counters` the envelope figures of the live following, if it
     /// runs.
-    pub fn envelopes(&self, counters: &crate::target::Counters) {
+    pub fn envelopes(&self, counters: &crate::target::TargetCounts) {
         if let Some(Segment {
             path: Path::Live(live),
             ..

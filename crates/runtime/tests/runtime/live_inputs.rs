@@ -20,7 +20,7 @@
 use crate::common;
 
 use common::{record, robot, sim_buses, Recorded, SO101_LIMITS};
-use servobus_runtime::{Chunk, Lead, RunOptions, Target, TargetSender, VirtualRun};
+use servobus_runtime::{Chunk, Lead, LiveTarget, RunOptions, TargetSender, VirtualRun};
 use servobus_sim::SimBus;
 
 const PERIOD: f64 = 0.005;
@@ -46,7 +46,7 @@ fn live_run() -> VirtualRun<SimBus> {
 
 /// Sends the pan target `q` deg stamped `stamp` s.
 fn send(tx: &TargetSender, stamp: f64, q: f64) {
-    let t = Target::named(stamp, vec![("shoulder_pan".into(), q.to_radians())]);
+    let t = LiveTarget::named(stamp, vec![("shoulder_pan".into(), q.to_radians())]);
     tx.send(t).expect("a good target");
 }
 

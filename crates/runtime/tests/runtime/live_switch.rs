@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::{motion, record, sim_buses_at};
-use servobus_runtime::{Command, Lead, RunOptions, Target, VirtualRun};
+use servobus_runtime::{Command, Lead, LiveTarget, RunOptions, VirtualRun};
 
 const PERIOD: f64 = 0.005;
 
@@ -28,7 +28,7 @@ fn a_target_sent_while_a_path_plays_takes_over_smoothly() {
     // again at 20 Hz, so that the stream does not time out).
     let rec = record(&mut run, 800, |k| {
         if k >= 200 && k % 10 == 0 {
-            let t = Target::named(
+            let t = LiveTarget::named(
                 k as f64 * PERIOD,
                 vec![("shoulder_pan".into(), (-40f64).to_radians())],
             );
@@ -56,7 +56,7 @@ fn pause_stops_the_following_and_resume_restarts_it() {
         let t = k as f64 * PERIOD;
         if k % 6 == 0 && t < 3.0 {
             let q: f64 = 30.0 * t;
-            let target = Target::named(t, vec![("shoulder_pan".into(), q.to_radians())]);
+            let target = LiveTarget::named(t, vec![("shoulder_pan".into(), q.to_radians())]);
             tx.send(target).expect("a good target");
         }
         if k == 200 {
@@ -96,7 +96,7 @@ fn a_path_played_in_a_live_run_ends_in_a_hold_and_the_run_goes_on() {
             commands.send(Command::replace(p)).expect("the run listens");
         }
         if k >= 1300 && k % 10 == 0 {
-            let t = Target::named(
+            let t = LiveTarget::named(
                 k as f64 * PERIOD,
                 vec![("shoulder_pan".into(), (-30f64).to_radians())],
             );

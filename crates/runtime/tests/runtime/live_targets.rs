@@ -9,7 +9,7 @@ use crate::common;
 
 use common::{record, robot, sim_buses};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::{Command, Lead, LiveEvent, RunOptions, Target, TargetError, VirtualRun};
+use servobus_runtime::{Command, Lead, LiveEvent, LiveTarget, RunOptions, TargetError, VirtualRun};
 use servobus_sim::SimBus;
 
 const PERIOD: f64 = 0.005;
@@ -71,7 +71,7 @@ fn a_jittery_30_hz_stream_is_followed_within_the_limits_closely_and_with_little_
         while next < stamps.len() && stamps[next] <= now {
             let s = stamps[next];
             let q = (0..6).map(|j| source(j, s).to_radians()).collect();
-            tx.send(Target::all(s, q)).expect("a good target");
+            tx.send(LiveTarget::all(s, q)).expect("a good target");
             next += 1;
         }
     });
@@ -119,7 +119,7 @@ fn a_90_degree_step_is_a_jerk_limited_move_to_the_target() {
         if k % 7 == 3 {
             let now = k as f64 * PERIOD;
             let q: f64 = if now >= 0.05 { 90.0 } else { 0.0 };
-            let t = Target::named(now, vec![("shoulder_pan".into(), q.to_radians())]);
+            let t = LiveTarget::named(now, vec![("shoulder_pan".into(), q.to_radians())]);
             tx.send(t).expect("a good target");
         }
     });
@@ -153,7 +153,7 @@ fn ramp(
     let slot = (now * 30.0).round() / 30.0;
     if now >= t0 && now < t1 && (now - slot).abs() < PERIOD / 2.0 {
         let q = from + speed * (now - t0);
-        let t = Target::named(now, vec![("shoulder_pan".into(), q.to_radians())]);
+        let t = LiveTarget::named(now, vec![("shoulder_pan".into(), q.to_radians())]);
         tx.send(t).expect("a good target");
         return Some(q);
     }
@@ -213,18 +213,18 @@ fn bad_targets_are_refused_or_clamped_and_counted() {
     let (mut run, robot) = live_run();
     let tx = run.targets();
     assert_eq!(tx.joint_names().len(), robot.joint_count());
-    let good = || Target::named(0.0, vec![("elbow_flex".into(), 20f64.to_radians())]);
+    let good = || LiveTarget::named(0.0, vec![("elbow_flex".into(), 20f64.to_radians())]);
     assert_eq!(tx.send(good()), Ok(0));
-    let nan = Target::all(0.01, vec![f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let nan = LiveTarget::all(0.01, vec![f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]);
     assert!(matches!(tx.send(nan), Err(TargetError::NotFinite { .. })));
-    let inf = Target::named(0.01, vec![("elbow_flex".into(), f64::INFINITY)]);
+    let inf = LiveTarget::named(0.01, vec![("elbow_flex".into(), f64::INFINITY)]);
     assert!(matches!(tx.send(inf), Err(TargetError::NotFinite { .. })));
-    let unknown = Target::named(0.01, vec![("tail".into(), 0.1)]);
+    let unknown = LiveTarget::named(0.01, vec![("tail".into(), 0.1)]);
     assert_eq!(
         tx.send(unknown),
         Err(TargetError::UnknownJoint("tail".into()))
     );
-    let short = Target::all(0.01, vec![0.0; 5]);
+    let short = LiveTarget::all(0.01, vec![0.0; 5]);
     assert_eq!(
         tx.send(short),
         Err(TargetError::WrongLength {
@@ -233,7 +233,7 @@ fn bad_targets_are_refused_or_clamped_and_counted() {
         })
     );
     // 200 deg is beyond the pan's 110.
-    let far = |t| Target::named(t, vec![("shoulder_pan".into(), 200f64.to_radians())]);
+    let far = |t| LiveTarget::named(t, vec![("shoulder_pan".into(), 200f64.to_radians())]);
     assert_eq!(tx.send(far(0.02)), Ok(1));
     // Both again at 20 Hz, so that the stream does not time out.
     let rec = record(&mut run, 600, |k| {

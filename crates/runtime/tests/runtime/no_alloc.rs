@@ -10,7 +10,7 @@ use std::time::Duration;
 use servobus_alloc_count::{allocations_during, uncounted, Counting};
 use servobus_driver::{Bus, Transport, TransportError};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::{RunOptions, Target, Telemetry, VirtualRun};
+use servobus_runtime::{LiveTarget, RunOptions, Telemetry, VirtualRun};
 use servobus_sim::SimBus;
 
 #[global_allocator]
@@ -138,7 +138,7 @@ fn a_live_loop_following_a_30_hz_stream_allocates_nothing_over_3000_cycles() {
                 .enumerate()
                 .map(|(j, q0)| q0 + 0.2 * (t * (1.0 + 0.2 * j as f64)).sin())
                 .collect();
-            assert_eq!(tx.send(Target::all(t, q)), Ok(0));
+            assert_eq!(tx.send(LiveTarget::all(t, q)), Ok(0));
             sent += 1;
         }
     });

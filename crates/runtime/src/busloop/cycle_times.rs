@@ -17,7 +17,7 @@ pub(crate) struct CycleTiming {
 
 /// See the module documentation.
 #[derive(Debug, Clone)]
-pub(crate) struct Counters {
+pub(crate) struct CycleTimes {
     pub cycles: u64,
     pub overruns: u64,
     pub busy_total: Duration,
@@ -31,9 +31,9 @@ pub(crate) struct Counters {
     last: Option<CycleTiming>,
 }
 
-impl Counters {
+impl CycleTimes {
     pub fn new() -> Self {
-        Counters {
+        CycleTimes {
             cycles: 0,
             overruns: 0,
             busy_total: Duration::ZERO,

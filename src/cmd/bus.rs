@@ -163,66 +163,9 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
     } = scanned;
     let elapsed = started.elapsed();
     if args.json {
-        let servos: Vec<_> = found
-            .iter()
-            .map(|f| {
-                serde_json::json!({
-                    "id": f.id,
-                    "baud": f.baud,
-                    "model": f.model.map(|m| m.name),
-                    "model_number": f.model_number,
-                    "firmware": format!("{}.{}", f.firmware.0, f.firmware.1),
-                    "position": f.position,
-                    "voltage_v": f.voltage_v,
-                    "temperature_c": f.temperature_c,
-                })
-            })
-            .collect();
-        let coll: Vec<_> = collisions
-            .iter()
-            .map(|(id, baud)| serde_json::json!({"id": id, "baud": baud}))
-            .collect();
-        let out = serde_json::json!({
-            "port": args.port.port,
-            "servos": servos,
-            "collisions": coll,
-            "elapsed_s": elapsed.as_secs_f64(),
-        });
-        outln!("{}", crate::shared::json::line(&out)?)?;
+        print_scan_json(&args.port.port, &found, &collisions, elapsed)?;
     } else {
-        if !found.is_empty() {
-            outln!(
-                "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  BAUD",
-                "ID",
-                "MODEL",
-                "FIRMWARE",
-                "POSITION",
-                "VOLTAGE",
-                "TEMP"
-            )?;
-        }
-        for f in &found {
-            let model = f
-                .model
-                .map_or_else(|| format!("#{}", f.model_number), |m| m.name.to_string());
-            let opt = |v: Option<String>| v.unwrap_or_else(|| "?".into());
-            outln!(
-                "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  {}",
-                f.id,
-                model,
-                format!("{}.{}", f.firmware.0, f.firmware.1),
-                opt(f.position.map(|p| p.to_string())),
-                opt(f.voltage_v.map(|v| format!("{v:.1} V"))),
-                opt(f.temperature_c.map(|t| format!("{t} C"))),
-                f.baud
-            )?;
-        }
-        outln!(
-            "found {} servo(s) on {} in {:.2} s",
-            found.len(),
-            args.port.port,
-            elapsed.as_secs_f64()
-        )?;
+        print_scan_table(&args.port.port, &found, elapsed)?;
     }
     for (id, baud) in &collisions {
         errln!(
@@ -247,6 +190,82 @@ pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(crate::shared::exit::PROBLEM));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Prints what a scan of `port` found, and the IDs whose replies
+/// collided, as one JSON line.
+fn print_scan_json(
+    port: &str,
+    found: &[Found],
+    collisions: &[(u8, u32)],
+    elapsed: Duration,
+) -> anyhow::Result<()> {
+    let servos: Vec<_> = found
+        .iter()
+        .map(|f| {
+            serde_json::json!({
+                "id": f.id,
+                "baud": f.baud,
+                "model": f.model.map(|m| m.name),
+                "model_number": f.model_number,
+                "firmware": format!("{}.{}", f.firmware.0, f.firmware.1),
+                "position": f.position,
+                "voltage_v": f.voltage_v,
+                "temperature_c": f.temperature_c,
+            })
+        })
+        .collect();
+    let coll: Vec<_> = collisions
+        .iter()
+        .map(|(id, baud)| serde_json::json!({"id": id, "baud": baud}))
+        .collect();
+    let out = serde_json::json!({
+        "port": port,
+        "servos": servos,
+        "collisions": coll,
+        "elapsed_s": elapsed.as_secs_f64(),
+    });
+    outln!("{}", crate::shared::json::line(&out)?)?;
+    Ok(())
+}
+
+/// Prints what a scan of `port` found as a table, a servo a line, and
+/// their count.
+fn print_scan_table(port: &str, found: &[Found], elapsed: Duration) -> anyhow::Result<()> {
+    if !found.is_empty() {
+        outln!(
+            "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  BAUD",
+            "ID",
+            "MODEL",
+            "FIRMWARE",
+            "POSITION",
+            "VOLTAGE",
+            "TEMP"
+        )?;
+    }
+    for f in found {
+        let model = f
+            .model
+            .map_or_else(|| format!("#{}", f.model_number), |m| m.name.to_string());
+        let opt = |v: Option<String>| v.unwrap_or_else(|| "?".into());
+        outln!(
+            "{:>3}  {:<9} {:>8}  {:>8}  {:>7}  {:>5}  {}",
+            f.id,
+            model,
+            format!("{}.{}", f.firmware.0, f.firmware.1),
+            opt(f.position.map(|p| p.to_string())),
+            opt(f.voltage_v.map(|v| format!("{v:.1} V"))),
+            opt(f.temperature_c.map(|t| format!("{t} C"))),
+            f.baud
+        )?;
+    }
+    outln!(
+        "found {} servo(s) on {} in {:.2} s",
+        found.len(),
+        port,
+        elapsed.as_secs_f64()
+    )?;
+    Ok(())
 }
 
 /// Runs `servobus ping`.

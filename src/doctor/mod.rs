@@ -144,6 +144,18 @@ pub fn advice_text(advice: &Advice) -> String {
     match advice {
         Advice::None => String::new(),
         Advice::Run(fix) => fix_line(fix),
+        Advice::EditRobotFile(edit) => edit_text(edit),
+        _ => connect_advice(advice)
+            .or_else(|| health_advice(advice))
+            .or_else(|| calibration_advice(advice))
+            .unwrap_or_else(|| format!("{advice:?}")),
+    }
+}
+
+/// The text of advice on getting every servo to answer at its ID (cables,
+/// IDs, servos sharing one); `None` for other advice.
+fn connect_advice(advice: &Advice) -> Option<String> {
+    Some(match advice {
         Advice::CheckCable(fix) => format!("check its cable, power and ID: {}", fix_line(fix)),
         Advice::GiveItsId { servo, joint, fix } => format!(
             "if servo {servo} is joint `{joint}`'s, give it its ID: {}",
@@ -176,6 +188,14 @@ pub fn advice_text(advice: &Advice) -> String {
             "connect them one at a time and give all but one a free ID: {}",
             fix_line(fix)
         ),
+        _ => return None,
+    })
+}
+
+/// The text of advice on the servos' hardware (model, temperature,
+/// supply, limits, firmware, wiring); `None` for other advice.
+fn health_advice(advice: &Advice) -> Option<String> {
+    Some(match advice {
         Advice::FitModel { model, edit } => format!("fit a {model}, or {}", edit_text(edit)),
         Advice::Cool(fix) => format!("let it cool with the torque off: {}", fix_line(fix)),
         Advice::Supply {
@@ -200,7 +220,14 @@ pub fn advice_text(advice: &Advice) -> String {
             "use shorter, thicker supply wires, or feed the supply in at both ends of the chain"
                 .into()
         }
-        Advice::EditRobotFile(edit) => edit_text(edit),
+        _ => return None,
+    })
+}
+
+/// The text of advice on the calibration and the homing offsets; `None`
+/// for other advice.
+fn calibration_advice(advice: &Advice) -> Option<String> {
+    Some(match advice {
         Advice::CalibrateIfReplaced(fix) => {
             format!("if it was, calibrate again: {}", fix_line(fix))
         }
@@ -227,8 +254,8 @@ pub fn advice_text(advice: &Advice) -> String {
             };
             format!("{}, {then}", fix_line(calibrate))
         }
-        _ => format!("{advice:?}"),
-    }
+        _ => return None,
+    })
 }
 
 /// What an applied fix did, as the report of `--fix` says it: the command

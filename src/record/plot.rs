@@ -216,6 +216,9 @@ impl PlotData {
         }
     }
 
+    /// Lays the drawing out on `backend`: the title, a grid of `rows` x
+    /// `cols` joint panels, the error panel and its key, and the views in
+    /// space below.
     fn draw_on<DB>(
         &self,
         backend: DB,
@@ -241,74 +244,105 @@ impl PlotData {
         let (_, h) = root.dim_in_pixel();
         let (grid, bottom) = root.split_vertically(h.saturating_sub(340));
         let cells = grid.split_evenly((rows, cols));
-        let replay = self.has_recording();
         for (j, (series, area)) in self.joints.iter().zip(cells.iter()).enumerate() {
-            let name = self.names.get(j).map_or("?", String::as_str);
-            let range = span(
-                series
-                    .planned
-                    .iter()
-                    .chain(&series.measured)
-                    .chain(&series.recording),
-            );
-            // The key is in the caption: a legend box would cover curves.
-            let caption = match self.key {
-                Key::Run if replay => {
-                    format!("{name}  (blue dashes: planned, red: measured, grey: recording)")
-                }
-                Key::Run => format!("{name}  (blue dashes: planned, red line: measured)"),
-                Key::Follow => format!("{name}  (blue dashes: leader, red line: follower)"),
-            };
-            let mut chart = self.panel(
-                area,
-                (&caption, 15),
-                32,
-                range,
-                format!("position ({units})"),
-                2,
-            )?;
-            // Under the others: where the replay keeps to the recording,
-            // the grey shows either side of the planned and measured lines.
-            if !series.recording.is_empty() {
-                chart
-                    .draw_series(LineSeries::new(
-                        series.recording.iter().copied(),
-                        RECORDING.stroke_width(4),
-                    ))
-                    .map_err(plot_err)?;
+            self.draw_joint(area, j, series, units)?;
+        }
+        // The error panel: chart on the left, its key beside it (never on
+        // the curves); a colour of its own for every joint.
+        let bw = bottom.dim_in_pixel().0;
+        let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
+        let colours = self.colours();
+        self.draw_errors(&left, &colours, units)?;
+        self.draw_error_key(&key, &colours)?;
+        root.present().map_err(plot_err)?;
+        Ok(())
+    }
+
+    /// Draws joint `j`'s panel on `area`: its planned and measured
+    /// positions, over the recording it replays if any.
+    fn draw_joint<DB>(
+        &self,
+        area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+        j: usize,
+        series: &Series,
+        units: &str,
+    ) -> anyhow::Result<()>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+
+        let name = self.names.get(j).map_or("?", String::as_str);
+        let range = span(
+            series
+                .planned
+                .iter()
+                .chain(&series.measured)
+                .chain(&series.recording),
+        );
+        // The key is in the caption: a legend box would cover curves.
+        let caption = match self.key {
+            Key::Run if self.has_recording() => {
+                format!("{name}  (blue dashes: planned, red: measured, grey: recording)")
             }
-            chart
-                .draw_series(DashedLineSeries::new(
-                    series.planned.iter().copied(),
-                    7,
-                    4,
-                    BLUE.stroke_width(2),
-                ))
-                .map_err(plot_err)?;
+            Key::Run => format!("{name}  (blue dashes: planned, red line: measured)"),
+            Key::Follow => format!("{name}  (blue dashes: leader, red line: follower)"),
+        };
+        let y_desc = format!("position ({units})");
+        let mut chart = self.panel(area, (&caption, 15), 32, range, y_desc, 2)?;
+        // Under the others: where the replay keeps to the recording,
+        // the grey shows either side of the planned and measured lines.
+        if !series.recording.is_empty() {
             chart
                 .draw_series(LineSeries::new(
-                    series.measured.iter().copied(),
-                    RED.stroke_width(1),
+                    series.recording.iter().copied(),
+                    RECORDING.stroke_width(4),
                 ))
                 .map_err(plot_err)?;
         }
+        chart
+            .draw_series(DashedLineSeries::new(
+                series.planned.iter().copied(),
+                7,
+                4,
+                BLUE.stroke_width(2),
+            ))
+            .map_err(plot_err)?;
+        chart
+            .draw_series(LineSeries::new(
+                series.measured.iter().copied(),
+                RED.stroke_width(1),
+            ))
+            .map_err(plot_err)?;
+        Ok(())
+    }
 
-        // The error panel: chart on the left, its key beside it (never on
-        // the curves); a colour of its own for every joint.
-        let (_, bw) = (0, bottom.dim_in_pixel().0);
-        let (left, key) = bottom.split_horizontally(bw.saturating_sub(190));
+    /// Draws every joint's tracking error on `area`, each in its colour of
+    /// `colours`.
+    fn draw_errors<DB>(
+        &self,
+        area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+        colours: &[plotters::style::RGBColor],
+        units: &str,
+    ) -> anyhow::Result<()>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+
         let range = span(self.joints.iter().flat_map(|s| s.error.iter()));
         let caption = self.error_caption();
         let mut chart = self.panel(
-            &left,
+            area,
             (&caption, 16),
             36,
             range,
             format!("error ({units})"),
             10, // plotters' default
         )?;
-        let colours = self.colours();
-        for (series, &color) in self.joints.iter().zip(&colours) {
+        for (series, &color) in self.joints.iter().zip(colours) {
             chart
                 .draw_series(LineSeries::new(
                     series.error.iter().copied(),
@@ -316,11 +350,27 @@ impl PlotData {
                 ))
                 .map_err(plot_err)?;
         }
+        Ok(())
+    }
+
+    /// Draws the error panel's key on `key`: a line of each joint's colour
+    /// of `colours`, and its name and bus.
+    fn draw_error_key<DB>(
+        &self,
+        key: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+        colours: &[plotters::style::RGBColor],
+    ) -> anyhow::Result<()>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+
         let rows = self.names.len().max(1) as i32;
         let (_, kh) = key.dim_in_pixel();
         let line = ((kh as i32 - 40) / rows).clamp(10, 22);
         let font = ("sans-serif", (line - 2).clamp(10, 15));
-        for (j, (name, &color)) in self.names.iter().zip(&colours).enumerate() {
+        for (j, (name, &color)) in self.names.iter().zip(colours).enumerate() {
             let y = 30 + j as i32 * line;
             key.draw(&PathElement::new([(4, y), (26, y)], color.stroke_width(3)))
                 .map_err(plot_err)?;
@@ -332,7 +382,6 @@ impl PlotData {
             ))
             .map_err(plot_err)?;
         }
-        root.present().map_err(plot_err)?;
         Ok(())
     }
 }

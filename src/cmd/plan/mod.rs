@@ -234,8 +234,9 @@ fn moving_times(traj: &Trajectory, rate_hz: f64) -> Vec<f64> {
     moving
 }
 
+/// Prints the plan for people: its header, a row per joint, a row per
+/// segment and what the motion does in space.
 fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
-    let u = &r.units;
     outln!(
         "{}: {} keyframes{} ({}) on `{}`, {:.3} s at {} Hz ({} cycles)",
         r.motion,
@@ -251,6 +252,17 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
         r.rate_hz,
         (r.duration_s * r.rate_hz).ceil()
     )?;
+    print_joints(r)?;
+    print_segments(r, motion)?;
+    if let Some(sp) = &r.spatial {
+        print_spatial(sp, &r.units)?;
+    }
+    Ok(())
+}
+
+/// Prints the table of joints: time moving, range and peaks.
+fn print_joints(r: &PlanJson) -> Result<(), StdoutError> {
+    let u = &r.units;
     let w = r
         .joints
         .iter()
@@ -281,15 +293,14 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
             jerk,
         )?;
     }
-    outln!("\nsegments (arriving at keyframe):")?;
-    let pw = motion
-        .keyframes
-        .iter()
-        .filter_map(|k| k.pose.as_ref().map(String::len))
-        .fold("inline pose".len(), usize::max);
+    Ok(())
+}
+
+/// The rows of the segment table, each the first and last index of the
+/// segments it stands for: the samples of one spatial keyframe (a line, a
+/// walk, a body move) share its place in the file, so one row for them all.
+fn segment_rows(r: &PlanJson, motion: &Motion) -> Vec<(usize, usize)> {
     let place = |k: usize| motion.keyframes.get(k).map(|kf| (kf.line, kf.column));
-    // The samples of one spatial keyframe (a line, a walk, a body move)
-    // share its place in the file: one row for them all.
     let mut rows: Vec<(usize, usize)> = Vec::new();
     for (i, seg) in r.segments.iter().enumerate() {
         if let Some(row) = rows.last_mut() {
@@ -301,7 +312,19 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
         }
         rows.push((i, i));
     }
-    for &(first, last) in &rows {
+    rows
+}
+
+/// Prints the table of segments: the keyframe each arrives at, its place
+/// in the file and its times.
+fn print_segments(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
+    outln!("\nsegments (arriving at keyframe):")?;
+    let pw = motion
+        .keyframes
+        .iter()
+        .filter_map(|k| k.pose.as_ref().map(String::len))
+        .fold("inline pose".len(), usize::max);
+    for (first, last) in segment_rows(r, motion) {
         let count = last - first + 1;
         let s = &r.segments[first];
         let end_s = r.segments[last].end_s;
@@ -335,9 +358,6 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
             end_s,
             end_s - s.start_s,
         )?;
-    }
-    if let Some(sp) = &r.spatial {
-        print_spatial(sp, u)?;
     }
     Ok(())
 }

@@ -105,23 +105,9 @@ fn draw(
     use plotters::prelude::*;
 
     let u = motion.units;
-    let duration = traj.duration().max(1e-3);
-    let (pos, vel) = sample(traj, motion.units, duration);
-    let legged = groups.iter().any(|g| g.leg.is_some());
-    let (cols, panel) = if legged {
-        (LEG_COLUMNS, LEG_ROW)
-    } else {
-        (1, ROW)
-    };
-    let grid = groups.len().div_ceil(cols).max(1);
-    // The leg panels' colours are said once, above them.
-    let key = if legged {
-        leg_key(motion, groups)
-    } else {
-        None
-    };
-    let key_row = if key.is_some() { KEY_ROW } else { 0 };
-    let block = key_row + panel * grid as u32;
+    let layout = Layout::new(motion, groups, traj.duration().max(1e-3));
+    let (pos, vel) = sample(traj, motion.units, layout.duration);
+    let block = layout.block();
     let space_row = if paths.is_empty() { 0 } else { ROW };
     let height = 40 + 2 * block + space_row;
     let root = SVGBackend::with_string(svg, (1200, height)).into_drawing_area();
@@ -140,26 +126,99 @@ fn draw(
     if !paths.is_empty() {
         space::draw(&space_area, paths)?;
     }
-    for (area, series, what, unit) in [
-        (&top, &pos, "Position", u.to_string()),
-        (&bottom, &vel, "Velocity", format!("{u}/s")),
-    ] {
+    layout.draw_quantity(&top, &pos, "Position", &u.to_string())?;
+    layout.draw_quantity(&bottom, &vel, "Velocity", &format!("{u}/s"))?;
+    root.present()?;
+    Ok(())
+}
+
+/// How the panels of one quantity are laid out: the groups' panels in a
+/// grid, under the leg panels' key if they share one.
+struct Layout<'a> {
+    /// The motion drawn (its joints' names).
+    motion: &'a Motion,
+    /// The joints of each panel.
+    groups: &'a [Group],
+    /// Panels are a leg's each (else one panel of every joint).
+    legged: bool,
+    /// Panels side by side.
+    cols: usize,
+    /// Rows of panels per quantity.
+    grid: usize,
+    /// The leg panels' colours, said once above them (`None`: each panel
+    /// has a legend of its own).
+    key: Option<Vec<String>>,
+    /// The height of the line of the key, px (0 without one).
+    key_row: u32,
+    /// The end of the time axis, s.
+    duration: f64,
+}
+
+impl<'a> Layout<'a> {
+    /// The layout of `groups` of `motion`, over `duration` s.
+    fn new(motion: &'a Motion, groups: &'a [Group], duration: f64) -> Self {
+        let legged = groups.iter().any(|g| g.leg.is_some());
+        let cols = if legged { LEG_COLUMNS } else { 1 };
+        // The leg panels' colours are said once, above them.
+        let key = if legged {
+            leg_key(motion, groups)
+        } else {
+            None
+        };
+        Layout {
+            motion,
+            groups,
+            legged,
+            cols,
+            grid: groups.len().div_ceil(cols).max(1),
+            key_row: if key.is_some() { KEY_ROW } else { 0 },
+            key,
+            duration,
+        }
+    }
+
+    /// The height of one quantity's panels and their key, px.
+    fn block(&self) -> u32 {
+        let panel = if self.legged { LEG_ROW } else { ROW };
+        self.key_row + panel * self.grid as u32
+    }
+
+    /// Draws `what` (in `unit`) of every joint on `area`, from `series`:
+    /// the key, then a panel per group, all on one scale.
+    fn draw_quantity<DB>(
+        &self,
+        area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+        series: &Series,
+        what: &str,
+        unit: &str,
+    ) -> anyhow::Result<()>
+    where
+        DB: plotters::prelude::DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+
         // One scale for every panel of a quantity: the legs compare.
         let range = range(series);
         let y_desc = format!("{} ({unit})", what.to_lowercase());
-        let (head, area) = area.split_vertically(key_row);
-        if let Some(key) = &key {
+        let (head, area) = area.split_vertically(self.key_row);
+        if let Some(key) = &self.key {
             draw_key(&head, &format!("{what} of each leg's joints:"), key)?;
         }
-        let legend = || key.is_none().then_some(SeriesLabelPosition::UpperRight);
-        for (group, cell) in groups.iter().zip(area.split_evenly((grid, cols))) {
+        let legend = || {
+            self.key
+                .is_none()
+                .then_some(SeriesLabelPosition::UpperRight)
+        };
+        let cells = area.split_evenly((self.grid, self.cols));
+        for (group, cell) in self.groups.iter().zip(cells) {
             let caption = match &group.leg {
                 Some(leg) => format!("{what}, leg {leg}"),
-                None if legged => format!("{what}, other joints"),
+                None if self.legged => format!("{what}, other joints"),
                 None => format!("{what} of every joint"),
             };
             let lines = group.joints.iter().enumerate().map(|(k, &j)| {
-                let name = motion.joints.get(j).map_or("?", String::as_str);
+                let name = self.motion.joints.get(j).map_or("?", String::as_str);
                 // In a leg's panel, a joint is named by its part of the
                 // leg (`coxa`), coloured as that part in every leg.
                 let label = match &group.leg {
@@ -175,15 +234,14 @@ fn draw(
             space::line_chart(
                 &cell,
                 &caption,
-                (0.0..duration, range.clone()),
+                (0.0..self.duration, range.clone()),
                 ("time (s)", &y_desc),
                 lines,
                 legend(),
             )?;
         }
+        Ok(())
     }
-    root.present()?;
-    Ok(())
 }
 
 /// A leg's joint named by its part of the leg: `coxa` for

@@ -58,6 +58,7 @@ mod interpolation_cli;
 mod json_output;
 mod kinematics_cli;
 mod layers;
+mod lengths;
 mod missing_pty;
 mod monitor;
 mod monitor_tmux;

@@ -3,11 +3,8 @@
 
 use std::process::ExitCode;
 
-use serde::Serialize;
-use servobus_config::{
-    load_motion_calibrated, plan_motion, spatial_summary, Motion, Robot, SpatialSummary,
-};
-use servobus_robot::{path::JointState, Trajectory};
+use servobus_config::{load_motion_calibrated, plan_motion, Motion};
+use servobus_robot::summary::{PlanSummary, SpaceFigures};
 
 use crate::record::space;
 use crate::shared::out::{outln, StdoutError};
@@ -35,96 +32,6 @@ pub struct Args {
     pub plot: Option<std::path::PathBuf>,
 }
 
-/// One joint in `--json` output, in the motion's units (per s, s^2, s^3).
-#[derive(Debug, Serialize)]
-struct JointJson {
-    name: String,
-    peak_velocity: f64,
-    peak_acceleration: f64,
-    /// `null` when the acceleration steps (a joint without a jerk limit).
-    peak_jerk: Option<f64>,
-    min_position: f64,
-    max_position: f64,
-    /// Time the joint spends moving, s.
-    moving_s: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct SegmentJson {
-    keyframe: usize,
-    repetition: usize,
-    start_s: f64,
-    end_s: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct PlanJson {
-    motion: String,
-    robot: String,
-    units: String,
-    rate_hz: f64,
-    /// Path shape: `untimed` (time-optimal pass-through), or the timed
-    /// keyframes' interpolation (`shape_preserving`, `spline`, ...).
-    interpolation: &'static str,
-    duration_s: f64,
-    joints: Vec<JointJson>,
-    segments: Vec<SegmentJson>,
-    /// What the motion does in space (robots with geometry).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    spatial: Option<SpatialJson>,
-}
-
-/// The spatial figures of `--json`.
-#[derive(Debug, Serialize)]
-struct SpatialJson {
-    /// The joint closest to a limit and how close, in the motion's units.
-    closest_limit_joint: Option<String>,
-    closest_limit: Option<f64>,
-    /// The arm's tool: peak speed (mm/s), path length (mm), and the
-    /// smallest dexterity (mm/rad; 0 at a singular pose).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tool_peak_speed_mm_s: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tool_path_mm: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    min_dexterity_mm_per_rad: Option<f64>,
-    /// The feet: highest lift (mm), worst stability margin while feet are
-    /// lifted (mm), and when it first drops under 10 mm (s).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    max_foot_lift_mm: Option<f64>,
-    /// How far the body travels (mm) and turns (the motion's units), from
-    /// the feet on the ground.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    body_distance_mm: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    body_turn: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    min_stability_margin_mm: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    low_margin_at_s: Option<Vec<f64>>,
-}
-
-impl SpatialJson {
-    fn new(s: &SpatialSummary, units: servobus_config::Units) -> Self {
-        SpatialJson {
-            body_distance_mm: s.feet.as_ref().and_then(|f| f.distance_mm),
-            body_turn: s
-                .feet
-                .as_ref()
-                .and_then(|f| f.turn_rad)
-                .map(|t| units.from_rad(t)),
-            closest_limit_joint: s.closest_limit.as_ref().map(|(j, _)| j.clone()),
-            closest_limit: s.closest_limit.as_ref().map(|(_, g)| *g),
-            tool_peak_speed_mm_s: s.tool.as_ref().map(|t| t.peak_speed_mm_s),
-            tool_path_mm: s.tool.as_ref().map(|t| t.path_mm),
-            min_dexterity_mm_per_rad: s.tool.as_ref().map(|t| t.min_dexterity),
-            max_foot_lift_mm: s.feet.as_ref().map(|f| f.max_lift_mm),
-            min_stability_margin_mm: s.feet.as_ref().and_then(|f| f.min_margin_mm),
-            low_margin_at_s: s.feet.as_ref().map(|f| f.low_margins_s.clone()),
-        }
-    }
-}
-
 /// Runs `servobus plan`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.plot {
@@ -137,9 +44,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         args.calibration.as_deref(),
     )?;
     let traj = plan_motion(&motion, &robot)?;
-    let mut report = summarise(&motion, &robot, &traj);
-    let spatial = spatial_summary(&motion, &robot, &traj, 1.0 / motion.rate_hz(&robot));
-    report.spatial = spatial.as_ref().map(|s| SpatialJson::new(s, motion.units));
+    let (report, spatial) = PlanSummary::of_motion(&motion, &robot, &traj);
     if let Some(path) = &args.plot {
         let paths = space::paths(spatial.as_ref());
         plot::write(&motion, robot.geometry().as_ref(), &traj, &paths, path)?;
@@ -155,88 +60,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn summarise(motion: &Motion, robot: &Robot, traj: &Trajectory) -> PlanJson {
-    let u = motion.units;
-    let rate = motion.rate_hz(robot);
-    let moving = moving_times(traj, rate);
-    let joints = motion
-        .joints
-        .iter()
-        .enumerate()
-        .map(|(j, name)| {
-            let s = traj.joint_summary(j);
-            let f = |get: fn(&servobus_robot::path::JointSummary) -> f64| {
-                s.as_ref().map_or(0.0, |s| u.from_rad(get(s)))
-            };
-            let jerk = f(|s| s.peak_jerk);
-            JointJson {
-                name: name.clone(),
-                peak_velocity: f(|s| s.peak_velocity),
-                peak_acceleration: f(|s| s.peak_acceleration),
-                peak_jerk: jerk.is_finite().then_some(jerk),
-                min_position: tidy(f(|s| s.min_position)),
-                max_position: tidy(f(|s| s.max_position)),
-                moving_s: moving.get(j).copied().unwrap_or(0.0),
-            }
-        })
-        .collect();
-    let segments = traj
-        .segments()
-        .iter()
-        .map(|s| SegmentJson {
-            keyframe: s.keyframe,
-            repetition: s.cycle,
-            start_s: s.start,
-            end_s: s.end,
-        })
-        .collect();
-    PlanJson {
-        motion: motion.path.display().to_string(),
-        robot: motion.robot_path.display().to_string(),
-        units: u.to_string(),
-        rate_hz: rate,
-        interpolation: motion.path_shape(),
-        duration_s: traj.duration(),
-        joints,
-        segments,
-        spatial: None,
-    }
-}
-
-/// Rounding noise of the unit conversion (`-5e-16`) shown as the 0 it is.
-fn tidy(x: f64) -> f64 {
-    if x.abs() < 1e-9 {
-        0.0
-    } else {
-        x
-    }
-}
-
-/// Seconds each joint moves, sampled at the control rate (the rate the
-/// scheduler will sample at): a cycle counts when the joint's speed is above
-/// a thousandth of a degree per second.
-fn moving_times(traj: &Trajectory, rate_hz: f64) -> Vec<f64> {
-    let n = traj.joints();
-    let mut out = vec![JointState::default(); n];
-    let mut moving = vec![0.0; n];
-    let dt = 1.0 / rate_hz;
-    let mut cursor = traj.cursor();
-    let cycles = (traj.duration() * rate_hz).ceil() as u64;
-    let threshold = 1e-3f64.to_radians();
-    for k in 0..cycles {
-        traj.sample_with(&mut cursor, k as f64 * dt, &mut out);
-        for (m, s) in moving.iter_mut().zip(&out) {
-            if s.velocity.abs() > threshold {
-                *m += dt;
-            }
-        }
-    }
-    moving
-}
-
 /// Prints the plan for people: its header, a row per joint, a row per
 /// segment and what the motion does in space.
-fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
+fn print_text(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
     outln!(
         "{}: {} keyframes{} ({}) on `{}`, {:.3} s at {} Hz ({} cycles)",
         r.motion,
@@ -261,7 +87,7 @@ fn print_text(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
 }
 
 /// Prints the table of joints: time moving, range and peaks.
-fn print_joints(r: &PlanJson) -> Result<(), StdoutError> {
+fn print_joints(r: &PlanSummary) -> Result<(), StdoutError> {
     let u = &r.units;
     let w = r
         .joints
@@ -299,7 +125,7 @@ fn print_joints(r: &PlanJson) -> Result<(), StdoutError> {
 /// The rows of the segment table, each the first and last index of the
 /// segments it stands for: the samples of one spatial keyframe (a line, a
 /// walk, a body move) share its place in the file, so one row for them all.
-fn segment_rows(r: &PlanJson, motion: &Motion) -> Vec<(usize, usize)> {
+fn segment_rows(r: &PlanSummary, motion: &Motion) -> Vec<(usize, usize)> {
     let place = |k: usize| motion.keyframes.get(k).map(|kf| (kf.line, kf.column));
     let mut rows: Vec<(usize, usize)> = Vec::new();
     for (i, seg) in r.segments.iter().enumerate() {
@@ -317,7 +143,7 @@ fn segment_rows(r: &PlanJson, motion: &Motion) -> Vec<(usize, usize)> {
 
 /// Prints the table of segments: the keyframe each arrives at, its place
 /// in the file and its times.
-fn print_segments(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
+fn print_segments(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
     outln!("\nsegments (arriving at keyframe):")?;
     let pw = motion
         .keyframes
@@ -362,7 +188,7 @@ fn print_segments(r: &PlanJson, motion: &Motion) -> Result<(), StdoutError> {
     Ok(())
 }
 
-fn print_spatial(sp: &SpatialJson, u: &str) -> Result<(), StdoutError> {
+fn print_spatial(sp: &SpaceFigures, u: &str) -> Result<(), StdoutError> {
     outln!(
         "
 in space:"

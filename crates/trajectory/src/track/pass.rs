@@ -116,8 +116,16 @@ pub(super) fn run(
 ) -> Result<Pass, PlanError> {
     let (lim, shown) = (&lims.strict, &lims.shown);
     let end = r.end;
-    let steps = ((end / step).ceil() as usize).max(1);
-    let time = |k: usize| (k as f64 * step).min(end);
+    let steps = step_count(end, step);
+    // The last step ends at `end` exactly, whatever the rounding of
+    // `steps * step`.
+    let time = |k: usize| {
+        if k >= steps {
+            end
+        } else {
+            (k as f64 * step).min(end)
+        }
+    };
     let mut out = Vec::with_capacity(steps + 16);
     let mut off = Vec::new();
     let (mut win, mut scratch) = (Vec::with_capacity(64), Vec::with_capacity(16));
@@ -172,6 +180,19 @@ pub(super) fn run(
     }
     Ok(Pass { pieces: out, off })
 }
+
+/// Steps needed to cover `[0, end]` in steps of `step`, each of positive
+/// length: a remainder below [`STEP_ROUNDING`] of a step (the rounding of
+/// `end / step`, as in `0.28 / 0.005 = 56.00000000000001`) lengthens the
+/// last step instead of making one of (about) zero length, over which
+/// every rate of the pursuit would divide by zero.
+fn step_count(end: f64, step: f64) -> usize {
+    (end / step - STEP_ROUNDING).ceil().max(1.0) as usize
+}
+
+/// The fraction of a step below which a remainder of the recording is
+/// rounding, not a step of its own.
+const STEP_ROUNDING: f64 = 1e-6;
 
 /// Whether two states are the same but for rounding (their accelerations
 /// too when `lim` limits the jerk; without a jerk limit they may jump).
@@ -394,6 +415,7 @@ fn pursue(
     scratch: &mut Vec<Piece>,
     out: &mut Vec<Piece>,
 ) -> JointState {
+    debug_assert!(dt > 0.0, "a step of positive length ({dt} s)");
     let (vm, am) = (lim.max_velocity, lim.max_acceleration);
     // Just off the reference, the joint may be beyond the strict limits by
     // what the recording's rounding allows: from there it may not go

@@ -11,3 +11,4 @@ mod properties;
 mod ruckig;
 mod timed;
 mod track;
+mod track_walk;

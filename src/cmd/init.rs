@@ -64,7 +64,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     std::fs::create_dir_all(&args.dir).map_err(|e| {
-        let why = crate::shared::exit::os_text(&e);
+        let why = crate::shared::os_error::os_text(&e);
         input(format!("cannot create {}: {why}", args.dir.display()))
     })?;
     // Both files are written in full (to temporaries) before either

@@ -10,6 +10,7 @@ pub(crate) mod args;
 pub(crate) mod ctrl_c;
 pub(crate) mod exit;
 pub(crate) mod json;
+pub(crate) mod os_error;
 pub(crate) mod out;
 pub(crate) mod ports;
 pub(crate) mod refusal;

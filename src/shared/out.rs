@@ -31,7 +31,7 @@ pub enum StdoutError {
     #[error("stdout was closed (the program reading it ended)")]
     Closed,
     /// Any other failure: a full disk, an I/O error.
-    #[error("cannot write to stdout: {}", super::exit::os_text(.0))]
+    #[error("cannot write to stdout: {}", super::os_error::os_text(.0))]
     Failed(io::Error),
 }
 

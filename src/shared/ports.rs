@@ -106,7 +106,7 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
         .connect(target)
         .map_err(|e| match e {
             servobus_robot::Error::Refused { port, refusal, .. } => {
-                crate::shared::refused(robot, &refusal, &port)
+                super::refusal::refused(robot, &refusal, &port)
             }
             servobus_robot::Error::NoPort { bus } => no_port(robot, &bus, None),
             e => e.into(),

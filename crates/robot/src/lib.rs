@@ -36,8 +36,45 @@
 //! cargo run --release --example play_motion -- arm-wave   # the built-in simulator
 //! ```
 //!
+//! # The four things most programs do
+//!
+//! Each is an example of this crate, shown here in full, that runs as
+//! written on the built-in simulator, without hardware:
+//! `cargo run -p servobus-robot --example NAME`.
+//!
+//! **Open a robot and play a motion** (`open_and_play`): [`Robot::open`],
+//! [`Robot::motion`], [`Robot::connect`], [`Connection::play`], and the
+//! [`Report`] of [`Run::join`].
+//!
+#![doc = concat!("````no_run\n", include_str!("../examples/open_and_play.rs"), "````")]
+//!
+//! **Stream targets to a live run** (`stream`): [`Connection::live`], a
+//! [`LiveTarget`] every 20 ms and then a [`Chunk`] through
+//! [`Run::targets`], a stop, and how the run kept to the targets
+//! ([`Report::live`]).
+//!
+#![doc = concat!("````no_run\n", include_str!("../examples/stream.rs"), "````")]
+//!
+//! **Calibrate an arm** (`calibrate`): the procedure of
+//! [`calibrate::calibrate`] on the simulator, a scripted [`sim::Hand`]
+//! moving the joints of an arm whose horns were fitted anywhere
+//! ([`sim::Mounting::random`]), the calibration written to a file and the
+//! robot opened with it ([`LoadOptions::calibration`]).
+//!
+#![doc = concat!("````no_run\n", include_str!("../examples/calibrate.rs"), "````")]
+//!
+//! **Check the servos** (`doctor`): [`Robot::doctor`], each
+//! [`Finding`](doctor::Finding) with its severity and its fix as data.
+//!
+#![doc = concat!("````no_run\n", include_str!("../examples/doctor.rs"), "````")]
+//!
+//! # The modules
+//!
 //! Live following ([`Connection::live`], targets through
-//! [`Run::targets`]) starts the same way as a path. Beside runs:
+//! [`Run::targets`]) starts the same way as a path; [`stream`] reads the
+//! line format every front end streams targets and chunks in (one JSON
+//! object a line). [`summary`] says what a planned motion does, as figures
+//! (`servobus plan --json`). Beside runs:
 //! [`scan`] finds the servos on a port at every baud rate, [`bench`](mod@bench)
 //! measures how fast a bus's full cycle runs, [`monitor`] samples what
 //! every servo of a bus is doing, and [`doctor`] checks the servos against
@@ -68,19 +105,21 @@
 //! Below the [`Robot`] and its [`Connection`], for programs that drive the
 //! steps themselves: [`calibrate`] holds the procedure `servobus calibrate`
 //! runs and the check that refuses to move a robot whose calibration does
-//! not fit its servos, [`teach`] turns poses or a path taught by hand into a
-//! motion file, and [`sim`] builds a robot file's servos on the simulator,
-//! with a body (mounting, hand, truth recorder) when asked: the glue the
-//! command line, the examples and the tests share.
+//! not fit its servos ([`Refusal`]), [`teach`] turns poses or a path taught
+//! by hand into a motion file, and [`sim`] builds a robot file's servos on
+//! the simulator, with a body (mounting, hand, truth recorder) when asked:
+//! the glue the command line, the examples and the tests share.
 //!
 //! And below a robot, for tools that work on one bus or one file: [`bus`]
 //! is a servo bus by itself (transactions by ID, registers, stop signals),
-//! [`timing`] the baud budget of a control cycle, [`path`] a planned
-//! path's states and how a recording is followed within the limits, and
-//! [`files`] the output files written whole or not at all. The command
-//! line, the Python bindings and the Zenoh node use this crate and the
-//! data crates it re-exports ([`config`], `servobus-protocol`,
-//! `servobus-kinematics`) and nothing else of servobus.
+//! [`ports`] says which port each bus is on and opens a bus on it (with
+//! reply deadlines that allow for the adapter's latency), [`timing`] the
+//! baud budget of a control cycle, [`path`] a planned path's states and
+//! how a recording is followed within the limits, and [`files`] the output
+//! files written whole or not at all. The command line, the Python
+//! bindings and the Zenoh node use this crate and the data crates it
+//! re-exports ([`config`], `servobus-protocol`, `servobus-kinematics`) and
+//! nothing else of servobus.
 
 pub mod bench;
 pub mod bus;

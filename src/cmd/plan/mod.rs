@@ -63,15 +63,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 /// Prints the plan for people: its header, a row per joint, a row per
 /// segment and what the motion does in space.
 fn print_text(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
+    let (given, sampled) = keyframe_count(motion);
     outln!(
-        "{}: {} keyframes{} ({}) on `{}`, {:.3} s at {} Hz ({} cycles)",
+        "{}: {} keyframes{} ({}{}) on `{}`, {:.3} s at {} Hz ({} cycles)",
         r.motion,
-        motion.keyframes.len(),
+        given,
         if motion.repeat > 1 {
             format!(" x {}", motion.repeat)
         } else {
             String::new()
         },
+        sampled,
         r.interpolation,
         r.robot,
         r.duration_s,
@@ -84,6 +86,25 @@ fn print_text(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
         print_spatial(sp, &r.units)?;
     }
     Ok(())
+}
+
+/// How many keyframes the motion file gives, and how many points those in
+/// space (lines, walks, body moves) were sampled into, when they were
+/// (`412 points in space, `; empty when none were).
+fn keyframe_count(motion: &Motion) -> (usize, String) {
+    let mut places: Vec<(usize, usize)> = motion
+        .keyframes
+        .iter()
+        .map(|k| (k.line, k.column))
+        .collect();
+    places.sort_unstable();
+    places.dedup();
+    let (given, points) = (places.len(), motion.keyframes.len());
+    if given < points {
+        (given, format!("{points} points in space, "))
+    } else {
+        (points, String::new())
+    }
 }
 
 /// Prints the table of joints: time moving, range and peaks.
@@ -141,6 +162,19 @@ fn segment_rows(r: &PlanSummary, motion: &Motion) -> Vec<(usize, usize)> {
     rows
 }
 
+/// The index in the motion file of keyframe `k` (keyframes in space are
+/// sampled into many, which share their keyframe's place in the file).
+fn file_index(motion: &Motion, k: usize) -> usize {
+    let mut seen: Vec<(usize, usize)> = Vec::new();
+    for kf in motion.keyframes.iter().take(k + 1) {
+        let place = (kf.line, kf.column);
+        if !seen.contains(&place) {
+            seen.push(place);
+        }
+    }
+    seen.len().saturating_sub(1)
+}
+
 /// Prints the table of segments: the keyframe each arrives at, its place
 /// in the file and its times.
 fn print_segments(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
@@ -177,7 +211,7 @@ fn print_segments(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
         let what = if count > 1 { "in space" } else { what.as_str() };
         outln!(
             "  {:>3} {:<pw$} line {:<4} {:>8.3} -> {:>8.3} s  ({:.3} s{timed}){rep}",
-            r.segments[last].keyframe,
+            file_index(motion, r.segments[last].keyframe),
             what,
             line,
             s.start_s,

@@ -132,3 +132,20 @@ pub fn choreography() -> (Vec<JointLimits>, Vec<Keyframe>) {
     }
     (limits, keyframes)
 }
+
+/// A deterministic source of numbers in [-1, 1) (xorshift64*), for
+/// recordings and noise that are the same on every run. Seed it with an
+/// odd number.
+pub struct Noise(pub u64);
+
+impl Noise {
+    /// The next number in [-1, 1).
+    #[allow(clippy::should_implement_trait)]
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
+    }
+}

@@ -2,7 +2,7 @@
 //! within every limit (checked by dense sampling), and a smooth recording
 //! that the limits allow is reproduced closely and on time.
 
-use crate::common;
+use crate::common::{self, Noise};
 
 use servobus_trajectory::{track, JointLimits, JointState};
 
@@ -11,19 +11,6 @@ fn limits() -> Vec<JointLimits> {
         JointLimits::new(3.0, 15.0, Some(150.0)).with_positions(-2.0, 2.0),
         JointLimits::new(2.0, 10.0, None).with_positions(-1.5, 1.5),
     ]
-}
-
-/// A deterministic noise source in [-1, 1) (xorshift64*).
-struct Noise(u64);
-
-impl Noise {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
-    }
 }
 
 #[test]

@@ -10,25 +10,10 @@
 //! `0 / 0` when the joint was exactly at a limit: `f64::clamp` panicked
 //! on the NaN ("min > max, or either was NaN").
 
-use crate::common;
+use crate::common::{self, Noise};
 
 use proptest::prelude::*;
 use servobus_trajectory::{track, track_with, JointLimits, TrackOptions, Trajectory};
-
-/// A deterministic source in [-1, 1) (xorshift64*), for recordings that
-/// are the same on every run.
-struct Walk(u64);
-
-impl Walk {
-    /// The next number in [-1, 1).
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
-    }
-}
 
 /// A one-joint recording of `n` samples `h` apart, `q(i)` at sample `i`.
 fn recording(n: usize, h: f64, q: impl Fn(usize) -> f64) -> (Vec<f64>, Vec<Vec<f64>>) {
@@ -47,7 +32,7 @@ fn walk(
     joints: usize,
     bound: f64,
 ) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let mut rng = Walk(seed | 1);
+    let mut rng = Noise(seed | 1);
     let mut q = vec![0.0f64; joints];
     let times = (0..n).map(|i| i as f64 * h).collect();
     let samples = (0..n)

@@ -41,7 +41,7 @@ pub struct Args {
     /// The robot, its servos' port, and (with --to-lerobot alone) the
     /// calibration to export.
     #[command(flatten)]
-    pub robot: super::RobotArgs,
+    pub robot: crate::shared::flags::RobotArgs,
     /// Where to write the calibration (default: the file the robot file's
     /// `calibration:` names, else `<robot name>.calibration.yaml`).
     #[arg(short = 'o', long = "output")]
@@ -76,10 +76,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // otherwise lose at its end; nothing is created or changed yet.
     let exporting_only = ports.is_none() && args.from_lerobot.is_none();
     if !exporting_only {
-        super::check_writable("-o", &output)?;
+        crate::shared::flags::check_writable("-o", &output)?;
     }
     if let Some(out) = &args.to_lerobot {
-        super::check_writable("--to-lerobot", out)?;
+        crate::shared::flags::check_writable("--to-lerobot", out)?;
     }
     let (cal, unfinished) = if let Some(json) = &args.from_lerobot {
         if args.write_servos && ports.is_none() {
@@ -290,7 +290,8 @@ fn how_to_use(robot: &Path, output: &Path) -> String {
     );
     if servobus_config::is_builtin_path(robot) {
         return format!(
-            "{flag} (or `servobus init` for a robot file of your own, and              `calibration: FILE` in it)"
+            "{flag} (or `servobus init` for a robot file of your own, and \
+             `calibration: FILE` in it)"
         );
     }
     let dir = robot

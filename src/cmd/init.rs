@@ -20,7 +20,7 @@ use crate::shared::out::outln;
 )]
 pub struct Args {
     /// The robot to start from: a built-in name (`servobus list`) or a robot file.
-    #[arg(long, default_value = "so101", value_parser = super::robot_arg)]
+    #[arg(long, default_value = "so101", value_parser = crate::shared::flags::robot_arg)]
     pub robot: PathBuf,
     /// Where to write `robot.yaml` and `motion.yaml` (created if missing).
     #[arg(default_value = ".")]
@@ -46,11 +46,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         format!("{}/", args.dir.display().to_string().trim_end_matches('/'))
     };
-    let robot_text = commands_for(
-        &robot_text(&args.robot)?,
-        &robot_file.display().to_string(),
-        &dir_prefix,
-    );
+    let original = robot_text(&args.robot)?;
+    let robot_text = commands_for(&original, &robot_file.display().to_string(), &dir_prefix);
     let files = [
         (args.dir.join("robot.yaml"), robot_text),
         (args.dir.join("motion.yaml"), starter_motion(&robot)),
@@ -87,12 +84,50 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         files[1].0.clone()
     };
-    let motion = motion.display();
-    outln!(
-        "Next: set each joint's id and limits in robot.yaml (and `port:` for real servos), then\n  \
-         servobus plan {motion}\n  servobus play {motion}"
-    )?;
+    let next = next_steps(
+        &robot_file.display().to_string(),
+        &motion.display().to_string(),
+        &dir_prefix,
+        commented_calibration(&original),
+    );
+    outln!("{next}")?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// What to run next, with the paths of where `init` ran (`robot_file`,
+/// `motion`; `dir_prefix` before a file beside them): the starter motion on
+/// the simulator, then on real servos the steps of `docs/first-arm.md` up
+/// to a calibrated robot: doctor, its fixes, calibrate, and the robot
+/// file's `calibration:` line uncommented when it has one (`calibration`,
+/// the file it names).
+fn next_steps(
+    robot_file: &str,
+    motion: &str,
+    dir_prefix: &str,
+    calibration: Option<&str>,
+) -> String {
+    let on_port = format!("--robot {robot_file} --port /dev/ttyACM0");
+    let mut text = format!(
+        "Next, on the simulator:\n  servobus plan {motion}\n  servobus play {motion}\n\
+         On real servos (`port:` in {robot_file}, or --port as here):\n  \
+         servobus doctor {on_port}\n  servobus doctor {on_port} --fix\n  \
+         servobus calibrate {on_port}"
+    );
+    if let Some(file) = calibration {
+        let _ = write!(
+            text,
+            " -o {dir_prefix}{file}\n  then uncomment `calibration: {file}` in {robot_file}"
+        );
+    }
+    text
+}
+
+/// The file a commented-out `# calibration: FILE` line of a robot file's
+/// `text` names: the line to uncomment once the robot is calibrated.
+fn commented_calibration(text: &str) -> Option<&str> {
+    text.lines()
+        .find_map(|line| line.trim_start().strip_prefix("# calibration:"))
+        .and_then(|rest| rest.split_whitespace().next())
 }
 
 /// The robot file's text: the built-in text, or the file as it is.

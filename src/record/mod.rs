@@ -8,6 +8,7 @@ mod log;
 mod plot;
 mod recording;
 pub(crate) mod space;
+pub(crate) mod svg;
 
 pub use log::CsvLog;
 pub use plot::PlotData;

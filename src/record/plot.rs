@@ -212,7 +212,7 @@ impl PlotData {
             let mut svg = String::new();
             let root = plotters::prelude::SVGBackend::with_string(&mut svg, (width, height));
             self.draw_on(root, title, units, rows, cols)?;
-            Ok(svg.into_bytes())
+            Ok(super::svg::round_font_sizes(&svg).into_bytes())
         }
     }
 

@@ -74,7 +74,11 @@ pub struct JointCalibration {
     pub homing_offset: i32,
     /// The joint's angle in the calibration pose, degrees.
     pub pose_deg: f64,
-    /// Present position in the calibration pose.
+    /// Present position in the calibration pose. Written as the integer
+    /// it is (`2048`, not `2048.0`); read from either. A LeRobot import
+    /// puts the pose at the middle of the range, half a tick when the
+    /// range's ends add up to an odd number: that is written as it is.
+    #[serde(serialize_with = "serialize_tick")]
     pub pose_tick: f64,
     /// +1 when rising ticks turn the joint positive, -1 otherwise.
     pub direction: i8,
@@ -82,6 +86,18 @@ pub struct JointCalibration {
     /// minimum is in `[0, turn)`, the maximum may pass the turn when the
     /// range crosses the seam.
     pub range: [i64; 2],
+}
+
+/// Writes a tick as an integer when it is a whole number (every measured
+/// one), else as the float it is.
+fn serialize_tick<S: serde::Serializer>(tick: &f64, s: S) -> Result<S::Ok, S::Error> {
+    // Every whole number below 2^53 converts to i64 exactly; a tick is far
+    // below that.
+    if tick.fract() == 0.0 && tick.abs() < 9_007_199_254_740_992.0 {
+        s.serialize_i64(*tick as i64)
+    } else {
+        s.serialize_f64(*tick)
+    }
 }
 
 /// The frame a joint is played in: the homing offset its servo must hold
@@ -303,6 +319,52 @@ fn utc_string(secs: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A calibration of one STS3215 joint whose pose reads `pose_tick`.
+    fn one_joint(pose_tick: f64) -> Calibration {
+        Calibration {
+            robot: "arm".to_owned(),
+            taken: "2026-11-24T00:31:07Z".to_owned(),
+            joints: vec![JointCalibration {
+                name: "pan".to_owned(),
+                id: 1,
+                model: "STS3215".to_owned(),
+                firmware: None,
+                homing_offset: 0,
+                pose_deg: 0.0,
+                pose_tick,
+                direction: 1,
+                range: [1000, 3000],
+            }],
+        }
+    }
+
+    #[test]
+    fn a_pose_tick_is_written_as_an_integer_and_read_from_either_form() {
+        let path = std::env::temp_dir().join(format!(
+            "servobus-config-pose-tick-{}.calibration.yaml",
+            std::process::id()
+        ));
+        let cal = one_joint(2048.0);
+        save_calibration(&cal, &path).expect("saves");
+        let text = std::fs::read_to_string(&path).expect("reads");
+        assert!(text.contains("pose_tick: 2048\n"), "{text}");
+        assert_eq!(load_calibration(&path).expect("loads"), cal);
+        // A file written before, with the tick as a float, still loads.
+        std::fs::write(
+            &path,
+            text.replace("pose_tick: 2048\n", "pose_tick: 2048.0\n"),
+        )
+        .expect("writes");
+        assert_eq!(load_calibration(&path).expect("loads the float"), cal);
+        // Half a tick (a LeRobot range's middle) is kept as it is.
+        let half = one_joint(2655.5);
+        save_calibration(&half, &path).expect("saves");
+        let text = std::fs::read_to_string(&path).expect("reads");
+        assert!(text.contains("pose_tick: 2655.5\n"), "{text}");
+        assert_eq!(load_calibration(&path).expect("loads"), half);
+        let _ = std::fs::remove_file(&path);
+    }
 
     #[test]
     fn dates_are_civil_utc() {

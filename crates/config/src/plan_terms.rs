@@ -18,6 +18,18 @@ pub(crate) fn quantity_unit(units: Units, q: Quantity) -> String {
     }
 }
 
+/// A peak and the limit it is above, as a message says them: to 0.1, as
+/// the planner's other messages say lengths, angles and limits, whatever
+/// the quantity (a jerk of thousands of deg/s^3 as well as a position);
+/// with more decimals (at most 4) only when 0.1 would print the two alike.
+pub(crate) fn peak_and_limit(peak: f64, limit: f64) -> (String, String) {
+    let mut decimals = 1;
+    while decimals < 4 && format!("{peak:.decimals$}") == format!("{limit:.decimals$}") {
+        decimals += 1;
+    }
+    (format!("{peak:.decimals$}"), format!("{limit:.decimals$}"))
+}
+
 /// The keyframe (or sample) `e` is about, when it is about one.
 pub(crate) fn keyframe_of(e: &PlanError) -> Option<usize> {
     match *e {
@@ -48,11 +60,10 @@ pub(crate) fn plan_reason(e: &PlanError, joints: &[String], units: Units) -> Str
             ..
         } => {
             let unit = quantity_unit(units, quantity);
+            let (peak, limit) = peak_and_limit(units.from_rad(peak), units.from_rad(limit));
             format!(
-                "{}: needs a peak {quantity} of {:.4} {unit}, above the limit {:.4} {unit}",
+                "{}: needs a peak {quantity} of {peak} {unit}, above the limit {limit} {unit}",
                 name(joint),
-                units.from_rad(peak),
-                units.from_rad(limit)
             )
         }
         PlanError::OutOfRange {
@@ -99,8 +110,7 @@ mod tests {
         assert_eq!(keyframe_of(&e), Some(37));
         assert_eq!(
             plan_reason(&e, &joints, Units::Deg),
-            "joint `femur`: needs a peak velocity of 180.0000 deg/s, above the limit 90.0000 \
-             deg/s"
+            "joint `femur`: needs a peak velocity of 180.0 deg/s, above the limit 90.0 deg/s"
         );
         let e = PlanError::OutOfRange {
             keyframe: 2,
@@ -123,6 +133,40 @@ mod tests {
         assert_eq!(
             plan_reason(&e, &joints, Units::Deg),
             "joint 5: a value is not finite"
+        );
+    }
+
+    #[test]
+    fn a_jerk_is_said_to_the_same_decimals_as_the_other_limits() {
+        let joints = vec!["tibia".to_owned()];
+        let e = PlanError::LimitExceeded {
+            keyframe: 3,
+            joint: 0,
+            quantity: Quantity::Jerk,
+            peak: 12_345.678_9_f64.to_radians(),
+            limit: 10_000.0_f64.to_radians(),
+        };
+        assert_eq!(
+            plan_reason(&e, &joints, Units::Deg),
+            "joint `tibia`: needs a peak jerk of 12345.7 deg/s^3, above the limit 10000.0 deg/s^3"
+        );
+    }
+
+    #[test]
+    fn a_peak_just_above_its_limit_gets_the_decimals_that_tell_them_apart() {
+        assert_eq!(peak_and_limit(180.0, 90.0), ("180.0".into(), "90.0".into()));
+        assert_eq!(
+            peak_and_limit(90.03, 90.0),
+            ("90.03".into(), "90.00".into())
+        );
+        assert_eq!(
+            peak_and_limit(0.4237, 0.4236),
+            ("0.4237".into(), "0.4236".into())
+        );
+        // Four at most, even when they still print alike.
+        assert_eq!(
+            peak_and_limit(1.000_01, 1.0),
+            ("1.0000".into(), "1.0000".into())
         );
     }
 }

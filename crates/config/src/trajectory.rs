@@ -6,7 +6,7 @@ use servobus_trajectory::{
 };
 
 use super::limits::check_length;
-use super::plan_terms::{plan_reason, quantity_unit};
+use super::plan_terms::{peak_and_limit, plan_reason, quantity_unit};
 use super::{ConfigError, Interpolation, Motion, OnLimit, Robot, Units};
 
 /// Per-joint limits of `robot` in radians, in the robot's joint order.
@@ -238,10 +238,9 @@ fn limit_reason(u: Units, joint: &str, quantity: Quantity, peak: f64, limit: f64
     } else {
         "; give the segment more time, or set `on_limit: stretch`"
     };
+    let (peak, limit) = peak_and_limit(in_units(u, peak), in_units(u, limit));
     format!(
-        "joint `{joint}`: the segment arriving here needs a peak {quantity} of {:.4} {unit}, \
-         above the limit {:.4} {unit}{hint}",
-        in_units(u, peak),
-        in_units(u, limit),
+        "joint `{joint}`: the segment arriving here needs a peak {quantity} of {peak} {unit}, \
+         above the limit {limit} {unit}{hint}"
     )
 }

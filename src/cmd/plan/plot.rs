@@ -9,7 +9,7 @@ use servobus_config::Motion;
 use servobus_kinematics::{Geometry, FOOT_PREFIX};
 use servobus_robot::{path::JointState, Trajectory};
 
-use crate::record::space;
+use crate::record::{space, svg};
 
 /// The height of one row of panels, px: one chart per quantity, or a grid
 /// of leg panels.
@@ -48,9 +48,10 @@ pub(super) fn write(
     paths: &space::Paths,
     path: &Path,
 ) -> anyhow::Result<()> {
-    let mut svg = String::new();
-    draw(motion, &groups(motion, geometry), traj, paths, &mut svg)?;
-    servobus_robot::files::write_atomic(path, svg.as_bytes())?;
+    let mut drawing = String::new();
+    draw(motion, &groups(motion, geometry), traj, paths, &mut drawing)?;
+    let text = svg::round_font_sizes(&drawing);
+    servobus_robot::files::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 

@@ -40,12 +40,12 @@ mod floor;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The robot: a file, or a built-in name (default: the built-in so101).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: Option<PathBuf>,
     /// Its port (without one, the simulator on a pty) and calibration:
     /// with a port it must match the servos.
     #[command(flatten)]
-    pub hardware: super::HardwareArgs,
+    pub hardware: crate::shared::flags::HardwareArgs,
     /// How long to measure, in seconds.
     #[arg(long, default_value = "5", value_parser = crate::shared::args::measure_seconds_arg)]
     pub seconds: Duration,
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     for bus in &mut robot.buses {
         bus.round_robin |= args.round_robin;
         if let Err(why) = bus.check_rate(robot.rate_hz) {
-            let why = super::rate_advice(&why);
+            let why = crate::shared::flags::rate_advice(&why);
             return Err(crate::shared::exit::input(format!(
                 "robot `{}`, bus `{}`: its rate {}",
                 robot.name, bus.name, why

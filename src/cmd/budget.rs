@@ -17,10 +17,10 @@ use crate::shared::ports::{open_bus, Allowance};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The robot: a file, or a built-in name (`servobus list`).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long, value_parser = super::rate_arg)]
+    #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,
     /// Print one JSON object.
     #[arg(long)]

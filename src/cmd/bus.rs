@@ -9,131 +9,19 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 
-use crate::shared::exit::input;
 use crate::shared::out::{errln, outln};
 
+mod args;
+mod open;
 mod regs;
+pub use args::{PingArgs, ReadArgs, RegistersArgs, ScanArgs, ServoArgs, SetIdArgs, WriteArgs};
 pub use regs::{list as registers, read, set_id, write};
 
-use crate::shared::ports::{open_plain_bus, SerialBus};
-use servobus_protocol::registers::{addr, Series};
-use servobus_protocol::MAX_ID;
-use servobus_robot::scan::{self, adapt_latency, identify, table_bauds, Found, Scan, ScanError};
-
-/// Options every bus tool shares.
-#[derive(Debug, clap::Args)]
-pub struct PortArgs {
-    /// Serial port (or the pty of `servobus sim`).
-    #[arg(long)]
-    pub port: String,
-    /// The adapter's latency per transaction, in microseconds (default: the
-    /// FTDI latency timer when the adapter is an FTDI one, else 1000).
-    #[arg(long, value_name = "US", value_parser = super::latency_us_arg)]
-    pub latency_us: Option<u64>,
-}
-
-/// Arguments of `servobus scan`.
-#[derive(Debug, clap::Args)]
-#[command(
-    after_help = "Two servos sharing an ID (their replies collide) is a problem found: exit 1."
-)]
-pub struct ScanArgs {
-    /// Port and latency.
-    #[command(flatten)]
-    pub port: PortArgs,
-    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
-    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
-    pub baud: u32,
-    /// Try every baud rate of the servo baud table.
-    #[arg(long, conflicts_with = "baud")]
-    pub all_bauds: bool,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
-}
-
-/// Port, baud rate and servo: what every single-servo tool needs.
-#[derive(Debug, clap::Args)]
-pub struct ServoArgs {
-    /// Port and latency.
-    #[command(flatten)]
-    pub port: PortArgs,
-    /// Baud rate (one of the servos' table: 1000000, 500000, ... 38400).
-    #[arg(long, default_value_t = 1_000_000, value_parser = super::baud_arg)]
-    pub baud: u32,
-    /// Servo ID (for set-id: the servo's current ID).
-    #[arg(long)]
-    pub id: u8,
-}
-
-/// Arguments of `servobus ping`.
-#[derive(Debug, clap::Args)]
-pub struct PingArgs {
-    /// Port, baud rate and servo.
-    #[command(flatten)]
-    pub servo: ServoArgs,
-}
-
-/// Arguments of `servobus read`.
-#[derive(Debug, clap::Args)]
-pub struct ReadArgs {
-    /// Port, baud rate and servo.
-    #[command(flatten)]
-    pub servo: ServoArgs,
-    /// Register name, e.g. present_position (or its address).
-    pub register: String,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
-}
-
-/// Arguments of `servobus write`.
-#[derive(Debug, clap::Args)]
-pub struct WriteArgs {
-    /// Port, baud rate and servo.
-    #[command(flatten)]
-    pub servo: ServoArgs,
-    /// Register name, e.g. goal_position (or its address).
-    pub register: String,
-    /// Value to write.
-    #[arg(allow_negative_numbers = true)]
-    pub value: i64,
-}
-
-/// Arguments of `servobus registers`.
-#[derive(Debug, clap::Args)]
-pub struct RegistersArgs {
-    /// Only this series' table: sts (STS/SMS servos) or scs.
-    #[arg(long, value_parser = ["sts", "scs"])]
-    pub series: Option<String>,
-}
-
-/// Arguments of `servobus set-id`.
-#[derive(Debug, clap::Args)]
-pub struct SetIdArgs {
-    /// Port, baud rate and servo.
-    #[command(flatten)]
-    pub servo: ServoArgs,
-    /// The new ID.
-    pub new_id: u8,
-}
-
-/// Opens the port and builds a bus; warns about a slow FTDI latency timer.
-fn open(port: &PortArgs, baud: u32, series: Series, retries: u8) -> anyhow::Result<SerialBus> {
-    let latency = port.latency_us.map(Duration::from_micros);
-    let mut bus = open_plain_bus(&port.port, baud, series, latency)?;
-    bus.set_settings(bus.settings().with_retries(retries));
-    Ok(bus)
-}
-
-fn check_id(id: u8) -> anyhow::Result<()> {
-    if id > MAX_ID {
-        return Err(input(format!("ID {id} is not a servo ID (0..={MAX_ID})")));
-    }
-    Ok(())
-}
+use open::{check_id, open};
+use servobus_protocol::registers::Series;
+use servobus_robot::scan::{self, adapt_latency, table_bauds, Found, Scan, ScanError};
 
 /// Runs `servobus scan`.
 pub fn scan(args: ScanArgs) -> anyhow::Result<ExitCode> {
@@ -282,38 +170,6 @@ pub fn ping(args: PingArgs) -> anyhow::Result<ExitCode> {
         bus.last_rtt().as_micros()
     )?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// Opens the bus and learns the servo's series from its model number.
-fn open_servo(servo: &ServoArgs) -> anyhow::Result<(SerialBus, Found)> {
-    let ServoArgs { port, baud, id } = servo;
-    let (baud, id) = (*baud, *id);
-    check_id(id)?;
-    let mut bus = open(port, baud, Series::Sts, 2)?;
-    if port.latency_us.is_none() {
-        adapt_latency(&mut bus, id).with_context(|| format!("servo {id}"))?;
-    }
-    let found = identify(&mut bus, id).with_context(|| {
-        format!(
-            "servo {id} at {baud} baud (to find the servos and their rates: \
-             servobus scan --port {} --all-bauds)",
-            port.port
-        )
-    })?;
-    // A servo at a status level that leaves WRITE unanswered (0 on STS,
-    // below 2 on SCS) is written without waiting for replies, so that
-    // `servobus write ... status_level 1` (doctor's fix) can reach it.
-    let mut level = [0u8; 1];
-    if bus.read(id, addr::STATUS_LEVEL, &mut level).is_ok() {
-        let series = bus.settings().series;
-        let s = bus
-            .settings()
-            .with_replies(servobus_robot::bus::StatusLevel::from_register(
-                series, level[0],
-            ));
-        bus.set_settings(s);
-    }
-    Ok((bus, found))
 }
 
 /// Baud rates for a message: `1000000 baud` or `8 baud rates`.

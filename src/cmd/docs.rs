@@ -6,8 +6,6 @@ use std::process::ExitCode;
 
 use clap_complete::Shell;
 
-use super::command;
-
 /// Arguments of `servobus completions`.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Load now: source <(servobus completions bash)\n\
@@ -21,9 +19,9 @@ pub struct CompletionsArgs {
 #[derive(Debug, clap::Args)]
 pub struct ManArgs {}
 
-/// Runs `servobus completions`.
-pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
-    let mut cmd = command();
+/// Runs `servobus completions`: the script of `cmd`, the whole command
+/// line as the dispatcher defines it.
+pub fn completions(args: CompletionsArgs, mut cmd: clap::Command) -> anyhow::Result<ExitCode> {
     // Generated into memory: clap_complete panics on a failed write.
     let mut script = Vec::new();
     clap_complete::generate(args.shell, &mut cmd, "servobus", &mut script);
@@ -31,10 +29,10 @@ pub fn completions(args: CompletionsArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Runs `servobus man`: the top-level page (clap_mangen), then each
+/// Runs `servobus man` for `cmd`, the whole command line: the top-level
+/// page (clap_mangen), then each
 /// subcommand's full help as a section of its own, so one page covers all.
-pub fn man(_args: ManArgs) -> anyhow::Result<ExitCode> {
-    let mut cmd = command();
+pub fn man(_args: ManArgs, mut cmd: clap::Command) -> anyhow::Result<ExitCode> {
     let mut out = Vec::new();
     clap_mangen::Man::new(cmd.clone()).render(&mut out)?;
     cmd.build();

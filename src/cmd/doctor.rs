@@ -27,7 +27,7 @@ pub struct Args {
     /// The robot to check the buses against, its port and the calibration
     /// to check the servos against.
     #[command(flatten)]
-    pub robot: super::RobotArgs,
+    pub robot: crate::shared::flags::RobotArgs,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,

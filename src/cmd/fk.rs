@@ -19,7 +19,7 @@ use crate::shared::out::outln;
 #[derive(Debug, clap::Args)]
 pub struct FkArgs {
     /// The robot: a file, or a built-in name (`servobus list`).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: PathBuf,
     /// Joint angles in the robot file's units, as YAML or JSON:
     /// `{shoulder_lift: 30, elbow_flex: -45}`. Joints not named are at 0.
@@ -34,7 +34,7 @@ pub struct FkArgs {
 #[derive(Debug, clap::Args)]
 pub struct IkArgs {
     /// The robot: a file, or a built-in name (`servobus list`).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: PathBuf,
     /// The named frame to place (`tool`, `foot_<leg>`).
     #[arg(long)]

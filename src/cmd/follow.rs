@@ -22,15 +22,18 @@
 //! the exit code is 1.
 
 mod against;
+mod args;
 mod report;
+mod seen;
 
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use against::{Figures, FollowErrors, LeaderTrail};
+use against::{Figures, LeaderTrail, ERRORS_FROM};
+pub use args::{Args, FollowLimits};
 use report::finish;
+use seen::Seen;
 
 use crossbeam_channel::Receiver;
 
@@ -38,70 +41,10 @@ use servobus_config::{load_robot, JointMap, Robot, RobotOptions, Units};
 use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
-use servobus_robot::{
-    Command, CycleSample, Lead, LiveTarget, Report, Run, RunOptions, TargetSender, Telemetry,
-};
+use servobus_robot::{Command, Lead, LiveTarget, Run, RunOptions, TargetSender, Telemetry};
 
-use crate::record::{CsvLog, PlotData};
-use crate::shared::out::{errln, outln};
+use crate::shared::out::errln;
 use crate::shared::ports::{every_port, Allowance, Ports};
-
-/// Arguments of `servobus follow`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    /// The follower: robot file or built-in name, its port and calibration.
-    #[command(flatten)]
-    pub robot: super::RobotArgs,
-    /// Serial port of the leader arm (absent: a simulated leader).
-    #[arg(long)]
-    pub leader: Option<String>,
-    /// The leader's robot file (default: the follower's).
-    #[arg(long, value_parser = super::robot_arg)]
-    pub leader_robot: Option<PathBuf>,
-    /// The leader's calibration file (default: its robot file's).
-    #[arg(long)]
-    pub leader_calibration: Option<PathBuf>,
-    /// A scripted hand moving the simulated leader (`servobus sim --hand`
-    /// format; built-in: so101-hand).
-    #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg, conflicts_with = "leader")]
-    pub leader_hand: Option<PathBuf>,
-    /// Stop after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_parser = crate::shared::args::run_seconds_arg)]
-    pub seconds: Option<Duration>,
-    /// Write one CSV row per cycle and joint of the follower (as play's).
-    #[arg(long)]
-    pub log: Option<PathBuf>,
-    /// Draw the leader against the follower (.svg or .png).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Save the follower's commanded path as a recording `time_s,<joint>...`
-    /// in degrees, which `servobus play TAKE.csv --robot ...` plays.
-    #[arg(long, value_name = "TAKE.csv")]
-    pub record: Option<PathBuf>,
-    /// Print the report as one JSON object (no live line).
-    #[arg(long)]
-    pub json: bool,
-    /// The follower's speed, acceleration and jerk limits: `model`, what
-    /// each servo's model can do (its top speed and fastest ramp), so that
-    /// it keeps up with the leader the way raw goal writes do; or `robot`,
-    /// the robot file's (gentler, for choreography). The robot file's
-    /// position limits hold either way.
-    #[arg(long, value_enum, default_value_t = FollowLimits::Model)]
-    pub limits: FollowLimits,
-}
-
-/// Whose speed, acceleration and jerk limits the follower keeps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum FollowLimits {
-    /// What each servo's model can do.
-    Model,
-    /// The robot file's.
-    Robot,
-}
-
-/// Errors of the follower against the leader are counted from this time
-/// on, s (the follower first catches up with wherever the leader is).
-const ERRORS_FROM: f64 = 0.5;
 
 /// How long a leader joint's readings may fail (late or garbled replies)
 /// before the leader counts as lost.
@@ -212,7 +155,7 @@ impl<T: Transport> Leader<T> {
 /// Runs `servobus follow`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.plot {
-        super::check_plot_format(path, &["svg", "png"])?;
+        crate::shared::flags::check_plot_format(path, &["svg", "png"])?;
     }
     for (flag, path) in [
         ("--log", &args.log),
@@ -220,7 +163,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ("--record", &args.record),
     ] {
         if let Some(path) = path {
-            super::check_writable(flag, path)?;
+            crate::shared::flags::check_writable(flag, path)?;
         }
     }
     let robot = load_robot(
@@ -268,83 +211,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let buses = sim.build()?.wall_buses(&clock);
             let leader = Leader::new(&leader_robot, &robot, buses)?;
             drive(&args, &robot, leader, options)
-        }
-    }
-}
-
-/// What the follower's telemetry gives while following.
-struct Seen {
-    log: Option<CsvLog>,
-    plot: Option<PlotData>,
-    /// `time_s` and commanded angles (robot units) per cycle, for --record.
-    take: Vec<(f64, Vec<f64>)>,
-    /// The follower's readings against the leader's.
-    errors: FollowErrors,
-    commanded: Vec<f64>,
-    cycles: u64,
-    faults: Vec<String>,
-    /// The follower's joint names, for the stall lines.
-    names: Vec<String>,
-    /// Stall events: joint index, held (or let go), time s, position.
-    stalls: Vec<(usize, bool, f64, f64)>,
-    /// A live line rewritten in place is on stderr (a terminal): a warning
-    /// starts a line of its own.
-    live_line: bool,
-}
-
-impl Seen {
-    /// Nothing seen yet: the log created (`--log`) and the plot's series
-    /// ready (`--plot`); `terminal`: stderr is one.
-    fn new(args: &Args, robot: &Robot, names: &[String], terminal: bool) -> anyhow::Result<Self> {
-        let units = robot.units;
-        let log = match &args.log {
-            Some(path) => Some(CsvLog::create(
-                path,
-                names.to_vec(),
-                units,
-                robot.geometry(),
-            )?),
-            None => None,
-        };
-        let bus_of = robot
-            .buses
-            .iter()
-            .flat_map(|b| b.joints.iter().map(|_| b.name.clone()))
-            .collect();
-        Ok(Seen {
-            log,
-            plot: args.plot.as_ref().map(|_| {
-                PlotData::new(names.to_vec(), bus_of)
-                    .following()
-                    .with_frames(robot.geometry(), units)
-            }),
-            take: Vec::new(),
-            errors: FollowErrors::new(names.len()),
-            commanded: vec![0.0; names.len()],
-            cycles: 0,
-            faults: Vec::new(),
-            names: names.to_vec(),
-            stalls: Vec::new(),
-            live_line: !args.json && terminal,
-        })
-    }
-
-    fn sample(&mut self, s: &CycleSample, record: bool) {
-        if let Some(log) = &mut self.log {
-            log.record(s);
-        }
-        if let Some(plot) = &mut self.plot {
-            plot.record(s);
-        }
-        self.errors.sample(s);
-        for j in s.joints() {
-            if let Some(c) = self.commanded.get_mut(j.joint) {
-                *c = j.commanded;
-            }
-        }
-        self.cycles += 1;
-        if record {
-            self.take.push((s.time_s, self.commanded.clone()));
         }
     }
 }
@@ -621,7 +487,7 @@ mod tests {
     #[test]
     fn model_limits_are_the_servos_top_speed_and_fastest_ramp_in_the_robots_units() {
         let robot = load_robot(
-            &crate::cmd::robot_arg("so101").unwrap_or_default(),
+            &crate::shared::flags::robot_arg("so101").unwrap_or_default(),
             &RobotOptions::default().calibration(None),
         )
         .expect("the built-in arm loads");

@@ -34,11 +34,11 @@ const SCAN_BAUD: u32 = 1_000_000;
 pub struct Args {
     /// Robot file (or a built-in robot's name): joint names, models and the
     /// bus (without --port, its built-in simulator).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: Option<PathBuf>,
     /// The port and the calibration.
     #[command(flatten)]
-    pub hardware: super::HardwareArgs,
+    pub hardware: crate::shared::flags::HardwareArgs,
     /// Print one JSON line per refresh instead of the live view (what
     /// happens anyway without a terminal). Exits 1 when a refresh saw a
     /// servo missing or reporting a status flag.

@@ -36,7 +36,7 @@ pub struct Args {
     /// The robot file, or a built-in robot's name, and its port and
     /// calibration.
     #[command(flatten)]
-    pub robot: super::RobotArgs,
+    pub robot: crate::shared::flags::RobotArgs,
     /// A Zenoh configuration file (JSON5): authentication, TLS, scouting.
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
@@ -64,7 +64,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0, requires = "ros2")]
     pub ros_domain: u32,
     /// Control rate in Hz (default: the robot's).
-    #[arg(long, value_parser = super::rate_arg)]
+    #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.

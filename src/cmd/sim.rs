@@ -36,7 +36,7 @@ Example: --faults drop=0.01,corrupt=0.01,seed=7";
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The robot whose servos to serve: a file, or a built-in name.
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: std::path::PathBuf,
     /// Make this path a symbolic link to the pty (removed on exit).
     #[arg(long)]
@@ -57,7 +57,7 @@ pub struct Args {
     /// How each servo horn sits on its joint: a YAML file of
     /// `<joint>: {zero_tick, direction, stops: [min_deg, max_deg]}`
     /// (built-in: so101-mounting; `servobus list`). Default: the robot file's.
-    #[arg(long, value_name = "M.yaml", value_parser = super::mounting_arg)]
+    #[arg(long, value_name = "M.yaml", value_parser = crate::shared::flags::mounting_arg)]
     pub mounting: Option<std::path::PathBuf>,
     /// A randomly assembled unit instead of --mounting: horns anywhere on
     /// the turn (some ranges across the 4095/0 seam), some directions
@@ -67,7 +67,7 @@ pub struct Args {
     /// A hand that moves torque-off joints along keyframes of physical
     /// angles: `{keyframes: [{at: SECONDS, pose: {<joint>: DEG}}]}`
     /// (built-in: so101-hand; `servobus list`).
-    #[arg(long, value_name = "H.yaml", value_parser = super::hand_arg)]
+    #[arg(long, value_name = "H.yaml", value_parser = crate::shared::flags::hand_arg)]
     pub hand: Option<std::path::PathBuf>,
     /// Write the physical joint angles (deg) to this CSV, `time_s,<joint>,...`,
     /// 100 rows a second, as a live stream: whole rows, flushed at least

@@ -34,7 +34,7 @@ pub struct Args {
     /// The robot file, or a built-in robot's name, and its port and
     /// calibration.
     #[command(flatten)]
-    pub robot: super::RobotArgs,
+    pub robot: crate::shared::flags::RobotArgs,
     /// Write one JSON line per control cycle on stdout: time, commanded and
     /// measured angles per joint, faults.
     #[arg(long)]

@@ -38,7 +38,7 @@ pub struct Args {
     /// The robot, its port and calibration: taught angles are physical
     /// angles when it has one.
     #[command(flatten)]
-    pub robot: super::RobotArgs,
+    pub robot: crate::shared::flags::RobotArgs,
     /// The motion file to write.
     #[arg(short = 'o', long = "output", value_name = "MOTION.yaml")]
     pub output: PathBuf,
@@ -71,7 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     )?;
     // Check the output before anything moves, without emptying a file that
     // is there: it is replaced only once something has been captured.
-    super::check_writable("-o", &args.output)?;
+    crate::shared::flags::check_writable("-o", &args.output)?;
     let port = args.robot.hardware.port.as_deref();
     let buses = open_buses(&robot, port)?;
     // The servos are made to match the calibration before the first pose is

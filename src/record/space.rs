@@ -9,15 +9,12 @@
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use servobus_config::SpatialSummary;
-use servobus_kinematics::FOOT_PREFIX;
 
+mod paths;
 mod world;
 
+pub(crate) use paths::{paths, Paths};
 use world::World;
-
-/// Named paths of points (mm, x y z): the tool, or each foot.
-pub(crate) type Paths = Vec<(String, Vec<[f64; 3]>)>;
 
 /// One colour per joint, distinct from its neighbours (a qualitative
 /// palette of 20: ten hues, each dark then light).
@@ -48,25 +45,6 @@ pub(crate) const PALETTE: [(u8, u8, u8); 20] = [
 pub(crate) fn colour(i: usize) -> RGBAColor {
     let (r, g, b) = PALETTE[i % PALETTE.len()];
     RGBColor(r, g, b).to_rgba()
-}
-
-/// The paths a summary has: the tool's, else the feet's.
-pub(crate) fn paths(summary: Option<&SpatialSummary>) -> Paths {
-    let Some(s) = summary else {
-        return Vec::new();
-    };
-    if let Some(tool) = &s.tool {
-        return vec![("tool".to_owned(), tool.path.clone())];
-    }
-    s.feet
-        .as_ref()
-        .map(|f| {
-            f.paths
-                .iter()
-                .map(|(leg, p)| (format!("{FOOT_PREFIX}{leg}"), p.clone()))
-                .collect()
-        })
-        .unwrap_or_default()
 }
 
 /// Draws the views of `paths` side by side in `area`: from above and from

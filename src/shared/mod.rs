@@ -9,6 +9,7 @@
 pub(crate) mod args;
 pub(crate) mod ctrl_c;
 pub(crate) mod exit;
+pub(crate) mod flags;
 pub(crate) mod json;
 pub(crate) mod os_error;
 pub(crate) mod out;

@@ -8,9 +8,11 @@ use anyhow::{bail, Context};
 use servobus_protocol::registers::{self, addr, Access, Register, Series};
 use servobus_robot::bus::BusError;
 
-use super::{check_id, open_servo, ReadArgs, RegistersArgs, SerialBus, SetIdArgs, WriteArgs};
+use super::args::{ReadArgs, RegistersArgs, SetIdArgs, WriteArgs};
+use super::open::{check_id, open_servo};
 use crate::shared::exit::input;
 use crate::shared::out::{errln, outln};
+use crate::shared::ports::SerialBus;
 
 /// Catches SIGINT, SIGTERM and SIGHUP from the start of a command that
 /// writes: one that comes during its EEPROM transaction is acted on once

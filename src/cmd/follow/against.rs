@@ -14,6 +14,10 @@ use std::time::Duration;
 use servobus_config::Units;
 use servobus_robot::CycleSample;
 
+/// Errors of the follower against the leader are counted from this time
+/// on, s (the follower first catches up with wherever the leader is).
+pub(super) const ERRORS_FROM: f64 = 0.5;
+
 /// How much of the leader's past is kept, s: a follower reading older than
 /// that when it is looked at is not counted (the live channel delivers
 /// within a few cycles).

@@ -2,7 +2,16 @@
 //! plot and the recording written, and the report with the follower's
 //! latency and error against the leader.
 
-use super::*;
+use std::io::Write;
+use std::process::ExitCode;
+
+use servobus_config::{Robot, Units};
+use servobus_robot::Report;
+
+use super::against::{FollowErrors, ERRORS_FROM};
+use super::args::Args;
+use super::seen::Seen;
+use crate::shared::out::outln;
 
 /// The outputs and the report; exit 0 once stopped, 1 after a fault.
 /// `lost`: why the leader's side ended the session, if it did.

@@ -15,10 +15,10 @@ mod plot;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The motion: a file, or a built-in name (`servobus list`).
-    #[arg(value_parser = super::motion_arg)]
+    #[arg(value_parser = crate::shared::flags::motion_arg)]
     pub motion: std::path::PathBuf,
     /// Robot file or built-in name (default: the one the motion file names).
-    #[arg(long, value_parser = super::robot_arg)]
+    #[arg(long, value_parser = crate::shared::flags::robot_arg)]
     pub robot: Option<std::path::PathBuf>,
     /// Calibration file of the physical robot: its measured ranges clip the
     /// joint limits the plan is checked against.
@@ -36,7 +36,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.plot {
         // The plan's plot is drawn as SVG only.
-        super::check_plot_format(path, &["svg"])?;
+        crate::shared::flags::check_plot_format(path, &["svg"])?;
     }
     let (motion, robot) = load_motion_calibrated(
         &args.motion,

@@ -1,7 +1,15 @@
 //! The inputs of `servobus play`: the motion or recording, checked and
 //! planned, and the outputs checked before anything moves.
 
-use super::*;
+use std::path::Path;
+
+use servobus_config::{
+    check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
+};
+use servobus_robot::Trajectory;
+
+use super::args::Args;
+use crate::record::read_recording;
 
 /// Plot formats `--plot` writes, by file extension.
 pub(super) const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
@@ -10,11 +18,11 @@ pub(super) const PLOT_FORMATS: [&str; 2] = ["svg", "png"];
 /// plot format not supported, or a directory that does not exist.
 pub(super) fn check_outputs(args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.plot {
-        crate::cmd::check_plot_format(path, &PLOT_FORMATS)?;
+        crate::shared::flags::check_plot_format(path, &PLOT_FORMATS)?;
     }
     for (flag, path) in [("--plot", &args.plot), ("--log", &args.log)] {
         if let Some(path) = path {
-            crate::cmd::check_writable(flag, path)?;
+            crate::shared::flags::check_writable(flag, path)?;
         }
     }
     Ok(())
@@ -218,7 +226,7 @@ fn check_buses(args: &Args, robot: &mut Robot, rate_hz: f64) -> anyhow::Result<(
         bus.round_robin |= args.round_robin;
         bus.busy_poll |= args.busy_poll;
         if let Err(why) = bus.check_rate(rate_hz) {
-            let why = crate::cmd::rate_advice(&why);
+            let why = crate::shared::flags::rate_advice(&why);
             return Err(crate::shared::exit::input(format!(
                 "bus `{}`: {why}",
                 bus.name
@@ -313,4 +321,9 @@ pub(super) fn recording_motion(path: &Path, robot: &Robot) -> Motion {
         on_limit: Default::default(),
         interpolation: Default::default(),
     }
+}
+
+/// The robot's joint names, in its joint order.
+pub(super) fn names_of(robot: &Robot) -> Vec<String> {
+    robot.joints().map(|j| j.name.clone()).collect()
 }

@@ -7,127 +7,30 @@
 //! approach from wherever the joints are to the first keyframe), a progress
 //! line follows it, and a report closes it.
 
-use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
 
-use crossbeam_channel::RecvTimeoutError;
-use servobus_config::{
-    check_motion_length, limits, load_motion_calibrated, plan_motion, Motion, Robot, Units,
-};
+use servobus_config::{Motion, Robot};
 use servobus_robot::Trajectory;
-use servobus_robot::{Command, CommandSender, Lead, RtOptions, Run, RunOptions, Telemetry};
 
-use crate::record::{read_recording, CsvLog, PlotData};
-use crate::shared::ports::{every_port, Ports};
+use crate::record::CsvLog;
 
 // `run` below is the order of events; each step's details live by concern:
 // reading the inputs, where the run happens, what is shown while it runs
 // and after.
+mod args;
 mod load;
 mod report;
 mod setup;
 mod view;
 
 use crate::shared::install_ctrl_c;
-use crate::shared::write_report;
-use load::{check_outputs, load};
+pub use args::Args;
+use load::{check_outputs, load, names_of, RecordingInfo};
 use report::{print_plan, report_text, Outputs};
-use setup::{backend, run_options, sim_pose, start};
-use view::{follow, Followed, Shown, APPROACH, SETTLE};
+use setup::{backend, run_options, sim_pose, start, Backend};
+use view::{follow, Followed, Shown, SETTLE};
 
 use crate::shared::out::outln;
-
-/// Arguments of `servobus play`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    /// The motion file (or a built-in motion's name, `servobus list`), or a
-    /// recorded path (.csv: a `play --log` file or `time_s,<joint>...` in
-    /// degrees; needs --robot).
-    #[arg(value_parser = super::motion_arg)]
-    pub motion: PathBuf,
-    /// Robot file or built-in name (default: the one the motion file names).
-    #[arg(long, value_parser = super::robot_arg)]
-    pub robot: Option<PathBuf>,
-    /// The port of real servos and their calibration.
-    #[command(flatten)]
-    pub hardware: super::HardwareArgs,
-    /// Control rate in Hz (default: the motion's, else the robot's).
-    #[arg(long, value_parser = super::rate_arg)]
-    pub rate: Option<f64>,
-    /// Allow a rate above the maximum by reading servos round-robin (a
-    /// subset each cycle), as `round_robin: true` on every bus.
-    #[arg(long)]
-    pub round_robin: bool,
-    /// Run the simulator in virtual time, as fast as the CPU allows.
-    #[arg(long, conflicts_with = "port")]
-    pub fast: bool,
-    /// Print the report as one JSON object (and no progress on stdout).
-    #[arg(long)]
-    pub json: bool,
-    /// Write one CSV row per cycle and joint.
-    #[arg(long)]
-    pub log: Option<PathBuf>,
-    /// Draw planned vs measured positions and the tracking error: SVG
-    /// (.svg) or PNG (.png); any other extension is refused before moving.
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Wait for replies by polling the port without blocking, on every bus
-    /// (as `busy_poll: true` in the robot file): saves the kernel's wake-up
-    /// latency on each reply at the cost of a busy core per bus.
-    #[arg(long, conflicts_with = "fast")]
-    pub busy_poll: bool,
-    /// Pin the control thread of the first bus to this core (the next bus
-    /// to the next core, and so on).
-    #[arg(long)]
-    pub core: Option<usize>,
-    /// Run the control threads under SCHED_FIFO at this priority (1..=99);
-    /// where not permitted, a warning and normal scheduling.
-    #[arg(long, value_parser = clap::value_parser!(i32).range(1..=99))]
-    pub fifo: Option<i32>,
-    /// Show the live servo view of `servobus monitor` while playing, from
-    /// the run's telemetry (no extra bus traffic). Needs a terminal: refused
-    /// (exit 2) before anything moves without one.
-    #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
-    pub monitor: bool,
-    /// Start the simulated joints at these angles instead of their rest
-    /// positions (robot units, robot joint order, comma-separated, e.g.
-    /// `--sim-pose=30,-60,70,10,40,50`): the run approaches the first
-    /// keyframe from there, as on real servos.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        allow_negative_numbers = true,
-        conflicts_with = "port"
-    )]
-    pub sim_pose: Option<Vec<f64>>,
-    /// Tell every robot serving in this Zenoh group (`servobus serve
-    /// --group NAME`) to play the motion together, instead of playing it
-    /// here.
-    #[cfg(feature = "zenoh")]
-    #[arg(long, value_name = "NAME")]
-    pub zenoh_group: Option<String>,
-    /// With --zenoh-group: when the robots start, from now (`2s`, `500ms`).
-    #[cfg(feature = "zenoh")]
-    #[arg(long, default_value = "2s", requires = "zenoh_group", value_parser = crate::shared::args::duration_arg)]
-    pub start_in: std::time::Duration,
-    /// With --zenoh-group: a robot's endpoint to connect to (repeatable),
-    /// e.g. tcp/127.0.0.1:7447.
-    #[cfg(feature = "zenoh")]
-    #[arg(long, value_name = "ENDPOINT", requires = "zenoh_group")]
-    pub connect: Vec<String>,
-}
-
-/// Where the run happens.
-enum Backend {
-    /// Simulated buses in virtual time.
-    Fast,
-    /// The simulator on pseudo-terminals, in wall-clock time.
-    Simulated,
-    /// Real servos: one port per bus.
-    Hardware(Vec<String>),
-}
 
 /// Runs `servobus play`.
 /// (`--zenoh-group` is the group's play, which the dispatcher hands to
@@ -208,7 +111,7 @@ struct Prepared {
     motion: Motion,
     robot: Robot,
     trajectory: Trajectory,
-    recording: Option<load::RecordingInfo>,
+    recording: Option<RecordingInfo>,
     rate_hz: f64,
     backend: Backend,
     /// Where the simulated joints start.
@@ -260,9 +163,4 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
         pose,
         log,
     })
-}
-
-/// The robot's joint names, in its joint order.
-fn names_of(robot: &Robot) -> Vec<String> {
-    robot.joints().map(|j| j.name.clone()).collect()
 }

@@ -1,8 +1,17 @@
 //! The plan printed before a run of `servobus play` and the report after it.
 
 use super::load::RecordingInfo;
-use super::*;
+use std::io::Write;
+use std::path::Path;
+
+use servobus_config::{Motion, Robot};
+use servobus_robot::Trajectory;
+
+use super::args::Args;
+use super::setup::Backend;
+use crate::record::{CsvLog, PlotData};
 use crate::shared::out::{err, out, outln, StdoutError};
+use crate::shared::write_report;
 
 pub(super) fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(

@@ -3,7 +3,22 @@
 
 use anyhow::Context;
 
-use super::*;
+use servobus_config::{Robot, Units};
+use servobus_robot::{Lead, RtOptions, Run, RunOptions, Trajectory};
+
+use super::args::Args;
+use super::view::{APPROACH, SETTLE};
+use crate::shared::ports::{every_port, Ports};
+
+/// Where the run happens.
+pub(super) enum Backend {
+    /// Simulated buses in virtual time.
+    Fast,
+    /// The simulator on pseudo-terminals, in wall-clock time.
+    Simulated,
+    /// Real servos: one port per bus.
+    Hardware(Vec<String>),
+}
 
 /// Where the simulated joints start (robot units, robot joint order):
 /// `--sim-pose`, checked against the robot, else the rest positions.
@@ -76,7 +91,7 @@ pub(super) fn check_measured_rates(
                 "bus `{}` on {port} (adapter measured: {:.0} us a PING beyond the wire and the servo): {}",
                 config.name,
                 measured.ping_latency.as_secs_f64() * 1e6,
-                crate::cmd::rate_advice(&why)
+                crate::shared::flags::rate_advice(&why)
             )));
         }
     }

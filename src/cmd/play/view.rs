@@ -2,7 +2,15 @@
 //! series, and Ctrl-C. A closed stdout (`play ... | head`) is taken as
 //! Ctrl-C once: a jerk-limited stop, then hold and report (on stderr).
 
-use super::*;
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::RecvTimeoutError;
+use servobus_config::Units;
+use servobus_robot::{Command, CommandSender, Run, Telemetry};
+
+use super::args::Args;
+use crate::record::{CsvLog, PlotData};
 use crate::shared::out::{errln, outln, StdoutError};
 
 /// How long the final position is held (and tracked) after the path.

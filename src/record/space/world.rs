@@ -8,7 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use servobus_kinematics::{planar_motion, Vector2, FOOT_PREFIX};
 
-use super::Paths;
+use super::paths::Paths;
 
 /// A foot this close to the ground stands on it, mm: a planned one stands
 /// exactly on it, a measured one within the servos' resolution (one

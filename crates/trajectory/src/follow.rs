@@ -378,6 +378,7 @@ impl Follower {
 /// on past it. A joint ahead of its goal has that much less room: the goal
 /// comes to it, and it does not run on past the places it was told to
 /// match the goal's speed.
+#[inline]
 fn goal_stop(lim: &JointLimits, goal: Goal, position: f64) -> f64 {
     let hard = match lim.max_jerk {
         Some(_) => JointLimits {
@@ -410,6 +411,7 @@ fn goal_stop(lim: &JointLimits, goal: Goal, position: f64) -> f64 {
 /// steps start from the same state and keep the limits over the cycle, and
 /// so does any blend of them (the jerk of a blend is the blend of the
 /// jerks).
+#[inline]
 fn nearest_within(
     rest: &JointState,
     step: &JointState,

@@ -41,7 +41,7 @@ use servobus_config::{load_robot, JointMap, Robot, RobotOptions, Units};
 use servobus_robot::bus::{Bus, Clock, Transport};
 use servobus_robot::sim::{Hand, SimRobot};
 use servobus_robot::teach::read_angle;
-use servobus_robot::{Command, Lead, LiveTarget, Run, RunOptions, TargetSender, Telemetry};
+use servobus_robot::{live_options, Command, LiveTarget, Run, RunOptions, TargetSender, Telemetry};
 
 use crate::shared::out::errln;
 use crate::shared::ports::{every_port, Allowance, Ports};
@@ -179,11 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         leader_path,
         &RobotOptions::default().calibration(args.leader_calibration.as_deref()),
     )?;
-    let options = RunOptions {
-        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
-        approach: None,
-        ..RunOptions::default()
-    };
+    let options = live_options(&robot);
     match &args.leader {
         Some(port) => {
             let ports = match every_port(&leader_robot, &[port]) {

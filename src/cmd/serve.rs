@@ -15,7 +15,7 @@ use servobus_node::node::{
 };
 use servobus_node::wire::NodeCommand;
 use servobus_node::zenoh::Wait;
-use servobus_robot::{Command, Lead, RunOptions};
+use servobus_robot::{live_options, Command, RunOptions};
 
 use crate::shared::out::{errln, outln};
 
@@ -103,10 +103,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let session = open_session(&config).map_err(|e| crate::shared::exit::input(e.to_string()))?;
     let options = RunOptions {
         rate_hz: args.rate,
-        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
-        approach: None,
         target_timeout: args.timeout,
-        ..RunOptions::default()
+        ..live_options(&robot)
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
     let runner =

@@ -21,7 +21,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use servobus_config::{load_robot, RobotOptions, Units};
-use servobus_robot::{Command, Lead, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry};
+use servobus_robot::{
+    live_options, Command, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry,
+};
 
 use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
 
@@ -60,10 +62,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     )?;
     let options = RunOptions {
         rate_hz: args.rate,
-        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
-        approach: None,
         target_timeout: args.timeout,
-        ..RunOptions::default()
+        ..live_options(&robot)
     };
     let runner = start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
     crate::shared::install_ctrl_c(runner.commands());

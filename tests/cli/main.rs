@@ -75,6 +75,7 @@ mod plot_views;
 mod rate_limit_cli;
 mod replay_log;
 mod rt_fallback;
+mod rust_code;
 mod scan_cli;
 mod sim_body_cli;
 mod stream_cli;

@@ -203,6 +203,12 @@ impl Connection {
         }
     }
 
+    /// The options a live run takes by default on this robot: see
+    /// [`live_options`].
+    pub fn live_options(&self) -> RunOptions {
+        live_options(&self.robot)
+    }
+
     /// Hands the buses to a run.
     pub(crate) fn into_buses(self) -> (Robot, RunBuses) {
         let clock = system_clock();
@@ -220,6 +226,18 @@ pub(crate) enum RunBuses {
     Serial(Vec<SerialBus>),
     Virtual(Vec<servobus_driver::Bus<servobus_sim::SimBus>>),
     Wall(Vec<servobus_driver::Bus<servobus_sim::WallBus<servobus_driver::SystemClock>>>),
+}
+
+/// The options a live run takes by default on `robot` (as `servobus
+/// stream`, `serve` and `follow` run it): the robot file's lead when it
+/// gives one, and no approach (a live run starts where the joints are and
+/// goes where its targets say).
+pub fn live_options(robot: &Robot) -> RunOptions {
+    RunOptions {
+        lead: robot.lead.map_or_else(Lead::default, Lead::Fixed),
+        approach: None,
+        ..RunOptions::default()
+    }
 }
 
 #[cfg(test)]

@@ -141,7 +141,7 @@ pub mod timing;
 
 use std::path::{Path, PathBuf};
 
-pub use connect::{Connection, SlowAdapter, Target, APPROACH, SETTLE};
+pub use connect::{live_options, Connection, SlowAdapter, Target, APPROACH, SETTLE};
 pub use error::Error;
 pub use run::{Play, Run};
 

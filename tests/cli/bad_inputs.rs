@@ -9,10 +9,9 @@ use crate::common;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{repo, temp_file, BIN};
+use common::{repo, temp_file};
 
 /// A safety net only: every case here ends in well under a second.
 const SAFETY_NET: Duration = Duration::from_secs(120);
@@ -25,14 +24,7 @@ fn corpus() -> PathBuf {
 /// Runs `servobus ARGS` in `dir`, killed if it outlives [`SAFETY_NET`];
 /// its exit code and standard error.
 fn run_in(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the servobus binary runs");
+    let mut child = common::spawn_stderr_piped(dir, args);
     let started = Instant::now();
     let status = loop {
         if let Some(status) = child.try_wait().expect("the child can be waited for") {

@@ -29,19 +29,26 @@ fn import_lerobot(from: &Path, to: &Path) {
 /// `more` arguments; it must succeed.
 fn import_to_servos(port: &str, to: &Path, more: &[&str]) -> Output {
     let lerobot = repo(LEROBOT);
-    let args = [
+    let args = import_to_servos_args(port, &lerobot, to);
+    servobus_ok(&[&args[..], more].concat())
+}
+
+/// The arguments of `servobus calibrate` of the SO-101 on `port`,
+/// importing the LeRobot file `lerobot` into `to` and storing it in the
+/// servos (`--write-servos`).
+fn import_to_servos_args<'a>(port: &'a str, lerobot: &'a Path, to: &'a Path) -> [&'a str; 10] {
+    [
         "calibrate",
         "--robot",
         SO101,
         "--port",
         port,
         "--from-lerobot",
-        arg(&lerobot),
+        arg(lerobot),
         "--write-servos",
         "-o",
         arg(to),
-    ];
-    servobus_ok(&[&args[..], more].concat())
+    ]
 }
 
 /// The SO-101 robot file, copied to `dir` with `calibration: FILE` added.
@@ -382,18 +389,7 @@ fn calibrate_write_servos_cut_by_a_signal_finishes_each_servo_it_began_and_says_
     let before = cut::states(&port, &ids);
     let cal = dir.join("arm.calibration.yaml");
     let lerobot = repo(LEROBOT);
-    let args = [
-        "calibrate",
-        "--robot",
-        SO101,
-        "--port",
-        &port,
-        "--from-lerobot",
-        arg(&lerobot),
-        "--write-servos",
-        "-o",
-        arg(&cal),
-    ];
+    let args = import_to_servos_args(&port, &lerobot, &cal);
     let whole = cut::run(&args, "", 0, Duration::ZERO, &[]);
     assert_eq!(whole.code, Some(0), "{whole:?}");
     let after = cut::states(&port, &ids);

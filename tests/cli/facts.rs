@@ -3,9 +3,7 @@
 //! licence against every crate's manifest and the licence files, the crate
 //! table against `crates/`.
 
-use std::process::Command;
-
-use crate::common::repo;
+use crate::common::{cargo_metadata, repo};
 
 /// The value of `key = "VALUE"` in the `[section]` of the TOML `text`
 /// (a flat reading: enough for the manifests of this workspace).
@@ -61,25 +59,7 @@ fn crates() -> Vec<String> {
 #[test]
 #[ignore = "runs `cargo metadata --all-features`, which may fetch the optional dependencies' manifests: `cargo test --test cli -- --ignored` (the gate runs it)"]
 fn the_rust_version_is_that_of_the_most_demanding_locked_dependency_at_least() {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| env!("CARGO").into());
-    let out = Command::new(cargo)
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--locked",
-            "--all-features",
-        ])
-        .arg("--manifest-path")
-        .arg(repo("Cargo.toml"))
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let metadata: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let metadata = cargo_metadata(&repo("Cargo.toml"), &["--locked", "--all-features"]);
     let declared = workspace_package("rust-version");
     let members = metadata["workspace_members"].as_array().expect("members");
     let packages = metadata["packages"].as_array().expect("packages");

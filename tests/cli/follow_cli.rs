@@ -4,21 +4,27 @@
 
 use crate::common;
 
-#[test]
-fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() {
-    let take = common::scratch("follow").join("take.csv");
-    let args = [
+/// `follow --robot so101 --leader PORT --seconds SECONDS --json`, then
+/// `more`: the SO-101 following a leader arm on `port`.
+fn follow_leader<'a>(port: &'a str, seconds: &'a str, more: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
         "follow",
         "--robot",
         "so101",
-        "--leader-hand",
-        "so101-hand",
+        "--leader",
+        port,
         "--seconds",
-        "6",
+        seconds,
         "--json",
-        "--record",
-        common::arg(&take),
     ];
+    args.extend_from_slice(more);
+    args
+}
+
+#[test]
+fn follow_runs_both_arms_simulated_reports_latency_and_error_and_saves_a_take() {
+    let take = common::scratch("follow").join("take.csv");
+    let args = common::follow_hand("6", &["--json", "--record", common::arg(&take)]);
     let out = common::servobus(&args);
     let (stdout, _) = common::exited(&out, 0);
     let report: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
@@ -173,20 +179,11 @@ fn follow_with_its_leader_killed_mid_run_writes_the_log_the_recording_and_the_re
     let log = dir.join("fl.csv");
     let take = dir.join("fr.csv");
     let leader = common::Sim::start(&dir);
-    let follow = common::Running::start(&[
-        "follow",
-        "--robot",
-        "so101",
-        "--leader",
+    let follow = common::Running::start(&follow_leader(
         leader.port(),
-        "--seconds",
         "30",
-        "--json",
-        "--log",
-        common::arg(&log),
-        "--record",
-        common::arg(&take),
-    ]);
+        &["--log", common::arg(&log), "--record", common::arg(&take)],
+    ));
     // 6 s into the leader's simulator (a few seconds of following, after
     // the follower's start-up, which takes more than 3 s on a loaded
     // machine), it is killed: the leader's port just goes.
@@ -221,16 +218,7 @@ fn a_leader_that_drops_replies_is_followed_and_the_skipped_readings_are_counted(
     // target), counted, and does not end the session.
     let dir = common::scratch("follow-leader-drops");
     let leader = common::Sim::start_with(&dir, &["--faults", "drop=0.1,seed=3"]);
-    let follow = common::Running::start(&[
-        "follow",
-        "--robot",
-        "so101",
-        "--leader",
-        leader.port(),
-        "--seconds",
-        "3",
-        "--json",
-    ]);
+    let follow = common::Running::start(&follow_leader(leader.port(), "3", &[]));
     let (status, stdout, stderr) = follow.finish();
     assert_eq!(status.code(), Some(0), "stdout {stdout} stderr {stderr}");
     assert!(stderr.contains("leader readings were skipped"), "{stderr}");
@@ -243,15 +231,7 @@ fn a_leader_that_drops_replies_is_followed_and_the_skipped_readings_are_counted(
 fn off_a_terminal_the_live_line_is_whole_lines_without_carriage_returns() {
     // Stderr to a pipe (a log): the live line comes every 5 s, each on a
     // line of its own, not rewritten in place with `\r`.
-    let out = common::servobus(&[
-        "follow",
-        "--robot",
-        "so101",
-        "--leader-hand",
-        "so101-hand",
-        "--seconds",
-        "6",
-    ]);
+    let out = common::servobus(&common::follow_hand("6", &[]));
     let (_, stderr) = common::exited(&out, 0);
     assert!(!stderr.contains('\r'), "{stderr:?}");
     let live: Vec<&str> = stderr

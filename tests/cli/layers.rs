@@ -4,9 +4,8 @@
 //! and their sources import none.
 
 use std::path::Path;
-use std::process::Command;
 
-use crate::common::repo;
+use crate::common::{cargo_metadata, repo};
 
 /// The crates a front end may depend on: the facade, the pure-data crates
 /// it re-exports, and (for the command line's `zenoh` feature) the node.
@@ -23,25 +22,7 @@ const BELOW: [&str; 6] = ["runtime", "driver", "sim", "io", "timing", "trajector
 
 /// `(package, its normal servobus dependencies)` of the manifest at `path`.
 fn normal_deps(manifest: &Path) -> Vec<(String, Vec<String>)> {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| env!("CARGO").into());
-    let out = Command::new(cargo)
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--no-deps",
-            "--offline",
-        ])
-        .arg("--manifest-path")
-        .arg(manifest)
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let metadata: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let metadata = cargo_metadata(manifest, &["--no-deps", "--offline"]);
     let packages = metadata["packages"].as_array().expect("packages");
     packages
         .iter()

@@ -397,19 +397,7 @@ fn a_plot_is_what_its_name_says_or_refused() {
     for (args, what) in [
         (vec!["plan", WAVE, "--plot"], "x.png"),
         (vec!["plan", WAVE, "--plot"], "x.jpg"),
-        (
-            vec![
-                "follow",
-                "--robot",
-                "so101",
-                "--leader-hand",
-                "so101-hand",
-                "--seconds",
-                "1",
-                "--plot",
-            ],
-            "x.jpg",
-        ),
+        (common::follow_hand("1", &["--plot"]), "x.jpg"),
     ] {
         let path = file(what);
         let mut args = args.clone();

@@ -81,19 +81,7 @@ fn polylines(svg: &str, attrs: &str) -> Vec<Vec<(f64, f64)>> {
 
 #[test]
 fn the_follow_plot_says_which_line_is_the_leader_and_which_the_follower() {
-    let svg = plot(
-        "follow.svg",
-        &[
-            "follow",
-            "--robot",
-            "so101",
-            "--leader-hand",
-            "so101-hand",
-            "--seconds",
-            "2",
-            "--json",
-        ],
-    );
+    let svg = plot("follow.svg", &common::follow_hand("2", &["--json"]));
     shows(
         &svg,
         &["shoulder_pan  (blue dashes: leader, red line: follower)"],

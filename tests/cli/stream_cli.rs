@@ -6,22 +6,38 @@
 use crate::common;
 
 use std::io::Write;
-use std::process::{Command, Stdio};
+use std::process::{Child, ChildStdin, Command, Stdio};
 use std::time::Duration;
 
 const BIN: &str = env!("CARGO_BIN_EXE_servobus");
 
-#[test]
-fn piped_targets_are_followed_a_bad_line_is_reported_and_the_end_stops() {
+/// Spawns `servobus ARGS` from the repository's root with stdin, stdout and
+/// stderr piped, and takes its stdin.
+fn spawn_piped(args: &[&str]) -> (Child, ChildStdin) {
     let mut child = Command::new(BIN)
-        .args(["stream", "--robot", "so101", "--telemetry", "--json"])
+        .args(args)
         .current_dir(common::repo(""))
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("servobus runs");
-    let mut stdin = child.stdin.take().expect("a pipe");
+    let stdin = child.stdin.take().expect("a pipe");
+    (child, stdin)
+}
+
+/// The last line of `stdout`, the report, as JSON.
+fn last_line_json(stdout: &str) -> serde_json::Value {
+    stdout
+        .lines()
+        .last()
+        .and_then(|l| serde_json::from_str(l).ok())
+        .expect("the report is the last line")
+}
+
+#[test]
+fn piped_targets_are_followed_a_bad_line_is_reported_and_the_end_stops() {
+    let (child, mut stdin) = spawn_piped(&["stream", "--robot", "so101", "--telemetry", "--json"]);
     // 1.5 s of the pan rising from 0 to 30 deg, then 0.5 s held at 30; the
     // 10th line is not JSON.
     let mut sent = 0;
@@ -77,25 +93,13 @@ fn piped_targets_are_followed_a_bad_line_is_reported_and_the_end_stops() {
 fn a_stream_that_brought_no_target_still_reports_its_live_section() {
     // Only bad lines, then the end of input: nothing was followed, and the
     // report says so instead of leaving its live section out.
-    let mut child = Command::new(BIN)
-        .args(["stream", "--robot", "so101", "--json"])
-        .current_dir(common::repo(""))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("servobus runs");
-    let mut stdin = child.stdin.take().expect("a pipe");
+    let (child, mut stdin) = spawn_piped(&["stream", "--robot", "so101", "--json"]);
     writeln!(stdin, "not json").expect("servobus reads its input");
     writeln!(stdin, "{{\"joints\": ").expect("servobus reads its input");
     drop(stdin);
     let out = child.wait_with_output().expect("servobus ends");
     let (stdout, _) = common::exited(&out, 0);
-    let last: serde_json::Value = stdout
-        .lines()
-        .last()
-        .and_then(|l| serde_json::from_str(l).ok())
-        .expect("the report is the last line");
+    let last = last_line_json(&stdout);
     let live = &last["report"]["live"];
     assert_eq!(live["received"], 0, "{last}");
     assert_eq!(last["skipped_lines"], 2, "{last}");
@@ -107,15 +111,7 @@ fn a_stream_that_brought_no_target_still_reports_its_live_section() {
 /// lines after them keep their numbers, and their targets are followed.
 #[test]
 fn a_line_not_utf8_or_longer_than_1_mib_is_skipped_and_the_input_goes_on() {
-    let mut child = Command::new(BIN)
-        .args(["stream", "--robot", "so101", "--json"])
-        .current_dir(common::repo(""))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("servobus runs");
-    let mut stdin = child.stdin.take().expect("a pipe");
+    let (child, mut stdin) = spawn_piped(&["stream", "--robot", "so101", "--json"]);
     let target = |pan: u32| format!("{{\"joints\": {{\"shoulder_pan\": {pan}}}}}\n");
     let mut input = target(1).into_bytes();
     // Line 2: a target behind two bytes that are no UTF-8.
@@ -140,11 +136,7 @@ fn a_line_not_utf8_or_longer_than_1_mib_is_skipped_and_the_input_goes_on() {
         assert!(stderr.contains(said), "{said:?} in {stderr}");
     }
     assert_eq!(stderr.matches("skipped").count(), 3, "{stderr}");
-    let last: serde_json::Value = stdout
-        .lines()
-        .last()
-        .and_then(|l| serde_json::from_str(l).ok())
-        .expect("the report is the last line");
+    let last = last_line_json(&stdout);
     let live = &last["report"]["live"];
     assert_eq!(live["received"], 3, "lines 1, 4 and 6: {last}");
     assert_eq!(live["refused"], 0, "{last}");

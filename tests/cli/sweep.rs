@@ -23,11 +23,11 @@ use crate::common;
 
 use std::os::unix::process::ExitStatusExt;
 use std::path::Path;
-use std::process::{Command, ExitStatus, Stdio};
+use std::process::ExitStatus;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use common::{scratch, BIN};
+use common::scratch;
 
 /// The values every numeric option is given.
 const HOSTILE: [&str; 6] = ["0", "-1", "NaN", "inf", "1e-300", "1e300"];
@@ -270,14 +270,7 @@ impl Ended {
 /// One run: `args` in `dir`, stdin empty, stopped with SIGTERM after
 /// [`BOUND`].
 fn run(dir: &Path, args: &[String]) -> Ended {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("servobus starts");
+    let mut child = common::spawn_stderr_piped(dir, args);
     let mut stderr = child.stderr.take().expect("stderr");
     let reader = std::thread::spawn(move || {
         let mut text = String::new();

@@ -8,7 +8,7 @@ mod process;
 mod sim;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 
 // Not every test uses every helper.
 #[allow(unused_imports)]
@@ -64,6 +64,54 @@ pub fn servobus_in(dir: &Path, args: &[&str]) -> Output {
         .current_dir(dir)
         .output()
         .expect("the servobus binary runs")
+}
+
+/// Starts `servobus ARGS` in `dir` with stdin and stdout null and stderr
+/// piped.
+pub fn spawn_stderr_piped<S: AsRef<std::ffi::OsStr>>(dir: &Path, args: &[S]) -> Child {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the servobus binary runs")
+}
+
+/// `follow --robot so101 --leader-hand so101-hand --seconds SECONDS`, then
+/// `more`: the SO-101 following the built-in hand.
+pub fn follow_hand<'a>(seconds: &'a str, more: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "follow",
+        "--robot",
+        "so101",
+        "--leader-hand",
+        "so101-hand",
+        "--seconds",
+        seconds,
+    ];
+    args.extend_from_slice(more);
+    args
+}
+
+/// Runs `cargo metadata --format-version 1 FLAGS --manifest-path MANIFEST`,
+/// which must succeed, and parses its JSON.
+pub fn cargo_metadata(manifest: &Path, flags: &[&str]) -> serde_json::Value {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| env!("CARGO").into());
+    let out = Command::new(cargo)
+        .args(["metadata", "--format-version", "1"])
+        .args(flags)
+        .arg("--manifest-path")
+        .arg(manifest)
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON")
 }
 
 /// Runs `servobus ARGS` from the repository's root; it must succeed.

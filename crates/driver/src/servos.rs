@@ -15,9 +15,9 @@ use servobus_protocol::StatusFlags;
 use servobus_protocol::registers::{addr, model_by_register, ByteOrder, Model};
 use servobus_protocol::MAX_ID;
 
+use crate::{Bus, BusError, EepromWrite, Missing, MissingReason, SyncRead, Transport};
 #[cfg(feature = "serial")]
-use crate::BusSettings;
-use crate::{Bus, BusError, Clock, EepromWrite, Missing, MissingReason, SyncRead, Transport};
+use crate::{BusSettings, Clock};
 
 /// A bus of servos, read and written through typed registers.
 ///

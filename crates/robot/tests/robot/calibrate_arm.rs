@@ -80,6 +80,11 @@ fn truth(sim: &SimBus, id: u8, m: Mount) -> f64 {
     m.dir * (sensor - m.zero) * DEG_PER_TICK
 }
 
+/// Asserts that servo `id` (of the joint `name`) has its EEPROM lock closed.
+fn assert_locked(sim: &SimBus, id: u8, name: &str) {
+    assert_eq!(sim.register(id, addr::LOCK), Some(1), "{name}");
+}
+
 /// Puts a joint at physical angle `deg`, as a hand turning the horn.
 fn place(sim: &SimBus, id: u8, m: Mount, deg: f64) {
     let sensor = (m.zero + m.dir * deg / DEG_PER_TICK).round() as i32;
@@ -410,12 +415,7 @@ fn write_servos_stores_centring_offsets_and_plays_the_same() {
             joint.name
         );
         // The lock is closed again, and the offset survives a power cycle.
-        assert_eq!(
-            sim.register(joint.id, addr::LOCK),
-            Some(1),
-            "{}",
-            joint.name
-        );
+        assert_locked(&sim, joint.id, &joint.name);
     }
     sim.power_cycle();
     for joint in robot.joints() {
@@ -513,11 +513,6 @@ fn a_store_that_meets_a_silent_servo_says_what_it_wrote_and_keeps_the_frames() {
                 joint.name
             );
         }
-        assert_eq!(
-            sim.register(joint.id, addr::LOCK),
-            Some(1),
-            "{}",
-            joint.name
-        );
+        assert_locked(&sim, joint.id, &joint.name);
     }
 }

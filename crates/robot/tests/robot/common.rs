@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use servobus_robot::config::{load_robot, Robot as RobotFile, RobotOptions};
 use servobus_robot::sim::{Mounting, SimRobot};
-use servobus_robot::{Connection, Report, Robot, Telemetry};
+use servobus_robot::{Connection, Play, Report, Robot, Telemetry};
 use servobus_sim::PtyServer;
 
 // The shipped files and scratch files, as the configuration's tests have
@@ -74,6 +74,17 @@ impl Drop for Pty {
             let _ = t.join();
         }
     }
+}
+
+/// Plays `what` on `connection` with its own options to its end, and
+/// returns the report.
+pub fn play_to_end(connection: Connection, what: impl Into<Play>) -> Report {
+    let options = connection.options();
+    connection
+        .play(what, options)
+        .expect("starts")
+        .join()
+        .expect("a report")
 }
 
 /// Plays arm-wave on `connection`, stops it after 20 cycles (however slow

@@ -42,12 +42,7 @@ fn a_robot_given_as_text_opens_and_plays_a_planned_path() {
         .plan(&motion)
         .expect("plans for the robot given as text");
     let connection = robot.connect(Target::VirtualSimulator).expect("connects");
-    let options = connection.options();
-    let report = connection
-        .play(path, options)
-        .expect("starts")
-        .join()
-        .expect("a report");
+    let report = common::play_to_end(connection, path);
     assert_eq!(report.finish, Finish::Completed);
     assert_eq!(report.timeouts, 0);
     // Its motions need a robot file to name.
@@ -141,12 +136,7 @@ fn a_motion_given_as_text_plays_as_its_file_does() {
     let motion = robot.motion_from_yaml(text).expect("the text is a motion");
     assert_eq!(motion.keyframes.len(), 2);
     let connection = robot.connect(Target::VirtualSimulator).expect("connects");
-    let options = connection.options();
-    let report = connection
-        .play(&motion, options)
-        .expect("starts")
-        .join()
-        .expect("a report");
+    let report = common::play_to_end(connection, &motion);
     assert_eq!(report.finish, Finish::Completed);
     // A bad one is located in the text.
     let err = robot

@@ -15,12 +15,7 @@ fn arm_wave_plays_to_the_end_on_a_pty() {
         .connect(Target::Ports(vec![pty.path.clone()]))
         .expect("connects on the pty");
     assert!(!connection.is_simulated());
-    let options = connection.options();
-    let report = connection
-        .play(&motion, options)
-        .expect("starts")
-        .join()
-        .expect("a report");
+    let report = common::play_to_end(connection, &motion);
     assert_eq!(report.finish, Finish::Completed);
     assert_eq!(report.joints.len(), 6);
     assert!(report.cycles > 100, "{} cycles", report.cycles);

@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 use servobus_driver::{Bus, Clock, ManualClock, Transport, TransportError};
-use servobus_runtime::bus_settings;
 use servobus_runtime::config::{JointMap, Robot};
+use servobus_runtime::{bus_settings, Lead, RunOptions, VirtualRun};
 use servobus_sim::{SimBus, SimModel, SimServo, WallBus};
 use servobus_trajectory::{JointState, Trajectory};
 
@@ -20,6 +20,20 @@ pub use files::{config, temp_file, temp_path};
 // facade's tests, which run the scheduler on its simulator backends.
 mod runs;
 pub use runs::*;
+
+/// A live run of the simulated SO-101, no lead and no approach, and its
+/// robot file.
+pub fn live_so101() -> (VirtualRun<SimBus>, Robot) {
+    let robot = robot("so101.yaml");
+    let (buses, _) = sim_buses(&robot);
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        ..RunOptions::default()
+    };
+    let run = VirtualRun::live(&robot, buses, options).expect("a live run starts");
+    (run, robot)
+}
 
 /// The cycle (of `period` seconds) at which joint `j` of `path` moves
 /// fastest: where a fault does the most harm.

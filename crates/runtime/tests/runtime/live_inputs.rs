@@ -34,14 +34,7 @@ const TOLERANCE: f64 = 0.5;
 /// A live run of the simulated SO-101, no lead: the goal of cycle `k` is
 /// the commanded path at `k * PERIOD`.
 fn live_run() -> VirtualRun<SimBus> {
-    let robot = robot("so101.yaml");
-    let (buses, _) = sim_buses(&robot);
-    let options = RunOptions {
-        lead: Lead::None,
-        approach: None,
-        ..RunOptions::default()
-    };
-    VirtualRun::live(&robot, buses, options).expect("a live run starts")
+    common::live_so101().0
 }
 
 /// Sends the pan target `q` deg stamped `stamp` s.

@@ -7,24 +7,11 @@
 
 use crate::common;
 
-use common::{record, robot, sim_buses};
+use common::{live_so101, record};
 use servobus_runtime::config::{JointMap, Robot};
-use servobus_runtime::{Command, Lead, LiveEvent, LiveTarget, RunOptions, TargetError, VirtualRun};
-use servobus_sim::SimBus;
+use servobus_runtime::{Command, LiveEvent, LiveTarget, TargetError};
 
 const PERIOD: f64 = 0.005;
-
-fn live_run() -> (VirtualRun<SimBus>, Robot) {
-    let robot = robot("so101.yaml");
-    let (buses, _) = sim_buses(&robot);
-    let options = RunOptions {
-        lead: Lead::None,
-        approach: None,
-        ..RunOptions::default()
-    };
-    let run = VirtualRun::live(&robot, buses, options).expect("a live run starts");
-    (run, robot)
-}
 
 /// Where the simulated joints start (the middle tick of each servo), deg.
 fn start_pose(robot: &Robot) -> Vec<f64> {
@@ -55,7 +42,7 @@ fn jitter(state: &mut u64) -> f64 {
 
 #[test]
 fn a_jittery_30_hz_stream_is_followed_within_the_limits_closely_and_with_little_lag() {
-    let (mut run, robot) = live_run();
+    let (mut run, robot) = live_so101();
     let start = start_pose(&robot);
     let source = |j, t| source(&start, j, t);
     let tx = run.targets();
@@ -112,7 +99,7 @@ fn a_jittery_30_hz_stream_is_followed_within_the_limits_closely_and_with_little_
 
 #[test]
 fn a_90_degree_step_is_a_jerk_limited_move_to_the_target() {
-    let (mut run, _) = live_run();
+    let (mut run, _) = live_so101();
     let tx = run.targets();
     // A 30 Hz stream whose pan target steps from 0 to 90 deg at 0.05 s.
     let rec = record(&mut run, 500, |k| {
@@ -162,7 +149,7 @@ fn ramp(
 
 #[test]
 fn a_stream_that_stops_comes_to_a_stop_and_holds_then_resumes_smoothly() {
-    let (mut run, _) = live_run();
+    let (mut run, _) = live_so101();
     let tx = run.targets();
     let speed = 60.0;
     // 0.1..1.1 s: up at 60 deg/s; silence until 2.0 s; then down again.
@@ -210,7 +197,7 @@ fn a_stream_that_stops_comes_to_a_stop_and_holds_then_resumes_smoothly() {
 
 #[test]
 fn bad_targets_are_refused_or_clamped_and_counted() {
-    let (mut run, robot) = live_run();
+    let (mut run, robot) = live_so101();
     let tx = run.targets();
     assert_eq!(tx.joint_names().len(), robot.joint_count());
     let good = || LiveTarget::named(0.0, vec![("elbow_flex".into(), 20f64.to_radians())]);
@@ -276,7 +263,7 @@ fn bad_targets_are_refused_or_clamped_and_counted() {
 
 #[test]
 fn stop_ends_a_live_run_with_a_jerk_limited_stop() {
-    let (mut run, _) = live_run();
+    let (mut run, _) = live_so101();
     let tx = run.targets();
     let commands = run.commands();
     let rec = record(&mut run, 2000, |k| {

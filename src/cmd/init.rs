@@ -88,7 +88,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &robot_file.display().to_string(),
         &motion.display().to_string(),
         &dir_prefix,
-        commented_calibration(&original),
+        servobus_config::builtin::commented_calibration(&original),
     );
     outln!("{next}")?;
     Ok(ExitCode::SUCCESS)
@@ -120,14 +120,6 @@ fn next_steps(
         );
     }
     text
-}
-
-/// The file a commented-out `# calibration: FILE` line of a robot file's
-/// `text` names: the line to uncomment once the robot is calibrated.
-fn commented_calibration(text: &str) -> Option<&str> {
-    text.lines()
-        .find_map(|line| line.trim_start().strip_prefix("# calibration:"))
-        .and_then(|rest| rest.split_whitespace().next())
 }
 
 /// The robot file's text: the built-in text, or the file as it is.

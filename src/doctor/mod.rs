@@ -243,16 +243,11 @@ fn calibration_advice(advice: &Advice) -> Option<String> {
             fix_line(calibrate)
         ),
         Advice::CalibrateFirst { calibrate, robot } => {
-            let then = match robot {
-                RobotFile::Builtin(_) => {
-                    "then pass --calibration calibration.yaml to play, teach and bench".to_owned()
-                }
-                RobotFile::File(path) => format!(
-                    "then add `calibration: calibration.yaml` to {} (or pass --calibration)",
-                    path.display()
-                ),
-            };
-            format!("{}, {then}", fix_line(calibrate))
+            format!(
+                "{}, {}",
+                fix_line(calibrate),
+                name_calibration(calibrate, robot)
+            )
         }
         _ => return None,
     })
@@ -272,6 +267,38 @@ pub fn applied_text(applied: &Applied) -> String {
             .filter(|line| !line.contains('<'))
             .unwrap_or_else(|| advice_text(advice)),
         _ => format!("{applied:?}"),
+    }
+}
+
+/// How the robot is told of the calibration `calibrate` writes: uncomment
+/// the robot file's `# calibration:` line that names it, add the line, or
+/// for a built-in robot pass `--calibration`.
+fn name_calibration(calibrate: &Fix, robot: &RobotFile) -> String {
+    let output = match calibrate {
+        Fix::Calibrate { output, .. } => output.as_str(),
+        _ => "calibration.yaml",
+    };
+    match robot {
+        RobotFile::Builtin(_) => {
+            format!("then pass --calibration {output} to play, teach and bench")
+        }
+        RobotFile::File(path) => {
+            let text = servobus_config::builtin::file_text(path);
+            let commented = text
+                .as_deref()
+                .and_then(servobus_config::builtin::commented_calibration);
+            if commented == Some(output) {
+                format!(
+                    "then uncomment `calibration: {output}` in {} (or pass --calibration)",
+                    path.display()
+                )
+            } else {
+                format!(
+                    "then add `calibration: {output}` to {} (or pass --calibration)",
+                    path.display()
+                )
+            }
+        }
     }
 }
 

@@ -230,7 +230,7 @@ fn a_builtin_robot_with_a_swapped_id_is_told_the_set_id_sequence() {
         &[
             "two servos answer as ID 5 and servo 6 (joint `gripper`) is silent: servo 6 probably has ID 5",
             &format!("run `servobus set-id --port {port} --id 5 6`"),
-            &format!("servobus calibrate --robot so101 --port {port} -o calibration.yaml"),
+            &format!("servobus calibrate --robot so101 --port {port} -o my-arm.calibration.yaml"),
         ],
     );
     assert!(!text.contains("<built-in>"), "{text}");

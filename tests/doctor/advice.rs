@@ -198,7 +198,7 @@ fn an_uncalibrated_arm_on_a_port_is_told_to_calibrate_first_not_to_move_a_joint(
     assert_eq!(
         f.command_line().as_deref(),
         Some(
-            format!("servobus calibrate --robot {robot} --port {PORT} -o calibration.yaml")
+            format!("servobus calibrate --robot {robot} --port {PORT} -o my-arm.calibration.yaml")
                 .as_str()
         )
     );
@@ -295,7 +295,7 @@ fn an_uncalibrated_robot_is_told_how_to_calibrate() {
     assert!(
         f.fix_text().starts_with("servobus calibrate --robot ")
             && f.fix_text()
-                .contains("so101.yaml --port /dev/ttyACM0 -o calibration.yaml"),
+                .contains("so101.yaml --port /dev/ttyACM0 -o my-arm.calibration.yaml"),
         "{}",
         f.fix_text()
     );

@@ -326,10 +326,44 @@ pub fn argument(path: &Path) -> String {
     builtin_name(path).map_or_else(|| path.display().to_string(), str::to_owned)
 }
 
+/// The calibration file a robot file's `text` names in a commented-out
+/// `# calibration: FILE` line (as the shipped robots and `servobus init`'s
+/// copies do): the line to uncomment once the robot is calibrated.
+pub fn commented_calibration(text: &str) -> Option<&str> {
+    text.lines()
+        .find_map(|line| line.trim_start().strip_prefix("# calibration:"))
+        .and_then(|rest| rest.split_whitespace().next())
+}
+
+/// The text of the robot (or any) file at `path`: a built-in's own text,
+/// else the file as it is on disk (`None` when it cannot be read).
+pub fn file_text(path: &Path) -> Option<std::borrow::Cow<'static, str>> {
+    match crate::files::builtin_text(path) {
+        Some(text) => Some(std::borrow::Cow::Borrowed(text)),
+        None => std::fs::read_to_string(path)
+            .ok()
+            .map(std::borrow::Cow::Owned),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{load_motion, load_robot, RobotOptions};
+
+    #[test]
+    fn a_shipped_robot_names_its_calibration_in_a_comment() {
+        let text = file_text(&crate::files::builtin_path("robots/so101.yaml")).expect("built in");
+        assert_eq!(
+            commented_calibration(&text),
+            Some("my-arm.calibration.yaml")
+        );
+        assert_eq!(commented_calibration("joints: []\n"), None);
+        assert_eq!(
+            commented_calibration("  # calibration: a.yaml   # relative\n"),
+            Some("a.yaml")
+        );
+    }
 
     #[test]
     fn a_mistyped_name_finds_the_nearest_built_in() {

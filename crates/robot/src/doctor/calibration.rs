@@ -100,9 +100,15 @@ impl Ctx<'_> {
     /// Calibrating this robot on this port, with where the calibration
     /// goes.
     pub(crate) fn calibrate_command(&self) -> Fix {
+        // The file the robot file names, else the one a commented-out
+        // `# calibration:` line of it suggests, else a plain name.
         let output = match &self.robot.calibration {
             RobotCalibration::Missing(path) => path.display().to_string(),
-            _ => "calibration.yaml".into(),
+            _ => servobus_config::builtin::file_text(&self.robot.path)
+                .as_deref()
+                .and_then(servobus_config::builtin::commented_calibration)
+                .unwrap_or("calibration.yaml")
+                .to_owned(),
         };
         Fix::Calibrate {
             robot: self.robot_arg(),

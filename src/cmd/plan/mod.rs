@@ -238,10 +238,14 @@ in space:"
         )?;
     }
     if let Some(lift) = sp.max_foot_lift_mm {
+        // The margin is over the times a foot is in the air: with none
+        // lifted, every foot stands and there is none to give.
         let margin = sp
             .min_stability_margin_mm
-            .map_or("no foot lifted".to_owned(), |m| format!("{m:.1} mm"));
-        outln!("  feet: highest lift {lift:.1} mm; worst stability margin {margin}")?;
+            .map_or("every foot stays on the ground".to_owned(), |m| {
+                format!("worst stability margin {m:.1} mm")
+            });
+        outln!("  feet: highest lift {lift:.1} mm; {margin}")?;
         if let (Some(d), Some(t)) = (sp.body_distance_mm, sp.body_turn) {
             outln!("  body: travels {d:.1} mm and turns {t:.1} {u}")?;
         }

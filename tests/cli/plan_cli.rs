@@ -328,21 +328,31 @@ fn plot_draws_titles_axes_and_a_legend() {
     );
 }
 
-/// The segment list gives a keyframe's time to the millisecond, whether
-/// the motion file wrote it (`at: 1.5`) or the planner chose it for a
-/// spatial keyframe (an f64 of 16 digits).
+/// The segment list gives a keyframe's written time to the millisecond
+/// (`at: 1.5`); a time the planner chose for the keyframe before a move in
+/// space (an f64 of 16 digits) is not given as an `at:` at all.
 #[test]
 fn keyframe_times_are_printed_to_the_millisecond() {
-    let out = stdout(&servobus_ok(&["plan", "arm-line"]));
+    // Written times, to the millisecond.
+    let out = stdout(&servobus_ok(&["plan", "arm-pick-place"]));
     let times: Vec<&str> = out
         .split(", at: ")
         .skip(1)
         .filter_map(|rest| rest.split(')').next())
         .collect();
-    assert!(!times.is_empty(), "arm-line has timed keyframes: {out}");
+    assert!(
+        !times.is_empty(),
+        "arm-pick-place has timed keyframes: {out}"
+    );
     for t in &times {
         let decimals = t.split_once('.').map_or(0, |(_, d)| d.len());
         assert!(decimals <= 3, "`at: {t}` in {out}");
         assert!(t.parse::<f64>().is_ok(), "`at: {t}` in {out}");
     }
+    // The times the planner chose for arm-line's keyframes before its
+    // moves in space are the arrivals the rows show, not `at:`s of the
+    // file; its tool keyframe is called one.
+    let out = stdout(&servobus_ok(&["plan", "arm-line"]));
+    assert!(!out.contains(", at: "), "{out}");
+    assert!(out.contains(" tool pose "), "{out}");
 }

@@ -48,8 +48,15 @@ pub struct Keyframe {
     /// Time from the start of the repetition, s; `None`: as soon as the
     /// limits allow.
     pub at: Option<f64>,
+    /// Whether `at` was chosen by the planner rather than written in the
+    /// file: a keyframe before a move in space is timed at its quickest
+    /// arrival.
+    pub planned_at: bool,
     /// The pose's name when the keyframe names one.
     pub pose: Option<String>,
+    /// Whether the keyframe gives a tool pose (`tool:`, its joints solved
+    /// from it).
+    pub tool: bool,
     /// Position of every robot joint (robot joint order), in the motion's units.
     pub positions: Vec<f64>,
     /// 1-based line of the keyframe in the motion file.

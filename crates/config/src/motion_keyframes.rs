@@ -121,7 +121,9 @@ impl<'a> KeyframeBuilder<'a> {
         let (line, column) = self.src.position(kp);
         self.keyframes.push(Keyframe {
             at: rk.at,
+            planned_at: false,
             pose: pose_name,
+            tool: rk.tool.is_some(),
             positions: self.current.clone(),
             line,
             column,

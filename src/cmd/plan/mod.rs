@@ -189,9 +189,11 @@ fn print_segments(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
         let s = &r.segments[first];
         let end_s = r.segments[last].end_s;
         let kf = motion.keyframes.get(r.segments[last].keyframe);
-        let what = kf
-            .and_then(|k| k.pose.clone())
-            .unwrap_or_else(|| "inline pose".to_owned());
+        let what = match kf {
+            Some(k) if k.pose.is_some() => k.pose.clone().unwrap_or_default(),
+            Some(k) if k.tool => "tool pose".to_owned(),
+            _ => "inline pose".to_owned(),
+        };
         let line = kf.map_or(0, |k| k.line);
         let rep = if motion.repeat > 1 {
             format!(" (repetition {})", s.repetition + 1)
@@ -200,8 +202,9 @@ fn print_segments(r: &PlanSummary, motion: &Motion) -> Result<(), StdoutError> {
         };
         let timed = match kf.and_then(|k| k.at) {
             _ if count > 1 => format!(", {count} samples"),
-            // A time the planner chose for a spatial keyframe is as long
-            // as an f64 prints; a written one is short: both to the ms.
+            // A time the planner chose is the arrival the row shows.
+            _ if kf.is_some_and(|k| k.planned_at) => String::new(),
+            // A written time, to the ms.
             Some(at) => {
                 let ms = format!("{at:.3}");
                 format!(", at: {}", ms.trim_end_matches('0').trim_end_matches('.'))

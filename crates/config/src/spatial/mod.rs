@@ -175,6 +175,7 @@ impl Context<'_> {
         let at = path.duration() + 1e-6;
         if let Some(last) = keyframes.last_mut() {
             last.at = Some(at);
+            last.planned_at = true;
         }
         Ok(at)
     }
@@ -193,7 +194,9 @@ impl Context<'_> {
         for (t, q) in samples.skip(1) {
             keyframes.push(Keyframe {
                 at: Some(t0 + t),
+                planned_at: true,
                 pose: None,
+                tool: false,
                 positions: q.iter().map(|&v| self.units.from_rad(v)).collect(),
                 line,
                 column,

@@ -367,7 +367,9 @@ fn paced_plan(robot: &Robot, keyframes: &[TimedPose]) -> Result<(), String> {
             .enumerate()
             .map(|(k, (t, p))| Keyframe {
                 at: (k > 0).then_some(*t),
+                planned_at: false,
                 pose: None,
+                tool: false,
                 positions: p.clone(),
                 line: k + 1,
                 column: 1,

@@ -119,11 +119,19 @@ fn the_first_arm_walkthrough_runs_on_its_simulator_twin() {
         "unit 7 crosses the seam: {said}"
     );
     assert!(!said.contains('\x1b'), "no escape codes without a terminal");
-    assert!(arm.join("calibration.yaml").is_file());
+    // Doctor names the file the robot file's comment gives.
+    assert!(
+        calibrate[0].ends_with("-o my-arm.calibration.yaml"),
+        "{calibrate:?}"
+    );
+    assert!(arm.join("my-arm.calibration.yaml").is_file());
 
-    // 4. The calibration named in robot.yaml, as the step says.
+    // 4. The calibration named in robot.yaml, as the step says: its
+    // commented line uncommented.
     let text = std::fs::read_to_string(&robot).expect("robot.yaml");
-    std::fs::write(&robot, format!("calibration: calibration.yaml\n{text}")).expect("edits");
+    let named = text.replace("\n# calibration: my-arm", "\ncalibration: my-arm");
+    assert_ne!(named, text, "robot.yaml has the line to uncomment");
+    std::fs::write(&robot, named).expect("edits");
 
     // 5. doctor again: nothing wrong (its fixes, if any, run as printed).
     let (code, commands, report) = doctor(&arm, &port);

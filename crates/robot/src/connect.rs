@@ -203,12 +203,6 @@ impl Connection {
         }
     }
 
-    /// The options a live run takes by default on this robot: see
-    /// [`live_options`].
-    pub fn live_options(&self) -> RunOptions {
-        live_options(&self.robot)
-    }
-
     /// Hands the buses to a run.
     pub(crate) fn into_buses(self) -> (Robot, RunBuses) {
         let clock = system_clock();

@@ -130,7 +130,7 @@ pub struct PlanSummary {
     pub joints: Vec<JointPeaks>,
     /// Each segment of the path, in time order.
     pub segments: Vec<Segment>,
-    /// What the motion does in space ([`PlanSummary::with_space`]).
+    /// What the motion does in space ([`PlanSummary::of_motion`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spatial: Option<SpaceFigures>,
 }
@@ -185,14 +185,6 @@ impl PlanSummary {
         }
     }
 
-    /// This with what the motion does in space, from `spatial` (see
-    /// [`spatial_summary`]), in the summary's units.
-    #[must_use]
-    pub fn with_space(mut self, spatial: Option<&SpatialSummary>, units: Units) -> Self {
-        self.spatial = spatial.map(|s| SpaceFigures::new(s, units));
-        self
-    }
-
     /// [`PlanSummary::new`] in the motion's units, with its figures in
     /// space (sampled at the control rate), and the spatial summary they
     /// came from (for a plot).
@@ -202,8 +194,8 @@ impl PlanSummary {
         path: &Trajectory,
     ) -> (Self, Option<SpatialSummary>) {
         let spatial = spatial_summary(motion, robot, path, 1.0 / motion.rate_hz(robot));
-        let summary =
-            Self::new(motion, robot, path, motion.units).with_space(spatial.as_ref(), motion.units);
+        let mut summary = Self::new(motion, robot, path, motion.units);
+        summary.spatial = spatial.as_ref().map(|s| SpaceFigures::new(s, motion.units));
         (summary, spatial)
     }
 }

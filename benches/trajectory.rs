@@ -130,7 +130,13 @@ pub fn benches(c: &mut Criterion) {
                     horizon: 0.033,
                 };
                 let here = f.state().position;
-                f.step_within(lim, black_box(goal), 0.005, (here - 1e-4, here + 1e-4));
+                f.step_within(
+                    lim,
+                    black_box(goal),
+                    0.005,
+                    (here - 1e-4, here + 1e-4),
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                );
             }
             bounded[0].state().position
         })

@@ -320,12 +320,18 @@ impl Follower {
     /// faster than it could stop where the goal would, and does not run
     /// past the next turn; one that has turned back already is left to its
     /// plan.
+    ///
+    /// `farthest` (least, greatest) is as far as the goal's own stop may
+    /// take the bounds: the caller's knowledge of where the stream could
+    /// stop (for a live stream, where a joint moving with it at its newest
+    /// target would); unbounded: `(-inf, inf)`.
     pub fn step_within(
         &mut self,
         lim: &JointLimits,
         goal: Goal,
         dt: f64,
         bounds: (f64, f64),
+        farthest: (f64, f64),
     ) -> JointState {
         let from = self.state;
         let s = self.step(lim, goal, dt);
@@ -339,6 +345,13 @@ impl Follower {
         }
         let end = stop_position(lim, &s);
         let own = goal_stop(lim, capped(lim, goal).after(dt), s.position);
+        // (A `farthest` that is not numbers bounds nothing.)
+        let (far_lo, far_hi) = (farthest.0.min(farthest.1), farthest.1.max(farthest.0));
+        let own = if far_lo <= far_hi {
+            own.clamp(far_lo, far_hi)
+        } else {
+            own
+        };
         let (lo, hi) = (bounds.0.min(own), bounds.1.max(own));
         let slack = BOUND_SLACK * (1.0 + lo.abs().max(hi.abs()));
         // Only a stop further on than the state itself.
@@ -380,15 +393,8 @@ impl Follower {
 /// match the goal's speed.
 #[inline]
 fn goal_stop(lim: &JointLimits, goal: Goal, position: f64) -> f64 {
-    let hard = match lim.max_jerk {
-        Some(_) => JointLimits {
-            max_acceleration: f64::INFINITY,
-            ..*lim
-        },
-        None => *lim,
-    };
-    let own = stop_position(
-        &hard,
+    let own = stop_with_jerk_alone(
+        lim,
         &JointState {
             position: goal.position,
             velocity: goal.velocity,
@@ -474,6 +480,22 @@ pub fn stop_position(lim: &JointLimits, state: &JointState) -> f64 {
         .1
 }
 
+/// Where the quickest stop from `state` ends with the jerk limit alone
+/// (no acceleration limit): how far a stream's target, which may brake
+/// harder than the joint, goes before it rests. With no jerk limit, the
+/// stop of [`stop_position`].
+#[inline]
+pub fn stop_with_jerk_alone(lim: &JointLimits, state: &JointState) -> f64 {
+    let hard = match lim.max_jerk {
+        Some(_) => JointLimits {
+            max_acceleration: f64::INFINITY,
+            ..*lim
+        },
+        None => *lim,
+    };
+    stop_position(&hard, state)
+}
+
 /// [`Follower::step`] for every joint.
 pub fn follow_steps(limits: &[JointLimits], followers: &mut [Follower], goals: &[Goal], dt: f64) {
     for ((lim, f), g) in limits.iter().zip(followers.iter_mut()).zip(goals) {
@@ -488,6 +510,9 @@ mod tests {
     fn lim() -> JointLimits {
         JointLimits::new(2.0, 10.0, Some(100.0))
     }
+
+    /// No bound on the goal's own stop.
+    const ANY: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
 
     /// Steps to a fixed goal; returns every state.
     fn run(from: JointState, goal: Goal, dt: f64, n: usize) -> Vec<JointState> {
@@ -550,7 +575,7 @@ mod tests {
             // The places told: from where the goal is to one interval
             // (30 ms) ahead of it.
             let a = free.step(&lim(), goal, dt);
-            let b = bound.step_within(&lim(), goal, dt, (0.5 * t, 0.5 * (t + 0.03)));
+            let b = bound.step_within(&lim(), goal, dt, (0.5 * t, 0.5 * (t + 0.03)), ANY);
             if k > 300 {
                 // Caught up (no faster than it could stop where the goal
                 // would: later than without bounds), on the goal within
@@ -597,7 +622,7 @@ mod tests {
             if turned.is_none() && 1.5 * t >= 1.0 {
                 turned = Some(stop_position(&lim(), &f.state()));
             }
-            let s = f.step_within(&lim(), goal, dt, bounds);
+            let s = f.step_within(&lim(), goal, dt, bounds, ANY);
             if k % 50 == 0 {
                 // The speed limit is kept (the goal's own is 1.5 of 2).
                 assert!(s.velocity.abs() <= 2.0 + 1e-9, "{s:?}");

@@ -108,7 +108,9 @@ mod trajectory;
 mod untimed;
 
 pub use error::{PlanError, Quantity};
-pub use follow::{follow_steps, stop_position, Follower, Goal, TARGET_SPEED_SHARE};
+pub use follow::{
+    follow_steps, stop_position, stop_with_jerk_alone, Follower, Goal, TARGET_SPEED_SHARE,
+};
 pub use limits::JointLimits;
 pub use online::{retarget, stop};
 pub use plan::{plan, Keyframe, OnLimit, PlanOptions};

@@ -30,7 +30,9 @@
 //! Stepping allocates nothing: the references keep room for a chunk of
 //! [`MAX_CHUNK_POINTS`] from the start.
 
-use servobus_trajectory::{stop_position, Follower, Goal, JointLimits, JointState};
+use servobus_trajectory::{
+    stop_position, stop_with_jerk_alone, Follower, Goal, JointLimits, JointState,
+};
 
 use crate::target::{Checked, MAX_CHUNK_POINTS};
 
@@ -241,7 +243,7 @@ impl LivePath {
         if self.mode != Mode::Following {
             return Goal::at(self.stops[j]);
         }
-        self.references[j].goal(x, &self.limits[j])
+        self.references[j].goal(x, &self.limits[j], self.cmd[j].position)
     }
 
     /// Where joint `j`'s reference was told to go and has not left behind
@@ -254,6 +256,33 @@ impl LivePath {
             return (f64::NEG_INFINITY, f64::INFINITY);
         }
         self.references[j].reach()
+    }
+
+    /// How far joint `j`'s stop may follow its reference's own stop
+    /// ([`Follower::step_within`]'s `farthest`). The reference is a target
+    /// behind the stream: where the stream brakes into its newest target
+    /// (or turns back) harder than the joint's acceleration limit allows,
+    /// the reference's own stop lies beyond the stream's. Then the stop
+    /// may go, on the side the stream moves to, only to where a joint
+    /// moving with the stream at its newest target would stop with its
+    /// jerk limit alone, and on the other side not past the points told
+    /// (`bounds`). Unbounded otherwise.
+    fn farthest(&self, j: usize, bounds: (f64, f64)) -> (f64, f64) {
+        let lim = &self.limits[j];
+        let braking = match self.mode {
+            Mode::Following => self.references[j].braking_into_newest(lim.max_acceleration),
+            _ => None,
+        };
+        let Some((position, velocity)) = braking else {
+            return (f64::NEG_INFINITY, f64::INFINITY);
+        };
+        let newest = JointState {
+            position,
+            velocity,
+            acceleration: 0.0,
+        };
+        let end = stop_with_jerk_alone(lim, &newest);
+        (end.min(bounds.0), end.max(bounds.1))
     }
 
     /// Begins the cycle of time `now`: the timeout is judged by it.
@@ -280,7 +309,8 @@ impl LivePath {
             for j in 0..self.cmd.len() {
                 let g = self.goal(j, self.last);
                 let bounds = self.bounds(j);
-                let s = self.followers[j].step_within(&self.limits[j], g, dt, bounds);
+                let farthest = self.farthest(j, bounds);
+                let s = self.followers[j].step_within(&self.limits[j], g, dt, bounds, farthest);
                 self.cmd[j] = s;
                 self.envelopes[j].commanded(&self.limits[j], x, s);
             }

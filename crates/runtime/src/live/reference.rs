@@ -158,9 +158,10 @@ impl Reference {
         self.chunk = !self.ahead.is_empty();
     }
 
-    /// The goal at `x` (increasing from call to call): the reference's
-    /// position, and its speed over the current piece.
-    pub fn goal(&mut self, x: f64, lim: &JointLimits) -> Goal {
+    /// The goal at `x` (increasing from call to call) of a joint at
+    /// `joint`: the reference's position, and its speed over the current
+    /// piece.
+    pub fn goal(&mut self, x: f64, lim: &JointLimits, joint: f64) -> Goal {
         self.advance(x);
         match self.ahead.front() {
             Some(&(t1, p1)) => {
@@ -204,14 +205,33 @@ impl Reference {
                 }
                 let v0 = speed - 0.5 * accel * span;
                 let tau = (x - t0).max(0.0);
+                let horizon = (t1 - x).max(BEND_HORIZON);
+                let (pos, vel) = (p0 + tau * (v0 + 0.5 * accel * tau), v0 + accel * tau);
+                // A bend that slows the goal may turn it back within the
+                // horizon, which the stream, coming to rest, does not do. A
+                // joint more than twice as far behind the goal as the goal
+                // goes before it would rest (`v^2 / |a|`) is told the goal
+                // rests at the horizon's end instead: otherwise it waits
+                // for the goal's foretold return, short of where the
+                // stream stopped, and comes on only when the next target
+                // shows it.
+                let behind = (pos - joint) * vel.signum();
+                let accel = if vel * accel < 0.0
+                    && vel.abs() < accel.abs() * horizon
+                    && behind * accel.abs() > vel * vel
+                {
+                    -vel / horizon
+                } else {
+                    accel
+                };
                 Goal {
-                    position: p0 + tau * (v0 + 0.5 * accel * tau),
-                    velocity: v0 + accel * tau,
+                    position: pos,
+                    velocity: vel,
                     acceleration: accel,
                     // The follower keeps its speed limit over the goal's
                     // horizon, and its plan to the goal may outlast the
                     // piece: the bend is taken as lasting that long.
-                    horizon: (t1 - x).max(BEND_HORIZON),
+                    horizon,
                 }
             }
             None => {
@@ -230,6 +250,31 @@ impl Reference {
             .fold((self.from.1, self.from.1), |(lo, hi), &(_, p)| {
                 (lo.min(p), hi.max(p))
             })
+    }
+
+    /// The newest point told and the stream's speed into it, if the
+    /// stream brakes into it (or turns back) harder than `max_acceleration`
+    /// allows: the speeds of its last two pieces (the pieces ahead, the
+    /// current one and the one before it) differ by more than that over
+    /// the time between their middles. None when it does not, or when two
+    /// pieces are not known.
+    pub fn braking_into_newest(&self, max_acceleration: f64) -> Option<(f64, f64)> {
+        let n = self.ahead.len();
+        let (t2, p2) = *self.ahead.back()?;
+        let (t1, p1) = if n >= 2 { self.ahead[n - 2] } else { self.from };
+        let (v0, d0) = if n >= 2 {
+            let (t0, p0) = if n >= 3 { self.ahead[n - 3] } else { self.from };
+            ((p1 - p0) / (t1 - t0), t1 - t0)
+        } else {
+            self.before?
+        };
+        let d1 = t2 - t1;
+        if d0 <= MIN_PIECE || d1 <= MIN_PIECE {
+            return None;
+        }
+        let v1 = (p2 - p1) / d1;
+        let slowing = (v0 - v1) * v0.signum();
+        (slowing > max_acceleration * 0.5 * (d0 + d1)).then_some((p2, v1))
     }
 
     /// Passes the points due by `x`.
@@ -279,7 +324,7 @@ mod tests {
         for k in 1..=4 {
             let t = f64::from(k) * 0.03;
             r.target(t, t, t, t);
-            let g = r.goal(t, &LIM);
+            let g = r.goal(t, &LIM, 0.0);
             // From the second on, the interval is known: the target is
             // reached 30 ms after its stamp, so the reference is one
             // target behind, moving at the ramp's speed.
@@ -289,7 +334,7 @@ mod tests {
             }
         }
         // Nothing more: it holds at the last target once reached.
-        let g = r.goal(0.2, &LIM);
+        let g = r.goal(0.2, &LIM, 0.0);
         assert_eq!((g.position, g.velocity), (0.12, 0.0));
     }
 
@@ -297,10 +342,10 @@ mod tests {
     fn a_chunk_replaces_what_is_ahead_and_skips_its_past_points() {
         let mut r = Reference::new(0.0, 0.0, 8);
         r.chunk([(0.1, 1.0), (0.2, 2.0)].into_iter(), 0.0);
-        assert!((r.goal(0.05, &LIM).position - 0.5).abs() < 1e-9);
+        assert!((r.goal(0.05, &LIM, 0.0).position - 0.5).abs() < 1e-9);
         // A new chunk at 0.15 whose first point is past.
         r.chunk([(0.1, 9.0), (0.25, 0.0)].into_iter(), 0.15);
-        let g = r.goal(0.15, &LIM);
+        let g = r.goal(0.15, &LIM, 0.0);
         // From where the old chunk was (1.5) toward 0 at 0.25, no jump.
         assert!((g.position - 1.5).abs() < 1e-9, "{g:?}");
         assert!((g.velocity + 15.0).abs() < 1e-9, "{g:?}");

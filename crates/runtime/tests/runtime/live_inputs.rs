@@ -569,3 +569,87 @@ fn a_hand_wiggle_at_the_servos_own_limits_stays_within_its_targets() {
     );
     assert!(l <= 2.0 * LAG_BOUND, "lag {l}");
 }
+
+/// A live run of the simulated SO-101 at its servo model's own limits (as
+/// `servobus follow` and the LeRobot plugin follow), no lead.
+fn model_run() -> VirtualRun<SimBus> {
+    let robot = robot("so101.yaml").with_model_limits();
+    let (buses, _) = sim_buses(&robot);
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        ..RunOptions::default()
+    };
+    VirtualRun::live(&robot, buses, options).expect("a live run starts")
+}
+
+/// The commanded pan (deg, one per cycle) of `cycles` cycles of `run`,
+/// sent `source(t)` at `hz`, stamped with each slot's time.
+fn stream_at(
+    run: &mut VirtualRun<SimBus>,
+    hz: f64,
+    cycles: u64,
+    source: impl Fn(f64) -> f64,
+) -> Vec<f64> {
+    let tx = run.targets();
+    let mut slot = 1u32;
+    let rec = record(run, cycles, |k| {
+        let now = k as f64 * PERIOD;
+        while f64::from(slot) / hz <= now + 1e-9 {
+            let s = f64::from(slot) / hz;
+            send(&tx, s, source(s));
+            slot += 1;
+        }
+    });
+    assert!(rec.faults.is_empty(), "{:?}", rec.faults);
+    rec.commanded(0)
+}
+
+#[test]
+fn a_joint_catching_up_with_a_stream_coming_to_rest_does_not_stop_short() {
+    // A fast swing as a hand makes it: eased from -100 to +100 deg in 0.9
+    // s (at 50 Hz, as follow reads a leader), beyond the pan's speed
+    // limit, so the joint falls behind. The stream slows into its end: a
+    // follower told that the slowing goes on (the stream turning back)
+    // would brake to wait for it, short of the end, and come on only when
+    // the next targets showed the stream at rest.
+    let ease = |s: f64| {
+        let s = s.clamp(0.0, 1.0);
+        s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
+    };
+    let source = move |t: f64| -100.0 + 200.0 * ease((t - 0.6) / 0.9);
+    let mut run = model_run();
+    // From -100, held until 0.6 s.
+    let c = stream_at(&mut run, 50.0, 500, source);
+    let k_fast = (1..c.len())
+        .find(|&k| (c[k] - c[k - 1]) / PERIOD > 150.0)
+        .expect("the joint speeds up");
+    let k_end = (k_fast..c.len())
+        .find(|&k| c[k] >= 99.0)
+        .expect("the joint reaches the end");
+    let slowest = (k_fast + 1..k_end)
+        .map(|k| (c[k] - c[k - 1]) / PERIOD)
+        .fold(f64::INFINITY, f64::min);
+    let at = k_end as f64 * PERIOD;
+    println!("swing: slowest {slowest:.0} deg/s on the way, within 1 deg of the end at {at:.3} s");
+    assert!(slowest > 30.0, "it stopped short: {slowest:.1} deg/s");
+    // The stream is at rest at 1.5 s: the joint within 1 deg 0.15 s on.
+    assert!(at <= 1.65, "{at}");
+}
+
+#[test]
+fn a_first_stroke_from_rest_faster_than_the_limits_is_not_run_far_past() {
+    // The 2 Hz hand wiggle's first stroke: 0 to 12 deg in 0.125 s from
+    // rest, 4400 deg/s^2, twice what the STS3215 can do, then back. The
+    // stream brakes into its peak harder than the joint could: the joint,
+    // behind, does not run on to where its reference (one target behind)
+    // would stop, but to no more than where a joint moving with the
+    // stream at its newest target would.
+    for (hz, bound) in [(50.0, 3.5), (30.0, 3.0)] {
+        let mut run = model_run();
+        let c = stream_at(&mut run, hz, 120, |t| eased_wiggle(t, 12.0, 2.0));
+        let highest = c.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        println!("first stroke at {hz} Hz: highest {highest:.2} deg");
+        assert!(highest - 12.0 <= bound, "{hz} Hz: {highest:.2}");
+    }
+}

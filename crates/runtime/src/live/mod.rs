@@ -13,6 +13,11 @@
 //!   by the stopping distance its limits make unavoidable ([`envelope`],
 //!   measured and reported). A first target is a step: a time-optimal
 //!   move to it.
+//! - Where the stream brakes into its newest target harder than a joint
+//!   can, the joint's stop goes no further than a joint moving with the
+//!   stream there would stop (its jerk limit alone); and a joint far
+//!   behind a stream that is coming to rest is not told the stream turns
+//!   back, so it does not wait short of where the stream stops.
 //! - A chunk (a policy's timed points) replaces what is ahead of the
 //!   reference from where it is: its points are reached at their own
 //!   times, those already past skipped. A single target after a chunk

@@ -522,14 +522,7 @@ fn a_hand_wiggle_at_the_servos_own_limits_stays_within_its_targets() {
     // within 1 deg of the targets of the last 0.5 s: a follower catching
     // up before a turn does not run on past a target that brakes harder
     // than it can.
-    let robot = robot("so101.yaml").with_model_limits();
-    let (buses, _) = sim_buses(&robot);
-    let options = RunOptions {
-        lead: Lead::None,
-        approach: None,
-        ..RunOptions::default()
-    };
-    let mut run = VirtualRun::live(&robot, buses, options).expect("a live run starts");
+    let mut run = model_run();
     let tx = run.targets();
     let source = |t: f64| eased_wiggle(t, 12.0, 2.0);
     let mut sent: Vec<(f64, f64)> = Vec::new();

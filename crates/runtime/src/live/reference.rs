@@ -352,6 +352,25 @@ mod tests {
     }
 
     #[test]
+    fn braking_into_the_newest_target_is_seen_only_beyond_the_limit() {
+        // Targets every 20 ms at 1 unit/s, then one 0.004 on: 0.8 unit/s
+        // less in 20 ms, 40 units/s^2 of braking.
+        let mut r = Reference::new(0.0, 0.0, 8);
+        for k in 1..=3 {
+            let t = f64::from(k) * 0.02;
+            r.target(t, t, t, t);
+        }
+        assert_eq!(r.braking_into_newest(10.0), None, "steady");
+        r.target(0.08, 0.08, 0.064, 0.08);
+        let (p, v) = r.braking_into_newest(10.0).expect("braking at 40 > 10");
+        assert!(
+            (p - 0.064).abs() < 1e-12 && (v - 0.2).abs() < 1e-9,
+            "{p} {v}"
+        );
+        assert_eq!(r.braking_into_newest(50.0), None, "within 50");
+    }
+
+    #[test]
     fn one_long_gap_does_not_set_the_delay() {
         let mut r = Reference::new(0.0, 0.0, 8);
         let stamps = [0.0, 0.033, 0.066, 0.166, 0.2, 0.233];

@@ -142,9 +142,35 @@ const CASES: [Case; 8] = [
     },
 ];
 
-/// The commanded pan (the robot file's units: degrees), one per cycle, following `source` sent at
-/// `hz`, stamped with each slot's time.
-fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, String> {
+/// How a sender's targets are timed.
+#[derive(Clone, Copy)]
+enum Timing {
+    /// Sampled and stamped at each slot's time.
+    Exact,
+    /// As a Python loop such as LeRobot's sends them: each slot's read
+    /// takes 1-7 ms (pseudo-random), the positions are those of the read's
+    /// middle and the stamp is taken when the read is done.
+    Python,
+}
+
+/// The read time of slot `k` in [`Timing::Python`], s.
+fn read_time(k: u32) -> f64 {
+    let mut x = u64::from(k).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x ^= x >> 32;
+    0.001 + 0.006 * (x % 1000) as f64 / 1000.0
+}
+
+/// The commanded pan (the robot file's units: degrees), one per cycle,
+/// following `source` sent at `hz` and timed by `timing`, and the targets
+/// sent: (arrival time, deg).
+fn follow(
+    robot: &Robot,
+    hz: f64,
+    source: fn(f64) -> f64,
+    timing: Timing,
+) -> Result<(Vec<f64>, Vec<(f64, f64)>), String> {
     let sim = SimRobot::builder(robot)
         .build()
         .map_err(|e| e.to_string())?;
@@ -158,14 +184,26 @@ fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, St
     let tx = run.targets();
     let telemetry = run.telemetry();
     let mut pan = Vec::new();
+    let mut sent = Vec::new();
     let mut slot = 1u32;
     for _ in 0..CYCLES {
         let now = run.cycle() as f64 * PERIOD;
-        while f64::from(slot) / hz <= now + 1e-9 {
+        loop {
             let s = f64::from(slot) / hz;
-            let q = source(s).to_radians();
-            tx.send(LiveTarget::named(s, vec![("shoulder_pan".into(), q)]))
-                .map_err(|e| e.to_string())?;
+            let (sample, stamp) = match timing {
+                Timing::Exact => (s, s),
+                Timing::Python => (s + 0.5 * read_time(slot), s + read_time(slot)),
+            };
+            if stamp > now + 1e-9 {
+                break;
+            }
+            let q = source(sample);
+            tx.send(LiveTarget::named(
+                stamp,
+                vec![("shoulder_pan".into(), q.to_radians())],
+            ))
+            .map_err(|e| e.to_string())?;
+            sent.push((now, q));
             slot += 1;
         }
         let going = run.step();
@@ -180,25 +218,29 @@ fn follow(robot: &Robot, hz: f64, source: fn(f64) -> f64) -> Result<Vec<f64>, St
             break;
         }
     }
-    Ok(pan)
+    Ok((pan, sent))
 }
 
 /// Overshoot beyond the envelope of the targets sent in the last
 /// [`WINDOW`], best lag, RMS error at it, RMS jerk (k deg/s^3).
-fn figures(pan: &[f64], hz: f64, source: fn(f64) -> f64) -> (f64, f64, f64, f64) {
-    let sent = |t: f64| source((t * hz).floor() / hz);
+fn figures(pan: &[f64], sent: &[(f64, f64)], source: fn(f64) -> f64) -> (f64, f64, f64, f64) {
     let mut over = 0.0f64;
     for (k, &q) in pan.iter().enumerate() {
         let t = k as f64 * PERIOD;
         if t < FROM {
             continue;
         }
+        // The targets sent in the window, and the one in force at its start.
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut s = t - WINDOW;
-        while s <= t {
-            lo = lo.min(sent(s));
-            hi = hi.max(sent(s));
-            s += PERIOD;
+        let in_force = sent.iter().rev().find(|(at, _)| *at <= t - WINDOW);
+        let recent = sent.iter().filter(|(at, _)| *at > t - WINDOW && *at <= t);
+        for &(_, v) in in_force.into_iter().chain(recent) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        if lo > hi {
+            lo = 0.0;
+            hi = 0.0;
         }
         over = over.max(q - hi).max(lo - q);
     }
@@ -237,13 +279,14 @@ fn main() -> Result<(), String> {
         "input (pan)", "Hz", "limits", "over", "lag ms", "rms", "jerk k/s3"
     );
     for case in &CASES {
-        for (hz, limits, robot) in [
-            (50.0, "model", &model),
-            (30.0, "model", &model),
-            (30.0, "file", &gentle),
+        for (hz, limits, robot, timing) in [
+            (50.0, "model", &model, Timing::Exact),
+            (30.0, "model", &model, Timing::Exact),
+            (30.0, "python", &model, Timing::Python),
+            (30.0, "file", &gentle, Timing::Exact),
         ] {
-            let pan = follow(robot, hz, case.source)?;
-            let (over, lag, rms, jerk) = figures(&pan, hz, case.source);
+            let (pan, sent) = follow(robot, hz, case.source, timing)?;
+            let (over, lag, rms, jerk) = figures(&pan, &sent, case.source);
             println!(
                 "{:<26}{hz:>6.0}{limits:>8}{over:>8.1}{:>8.0}{rms:>8.2}{jerk:>10.0}",
                 case.name,

@@ -3,9 +3,14 @@
 //! toward its reference ([`reference`]): its position, speed and bend.
 //!
 //! - The reference goes through the targets received, in straight pieces,
-//!   each target reached one target interval after it was taken (the
-//!   second longest of the last few intervals: a stream's jitter and one
-//!   late target do not stop it between targets). The follower is given
+//!   each target reached one period of the stream after it was taken (the
+//!   period, and the room its late targets need, from the last few
+//!   intervals: a stream's jitter and one late target do not stop it
+//!   between targets). A jittery sender's targets are put on its schedule:
+//!   a target stamped late (a Python loop stamps its reads when they are
+//!   done) is taken as read half way between its schedule and its stamp,
+//!   so that the pieces are as even as the reads were, not as the stamps.
+//!   The follower is given
 //!   the reference's position and speed, so that it moves with the stream
 //!   rather than stopping at every target. Nothing is extrapolated past the
 //!   newest target: a stream that turns back is followed back, and the

@@ -22,8 +22,27 @@ const MIN_PIECE: f64 = 1e-3;
 /// goal takes at the joints' limits.
 const BEND_HORIZON: f64 = 0.25;
 
-/// How many recent target intervals the delay is taken from.
-const INTERVALS: usize = 5;
+/// How many recent target lateness figures the delay and the schedule
+/// are taken from.
+const INTERVALS: usize = 8;
+
+/// How many recent target intervals the stream's period is taken from.
+const PERIODS: usize = 16;
+
+/// How late after its regular time a target may be stamped, in periods,
+/// before the stream counts as having moved its schedule (after a gap).
+const MAX_LATE: f64 = 0.5;
+
+/// Where between its regular time and its stamp a late target's position
+/// is taken to be the sender's, as a share of its lateness: the middle, as
+/// for a sender that reads its positions (taking the read's time) and
+/// stamps them when the read is done.
+const SAMPLE_SHARE: f64 = 0.5;
+
+/// How fast the room kept for late targets shrinks once they come on time
+/// again, in periods per target: slowly, so that the targets' spacing does
+/// not jitter with it.
+const SLACK_EASE: f64 = 0.01;
 
 /// The piecewise-linear reference of one joint (see the module docs).
 #[derive(Debug)]
@@ -41,8 +60,16 @@ pub(super) struct Reference {
     chunk: bool,
     /// The sender's stamp of the last single target.
     stamp: Option<f64>,
-    /// The last target intervals, s (0: none).
+    /// The regular time of the last single target on the sender's clock
+    /// (its stamp less how late it came after the stream's schedule).
+    phase: Option<f64>,
+    /// How late the last targets came after their regular times, s.
     recent: [f64; INTERVALS],
+    /// The last target intervals, s (0: none), newest first.
+    intervals: [f64; PERIODS],
+    /// The room kept for late targets, s: the second latest of `recent`,
+    /// shrinking by [`SLACK_EASE`] at most.
+    slack: f64,
     /// The speed and duration of the piece before the current one, if it
     /// led into it (none after a hold or a new start).
     before: Option<(f64, f64)>,
@@ -65,31 +92,111 @@ impl Reference {
             ahead: VecDeque::with_capacity(capacity),
             chunk: false,
             stamp: None,
+            phase: None,
             recent: [0.0; INTERVALS],
+            intervals: [0.0; PERIODS],
+            slack: 0.0,
             before: None,
         }
     }
 
-    /// The delay after its stamp at which a single target is reached: the
-    /// target interval, as the second longest of the last few (jitter
-    /// makes some shorter than the stream's, one long gap does not count);
+    /// The delay after its regular time at which a single target is
+    /// reached: the stream's period ([`Reference::period`]) and how late
+    /// targets come after their regular times (the second latest of the
+    /// last few: one late target does not count; shrinking slowly), so
+    /// that the next target is there when the reference reaches this one;
     /// 0 before any interval is known (a first target is a step).
     pub fn delay(&self) -> f64 {
-        let mut longest = 0.0f64;
+        let period = self.period();
+        if period == 0.0 {
+            0.0
+        } else {
+            period + SAMPLE_SHARE * self.slack
+        }
+    }
+
+    /// The second latest of the recent lateness figures, s.
+    fn second_latest(&self) -> f64 {
+        let mut latest = 0.0f64;
         let mut second = 0.0f64;
         for &d in &self.recent {
-            if d > longest {
-                second = longest;
-                longest = d;
+            if d > latest {
+                second = latest;
+                latest = d;
             } else if d > second {
                 second = d;
             }
         }
-        if second > 0.0 {
-            second
-        } else {
-            longest
+        second
+    }
+
+    /// The stream's period: the mean of its recent intervals, those more
+    /// than half again as long as their median (a gap) or half as long
+    /// left out; 0 before any interval is known.
+    pub fn period(&self) -> f64 {
+        let mut sorted = self.intervals;
+        let known = sorted.iter().filter(|d| **d > 0.0).count();
+        if known == 0 {
+            return 0.0;
         }
+        sorted.sort_unstable_by(|a, b| b.total_cmp(a));
+        let median = sorted[known / 2];
+        let (mut sum, mut n) = (0.0, 0.0);
+        for &d in &sorted[..known] {
+            if d <= 1.5 * median && d >= 0.5 * median {
+                sum += d;
+                n += 1.0;
+            }
+        }
+        sum / n
+    }
+
+    /// Takes in a target's `stamp`: its interval after the last is kept,
+    /// and its regular time returned: one period after the last target's,
+    /// unless it came earlier (a sender's jitter only delays: the earliest
+    /// ones keep the schedule) or later by [`MAX_LATE`] periods or more
+    /// (the sender moved its schedule); the schedule moves later by the
+    /// least lateness of the last few targets when all of them came late
+    /// (a sender whose period is a little longer than the one estimated is
+    /// followed so).
+    fn regular(&mut self, stamp: f64) -> f64 {
+        let interval = self
+            .stamp
+            .map(|s| stamp - s)
+            .filter(|d| *d > INTERVAL.0 && *d < INTERVAL.1);
+        self.stamp = Some(stamp);
+        let Some(d) = interval else {
+            self.phase = Some(stamp);
+            return stamp;
+        };
+        self.intervals.rotate_right(1);
+        self.intervals[0] = d;
+        let period = self.period();
+        let regular = match self.phase {
+            Some(last) => {
+                let due = last + period;
+                stamp.min(due).max(stamp - MAX_LATE * period)
+            }
+            None => stamp,
+        };
+        self.recent.rotate_right(1);
+        self.recent[0] = stamp - regular;
+        // Every one of the last few late: the schedule is later by the
+        // least of them (a jittery sender's earliest targets keep it).
+        let least = self.recent.iter().copied().fold(f64::INFINITY, f64::min);
+        let regular = if least > 0.0 {
+            self.recent.iter_mut().for_each(|d| *d -= least);
+            self.slack -= least;
+            regular + least
+        } else {
+            regular
+        };
+        self.slack = self
+            .second_latest()
+            .max(self.slack - SLACK_EASE * period)
+            .max(0.0);
+        self.phase = Some(regular);
+        regular
     }
 
     /// The position of the reference at `x` (not before the last time
@@ -121,23 +228,17 @@ impl Reference {
 
     /// Takes in a single target at `position`, stamped `stamp` by its
     /// sender and at `at` on the run's clock, the reference having been
-    /// sampled up to `x`: it is reached one target interval after `at`,
-    /// after the points already ahead.
+    /// sampled up to `x`: it is reached [`Reference::delay`] after its
+    /// regular time (the stream's schedule: a jittery sender's targets are
+    /// reached evenly spaced), after the points already ahead.
     pub fn target(&mut self, stamp: f64, at: f64, position: f64, x: f64) {
-        let interval = self
-            .stamp
-            .map(|s| stamp - s)
-            .filter(|d| *d > INTERVAL.0 && *d < INTERVAL.1);
-        if let Some(d) = interval {
-            self.recent.rotate_right(1);
-            self.recent[0] = d;
-        }
-        self.stamp = Some(stamp);
+        let regular = self.regular(stamp);
         if self.chunk || self.ahead.is_empty() {
             self.rebase(x);
         }
         let last = self.ahead.back().map_or(self.from.0, |p| p.0);
-        let due = (at + self.delay()).max(last).max(x);
+        let taken = stamp - SAMPLE_SHARE * (stamp - regular);
+        let due = (at - (stamp - taken) + self.delay()).max(last).max(x);
         if self.ahead.len() >= self.room {
             // Never with a sane stream (points are passed as fast as they
             // come); keeps the reference bounded if one floods it.
@@ -371,12 +472,43 @@ mod tests {
     }
 
     #[test]
-    fn one_long_gap_does_not_set_the_delay() {
+    fn one_long_gap_does_not_set_the_period_and_the_delay_relocks() {
         let mut r = Reference::new(0.0, 0.0, 8);
-        let stamps = [0.0, 0.033, 0.066, 0.166, 0.2, 0.233];
+        let mut stamps = vec![0.0, 0.033, 0.066, 0.166];
+        stamps.extend((1..=16).map(|k| 0.166 + 0.033 * f64::from(k)));
         for &s in &stamps {
             r.target(s, s, 0.0, s);
         }
-        assert!((r.delay() - 0.034).abs() < 1e-9, "{}", r.delay());
+        assert!((r.period() - 0.033).abs() < 1e-6, "{}", r.period());
+        // Sixteen targets after the gap, on the stream's new schedule:
+        // reached one period after it again.
+        assert!((r.delay() - 0.033).abs() < 1e-6, "{}", r.delay());
+    }
+
+    #[test]
+    fn a_jittery_senders_targets_are_reached_spaced_as_it_read_them() {
+        // Every 33 ms a read of 0-6 ms, stamped when it is done (a Python
+        // loop's): each position is the sender's at the middle of its
+        // read, and the targets are reached spaced as those middles are
+        // (within 2 ms), not as the stamps are (up to 6 ms off).
+        let mut r = Reference::new(0.0, 0.0, 64);
+        let read = [
+            0.004, 0.0, 0.006, 0.002, 0.005, 0.001, 0.003, 0.006, 0.0, 0.004,
+        ];
+        let mut dues = Vec::new();
+        for k in 0..40u32 {
+            let slot = 0.033 * f64::from(k);
+            let took = read[k as usize % read.len()];
+            r.target(slot + took, slot + took, f64::from(k), slot + took);
+            dues.push((slot + 0.5 * took, r.ahead.back().map_or(f64::NAN, |p| p.0)));
+        }
+        for w in dues[20..].windows(2) {
+            let (read, reached) = (w[1].0 - w[0].0, w[1].1 - w[0].1);
+            assert!((reached - read).abs() < 2e-3, "{w:?}");
+        }
+        // Reached one period and half the second latest lateness after the
+        // schedule: the next target is in by then.
+        let d = r.delay();
+        assert!(d > 0.033 + 0.002 && d < 0.033 + 0.0035, "{d}");
     }
 }

@@ -153,6 +153,9 @@ enum Timing {
     Python,
 }
 
+/// The targets sent: (arrival time, deg).
+type Sent = Vec<(f64, f64)>;
+
 /// The read time of slot `k` in [`Timing::Python`], s.
 fn read_time(k: u32) -> f64 {
     let mut x = u64::from(k).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
@@ -170,7 +173,7 @@ fn follow(
     hz: f64,
     source: fn(f64) -> f64,
     timing: Timing,
-) -> Result<(Vec<f64>, Vec<(f64, f64)>), String> {
+) -> Result<(Vec<f64>, Sent), String> {
     let sim = SimRobot::builder(robot)
         .build()
         .map_err(|e| e.to_string())?;

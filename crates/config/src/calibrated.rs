@@ -94,6 +94,12 @@ pub(crate) fn apply(mut robot: Robot, path: &Path) -> Result<Robot, ConfigError>
                     ),
                 ));
             }
+            if joint.is_wheel() {
+                // A wheel turns without end: its measured range bounds
+                // nothing.
+                joint.calibration = Some(jc.clone());
+                continue;
+            }
             let (lo_deg, hi_deg) = jc.limits_deg(joint.model);
             let lo = joint.min.max(super::Units::Deg.convert(lo_deg, units));
             let hi = joint.max.min(super::Units::Deg.convert(hi_deg, units));

@@ -32,13 +32,20 @@
 //!   moves the body with the feet planted ([`Legs::body_move`]);
 //!   [`plan_walk`] walks it with a tripod, ripple or wave [`Gait`] along
 //!   segments of body velocity, stance feet fixed on the ground.
+//! - [`Base`] checks a wheeled base's `base:` section ([`BaseSpec`]: three
+//!   omni wheels or a differential pair) and maps a body velocity
+//!   ([`Twist`], in m/s and rad/s) to wheel speeds and back, scaling all
+//!   wheels together at their limits ([`Base::limited`]); [`Odometry`]
+//!   integrates the measured velocity into a pose on the floor, exactly
+//!   along arcs.
 //!
-//! Angles are radians and lengths millimetres throughout; the caller
-//! converts the robot file's angle unit. Failures are typed ([`IkError`]):
-//! unreachable (with the distance short), a joint limit (naming the joint),
-//! near a singularity.
+//! Angles are radians and lengths millimetres throughout (except a base's
+//! velocities, in metres); the caller converts the robot file's angle unit.
+//! Failures are typed ([`IkError`]): unreachable (with the distance
+//! short), a joint limit (naming the joint), near a singularity.
 
 mod arm;
+mod base;
 mod error;
 mod gait;
 mod geometry;
@@ -49,6 +56,10 @@ mod spec;
 mod support;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
+pub use base::{
+    Base, BaseError, BaseKind, BaseSpec, DifferentialSpec, Odometry, Omni3Spec, OmniWheelSpec,
+    Twist, MIN_SEPARATION_DEG,
+};
 pub use error::IkError;
 pub use gait::{
     plan_walk, Gait, Walk, WalkError, WalkPlan, WalkSegment, LOW_MARGIN_MM, MAX_WALK_SAMPLES,

@@ -1,12 +1,16 @@
 //! Robot files: buses, servos and joint limits.
 //!
 //! Parts: the types and loaders here, `raw` (the file's shape as serde
-//! reads it) and `validate` (from that shape to a [`Robot`], every problem
-//! located in the file).
+//! reads it), `validate` (from that shape to a [`Robot`], every problem
+//! located in the file) and `servo` (a joint's mode and the `servo:`
+//! settings, turned into register writes of its model).
 
 mod raw;
+mod servo;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_servo;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -19,6 +23,7 @@ use super::error::{ConfigError, Source};
 use super::locate::FieldPath;
 use super::Units;
 use raw::RawRobot;
+pub use servo::{JointMode, ServoSettings, ServoWrite};
 pub(crate) use validate::{check_rate, check_servo_range};
 
 /// A robot: its buses and the joints on each, as read from a robot file.
@@ -46,6 +51,9 @@ pub struct Robot {
     /// The robot's geometry (`kinematics:`), checked against its joints;
     /// joint limits unset ([`Robot::geometry`] sets them).
     pub kinematics: Option<servobus_kinematics::Geometry>,
+    /// The mobile base its wheel joints drive (`base:`), checked against
+    /// its joints: every wheel of the base is a `mode: wheel` joint.
+    pub base: Option<servobus_kinematics::Base>,
 }
 
 /// Whether a robot's angles go through a calibration.
@@ -126,25 +134,33 @@ pub struct JointConfig {
     pub id: u8,
     /// The servo model, which gives the resolution and register map.
     pub model: &'static Model,
-    /// Lowest position, in the robot's units.
+    /// Position (the default) or wheel (`mode:` in the robot file).
+    pub mode: JointMode,
+    /// Lowest position, in the robot's units. Unused for wheels: 0.0.
     pub min: f64,
-    /// Highest position, in the robot's units.
+    /// Highest position, in the robot's units. Unused for wheels: 0.0.
     pub max: f64,
-    /// Velocity limit, units/s.
+    /// Velocity limit, units/s (a wheel's top speed, at most what its model
+    /// can turn at).
     pub max_velocity: f64,
-    /// Acceleration limit, units/s^2.
+    /// Acceleration limit, units/s^2 (a wheel's, of its speed).
     pub max_acceleration: f64,
     /// Jerk limit, units/s^3 (`None`: acceleration may step).
     pub max_jerk: Option<f64>,
-    /// Servo angle (from the middle of its range) at joint position 0, units.
+    /// Servo angle (from the middle of its range) at joint position 0,
+    /// units (0 for wheels).
     pub offset: f64,
     /// The joint turns the opposite way to the servo.
     pub inverted: bool,
-    /// Rest position, units.
+    /// Rest position, units (never for wheels).
     pub home: Option<f64>,
     /// The joint's calibration, when the robot has one: it replaces
     /// `offset` and `inverted` in the mapping to ticks.
     pub calibration: Option<JointCalibration>,
+    /// The settings written to the servo when a run connects (`servo:` in
+    /// the robot file), checked against the model at load; `None` when the
+    /// file gives none.
+    pub servo: Option<ServoSettings>,
 }
 
 /// How long the jerk limit of [`Robot::with_model_limits`] takes to reach
@@ -162,10 +178,14 @@ impl Robot {
     /// limit reaching that acceleration in [`MODEL_JERK_RAMP_S`]: the
     /// limits of live following (`servobus follow`, the LeRobot plugin),
     /// which keeps up with a stream the way raw goal writes would. Joints
-    /// whose model states no such profile keep the file's limits.
+    /// whose model states no such profile keep the file's limits, and so do
+    /// wheels: a wheel's speed target is followed as given, and its limits
+    /// are the speed and acceleration the robot builder allows the base
+    /// (loading already keeps them within what the model can do).
     pub fn with_model_limits(mut self) -> Robot {
         let units = self.units;
-        for joint in self.buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
+        let positions = self.buses.iter_mut().flat_map(|b| b.joints.iter_mut());
+        for joint in positions.filter(|j| !j.is_wheel()) {
             if let Some((v, a)) = joint.model.fastest_profile() {
                 joint.max_velocity = units.from_rad(v.to_radians());
                 joint.max_acceleration = units.from_rad(a.to_radians());
@@ -216,10 +236,23 @@ impl BusConfig {
 }
 
 impl JointConfig {
-    /// The rest position: `home`, or 0 clamped into the limits.
+    /// The rest position: `home`, or 0 clamped into the limits (0 for a
+    /// wheel: at rest, its speed).
     pub fn rest(&self) -> f64 {
         self.home
             .unwrap_or_else(|| 0.0f64.clamp(self.min, self.max))
+    }
+
+    /// Whether the joint is a wheel ([`JointMode::Wheel`]): its target is a
+    /// speed and it has no position limits.
+    pub fn is_wheel(&self) -> bool {
+        self.mode == JointMode::Wheel
+    }
+
+    /// The register writes of the joint's `servo:` settings
+    /// ([`ServoSettings::writes`]); none without them.
+    pub fn servo_writes(&self) -> &[ServoWrite] {
+        self.servo.as_ref().map_or(&[], ServoSettings::writes)
     }
 }
 
@@ -340,7 +373,10 @@ impl RobotOptions {
 /// has the name); otherwise [`ConfigError::Invalid`] naming the file, line,
 /// column and field of the first problem: YAML syntax, an unknown or missing
 /// field, a duplicate ID or joint name, an ID above 253, an unknown model,
-/// `min >= max`, a non-positive limit, a limit outside the servo's range, a
+/// `min >= max`, a position joint without `min` or `max`, a wheel given
+/// `min`, `max`, `home` or `offset` or a `max_velocity` above its model's top
+/// speed, a `servo:` setting out of range or for a register its model lacks,
+/// a non-positive limit, a limit outside the servo's range, a
 /// rate the bus cannot carry (the error says which rate would fit; not with
 /// [`RobotOptions::any_rate`]); the errors of
 /// [`load_calibration`](super::load_calibration) and of applying it (a joint

@@ -8,6 +8,7 @@ use std::fmt;
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer};
 
+use super::JointMode;
 use crate::Units;
 
 /// A robot file, field for field ([`Robot`](super::Robot) says what each
@@ -32,6 +33,8 @@ pub(super) struct RawRobot {
     pub buses: Vec<RawBus>,
     #[serde(default)]
     pub kinematics: Option<servobus_kinematics::Spec>,
+    #[serde(default)]
+    pub base: Option<servobus_kinematics::BaseSpec>,
 }
 
 fn default_rate() -> f64 {
@@ -94,25 +97,58 @@ pub(super) struct RawBus {
 }
 
 /// One entry of a bus's `joints` ([`JointConfig`](super::JointConfig)).
+/// `min` and `max` are optional here because a wheel has neither; a
+/// position joint without them is refused in validation, naming it.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 #[serde(
-    expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:`, `max_velocity:`, `max_acceleration:`, ..."
+    expecting = "a joint: a mapping with `name:`, `id:`, `model:`, `min:`, `max:` (not for `mode: wheel`), `max_velocity:`, `max_acceleration:`, ..."
 )]
 pub(super) struct RawJoint {
     pub name: String,
     pub id: i64,
     pub model: String,
-    pub min: f64,
-    pub max: f64,
+    #[serde(default)]
+    pub mode: JointMode,
+    #[serde(default)]
+    pub min: Option<f64>,
+    #[serde(default)]
+    pub max: Option<f64>,
     pub max_velocity: f64,
     pub max_acceleration: f64,
     #[serde(default)]
     pub max_jerk: Option<f64>,
     #[serde(default)]
-    pub offset: f64,
+    pub offset: Option<f64>,
     #[serde(default)]
     pub inverted: bool,
     #[serde(default)]
     pub home: Option<f64>,
+    #[serde(default)]
+    pub servo: Option<RawServo>,
+}
+
+/// A joint's `servo:` ([`ServoSettings`](super::ServoSettings)), the values
+/// as written: wide types, so that an out-of-range gain or a negative
+/// current is refused in validation with the accepted range.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "servo settings: a mapping with any of `p:`, `d:`, `i:`, `torque_limit:`, `protection_current:`, `acceleration:`, `max_temperature:`"
+)]
+pub(super) struct RawServo {
+    #[serde(default)]
+    pub p: Option<i64>,
+    #[serde(default)]
+    pub d: Option<i64>,
+    #[serde(default)]
+    pub i: Option<i64>,
+    #[serde(default)]
+    pub torque_limit: Option<f64>,
+    #[serde(default)]
+    pub protection_current: Option<f64>,
+    #[serde(default)]
+    pub acceleration: Option<f64>,
+    #[serde(default)]
+    pub max_temperature: Option<i64>,
 }

@@ -4,14 +4,15 @@
 use std::collections::{HashMap, HashSet};
 use std::time::Duration;
 
-use servobus_protocol::registers::{model_by_name, MODELS};
+use servobus_protocol::registers::{model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
 use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
-use super::{BusConfig, JointConfig, Robot, RobotCalibration};
+use super::{servo, BusConfig, JointConfig, JointMode, Robot, RobotCalibration};
 use crate::error::{ConfigError, Source};
 use crate::limits::{check_baud, check_latency_us, check_rate_hz};
 use crate::locate::FieldPath;
+use crate::Units;
 
 /// The largest lag-compensation lead a robot file may set, ms.
 const MAX_LEAD_MS: f64 = 500.0;
@@ -77,7 +78,7 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
                 format!("bus name `{}` is used twice", rb.name),
             ));
         }
-        buses.push(bus(rb, &bp, &mut joint_names, src)?);
+        buses.push(bus(rb, &bp, raw.units, &mut joint_names, src)?);
     }
     let mut robot = Robot {
         name: raw.name,
@@ -89,12 +90,43 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
         calibration: RobotCalibration::None,
         calibration_pose: Vec::new(),
         kinematics: None,
+        base: None,
     };
     robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
     if let Some(spec) = &raw.kinematics {
         robot.kinematics = Some(kinematics(&robot, spec, src)?);
     }
+    if let Some(spec) = &raw.base {
+        robot.base = Some(base(&robot, spec, src)?);
+    }
     Ok(robot)
+}
+
+/// The `base:` section checked against the robot's joints: each wheel a
+/// joint of the robot in `mode: wheel`; a problem is reported at `base`,
+/// naming its field.
+fn base(
+    robot: &Robot,
+    spec: &servobus_kinematics::BaseSpec,
+    src: &Source,
+) -> Result<servobus_kinematics::Base, ConfigError> {
+    let at = FieldPath::root().key("base");
+    let base = servobus_kinematics::Base::new(spec, |name| robot.joint_index(name))
+        .map_err(|e| src.error(&at, e.to_string()))?;
+    let joints: Vec<&JointConfig> = robot.joints().collect();
+    for &w in base.wheels() {
+        let Some(joint) = joints.get(w) else { continue };
+        if !joint.is_wheel() {
+            return Err(src.error(
+                &at,
+                format!(
+                    "`{}` drives a wheel of the base but is a position joint: give it `mode: wheel`",
+                    joint.name
+                ),
+            ));
+        }
+    }
+    Ok(base)
 }
 
 /// The `kinematics:` section checked against the robot's joints; a problem
@@ -119,11 +151,13 @@ fn kinematics(
     })
 }
 
-/// One bus of the robot at `bp`, its joints' names also checked against
-/// every other bus's (`joint_names`: where each name was first used).
+/// One bus of the robot at `bp` (angles in `units`), its joints' names
+/// also checked against every other bus's (`joint_names`: where each name
+/// was first used).
 fn bus(
     rb: RawBus,
     bp: &FieldPath,
+    units: Units,
     joint_names: &mut HashMap<String, FieldPath>,
     src: &Source,
 ) -> Result<BusConfig, ConfigError> {
@@ -147,7 +181,7 @@ fn bus(
     let mut joints = Vec::with_capacity(rb.joints.len());
     for (ji, rj) in rb.joints.into_iter().enumerate() {
         let jp = bp.key("joints").index(ji);
-        let joint = validate_joint(rj, &jp, src)?;
+        let joint = validate_joint(rj, &jp, units, src)?;
         if let Some(first) = ids.insert(joint.id, ji) {
             return Err(src.error(
                 &jp.key("id"),
@@ -192,7 +226,12 @@ fn bus(
     })
 }
 
-fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointConfig, ConfigError> {
+fn validate_joint(
+    rj: RawJoint,
+    jp: &FieldPath,
+    units: Units,
+    src: &Source,
+) -> Result<JointConfig, ConfigError> {
     if rj.name.trim().is_empty() {
         return Err(src.error(&jp.key("name"), "must not be empty"));
     }
@@ -212,17 +251,10 @@ fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointCon
             format!("unknown model `{}` (known: {})", rj.model, known.join(", ")),
         ));
     };
-    for (field, v) in [("min", rj.min), ("max", rj.max), ("offset", rj.offset)] {
-        if !v.is_finite() {
-            return Err(src.error(&jp.key(field), "must be a finite number"));
-        }
-    }
-    if rj.min >= rj.max {
-        return Err(src.error(
-            &jp.key("max"),
-            format!("max ({}) must be greater than min ({})", rj.max, rj.min),
-        ));
-    }
+    let (min, max) = match rj.mode {
+        JointMode::Position => position_limits(&rj, jp, src)?,
+        JointMode::Wheel => wheel_fields(&rj, model, jp, src)?,
+    };
     for (field, v) in [
         ("max_velocity", Some(rj.max_velocity)),
         ("max_acceleration", Some(rj.max_acceleration)),
@@ -234,19 +266,31 @@ fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointCon
             }
         }
     }
+    if rj.mode == JointMode::Wheel {
+        wheel_speed(&rj, model, units, jp, src)?;
+    }
+    let servo = match &rj.servo {
+        None => None,
+        Some(raw) => Some(servo::settings(raw, model, units).map_err(|r| {
+            let reason = format!("joint `{}`: {}", rj.name, r.reason);
+            src.error(&jp.key("servo").key(r.setting), reason)
+        })?),
+    };
     let joint = JointConfig {
         name: rj.name,
         id,
         model,
-        min: rj.min,
-        max: rj.max,
+        mode: rj.mode,
+        min,
+        max,
         max_velocity: rj.max_velocity,
         max_acceleration: rj.max_acceleration,
         max_jerk: rj.max_jerk,
-        offset: rj.offset,
+        offset: rj.offset.unwrap_or(0.0),
         inverted: rj.inverted,
         home: rj.home,
         calibration: None,
+        servo,
     };
     if let Some(home) = joint.home {
         if !(home >= joint.min && home <= joint.max) {
@@ -257,6 +301,114 @@ fn validate_joint(rj: RawJoint, jp: &FieldPath, src: &Source) -> Result<JointCon
         }
     }
     Ok(joint)
+}
+
+/// A position joint's `min` and `max`: both given, finite and in order
+/// (and its `offset` finite).
+fn position_limits(rj: &RawJoint, jp: &FieldPath, src: &Source) -> Result<(f64, f64), ConfigError> {
+    let (Some(min), Some(max)) = (rj.min, rj.max) else {
+        // Where serde reports a missing field: the joint's mapping.
+        let (field, what) = if rj.min.is_none() {
+            ("min", "lowest")
+        } else {
+            ("max", "highest")
+        };
+        return Err(src.error(
+            jp,
+            format!(
+                "missing field `{field}`: joint `{}` is a position joint and needs its {what} \
+                 position, in the file's units (a wheel says `mode: wheel`)",
+                rj.name
+            ),
+        ));
+    };
+    let offset = rj.offset.unwrap_or(0.0);
+    for (field, v) in [("min", min), ("max", max), ("offset", offset)] {
+        if !v.is_finite() {
+            return Err(src.error(&jp.key(field), "must be a finite number"));
+        }
+    }
+    if min >= max {
+        return Err(src.error(
+            &jp.key("max"),
+            format!("max ({max}) must be greater than min ({min})"),
+        ));
+    }
+    Ok((min, max))
+}
+
+/// A wheel's position limits (0, 0, unused) once it is checked to give no
+/// position fields and its model to have a constant-speed mode.
+fn wheel_fields(
+    rj: &RawJoint,
+    model: &Model,
+    jp: &FieldPath,
+    src: &Source,
+) -> Result<(f64, f64), ConfigError> {
+    for (field, given) in [
+        ("min", rj.min.is_some()),
+        ("max", rj.max.is_some()),
+        ("home", rj.home.is_some()),
+        ("offset", rj.offset.is_some()),
+    ] {
+        if given {
+            return Err(src.error(
+                &jp.key(field),
+                format!(
+                    "joint `{}` is a wheel: a wheel turns without end and its target is a \
+                     speed, so it takes no `{field}:`; remove it",
+                    rj.name
+                ),
+            ));
+        }
+    }
+    let has_mode = |m: &Model| m.map().get("mode").is_some();
+    if !has_mode(model) {
+        let wheels: Vec<&str> = MODELS
+            .iter()
+            .filter(|m| has_mode(m))
+            .map(|m| m.name)
+            .collect();
+        return Err(src.error(
+            &jp.key("mode"),
+            format!(
+                "joint `{}` is a wheel, but the {} has no `mode` register to turn at a \
+                 constant speed; use a model that has one ({})",
+                rj.name,
+                model.name,
+                wheels.join(", ")
+            ),
+        ));
+    }
+    Ok((0.0, 0.0))
+}
+
+/// Refuses a wheel whose `max_velocity` is above its model's top speed
+/// ([`Model::fastest_profile`]), converted to `units`.
+fn wheel_speed(
+    rj: &RawJoint,
+    model: &Model,
+    units: Units,
+    jp: &FieldPath,
+    src: &Source,
+) -> Result<(), ConfigError> {
+    let Some((top_deg_s, _)) = model.fastest_profile() else {
+        return Ok(());
+    };
+    let top = units.from_rad(top_deg_s.to_radians());
+    // Room for the rounding of the conversion: a top speed computed from
+    // the same figures passes.
+    if rj.max_velocity <= top * (1.0 + 1e-9) {
+        return Ok(());
+    }
+    Err(src.error(
+        &jp.key("max_velocity"),
+        format!(
+            "joint `{}` is a wheel whose max_velocity {} {units}/s is above what the {} can \
+             turn at, {top:.1} {units}/s ({} steps/s)",
+            rj.name, rj.max_velocity, model.name, model.max_speed
+        ),
+    ))
 }
 
 /// The calibration pose in joint order: every joint named exists and its
@@ -271,6 +423,12 @@ fn calibration_pose(
         let Some(joint) = robot.joint(name) else {
             return Err(src.key_error(&field.key(name), format!("no joint `{name}`")));
         };
+        if joint.is_wheel() {
+            return Err(src.key_error(
+                &field.key(name),
+                format!("joint `{name}` is a wheel: it turns without end and has no pose"),
+            ));
+        }
         if !(v >= joint.min && v <= joint.max) {
             return Err(src.error(
                 &field.key(name),
@@ -289,7 +447,9 @@ fn calibration_pose(
 pub(crate) fn check_servo_range(robot: &Robot, src: &Source) -> Result<(), ConfigError> {
     let root = FieldPath::root();
     for (bi, bus) in robot.buses.iter().enumerate() {
-        for (ji, joint) in bus.joints.iter().enumerate() {
+        // A wheel's limits are no positions (see `JointConfig::min`).
+        let positions = bus.joints.iter().enumerate().filter(|(_, j)| !j.is_wheel());
+        for (ji, joint) in positions {
             let map = crate::JointMap::new(joint, robot.units);
             let jp = root.key("buses").index(bi).key("joints").index(ji);
             for (field, v) in [("min", joint.min), ("max", joint.max)] {

@@ -10,6 +10,8 @@ fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointC
         name: "j".into(),
         id: 1,
         model: model_by_name(model).expect("known model"),
+        // A position joint (`JointMode::Position`, the default).
+        mode: Default::default(),
         min,
         max,
         max_velocity: 100.0,
@@ -19,6 +21,7 @@ fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointC
         inverted,
         home: None,
         calibration: None,
+        servo: None,
     }
 }
 

@@ -10,3 +10,4 @@ mod config_files;
 mod config_mapping;
 mod config_motion;
 mod config_pose_arg;
+mod config_wheel_servo;

@@ -5,6 +5,8 @@
 //! located in the file) and `servo` (a joint's mode and the `servo:`
 //! settings, turned into register writes of its model).
 
+mod base;
+mod loading;
 mod raw;
 mod servo;
 #[cfg(test)]
@@ -20,9 +22,10 @@ use servobus_protocol::registers::Model;
 
 use super::calibration::JointCalibration;
 use super::error::{ConfigError, Source};
-use super::locate::FieldPath;
 use super::Units;
-use raw::RawRobot;
+pub use base::{BaseTarget, BaseTargetError, WheelTargets};
+use loading::{design_of, load_design, rate_fits, with_calibration};
+pub(crate) use loading::{load_calibrated, require_calibration};
 pub use servo::{JointMode, ServoSettings, ServoWrite};
 pub(crate) use validate::{check_rate, check_servo_range};
 
@@ -422,80 +425,4 @@ pub fn load_robot<'a>(
         return Ok(robot);
     }
     rate_fits(robot, &source)
-}
-
-/// Refuses a robot whose robot file (`source`) names a calibration file
-/// that does not exist.
-pub(crate) fn require_calibration(robot: &Robot, source: &Source) -> Result<(), ConfigError> {
-    let RobotCalibration::Missing(file) = &robot.calibration else {
-        return Ok(());
-    };
-    Err(source.error(
-        &FieldPath::root().key("calibration"),
-        format!(
-            "the calibration file {} does not exist; motions are planned and played within \
-             the calibrated limits: calibrate first, on the robot's servos \
-             (`servobus calibrate --robot {} --port <PORT> -o {}`), \
-             or remove `calibration:` to use the robot as designed",
-            file.display(),
-            source.path.display(),
-            file.display()
-        ),
-    ))
-}
-
-/// Loads a robot file and applies its calibration (or `calibration`, which
-/// takes precedence over the file's `calibration:`).
-pub(crate) fn load_calibrated(
-    path: &Path,
-    calibration: Option<&Path>,
-) -> Result<(Robot, Source), ConfigError> {
-    let (robot, source, named) = load_design(path)?;
-    with_calibration(robot, source, named, calibration)
-}
-
-/// `robot` with `calibration` applied, or else the file it `named`.
-fn with_calibration(
-    robot: Robot,
-    source: Source,
-    named: Option<PathBuf>,
-    calibration: Option<&Path>,
-) -> Result<(Robot, Source), ConfigError> {
-    let robot = match calibration.map(Path::to_owned).or(named) {
-        Some(file) if calibration.is_some() || file.exists() => {
-            super::calibrated::apply(robot, &file)?
-        }
-        Some(file) => Robot {
-            calibration: RobotCalibration::Missing(file),
-            ..robot
-        },
-        None => robot,
-    };
-    Ok((robot, source))
-}
-
-/// `robot` when its default rate fits every bus (its file's `rate:`).
-fn rate_fits(robot: Robot, source: &Source) -> Result<Robot, ConfigError> {
-    check_rate(
-        &robot,
-        source,
-        robot.rate_hz,
-        &FieldPath::root().key("rate"),
-    )?;
-    Ok(robot)
-}
-
-fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
-    let source = Source::read(path)?;
-    design_of(source, path.parent().unwrap_or(Path::new("")))
-}
-
-/// The robot as designed in `source`, and the calibration file it names
-/// (relative to `dir`).
-fn design_of(source: Source, dir: &Path) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
-    let raw: RawRobot = source.parse()?;
-    let named = raw.calibration.as_ref().map(|rel| dir.join(rel));
-    let robot = validate::robot(raw, &source)?;
-    check_servo_range(&robot, &source)?;
-    Ok((robot, source, named))
 }

@@ -6,7 +6,9 @@
 //! <angle>}}`, or an action chunk, `{"chunk": {"t0": <seconds, optional>,
 //! "dt": <seconds>, "joints": {"<name>": [<angle>, ...]}}}`, angles in the
 //! robot file's units ([`servobus_robot::stream`]); a line may name some
-//! joints only (the others keep their targets). A malformed line, one
+//! joints only (the others keep their targets). A robot with a mobile base
+//! also takes `{"base": {"x": m/s, "y": m/s, "theta": <units>/s}}`: its
+//! wheels' speeds, scaled together within their limits. A malformed line, one
 //! longer than 1 MiB or one that is not UTF-8 is reported on standard
 //! error with its number, skipped and counted. End of input stops the
 //! robot (jerk limited) and ends the run with its report: on standard
@@ -20,12 +22,12 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use servobus_config::{load_robot, RobotOptions, Units};
+use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::{
     live_options, Command, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry,
 };
 
-use servobus_robot::stream::{parse_line, MAX_LINE_BYTES};
+use servobus_robot::stream::{parse_line_for, MAX_LINE_BYTES};
 
 use crate::shared::out::{errln, outln};
 use crate::shared::ports::start_live;
@@ -69,7 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let commands = runner.commands();
-    let units = robot.units;
+    let lines_robot = robot.clone();
     // Standard input on a thread of its own: the telemetry is written
     // meanwhile. End of input stops the run.
     let skipped = std::sync::Arc::new(AtomicU64::new(0));
@@ -77,7 +79,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     std::thread::Builder::new()
         .name("servobus-stdin".into())
         .spawn(move || {
-            read_targets(std::io::stdin().lock(), &targets, units, &skips);
+            read_targets(std::io::stdin().lock(), &targets, &lines_robot, &skips);
             let _ = commands.send(Command::Stop);
         })?;
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
@@ -136,7 +138,7 @@ fn next_line(input: &mut impl BufRead, buf: &mut Vec<u8>) -> Result<(), bool> {
 fn read_targets(
     mut input: impl BufRead,
     targets: &TargetSender,
-    units: Units,
+    robot: &Robot,
     skipped: &AtomicU64,
 ) {
     let skip = || skipped.fetch_add(1, Ordering::Relaxed);
@@ -164,7 +166,7 @@ fn read_targets(
             continue;
         }
         let arrival = started.elapsed().as_secs_f64();
-        let input = match parse_line(line, units, arrival) {
+        let input = match parse_line_for(line, robot, arrival) {
             Ok(parsed) => parsed,
             Err(why) => {
                 errln!("line {n}: {why}; skipped");

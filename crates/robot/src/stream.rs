@@ -6,12 +6,14 @@
 //! |---|---|
 //! | `{"t": s, "joints": {"<name>": angle}}` | a target; `t` (the sender's clock, s) optional |
 //! | `{"chunk": {"t0": s, "dt": s, "joints": {"<name>": [angle, ...]}}}` | an action chunk: points `dt` apart from `t0` (optional: on arrival) |
+//! | `{"t": s, "base": {"x": m/s, "y": m/s, "theta": units/s}}` | a mobile base's velocity ([`parse_line_for`]): its wheels' speeds, with `joints` or alone |
 //!
 //! A target names some joints or all (the others keep theirs); a chunk's
-//! joints each give one angle per point. What a line means is checked
-//! against the robot when it is sent ([`TargetSender`]).
+//! joints each give one angle per point; a wheel joint's value is a speed
+//! (units/s). What a line means is checked against the robot when it is
+//! sent ([`TargetSender`]).
 
-use servobus_config::Units;
+use servobus_config::{BaseTarget, Robot, Units};
 use servobus_runtime::{Chunk, LiveTarget, TargetError, TargetSender};
 
 /// The longest line taken, bytes (as the longest file servobus reads).
@@ -55,19 +57,46 @@ fn err(why: impl Into<String>) -> LineError {
 /// # Errors
 /// [`LineError`] saying what is wrong with the line.
 pub fn parse_line(line: &str, units: Units, arrival: f64) -> Result<Input, LineError> {
+    parse(line, units, None, arrival)
+}
+
+/// [`parse_line`] for `robot`, whose base (if it has one) a `base` velocity
+/// drives: its wheel joints' speeds ([`Robot::wheel_targets`], all scaled
+/// together within their limits), joined to the line's `joints`.
+///
+/// # Errors
+/// [`LineError`] saying what is wrong with the line, or why the base
+/// cannot move so (no base, a differential base sideways), or a wheel
+/// given both in `joints` and by the base.
+pub fn parse_line_for(line: &str, robot: &Robot, arrival: f64) -> Result<Input, LineError> {
+    parse(line, robot.units, Some(robot), arrival)
+}
+
+/// Reads one line for [`parse_line`] and [`parse_line_for`].
+fn parse(
+    line: &str,
+    units: Units,
+    robot: Option<&Robot>,
+    arrival: f64,
+) -> Result<Input, LineError> {
+    const SHAPE: &str = "give {\"joints\": {\"<name>\": angle}}";
     let value: serde_json::Value =
         serde_json::from_str(line).map_err(|e| err(format!("not JSON: {e}")))?;
     let obj = value
         .as_object()
-        .ok_or_else(|| err("not a JSON object: give {\"joints\": {\"<name>\": angle}}"))?;
+        .ok_or_else(|| err(format!("not a JSON object: {SHAPE}")))?;
     if let Some(chunk) = obj.get("chunk") {
         return parse_chunk(chunk, units).map(Input::Chunk);
     }
     let t = number_or_null(obj.get("t"), "t")?;
-    let joints = obj
-        .get("joints")
-        .and_then(|j| j.as_object())
-        .ok_or_else(|| err("no `joints` object: give {\"joints\": {\"<name>\": angle}}"))?;
+    let base = obj.get("base");
+    let joints = match obj.get("joints") {
+        Some(j) => j
+            .as_object()
+            .ok_or_else(|| err(format!("`joints` is not an object: {SHAPE}")))?,
+        None if base.is_some() => &serde_json::Map::new(),
+        None => return Err(err(format!("no `joints` object: {SHAPE}"))),
+    };
     let mut out = Vec::with_capacity(joints.len());
     for (name, angle) in joints {
         let a = angle
@@ -75,7 +104,43 @@ pub fn parse_line(line: &str, units: Units, arrival: f64) -> Result<Input, LineE
             .ok_or_else(|| err(format!("joint `{name}`: the angle is not a number")))?;
         out.push((name.clone(), units.to_rad(a)));
     }
+    if let Some(base) = base {
+        let robot = robot.ok_or_else(|| err("a `base` target needs the robot's base"))?;
+        for (wheel, speed) in wheel_speeds(base, robot)? {
+            if out.iter().any(|(n, _)| *n == wheel) {
+                return Err(err(format!(
+                    "wheel `{wheel}` is driven by the `base` target: give its speed in `joints` or the base's velocity, not both"
+                )));
+            }
+            out.push((wheel, speed));
+        }
+    }
     Ok(Input::Target(LiveTarget::named(t.unwrap_or(arrival), out)))
+}
+
+/// The wheel speeds (rad/s) of a line's `base` velocity on `robot`.
+fn wheel_speeds(base: &serde_json::Value, robot: &Robot) -> Result<Vec<(String, f64)>, LineError> {
+    const SHAPE: &str = "give {\"base\": {\"x\": m/s, \"y\": m/s, \"theta\": units/s}}";
+    let obj = base
+        .as_object()
+        .ok_or_else(|| err(format!("`base` is not an object: {SHAPE}")))?;
+    if let Some(key) = obj
+        .keys()
+        .find(|k| !["x", "y", "theta"].contains(&k.as_str()))
+    {
+        return Err(err(format!("`base.{key}`: no such field: {SHAPE}")));
+    }
+    let field =
+        |k: &str| number_or_null(obj.get(k), &format!("base.{k}")).map(|v| v.unwrap_or(0.0));
+    let target = BaseTarget {
+        x: field("x")?,
+        y: field("y")?,
+        theta: field("theta")?,
+    };
+    robot
+        .wheel_targets(&target)
+        .map(|w| w.wheels)
+        .map_err(|e| err(e.to_string()))
 }
 
 /// A number, absent, or null.
@@ -141,6 +206,63 @@ mod tests {
         );
         let want = Chunk::named(None, 0.02, vec![("a".into(), vec![0.0, 1.0])]);
         assert_eq!(c, Ok(Input::Chunk(want)));
+    }
+
+    /// A cart: an arm joint and a differential base of 50 mm wheels 200 mm
+    /// apart, at 180 deg/s at most.
+    fn cart() -> Robot {
+        let text = "name: cart\nunits: deg\nbuses:\n  - name: b\n    joints:\n      \
+             - {name: arm, id: 1, model: sts3215, min: -90, max: 90, max_velocity: 100, max_acceleration: 400}\n      \
+             - {name: l, id: 2, model: sts3215, mode: wheel, max_velocity: 180, max_acceleration: 900}\n      \
+             - {name: r, id: 3, model: sts3215, mode: wheel, max_velocity: 180, max_acceleration: 900}\n\
+             base:\n  differential: {wheel_radius_mm: 50, track_mm: 200, left: l, right: r}\n";
+        let source = servobus_config::RobotSource::Text {
+            name: std::path::Path::new("<text>"),
+            text,
+        };
+        servobus_config::load_robot(source, &servobus_config::RobotOptions::default())
+            .expect("the cart loads")
+    }
+
+    #[test]
+    fn a_base_velocity_is_its_wheels_speeds_with_the_lines_joints() {
+        let cart = cart();
+        let Ok(Input::Target(t)) = parse_line_for(
+            r#"{"t": 2, "joints": {"arm": 10}, "base": {"x": 0.1}}"#,
+            &cart,
+            9.0,
+        ) else {
+            panic!("a target");
+        };
+        assert_eq!(
+            t,
+            LiveTarget::named(
+                2.0,
+                vec![
+                    ("arm".into(), 10f64.to_radians()),
+                    ("l".into(), 2.0),
+                    ("r".into(), 2.0),
+                ]
+            )
+        );
+        let Ok(Input::Target(t)) = parse_line_for(r#"{"base": {"theta": 0}}"#, &cart, 9.0) else {
+            panic!("a base alone is a target");
+        };
+        assert_eq!(
+            t,
+            LiveTarget::named(9.0, vec![("l".into(), 0.0), ("r".into(), 0.0)])
+        );
+        let why = |line: &str| match parse_line_for(line, &cart, 0.0) {
+            Err(e) => e.to_string(),
+            Ok(i) => panic!("{line} parsed: {i:?}"),
+        };
+        assert!(why(r#"{"base": {"y": 0.1}}"#).contains("sideways"));
+        assert!(why(r#"{"base": {"z": 1}}"#).contains("`base.z`"));
+        assert!(why(r#"{"base": {"x": "fast"}}"#).contains("`base.x` is not a number"));
+        assert!(why(r#"{"joints": {"l": 1}, "base": {"x": 0.1}}"#).contains("not both"));
+        assert!(why(r#"{"base": 3}"#).contains("not an object"));
+        // Without the robot, or on a robot without a base: refused.
+        assert!(parse_line(r#"{"base": {"x": 0.1}}"#, Units::Deg, 0.0).is_err());
     }
 
     #[test]

@@ -84,6 +84,8 @@ class Stream:
         """Sends an action chunk (dt spacing or times from now)."""
     def send(self, joints: List[Tuple[str, float]]) -> int:
         """Sends a target; returns how many angles were clamped."""
+    def send_base(self, x: float, y: float, theta: float) -> int:
+        """Sends a mobile base's velocity (m/s, m/s, robot units/s)."""
     def state(
         self,
     ) -> Tuple[float, List[float], List[float], List[float], List[float], List[int], List[str]]:

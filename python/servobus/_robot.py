@@ -219,6 +219,16 @@ class Stream:
         the joint limits and clamped."""
         return self._stream.send([(str(k), float(v)) for k, v in joints.items()])
 
+    def send_base(self, x: float = 0.0, y: float = 0.0, theta: float = 0.0) -> int:
+        """Drives the robot's mobile base (a ``base:`` section in its robot
+        file): ``x`` forward and ``y`` left in m/s, ``theta`` turning
+        counter-clockwise in the robot's units per second. The wheels'
+        speeds are scaled together within their limits, so the base keeps
+        its direction of travel; the live timeout stops it when the sends
+        stop. Raises :class:`servobus.UsageError` for a robot without a base
+        or a velocity it cannot take (a differential base sideways)."""
+        return self._stream.send_base(float(x), float(y), float(theta))
+
     def send_chunk(self, times_or_dt, positions) -> int:
         """Sends an action chunk, as a policy (ACT, diffusion, pi0) emits
         one: ``times_or_dt`` is the points' spacing in s (a number) or

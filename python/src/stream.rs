@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use pyo3::prelude::*;
-use servobus_config::Units;
+use servobus_config::{BaseTarget, Units};
 use servobus_robot::{
     Chunk, Command, LiveTarget, Run, RunOptions, TargetError, TargetSender, Telemetry,
 };
@@ -52,6 +52,8 @@ pub struct Stream {
     runner: Mutex<Option<Run>>,
     targets: TargetSender,
     units: Units,
+    /// The robot, whose base (if any) `send_base` drives.
+    config: servobus_config::Robot,
     started: Instant,
     state: Arc<Mutex<State>>,
     watcher: Mutex<Option<std::thread::JoinHandle<()>>>,
@@ -123,6 +125,7 @@ impl Stream {
             targets: runner.targets(),
             runner: Mutex::new(Some(runner)),
             units: config.units,
+            config: config.clone(),
             started: Instant::now(),
             state,
             watcher: Mutex::new(Some(watcher)),
@@ -172,6 +175,30 @@ impl Stream {
             .collect();
         let sent = py.allow_threads(|| self.targets.send(LiveTarget::named(stamp, joints)));
         match sent {
+            Ok(clamped) => Ok(clamped),
+            Err(TargetError::Ended) => {
+                Err(Failure::new(Class::Error, "the stream has ended").into())
+            }
+            Err(e) => Err(Failure::usage(chain(&e)).into()),
+        }
+    }
+
+    /// Sends a velocity to the robot's mobile base: `x` and `y` in m/s
+    /// (forward, left), `theta` in the robot's units per second
+    /// (counter-clockwise): its wheels' speeds, all scaled together within
+    /// their limits so that the direction of travel is kept. Returns how
+    /// many wheel speeds were clamped (0 once scaled). Raises `UsageError`
+    /// for a robot without a base or a velocity it cannot take (a
+    /// differential base sideways, a number that is not finite), `Error`
+    /// once the run has ended.
+    fn send_base(&self, py: Python<'_>, x: f64, y: f64, theta: f64) -> PyResult<usize> {
+        let stamp = self.started.elapsed().as_secs_f64();
+        let wheels = self
+            .config
+            .wheel_targets(&BaseTarget { x, y, theta })
+            .map_err(|e| Failure::usage(e.to_string()))?;
+        let target = LiveTarget::named(stamp, wheels.wheels);
+        match py.allow_threads(|| self.targets.send(target)) {
             Ok(clamped) => Ok(clamped),
             Err(TargetError::Ended) => {
                 Err(Failure::new(Class::Error, "the stream has ended").into())

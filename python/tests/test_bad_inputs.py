@@ -119,6 +119,15 @@ def test_a_chunk_time_beyond_an_hour_or_not_a_number_is_a_usage_error(times):
         assert stream.send_chunk([0.0, 0.1], {"shoulder_pan": [0.0, 1.0]}) == 0
 
 
+def test_a_base_velocity_for_a_robot_without_a_base_is_a_usage_error_that_says_so():
+    with servobus.Robot("so101").stream(timeout=1.0) as stream:
+        with pytest.raises(servobus.UsageError) as caught:
+            stream.send_base(0.1, 0.0, 0.0)
+        assert "no mobile base" in str(caught.value)
+        # The stream goes on taking targets.
+        assert stream.send({"shoulder_pan": 1.0}) == 0
+
+
 def test_calibrate_refuses_a_directory_as_output_before_it_starts(tmp_path):
     steps = []
     robot = servobus.Robot("so101")

@@ -115,6 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         joints: robot.joints().map(|j| j.name.clone()).collect(),
         units: robot.units,
         rate_hz,
+        config: Some(robot.clone()),
     };
     let robot_path = robot.path.clone();
     let planner =

@@ -6,7 +6,7 @@
 //! | key | direction | what |
 //! |---|---|---|
 //! | `state` | out, every few cycles | [`wire::StateMessage`] as JSON |
-//! | `target` | in | live targets, `{"joints": {"<name>": angle}}`, and action chunks, `{"chunk": {"t0", "dt", "joints": {"<name>": [angle, ...]}}}` |
+//! | `target` | in | live targets, `{"joints": {"<name>": angle}}`, a mobile base's velocity `{"base": {"x", "y", "theta"}}`, and action chunks, `{"chunk": {"t0", "dt", "joints": {"<name>": [angle, ...]}}}` |
 //! | `command` | in | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off`, `shutdown` |
 //! | `report` | queryable | the run's report as JSON |
 //! | `alive` | liveliness token | present while the node runs |

@@ -45,8 +45,13 @@ pub enum WireError {
 pub struct TargetMessage {
     /// `t`, when the sender stamped the target.
     pub t: Option<f64>,
-    /// Angles by joint name, in the robot file's units.
+    /// Angles by joint name, in the robot file's units (a wheel joint's:
+    /// its speed, units/s).
     pub joints: Vec<(String, f64)>,
+    /// `base`, a mobile base's velocity: `{"x": m/s, "y": m/s, "theta":
+    /// units/s}` (each optional, 0 when absent); its wheels' speeds are the
+    /// robot's to work out ([`Robot::wheel_targets`](servobus_robot::config::Robot::wheel_targets)).
+    pub base: Option<servobus_robot::config::BaseTarget>,
     /// `sent_ns`, when the sender says when it published the target (ns
     /// since the UNIX epoch): the target's latency is then counted from
     /// there, network included (on machines whose clocks agree).
@@ -137,10 +142,18 @@ pub fn parse_target(payload: &[u8]) -> Result<TargetMessage, WireError> {
 fn target_of(obj: &Object) -> Result<TargetMessage, WireError> {
     let t = number(obj, "t").map_err(WireError::Target)?;
     let sent_ns = sent_ns(obj).map_err(WireError::Target)?;
-    let joints = obj
-        .get("joints")
-        .and_then(|j| j.as_object())
-        .ok_or_else(|| WireError::Target("no `joints` object".into()))?;
+    let base = match obj.get("base") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(b) => Some(base_of(b)?),
+    };
+    let none = Object::new();
+    let joints = match obj.get("joints") {
+        Some(j) => j
+            .as_object()
+            .ok_or_else(|| WireError::Target("`joints` is not an object".into()))?,
+        None if base.is_some() => &none,
+        None => return Err(WireError::Target("no `joints` object".into())),
+    };
     let mut out = Vec::with_capacity(joints.len());
     for (name, angle) in joints {
         let a = angle.as_f64().ok_or_else(|| {
@@ -151,7 +164,29 @@ fn target_of(obj: &Object) -> Result<TargetMessage, WireError> {
     Ok(TargetMessage {
         t,
         joints: out,
+        base,
         sent_ns,
+    })
+}
+
+/// A target's `base`: `{"x": m/s, "y": m/s, "theta": units/s}`, each
+/// optional (0), nothing else.
+fn base_of(value: &serde_json::Value) -> Result<servobus_robot::config::BaseTarget, WireError> {
+    let bad = |why: String| WireError::Target(format!("base: {why}"));
+    let obj = value.as_object().ok_or_else(|| {
+        bad("not an object: give {\"x\": m/s, \"y\": m/s, \"theta\": units/s}".into())
+    })?;
+    if let Some(key) = obj
+        .keys()
+        .find(|k| !["x", "y", "theta"].contains(&k.as_str()))
+    {
+        return Err(bad(format!("no field `{key}` (x, y and theta are)")));
+    }
+    let field = |k: &str| number(obj, k).map(|v| v.unwrap_or(0.0)).map_err(bad);
+    Ok(servobus_robot::config::BaseTarget {
+        x: field("x")?,
+        y: field("y")?,
+        theta: field("theta")?,
     })
 }
 

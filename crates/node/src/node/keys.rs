@@ -108,11 +108,13 @@ fn subscribe_targets(
     let to = inputs(runner);
     let shared = Arc::clone(shared);
     let units = robot.units;
+    let config = robot.config.clone();
     let started = Instant::now();
     session
         .declare_subscriber(format!("{base}/target"))
         .callback(move |sample| {
-            take_target(&sample.payload().to_bytes(), &to, units, started, &shared);
+            let robot = (units, config.as_ref());
+            take_target(&sample.payload().to_bytes(), &to, robot, started, &shared);
         })
         .wait()
         .map_err(zerr)

@@ -39,6 +39,10 @@ pub struct RobotInfo {
     pub units: Units,
     /// The control rate, Hz.
     pub rate_hz: f64,
+    /// The robot as its file describes it, for targets that need more than
+    /// names: a mobile base's velocity becomes its wheels' speeds. `None`:
+    /// base targets are refused (counted as malformed).
+    pub config: Option<servobus_robot::config::Robot>,
 }
 
 /// What the node reports at the end: the run's report and its own counts.

@@ -20,11 +20,11 @@
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant, SystemTime};
 
-use servobus_robot::config::Units;
+use servobus_robot::config::{Robot, Units};
 use servobus_robot::{Chunk, Command, CommandSender, LiveTarget, TargetError, TargetSender};
 
 use super::{lock, unix_ns, Planner, Shared};
-use crate::wire::{parse_command, parse_live, LiveMessage, NodeCommand};
+use crate::wire::{parse_command, parse_live, LiveMessage, NodeCommand, TargetMessage};
 
 /// The stamp of the joint-less target that switches a running path to
 /// live following on `stop`: far before any sender's stamp, so that the
@@ -54,17 +54,30 @@ pub(super) struct Inputs {
 pub(super) fn take_target(
     payload: &[u8],
     to: &Inputs,
-    units: Units,
+    robot: (Units, Option<&Robot>),
     started: Instant,
     shared: &Shared,
 ) {
+    let (units, config) = robot;
+    let malformed = |why: &dyn std::fmt::Display| {
+        shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
+        eprintln!("target: {why}; ignored");
+    };
     let msg = match parse_live(payload) {
         Ok(m) => m,
-        Err(why) => {
-            shared.counts.malformed.fetch_add(1, Ordering::Relaxed);
-            eprintln!("target: {why}; ignored");
-            return;
-        }
+        Err(why) => return malformed(&why),
+    };
+    // A base velocity becomes its wheels' speeds (rad/s) before anything is
+    // sent: one the robot cannot take moves nothing.
+    let wheels = match &msg {
+        LiveMessage::Target(TargetMessage {
+            base: Some(base), ..
+        }) => match config.map(|r| r.wheel_targets(base)) {
+            Some(Ok(w)) => w.wheels,
+            Some(Err(why)) => return malformed(&why),
+            None => return malformed(&"a `base` target needs the robot's base"),
+        },
+        _ => Vec::new(),
     };
     let taken = |sent_ns: Option<i64>| {
         // Counted from its publishing when the sender says when that was.
@@ -81,11 +94,12 @@ pub(super) fn take_target(
     let mut motion = lock(&shared.motion);
     let (sent, what) = match msg {
         LiveMessage::Target(m) => {
-            let joints = m
+            let mut joints: Vec<(String, f64)> = m
                 .joints
                 .into_iter()
                 .map(|(n, a)| (n, units.to_rad(a)))
                 .collect();
+            joints.extend(wheels);
             let stamp = m.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
             let target = LiveTarget::named(stamp, joints).taken_at(taken(m.sent_ns));
             (to.targets.send(target), "target")

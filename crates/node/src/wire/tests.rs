@@ -70,6 +70,7 @@ fn a_chunk_is_a_timed_list_per_joint() {
         LiveMessage::Target(TargetMessage {
             t: Some(1.0),
             joints: vec![("elbow_flex".to_string(), 30.0)],
+            base: None,
             sent_ns: None,
         })
     );
@@ -248,5 +249,30 @@ fn utc_times_by_hand() {
         "",
     ] {
         assert!(parse_utc(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn a_base_velocity_parses_with_or_without_joints_and_says_what_is_wrong() {
+    let m = parse_target(br#"{"base": {"x": 0.2, "theta": 30}}"#).expect("a base target");
+    assert_eq!(
+        m.base,
+        Some(servobus_robot::config::BaseTarget {
+            x: 0.2,
+            y: 0.0,
+            theta: 30.0
+        })
+    );
+    assert!(m.joints.is_empty());
+    let m = parse_target(br#"{"joints": {"gripper": 10}, "base": {"y": -0.1}}"#).expect("both");
+    assert_eq!(m.joints, vec![("gripper".to_string(), 10.0)]);
+    assert_eq!(m.base.map(|b| b.y), Some(-0.1));
+    for (payload, says) in [
+        (&br#"{"base": {"z": 1}}"#[..], "no field `z`"),
+        (br#"{"base": {"x": "fast"}}"#, "`x` is not a number"),
+        (br#"{"base": 2}"#, "not an object"),
+    ] {
+        let e = parse_target(payload).expect_err("malformed");
+        assert!(e.to_string().contains(says), "{e}");
     }
 }

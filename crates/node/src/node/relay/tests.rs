@@ -103,11 +103,11 @@ impl Node {
     }
 
     fn target(&self, payload: &str) {
-        let units = self.robot.units;
+        let robot = (self.robot.units, Some(&self.robot));
         take_target(
             payload.as_bytes(),
             &self.to,
-            units,
+            robot,
             self.started,
             &self.shared,
         );
@@ -311,4 +311,22 @@ fn chunks_are_followed_and_malformed_ones_never_move_the_robot() {
     let last = *pan.last().expect("cycles");
     assert!((last - 30.0).abs() < 0.5, "the chunk's end: {last}");
     node.assert_within_limits();
+}
+
+#[test]
+fn a_base_velocity_for_an_arm_without_a_base_is_malformed_and_moves_nothing() {
+    let mut node = Node::new();
+    assert!(node.run_for(40, |_, _| {}));
+    let before = node.commanded.last().expect("cycles").clone();
+    // With a joint as well: refused whole, the joint not moved either.
+    node.target(r#"{"joints": {"shoulder_pan": 20}, "base": {"x": 0.1}}"#);
+    node.target(r#"{"base": {"w": 1}}"#);
+    assert!(node.run_for(60, |_, _| {}));
+    assert!(
+        node.commanded[40..]
+            .iter()
+            .all(|r| r.iter().zip(&before).all(|(a, b)| (a - b).abs() < 1e-9)),
+        "a refused base target never moves the robot"
+    );
+    assert_eq!(node.shared.counts.malformed.load(Ordering::Relaxed), 2);
 }

@@ -18,12 +18,18 @@
 //! into the joint angle (a step moves far less than half a turn), so a joint
 //! that crosses the seam keeps a continuous angle. Stops clamp the angle and
 //! load the servo; the hand sets the angle of a joint whose torque is off and
-//! pushes on one whose torque is on.
+//! pushes on one whose torque is on, and may put an object in the joint's
+//! way ([`HandObject`]: what a gripper closes on).
 
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use servobus_protocol::registers::Model;
+
+mod object;
+
+use object::Contact;
+pub use object::{HandObject, DEFAULT_STIFFNESS, GIVE_SPEED_DEG_S, MAX_STIFFNESS};
 
 /// The shortest signed way from `b` to `a` on a sensor of `turn` ticks a
 /// turn, in `[-turn / 2, turn / 2)`: how far a full-turn sensor moved
@@ -82,9 +88,14 @@ impl Mount {
 /// keyframe before it to the one after it as if it were not there. Before
 /// its first keyframe and after its last the hand does not touch the joint
 /// (a person lets go); in between it holds it on the path.
+///
+/// The hand may also put an object in the joint's way
+/// ([`HandPath::with_object`]), there from the start whether or not the path
+/// has keyframes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct HandPath {
     keys: Vec<(f64, f64)>,
+    object: Option<HandObject>,
 }
 
 impl HandPath {
@@ -96,7 +107,19 @@ impl HandPath {
             .filter(|(t, a)| t.is_finite() && a.is_finite())
             .collect();
         keys.sort_by(|a, b| a.0.total_cmp(&b.0));
-        HandPath { keys }
+        HandPath { keys, object: None }
+    }
+
+    /// The same path with `object` in the joint's way (see [`HandObject`]).
+    #[must_use]
+    pub fn with_object(mut self, object: HandObject) -> HandPath {
+        self.object = Some(object);
+        self
+    }
+
+    /// The object the hand puts in the joint's way, if any.
+    pub fn object(&self) -> Option<HandObject> {
+        self.object
     }
 
     /// The keyframes, sorted by time.
@@ -294,6 +317,10 @@ pub(crate) struct Body {
     raw: f64,
     /// The servo's model: its sensor's resolution and range.
     model: &'static Model,
+    /// The hand's object as this body met it (its side), once it has.
+    contact: Option<Contact>,
+    /// The time of the last [`Body::settle`], s.
+    settled_at: Option<f64>,
 }
 
 impl Body {
@@ -306,6 +333,8 @@ impl Body {
             angle,
             raw: 0.0,
             model,
+            contact: None,
+            settled_at: None,
         };
         b.angle = b.clamp_to_stops(angle);
         b.raw = b.raw_of(b.angle);
@@ -374,13 +403,28 @@ impl Body {
     }
 
     /// The load (fraction of maximum torque, positive towards lower ticks)
-    /// with which the hand pushes a torque-on joint at `t`.
+    /// with which the hand and its object push a torque-on joint at `t`.
     pub(crate) fn hand_load(&self, t: f64) -> f64 {
-        let Some(target) = self.hand.as_ref().and_then(|h| h.angle_at(t)) else {
-            return 0.0;
+        let mut push = match self.hand.as_ref().and_then(|h| h.angle_at(t)) {
+            Some(target) => {
+                ((target - self.angle) / HAND_FULL_PUSH_DEG).clamp(-1.0, 1.0) * HAND_PUSH
+            }
+            None => 0.0,
         };
-        let push = ((target - self.angle) / HAND_FULL_PUSH_DEG).clamp(-1.0, 1.0) * HAND_PUSH;
+        if let Some(c) = self.contact_now() {
+            push += c.push(self.angle);
+        }
         -self.mount.direction * push
+    }
+
+    /// The hand's object as the body holds it: met at the present angle
+    /// unless it was met before.
+    fn contact_now(&self) -> Option<Contact> {
+        let object = self.hand.as_ref()?.object()?;
+        match self.contact {
+            Some(c) if c.object == object => Some(c),
+            _ => Some(Contact::new(object, self.angle)),
+        }
     }
 
     /// Whether the hand holds the joint at any time in `[t0, t1]`.
@@ -398,9 +442,16 @@ impl Body {
 
     /// The angle the body should take at `t` after the shaft moved to
     /// `raw`: the shaft's own angle, or the hand's when it holds a torque-off
-    /// joint, clamped to the stops. Returns the new sensor position when
-    /// the body overrides the shaft.
+    /// joint, clamped to the stops and kept out of the hand's object as far
+    /// as it gives way. Returns the new sensor position when the body
+    /// overrides the shaft.
     pub(crate) fn settle(&mut self, raw: f64, t: f64, torque_on: bool) -> Option<f64> {
+        // The object's side is decided where the joint is when it first
+        // meets it (before this step's move).
+        self.contact = self.contact_now();
+        let before = self.angle;
+        let dt = self.settled_at.map_or(0.0, |t0| t - t0);
+        self.settled_at = Some(t);
         self.follow(raw);
         let mut angle = self.angle;
         if !torque_on {
@@ -409,6 +460,9 @@ impl Body {
             }
         }
         angle = self.clamp_to_stops(angle);
+        if let Some(c) = &self.contact {
+            angle = c.admit(angle, before, dt, torque_on);
+        }
         if angle == self.angle {
             return None;
         }

@@ -146,9 +146,15 @@ impl Joint {
             let demand = d.load + error / d.full_effort_error;
             let limit = d.torque_limit;
             self.effort = demand.clamp(-limit, limit);
+            // The load overpowers the motor unless the motor drives the way
+            // the load pushes (a positive load pushes towards lower ticks):
+            // then both move the shaft, as a gripper backs out of an object
+            // squeezed at its torque limit.
+            let with_load = error * d.load < 0.0;
+            let overpowered = d.load.abs() > limit && !with_load;
             if d.blocked {
                 self.vel = 0.0;
-            } else if d.load.abs() > limit {
+            } else if overpowered {
                 // The load wins: the shaft is pushed back against the motor.
                 let excess = d.load.abs() - limit;
                 self.pos -= d.load.signum() * excess * SAG_SPEED * dt;
@@ -164,7 +170,7 @@ impl Joint {
                     self.pos += err * (1.0 - (-dt / d.lag_s).exp());
                 }
             }
-            let saturated = demand.abs() > limit && (d.blocked || d.load.abs() > limit);
+            let saturated = demand.abs() > limit && (d.blocked || overpowered);
             if saturated {
                 self.stalled_s += dt;
             } else {
@@ -263,5 +269,28 @@ mod tests {
         d.load = 0.5;
         j.step(&d, 0.1);
         assert!(j.pos < 2000.0);
+    }
+
+    #[test]
+    fn a_load_beyond_the_torque_limit_wins_unless_the_motor_drives_its_way() {
+        // The load (1.2 of a 1.0 limit) pushes towards lower ticks.
+        let mut d = drive(2200.0);
+        d.load = 1.2;
+        let mut j = Joint::at(2000.0, 25.0);
+        for _ in 0..200 {
+            j.step(&d, 0.001);
+        }
+        assert!(j.pos < 2000.0, "pushed back: {}", j.pos);
+        assert!(j.stalled_s > 0.19, "stalled {}", j.stalled_s);
+        // Driving down with the load, the shaft goes where both push, at
+        // once (not at the load's crawl).
+        let mut d = drive(1500.0);
+        d.load = 1.2;
+        let mut j = Joint::at(2000.0, 25.0);
+        for _ in 0..300 {
+            j.step(&d, 0.001);
+        }
+        // The load alone would have crawled 0.2 * 400 ticks/s * 0.3 s = 24.
+        assert!(j.pos < 1850.0, "{}", j.pos);
     }
 }

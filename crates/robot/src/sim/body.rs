@@ -13,6 +13,10 @@
 //! keyframes:
 //!   - {at: 0, pose: {shoulder_pan: 0}}
 //!   - {at: 2, pose: {shoulder_pan: 90}}
+//! # optional: an object in a joint's way, its surface at `at` deg, on the
+//! # side away from where the joint starts; `stiffness` in % of full torque
+//! # per degree of squeeze (default 20)
+//! object: {joint: gripper, at: 25, stiffness: 20}
 //! ```
 
 use std::collections::BTreeMap;
@@ -21,6 +25,7 @@ use std::path::Path;
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use serde::Deserialize;
+use servobus_sim::body::{HandObject, DEFAULT_STIFFNESS, MAX_STIFFNESS};
 use servobus_sim::{HandPath, Mount};
 
 use crate::config::limits::{Rounded, MAX_MOTION_DURATION_S};
@@ -219,7 +224,8 @@ fn limits_deg(robot: &Robot, j: &JointConfig) -> (f64, f64) {
 /// moves during one session with the simulator.
 pub const MAX_HAND_S: f64 = MAX_MOTION_DURATION_S;
 
-/// A hand's path for every joint it names, in the robot's joint order.
+/// A hand's path for every joint it names, in the robot's joint order,
+/// with the object it puts in a joint's way.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Hand {
     paths: Vec<Option<HandPath>>,
@@ -227,9 +233,28 @@ pub struct Hand {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-#[serde(expecting = "a hand file: a mapping with `keyframes:`")]
+#[serde(expecting = "a hand file: a mapping with `keyframes:` and optional `object:`")]
 struct RawHand {
+    #[serde(default)]
     keyframes: Vec<RawKey>,
+    #[serde(default)]
+    object: Option<RawObject>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(
+    expecting = "a hand's object: a mapping with `joint:`, `at:` (deg) and optional `stiffness:`"
+)]
+struct RawObject {
+    joint: String,
+    at: f64,
+    #[serde(default = "default_stiffness")]
+    stiffness: f64,
+}
+
+fn default_stiffness() -> f64 {
+    DEFAULT_STIFFNESS
 }
 
 #[derive(Deserialize)]
@@ -260,62 +285,224 @@ impl Hand {
         }
     }
 
+    /// The same hand with `object` in the way of joint `index` (robot
+    /// joint order; ignored past the last joint), in place of any object
+    /// the hand had there.
+    #[must_use]
+    pub fn with_object(mut self, index: usize, object: HandObject) -> Hand {
+        if let Some(p) = self.paths.get_mut(index) {
+            *p = Some(p.take().unwrap_or_default().with_object(object));
+        }
+        self
+    }
+
     /// Loads a hand file for `robot`.
     ///
     /// # Errors
     /// [`ConfigError`] naming the file, line, column and field of the first
     /// problem: an unknown joint, a time outside 0 to a day or not
-    /// after the previous keyframe's, an angle that is not a number.
+    /// after the previous keyframe's, an angle that is not a number, an
+    /// object on an unknown joint, at an angle that is not a number, or
+    /// with a stiffness not above 0 and at most [`MAX_STIFFNESS`].
     pub fn load(path: &Path, robot: &Robot) -> Result<Hand, ConfigError> {
         let src = Source::read(path)?;
         let raw: RawHand = src.parse()?;
         let names: Vec<&str> = robot.joints().map(|j| j.name.as_str()).collect();
-        let root = FieldPath::root().key("keyframes");
-        let mut keyframes = Vec::with_capacity(raw.keyframes.len());
-        let mut last = f64::NEG_INFINITY;
-        for (k, key) in raw.keyframes.iter().enumerate() {
-            let field = root.index(k);
-            if !(0.0..=MAX_HAND_S).contains(&key.at) {
-                return Err(src.error(
-                    &field.key("at"),
-                    format!(
-                        "must be a time from 0 to {MAX_HAND_S} s (a day) from the simulator's \
-                         start, got {}",
-                        Rounded(key.at)
-                    ),
-                ));
-            }
-            if key.at <= last {
-                return Err(src.error(
-                    &field.key("at"),
-                    format!("{} s is not after the previous keyframe's {last} s", key.at),
-                ));
-            }
-            last = key.at;
-            let mut pose = Vec::with_capacity(key.pose.len());
-            for (name, &deg) in &key.pose {
-                let f = field.key("pose").key(name);
-                let Some(i) = names.iter().position(|n| n == name) else {
-                    return Err(src.key_error(
-                        &f,
-                        format!(
-                            "no joint `{name}` in the robot (joints: {})",
-                            names.join(", ")
-                        ),
-                    ));
-                };
-                if !deg.is_finite() {
-                    return Err(src.error(&f, "must be an angle in degrees"));
-                }
-                pose.push((i, deg));
-            }
-            keyframes.push((key.at, pose));
+        let keyframes = keyframes(&src, &raw.keyframes, &names)?;
+        let mut hand = Hand::from_keyframes(robot, &keyframes);
+        if let Some(o) = &raw.object {
+            let (index, object) = object(&src, o, &names)?;
+            hand = hand.with_object(index, object);
         }
-        Ok(Hand::from_keyframes(robot, &keyframes))
+        Ok(hand)
     }
 
     /// The path of joint `index` (robot joint order), if the hand names it.
     pub fn path(&self, index: usize) -> Option<&HandPath> {
         self.paths.get(index).and_then(Option::as_ref)
+    }
+
+    /// The object in the way of joint `index` (robot joint order), if any.
+    pub fn object(&self, index: usize) -> Option<HandObject> {
+        self.path(index).and_then(HandPath::object)
+    }
+}
+
+/// A hand file's keyframes, checked, as `(time_s, [(joint index, deg)])`.
+type Keyframes = Vec<(f64, Vec<(usize, f64)>)>;
+
+/// Checks a hand file's keyframes against the robot's joint `names`.
+fn keyframes(src: &Source, raw: &[RawKey], names: &[&str]) -> Result<Keyframes, ConfigError> {
+    let root = FieldPath::root().key("keyframes");
+    let mut keyframes = Vec::with_capacity(raw.len());
+    let mut last = f64::NEG_INFINITY;
+    for (k, key) in raw.iter().enumerate() {
+        let field = root.index(k);
+        if !(0.0..=MAX_HAND_S).contains(&key.at) {
+            return Err(src.error(
+                &field.key("at"),
+                format!(
+                    "must be a time from 0 to {MAX_HAND_S} s (a day) from the simulator's \
+                         start, got {}",
+                    Rounded(key.at)
+                ),
+            ));
+        }
+        if key.at <= last {
+            return Err(src.error(
+                &field.key("at"),
+                format!("{} s is not after the previous keyframe's {last} s", key.at),
+            ));
+        }
+        last = key.at;
+        let mut pose = Vec::with_capacity(key.pose.len());
+        for (name, &deg) in &key.pose {
+            let f = field.key("pose").key(name);
+            let Some(i) = names.iter().position(|n| n == name) else {
+                return Err(src.key_error(
+                    &f,
+                    format!(
+                        "no joint `{name}` in the robot (joints: {})",
+                        names.join(", ")
+                    ),
+                ));
+            };
+            if !deg.is_finite() {
+                return Err(src.error(&f, "must be an angle in degrees"));
+            }
+            pose.push((i, deg));
+        }
+        keyframes.push((key.at, pose));
+    }
+    Ok(keyframes)
+}
+
+/// Checks a hand file's `object:`: the joint's index and the object.
+fn object(
+    src: &Source,
+    raw: &RawObject,
+    names: &[&str],
+) -> Result<(usize, HandObject), ConfigError> {
+    let field = FieldPath::root().key("object");
+    let Some(index) = names.iter().position(|n| *n == raw.joint) else {
+        return Err(src.error(
+            &field.key("joint"),
+            format!(
+                "no joint `{}` in the robot (joints: {})",
+                raw.joint,
+                names.join(", ")
+            ),
+        ));
+    };
+    if !raw.at.is_finite() {
+        return Err(src.error(
+            &field.key("at"),
+            "must be the angle in degrees of the object's surface",
+        ));
+    }
+    HandObject::new(raw.at, raw.stiffness)
+        .map(|o| (index, o))
+        .ok_or_else(|| {
+            src.error(
+                &field.key("stiffness"),
+                format!(
+                    "must be above 0 and at most {MAX_STIFFNESS} (% of full torque per degree of \
+                     squeeze; {DEFAULT_STIFFNESS} if left out), got {}",
+                    raw.stiffness
+                ),
+            )
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{load_robot, RobotOptions, RobotSource};
+
+    fn so101() -> Robot {
+        load_robot(RobotSource::Builtin("so101"), &RobotOptions::default()).expect("the arm")
+    }
+
+    /// Loads `yaml` as a hand file of the so101 (a file of its own per case).
+    fn load(name: &str, yaml: &str) -> Result<Hand, ConfigError> {
+        let dir = std::env::temp_dir().join(format!("servobus-hand-object-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join(format!("{name}.yaml"));
+        std::fs::write(&file, yaml).expect("writes");
+        Hand::load(&file, &so101())
+    }
+
+    fn gripper() -> usize {
+        so101()
+            .joints()
+            .position(|j| j.name == "gripper")
+            .expect("a gripper")
+    }
+
+    #[test]
+    fn a_hand_file_puts_an_object_in_a_joint_s_way() {
+        let yaml = "keyframes:\n  - {at: 0, pose: {shoulder_pan: 5}}\n\
+                    object: {joint: gripper, at: 25, stiffness: 40}\n";
+        let hand = load("full", yaml).expect("loads");
+        let o = hand.object(gripper()).expect("an object on the gripper");
+        assert_eq!((o.at_deg(), o.stiffness()), (25.0, 40.0));
+        assert_eq!(hand.object(0), None);
+        assert_eq!(hand.path(0).map(|p| p.keys().len()), Some(1));
+        // The gripper has no keyframes: the hand never holds it.
+        assert!(hand.path(gripper()).is_some_and(|p| p.keys().is_empty()));
+
+        let hand = load("bare", "object: {joint: gripper, at: -3}\n").expect("loads");
+        let o = hand.object(gripper()).expect("an object");
+        assert_eq!((o.at_deg(), o.stiffness()), (-3.0, DEFAULT_STIFFNESS));
+    }
+
+    #[test]
+    fn a_hand_file_without_an_object_has_none() {
+        let hand = load("none", "keyframes:\n  - {at: 0, pose: {gripper: 5}}\n").expect("loads");
+        assert!((0..6).all(|i| hand.object(i).is_none()));
+        let scripted = Hand::from_keyframes(&so101(), &[(0.0, vec![(gripper(), 5.0)])]);
+        assert_eq!(hand, scripted);
+    }
+
+    #[test]
+    fn a_bad_object_is_refused_naming_its_field() {
+        let cases = [
+            (
+                "joint",
+                "object: {joint: grip, at: 25}\n",
+                "object.joint",
+                "grip",
+            ),
+            (
+                "negative",
+                "object: {joint: gripper, at: 25, stiffness: -5}\n",
+                "object.stiffness",
+                "above 0",
+            ),
+            (
+                "zero",
+                "keyframes: []\nobject: {joint: gripper, at: 25, stiffness: 0}\n",
+                "object.stiffness",
+                "got 0",
+            ),
+            (
+                "nan",
+                "object: {joint: gripper, at: .nan}\n",
+                "object.at",
+                "degrees",
+            ),
+            (
+                "key",
+                "object: {joint: gripper, at: 25, stifness: 5}\n",
+                "object",
+                "stifness",
+            ),
+            ("missing", "object: {joint: gripper}\n", "object", "at"),
+        ];
+        for (name, yaml, field, says) in cases {
+            let e = load(name, yaml).expect_err("refused");
+            assert_eq!(e.field(), Some(field), "{name}: {e}");
+            assert!(e.to_string().contains(says), "{name}: {e}");
+        }
     }
 }

@@ -10,4 +10,5 @@ mod dynamics;
 mod instructions;
 mod link_served;
 mod model;
+mod object;
 mod pty;

@@ -2,8 +2,10 @@
 //! the usual set-up mistakes, prints each finding with the command that
 //! fixes it, and with `--fix` applies those fixes (EEPROM with
 //! unlock-write-verify-lock; homing offsets for the session unless
-//! `--write-servos`). The checks live in [`servobus_robot::doctor`]; the
-//! text they are shown in, in [`servobus::doctor`].
+//! `--write-servos`, which also stores what the robot file asks of the
+//! servos' EEPROM: operating modes and `servo:` settings). The checks live
+//! in [`servobus_robot::doctor`]; the text they are shown in, in
+//! [`servobus::doctor`].
 
 use std::process::ExitCode;
 
@@ -36,7 +38,10 @@ pub struct Args {
     /// play sets them (lost at power-off).
     #[arg(long)]
     pub fix: bool,
-    /// With --fix: store homing offsets in the servos' EEPROM instead.
+    /// With --fix: store homing offsets in the servos' EEPROM instead, and
+    /// store what the robot file asks of their EEPROM (each joint's
+    /// operating mode, with the torque off; its `servo:` p, d, i,
+    /// protection_current and max_temperature).
     #[arg(long, requires = "fix")]
     pub write_servos: bool,
 }
@@ -208,6 +213,9 @@ fn print_json(robot: &Robot, outcomes: &[BusCheck], status: u8) -> anyhow::Resul
                 v["fix_flags"] = f.fix_flags().into();
                 v["fix"] = f.fix_text().into();
                 v["command"] = f.command_line().into();
+                // What the robot file asks of the register, beside what the
+                // servo holds (null for other findings).
+                v["setting"] = serde_json::to_value(&f.setting).unwrap_or_default();
                 v
             })
             .collect()

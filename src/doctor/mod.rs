@@ -254,12 +254,29 @@ fn calibration_advice(advice: &Advice) -> Option<String> {
 }
 
 /// What an applied fix did, as the report of `--fix` says it: the command
-/// it stands for, or for a homing offset what was set.
+/// it stands for, or for a homing offset or a register the robot file asks
+/// for what was set.
 pub fn applied_text(applied: &Applied) -> String {
     match applied {
         Applied::OffsetStored(value) => format!("homing offset {value} stored in EEPROM"),
         Applied::OffsetForSession(value) => {
             format!("homing offset {value} set for this session (as play sets it)")
+        }
+        Applied::Stored {
+            register,
+            value,
+            shown,
+            torque_off,
+        } => {
+            let shown = shown
+                .as_ref()
+                .map_or_else(String::new, |s| format!(" ({s})"));
+            let torque = if *torque_off {
+                ", the torque turned off first"
+            } else {
+                ""
+            };
+            format!("{register} {value}{shown} stored in EEPROM{torque}")
         }
         Applied::Advice(advice) => advice
             .command()

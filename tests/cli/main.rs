@@ -49,6 +49,7 @@ mod cli_errors;
 mod decode_cli;
 mod docs;
 mod doctor_cli;
+mod doctor_servo_settings;
 mod exit_codes;
 mod facts;
 mod first_arm;

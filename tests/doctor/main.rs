@@ -7,6 +7,7 @@
 mod common;
 
 mod advice;
+mod servo_settings;
 
 use std::time::Duration;
 

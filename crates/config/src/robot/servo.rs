@@ -37,6 +37,17 @@ pub enum JointMode {
     Wheel,
 }
 
+impl JointMode {
+    /// The servo's operating mode (register `mode`, 33) this joint needs:
+    /// 0 for a position joint, 1 for a wheel.
+    pub const fn operating_mode(self) -> u8 {
+        match self {
+            JointMode::Position => 0,
+            JointMode::Wheel => 1,
+        }
+    }
+}
+
 /// A joint's `servo:` settings, the values as the robot file gives them
 /// (`None`: not given, the servo keeps its own), and the register writes
 /// they make ([`ServoSettings::writes`]), checked against the joint's model

@@ -186,7 +186,11 @@ impl Ctx<'_> {
         self.lock(s, &mut out);
         self.health(s, joint, &mut out);
         if let Some(joint) = joint {
-            self.limits(s, joint, &mut out);
+            self.wanted_settings(s, joint, &mut out);
+            // A wheel has no position to keep within limits.
+            if !joint.is_wheel() {
+                self.limits(s, joint, &mut out);
+            }
             self.protection(s, joint, &mut out);
             self.calibration(s, joint, &mut out);
         }
@@ -383,7 +387,13 @@ impl Ctx<'_> {
         if !gripper {
             return;
         }
+        // A register the joint's `servo:` settings set is the robot file's
+        // to choose (see `wanted_settings`).
+        let set_by_file = |name: &str| joint.servo_writes().iter().any(|w| w.register.name == name);
         for (name, most) in GRIPPER_LIMITS {
+            if set_by_file(name) {
+                continue;
+            }
             if let Some(v) = s.value(name).filter(|&v| v > most) {
                 let mut f = self.write_fix(Severity::Warning, Step::Configure, s, name, most);
                 f.problem = format!(

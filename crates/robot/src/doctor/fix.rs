@@ -2,7 +2,9 @@
 //! are written with unlock-write-verify-lock; a baud-rate change is the same
 //! transaction split across the two rates. Homing offsets are set for the
 //! session, as play sets them (lock closed: nothing persists), unless
-//! [`Fixing::write_servos`] asks for EEPROM.
+//! [`Fixing::write_servos`] asks for EEPROM; what the robot file asks of the
+//! servos' EEPROM (an operating mode, a `servo:` setting) is stored only
+//! then, an operating mode with the torque turned off first.
 
 use servobus_driver::{
     stop_signal, Bus, BusError, StatusLevel, StopSignal, Transport, PATIENCE, PATIENT_TRIES,
@@ -10,7 +12,7 @@ use servobus_driver::{
 use servobus_protocol::registers::addr;
 
 use crate::calibrate::{prepare_bus, Refusal};
-use servobus_protocol::registers::Series;
+use servobus_protocol::registers::{Register, Series};
 
 use super::probe::MAX_RETURN_DELAY;
 use super::{Action, Advice, Finding, Fixing};
@@ -43,6 +45,19 @@ pub enum Applied {
     OffsetStored(i32),
     /// Homing offset `value` set for this session, as play sets it.
     OffsetForSession(i32),
+    /// What the robot file asks of a register stored in EEPROM
+    /// ([`Action::Store`]).
+    Stored {
+        /// The register.
+        register: &'static str,
+        /// The value stored.
+        value: i32,
+        /// The value in the robot file's terms (`wheel`, `1501.5 mA`),
+        /// when it has one.
+        shown: Option<String>,
+        /// Whether the torque was turned off first.
+        torque_off: bool,
+    },
 }
 
 /// What became of one fix.
@@ -113,13 +128,14 @@ pub fn apply<T: Transport>(
 
 /// The findings with a fix to apply, in the order they are applied: baud
 /// rates first, the EEPROM lock last, session offsets after every EEPROM
-/// write. An offset that can only be stored is left out unless
-/// `how.write_servos`.
+/// write. An offset that can only be stored, and what the robot file asks
+/// of a servo's EEPROM, are left out unless `how.write_servos`.
 fn fixes_in_order<'f>(findings: &'f [Finding], how: &Fixing<'_>) -> Vec<&'f Finding> {
     let mut todo: Vec<&Finding> = findings
         .iter()
         .filter(|f| match f.action {
             Some(Action::Offset { store_only, .. }) => how.write_servos || !store_only,
+            Some(Action::Store { .. }) => how.write_servos,
             other => other.is_some(),
         })
         .collect();
@@ -148,16 +164,21 @@ fn run_action<T: Transport>(
             silent,
             series,
         } => {
-            let mut s = *bus.settings();
-            if silent {
-                s.replies = StatusLevel::PingAndRead;
-            }
-            // The register's layout and the lock are the servo's series'.
-            s.series = series;
-            bus.set_settings(s);
+            speak_to(bus, silent, series);
             bus.write_register(id, register, value)
                 .map(|_| ())
                 .map_err(FixError::Bus)
+        }
+        Action::Store {
+            id,
+            register,
+            value,
+            silent,
+            series,
+            torque_off,
+        } => {
+            speak_to(bus, silent, series);
+            store(bus, id, register, value, torque_off).map_err(FixError::Bus)
         }
         Action::Baud { id, baud, index } => {
             change_baud(bus, id, baud, index).map_err(FixError::Bus)
@@ -180,12 +201,69 @@ fn run_action<T: Transport>(
     }
 }
 
+/// Sets the bus to speak to a servo of `series` (the register's layout and
+/// the lock are its series'), waiting for no reply to a write when
+/// `silent`.
+fn speak_to<T: Transport>(bus: &mut Bus<T>, silent: bool, series: Series) {
+    let mut s = *bus.settings();
+    if silent {
+        s.replies = StatusLevel::PingAndRead;
+    }
+    s.series = series;
+    bus.set_settings(s);
+}
+
+/// Stores `value` in EEPROM `register` of servo `id`
+/// (unlock-write-verify-lock), its torque turned off first when
+/// `torque_off`. The torque is left off: the run that follows turns it on
+/// in the mode it finds.
+fn store<T: Transport>(
+    bus: &mut Bus<T>,
+    id: u8,
+    register: &'static Register,
+    value: i32,
+    torque_off: bool,
+) -> Result<(), BusError> {
+    if torque_off {
+        let torque = bus
+            .settings()
+            .series
+            .map()
+            .get("torque_enable")
+            .ok_or(BusError::InvalidRequest("no torque_enable on this series"))?;
+        bus.write_register(id, torque, 0)?;
+        // Read back: the mode changes only once the torque is known off.
+        let mut back = [0u8; 1];
+        bus.read(id, torque.address, &mut back)?;
+        if back[0] != 0 {
+            return Err(BusError::Verify {
+                id,
+                address: torque.address,
+                expected: vec![0],
+                actual: back.to_vec(),
+            });
+        }
+    }
+    bus.write_register(id, register, value).map(|_| ())
+}
+
 /// What applying `f`'s fix does, for the report: its fix, or for a homing
 /// offset where it goes.
 fn done(f: &Finding, how: &Fixing<'_>) -> Applied {
     match f.action {
         Some(Action::Offset { value, .. }) if how.write_servos => Applied::OffsetStored(value),
         Some(Action::Offset { value, .. }) => Applied::OffsetForSession(value),
+        Some(Action::Store {
+            register,
+            value,
+            torque_off,
+            ..
+        }) => Applied::Stored {
+            register: register.name,
+            value,
+            shown: f.setting.as_ref().and_then(|m| m.wanted_as.clone()),
+            torque_off,
+        },
         _ => Applied::Advice(f.advice.clone()),
     }
 }

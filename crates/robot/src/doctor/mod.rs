@@ -1,13 +1,26 @@
 //! The doctor: checks a bus of servos against the robot file and against
 //! the set-up mistakes that break Feetech robots (wrong ID or baud rate,
 //! return delays left at the factory 500 us, an EEPROM lock left open,
-//! angle limits narrower than the joint's, a gripper free to overheat, ...).
+//! angle limits narrower than the joint's, a gripper free to overheat, an
+//! operating mode other than the joint's, ...).
 //!
 //! Each [`Finding`] names its severity, the servo and register, the value
 //! measured, what is wrong and what to do about it ([`Advice`], with the
 //! [`Fix`] that repairs it as data). Nothing is written unless the caller
 //! asks for it with [`apply`]; EEPROM values are then written with the
 //! driver's unlock-write-verify-lock transaction.
+//!
+//! What the robot file asks of each servo's EEPROM is checked too: the
+//! operating mode of its joint (`mode:`; a wheel turns at constant speed,
+//! mode 1, a position joint needs mode 0) and the EEPROM registers of its
+//! `servo:` settings (`p`, `d`, `i`, `protection_current`,
+//! `max_temperature`). A run writes none of them, so a servo that holds
+//! other values is a [`Finding`] with a [`SettingMismatch`], fixed only when
+//! [`Fixing::write_servos`] asks for EEPROM writes ([`Action::Store`]; the
+//! mode with the torque off). The RAM settings (`torque_limit`,
+//! `acceleration`) are not checked: a run writes them at every start and
+//! the servo forgets them at power-off, so between runs they differ as a
+//! rule and the difference says nothing.
 //!
 //! [`check`] examines every bus of a robot (on its ports, or the built-in
 //! simulator) and applies the fixes when asked; [`examine`] and [`apply`]
@@ -23,6 +36,7 @@ mod checks;
 mod fix;
 mod probe;
 mod robot;
+mod settings;
 
 use serde::Serialize;
 use servobus_config::Robot;
@@ -34,6 +48,7 @@ pub use fix::{apply, change_baud, Applied, FixError, FixOutcome};
 pub use probe::fix_all_command;
 pub use probe::{examine, BusPort, Examined, PortKind};
 pub use robot::{check, BusCheck, CheckOptions, Checkup};
+pub use settings::SettingMismatch;
 
 /// How bad a finding is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -116,13 +131,34 @@ pub enum Action {
         /// The servo's series.
         series: Series,
     },
+    /// Store `value` in EEPROM `register` of servo `id` because the robot
+    /// file asks for it (a joint's operating mode, a `servo:` setting):
+    /// only with [`Fixing::write_servos`], with unlock-write-verify-lock.
+    Store {
+        /// The servo.
+        id: u8,
+        /// The register.
+        register: &'static Register,
+        /// The value.
+        value: i32,
+        /// Whether writes go unanswered.
+        silent: bool,
+        /// The servo's series.
+        series: Series,
+        /// Turn the torque off first: a servo switched from position to
+        /// wheel mode with its torque on may start turning.
+        torque_off: bool,
+    },
 }
 
 impl Action {
     /// The servo it acts on.
     pub fn id(&self) -> u8 {
         match *self {
-            Action::Write { id, .. } | Action::Baud { id, .. } | Action::Offset { id, .. } => id,
+            Action::Write { id, .. }
+            | Action::Baud { id, .. }
+            | Action::Offset { id, .. }
+            | Action::Store { id, .. } => id,
         }
     }
 }
@@ -135,7 +171,8 @@ pub struct Fixing<'a> {
     /// The index of the bus in the robot file.
     pub bus: usize,
     /// Store homing offsets in EEPROM instead of setting them for the
-    /// session only.
+    /// session only, and store what the robot file asks of the servos'
+    /// EEPROM ([`Action::Store`]; left alone without it).
     pub write_servos: bool,
 }
 
@@ -163,6 +200,12 @@ pub struct Finding {
     /// What [`apply`] does about it, if anything.
     #[serde(skip)]
     pub action: Option<Action>,
+    /// The value the robot file asks of the register and the one the
+    /// servo holds, when the finding is about a joint's mode or `servo:`
+    /// setting. Not serialised with the finding (whose fields readers
+    /// take as they are); the command line's JSON adds it.
+    #[serde(skip)]
+    pub setting: Option<SettingMismatch>,
 }
 
 impl Finding {
@@ -173,12 +216,14 @@ impl Finding {
 
     /// The flags of `servobus doctor` that apply the fix: `--fix`, or
     /// `--fix --write-servos` where only an EEPROM write fixes it (a
-    /// homing offset play refuses); `None` when [`apply`] cannot fix it.
+    /// homing offset play refuses, what the robot file asks of the
+    /// servo's EEPROM); `None` when [`apply`] cannot fix it.
     pub fn fix_flags(&self) -> Option<&'static str> {
         match self.action? {
             Action::Offset {
                 store_only: true, ..
-            } => Some("--fix --write-servos"),
+            }
+            | Action::Store { .. } => Some("--fix --write-servos"),
             _ => Some("--fix"),
         }
     }

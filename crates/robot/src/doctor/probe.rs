@@ -388,6 +388,7 @@ pub(crate) fn finding(
         problem: String::new(),
         advice: Advice::None,
         action: None,
+        setting: None,
     }
 }
 

@@ -15,7 +15,8 @@ pub struct CheckOptions {
     /// Apply the fixes that are writes, then examine again.
     pub fix: bool,
     /// With `fix`: store homing offsets in EEPROM instead of setting them
-    /// for the session.
+    /// for the session, and store what the robot file asks of the servos'
+    /// EEPROM (operating modes, `servo:` settings).
     pub write_servos: bool,
 }
 
@@ -128,7 +129,10 @@ fn check_bus<T: Transport>(
     let first = examine(bus, robot, cfg, &target, kind).map_err(unfinished)?;
     let mut fixes = Vec::new();
     let mut after = None;
-    if options.fix && first.findings.iter().any(Finding::fixable) {
+    // A fix only `--write-servos` applies is left alone without it: then
+    // nothing changed, and nothing is examined again.
+    let applies = |f: &Finding| f.fixable() && (options.write_servos || !f.needs_write_servos());
+    if options.fix && first.findings.iter().any(applies) {
         let how = Fixing {
             robot,
             bus: index,

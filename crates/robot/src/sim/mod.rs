@@ -354,9 +354,14 @@ impl SimRobotBuilder<'_> {
                 .and_then(|i| pose.get(i))
                 .copied()
                 .unwrap_or(joint.rest());
-            let servo = SimServo::new(model, joint.id)
+            let mut servo = SimServo::new(model, joint.id)
                 .with_return_delay(bus.return_delay)
                 .with_byte(servobus_sim::addr::BAUD_RATE, baud);
+            if joint.is_wheel() {
+                // Set up as the robot file asks: a wheel's servo in its
+                // constant-speed mode (only STS-type models have wheels).
+                servo = servo.with_byte(servobus_sim::addr::MODE, joint.mode.operating_mode());
+            }
             let servo = match index.filter(|_| bodies) {
                 None => {
                     let map = JointMap::new(joint, robot.units);

@@ -1,7 +1,9 @@
 //! `servobus doctor` and what a robot file asks of the servos' EEPROM (a
-//! wheel joint's operating mode, a `servo: {p: 16}`), end to end: on the
-//! built-in simulator (the text, the hint, `--json`) and on `servobus sim`
-//! on a pseudo-terminal, whose servos keep what was written between runs.
+//! wheel joint's operating mode, a `servo: {p: 16}`), end to end on
+//! `servobus sim` on a pseudo-terminal, whose servos keep what was written
+//! between runs and start as a new servo does (every one in position mode,
+//! P 32): the text, the hint and `--json`. The built-in simulator starts
+//! its servos as the robot file asks for the mode.
 
 use crate::common;
 
@@ -31,6 +33,38 @@ buses:
         max_acceleration: 500
 ";
 
+/// The same bus as the servos come from the box: servo 2 still a position
+/// servo (mode 0), as a simulator of this file starts it.
+const FRESH: &str = "\
+name: rover
+units: deg
+buses:
+  - name: b
+    joints:
+      - name: arm
+        id: 1
+        model: sts3215
+        min: -90
+        max: 90
+        max_velocity: 180
+        max_acceleration: 900
+      - name: drive
+        id: 2
+        model: sts3215
+        min: -90
+        max: 90
+        max_velocity: 180
+        max_acceleration: 900
+";
+
+/// `servobus sim` of the servos as they come from the box, on a pty in
+/// `dir`, and `rover.yaml` there, the robot file that asks for more.
+fn fresh_servos(dir: &std::path::Path) -> (Sim, std::path::PathBuf) {
+    let fresh = write_file(dir, "fresh.yaml", FRESH);
+    let robot = write_file(dir, "rover.yaml", ROVER);
+    (Sim::start_robot(dir, &fresh, 2, &[]), robot)
+}
+
 /// The finding of `findings` (a JSON list) about servo `id`'s `register`.
 fn about<'a>(findings: &'a serde_json::Value, id: u64, register: &str) -> &'a serde_json::Value {
     findings
@@ -43,10 +77,22 @@ fn about<'a>(findings: &'a serde_json::Value, id: u64, register: &str) -> &'a se
 }
 
 #[test]
-fn the_built_in_simulator_reports_the_mode_and_p_and_fixes_them_only_with_write_servos() {
-    let dir = scratch("doctor-servo-settings");
+fn the_built_in_simulator_starts_a_wheels_servo_in_its_mode() {
+    let dir = scratch("doctor-servo-settings-built-in");
     let robot = write_file(&dir, "rover.yaml", ROVER);
-    let doctor = ["doctor", "--robot", arg(&robot)];
+    // Only a warning (exit 1): the P coefficient is EEPROM, which a new
+    // servo holds at 32.
+    let (text, _) = exited(&servobus(&["doctor", "--robot", arg(&robot)]), 1);
+    assert!(!text.contains("servo 2 mode"), "{text}");
+    says(&text, &["WARNING  servo 1 p_coefficient"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn new_servos_mode_and_p_are_reported_and_fixed_only_with_write_servos() {
+    let dir = scratch("doctor-servo-settings");
+    let (sim, robot) = fresh_servos(&dir);
+    let doctor = ["doctor", "--robot", arg(&robot), "--port", sim.port()];
 
     let (text, _) = exited(&servobus(&doctor), 2);
     says(
@@ -86,14 +132,16 @@ fn the_built_in_simulator_reports_the_mode_and_p_and_fixes_them_only_with_write_
             "0 error(s), 0 warning(s)",
         ],
     );
+    sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn json_gives_what_the_file_asks_beside_what_the_servo_holds() {
     let dir = scratch("doctor-servo-settings-json");
-    let robot = write_file(&dir, "rover.yaml", ROVER);
-    let out = servobus(&["doctor", "--robot", arg(&robot), "--json"]);
+    let (sim, robot) = fresh_servos(&dir);
+    let doctor = ["doctor", "--robot", arg(&robot), "--port", sim.port()];
+    let out = servobus(&[&doctor[..], &["--json"]].concat());
     assert_eq!(out.status.code(), Some(2));
     let v = json(&out);
     let findings = &v["buses"][0]["findings"];
@@ -125,14 +173,7 @@ fn json_gives_what_the_file_asks_beside_what_the_servo_holds() {
     assert!(!others.is_empty(), "{v}");
     assert!(others.iter().all(|f| f["setting"].is_null()), "{v}");
 
-    let out = servobus(&[
-        "doctor",
-        "--robot",
-        arg(&robot),
-        "--json",
-        "--fix",
-        "--write-servos",
-    ]);
+    let out = servobus(&[&doctor[..], &["--json", "--fix", "--write-servos"]].concat());
     assert_eq!(out.status.code(), Some(0));
     let v = json(&out);
     let bus = &v["buses"][0];
@@ -141,14 +182,14 @@ fn json_gives_what_the_file_asks_beside_what_the_servo_holds() {
     assert!(fixes.iter().all(|f| f["ok"] == true), "{v}");
     let after = bus["after_fix"].as_array().expect("examined again");
     assert!(after.iter().all(|f| f["setting"].is_null()), "{v}");
+    sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn on_a_pty_the_mode_is_written_only_with_write_servos_and_stays_written() {
     let dir = scratch("doctor-servo-settings-pty");
-    let robot = write_file(&dir, "rover.yaml", ROVER);
-    let sim = Sim::start_robot(&dir, &robot, 2, &[]);
+    let (sim, robot) = fresh_servos(&dir);
     let doctor = ["doctor", "--robot", arg(&robot), "--port", sim.port()];
 
     let (text, _) = exited(&servobus(&[&doctor[..], &["--fix"]].concat()), 2);

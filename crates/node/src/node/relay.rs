@@ -69,25 +69,9 @@ pub(super) fn take_target(
     };
     // A base velocity becomes its wheels' speeds (rad/s) before anything is
     // sent: one the robot cannot take moves nothing.
-    let wheels = match &msg {
-        LiveMessage::Target(TargetMessage {
-            base: Some(base), ..
-        }) => match config.map(|r| r.wheel_targets(base)) {
-            Some(Ok(w)) => w.wheels,
-            Some(Err(why)) => return malformed(&why),
-            None => return malformed(&"a `base` target needs the robot's base"),
-        },
-        _ => Vec::new(),
-    };
-    let taken = |sent_ns: Option<i64>| {
-        // Counted from its publishing when the sender says when that was.
-        let now = Instant::now();
-        sent_ns
-            .and_then(|sent| {
-                let ago = unix_ns(SystemTime::now()).checked_sub(sent)?;
-                now.checked_sub(Duration::from_nanos(u64::try_from(ago).ok()?))
-            })
-            .unwrap_or(now)
+    let wheels = match wheel_speeds(&msg, config) {
+        Ok(w) => w,
+        Err(why) => return malformed(&why),
     };
     // Sent under the lock: a `stop` never comes between a target and the
     // resume it needs.
@@ -101,7 +85,7 @@ pub(super) fn take_target(
                 .collect();
             joints.extend(wheels);
             let stamp = m.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
-            let target = LiveTarget::named(stamp, joints).taken_at(taken(m.sent_ns));
+            let target = LiveTarget::named(stamp, joints).taken_at(taken_at(m.sent_ns));
             (to.targets.send(target), "target")
         }
         LiveMessage::Chunk(m) => {
@@ -110,7 +94,7 @@ pub(super) fn take_target(
                 .into_iter()
                 .map(|(n, a)| (n, a.into_iter().map(|a| units.to_rad(a)).collect()))
                 .collect();
-            let chunk = Chunk::named(m.t0, m.dt, joints).taken_at(taken(m.sent_ns));
+            let chunk = Chunk::named(m.t0, m.dt, joints).taken_at(taken_at(m.sent_ns));
             (to.targets.send_chunk(chunk), "chunk")
         }
     };
@@ -136,6 +120,33 @@ pub(super) fn take_target(
         // The stream counts its refusals for the report.
         Err(why) => eprintln!("{what}: {why}; refused"),
     }
+}
+
+/// The wheel speeds (rad/s) a message's base velocity asks for: none
+/// without one; an error when the robot cannot take it.
+fn wheel_speeds(msg: &LiveMessage, config: Option<&Robot>) -> Result<Vec<(String, f64)>, String> {
+    match msg {
+        LiveMessage::Target(TargetMessage {
+            base: Some(base), ..
+        }) => match config.map(|r| r.wheel_targets(base)) {
+            Some(Ok(w)) => Ok(w.wheels),
+            Some(Err(why)) => Err(why.to_string()),
+            None => Err("a `base` target needs the robot's base".into()),
+        },
+        _ => Ok(Vec::new()),
+    }
+}
+
+/// When a message was taken: counted from its publishing when the sender
+/// says when that was (`sent_ns`, Unix nanoseconds), else now.
+fn taken_at(sent_ns: Option<i64>) -> Instant {
+    let now = Instant::now();
+    sent_ns
+        .and_then(|sent| {
+            let ago = unix_ns(SystemTime::now()).checked_sub(sent)?;
+            now.checked_sub(Duration::from_nanos(u64::try_from(ago).ok()?))
+        })
+        .unwrap_or(now)
 }
 
 /// A command from the network to the loop; a malformed one is counted and

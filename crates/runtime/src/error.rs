@@ -94,6 +94,63 @@ pub enum RunError {
         /// Why the read failed.
         reason: String,
     },
+    /// A servo's operating mode (register `mode`, 33) is not its joint's:
+    /// a wheel needs mode 1 (constant speed), a position joint mode 0. The
+    /// mode is an EEPROM setting, which a run never writes.
+    #[error(
+        "bus `{bus}`: joint `{joint}` (servo {id}) is in operating mode {found} ({}), \
+         a {} joint needs mode {wanted} ({}): `servobus doctor --robot FILE --port PORT --fix \
+         --write-servos` sets it (an EEPROM register, which a run never writes)",
+        mode_name(*found), if *wanted == 1 { "wheel" } else { "position" }, mode_name(*wanted)
+    )]
+    Mode {
+        /// The bus.
+        bus: String,
+        /// The joint.
+        joint: String,
+        /// Its servo's ID.
+        id: u8,
+        /// The mode the servo is in.
+        found: u8,
+        /// The mode the joint needs.
+        wanted: u8,
+    },
+    /// A servo held another value of a RAM `servo:` setting than was just
+    /// written to it.
+    #[error(
+        "bus `{bus}`: joint `{joint}` (servo {id}): its `servo: {setting}` was written as \
+         {wrote} but reads back as {held}: is the servo the model the robot file says?"
+    )]
+    Setting {
+        /// The bus.
+        bus: String,
+        /// The joint.
+        joint: String,
+        /// Its servo's ID.
+        id: u8,
+        /// The `servo:` key.
+        setting: &'static str,
+        /// The raw value written.
+        wrote: i32,
+        /// The raw value read back.
+        held: i32,
+    },
+    /// A bus with wheel joints whose register map lacks what a wheel needs
+    /// (the operating mode, goal speed, or a present speed right after the
+    /// present position).
+    #[error(
+        "bus `{bus}`: joint `{joint}` is a wheel but the {series:?} register map has no {what}"
+    )]
+    NoWheelRegisters {
+        /// The bus.
+        bus: String,
+        /// The wheel joint.
+        joint: String,
+        /// Its series.
+        series: servobus_protocol::registers::Series,
+        /// The register missing.
+        what: &'static str,
+    },
     /// Planning a transition failed (approach, replace).
     #[error("cannot plan the {what}: {source}")]
     Trajectory {
@@ -114,6 +171,17 @@ pub enum RunError {
     /// The run has ended: it takes no more commands or targets.
     #[error("the run has ended")]
     Ended,
+}
+
+/// The name of operating mode `mode` (register `mode`, 33).
+fn mode_name(mode: u8) -> &'static str {
+    match mode {
+        0 => "position",
+        1 => "constant speed, a wheel",
+        2 => "PWM",
+        3 => "step",
+        _ => "unknown",
+    }
 }
 
 /// The serial port of a bus failed while running (unplugged adapter, closed

@@ -10,6 +10,13 @@
 //! commands take effect in the cycle they are stamped with on every lane,
 //! and the first fault of any bus is carried out by every other bus from the
 //! cycle after its detection.
+//!
+//! Wheels take their target speeds from the timeline each cycle (0 but
+//! while live targets are followed): a stop, a pause, a hold of a fault
+//! reaction and a live timeout all ramp them to 0 in the bus loop, and a
+//! run whose path is over ends only once they are at rest. Torque off
+//! (the command, the fault reaction) sets their speed to 0 at once; a lost
+//! port sends nothing.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -41,6 +48,8 @@ pub(crate) struct Lane<T: Transport> {
     /// and resumed ones when it is the first).
     counters: Arc<TargetCounts>,
     cmd: Vec<JointState>,
+    /// The wheels' target speeds this cycle, rad/s (robot order).
+    speeds: Vec<f64>,
     reference: Vec<JointState>,
     hold: Vec<f64>,
     /// The fault reaction this lane has carried out (one per run).
@@ -75,6 +84,7 @@ impl<T: Transport> Lane<T> {
             board,
             counters,
             cmd: vec![JointState::default(); joints],
+            speeds: vec![0.0; joints],
             reference: vec![JointState::default(); joints],
             hold: vec![0.0; joints],
             reacted: None,
@@ -127,9 +137,10 @@ impl<T: Transport> Lane<T> {
             return end;
         }
         self.timeline.prune(t);
-        self.timeline
-            .finished(t, self.settle)
-            .then(|| self.finish_of())
+        // A path that is over ends the run once the wheels are at rest too:
+        // the last goal speed sent is 0.
+        let over = self.timeline.finished(t, self.settle);
+        (over && self.bus.wheels_at_rest()).then(|| self.finish_of())
     }
 
     /// The bus's work of cycle `timing.index` at path time `t`: command the
@@ -141,7 +152,8 @@ impl<T: Transport> Lane<T> {
         l.begin(timing);
         let lead = l.lead_at(t);
         self.timeline.sample_cmd(t + lead, &mut self.cmd);
-        let mut gone = l.write(&self.cmd).err();
+        self.timeline.wheel_targets(t + lead, &mut self.speeds);
+        let mut gone = l.write(&self.cmd, &self.speeds).err();
         if let Some(taken) = self.taken.take() {
             // A target taken before the first cycle waited for the loop to
             // start (the start gap, 50 ms at least on the real clock): that

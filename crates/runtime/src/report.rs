@@ -53,6 +53,15 @@ pub struct JointReport {
     pub stalls: u64,
     /// How long it was held so, s.
     pub stalled_s: f64,
+    /// A wheel joint's largest |commanded speed|, units/s (`None`, and
+    /// left out of the JSON, for a position joint). A wheel's error
+    /// figures above stay 0: it is not tracked against the path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_commanded_speed: Option<f64>,
+    /// A wheel joint's largest |present speed| read, units/s (`None` for a
+    /// position joint).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_measured_speed: Option<f64>,
 }
 
 /// One bus's figures.

@@ -129,7 +129,8 @@ pub(crate) fn prepare<T: Transport>(
     let plain = joint_limits(robot);
     let limits = live_limits(robot, &plain);
     let live_session = trajectory.is_none();
-    let timeline = plan_timeline(trajectory, plain, limits.clone(), &present, o)?;
+    let mut timeline = plan_timeline(trajectory, plain, limits.clone(), &present, o)?;
+    timeline.set_wheels(robot.joints().map(|j| j.is_wheel()).collect());
     let approach = timeline.approach();
     // Cycle 0 is due a gap after the slowest bus's start-up.
     let last = loops.iter().map(|l| l.bus.clock().now()).max();
@@ -172,12 +173,18 @@ pub(crate) fn prepare<T: Transport>(
 }
 
 /// The limits live targets are kept within: the ticks inside each joint's
-/// limits, where goals are sent as they are.
+/// limits, where goals are sent as they are; for a wheel, whose target is a
+/// speed, its top speed either way (`+-max_velocity`, rad/s), so that a
+/// faster target is clamped and counted as a position beyond a limit is.
 fn live_limits(robot: &Robot, plain: &[JointLimits]) -> Vec<JointLimits> {
     plain
         .iter()
         .zip(robot.joints())
         .map(|(l, j)| {
+            if j.is_wheel() {
+                let top = l.max_velocity.abs();
+                return l.with_positions(-top, top);
+            }
             let (lo, hi) = reachable(j, robot.units);
             l.with_positions(lo.max(l.min_position), hi.min(l.max_position))
         })

@@ -19,19 +19,28 @@ pub const SAMPLE_JOINTS: usize = 24;
 
 /// One joint in one cycle. Angles are in the report's units
 /// ([`RunOptions::units`](crate::RunOptions::units)).
+///
+/// A wheel joint (`mode: wheel`) has no position to follow, and its sample
+/// is of speeds, units/s: `commanded` is its commanded speed (ramped
+/// within its acceleration limit), `planned` the speed it heads for,
+/// `measured` and `velocity` its present speed, `error` commanded -
+/// measured; it is never `clamped` or `stalled`.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct JointSample {
     /// Index of the joint in the robot's joint order.
     pub joint: usize,
-    /// The goal sent this cycle (the path at `t + lead`, clamped).
+    /// The goal sent this cycle (the path at `t + lead`, clamped); a
+    /// wheel's commanded speed, units/s.
     pub commanded: f64,
-    /// The path at the time of the reading (what the joint should be at).
+    /// The path at the time of the reading (what the joint should be at);
+    /// the speed a wheel heads for, units/s.
     pub planned: f64,
-    /// The last reading, if any.
+    /// The last reading, if any; a wheel's present speed, units/s.
     pub measured: Option<f64>,
-    /// `planned - measured` at the last fresh reading (0 when none).
+    /// `planned - measured` at the last fresh reading (0 when none); a
+    /// wheel's commanded - measured speed, units/s.
     pub error: f64,
-    /// Measured velocity, units/s.
+    /// Measured velocity, units/s (a wheel's present speed).
     pub velocity: f64,
     /// Time since the last reading of this joint.
     pub feedback_age: Duration,

@@ -1,6 +1,11 @@
 //! Reading the joints' positions back: patiently at start-up (every servo
 //! must answer), then each cycle the servos the timing plan schedules,
 //! within what is left of the cycle.
+//!
+//! On a bus with wheel joints every read takes the present speed too
+//! (register `present_speed`, 58, sign-magnitude steps/s, right after the
+//! present position: one read of 4 bytes from 56), which is what a wheel
+//! is tracked by; a bus of position joints alone reads the position only.
 
 use std::ops::Range;
 use std::time::Duration;
@@ -15,13 +20,45 @@ use crate::error::{PortGone, RunError};
 #[derive(Debug)]
 pub(crate) struct Feedback {
     reg: &'static Register,
+    /// The speed register, read with the position (buses with wheels).
+    speed: Option<&'static Register>,
     order: ByteOrder,
     ids: Vec<u8>,
 }
 
 impl Feedback {
-    pub fn new(reg: &'static Register, order: ByteOrder, ids: Vec<u8>) -> Self {
-        Feedback { reg, order, ids }
+    /// Reads `reg` of the servos `ids`, and `speed` with it when given
+    /// (it must follow `reg` directly).
+    pub fn new(
+        reg: &'static Register,
+        speed: Option<&'static Register>,
+        order: ByteOrder,
+        ids: Vec<u8>,
+    ) -> Self {
+        let speed = speed.filter(|s| u16::from(s.address) == reg.end());
+        Feedback {
+            reg,
+            speed,
+            order,
+            ids,
+        }
+    }
+
+    /// Bytes of one servo's reply as `u8` (position, and speed).
+    fn len(&self) -> u8 {
+        self.reg.size + self.speed.map_or(0, |s| s.size)
+    }
+
+    /// The reading in `data` (one servo's reply): position ticks, and
+    /// speed in steps/s when read; `None` when it does not decode.
+    fn decode(&self, data: &[u8]) -> Option<(i32, Option<i32>)> {
+        let (p, s) = data.split_at_checked(usize::from(self.reg.size))?;
+        let ticks = self.reg.decode(p, self.order).ok()?;
+        let speed = match self.speed {
+            Some(reg) => Some(reg.decode(s, self.order).ok()?),
+            None => None,
+        };
+        Some((ticks, speed))
     }
 
     /// The servos' IDs, in bus order.
@@ -29,9 +66,9 @@ impl Feedback {
         &self.ids
     }
 
-    /// Bytes of the position register.
+    /// Bytes read of each servo (the position register, and the speed's).
     pub fn size(&self) -> usize {
-        usize::from(self.reg.size)
+        usize::from(self.len())
     }
 
     /// Reads every servo's position patiently (start-up is not timed; see
@@ -48,7 +85,7 @@ impl Feedback {
         track: &mut Tracker,
     ) -> Result<(), RunError> {
         let read = bus
-            .sync_read_patiently(self.reg.address, self.reg.size, &self.ids)
+            .sync_read_patiently(self.reg.address, self.len(), &self.ids)
             .map_err(|source| RunError::Startup {
                 bus: name.to_owned(),
                 what: "reading the start positions",
@@ -56,14 +93,22 @@ impl Feedback {
             })?;
         for (i, r) in read.iter().enumerate() {
             let reason = match r {
-                Ok(reply) => match self.reg.decode(reply.data, self.order) {
-                    Ok(ticks) => {
+                Ok(reply) => match self.decode(reply.data) {
+                    Some((ticks, speed)) => {
                         let flags = servobus_protocol::StatusFlags(0);
                         let at = reply.sampled;
-                        track.observe(i, Reading { ticks, at, flags });
+                        track.observe(
+                            i,
+                            Reading {
+                                ticks,
+                                speed,
+                                at,
+                                flags,
+                            },
+                        );
                         continue;
                     }
-                    Err(_) => "it reported an impossible position".to_owned(),
+                    None => "it reported an impossible position".to_owned(),
                 },
                 Err(m) => m.reason.to_string(),
             };
@@ -101,7 +146,7 @@ impl Feedback {
             return Ok(true);
         };
         let Some(read) =
-            PortGone::check(bus.sync_read_within(self.reg.address, self.reg.size, ids, budget))?
+            PortGone::check(bus.sync_read_within(self.reg.address, self.len(), ids, budget))?
         else {
             return Ok(false);
         };
@@ -124,16 +169,17 @@ impl Feedback {
             let joint = range.start + i;
             match r {
                 Ok(reply) if reply.in_doubt => {}
-                Ok(reply) => match self.reg.decode(reply.data, self.order) {
-                    Ok(ticks) => track.observe(
+                Ok(reply) => match self.decode(reply.data) {
+                    Some((ticks, speed)) => track.observe(
                         joint,
                         Reading {
                             ticks,
+                            speed,
                             at: reply.sampled,
                             flags: reply.flags,
                         },
                     ),
-                    Err(_) => track.miss(joint, None),
+                    None => track.miss(joint, None),
                 },
                 Err(m) => {
                     all = false;

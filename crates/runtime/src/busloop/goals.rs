@@ -1,6 +1,11 @@
 //! Writing goals: each joint's angle clamped to its limits and rounded to a
 //! tick inside them, encoded once into a SYNC WRITE block that is reused
 //! every cycle.
+//!
+//! Wheel joints get no goal position: their entry here only keeps the
+//! bus's joints in step with tracking (see `wheels` for their goal
+//! speeds), and the block carries the position joints alone. A bus of
+//! wheels alone sends no goal position frame.
 
 use servobus_driver::{Bus, BusError, Transport};
 use servobus_protocol::registers::{addr, ByteOrder, Register};
@@ -28,6 +33,8 @@ pub(crate) struct JointGoal {
     pub clamped: bool,
     /// Goals clamped so far (a clamp means the plan was wrong).
     pub clamps: u64,
+    /// A wheel joint: no goal position is sent (see `wheels`).
+    pub wheel: bool,
 }
 
 /// The ticks inside a joint's limits: lowest and highest.
@@ -65,12 +72,16 @@ impl JointGoal {
             rad: map.from_ticks(lo),
             clamped: false,
             clamps: 0,
+            wheel: joint.is_wheel(),
         }
     }
 
     /// The goal for `rad`: clamped to the joint limits at the very last
     /// step, in ticks. Counts a clamp.
     fn set(&mut self, rad: f64) {
+        if self.wheel {
+            return;
+        }
         let c = self.map.goal(rad);
         // Rounding to a tick can land half a tick beyond a limit: keep the
         // tick inside too.
@@ -93,8 +104,11 @@ impl JointGoal {
 pub(crate) struct GoalWriter {
     reg: &'static Register,
     order: ByteOrder,
+    /// Every servo of the bus (torque, profiles).
     ids: Vec<u8>,
-    /// The encoded goals, one block per servo: allocated once.
+    /// The servos of position joints: the goals' SYNC WRITE.
+    position_ids: Vec<u8>,
+    /// The encoded goals, one block per position joint: allocated once.
     data: Vec<u8>,
     /// Torque-enable blocks, off and on: a fault turns torque off without
     /// allocating.
@@ -118,11 +132,18 @@ impl GoalWriter {
             .enumerate()
             .map(|(i, j)| JointGoal::new(first_joint + i, j, units))
             .collect();
+        let positions = joints.iter().filter(|j| !j.wheel).count();
         GoalWriter {
             reg,
             order,
             ids: config.joints.iter().map(|j| j.id).collect(),
-            data: vec![0; joints.len() * usize::from(reg.size)],
+            position_ids: config
+                .joints
+                .iter()
+                .filter(|j| !j.is_wheel())
+                .map(|j| j.id)
+                .collect(),
+            data: vec![0; positions * usize::from(reg.size)],
             torque: [vec![0; joints.len()], vec![1; joints.len()]],
             joints,
         }
@@ -159,7 +180,8 @@ impl GoalWriter {
 
     fn encode(&mut self) {
         let size = usize::from(self.reg.size);
-        for (j, out) in self.joints.iter().zip(self.data.chunks_exact_mut(size)) {
+        let positions = self.joints.iter().filter(|j| !j.wheel);
+        for (j, out) in positions.zip(self.data.chunks_exact_mut(size)) {
             // The tick is inside the servo's range, so it always encodes.
             let _ = self.reg.encode(j.tick, self.order, out);
         }
@@ -168,21 +190,25 @@ impl GoalWriter {
     /// Sends the goals, patiently: start-up, where any failure is an error.
     pub fn send_checked<T: Transport>(&mut self, bus: &mut Bus<T>) -> Result<(), BusError> {
         self.encode();
-        bus.sync_write(self.reg.address, &self.ids, &self.data)
+        if self.position_ids.is_empty() {
+            return Ok(());
+        }
+        bus.sync_write(self.reg.address, &self.position_ids, &self.data)
     }
 
     /// Sends the goals in a cycle. Only a lost port is an error: a servo
     /// that missed its goal gets the next one a period later.
     pub fn send<T: Transport>(&mut self, bus: &mut Bus<T>) -> Result<(), PortGone> {
-        self.encode();
-        PortGone::check(bus.sync_write(self.reg.address, &self.ids, &self.data)).map(|_| ())
+        PortGone::check(self.send_checked(bus)).map(|_| ())
     }
 
     /// Turns off every servo's own motion profile (its acceleration ramp,
     /// and the move time and speed that cap a goal): the run's path is
     /// already within the joints' limits, and a ramp in the firmware on
     /// top of it would only make the servo trail the path. These are RAM
-    /// registers (no EEPROM write); a power cycle clears them too.
+    /// registers (no EEPROM write); a power cycle clears them too. The goal
+    /// speed is among them: a wheel's is 0 (at rest) from here until the
+    /// loop commands one.
     pub fn release_profiles<T: Transport>(&self, bus: &mut Bus<T>) -> Result<(), BusError> {
         // Zeroes: one byte per servo for the ramp, four for time and speed.
         let ramp = &self.torque[0];

@@ -3,6 +3,17 @@
 //! detection ([`tracking`]), lead estimation ([`lead`]), timing figures
 //! ([`counters`]) and telemetry ([`publish`]). Everything is allocated when
 //! the loop is built; a cycle allocates nothing.
+//!
+//! Wheel joints (`mode: wheel`, [`wheels`]) take part in the same cycle
+//! with speeds instead of positions: their commanded speed ramps toward
+//! the timeline's target speed within their acceleration (and jerk)
+//! limits and goes out as goal speed in a SYNC WRITE frame of its own,
+//! after the goal positions; their present speed is read with the
+//! position (4 bytes from 56) and published, and they are not tracked
+//! against the path. Start-up ([`servo_setup`]) refuses a servo whose
+//! operating mode is not its joint's and writes the joints' RAM `servo:`
+//! settings. A bus without wheels writes and reads exactly what it did
+//! before wheels existed.
 
 mod cycle_times;
 mod deadlines;
@@ -10,14 +21,16 @@ mod feedback;
 mod goals;
 mod lead;
 mod publish;
+mod servo_setup;
 mod tracking;
+mod wheels;
 
 use std::time::Duration;
 
 use crossbeam_channel::Sender;
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_protocol::registers::addr;
-use servobus_timing::Plan;
+use servobus_protocol::registers::{addr, sts, Register, Series};
+use servobus_timing::{Block, Plan};
 use servobus_trajectory::JointState;
 
 pub(crate) use cycle_times::CycleTiming;
@@ -29,7 +42,9 @@ use feedback::Feedback;
 use goals::GoalWriter;
 use lead::LeadEstimator;
 use publish::{Publisher, SampleTiming};
+use servo_setup::ServoSetup;
 use tracking::Tracker;
+use wheels::WheelWriter;
 
 use crate::config::{BusConfig, Units};
 use crate::error::{PortGone, RunError};
@@ -70,6 +85,11 @@ pub(crate) struct BusLoop<T: Transport> {
     units: Units,
     policy: FaultPolicy,
     goals: GoalWriter,
+    /// The wheels' goal speeds (none on a bus of position joints).
+    wheels: WheelWriter,
+    /// The operating modes checked and the `servo:` settings written at
+    /// start-up.
+    setup: ServoSetup,
     feedback: Feedback,
     track: Tracker,
     lead: LeadEstimator,
@@ -96,7 +116,7 @@ impl<T: Transport> BusLoop<T> {
     /// [`RunError::Series`] when a joint's servo is not of the bus's series.
     pub fn new(c: LoopConfig<'_>, bus: Bus<T>) -> Result<Self, RunError> {
         let config = c.bus;
-        let plan = config.plan(c.rate_hz).map_err(|source| RunError::Plan {
+        let plan = plan(config, c.rate_hz).map_err(|source| RunError::Plan {
             bus: config.name.clone(),
             source,
         })?;
@@ -117,6 +137,7 @@ impl<T: Transport> BusLoop<T> {
             return Err(RunError::NoPositionRegisters(series));
         };
         let order = series.byte_order();
+        let (speed_reg, feedback_speed) = wheel_registers(config, series)?;
         let every = u32::try_from(plan.read_every()).unwrap_or(u32::MAX);
         let stale_after = c.period * every.saturating_mul(2);
         let ids = config.joints.iter().map(|j| j.id).collect();
@@ -132,7 +153,16 @@ impl<T: Transport> BusLoop<T> {
             units: c.report_units,
             policy: c.policy,
             goals: GoalWriter::new(config, c.first_joint, c.units, goal_reg, order),
-            feedback: Feedback::new(pos_reg, order, ids),
+            wheels: WheelWriter::new(
+                config,
+                c.first_joint,
+                c.units,
+                speed_reg,
+                order,
+                c.period.as_secs_f64(),
+            ),
+            setup: ServoSetup::new(config, map.at(addr::MODE)),
+            feedback: Feedback::new(pos_reg, feedback_speed, order, ids),
             track: Tracker::new(
                 config,
                 c.first_joint,
@@ -141,19 +171,7 @@ impl<T: Transport> BusLoop<T> {
                 c.policy,
                 stale_after,
             ),
-            lead: LeadEstimator::new(
-                c.lead,
-                lead::prior_lag(
-                    config.joints.iter().map(|j| j.model.response_lag),
-                    c.period.as_secs_f64(),
-                ),
-                lead::Pace::of(
-                    config
-                        .joints
-                        .iter()
-                        .map(|j| (j.max_velocity, j.max_acceleration, j.max_jerk)),
-                ),
-            ),
+            lead: lead_estimator(c.lead, config, c.period),
             counters: CycleTimes::new(),
             out: Publisher::new(c.index, c.telemetry),
             timing: CycleTiming {
@@ -170,14 +188,19 @@ impl<T: Transport> BusLoop<T> {
     }
 
     /// Reads every servo's position patiently, sets the goals there
-    /// (clamped into the limits) and, when asked, turns the servos' own
-    /// motion profiles off ([`GoalWriter::release_profiles`]) and enables
-    /// torque.
+    /// (clamped into the limits) and, when asked, checks every servo's
+    /// operating mode against its joint ([`ServoSetup::check_modes`]),
+    /// turns the servos' own motion profiles off
+    /// ([`GoalWriter::release_profiles`], which leaves the wheels' goal
+    /// speed at 0), writes the joints' RAM `servo:` settings
+    /// ([`ServoSetup::write_settings`]: a joint's own `acceleration` wins
+    /// over the release) and enables torque.
     ///
     /// # Errors
     ///
-    /// As [`Feedback::startup`]; [`RunError::Startup`] when the goals or
-    /// the torque cannot be written.
+    /// As [`Feedback::startup`] and [`ServoSetup::check_modes`];
+    /// [`RunError::Startup`] when the goals, the settings or the torque
+    /// cannot be written.
     pub fn startup(&mut self, enable_torque: bool) -> Result<(), RunError> {
         if self.link.learns() {
             self.probe =
@@ -193,6 +216,7 @@ impl<T: Transport> BusLoop<T> {
         if !enable_torque {
             return Ok(());
         }
+        self.setup.check_modes(&mut self.bus, &self.name)?;
         let failed = |what| {
             let bus = self.name.clone();
             move |source| RunError::Startup { bus, what, source }
@@ -203,18 +227,34 @@ impl<T: Transport> BusLoop<T> {
         self.goals
             .release_profiles(&mut self.bus)
             .map_err(failed("turning off the servos' own acceleration ramps"))?;
+        self.wheels
+            .send_checked(&mut self.bus)
+            .map_err(failed("setting the wheels' speeds to 0"))?;
+        self.setup.write_settings(&mut self.bus, &self.name)?;
         self.goals
             .torque(&mut self.bus, true)
             .map_err(failed("enabling torque"))
     }
 
-    /// Positions read at start-up (rad), into `out` (robot order).
+    /// Positions read at start-up (rad), into `out` (robot order); a
+    /// wheel's is its rest, 0, so that no path moves to where it stands.
     pub fn present(&self, out: &mut [f64]) {
         for (g, j) in self.goals.joints.iter().zip(&self.track.joints) {
             if let Some(slot) = out.get_mut(g.robot_index) {
-                *slot = j.measured.unwrap_or(g.rad);
+                *slot = if g.wheel {
+                    0.0
+                } else {
+                    j.measured.unwrap_or(g.rad)
+                };
             }
         }
+    }
+
+    /// Whether every wheel of the bus is commanded to rest (true on a bus
+    /// without wheels): a run ends only then, so that the last goal speed
+    /// sent is 0.
+    pub fn wheels_at_rest(&self) -> bool {
+        self.wheels.at_rest()
     }
 
     /// The lead at path time `x`, s.
@@ -237,14 +277,17 @@ impl<T: Transport> BusLoop<T> {
         self.track.live_session();
     }
 
-    /// Maps, clamps and sends the goals for `cmd` (robot order, rad). A
-    /// pressed joint's goal is kept within its press's bound; one whose
-    /// goal came back within it is let go.
-    pub fn write(&mut self, cmd: &[JointState]) -> Result<(), PortGone> {
+    /// Maps, clamps and sends the goals for `cmd` (robot order, rad), and
+    /// the wheels' speeds one ramp step toward `speeds` (robot order,
+    /// rad/s; read for wheel joints only). A pressed joint's goal is kept
+    /// within its press's bound; one whose goal came back within it is let
+    /// go.
+    pub fn write(&mut self, cmd: &[JointState], speeds: &[f64]) -> Result<(), PortGone> {
         self.release_presses(cmd);
         let joints = &self.track.joints;
         self.goals
             .aim_within(cmd, |i| joints.get(i).and_then(|j| j.press));
+        self.wheels.aim(speeds);
         self.send_goals()
     }
 
@@ -299,7 +342,10 @@ impl<T: Transport> BusLoop<T> {
         if self.gone {
             return Ok(());
         }
-        let sent = self.goals.send(&mut self.bus);
+        let mut sent = self.goals.send(&mut self.bus);
+        if sent.is_ok() && self.wheels.any() {
+            sent = self.wheels.send(&mut self.bus);
+        }
         self.gone = sent.is_err();
         sent
     }
@@ -412,10 +458,16 @@ impl<T: Transport> BusLoop<T> {
         self.track.hold_positions(self.clock.now(), goal, out);
     }
 
-    /// Disables torque on every servo of the bus.
+    /// Disables torque on every servo of the bus, the wheels' goal speed
+    /// set to 0 first (no ramp is possible without torque, and a wheel
+    /// whose torque comes back on must not turn by itself).
     pub fn torque_off(&mut self) {
         if !self.gone {
             // Nothing more can be done if this fails: the caller ends.
+            if self.wheels.any() {
+                self.wheels.halt();
+                let _ = self.wheels.send_checked(&mut self.bus);
+            }
             let _ = self.goals.torque(&mut self.bus, false);
         }
     }
@@ -436,7 +488,7 @@ impl<T: Transport> BusLoop<T> {
             now,
         };
         self.out
-            .cycle(s, &self.goals.joints, &self.track, self.units);
+            .cycle(s, &self.goals.joints, &self.wheels, &self.track, self.units);
     }
 
     /// Sends a message that is not a cycle sample (fault, rejection,
@@ -505,7 +557,9 @@ impl<T: Transport> BusLoop<T> {
         let goals = self.goals.joints.iter();
         goals
             .zip(&self.track.joints)
-            .map(|(g, j)| {
+            .enumerate()
+            .map(|(i, (g, j))| {
+                let wheel = self.wheels.of_joint(i);
                 let report = JointReport {
                     name: j.name.clone(),
                     rms_error: u.from_rad(j.err.rms()),
@@ -514,11 +568,89 @@ impl<T: Transport> BusLoop<T> {
                     clamps: g.clamps,
                     stalls: j.presses,
                     stalled_s: j.pressed_cycles as f64 * self.period.as_secs_f64(),
+                    peak_commanded_speed: wheel.map(|w| u.from_rad(w.peak)),
+                    peak_measured_speed: wheel.map(|_| u.from_rad(j.peak_speed)),
                 };
                 (j.robot_index, report)
             })
             .collect()
     }
+}
+
+/// The lead estimator of `config`'s position joints (wheels follow no
+/// path) at `period`.
+fn lead_estimator(lead: Lead, config: &BusConfig, period: Duration) -> LeadEstimator {
+    let positions = || config.joints.iter().filter(|j| !j.is_wheel());
+    LeadEstimator::new(
+        lead,
+        lead::prior_lag(
+            config.joints.iter().map(|j| j.model.response_lag),
+            period.as_secs_f64(),
+        ),
+        lead::Pace::of(positions().map(|j| (j.max_velocity, j.max_acceleration, j.max_jerk))),
+    )
+}
+
+/// The plan of `config`'s cycle at `rate_hz`: the robot file's
+/// ([`BusConfig::plan`]) on a bus of position joints; with wheels, one
+/// that charges for what such a bus sends and reads. Its goal positions
+/// and goal speeds go in two frames (8 + 3P and 8 + 3W bytes for P
+/// position joints and W wheels), which the plan counts as one frame of
+/// goal position, time and speed to every servo (8 + 7(P + W) bytes, as
+/// much or more); its reads are of 4 bytes (position and speed).
+fn plan(config: &BusConfig, rate_hz: f64) -> Result<Plan, servobus_timing::CycleError> {
+    if !config.joints.iter().any(|j| j.is_wheel()) {
+        return config.plan(rate_hz);
+    }
+    let read = Block::span(
+        sts::PRESENT_POSITION.register(),
+        sts::PRESENT_SPEED.register(),
+    );
+    servobus_timing::plan(
+        &config.budget_link(),
+        &config.timing_servos(),
+        Some(Block::POSITION_TIME_SPEED),
+        Some(read),
+        rate_hz,
+    )
+}
+
+/// The goal speed register of a bus's wheels and the present speed read
+/// with the position (both `None` on a bus of position joints).
+///
+/// # Errors
+///
+/// [`RunError::NoWheelRegisters`] when the series lacks one of them, or the
+/// operating mode.
+#[allow(clippy::type_complexity)] // two optional registers
+fn wheel_registers(
+    config: &BusConfig,
+    series: Series,
+) -> Result<(Option<&'static Register>, Option<&'static Register>), RunError> {
+    let Some(wheel) = config.joints.iter().find(|j| j.is_wheel()) else {
+        return Ok((None, None));
+    };
+    let map = series.map();
+    let missing = |what| RunError::NoWheelRegisters {
+        bus: config.name.clone(),
+        joint: wheel.name.clone(),
+        series,
+        what,
+    };
+    map.at(addr::MODE)
+        .ok_or_else(|| missing("operating mode"))?;
+    let goal = map
+        .at(addr::GOAL_SPEED)
+        .filter(|r| r.is_signed())
+        .ok_or_else(|| missing("signed goal speed"))?;
+    let present = map
+        .at(addr::PRESENT_SPEED)
+        .filter(|r| {
+            map.at(addr::PRESENT_POSITION)
+                .is_some_and(|p| p.end() == u16::from(r.address))
+        })
+        .ok_or_else(|| missing("present speed after the present position"))?;
+    Ok((Some(goal), Some(present)))
 }
 
 /// One bus's share of the report.

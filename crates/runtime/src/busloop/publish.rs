@@ -1,13 +1,18 @@
 //! A bus's telemetry: one sample per cycle (several for a bus of more than
 //! [`SAMPLE_JOINTS`] joints), sent without blocking or allocating; a full
 //! channel drops the sample and counts it.
+//!
+//! A wheel joint's sample is of speeds (units/s): commanded, measured and
+//! velocity are its commanded and present speed, and its error is
+//! commanded - measured (see [`JointSample`]).
 
 use std::time::Duration;
 
 use crossbeam_channel::Sender;
 
 use super::goals::JointGoal;
-use super::tracking::Tracker;
+use super::tracking::{JointTrack, Tracker};
+use super::wheels::{WheelGoal, WheelWriter};
 use crate::config::Units;
 use crate::telemetry::{CycleSample, JointSample, Telemetry, SAMPLE_JOINTS};
 
@@ -55,7 +60,14 @@ impl Publisher {
     }
 
     /// Sends the cycle's samples of `goals` and `track`, angles in `units`.
-    pub fn cycle(&mut self, s: SampleTiming, goals: &[JointGoal], track: &Tracker, u: Units) {
+    pub fn cycle(
+        &mut self,
+        s: SampleTiming,
+        goals: &[JointGoal],
+        wheels: &WheelWriter,
+        track: &Tracker,
+        u: Units,
+    ) {
         let Some(tx) = &self.tx else { return };
         let mut sample = self.sample;
         sample.cycle = s.cycle;
@@ -67,8 +79,12 @@ impl Publisher {
         let joints = goals.iter().zip(&track.joints);
         for start in (0..goals.len()).step_by(SAMPLE_JOINTS) {
             sample.clear_joints();
-            for (g, j) in joints.clone().skip(start).take(SAMPLE_JOINTS) {
+            for (i, (g, j)) in joints.clone().enumerate().skip(start).take(SAMPLE_JOINTS) {
                 let age = s.now.saturating_sub(j.measured_at);
+                if let Some(w) = wheels.of_joint(i) {
+                    sample.push(wheel_sample(w, j, age, track, u));
+                    continue;
+                }
                 sample.push(JointSample {
                     joint: j.robot_index,
                     commanded: u.from_rad(g.rad),
@@ -89,5 +105,31 @@ impl Publisher {
                 self.dropped += 1;
             }
         }
+    }
+}
+
+/// A wheel's sample: speeds, units/s.
+fn wheel_sample(
+    w: &WheelGoal,
+    j: &JointTrack,
+    age: Duration,
+    track: &Tracker,
+    u: Units,
+) -> JointSample {
+    let measured = j.speed;
+    JointSample {
+        joint: j.robot_index,
+        commanded: u.from_rad(w.speed),
+        planned: u.from_rad(w.target),
+        measured: measured.map(|m| u.from_rad(m)),
+        error: measured.map_or(0.0, |m| u.from_rad(w.speed - m)),
+        velocity: u.from_rad(measured.unwrap_or(0.0)),
+        feedback_age: age,
+        measured_at: j.measured_at,
+        stale: age > track.stale_after,
+        clamped: false,
+        flags: j.flags,
+        missing_reads: j.missing,
+        stalled: false,
     }
 }

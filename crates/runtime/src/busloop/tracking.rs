@@ -14,6 +14,11 @@
 //! A following error of a joint that does not move towards its path is
 //! taken the same way. Status flags (heat, over-current, overload) and a
 //! missing servo still raise their faults, pressed or not.
+//!
+//! A wheel joint has no position to follow: it is not judged against the
+//! path (no following error, stall or press). Its reading is its present
+//! speed (rad/s, through the joint's mapping); its status flags and its
+//! silence raise their faults as any joint's do.
 
 use std::time::Duration;
 
@@ -32,6 +37,8 @@ use crate::stats::RunningError;
 pub(crate) struct Reading {
     /// The position, ticks.
     pub ticks: i32,
+    /// The present speed, steps/s, when read (buses with wheels).
+    pub speed: Option<i32>,
     /// When it was read, on the bus's clock.
     pub at: Duration,
     /// The status flags of the reply.
@@ -49,8 +56,17 @@ pub(crate) struct JointTrack {
     pub measured: Option<f64>,
     pub measured_at: Duration,
     prev: Option<(f64, Duration)>,
-    /// Measured velocity, rad/s.
+    /// Measured velocity, rad/s (a wheel's: its present speed).
     pub velocity: f64,
+    /// A wheel joint: tracked by its speed, not against the path.
+    pub wheel: bool,
+    /// Steps/s of the speed register per rad/s of joint speed (signed by
+    /// the joint's direction).
+    steps_per_rad: f64,
+    /// A wheel's present speed at its last reading, rad/s.
+    pub speed: Option<f64>,
+    /// The largest |present speed| read, rad/s.
+    pub peak_speed: f64,
     /// The path at the time of the reading, rad and rad/s.
     pub planned: f64,
     planned_velocity: f64,
@@ -124,6 +140,12 @@ impl JointTrack {
                 self.velocity = (p - q) / (r.at - t).as_secs_f64();
             }
         }
+        if let Some(steps) = r.speed.filter(|_| self.wheel && self.steps_per_rad != 0.0) {
+            let v = f64::from(steps) / self.steps_per_rad;
+            self.speed = Some(v);
+            self.velocity = v;
+            self.peak_speed = self.peak_speed.max(v.abs());
+        }
         self.prev = Some((p, r.at));
         self.measured = Some(p);
         self.measured_at = r.at;
@@ -183,30 +205,37 @@ impl Tracker {
             .joints
             .iter()
             .enumerate()
-            .map(|(i, j)| JointTrack {
-                robot_index: first_joint + i,
-                name: j.name.clone(),
-                id: j.id,
-                map: JointMap::new(j, units),
-                measured: None,
-                measured_at: Duration::ZERO,
-                prev: None,
-                velocity: 0.0,
-                planned: 0.0,
-                planned_velocity: 0.0,
-                error: 0.0,
-                fresh: false,
-                flags: StatusFlags(0),
-                why_missing: None,
-                err: RunningError::default(),
-                follow: 0,
-                stall: 0,
-                missing: 0,
-                press: None,
-                press_began: false,
-                presses: 0,
-                pressed_cycles: 0,
-                held: false,
+            .map(|(i, j)| {
+                let map = JointMap::new(j, units);
+                JointTrack {
+                    robot_index: first_joint + i,
+                    name: j.name.clone(),
+                    id: j.id,
+                    map,
+                    measured: None,
+                    measured_at: Duration::ZERO,
+                    prev: None,
+                    velocity: 0.0,
+                    wheel: j.is_wheel(),
+                    steps_per_rad: map.raw_ticks(1.0) - map.raw_ticks(0.0),
+                    speed: None,
+                    peak_speed: 0.0,
+                    planned: 0.0,
+                    planned_velocity: 0.0,
+                    error: 0.0,
+                    fresh: false,
+                    flags: StatusFlags(0),
+                    why_missing: None,
+                    err: RunningError::default(),
+                    follow: 0,
+                    stall: 0,
+                    missing: 0,
+                    press: None,
+                    press_began: false,
+                    presses: 0,
+                    pressed_cycles: 0,
+                    held: false,
+                }
             })
             .collect();
         Tracker {
@@ -299,7 +328,7 @@ impl Tracker {
     pub fn fresh_errors(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.joints
             .iter()
-            .filter(|j| j.fresh && j.measured.is_some() && j.press.is_none())
+            .filter(|j| j.fresh && !j.wheel && j.measured.is_some() && j.press.is_none())
             .map(|j| (j.error, j.planned_velocity))
     }
 
@@ -350,6 +379,17 @@ impl Tracker {
             if !j.fresh {
                 continue;
             }
+            if j.wheel {
+                // No path to follow: only its status flags are judged.
+                if found.is_none() {
+                    found = flag_fault(j, &p).map(|(kind, reaction)| Found {
+                        joint: Some(i),
+                        kind,
+                        reaction,
+                    });
+                }
+                continue;
+            }
             let Some(m) = j.measured else { continue };
             let e = r.position - m;
             j.error = e;
@@ -365,6 +405,15 @@ impl Tracker {
         }
         found
     }
+}
+
+/// The fault `j`'s status flags show, if any (those of the policy's mask).
+fn flag_fault(j: &JointTrack, p: &FaultPolicy) -> Option<(FaultKind, Reaction)> {
+    let flags = j.flags.bits() & p.status_mask;
+    (flags != 0).then(|| {
+        let names = StatusFlags(flags).to_string();
+        (FaultKind::Status { flags, names }, p.on_status)
+    })
 }
 
 /// Counts `j`'s stalled and off-path readings (error `e` against a path
@@ -388,10 +437,8 @@ fn judge(
     } else {
         0
     };
-    let flags = j.flags.bits() & p.status_mask;
-    if flags != 0 {
-        let names = StatusFlags(flags).to_string();
-        return Some((FaultKind::Status { flags, names }, p.on_status));
+    if let Some(fault) = flag_fault(j, p) {
+        return Some(fault);
     }
     if live {
         let measured = j.measured.unwrap_or(j.planned);

@@ -37,6 +37,14 @@
 //! - Paused: the same stop and hold; targets are kept and followed on
 //!   resume.
 //!
+//! - A wheel joint's target is a speed (rad/s, within its top speed), not
+//!   a position: it is kept as given ([`LivePath::wheel_speeds`]), and the
+//!   bus loop ramps the wheel toward it within its acceleration limit. A
+//!   chunk gives a wheel the speed of its first point. Timed out or
+//!   paused, every wheel heads for 0; a timeout also forgets the wheels'
+//!   targets (a dead-man: a base that lost its stream stays stopped until
+//!   a target names its wheels again), a pause keeps them for the resume.
+//!
 //! Stepping allocates nothing: the references keep room for a chunk of
 //! [`MAX_CHUNK_POINTS`] from the start.
 
@@ -93,6 +101,9 @@ pub(crate) struct LivePath {
     envelopes: Vec<Envelope>,
     /// Goals while stopped (timeout or pause).
     stops: Vec<f64>,
+    /// Per joint, a wheel's target speed (rad/s); `None` for a position
+    /// joint.
+    speeds: Vec<Option<f64>>,
     mode: Mode,
     /// Whether any target has come.
     any: bool,
@@ -135,6 +146,7 @@ impl LivePath {
                 .collect(),
             envelopes: from.iter().map(|s| Envelope::new(*s)).collect(),
             stops: vec![0.0; n],
+            speeds: vec![None; n],
             limits,
             mode: Mode::TimedOut,
             any: false,
@@ -153,6 +165,26 @@ impl LivePath {
         // and hold.
         live.set_stops();
         live
+    }
+
+    /// Marks the wheel joints (`wheels[j]`): their targets are speeds,
+    /// 0 until one comes.
+    pub fn set_wheels(&mut self, wheels: &[bool]) {
+        for (s, &w) in self.speeds.iter_mut().zip(wheels) {
+            *s = w.then_some(0.0);
+        }
+    }
+
+    /// The wheels' target speeds (rad/s) into `out` (robot order): as
+    /// given while following, 0 when stopped (timeout, pause). Position
+    /// joints' entries are left as they are.
+    pub fn wheel_speeds(&self, out: &mut [f64]) {
+        let following = self.mode == Mode::Following;
+        for (o, s) in out.iter_mut().zip(&self.speeds) {
+            if let Some(s) = s {
+                *o = if following { *s } else { 0.0 };
+            }
+        }
     }
 
     /// Takes in a target (or a chunk) that arrived at run time `now`.
@@ -184,13 +216,18 @@ impl LivePath {
             if let Some(end) = chunk.times.last() {
                 alive = alive.max(end + shift - self.lead);
             }
-            for ((r, e), q) in self
+            for (((r, e), q), speed) in self
                 .references
                 .iter_mut()
                 .zip(self.envelopes.iter_mut())
                 .zip(&chunk.joints)
+                .zip(self.speeds.iter_mut())
             {
                 let Some(q) = q else { continue };
+                if let Some(speed) = speed {
+                    *speed = q.first().copied().unwrap_or(0.0);
+                    continue;
+                }
                 let (lo, hi) = q
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &p| {
@@ -201,13 +238,18 @@ impl LivePath {
                 r.chunk(times.zip(q.iter().copied()), x);
             }
         } else {
-            for ((r, e), new) in self
+            for (((r, e), new), speed) in self
                 .references
                 .iter_mut()
                 .zip(self.envelopes.iter_mut())
                 .zip(&t.joints)
+                .zip(self.speeds.iter_mut())
             {
                 let Some((q, _)) = *new else { continue };
+                if let Some(speed) = speed {
+                    *speed = q;
+                    continue;
+                }
                 e.arrived(now, q, q);
                 r.target(t.stamp, at, q, x);
             }
@@ -311,12 +353,19 @@ impl LivePath {
             for r in &mut self.references {
                 r.hold(self.last);
             }
+            for s in self.speeds.iter_mut().flatten() {
+                *s = 0.0;
+            }
         }
         let dt = x - self.last;
         if dt > 0.0 {
             // The goal at the start of the step: the follower plans from
             // there.
             for j in 0..self.cmd.len() {
+                if self.speeds[j].is_some() {
+                    // A wheel: its speed is the bus loop's to ramp.
+                    continue;
+                }
                 let g = self.goal(j, self.last);
                 let bounds = self.bounds(j);
                 let farthest = self.farthest(j, bounds);

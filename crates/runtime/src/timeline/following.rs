@@ -58,6 +58,7 @@ impl Timeline {
         let st = self.state_at_horizon();
         let x = self.horizon;
         let mut live = LivePath::new(self.live_limits.clone(), &st, x, self.target_timeout);
+        live.set_wheels(&self.wheels);
         live.begin_cycle(now);
         live.target(target, now);
         self.pending = None;

@@ -11,6 +11,12 @@
 //!
 //! Steady-state sampling allocates nothing; each change (a command, a
 //! fault reaction) plans a short path once, which allocates.
+//!
+//! Wheel joints ([`Timeline::set_wheels`]) have no position on the path:
+//! their entries in a sampled state mean nothing, and their target speeds
+//! come from [`Timeline::wheel_targets`] instead: a live target's speed
+//! while live targets are followed, 0 under any other segment (a played
+//! path, a stop, a hold), paused or timed out.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -150,6 +156,8 @@ pub(crate) struct Timeline {
     /// A live run: a path played in it gives way to a hold when it ends,
     /// and the run goes on (for more targets or paths) until stopped.
     stays: bool,
+    /// Which joints are wheels (robot order).
+    wheels: Vec<bool>,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -185,6 +193,7 @@ impl Timeline {
             now: 0.0,
             target_timeout: DEFAULT_TARGET_TIMEOUT,
             stays: false,
+            wheels: vec![false; n],
         }
     }
 
@@ -268,6 +277,36 @@ impl Timeline {
         self.horizon = self.horizon.max(x);
         if let Some(s) = self.active(x) {
             s.sample(x, Which::Cmd, out);
+        }
+    }
+
+    /// Marks the wheel joints (`wheels[j]`, robot order): their targets
+    /// are speeds ([`Timeline::wheel_targets`]).
+    pub fn set_wheels(&mut self, wheels: Vec<bool>) {
+        for seg in &mut self.segments {
+            if let Path::Live(live) = &mut seg.path {
+                live.set_wheels(&wheels);
+            }
+        }
+        self.wheels = wheels;
+    }
+
+    /// The wheels' target speeds (rad/s) at `x` into `out` (robot order;
+    /// position joints' entries are left as they are): the live targets'
+    /// while they are followed, else 0. Sampled after
+    /// [`sample_cmd`](Self::sample_cmd) at the same `x`, which judges the
+    /// live timeout.
+    pub fn wheel_targets(&self, x: f64, out: &mut [f64]) {
+        for (o, _) in out.iter_mut().zip(&self.wheels).filter(|(_, &w)| w) {
+            *o = 0.0;
+        }
+        let i = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= x)
+            .unwrap_or(0);
+        if let Some(Path::Live(live)) = self.segments.get(i).map(|s| &s.path) {
+            live.wheel_speeds(out);
         }
     }
 

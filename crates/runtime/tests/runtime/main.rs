@@ -18,4 +18,5 @@ mod run_link;
 mod run_robots;
 mod run_same_cycle;
 mod run_threads;
+mod run_wheels;
 mod sim_budget;

@@ -151,6 +151,41 @@ enum Timing {
     /// takes 1-7 ms (pseudo-random), the positions are those of the read's
     /// middle and the stamp is taken when the read is done.
     Python,
+    /// As `servobus follow` reads a leader arm: each slot's read takes
+    /// 1.5-3 ms, one in 20 a stall of 10-40 ms (a loaded machine), after
+    /// which the loop starts its next slot at once on a moved schedule;
+    /// one read in 30 misses and sends nothing.
+    Leader,
+}
+
+/// A pseudo-random number in [0, 1) for slot `k` and stream `salt`.
+fn unit(k: u32, salt: u64) -> f64 {
+    let mut x = (u64::from(k) ^ salt.wrapping_mul(0xA24B_AED4_963E_E407))
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ 0xD1B5_4A32_D192_ED03;
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x ^= x >> 32;
+    (x % 1_000_000) as f64 / 1e6
+}
+
+/// The reads of [`Timing::Leader`] at `hz` over `seconds`: (sample time,
+/// stamp), the missed ones left out.
+fn leader_reads(hz: f64, seconds: f64) -> Vec<(f64, f64)> {
+    let period = 1.0 / hz;
+    let (mut t, mut k, mut out) = (period, 0u32, Vec::new());
+    while t < seconds && k < 1_000_000 {
+        k += 1;
+        let mut read = 0.0015 + 0.0015 * unit(k, 1);
+        if unit(k, 2) < 0.05 {
+            read += 0.010 + 0.030 * unit(k, 3);
+        }
+        if unit(k, 4) >= 1.0 / 30.0 {
+            out.push((t + 0.5 * read, t + read));
+        }
+        t = (t + period).max(t + read + 0.0002);
+    }
+    out
 }
 
 /// The targets sent: (arrival time, deg).
@@ -189,6 +224,7 @@ fn follow(
     let mut pan = Vec::new();
     let mut sent = Vec::new();
     let mut slot = 1u32;
+    let reads = leader_reads(hz, CYCLES as f64 * PERIOD + 1.0);
     for _ in 0..CYCLES {
         let now = run.cycle() as f64 * PERIOD;
         loop {
@@ -196,6 +232,10 @@ fn follow(
             let (sample, stamp) = match timing {
                 Timing::Exact => (s, s),
                 Timing::Python => (s + 0.5 * read_time(slot), s + read_time(slot)),
+                Timing::Leader => match reads.get(slot as usize - 1) {
+                    Some(&r) => r,
+                    None => break,
+                },
             };
             if stamp > now + 1e-9 {
                 break;
@@ -286,6 +326,7 @@ fn main() -> Result<(), String> {
             (50.0, "model", &model, Timing::Exact),
             (30.0, "model", &model, Timing::Exact),
             (30.0, "python", &model, Timing::Python),
+            (50.0, "leader", &model, Timing::Leader),
             (30.0, "file", &gentle, Timing::Exact),
         ] {
             let (pan, sent) = follow(robot, hz, case.source, timing)?;

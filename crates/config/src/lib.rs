@@ -69,9 +69,9 @@ pub use motion::{
 };
 pub use pose_arg::{parse_pose, PoseError};
 pub use robot::{
-    load_robot, BaseTarget, BaseTargetError, BusConfig, CalibrationChoice, JointConfig, JointMode,
-    Robot, RobotCalibration, RobotOptions, RobotSource, ServoSettings, ServoWrite, WheelTargets,
-    MODEL_JERK_RAMP_S,
+    load_robot, BaseTarget, BaseTargetError, BusConfig, CalibrationChoice, FaultResponse,
+    JointConfig, JointFaults, JointMode, Robot, RobotCalibration, RobotOptions, RobotSource,
+    ServoSettings, ServoWrite, WheelTargets, MODEL_JERK_RAMP_S,
 };
 pub use spatial::{spatial_summary, FeetSummary, SpatialSummary, ToolSummary};
 pub use tool::{ik_reason, TOOL_FRAME};

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use servobus_protocol::StatusFlags;
 
-use crate::config::Units;
+use crate::config::{FaultResponse, JointConfig, Units};
 use crate::rt::RtOptions;
 
 /// How far ahead of the planned path the goals are commanded.
@@ -64,6 +64,13 @@ pub enum Reaction {
 /// condition; a fault is raised on the `*_cycles`-th (so a count of 3 means
 /// detection within 3 cycles of the condition appearing), and the reaction
 /// starts in the cycle of detection.
+///
+/// This is the run-wide policy. A joint's `faults:` in the robot file
+/// ([`JointConfig::faults`]) may hold its stalls or following errors
+/// instead (the joint is held pressed, reported as a
+/// [`StallEvent`](crate::StallEvent), and the run goes on), ignore them, or
+/// give it its own following-error tolerance; every other fault is this
+/// policy's for every joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FaultPolicy {
     /// Largest tolerated tracking error, rad.
@@ -151,6 +158,57 @@ impl FaultPolicy {
             status_mask: 0,
             ..FaultPolicy::default()
         }
+    }
+}
+
+/// One joint's fault policy: the run-wide [`FaultPolicy`] with the joint's
+/// own `faults:` of the robot file ([`JointConfig::faults`]). Only a stall
+/// and a following error are set per joint; everything else is the run's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct JointPolicy {
+    /// A stall of the joint.
+    pub stall: FaultResponse,
+    /// A following error of the joint.
+    pub following: FaultResponse,
+    /// The joint's following-error tolerance, rad.
+    pub following_error: f64,
+}
+
+impl JointPolicy {
+    /// `joint`'s policy within `run` (the joint's angles in `units`).
+    pub fn new(run: &FaultPolicy, joint: &JointConfig, units: Units) -> Self {
+        let f = joint.faults;
+        JointPolicy {
+            stall: f.stall,
+            following: f.following_error,
+            following_error: f
+                .following_tolerance
+                .map_or(run.following_error, |t| units.to_rad(t)),
+        }
+    }
+
+    /// Whether the joint's stalls are looked for.
+    pub fn checks_stall(&self) -> bool {
+        self.stall != FaultResponse::Ignore
+    }
+
+    /// Whether the joint's following errors are looked for.
+    pub fn checks_following(&self) -> bool {
+        self.following != FaultResponse::Ignore
+    }
+
+    /// Whether a stall holds the joint pressed rather than raising a fault:
+    /// with `stall: hold`, or in a live session (`live`) unless ignored.
+    pub fn presses_stall(&self, live: bool) -> bool {
+        self.stall == FaultResponse::Hold || (live && self.checks_stall())
+    }
+
+    /// Whether a following error holds the joint pressed rather than
+    /// raising a fault: with `following_error: hold`, or when the joint
+    /// does not move towards its path (`blocked`, a stall of a slow path)
+    /// and a stall would press it ([`presses_stall`](Self::presses_stall)).
+    pub fn presses_following(&self, live: bool, blocked: bool) -> bool {
+        self.following == FaultResponse::Hold || (blocked && self.presses_stall(live))
     }
 }
 

@@ -2,15 +2,19 @@
 //!
 //! Parts: the types and loaders here, `raw` (the file's shape as serde
 //! reads it), `validate` (from that shape to a [`Robot`], every problem
-//! located in the file) and `servo` (a joint's mode and the `servo:`
-//! settings, turned into register writes of its model).
+//! located in the file), `servo` (a joint's mode and the `servo:`
+//! settings, turned into register writes of its model) and `faults` (a
+//! joint's own `faults:` policy).
 
 mod base;
+mod faults;
 mod loading;
 mod raw;
 mod servo;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_faults;
 #[cfg(test)]
 mod tests_servo;
 mod validate;
@@ -24,6 +28,7 @@ use super::calibration::JointCalibration;
 use super::error::{ConfigError, Source};
 use super::Units;
 pub use base::{BaseTarget, BaseTargetError, WheelTargets};
+pub use faults::{FaultResponse, JointFaults};
 use loading::{design_of, load_design, rate_fits, with_calibration};
 pub(crate) use loading::{load_calibrated, require_calibration};
 pub use servo::{JointMode, ServoSettings, ServoWrite};
@@ -164,6 +169,9 @@ pub struct JointConfig {
     /// the robot file), checked against the model at load; `None` when the
     /// file gives none.
     pub servo: Option<ServoSettings>,
+    /// What a stall or a following error of this joint does (`faults:` in
+    /// the robot file); the default is the run-wide policy.
+    pub faults: JointFaults,
 }
 
 /// How long the jerk limit of [`Robot::with_model_limits`] takes to reach

@@ -8,6 +8,7 @@ use std::fmt;
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer};
 
+use super::faults::RawFaults;
 use super::JointMode;
 use crate::Units;
 
@@ -126,6 +127,8 @@ pub(super) struct RawJoint {
     pub home: Option<f64>,
     #[serde(default)]
     pub servo: Option<RawServo>,
+    #[serde(default)]
+    pub faults: Option<RawFaults>,
 }
 
 /// A joint's `servo:` ([`ServoSettings`](super::ServoSettings)), the values

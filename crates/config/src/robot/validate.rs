@@ -8,7 +8,7 @@ use servobus_protocol::registers::{model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
 use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
-use super::{servo, BusConfig, JointConfig, JointMode, Robot, RobotCalibration};
+use super::{faults, servo, BusConfig, JointConfig, JointMode, Robot, RobotCalibration};
 use crate::error::{ConfigError, Source};
 use crate::limits::{check_baud, check_latency_us, check_rate_hz};
 use crate::locate::FieldPath;
@@ -276,7 +276,7 @@ fn validate_joint(
             src.error(&jp.key("servo").key(r.setting), reason)
         })?),
     };
-    let joint = JointConfig {
+    let mut joint = JointConfig {
         name: rj.name,
         id,
         model,
@@ -291,7 +291,9 @@ fn validate_joint(
         home: rj.home,
         calibration: None,
         servo,
+        faults: Default::default(),
     };
+    joint.faults = faults::joint_faults(rj.faults.as_ref(), &joint, jp, src)?;
     if let Some(home) = joint.home {
         if !(home >= joint.min && home <= joint.max) {
             return Err(src.error(

@@ -22,6 +22,7 @@ fn joint(model: &str, min: f64, max: f64, offset: f64, inverted: bool) -> JointC
         home: None,
         calibration: None,
         servo: None,
+        faults: Default::default(),
     }
 }
 

@@ -12,8 +12,11 @@
 //! the goal writer keeps its goal within [`STALL_PUSH`] of where it stands
 //! (see `goals`), until its commanded goal comes back within that bound.
 //! A following error of a joint that does not move towards its path is
-//! taken the same way. Status flags (heat, over-current, overload) and a
-//! missing servo still raise their faults, pressed or not.
+//! taken the same way. A joint whose robot file says `faults: {stall: hold}`
+//! (or `following_error: hold`) is pressed so in any run, played or live;
+//! `ignore` skips the check for it ([`JointPolicy`]). Status flags (heat,
+//! over-current, overload) and a missing servo still raise their faults,
+//! pressed or not.
 //!
 //! A wheel joint has no position to follow: it is not judged against the
 //! path (no following error, stall or press). Its reading is its present
@@ -28,7 +31,7 @@ use servobus_trajectory::JointState;
 
 use crate::config::{BusConfig, JointMap, Units};
 use crate::fault::{FaultKind, STALL_PUSH};
-use crate::options::{FaultPolicy, Reaction};
+use crate::options::{FaultPolicy, JointPolicy, Reaction};
 use crate::stats::RunningError;
 
 /// One reading of a joint's position, as it came off the bus. (How late
@@ -60,6 +63,8 @@ pub(crate) struct JointTrack {
     pub velocity: f64,
     /// A wheel joint: tracked by its speed, not against the path.
     pub wheel: bool,
+    /// Its own stall and following-error policy.
+    policy: JointPolicy,
     /// Steps/s of the speed register per rad/s of joint speed (signed by
     /// the joint's direction).
     steps_per_rad: f64,
@@ -217,6 +222,7 @@ impl Tracker {
                     prev: None,
                     velocity: 0.0,
                     wheel: j.is_wheel(),
+                    policy: JointPolicy::new(&policy, j, units),
                     steps_per_rad: map.raw_ticks(1.0) - map.raw_ticks(0.0),
                     speed: None,
                     peak_speed: 0.0,
@@ -418,8 +424,8 @@ fn flag_fault(j: &JointTrack, p: &FaultPolicy) -> Option<(FaultKind, Reaction)> 
 
 /// Counts `j`'s stalled and off-path readings (error `e` against a path
 /// moving at `v`) and names the first fault they or its status flags show.
-/// In a live session (`live`) a stall, or a following error of a joint not
-/// moving towards its path, presses the joint instead (see [`Press`]).
+/// A stall, or a following error, that the joint's policy holds (`hold`,
+/// or a live session: `live`) presses the joint instead (see [`Press`]).
 fn judge(
     j: &mut JointTrack,
     p: &FaultPolicy,
@@ -428,11 +434,13 @@ fn judge(
     u: Units,
     live: bool,
 ) -> Option<(FaultKind, Reaction)> {
-    let stalled = e.abs() > p.stall_error
+    let jp = j.policy;
+    let stalled = jp.checks_stall()
+        && e.abs() > p.stall_error
         && v.abs() >= p.stall_min_velocity
         && (j.velocity.abs() < p.stall_ratio * v.abs() || j.velocity.signum() != v.signum());
     j.stall = if stalled { j.stall + 1 } else { 0 };
-    j.follow = if e.abs() > p.following_error {
+    j.follow = if jp.checks_following() && e.abs() > jp.following_error {
         j.follow + 1
     } else {
         0
@@ -440,34 +448,33 @@ fn judge(
     if let Some(fault) = flag_fault(j, p) {
         return Some(fault);
     }
-    if live {
-        let measured = j.measured.unwrap_or(j.planned);
-        if let Some(press) = &mut j.press {
-            // Held: the error is the stop's, not a fault. A joint that gets
-            // further (what it pressed on gave way) moves the anchor on.
-            if (measured - press.anchor) * press.dir > 0.0 {
-                press.anchor = measured;
-            }
-            j.stall = 0;
-            j.follow = 0;
-            return None;
+    let measured = j.measured.unwrap_or(j.planned);
+    if let Some(press) = &mut j.press {
+        // Held: the error is the stop's, not a fault. A joint that gets
+        // further (what it pressed on gave way) moves the anchor on.
+        if (measured - press.anchor) * press.dir > 0.0 {
+            press.anchor = measured;
         }
-        // Not moving towards its path at a quarter of the slowest speed a
-        // stall is judged at: blocked, however slowly the path goes.
-        let towards = j.velocity * e.signum();
-        let blocked =
-            j.follow >= p.following_cycles && towards < p.stall_ratio * p.stall_min_velocity;
-        if j.stall >= p.stall_cycles || blocked {
-            j.press = Some(Press {
-                dir: e.signum(),
-                anchor: measured,
-            });
-            j.press_began = true;
-            j.presses += 1;
-            j.stall = 0;
-            j.follow = 0;
-            return None;
-        }
+        j.stall = 0;
+        j.follow = 0;
+        return None;
+    }
+    // Not moving towards its path at a quarter of the slowest speed a
+    // stall is judged at: blocked, however slowly the path goes.
+    let towards = j.velocity * e.signum();
+    let blocked = towards < p.stall_ratio * p.stall_min_velocity;
+    let stall_held = j.stall >= p.stall_cycles && jp.presses_stall(live);
+    let follow_held = j.follow >= p.following_cycles && jp.presses_following(live, blocked);
+    if stall_held || follow_held {
+        j.press = Some(Press {
+            dir: e.signum(),
+            anchor: measured,
+        });
+        j.press_began = true;
+        j.presses += 1;
+        j.stall = 0;
+        j.follow = 0;
+        return None;
     }
     if j.stall >= p.stall_cycles {
         let kind = FaultKind::Stall {
@@ -480,7 +487,7 @@ fn judge(
     } else if j.follow >= p.following_cycles {
         let kind = FaultKind::FollowingError {
             error: u.from_rad(e),
-            tolerance: u.from_rad(p.following_error),
+            tolerance: u.from_rad(jp.following_error),
             cycles: j.follow,
         };
         Some((kind, p.on_following_error))

@@ -12,6 +12,7 @@ mod no_alloc;
 mod read_time;
 mod run_arm;
 mod run_faults;
+mod run_joint_faults;
 mod run_lead;
 mod run_limits;
 mod run_link;

@@ -89,8 +89,8 @@ echo "PASS: the bus summary is on screen"
 sleep 0.5
 screen2=$(tmux capture-pane -p -t "$session")
 for id in 1 2 3 4 6; do
-    # replies: field 13 of a row whose status is one word (ok, OVERHEAT).
-    a=$(field $id 13 "$screen1"); b=$(field $id 13 "$screen2")
+    # replies: field 14 of a row whose status is one word (ok, OVERHEAT).
+    a=$(field $id 14 "$screen1"); b=$(field $id 14 "$screen2")
     [[ "$a" =~ ^[0-9]+$ && "$b" =~ ^[0-9]+$ ]] || fail "servo $id: no reply count ($a, $b)"
     [ "$b" -gt "$a" ] || fail "servo $id does not update ($a then $b replies)"
 done

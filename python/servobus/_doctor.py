@@ -8,6 +8,31 @@ from typing import Any, Dict, List, Optional
 
 
 @dataclass(frozen=True)
+class SettingMismatch:
+    """A register whose value the robot file asks for and the servo does
+    not hold: a joint's operating mode or one of its ``servo:`` settings."""
+
+    joint: str
+    """The joint."""
+    setting: str
+    """What the robot file calls it: ``"mode"``, or the ``servo:`` key
+    (``"p"``, ``"protection_current"`` ...)."""
+    register: str
+    """The register's name."""
+    address: int
+    """The register's address."""
+    found: int
+    """The value the servo holds, in the register's units."""
+    wanted: int
+    """The value the robot file asks for, in the register's units."""
+    found_as: Optional[str]
+    """``found`` in the robot file's terms (``"position"``,
+    ``"3250 mA"``); None for a plain number."""
+    wanted_as: Optional[str]
+    """``wanted`` in the robot file's terms."""
+
+
+@dataclass(frozen=True)
 class Finding:
     """One thing found wrong (or worth knowing) about a bus."""
 
@@ -32,6 +57,20 @@ class Finding:
     calibration, a change to the robot file ..."""
     fixable: bool
     """Whether ``Robot.doctor(fix=True)`` applies the fix."""
+    setting: Optional[SettingMismatch] = None
+    """The robot file's setting the finding is about (a joint's mode or
+    ``servo:`` setting), with the values found and wanted; None for any
+    other finding."""
+
+    @classmethod
+    def from_dict(cls, raw: Dict[str, Any]) -> "Finding":
+        """The finding from one of the extension's JSON objects."""
+        fields = dict(raw)
+        setting = fields.pop("setting", None)
+        return cls(
+            **fields,
+            setting=None if setting is None else SettingMismatch(**setting),
+        )
 
 
 @dataclass(frozen=True)
@@ -89,7 +128,7 @@ class Checkup:
                 baud=b["baud"],
                 servos=b["servos"],
                 expected=b["expected"],
-                findings=[Finding(**f) for f in b["findings"]],
+                findings=[Finding.from_dict(f) for f in b["findings"]],
                 fixes=[AppliedFix(**f) for f in b["fixes"]],
             )
             for b in doc["buses"]

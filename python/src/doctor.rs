@@ -6,8 +6,9 @@ use servobus_robot::doctor::{exit_status, Applied, BusCheck, CheckOptions, Check
 
 use crate::errors::{Class, Failure, Outcome};
 
-/// One finding: its fields, the advice as data, and whether the doctor
-/// can apply its fix.
+/// One finding: its fields, the advice as data, whether the doctor can
+/// apply its fix, and the setting it is about (a joint's mode or `servo:`
+/// setting; null otherwise), as `servobus doctor --json` gives it.
 fn finding(f: &Finding) -> Outcome<serde_json::Value> {
     let mut v = serde_json::to_value(f).map_err(json_failure)?;
     if let Some(map) = v.as_object_mut() {
@@ -16,6 +17,10 @@ fn finding(f: &Finding) -> Outcome<serde_json::Value> {
             serde_json::to_value(&f.advice).map_err(json_failure)?,
         );
         map.insert("fixable".into(), f.fixable().into());
+        map.insert(
+            "setting".into(),
+            serde_json::to_value(&f.setting).map_err(json_failure)?,
+        );
     }
     Ok(v)
 }

@@ -44,3 +44,58 @@ def test_a_missing_servo_is_an_error_on_a_pty():
     errors = [f for f in checkup.findings if f.severity == "error"]
     assert [f.id for f in errors] == [3], errors
     assert checkup.buses[0].port == sim.port
+
+
+# A position joint ``arm`` (servo 1) that asks for P 16, and a wheel
+# ``drive`` (servo 2); the same bus as the servos come from the box (every
+# one in position mode, P 32) to serve them.
+ROVER_JOINTS = """\
+name: rover
+units: deg
+buses:
+  - name: b
+    joints:
+      - name: arm
+        id: 1
+        model: sts3215
+        min: -90
+        max: 90
+        max_velocity: 180
+        max_acceleration: 900
+{arm}
+      - name: drive
+        id: 2
+        model: sts3215
+{drive}
+"""
+ROVER = ROVER_JOINTS.format(
+    arm="        servo: {p: 16}",
+    drive="        mode: wheel\n        max_velocity: 250\n        max_acceleration: 500",
+)
+FRESH = ROVER_JOINTS.format(
+    arm="",
+    drive="        min: -90\n        max: 90\n        max_velocity: 180\n        max_acceleration: 900",
+)
+
+
+def test_a_finding_about_a_joints_setting_names_it_with_the_values_found_and_wanted():
+    with servobus.Sim(FRESH) as sim:
+        checkup = servobus.Robot(ROVER, port=sim.port).doctor()
+    by = {(f.id, f.register): f for f in checkup.findings}
+    mode = by[(2, "mode")].setting
+    assert mode == servobus._doctor.SettingMismatch(
+        joint="drive", setting="mode", register="mode", address=33,
+        found=0, wanted=1, found_as="position", wanted_as="wheel",
+    ), mode
+    p = by[(1, "p_coefficient")].setting
+    assert (p.joint, p.setting, p.found, p.wanted) == ("arm", "p", 32, 16), p
+    assert (p.found_as, p.wanted_as) == (None, None), p
+    # Every other finding has none.
+    others = [f for f in checkup.findings if f.register not in ("mode", "p_coefficient")]
+    assert others and all(f.setting is None for f in others), checkup.findings
+
+
+def test_findings_of_the_built_in_robot_carry_no_setting():
+    checkup = servobus.Robot("so101").doctor()
+    assert checkup.findings
+    assert all(f.setting is None for f in checkup.findings), checkup.findings

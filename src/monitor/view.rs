@@ -20,7 +20,7 @@ pub const KEYS: &str = "q quit   Space torque OFF on every servo";
 pub const REPLY_COLUMN: &str = "reply p99 us: request sent to this servo's reply received, \
      p99 in microseconds; servos answer one SYNC READ in turn, so later ones wait for earlier ones";
 
-const HEADER: [&str; 15] = [
+const HEADER: [&str; 16] = [
     "ID",
     "joint",
     "model",
@@ -29,6 +29,7 @@ const HEADER: [&str; 15] = [
     "goal deg",
     "deg/s",
     "load %",
+    "cur mA",
     "volt",
     "temp C",
     "torque",
@@ -41,7 +42,7 @@ const HEADER: [&str; 15] = [
 /// The status column's width, in cells.
 const STATUS_WIDTH: u16 = 24;
 
-const WIDTHS: [u16; 15] = [3, 14, 8, 8, 6, 8, 7, 7, 5, 6, 6, STATUS_WIDTH, 8, 8, 12];
+const WIDTHS: [u16; 16] = [3, 14, 8, 8, 6, 8, 7, 7, 6, 5, 6, 6, STATUS_WIDTH, 8, 8, 12];
 
 /// Where the figures on the screen come from, in words, for a frame's
 /// `source` (`bus` or `telemetry`).
@@ -129,6 +130,7 @@ fn row_cells(r: &Row) -> (Vec<Cell<'static>>, Style) {
         Cell::from(opt(r.goal_deg, 1)),
         Cell::from(opt(r.speed_deg_s, 0)),
         Cell::from(opt(r.load_pct, 1)),
+        Cell::from(opt(r.current_ma, 0)),
         Cell::from(opt(r.voltage_v, 1)),
         Cell::from(opt(r.temperature_c, 0)),
         Cell::from(torque),

@@ -1,7 +1,8 @@
 //! `servobus monitor` on the simulator: one SYNC READ per refresh, a
 //! missing servo shown as missing while the others update, the flags by
-//! name, torque off with one frame, the view drawn, the JSON lines, and the
-//! rows of `play --monitor` built from a run's telemetry.
+//! name, the motor current beside the load (none on SCS servos), torque off
+//! with one frame, the view drawn, the JSON lines, and the rows of
+//! `play --monitor` built from a run's telemetry.
 
 use crate::common;
 
@@ -88,16 +89,98 @@ fn a_vanished_servo_is_missing_while_the_others_update_with_one_sync_read_each()
     );
 
     // 20 refreshes a second; each moves 8 + 6 request bytes and five
-    // replies of 6 + 27 bytes: 179 bytes, 1.79 ms at 1 Mbps, of every 50 ms.
+    // replies of 6 + 31 bytes (torque enable 40 to the present current's
+    // last byte 70): 199 bytes, 1.99 ms at 1 Mbps, of every 50 ms.
     assert!(
         (frame.read_rate_hz - 20.0).abs() < 0.5,
         "{}",
         frame.read_rate_hz
     );
     assert!(
-        (frame.utilisation - 0.0358).abs() < 0.001,
+        (frame.utilisation - 0.0398).abs() < 0.001,
         "{}",
         frame.utilisation
+    );
+}
+
+/// The raw count servo `id` holds in `present_current` (69, sign bit 15).
+fn current_count(bus: &mut Bus<SimBus>, id: u8) -> i32 {
+    let mut raw = [0u8; 2];
+    bus.read(id, addr::PRESENT_CURRENT, &mut raw)
+        .expect("present current");
+    let v = i32::from(u16::from_le_bytes(raw));
+    if v & 0x8000 != 0 {
+        -(v & 0x7fff)
+    } else {
+        v
+    }
+}
+
+#[test]
+fn the_current_is_read_beside_the_load_in_6_5_ma_counts() {
+    let arm = robot("so101.yaml");
+    let (sim, mut bus) = virtual_bus(&arm, Faults::none());
+    let mut poller = Poller::new(Watched::of_bus(&arm.buses[0], arm.units));
+    // Servo 2 blocked and driven 500 ticks away: it strains at its full
+    // torque. Servo 4 holds against a load of a fifth of its torque.
+    // Servo 6 has its torque off.
+    for id in [2, 4] {
+        bus.write(id, addr::TORQUE_ENABLE, &[1]).expect("torque");
+    }
+    sim.servo(2, |s| s.set_blocked(true)).expect("servo 2");
+    let goal = sim.present_position(2).expect("position") + 500;
+    bus.write(2, addr::GOAL_POSITION, &(goal as u16).to_le_bytes())
+        .expect("goal");
+    sim.servo(4, |s| s.set_external_load(0.2)).expect("servo 4");
+    // Half a second: well inside the 2 s before the overload protection.
+    let frame = poll(&mut poller, &mut bus, 10);
+
+    let blocked = row(&frame, 2);
+    let ma = blocked.current_ma.expect("an STS3215 reports its current");
+    // An STS3215 stalls at about 2.7 A on 12 V.
+    assert!((2000.0..=3200.0).contains(&ma), "blocked: {ma} mA");
+    assert!(
+        blocked.load_pct.is_some_and(|l| l.abs() >= 99.0),
+        "{blocked:?}"
+    );
+    let held = row(&frame, 4);
+    let held_ma = held.current_ma.expect("servo 4's current");
+    assert!(held_ma > 100.0 && held_ma < ma * 0.8, "held: {held_ma} mA");
+    assert_eq!(
+        row(&frame, 6).current_ma,
+        Some(0.0),
+        "torque off: no current"
+    );
+    // The figure is the register's count in 6.5 mA (the servo at rest now,
+    // so the count the row was made of still stands).
+    for id in [2, 4, 6] {
+        let count = current_count(&mut bus, id);
+        let shown = row(&frame, id).current_ma.expect("a current");
+        assert!(
+            (shown - 6.5 * f64::from(count)).abs() < 1e-9,
+            "servo {id}: {shown} mA of {count} counts"
+        );
+    }
+}
+
+#[test]
+fn scs_servos_show_no_current() {
+    let mini = robot("scs-mini.yaml");
+    let (sim, mut bus) = virtual_bus(&mini, Faults::none());
+    let mut poller = Poller::new(Watched::of_bus(&mini.buses[0], mini.units));
+    let first = mini.buses[0].joints[0].id;
+    bus.write(first, addr::TORQUE_ENABLE, &[1]).expect("torque");
+    sim.servo(first, |s| s.set_external_load(0.3))
+        .expect("servo");
+    let frame = poll(&mut poller, &mut bus, 4);
+    assert!(row(&frame, first).load_pct.is_some_and(|l| l.abs() > 10.0));
+    assert!(
+        frame
+            .servos
+            .iter()
+            .all(|r| r.present && r.current_ma.is_none()),
+        "{:?}",
+        frame.servos
     );
 }
 
@@ -235,6 +318,28 @@ fn the_view_gives_units_and_sources_and_cuts_no_status_mid_word() {
         .cloned()
         .unwrap_or_default();
     assert!(header.contains("reply p99 us"), "{lines:#?}");
+    // The current beside the load, in mA (none drawn, the torque being off).
+    let (Some(ma), Some(volt)) = (header.find("cur mA"), header.find("volt")) else {
+        panic!("no current column in {header:?}");
+    };
+    assert!(
+        header.find("load %").is_some_and(|load| load < ma),
+        "{header}"
+    );
+    let cell = |id: &str| -> String {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(&format!("{id:<4}")))
+            .cloned()
+            .unwrap_or_default();
+        line.chars()
+            .skip(ma)
+            .take(volt - ma)
+            .collect::<String>()
+            .trim()
+            .to_string()
+    };
+    assert_eq!(cell("1"), "0", "{lines:#?}");
     // The summary names where the figures come from, in words.
     assert!(!lines[0].contains("(bus)"), "{lines:#?}");
     assert!(
@@ -262,6 +367,32 @@ fn the_view_gives_units_and_sources_and_cuts_no_status_mid_word() {
     assert_eq!(status("2"), "VOLTAGE, ANGLE SENSOR +3", "{lines:#?}");
     // Whole words of the reason, and a mark that there is more.
     assert_eq!(status("4"), "MISSING (reply of the…", "{lines:#?}");
+}
+
+#[test]
+fn the_view_shows_a_dash_for_an_scs_servos_current() {
+    let mini = robot("scs-mini.yaml");
+    let (_sim, mut bus) = virtual_bus(&mini, Faults::none());
+    let mut poller = Poller::new(Watched::of_bus(&mini.buses[0], mini.units));
+    let frame = poll(&mut poller, &mut bus, 2);
+    let lines = screen(&frame, 160);
+    let header = lines
+        .iter()
+        .find(|l| l.starts_with("ID "))
+        .cloned()
+        .unwrap_or_default();
+    let (Some(ma), Some(volt)) = (header.find("cur mA"), header.find("volt")) else {
+        panic!("no current column in {header:?}");
+    };
+    for r in &frame.servos {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(&format!("{:<4}", r.id)))
+            .cloned()
+            .unwrap_or_default();
+        let cell: String = line.chars().skip(ma).take(volt - ma).collect();
+        assert_eq!(cell.trim(), "-", "servo {}: {lines:#?}", r.id);
+    }
 }
 
 #[test]
@@ -330,4 +461,38 @@ fn monitor_json_prints_one_line_per_refresh_at_10_hz_or_more() {
     assert!(servos
         .iter()
         .all(|s| s["present"] == true && s["replies"] == 15));
+    // The current beside the load: none drawn, the torque being off.
+    assert!(servos.iter().all(|s| s["current_ma"] == 0.0), "{last}");
+    let line = text.lines().last().unwrap_or_default();
+    let at = |key: &str| line.find(&format!("\"{key}\":"));
+    assert!(
+        at("load_pct") < at("current_ma") && at("current_ma") < at("voltage_v"),
+        "{line}"
+    );
+}
+
+#[test]
+fn monitor_json_gives_scs_servos_no_current() {
+    let out = common::servobus(&[
+        "monitor",
+        "--robot",
+        "configs/robots/scs-mini.yaml",
+        "--json",
+        "--count",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let last: serde_json::Value =
+        serde_json::from_str(text.lines().last().unwrap_or_default()).expect("a JSON line");
+    let servos = last["servos"].as_array().expect("servos");
+    assert!(!servos.is_empty());
+    for s in servos {
+        assert!(s["load_pct"].is_number(), "{s}");
+        assert!(s["current_ma"].is_null(), "{s}");
+    }
 }

@@ -2,8 +2,9 @@
 //! live (`servobus monitor` renders it).
 //!
 //! A [`Poller`] reads one register block (torque enable 40 to the moving
-//! flag 66) from every servo with one SYNC READ per refresh (SCS servos,
-//! which lack SYNC READ, are read one after another by the driver), and
+//! flag 66, on STS/SMS servos on to the present current at 69) from every
+//! servo with one SYNC READ per refresh (SCS servos, which lack SYNC READ,
+//! are read one after another by the driver), and
 //! keeps a [`Row`] per servo: a servo that does not answer is marked
 //! missing and keeps its last values, so the others go on updating.
 //! [`Frame`] is one refresh of every row with the bus summary, for a
@@ -11,6 +12,7 @@
 //! `servobus play --monitor` builds the same frames from the runtime's
 //! telemetry ([`TelemetryRows`]).
 
+mod current;
 mod telemetry;
 
 use std::collections::VecDeque;
@@ -22,11 +24,14 @@ use servobus_driver::{Bus, BusError, Clock, Transport};
 use servobus_protocol::registers::{addr, model_by_number, Model, Series};
 use servobus_protocol::StatusFlags;
 
+pub use current::{block_len, milliamps_per_count};
 pub use telemetry::TelemetryRows;
 
 /// First address of the block read every refresh (torque enable).
 pub const BLOCK_START: u8 = addr::TORQUE_ENABLE;
-/// Bytes of the block: torque enable (40) to the moving flag (66).
+/// Bytes of the block every series has: torque enable (40) to the moving
+/// flag (66). STS/SMS servos are read further, to their present current
+/// ([`block_len`]).
 pub const BLOCK_LEN: u8 = addr::MOVING - addr::TORQUE_ENABLE + 1;
 /// Reply latencies kept per servo for the p99.
 const LATENCY_WINDOW: usize = 512;
@@ -69,6 +74,10 @@ pub struct Row {
     pub speed_deg_s: Option<f64>,
     /// Load, percent of the maximum torque (signed).
     pub load_pct: Option<f64>,
+    /// Motor current, mA (signed): STS/SMS servos' `present_current` in
+    /// the register's unit (6.5 mA a count); `None` for SCS servos, which
+    /// have no documented current register.
+    pub current_ma: Option<f64>,
     /// Supply voltage, V.
     pub voltage_v: Option<f64>,
     /// Temperature, C.
@@ -117,6 +126,7 @@ impl Row {
             goal_ticks: None,
             speed_deg_s: None,
             load_pct: None,
+            current_ma: None,
             voltage_v: None,
             temperature_c: None,
             torque: None,
@@ -209,6 +219,8 @@ pub struct Poller {
     recent: VecDeque<(Duration, Duration)>,
     started: Option<Duration>,
     series: Series,
+    /// Bytes read from each servo every refresh ([`block_len`]).
+    block_len: u8,
 }
 
 impl Poller {
@@ -228,6 +240,7 @@ impl Poller {
             recent: VecDeque::new(),
             started: None,
             series,
+            block_len: block_len(series),
         }
     }
 
@@ -272,7 +285,8 @@ impl Poller {
         &self.ids
     }
 
-    /// One refresh: one SYNC READ of the block from every servo.
+    /// One refresh: one SYNC READ of the series' block ([`block_len`])
+    /// from every servo.
     ///
     /// # Errors
     /// Only for the read as a whole (the transport failed); missing servos
@@ -284,11 +298,12 @@ impl Poller {
         // again): a port just opened, or a simulator just started, may be
         // slow to answer, and a present servo must not look absent.
         let read = if first {
-            bus.sync_read_patiently(BLOCK_START, BLOCK_LEN, &self.ids)?
+            bus.sync_read_patiently(BLOCK_START, self.block_len, &self.ids)?
         } else {
-            bus.sync_read(BLOCK_START, BLOCK_LEN, &self.ids)?
+            bus.sync_read(BLOCK_START, self.block_len, &self.ids)?
         };
         let map = self.series.map();
+        let ma_per_count = map.get("present_current").and_then(milliamps_per_count);
         let order = self.series.byte_order();
         let value = |data: &[u8], name: &str| -> Option<i32> {
             let reg = map.get(name)?;
@@ -316,6 +331,8 @@ impl Poller {
                     row.goal_deg = goal.map(|t| w.degrees(t));
                     row.speed_deg_s = value(d, "present_speed").map(|v| f64::from(v) * per_tick);
                     row.load_pct = value(d, "present_load").map(|v| f64::from(v) / 10.0);
+                    row.current_ma = ma_per_count
+                        .and_then(|ma| Some(f64::from(value(d, "present_current")?) * ma));
                     row.voltage_v = value(d, "present_voltage").map(|v| f64::from(v) / 10.0);
                     row.temperature_c = value(d, "present_temperature").map(f64::from);
                     row.torque = value(d, "torque_enable").map(|v| v != 0);
@@ -334,7 +351,7 @@ impl Poller {
         self.record_latencies(bus, !first);
         let now = bus.clock().now();
         let link = bus.link();
-        let (request, reply) = (8 + self.ids.len(), 6 + usize::from(BLOCK_LEN));
+        let (request, reply) = (8 + self.ids.len(), 6 + usize::from(self.block_len));
         let bytes = match self.series {
             Series::Sts => request + answered * reply,
             // One READ request of 8 bytes per servo.

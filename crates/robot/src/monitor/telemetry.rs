@@ -2,8 +2,8 @@
 //! (`servobus play --monitor`): no request of its own goes on the bus.
 //!
 //! The runtime reads positions (and with them each reply's status flags)
-//! only, so load, voltage, temperature, torque and reply latency stay empty
-//! here; the monitor shows them as `-`.
+//! only, so load, current, voltage, temperature and reply latency stay
+//! empty here; the monitor shows them as `-`.
 
 use std::collections::VecDeque;
 

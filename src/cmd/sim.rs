@@ -9,6 +9,7 @@ use std::sync::Arc;
 use anyhow::Context;
 use servobus_config::{load_robot, Robot, RobotOptions};
 use servobus_robot::files::OutputError;
+use servobus_robot::odometry::{pose_figures, Odometry, TruthBase};
 use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_robot::sim::{Faults, PtyServer, SimServo, Truth};
 
@@ -97,7 +98,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // written before the simulator says it serves, so that a reader who
     // opens it then finds at least the header. An error here drops the
     // server, which removes the link.
-    let truth = truth.map(create_truth).transpose()?;
+    // A mobile base's true pose goes with its wheels' angles.
+    let base = truth
+        .as_ref()
+        .and_then(|(t, _)| TruthBase::of(&robot, &t.names()));
+    let truth = truth.map(|t| create_truth(t, base.is_some())).transpose()?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -110,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     )?;
     crate::shared::out::flush()?;
 
-    let writer = truth.map(|(truth, out, path)| TruthWriter::spawn(truth, out, path, &stop));
+    let writer = truth.map(|(truth, out, path)| TruthWriter::spawn(truth, base, out, path, &stop));
     let served = server.serve(&stop);
     server.settle();
     // Dropping the server removes the link, also after an I/O error.
@@ -204,13 +209,21 @@ fn open_server(
 /// Creates (or truncates) the truth file and writes its header.
 fn create_truth(
     (truth, path): (Truth, PathBuf),
+    base: bool,
 ) -> Result<(Truth, std::fs::File, PathBuf), OutputError> {
     let write_err = |source| OutputError::Write {
         path: path.clone(),
         source,
     };
     let mut file = std::fs::File::create(&path).map_err(write_err)?;
-    writeln!(file, "{}", truth.csv_header()).map_err(write_err)?;
+    let mut header = truth.csv_header();
+    if base {
+        for (name, _) in pose_figures(&Odometry::default()) {
+            header.push(',');
+            header.push_str(name);
+        }
+    }
+    writeln!(file, "{header}").map_err(write_err)?;
     Ok((truth, file, path))
 }
 
@@ -223,15 +236,22 @@ struct TruthWriter {
 }
 
 impl TruthWriter {
-    /// Starts streaming `truth` to `out` (the file at `path`).
-    fn spawn(truth: Truth, out: std::fs::File, path: PathBuf, stop: &Arc<AtomicBool>) -> Self {
+    /// Starts streaming `truth` to `out` (the file at `path`), with the
+    /// `base`'s true pose on each row when the robot has one.
+    fn spawn(
+        truth: Truth,
+        mut base: Option<TruthBase>,
+        out: std::fs::File,
+        path: PathBuf,
+        stop: &Arc<AtomicBool>,
+    ) -> Self {
         let stop = Arc::clone(stop);
         let done = Arc::new(AtomicBool::new(false));
         let finished = Arc::clone(&done);
         let name = path.clone();
         let handle = std::thread::spawn(move || -> anyhow::Result<()> {
             let mut out = out;
-            write_truth(&truth, &mut out, &stop, &finished)
+            write_truth(&truth, &mut base, &mut out, &stop, &finished)
                 .map_err(|source| OutputError::Write { path: name, source }.into())
         });
         TruthWriter { handle, done, path }
@@ -253,6 +273,7 @@ impl TruthWriter {
 /// rows only, and memory does not grow with a long session.
 fn write_truth(
     truth: &Truth,
+    base: &mut Option<TruthBase>,
     out: &mut impl Write,
     stop: &AtomicBool,
     done: &AtomicBool,
@@ -264,7 +285,8 @@ fn write_truth(
         let last = done.load(Ordering::SeqCst);
         text.clear();
         for row in truth.take_rows() {
-            push_row(&mut text, row.time_s, &row.angles_deg);
+            let pose = base.as_mut().map(|b| b.take(&row));
+            push_row(&mut text, row.time_s, &row.angles_deg, pose);
         }
         if !text.is_empty() {
             out.write_all(text.as_bytes())?;
@@ -281,13 +303,19 @@ fn write_truth(
     }
 }
 
-/// Appends one truth row, `time_s,<angle>,...` and its newline, to `text`.
-fn push_row(text: &mut String, time_s: f64, angles_deg: &[f64]) {
+/// Appends one truth row, `time_s,<angle>,...`, the base's pose when
+/// given (`base_x_m,base_y_m,base_theta_deg`) and its newline, to `text`.
+fn push_row(text: &mut String, time_s: f64, angles_deg: &[f64], base: Option<Odometry>) {
     use std::fmt::Write as _;
     // Writing to a String cannot fail.
     let _ = write!(text, "{time_s:.3}");
     for a in angles_deg {
         let _ = write!(text, ",{a:.3}");
+    }
+    if let Some(pose) = base {
+        for (_, v) in pose_figures(&pose) {
+            let _ = write!(text, ",{v:.5}");
+        }
     }
     text.push('\n');
 }

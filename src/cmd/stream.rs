@@ -27,6 +27,7 @@ use servobus_robot::{
     live_options, Command, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry,
 };
 
+use servobus_robot::odometry::{pose_figures, Odometer, Odometry};
 use servobus_robot::stream::{parse_line_for, MAX_LINE_BYTES};
 
 use crate::shared::out::{errln, outln};
@@ -83,7 +84,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             let _ = commands.send(Command::Stop);
         })?;
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
-    let lost = watch(&runner, &names, args.telemetry)?;
+    let odometer = servobus_robot::odometry::Odometer::of(&robot, robot.units);
+    let lost = watch(&runner, &names, odometer, args.telemetry)?;
     let report = runner.join()?;
     let skipped = skipped.load(Ordering::Relaxed);
     let code = finish(&report, skipped, args.json && !lost)?;
@@ -186,10 +188,63 @@ fn read_targets(
     }
 }
 
-/// One telemetry line per cycle (all buses' joints) while the run goes on.
-/// Returns whether the telemetry could not all be written (the run was
-/// then stopped).
-fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<bool> {
+/// The telemetry line of the cycle at `t` s: every joint's commanded and
+/// measured angle (`joints`), the faults so far, and a mobile base's
+/// odometry when given.
+fn telemetry_line(
+    names: &[String],
+    t: f64,
+    joints: (&[Option<f64>], &[Option<f64>]),
+    faults: &[String],
+    pose: Option<Odometry>,
+) -> serde_json::Value {
+    let map = |v: &[Option<f64>]| -> serde_json::Map<String, serde_json::Value> {
+        names
+            .iter()
+            .zip(v)
+            .map(|(name, a)| (name.clone(), serde_json::json!(a)))
+            .collect()
+    };
+    let mut line = serde_json::json!({
+        "t": t,
+        "commanded": map(joints.0),
+        "measured": map(joints.1),
+        "faults": faults,
+    });
+    if let (Some(pose), Some(fields)) = (pose, line.as_object_mut()) {
+        for (key, value) in pose_figures(&pose) {
+            fields.insert(key.to_owned(), serde_json::json!(value));
+        }
+    }
+    line
+}
+
+/// Says on stderr what a telemetry message other than a cycle, a fault or
+/// the end tells: the live following stopped or resumed, a command refused.
+fn say(m: &Telemetry) {
+    match m {
+        Telemetry::Live { event, time_s } => match event {
+            LiveEvent::TimedOut => {
+                errln!("{time_s:.2} s: no target for the timeout; stopping, then holding")
+            }
+            LiveEvent::Resumed => errln!("{time_s:.2} s: targets again; following"),
+            _ => {}
+        },
+        Telemetry::Rejected(why) => errln!("refused: {why}"),
+        _ => {}
+    }
+}
+
+/// One telemetry line per cycle (all buses' joints, and a mobile base's
+/// odometry when `odometer` is given) while the run goes on. Returns
+/// whether the telemetry could not all be written (the run was then
+/// stopped).
+fn watch(
+    runner: &Run,
+    names: &[String],
+    mut odometer: Option<Odometer>,
+    mut telemetry: bool,
+) -> anyhow::Result<bool> {
     let mut lost = false;
     let rx = runner.telemetry();
     let n = names.len();
@@ -203,21 +258,10 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
                 t: f64,
                 commanded: &[Option<f64>],
                 measured: &[Option<f64>],
-                faults: &[String]|
+                faults: &[String],
+                pose: Option<Odometry>|
      -> std::io::Result<()> {
-        let map = |v: &[Option<f64>]| -> serde_json::Map<String, serde_json::Value> {
-            names
-                .iter()
-                .zip(v)
-                .map(|(name, a)| (name.clone(), serde_json::json!(a)))
-                .collect()
-        };
-        let line = serde_json::json!({
-            "t": t,
-            "commanded": map(commanded),
-            "measured": map(measured),
-            "faults": faults,
-        });
+        let line = telemetry_line(names, t, (commanded, measured), faults, pose);
         let text = crate::shared::json::line(&line).map_err(std::io::Error::other)?;
         writeln!(out, "{text}")?;
         out.flush()
@@ -226,7 +270,9 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
         match m {
             Telemetry::Cycle(c) => {
                 if let Some((_, t)) = cycle.filter(|(k, _)| *k != c.cycle) {
-                    if telemetry && emit(&mut out, t, &commanded, &measured, &faults).is_err() {
+                    let pose = odometer.as_ref().map(Odometer::pose);
+                    if telemetry && emit(&mut out, t, &commanded, &measured, &faults, pose).is_err()
+                    {
                         // Nobody reads the telemetry any more (a closed
                         // pipe) or it cannot be written: stop as on
                         // Ctrl-C, the report still goes to stderr.
@@ -237,6 +283,9 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
                     }
                 }
                 cycle = Some((c.cycle, c.time_s));
+                if let Some(o) = odometer.as_mut() {
+                    o.take(&c);
+                }
                 for j in c.joints() {
                     if let (Some(cm), Some(ms)) =
                         (commanded.get_mut(j.joint), measured.get_mut(j.joint))
@@ -250,20 +299,20 @@ fn watch(runner: &Run, names: &[String], mut telemetry: bool) -> anyhow::Result<
                 errln!("fault: {f}");
                 faults.push(f.to_string());
             }
-            Telemetry::Live { event, time_s } => match event {
-                LiveEvent::TimedOut => {
-                    errln!("{time_s:.2} s: no target for the timeout; stopping, then holding")
-                }
-                LiveEvent::Resumed => errln!("{time_s:.2} s: targets again; following"),
-                _ => {}
-            },
-            Telemetry::Rejected(why) => errln!("refused: {why}"),
             Telemetry::Finished(_) => break,
-            _ => {}
+            other => say(&other),
         }
     }
     if let (Some((_, t)), true) = (cycle, telemetry) {
-        lost |= emit(&mut out, t, &commanded, &measured, &faults).is_err();
+        lost |= emit(
+            &mut out,
+            t,
+            &commanded,
+            &measured,
+            &faults,
+            odometer.as_ref().map(Odometer::pose),
+        )
+        .is_err();
     }
     Ok(lost)
 }

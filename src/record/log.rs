@@ -15,6 +15,7 @@ use servobus_config::limits::Fixed;
 use servobus_config::Units;
 use servobus_kinematics::Geometry;
 use servobus_robot::files::AtomicFile;
+use servobus_robot::odometry::{pose_figures, Odometer};
 use servobus_robot::CycleSample;
 
 use super::frames::FrameTracker;
@@ -32,6 +33,8 @@ pub struct CsvLog {
     /// The current sample's frame cells: x, y, z (mm) of each frame, empty
     /// until every joint has been read.
     frame_cells: Vec<String>,
+    /// A mobile base's odometry, when the robot has one.
+    odometer: Option<Odometer>,
     /// The first write error.
     failed: Option<csv::Error>,
 }
@@ -41,6 +44,9 @@ impl CsvLog {
     /// are in `units`. With the robot's `geometry`, each row also gives the
     /// position of every named frame (`tool`, `foot_<leg>`) by forward
     /// kinematics of the measured angles: `<frame>_x_mm`, `_y_mm`, `_z_mm`.
+    /// With an `odometer` (a robot with a mobile base), each row ends with
+    /// the base's odometry so far: `base_x_m`, `base_y_m`,
+    /// `base_theta_deg`.
     ///
     /// # Errors
     /// The path cannot be an output, or the temporary cannot be created.
@@ -49,6 +55,7 @@ impl CsvLog {
         names: Vec<String>,
         units: Units,
         geometry: Option<Geometry>,
+        odometer: Option<Odometer>,
     ) -> anyhow::Result<Self> {
         let file = AtomicFile::create(path)?;
         let mut log = CsvLog {
@@ -58,15 +65,22 @@ impl CsvLog {
             names,
             frames: geometry.and_then(|g| FrameTracker::new(g, units)),
             frame_cells: Vec::new(),
+            odometer,
             failed: None,
         };
-        let spatial: Vec<String> = log
+        let mut spatial: Vec<String> = log
             .frames
             .iter()
             .flat_map(FrameTracker::names)
             .flat_map(|n| ["x", "y", "z"].map(|axis| format!("{n}_{axis}_mm")))
             .collect();
         log.frame_cells = vec![String::new(); spatial.len()];
+        if let Some(o) = &log.odometer {
+            for (name, _) in pose_figures(&o.pose()) {
+                spatial.push(name.to_owned());
+                log.frame_cells.push(String::new());
+            }
+        }
         write(
             &mut log.writer,
             &mut log.failed,
@@ -99,6 +113,13 @@ impl CsvLog {
             let positions = frames.positions().unwrap_or_default();
             for (cell, v) in self.frame_cells.iter_mut().zip(positions.iter().flatten()) {
                 *cell = Fixed(*v, 3).to_string();
+            }
+        }
+        if let Some(o) = &mut self.odometer {
+            let pose = o.take(sample);
+            let cells = self.frame_cells.iter_mut().rev().take(3).rev();
+            for (cell, (_, v)) in cells.zip(pose_figures(&pose)) {
+                *cell = Fixed(v, 5).to_string();
             }
         }
         for j in sample.joints() {

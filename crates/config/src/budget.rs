@@ -70,13 +70,32 @@ impl BusConfig {
     ///
     /// As [`plan`](BusConfig::plan).
     pub fn plan_on(&self, link: &Link, rate_hz: f64) -> Result<Plan, CycleError> {
+        let (write, read) = self.cycle_blocks();
         plan(
             link,
             &self.timing_servos(),
-            Some(Block::GOAL_POSITION),
-            Some(Block::PRESENT_POSITION),
+            Some(write),
+            Some(read),
             rate_hz,
         )
+    }
+
+    /// What a cycle writes to each servo and reads back: the goal position
+    /// and the present position; on a bus with wheel joints the present
+    /// speed too (read with the position), and the write charged as goal
+    /// position, time and speed for every servo (more than the goal
+    /// positions and the wheels' goal speeds in their two frames, so the
+    /// plan never promises a rate the cycle cannot hold).
+    pub fn cycle_blocks(&self) -> (Block, Block) {
+        if self.joints.iter().any(|j| j.is_wheel()) {
+            let read = Block::span(
+                servobus_protocol::registers::sts::PRESENT_POSITION.register(),
+                servobus_protocol::registers::sts::PRESENT_SPEED.register(),
+            );
+            (Block::POSITION_TIME_SPEED, read)
+        } else {
+            (Block::GOAL_POSITION, Block::PRESENT_POSITION)
+        }
     }
 
     /// The fastest whole rate at which every servo is read every cycle, Hz

@@ -65,8 +65,9 @@ macro_rules! shipped {
     };
 }
 
-static FILES: [BuiltinFile; 14] = [
+static FILES: [BuiltinFile; 15] = [
     shipped!("robots", "so101"),
+    shipped!("robots", "lekiwi"),
     shipped!("robots", "hexapod"),
     shipped!("robots", "hexapod-2bus"),
     shipped!("robots", "scs-mini"),

@@ -428,6 +428,18 @@ pub struct StateMessage {
     pub velocity: Vec<f64>,
     /// Faults so far, as text (empty while healthy).
     pub faults: Vec<String>,
+    /// A mobile base's odometry (from its wheels' measured speeds, since
+    /// the start): x along the floor where it started, m; left of that, m;
+    /// its heading, deg counter-clockwise. Left out for a robot without a
+    /// base.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_x_m: Option<f64>,
+    /// See [`base_x_m`](Self::base_x_m).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_y_m: Option<f64>,
+    /// See [`base_x_m`](Self::base_x_m).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_theta_deg: Option<f64>,
 }
 
 #[cfg(test)]

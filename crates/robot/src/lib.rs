@@ -129,6 +129,7 @@ pub mod doctor;
 mod error;
 pub mod files;
 pub mod monitor;
+pub mod odometry;
 pub mod path;
 pub mod ports;
 mod run;

@@ -50,6 +50,7 @@ impl Seen {
                 names.to_vec(),
                 units,
                 robot.geometry(),
+                servobus_robot::odometry::Odometer::of(robot, units),
             )?),
             None => None,
         };

@@ -150,6 +150,7 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
             names_of(&robot),
             motion.units,
             robot.geometry(),
+            servobus_robot::odometry::Odometer::of(&robot, motion.units),
         )?),
         None => None,
     };

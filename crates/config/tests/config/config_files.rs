@@ -58,7 +58,13 @@ fn every_robot_file_validates() {
                 let num = |k: &str| rj[k].as_f64().unwrap_or_else(|| panic!("{k} of {rj:?}"));
                 assert_eq!(j.name, rj["name"].as_str().expect("joint name"));
                 assert_eq!(Some(u64::from(j.id)), rj["id"].as_u64(), "{}", j.name);
-                assert_eq!((j.min, j.max), (num("min"), num("max")), "{}", j.name);
+                if rj["mode"].as_str() == Some("wheel") {
+                    // A wheel has no position limits: both are 0.
+                    assert!(j.is_wheel(), "{}", j.name);
+                    assert_eq!((j.min, j.max), (0.0, 0.0), "{}", j.name);
+                } else {
+                    assert_eq!((j.min, j.max), (num("min"), num("max")), "{}", j.name);
+                }
                 assert_eq!(j.max_velocity, num("max_velocity"), "{}", j.name);
                 assert_eq!(j.max_acceleration, num("max_acceleration"), "{}", j.name);
                 assert_eq!(j.max_jerk, rj["max_jerk"].as_f64(), "{}", j.name);

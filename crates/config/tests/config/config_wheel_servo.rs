@@ -440,7 +440,7 @@ fn a_setting_the_model_has_no_register_for_is_refused_naming_it() {
 }
 
 #[test]
-fn the_shipped_robots_have_no_wheels_or_servo_settings() {
+fn the_shipped_robots_have_wheels_only_on_lekiwi_and_no_servo_settings() {
     let dir = common::config("robots");
     let mut seen = 0;
     for entry in std::fs::read_dir(&dir).expect("configs/robots") {
@@ -450,10 +450,18 @@ fn the_shipped_robots_have_no_wheels_or_servo_settings() {
         }
         let robot = load_robot(&path, &RobotOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         for j in robot.joints() {
-            assert!(!j.is_wheel(), "{}: {}", path.display(), j.name);
+            let wheel = robot.name == "lekiwi" && j.name.starts_with("wheel_");
+            assert_eq!(j.is_wheel(), wheel, "{}: {}", path.display(), j.name);
             assert_eq!(j.servo, None, "{}: {}", path.display(), j.name);
-            assert!(j.min < j.max, "{}: {}", path.display(), j.name);
+            assert!(wheel || j.min < j.max, "{}: {}", path.display(), j.name);
         }
+        // Only a robot with wheels has a base, and lekiwi's drives all three.
+        assert_eq!(
+            robot.base.as_ref().map(|b| b.wheels().len()),
+            (robot.name == "lekiwi").then_some(3),
+            "{}",
+            path.display()
+        );
         seen += 1;
     }
     assert!(seen >= 4, "{seen} robot files in {}", dir.display());

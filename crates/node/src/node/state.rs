@@ -4,6 +4,7 @@
 use std::time::SystemTime;
 
 use servobus_robot::config::Units;
+use servobus_robot::odometry::Odometer;
 use zenoh::Wait;
 
 use super::{unix_ns, zerr, NodeError, RobotInfo};
@@ -22,6 +23,8 @@ pub(super) struct Done {
 /// Gathers a cycle's samples (one per bus, or more for long buses).
 pub(super) struct Watch {
     msg: StateMessage,
+    /// A mobile base's odometry, for a robot with one.
+    odometer: Option<Odometer>,
     cycle: Option<(u64, f64)>,
     /// Faults seen since the last whole cycle.
     pub(super) faults: Vec<String>,
@@ -41,7 +44,14 @@ impl Watch {
                 commanded: vec![0.0; n],
                 velocity: vec![0.0; n],
                 faults: Vec::new(),
+                base_x_m: None,
+                base_y_m: None,
+                base_theta_deg: None,
             },
+            odometer: robot
+                .config
+                .as_ref()
+                .and_then(|r| Odometer::of(r, robot.units)),
             cycle: None,
             faults: Vec::new(),
         }
@@ -59,6 +69,12 @@ impl Watch {
             done = Some(Done { cycle: k, t, msg });
         }
         self.cycle = Some((c.cycle, c.time_s));
+        if let Some(o) = self.odometer.as_mut() {
+            let pose = o.take(c);
+            self.msg.base_x_m = Some(pose.x_m);
+            self.msg.base_y_m = Some(pose.y_m);
+            self.msg.base_theta_deg = Some(pose.theta_rad.to_degrees());
+        }
         for j in c.joints() {
             if j.joint < self.msg.joints.len() {
                 self.msg.commanded[j.joint] = j.commanded;

@@ -4,6 +4,7 @@
 //! hand, truth) in virtual time, and live runs on such a body (a leader
 //! moved by the hand, a joint against an end stop, the truth compared).
 
+mod base_drive;
 mod bench;
 mod calib_play;
 mod calibrate_arm;

@@ -29,8 +29,8 @@ use std::time::Duration;
 
 use crossbeam_channel::Sender;
 use servobus_driver::{Bus, Clock, Transport};
-use servobus_protocol::registers::{addr, sts, Register, Series};
-use servobus_timing::{Block, Plan};
+use servobus_protocol::registers::{addr, Register, Series};
+use servobus_timing::Plan;
 use servobus_trajectory::JointState;
 
 pub(crate) use cycle_times::CycleTiming;
@@ -116,7 +116,7 @@ impl<T: Transport> BusLoop<T> {
     /// [`RunError::Series`] when a joint's servo is not of the bus's series.
     pub fn new(c: LoopConfig<'_>, bus: Bus<T>) -> Result<Self, RunError> {
         let config = c.bus;
-        let plan = plan(config, c.rate_hz).map_err(|source| RunError::Plan {
+        let plan = config.plan(c.rate_hz).map_err(|source| RunError::Plan {
             bus: config.name.clone(),
             source,
         })?;
@@ -588,30 +588,6 @@ fn lead_estimator(lead: Lead, config: &BusConfig, period: Duration) -> LeadEstim
             period.as_secs_f64(),
         ),
         lead::Pace::of(positions().map(|j| (j.max_velocity, j.max_acceleration, j.max_jerk))),
-    )
-}
-
-/// The plan of `config`'s cycle at `rate_hz`: the robot file's
-/// ([`BusConfig::plan`]) on a bus of position joints; with wheels, one
-/// that charges for what such a bus sends and reads. Its goal positions
-/// and goal speeds go in two frames (8 + 3P and 8 + 3W bytes for P
-/// position joints and W wheels), which the plan counts as one frame of
-/// goal position, time and speed to every servo (8 + 7(P + W) bytes, as
-/// much or more); its reads are of 4 bytes (position and speed).
-fn plan(config: &BusConfig, rate_hz: f64) -> Result<Plan, servobus_timing::CycleError> {
-    if !config.joints.iter().any(|j| j.is_wheel()) {
-        return config.plan(rate_hz);
-    }
-    let read = Block::span(
-        sts::PRESENT_POSITION.register(),
-        sts::PRESENT_SPEED.register(),
-    );
-    servobus_timing::plan(
-        &config.budget_link(),
-        &config.timing_servos(),
-        Some(Block::POSITION_TIME_SPEED),
-        Some(read),
-        rate_hz,
     )
 }
 

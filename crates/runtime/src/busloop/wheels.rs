@@ -84,6 +84,23 @@ impl WheelGoal {
         self.peak = self.peak.max(self.speed.abs());
     }
 
+    /// One step of `dt` s covering `share` (0..=1) of what is left to the
+    /// target (clamped to the top speed): the whole of it at 1.
+    fn toward(&mut self, share: f64, dt: f64) {
+        let target = self.target.clamp(-self.max_velocity, self.max_velocity);
+        let next = if share >= 1.0 {
+            target
+        } else {
+            self.speed + share * (target - self.speed)
+        };
+        self.accel = (next - self.speed) / dt;
+        self.speed = next;
+        if self.speed == target {
+            self.accel = 0.0;
+        }
+        self.peak = self.peak.max(self.speed.abs());
+    }
+
     /// The commanded speed as steps/s in `reg`'s range.
     fn steps(&self, reg: &Register) -> i32 {
         let (lo, hi) = reg.range();
@@ -171,10 +188,37 @@ impl WheelWriter {
 
     /// Sets every wheel's target from `speeds` (robot order, rad/s; a wheel
     /// missing there heads for 0) and takes one ramp step.
+    ///
+    /// Without jerk limits the wheels ramp together: every wheel covers the
+    /// same share of what is left to its target in a step, the share the
+    /// wheel with the most to change can take within its acceleration, so
+    /// that all arrive at once and the speeds keep their proportions on the
+    /// way (a base keeps its direction of travel while it speeds up or
+    /// brakes). A wheel with a jerk limit ramps on its own.
     pub fn aim(&mut self, speeds: &[f64]) {
         for w in &mut self.wheels {
             w.target = speeds.get(w.robot_index).copied().unwrap_or(0.0);
-            w.step(self.dt);
+        }
+        if self.wheels.iter().any(|w| w.max_jerk.is_some()) || self.dt <= 0.0 {
+            for w in &mut self.wheels {
+                w.step(self.dt);
+            }
+            return;
+        }
+        let share = self
+            .wheels
+            .iter()
+            .map(|w| {
+                let d = (w.target.clamp(-w.max_velocity, w.max_velocity) - w.speed).abs();
+                if d > 0.0 {
+                    (w.max_acceleration * self.dt / d).min(1.0)
+                } else {
+                    1.0
+                }
+            })
+            .fold(1.0f64, f64::min);
+        for w in &mut self.wheels {
+            w.toward(share, self.dt);
         }
     }
 
@@ -287,6 +331,50 @@ mod tests {
             assert!((a[1] - a[0]).abs() <= 60.0 * 0.005 + 1e-9, "{a:?}");
         }
         assert!(accel[landed - 2].abs() <= 2.0 * 60.0 * 0.005, "{accel:?}");
+    }
+
+    #[test]
+    fn wheels_ramp_together_keeping_their_proportions() {
+        let mut wheels = WheelWriter {
+            reg: None,
+            order: ByteOrder::Little,
+            ids: vec![1, 2, 3],
+            data: Vec::new(),
+            wheels: (0..3)
+                .map(|i| WheelGoal {
+                    robot_index: i,
+                    bus_index: i,
+                    ..wheel(None)
+                })
+                .collect(),
+            dt: 0.005,
+        };
+        // A base's wheels: one has twice as far to go as the others.
+        let target = [1.0, -1.0, 2.0];
+        let mut steps = 0;
+        while !wheels
+            .wheels
+            .iter()
+            .zip(&target)
+            .all(|(w, t)| w.speed == *t)
+        {
+            steps += 1;
+            assert!(steps < 1000, "never arrived");
+            wheels.aim(&target);
+            let s: Vec<f64> = wheels.wheels.iter().map(|w| w.speed).collect();
+            // In proportion all the way, and within every acceleration.
+            assert!(
+                (s[2] - 2.0 * s[0]).abs() < 1e-12 && (s[1] + s[0]).abs() < 1e-12,
+                "{s:?}"
+            );
+            assert!(wheels.wheels.iter().all(|w| w.accel.abs() <= 6.0 + 1e-9));
+        }
+        // The wheel with the most to change sets the pace: 2 rad/s at 6.
+        assert_eq!(steps, (2.0f64 / (6.0 * 0.005)).ceil() as usize);
+        // Braking to rest from there, together too.
+        wheels.aim(&[0.0; 3]);
+        let s: Vec<f64> = wheels.wheels.iter().map(|w| w.speed).collect();
+        assert!((s[2] - 2.0 * s[0]).abs() < 1e-12 && s[2] < 2.0, "{s:?}");
     }
 
     #[test]

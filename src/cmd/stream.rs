@@ -27,6 +27,7 @@ use servobus_robot::{
     live_options, Command, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry,
 };
 
+use servobus_robot::grasp::GraspEvent;
 use servobus_robot::odometry::{pose_figures, Odometer, Odometry};
 use servobus_robot::stream::{parse_line_for, MAX_LINE_BYTES};
 
@@ -220,9 +221,28 @@ fn telemetry_line(
 }
 
 /// Says on stderr what a telemetry message other than a cycle, a fault or
-/// the end tells: the live following stopped or resumed, a command refused.
-fn say(m: &Telemetry) {
+/// the end tells: the live following stopped or resumed, a grasp's news, a
+/// command refused (`names`: the joints').
+fn say(m: &Telemetry, names: &[String]) {
     match m {
+        Telemetry::Grasp(g) => {
+            let joint = names.get(g.joint).map_or("?", String::as_str);
+            let what = match g.event {
+                GraspEvent::Closing { effort_pct } => {
+                    format!("closing to grasp with {effort_pct:.0} % of its torque")
+                }
+                GraspEvent::Lowered {
+                    effort_pct,
+                    temperature_c,
+                } => format!("warm ({temperature_c:.0} C): its grasp eased to {effort_pct:.0} %"),
+                GraspEvent::LetGo { temperature_c } => {
+                    format!("hot ({temperature_c:.0} C): it let go of what it held")
+                }
+                GraspEvent::Released => "released".to_owned(),
+                _ => return,
+            };
+            errln!("{:.2} s: {joint}: {what}", g.time_s);
+        }
         Telemetry::Live { event, time_s } => match event {
             LiveEvent::TimedOut => {
                 errln!("{time_s:.2} s: no target for the timeout; stopping, then holding")
@@ -300,7 +320,7 @@ fn watch(
                 faults.push(f.to_string());
             }
             Telemetry::Finished(_) => break,
-            other => say(&other),
+            other => say(&other, names),
         }
     }
     if let (Some((_, t)), true) = (cycle, telemetry) {

@@ -151,6 +151,9 @@ pub use calibrate::Refusal;
 pub use servobus_config as config;
 pub use servobus_config::Motion;
 /// Where a run's bus threads run (core, SCHED_FIFO priority).
+/// Grasps: a gripper closing on an object and holding it with a bounded
+/// effort, watched for heat.
+pub use servobus_runtime::grasp;
 pub use servobus_runtime::rt::RtOptions;
 pub use servobus_runtime::{
     Chunk, Command, CommandSender, CycleSample, Finish, JointSample, Lead, LiveEvent, LiveTarget,

@@ -50,6 +50,8 @@ pub(crate) struct Lane<T: Transport> {
     cmd: Vec<JointState>,
     /// The wheels' target speeds this cycle, rad/s (robot order).
     speeds: Vec<f64>,
+    /// The grasps' efforts this cycle (robot order).
+    grasps: Vec<Option<f64>>,
     reference: Vec<JointState>,
     hold: Vec<f64>,
     /// The fault reaction this lane has carried out (one per run).
@@ -85,6 +87,7 @@ impl<T: Transport> Lane<T> {
             counters,
             cmd: vec![JointState::default(); joints],
             speeds: vec![0.0; joints],
+            grasps: vec![None; joints],
             reference: vec![JointState::default(); joints],
             hold: vec![0.0; joints],
             reacted: None,
@@ -153,7 +156,8 @@ impl<T: Transport> Lane<T> {
         let lead = l.lead_at(t);
         self.timeline.sample_cmd(t + lead, &mut self.cmd);
         self.timeline.wheel_targets(t + lead, &mut self.speeds);
-        let mut gone = l.write(&self.cmd, &self.speeds).err();
+        self.timeline.grasp_efforts(t + lead, &mut self.grasps);
+        let mut gone = l.write(&self.cmd, &self.speeds, &self.grasps).err();
         if let Some(taken) = self.taken.take() {
             // A target taken before the first cycle waited for the loop to
             // start (the start gap, 50 ms at least on the real clock): that

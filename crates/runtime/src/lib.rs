@@ -19,6 +19,7 @@
 /// The robot, motion and calibration files (the `servobus-config` crate).
 pub use servobus_config as config;
 
+pub mod grasp;
 pub mod pacer;
 pub mod rt;
 pub mod stats;

@@ -44,6 +44,8 @@ pub struct LiveTarget {
     joints: Joints,
     velocities: Option<Vec<f64>>,
     taken: Option<Instant>,
+    /// Joints told to grasp, by name, with their effort (percent).
+    grasps: Vec<(String, f64)>,
 }
 
 impl LiveTarget {
@@ -54,6 +56,7 @@ impl LiveTarget {
             joints: Joints::All(positions),
             velocities: None,
             taken: None,
+            grasps: Vec::new(),
         }
     }
 
@@ -64,6 +67,7 @@ impl LiveTarget {
             joints: Joints::Named(joints),
             velocities: None,
             taken: None,
+            grasps: Vec::new(),
         }
     }
 
@@ -71,6 +75,18 @@ impl LiveTarget {
     /// order; without them the loop estimates them from the stamps.
     pub fn with_velocities(mut self, velocities: Vec<f64>) -> Self {
         self.velocities = Some(velocities);
+        self
+    }
+
+    /// Tells the joints named to grasp (a gripper closing on an object):
+    /// each closes towards its `min` at a bounded speed until it meets
+    /// something, then holds there, pushing with `effort` percent of its
+    /// servo's torque (its torque limit set to it), while its temperature
+    /// is watched (see [`crate::grasp`]). A later position target for the
+    /// joint releases it. A joint may not have a position in the same
+    /// target; the others named in it follow as usual.
+    pub fn with_grasps(mut self, grasps: Vec<(String, f64)>) -> Self {
+        self.grasps = grasps;
         self
     }
 
@@ -193,6 +209,15 @@ pub enum TargetError {
         /// The positions given for the joint.
         actual: usize,
     },
+    /// A grasp the joint cannot make: an effort not in (0, 100] percent, a
+    /// wheel, or a position for the same joint in the same target.
+    #[error("joint `{joint}`: cannot grasp: {why}")]
+    Grasp {
+        /// The joint.
+        joint: String,
+        /// Why.
+        why: &'static str,
+    },
     /// A chunk with no point, or more than [`MAX_CHUNK_POINTS`].
     #[error("a chunk of {0} points: a chunk holds 1 to {MAX_CHUNK_POINTS}")]
     ChunkSize(usize),
@@ -207,6 +232,9 @@ pub enum TargetError {
 pub(crate) struct Checked {
     pub stamp: f64,
     pub joints: Vec<Option<(f64, Option<f64>)>>,
+    /// Per joint, the effort (0..=1 of the servo's torque) of a grasp it
+    /// was told to make; empty when none was.
+    pub grasps: Vec<Option<f64>>,
     pub taken: Option<Instant>,
     /// A chunk's points (`joints` all `None` then).
     pub chunk: Option<ChunkPoints>,
@@ -551,6 +579,7 @@ impl TargetSender {
             Checked {
                 stamp,
                 joints: vec![None; n],
+                grasps: Vec::new(),
                 taken: chunk.taken,
                 chunk: Some(ChunkPoints {
                     times,
@@ -560,6 +589,38 @@ impl TargetSender {
             },
             clamped,
         ))
+    }
+
+    /// The grasps of a target whose positions are `joints`: per joint its
+    /// effort as a share of the servo's torque (empty when none).
+    fn grasps(
+        &self,
+        grasps: Vec<(String, f64)>,
+        joints: &[Option<(f64, Option<f64>)>],
+    ) -> Result<Vec<Option<f64>>, TargetError> {
+        if grasps.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut out = vec![None; self.names.len()];
+        for (i, effort) in self.indexed(Joints::Named(grasps))? {
+            let refuse = |why| TargetError::Grasp {
+                joint: self.names[i].clone(),
+                why,
+            };
+            if !(effort.is_finite() && effort > 0.0 && effort <= 100.0) {
+                return Err(refuse(
+                    "its effort is a percentage of the servo's torque, above 0 and at most 100",
+                ));
+            }
+            if self.limits[i].max_position <= self.limits[i].min_position {
+                return Err(refuse("it has no range to close in (a wheel)"));
+            }
+            if joints.get(i).is_some_and(Option::is_some) {
+                return Err(refuse("the same target gives it a position"));
+            }
+            out[i] = Some(effort / 100.0);
+        }
+        Ok(out)
     }
 
     fn check(&self, target: LiveTarget) -> Result<(Checked, usize), TargetError> {
@@ -594,10 +655,12 @@ impl TargetSender {
             }
             joints[i] = Some((c, v));
         }
+        let grasps = self.grasps(target.grasps, &joints)?;
         Ok((
             Checked {
                 stamp: target.stamp,
                 joints,
+                grasps,
                 taken: target.taken,
                 chunk: None,
             },

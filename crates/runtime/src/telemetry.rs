@@ -219,6 +219,9 @@ pub enum Telemetry {
     /// an object): the run goes on with the joint held pressed, or it was
     /// let go (`StallEvent::held`).
     Stall(StallEvent),
+    /// A grasp began, was lowered for heat, let go, or was released (see
+    /// [`crate::grasp`]).
+    Grasp(crate::grasp::GraspReport),
     /// A command could not be carried out (a replacement path with the
     /// wrong joints, say); the run goes on as before.
     Rejected(Rejection),

@@ -12,6 +12,7 @@ mod calibrate_body;
 mod calibrate_lerobot;
 mod common;
 mod doctor;
+mod grasp_hold;
 mod live_compare;
 mod live_follow;
 mod live_stall;

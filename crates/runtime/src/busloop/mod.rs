@@ -19,6 +19,7 @@ mod cycle_times;
 mod deadlines;
 mod feedback;
 mod goals;
+mod grasp;
 mod lead;
 mod publish;
 mod servo_setup;
@@ -40,6 +41,7 @@ use cycle_times::CycleTimes;
 use deadlines::{LinkLearner, Probe};
 use feedback::Feedback;
 use goals::GoalWriter;
+use grasp::GraspWatch;
 use lead::LeadEstimator;
 use publish::{Publisher, SampleTiming};
 use servo_setup::ServoSetup;
@@ -49,6 +51,7 @@ use wheels::WheelWriter;
 use crate::config::{BusConfig, Units};
 use crate::error::{PortGone, RunError};
 use crate::fault::{Fault, FaultKind, STALL_PUSH};
+use crate::grasp::GraspReport;
 use crate::options::{FaultPolicy, Lead};
 use crate::report::{BusReport, JointReport};
 use crate::stats::Histogram;
@@ -87,6 +90,8 @@ pub(crate) struct BusLoop<T: Transport> {
     goals: GoalWriter,
     /// The wheels' goal speeds (none on a bus of position joints).
     wheels: WheelWriter,
+    /// The grasps its joints make.
+    grasps: GraspWatch,
     /// The operating modes checked and the `servo:` settings written at
     /// start-up.
     setup: ServoSetup,
@@ -162,6 +167,13 @@ impl<T: Transport> BusLoop<T> {
                 c.period.as_secs_f64(),
             ),
             setup: ServoSetup::new(config, map.at(addr::MODE)),
+            grasps: GraspWatch::new(
+                config,
+                c.first_joint,
+                map.get("torque_limit"),
+                map.get("present_load"),
+                map.get("present_temperature"),
+            ),
             feedback: Feedback::new(pos_reg, feedback_speed, order, ids),
             track: Tracker::new(
                 config,
@@ -279,10 +291,26 @@ impl<T: Transport> BusLoop<T> {
 
     /// Maps, clamps and sends the goals for `cmd` (robot order, rad), and
     /// the wheels' speeds one ramp step toward `speeds` (robot order,
-    /// rad/s; read for wheel joints only). A pressed joint's goal is kept
+    /// rad/s; read for wheel joints only), after taking in the efforts of
+    /// the grasps asked (`grasps`, robot order; see [`GraspWatch`]). A pressed joint's goal is kept
     /// within its press's bound; one whose goal came back within it is let
     /// go.
-    pub fn write(&mut self, cmd: &[JointState], speeds: &[f64]) -> Result<(), PortGone> {
+    pub fn write(
+        &mut self,
+        cmd: &[JointState],
+        speeds: &[f64],
+        grasps: &[Option<f64>],
+    ) -> Result<(), PortGone> {
+        let t = self.timing.index as f64 * self.period.as_secs_f64();
+        let out = &mut self.out;
+        self.grasps
+            .update(&mut self.bus, grasps, t, &mut self.track, |joint, event| {
+                out.publish(Telemetry::Grasp(GraspReport {
+                    joint,
+                    time_s: t,
+                    event,
+                }));
+            })?;
         self.release_presses(cmd);
         let joints = &self.track.joints;
         self.goals
@@ -327,7 +355,13 @@ impl<T: Transport> BusLoop<T> {
             time_s: self.timing.index as f64 * self.period.as_secs_f64(),
             cycle: self.timing.index,
             position: u.from_rad(j.measured.unwrap_or(j.planned)),
-            push: u.from_rad(dir * STALL_PUSH),
+            push: u.from_rad(
+                dir * j
+                    .press
+                    .map(|p| p.push)
+                    .or(j.grasp_push)
+                    .unwrap_or(STALL_PUSH),
+            ),
         };
         self.out.publish(Telemetry::Stall(event));
     }

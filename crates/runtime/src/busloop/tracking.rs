@@ -91,6 +91,9 @@ pub(crate) struct JointTrack {
     /// Pressed against a stop (live sessions only): held with bounded
     /// effort instead of raising a stall fault.
     pub press: Option<Press>,
+    /// Grasping (see [`crate::grasp`]): a stall presses the joint in any
+    /// run, its goal kept this far (rad) beyond where it stands.
+    pub grasp_push: Option<f64>,
     /// The press began at this cycle's reading (to be published).
     pub press_began: bool,
     /// Presses so far.
@@ -102,11 +105,14 @@ pub(crate) struct JointTrack {
 }
 
 /// A joint pressed against a stop or an object: its goal is kept within
-/// [`STALL_PUSH`] beyond `anchor` in the direction `dir`.
+/// `push` ([`STALL_PUSH`], or a grasp's) beyond `anchor` in the direction
+/// `dir`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Press {
     /// The direction the path pushes: +1 (towards higher angles) or -1.
     pub dir: f64,
+    /// How far beyond the anchor the goal may go, rad.
+    pub push: f64,
     /// The furthest position measured in that direction since the press
     /// began, rad (at a stop: where the joint stands). The goal is bounded
     /// from there rather than from each reading, so that a joint pushed
@@ -117,7 +123,7 @@ pub(crate) struct Press {
 impl Press {
     /// The furthest goal (rad) the press allows in its direction.
     pub fn bound(&self) -> f64 {
-        self.anchor + self.dir * STALL_PUSH
+        self.anchor + self.dir * self.push
     }
 
     /// `goal` kept within the bound, in the direction pushed only.
@@ -237,6 +243,7 @@ impl Tracker {
                     stall: 0,
                     missing: 0,
                     press: None,
+                    grasp_push: None,
                     press_began: false,
                     presses: 0,
                     pressed_cycles: 0,
@@ -260,6 +267,18 @@ impl Tracker {
     /// pressed with bounded effort instead of raising a stall fault.
     pub fn live_session(&mut self) {
         self.live = true;
+    }
+
+    /// Joint `i` (of the bus) grasps, a stall pressing it `push` rad
+    /// beyond where it stands (`None`: it grasps no more; a press it is in
+    /// keeps its push until it is let go).
+    pub fn set_grasp(&mut self, i: usize, push: Option<f64>) {
+        if let Some(j) = self.joints.get_mut(i) {
+            j.grasp_push = push;
+            if let (Some(press), Some(push)) = (&mut j.press, push) {
+                press.push = push;
+            }
+        }
     }
 
     /// A new cycle: no reading is fresh yet.
@@ -465,9 +484,12 @@ fn judge(
     let blocked = towards < p.stall_ratio * p.stall_min_velocity;
     let stall_held = j.stall >= p.stall_cycles && jp.presses_stall(live);
     let follow_held = j.follow >= p.following_cycles && jp.presses_following(live, blocked);
-    if stall_held || follow_held {
+    let grasp_held = j.grasp_push.is_some()
+        && (j.stall >= p.stall_cycles || (j.follow >= p.following_cycles && blocked));
+    if stall_held || follow_held || grasp_held {
         j.press = Some(Press {
             dir: e.signum(),
+            push: j.grasp_push.unwrap_or(STALL_PUSH),
             anchor: measured,
         });
         j.press_began = true;

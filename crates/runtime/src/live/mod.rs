@@ -104,6 +104,9 @@ pub(crate) struct LivePath {
     /// Per joint, a wheel's target speed (rad/s); `None` for a position
     /// joint.
     speeds: Vec<Option<f64>>,
+    /// Per joint, the effort of the grasp it is making (see
+    /// [`crate::grasp`]); `None` when it makes none.
+    grasps: Vec<Option<f64>>,
     mode: Mode,
     /// Whether any target has come.
     any: bool,
@@ -147,6 +150,7 @@ impl LivePath {
             envelopes: from.iter().map(|s| Envelope::new(*s)).collect(),
             stops: vec![0.0; n],
             speeds: vec![None; n],
+            grasps: vec![None; n],
             limits,
             mode: Mode::TimedOut,
             any: false,
@@ -184,6 +188,37 @@ impl LivePath {
             if let Some(s) = s {
                 *o = if following { *s } else { 0.0 };
             }
+        }
+    }
+
+    /// The efforts of the grasps being made into `out` (robot order; `None`
+    /// for a joint making none).
+    pub fn grasp_efforts(&self, out: &mut [Option<f64>]) {
+        out.copy_from_slice(&self.grasps[..out.len().min(self.grasps.len())]);
+    }
+
+    /// Starts the grasps `grasps` (per joint, an effort) from the
+    /// reference at `x`: each joint's path heads for its `min` at its
+    /// closing speed ([`crate::grasp::CLOSING_SPEED_SHARE`]).
+    fn grasp(&mut self, grasps: &[Option<f64>], now: f64, x: f64) {
+        for (j, g) in grasps.iter().enumerate() {
+            let (Some(effort), Some(l)) = (*g, self.limits.get(j)) else {
+                continue;
+            };
+            let (Some(r), Some(e)) = (self.references.get_mut(j), self.envelopes.get_mut(j)) else {
+                continue;
+            };
+            let from = r.position_at(x);
+            let speed = crate::grasp::CLOSING_SPEED_SHARE * l.max_velocity;
+            let closing = if speed > 0.0 {
+                ((from - l.min_position) / speed).max(0.0)
+            } else {
+                0.0
+            };
+            // Past the closed end already: the piece ends on it at once.
+            r.chunk(std::iter::once((x + closing.max(1e-3), l.min_position)), x);
+            e.arrived(now, l.min_position.min(from), from.max(l.min_position));
+            self.grasps[j] = Some(effort);
         }
     }
 
@@ -252,6 +287,16 @@ impl LivePath {
                 }
                 e.arrived(now, q, q);
                 r.target(t.stamp, at, q, x);
+            }
+            self.grasp(&t.grasps, now, x);
+        }
+        // A joint given a position (or a chunk's points) lets go.
+        let chunked = t.chunk.as_ref().map(|c| &c.joints);
+        for (j, g) in self.grasps.iter_mut().enumerate() {
+            let positioned = t.joints.get(j).is_some_and(Option::is_some)
+                || chunked.is_some_and(|c| c.get(j).is_some_and(Option::is_some));
+            if positioned {
+                *g = None;
             }
         }
         self.arrived = alive;
@@ -419,6 +464,7 @@ mod tests {
         Checked {
             stamp,
             joints: vec![Some((q, None))],
+            grasps: Vec::new(),
             taken: None,
             chunk: None,
         }

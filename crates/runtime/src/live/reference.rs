@@ -201,7 +201,7 @@ impl Reference {
 
     /// The position of the reference at `x` (not before the last time
     /// it was advanced to).
-    fn position_at(&self, x: f64) -> f64 {
+    pub(super) fn position_at(&self, x: f64) -> f64 {
         match self.ahead.front() {
             Some(&(t1, p1)) => {
                 let (t0, p0) = self.from;

@@ -291,6 +291,22 @@ impl Timeline {
         self.wheels = wheels;
     }
 
+    /// The efforts of the grasps being made at `x` into `out` (robot
+    /// order; `None` for a joint making none): those of the live targets
+    /// while they are followed (a timeout or a pause keeps them: the
+    /// gripper holds on), none under any other segment.
+    pub fn grasp_efforts(&self, x: f64, out: &mut [Option<f64>]) {
+        out.fill(None);
+        let i = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= x)
+            .unwrap_or(0);
+        if let Some(Path::Live(live)) = self.segments.get(i).map(|s| &s.path) {
+            live.grasp_efforts(out);
+        }
+    }
+
     /// The wheels' target speeds (rad/s) at `x` into `out` (robot order;
     /// position joints' entries are left as they are): the live targets'
     /// while they are followed, else 0. Sampled after

@@ -1,0 +1,283 @@
+//! A grasp that holds (issue 39), in virtual time: the simulated SO-101's
+//! hand puts an object between the gripper's jaws at 25 deg (a hand file's
+//! `object:`), and a live target tells the gripper to grasp with 30 % of
+//! its torque. It closes at its closing speed, stops within 2 deg of the
+//! object, and holds it for 60 s of simulated time with its temperature
+//! under the warning level; a position target releases it and the torque
+//! limit is put back. The same gripper written a raw position goal past the
+//! object (as a program writing Goal_Position does) strains at full torque
+//! and heats until the simulator's overheat protection lets go.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use servobus_driver::Clock;
+use servobus_protocol::StatusFlags;
+use servobus_robot::sim::{new_truth, Hand, SimRobot};
+use servobus_runtime::config::{JointMap, Robot};
+use servobus_runtime::grasp::{GraspEvent, DEFAULT_MAX_TEMPERATURE_C, WARNING_BELOW_LIMIT_C};
+use servobus_runtime::{Lead, LiveTarget, RunOptions, Telemetry, VirtualRun};
+use servobus_sim::addr;
+
+use crate::common;
+
+const PERIOD: f64 = 0.005;
+const GRIPPER: usize = 5;
+const GRIPPER_ID: u8 = 6;
+/// Where the object meets the jaws, deg.
+const CONTACT_DEG: f64 = 25.0;
+/// The effort asked, percent.
+const EFFORT: f64 = 30.0;
+/// The pose the arm starts in and the other joints' targets keep, deg.
+const POSE: [f64; 6] = [0.0, 0.0, 0.0, 0.0, 0.0, 40.0];
+
+/// A hand file with the object in the gripper's way, for test `name`.
+fn hand_file(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("servobus-grasp-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("hand.yaml");
+    std::fs::write(
+        &file,
+        format!("object: {{joint: gripper, at: {CONTACT_DEG}, stiffness: 20}}\n"),
+    )
+    .expect("writes the hand file");
+    file
+}
+
+fn arm_with_object(robot: &Robot, name: &str) -> (SimRobot, servobus_sim::Truth) {
+    let hand = Hand::load(&hand_file(name), robot).expect("the hand file loads");
+    let truth = new_truth(robot);
+    let sim = SimRobot::builder(robot)
+        .hand(hand)
+        .truth(&truth)
+        .pose(&POSE)
+        .build()
+        .expect("simulates");
+    (sim, truth)
+}
+
+/// The other joints' targets at `t`, rad: where they are.
+fn arm_target(t: f64) -> LiveTarget {
+    let names = [
+        "shoulder_pan",
+        "shoulder_lift",
+        "elbow_flex",
+        "wrist_flex",
+        "wrist_roll",
+    ];
+    LiveTarget::named(
+        t,
+        names
+            .iter()
+            .zip(POSE)
+            .map(|(n, a)| ((*n).to_owned(), a.to_radians()))
+            .collect(),
+    )
+}
+
+#[test]
+fn a_grasp_stops_at_the_object_and_holds_it_a_minute_without_heating() {
+    let robot = common::robot("so101.yaml");
+    let (sim, truth) = arm_with_object(&robot, "hold");
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        telemetry_capacity: 1 << 12,
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::live(&robot, sim.driver_buses(), options).expect("a live run");
+    let (tx, rx) = (run.targets(), run.telemetry());
+    let mut grasps = Vec::new();
+    let mut stalls = Vec::new();
+    let mut faults = Vec::new();
+    let seconds = 62.0;
+    let release_at = 61.0;
+    for _ in 0..(seconds / PERIOD) as u64 {
+        let k = run.cycle();
+        let t = k as f64 * PERIOD;
+        if k % 6 == 0 {
+            let target = if t >= release_at {
+                LiveTarget::named(t, vec![("gripper".into(), 60f64.to_radians())])
+            } else if k == 60 {
+                arm_target(t).with_grasps(vec![("gripper".into(), EFFORT)])
+            } else {
+                arm_target(t)
+            };
+            tx.send(target).expect("a good target");
+        }
+        let going = run.step();
+        while let Ok(m) = rx.try_recv() {
+            match m {
+                Telemetry::Grasp(g) => grasps.push(g),
+                Telemetry::Stall(s) => stalls.push(s),
+                Telemetry::Fault(f) => faults.push(f),
+                _ => {}
+            }
+        }
+        assert!(going, "the run goes on: {faults:?} {grasps:?} {stalls:?}");
+    }
+    assert!(faults.is_empty(), "{faults:?}");
+    // Closing, then released: never lowered or let go.
+    let events: Vec<GraspEvent> = grasps.iter().map(|g| g.event).collect();
+    assert_eq!(
+        events,
+        vec![
+            GraspEvent::Closing { effort_pct: EFFORT },
+            GraspEvent::Released
+        ],
+        "{grasps:?}"
+    );
+    assert!(grasps.iter().all(|g| g.joint == GRIPPER));
+    // Contact: the stall that held it, near the object.
+    let contact = stalls.first().expect("the gripper met the object");
+    assert!(contact.held && contact.joint == GRIPPER, "{contact:?}");
+    assert!((contact.position - CONTACT_DEG).abs() < 2.0, "{contact:?}");
+
+    // The truth: closed onto the object, and held there within 2 deg of
+    // where it met it, from a second after the grasp to the release.
+    sim.settle();
+    let rows = truth.rows();
+    let held: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.time_s >= 1.5 && r.time_s < release_at)
+        .map(|r| r.angles_deg[GRIPPER])
+        .collect();
+    assert!(held.len() > 5000, "{}", held.len());
+    let (lo, hi) = held
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    println!("held between {lo:.2} and {hi:.2} deg (object at {CONTACT_DEG})");
+    assert!(
+        lo > CONTACT_DEG - 2.0 && hi <= CONTACT_DEG + 0.5,
+        "{lo} {hi}"
+    );
+
+    // Cool: under the warning level all the minute, and the servo was at
+    // 30 % effort: its torque limit then was 300.
+    let warm_from = DEFAULT_MAX_TEMPERATURE_C - WARNING_BELOW_LIMIT_C;
+    let temperature = |sim: &SimRobot| {
+        sim.buses()[0]
+            .register(GRIPPER_ID, addr::PRESENT_TEMPERATURE)
+            .map(f64::from)
+            .expect("the gripper's servo")
+    };
+    let temp = temperature(&sim);
+    println!(
+        "temperature after a minute's hold and the release: {temp} C (warning from {warm_from})"
+    );
+    assert!(temp < warm_from, "{temp}");
+    // Released: the torque limit back to what the servo held, and open.
+    let byte = |a: u8| sim.buses()[0].register(GRIPPER_ID, a).expect("the servo");
+    let limit = u16::from_le_bytes([byte(48), byte(49)]);
+    assert_eq!(limit, 1000);
+    let last = rows.last().expect("rows").angles_deg[GRIPPER];
+    assert!(last > 50.0, "opened: {last}");
+}
+
+#[test]
+fn a_raw_goal_past_the_object_heats_the_gripper_until_its_protection_lets_go() {
+    let robot = common::robot("so101.yaml");
+    let (sim, truth) = arm_with_object(&robot, "raw");
+    let mut bus = sim.driver_buses().remove(0);
+    let joint = robot.joints().nth(GRIPPER).expect("a gripper");
+    let map = JointMap::new(joint, robot.units);
+    let regs = bus.settings().series.map();
+    let (goal, torque) = (
+        regs.get("goal_position").expect("a goal register"),
+        regs.get("torque_enable").expect("a torque register"),
+    );
+    bus.write_register(GRIPPER_ID, goal, map.to_ticks(0.0))
+        .expect("the servo answers");
+    bus.write_register(GRIPPER_ID, torque, 1)
+        .expect("the servo answers");
+    let start = bus.clock().now();
+    let status = regs.get("status").expect("a status register");
+    let mut tripped = None;
+    for s in 1..=12_000u64 {
+        bus.clock()
+            .sleep_until(start + Duration::from_millis(100 * s));
+        let (flags, _) = bus
+            .read_register(GRIPPER_ID, status)
+            .expect("the servo answers");
+        let flags = StatusFlags(u8::try_from(flags).unwrap_or(0));
+        if flags.contains(StatusFlags::OVERHEAT) || flags.contains(StatusFlags::OVERLOAD) {
+            tripped = Some((s, flags));
+            break;
+        }
+    }
+    let (after, flags) = tripped.expect("the protection trips within 20 minutes");
+    let after = after as f64 / 10.0;
+    println!("a raw goal past the object: the protection ({flags:?}) trips after {after} s");
+    let _ = truth;
+}
+
+#[test]
+fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself() {
+    let robot = common::robot("so101.yaml");
+    let (sim, _truth) = arm_with_object(&robot, "warm");
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        telemetry_capacity: 1 << 12,
+        ..RunOptions::default()
+    };
+    let mut run = VirtualRun::live(&robot, sim.driver_buses(), options).expect("a live run");
+    let (tx, rx) = (run.targets(), run.telemetry());
+    let heat = |c: f64| {
+        sim.buses()[0].servo(GRIPPER_ID, |s| s.set_temperature(c, c));
+    };
+    let mut grasps = Vec::new();
+    let mut faults = Vec::new();
+    for _ in 0..(6.0 / PERIOD) as u64 {
+        let k = run.cycle();
+        let t = k as f64 * PERIOD;
+        if k % 6 == 0 {
+            let target = if k == 60 {
+                arm_target(t).with_grasps(vec![("gripper".into(), EFFORT)])
+            } else {
+                arm_target(t)
+            };
+            tx.send(target).expect("a good target");
+        }
+        // Warm from 2 s (above the warning level), hot from 4 s (within
+        // the let-go margin of its limit, still under the limit itself).
+        if k == 400 {
+            heat(DEFAULT_MAX_TEMPERATURE_C - WARNING_BELOW_LIMIT_C + 2.0);
+        }
+        if k == 800 {
+            heat(DEFAULT_MAX_TEMPERATURE_C - 2.0);
+        }
+        let going = run.step();
+        while let Ok(m) = rx.try_recv() {
+            match m {
+                Telemetry::Grasp(g) => grasps.push(g),
+                Telemetry::Fault(f) => faults.push(f),
+                _ => {}
+            }
+        }
+        assert!(going, "the run goes on: {faults:?}");
+    }
+    assert!(faults.is_empty(), "{faults:?}");
+    let lowered: Vec<f64> = grasps
+        .iter()
+        .filter_map(|g| match g.event {
+            GraspEvent::Lowered { effort_pct, .. } => Some(effort_pct),
+            _ => None,
+        })
+        .collect();
+    println!("lowered to {lowered:?}; {grasps:?}");
+    assert!(!lowered.is_empty(), "{grasps:?}");
+    assert!(lowered.windows(2).all(|w| w[1] < w[0]), "{lowered:?}");
+    assert!(lowered[0] < EFFORT, "{lowered:?}");
+    let let_go = grasps
+        .iter()
+        .find(|g| matches!(g.event, GraspEvent::LetGo { .. }))
+        .expect("it let go");
+    assert!(let_go.time_s >= 4.0 && let_go.time_s < 4.3, "{let_go:?}");
+    // Backed off: no load on the servo since (the jaws off the object).
+    let byte = |a: u8| sim.buses()[0].register(GRIPPER_ID, a).expect("the servo");
+    let load = u16::from_le_bytes([byte(60), byte(61)]) & 0x3ff;
+    assert!(load < 50, "still pushing: {load}");
+}

@@ -306,3 +306,31 @@ fn baud_table() {
     assert_eq!(return_delay_from_register(255), Duration::from_micros(510));
     assert_eq!(registers::sign_magnitude(0x8001, 15), -1);
 }
+
+#[test]
+fn goal_and_present_speed_are_sign_magnitude_at_zero_one_and_the_top() {
+    // The manual's rule for a wheel's speed (steps/s): bit 15 is the
+    // direction, the other 15 bits the magnitude; low byte first on STS.
+    for name in ["goal_speed", "present_speed"] {
+        let reg = STS.get(name).unwrap();
+        let (lo, hi) = reg.range();
+        assert_eq!((lo, hi), (-0x7FFF, 0x7FFF), "{name}");
+        let mut b = [0u8; 2];
+        for (value, bytes) in [
+            (0, [0x00, 0x00]),
+            (1, [0x01, 0x00]),
+            (-1, [0x01, 0x80]),
+            (hi, [0xFF, 0x7F]),
+            (lo, [0xFF, 0xFF]),
+            (3000, [0xB8, 0x0B]),
+            (-3000, [0xB8, 0x8B]),
+        ] {
+            reg.encode(value, ByteOrder::Little, &mut b).unwrap();
+            assert_eq!(b, bytes, "{name} {value}");
+            assert_eq!(reg.decode(&bytes, ByteOrder::Little), Ok(value), "{name}");
+        }
+        // "-0": the sign bit alone is 0, as a servo may report at rest.
+        assert_eq!(reg.decode(&[0x00, 0x80], ByteOrder::Little), Ok(0), "{name}");
+        assert!(reg.encode(hi + 1, ByteOrder::Little, &mut b).is_err(), "{name}");
+    }
+}

@@ -74,6 +74,15 @@ fn write_links(out: &mut impl std::io::Write, r: &Report) -> std::io::Result<()>
             "  bus {} link: latency mean {:.0} us, p99 {:.0} us, {how}; reply deadline {:.0} us",
             b.name, b.latency_us, b.latency_p99_us, b.reply_deadline_us
         )?;
+        for d in &b.eeprom_differences {
+            writeln!(
+                out,
+                "  warning: servo {} ({}) holds {} {}, the robot file's `servo: {}` asks {}: \
+                 an EEPROM setting, which a run never writes (`servobus doctor --fix \
+                 --write-servos` stores it)",
+                d.id, d.joint, d.register, d.held, d.setting, d.wanted
+            )?;
+        }
     }
     Ok(())
 }

@@ -49,7 +49,7 @@ pub use error::RunError;
 pub use exchange::{CommandSender, COMMAND_DELAY_CYCLES};
 pub use fault::{Fault, FaultKind, STALL_PUSH};
 pub use options::{FaultPolicy, Lead, Reaction, RunOptions, BUS_SILENCE};
-pub use report::{BusReport, JointReport, Quantiles, Report};
+pub use report::{BusReport, JointReport, Quantiles, Report, SettingDifference};
 pub use run::bus_settings;
 pub use target::{
     Chunk, LiveJoint, LiveReport, LiveTarget, TargetError, TargetSender, MAX_CHUNK_POINTS,

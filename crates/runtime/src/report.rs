@@ -100,6 +100,29 @@ pub struct BusReport {
     pub latency_p99_us: f64,
     /// The reply deadline in force at the end for a read of every servo, us.
     pub reply_deadline_us: f64,
+    /// The robot file's EEPROM `servo:` settings its servos hold otherwise
+    /// (a run writes no EEPROM: `servobus doctor --fix --write-servos`
+    /// stores them), as read at start-up; left out of the JSON when none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eeprom_differences: Vec<SettingDifference>,
+}
+
+/// An EEPROM `servo:` setting of the robot file that a servo holds
+/// otherwise.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct SettingDifference {
+    /// The joint.
+    pub joint: String,
+    /// Its servo's ID.
+    pub id: u8,
+    /// The `servo:` key (`p`, `max_temperature`, ...).
+    pub setting: &'static str,
+    /// The register.
+    pub register: &'static str,
+    /// What the servo holds, raw.
+    pub held: i32,
+    /// What the robot file asks, raw.
+    pub wanted: i32,
 }
 
 /// The summary of a run. The first fields are those of

@@ -95,6 +95,8 @@ pub(crate) struct BusLoop<T: Transport> {
     /// The operating modes checked and the `servo:` settings written at
     /// start-up.
     setup: ServoSetup,
+    /// The EEPROM `servo:` settings the servos held otherwise at start-up.
+    eeprom_differences: Vec<crate::report::SettingDifference>,
     feedback: Feedback,
     track: Tracker,
     lead: LeadEstimator,
@@ -167,6 +169,7 @@ impl<T: Transport> BusLoop<T> {
                 c.period.as_secs_f64(),
             ),
             setup: ServoSetup::new(config, map.at(addr::MODE)),
+            eeprom_differences: Vec::new(),
             grasps: GraspWatch::new(
                 config,
                 c.first_joint,
@@ -229,6 +232,7 @@ impl<T: Transport> BusLoop<T> {
             return Ok(());
         }
         self.setup.check_modes(&mut self.bus, &self.name)?;
+        self.eeprom_differences = self.setup.compare_eeprom(&mut self.bus);
         let failed = |what| {
             let bus = self.name.clone();
             move |source| RunError::Startup { bus, what, source }
@@ -582,6 +586,7 @@ impl<T: Transport> BusLoop<T> {
             )
             .as_secs_f64()
                 * 1e6,
+            eeprom_differences: self.eeprom_differences.clone(),
         }
     }
 

@@ -8,7 +8,10 @@
 //!   not asked.
 //! - the joint's RAM `servo:` settings (`torque_limit`, `acceleration`,
 //!   ...) are written after the motion profiles are released, so that a
-//!   joint's own `acceleration` wins over the release, and read back. EEPROM settings are
+//!   joint's own `acceleration` wins over the release, and read back.
+//! - the joint's EEPROM `servo:` settings are read and compared: those the
+//!   servo holds otherwise go in the report
+//!   ([`BusReport::eeprom_differences`](crate::BusReport)). EEPROM settings are
 //!   the doctor's to check and fix (`servobus doctor --fix
 //!   --write-servos`), never written here.
 
@@ -17,6 +20,7 @@ use servobus_protocol::registers::{addr, Register};
 
 use crate::config::{BusConfig, ServoWrite};
 use crate::error::RunError;
+use crate::report::SettingDifference;
 
 /// One joint's servo as start-up sees it.
 #[derive(Debug)]
@@ -27,6 +31,8 @@ struct Servo {
     mode: u8,
     /// Its RAM `servo:` settings.
     writes: Vec<ServoWrite>,
+    /// Its EEPROM `servo:` settings (compared, never written).
+    eeprom: Vec<ServoWrite>,
 }
 
 /// The start-up checks and settings of one bus's servos.
@@ -50,6 +56,12 @@ impl ServoSetup {
                     .servo_writes()
                     .iter()
                     .filter(|w| !w.eeprom)
+                    .copied()
+                    .collect(),
+                eeprom: j
+                    .servo_writes()
+                    .iter()
+                    .filter(|w| w.eeprom)
                     .copied()
                     .collect(),
             })
@@ -100,6 +112,31 @@ impl ServoSetup {
             }
         }
         Ok(())
+    }
+
+    /// Reads every joint's EEPROM `servo:` settings and returns those its
+    /// servo holds otherwise (one that cannot be read is left out: the
+    /// doctor examines it).
+    pub fn compare_eeprom<T: Transport>(&self, bus: &mut Bus<T>) -> Vec<SettingDifference> {
+        let mut out = Vec::new();
+        for s in &self.servos {
+            for w in &s.eeprom {
+                let wanted = i32::try_from(w.raw).unwrap_or(i32::MAX);
+                if let Ok((held, _)) = bus.read_register(s.id, w.register) {
+                    if held != wanted {
+                        out.push(SettingDifference {
+                            joint: s.joint.clone(),
+                            id: s.id,
+                            setting: w.setting,
+                            register: w.register.name,
+                            held,
+                            wanted,
+                        });
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// Writes every joint's RAM `servo:` settings and reads each back.

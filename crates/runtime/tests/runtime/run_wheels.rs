@@ -269,6 +269,40 @@ fn the_joints_servo_settings_are_written_after_the_profiles_are_released() {
 }
 
 #[test]
+fn eeprom_settings_the_servos_hold_otherwise_are_reported_and_never_written() {
+    // P is EEPROM (a new servo holds 32); the torque limit is RAM.
+    let robot = cart_with(", servo: {p: 16, torque_limit: 50}", "");
+    let sim = cart_sim(&robot, 1);
+    let mut run = live(&robot, &sim).expect("the cart starts");
+    run.commands().send(Command::Stop).expect("the run listens");
+    while run.step() {}
+    let report = run.report();
+    let differ = &report.buses[0].eeprom_differences;
+    assert_eq!(differ.len(), 1, "{differ:?}");
+    let d = &differ[0];
+    assert_eq!(
+        (
+            d.joint.as_str(),
+            d.id,
+            d.setting,
+            d.register,
+            d.held,
+            d.wanted
+        ),
+        ("arm", 1, "p", "p_coefficient", 32, 16)
+    );
+    assert_eq!(sim.register(1, 21), Some(32), "not written");
+    // As the robot file asks: nothing to report.
+    let robot = cart_with(", servo: {p: 32}", "");
+    let sim = cart_sim(&robot, 1);
+    let mut run = live(&robot, &sim).expect("the cart starts");
+    run.commands().send(Command::Stop).expect("the run listens");
+    while run.step() {}
+    let report = run.report();
+    assert!(report.buses[0].eeprom_differences.is_empty());
+}
+
+#[test]
 fn a_speed_beyond_the_top_speed_is_clamped_and_counted() {
     let robot = cart();
     let sim = cart_sim(&robot, 1);

@@ -1,7 +1,7 @@
 """Type stubs of the extension module ``servobus._native`` (the Rust side;
 the package ``servobus`` wraps it with typed results)."""
 
-from typing import Callable, List, Optional, Tuple
+from typing import Callable, List, Mapping, Optional, Tuple
 
 __version__: str
 
@@ -86,6 +86,9 @@ class Stream:
         """Sends a target; returns how many angles were clamped."""
     def send_base(self, x: float, y: float, theta: float) -> int:
         """Sends a mobile base's velocity (m/s, m/s, robot units/s)."""
+    def send_grasp(self, grasps: Mapping[str, float]) -> None:
+        """Tells joints to grasp: joint name to effort, percent of the
+        servo's torque (above 0, at most 100)."""
     def state(
         self,
     ) -> Tuple[float, List[float], List[float], List[float], List[float], List[int], List[str]]:

@@ -229,6 +229,19 @@ class Stream:
         or a velocity it cannot take (a differential base sideways)."""
         return self._stream.send_base(float(x), float(y), float(theta))
 
+    def send_grasp(self, grasps: Mapping[str, float]) -> None:
+        """Tells gripper joints to grasp: joint name to effort, in percent
+        of the servo's torque (above 0, at most 100). Each closes towards
+        its ``min`` until it meets something and holds there pushing with
+        that effort, eased when warm, letting go near its temperature
+        limit; a later target giving it a position releases it. Raises
+        :class:`servobus.UsageError` for an unknown joint, an effort out of
+        range or a wheel."""
+        if isinstance(grasps, Mapping):
+            # Efforts are passed as given: the extension names a bad one.
+            grasps = {str(k): v for k, v in grasps.items()}
+        self._stream.send_grasp(grasps)
+
     def send_chunk(self, times_or_dt, positions) -> int:
         """Sends an action chunk, as a policy (ACT, diffusion, pi0) emits
         one: ``times_or_dt`` is the points' spacing in s (a number) or

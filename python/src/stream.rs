@@ -5,6 +5,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use pyo3::prelude::*;
+use pyo3::types::PyMapping;
 use servobus_config::{BaseTarget, Units};
 use servobus_robot::{
     Chunk, Command, LiveTarget, Run, RunOptions, TargetError, TargetSender, Telemetry,
@@ -207,6 +208,27 @@ impl Stream {
         }
     }
 
+    /// Tells grippers to grasp: `grasps` maps joint names to efforts, each
+    /// in percent of its servo's torque (above 0, at most 100). Each joint
+    /// named closes until it meets something, then holds there pushing with
+    /// that effort; a later target giving it a position releases it. The
+    /// other joints keep their targets. Raises `UsageError` for a `grasps`
+    /// that is not a mapping of names to numbers, names no joint, an
+    /// unknown joint, an effort out of range or a wheel, `Error` once the
+    /// run has ended.
+    fn send_grasp(&self, py: Python<'_>, grasps: &Bound<'_, PyAny>) -> PyResult<()> {
+        let grasps = grasp_efforts(grasps)?;
+        let stamp = self.started.elapsed().as_secs_f64();
+        let target = LiveTarget::named(stamp, Vec::new()).with_grasps(grasps);
+        match py.allow_threads(|| self.targets.send(target)) {
+            Ok(_) => Ok(()),
+            Err(TargetError::Ended) => {
+                Err(Failure::new(Class::Error, "the stream has ended").into())
+            }
+            Err(e) => Err(Failure::usage(chain(&e)).into()),
+        }
+    }
+
     /// Sends an action chunk: `joints` maps joint names to their positions
     /// (robot units), one per point; the points are `dt` s apart from now,
     /// or at `times` s from now (increasing; evenly spaced ones are sent
@@ -296,6 +318,38 @@ impl Stream {
     fn torque_off(&self, py: Python<'_>) -> PyResult<Option<String>> {
         Ok(py.allow_threads(|| self.finish(Command::TorqueOff))?)
     }
+}
+
+/// The `(joint, effort %)` pairs of `send_grasp`'s mapping, in its order;
+/// at least one. Whether each is a grasp the joint can make is the run's
+/// to check, as for every sender.
+fn grasp_efforts(grasps: &Bound<'_, PyAny>) -> PyResult<Vec<(String, f64)>> {
+    const SHAPE: &str = "give a dict of joint name to effort (percent of the servo's torque), \
+                         e.g. {\"gripper\": 40}";
+    let map = grasps.downcast::<PyMapping>().map_err(|_| {
+        let kind = grasps
+            .get_type()
+            .name()
+            .map_or_else(|_| "?".to_string(), |n| n.to_string());
+        Failure::usage(format!("send_grasp: got a `{kind}`: {SHAPE}"))
+    })?;
+    let mut out = Vec::new();
+    for item in map.items()?.iter() {
+        let (name, effort): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item.extract()?;
+        let name: String = name.extract().map_err(|_| {
+            Failure::usage(format!("send_grasp: a joint name is not text: {SHAPE}"))
+        })?;
+        let effort: f64 = effort.extract().map_err(|_| {
+            Failure::usage(format!(
+                "send_grasp: joint `{name}`: the effort is not a number (percent of the servo's torque)"
+            ))
+        })?;
+        out.push((name, effort));
+    }
+    if out.is_empty() {
+        return Err(Failure::usage(format!("send_grasp: no joint named: {SHAPE}")).into());
+    }
+    Ok(out)
 }
 
 /// Checks a chunk's interval: finite, positive, at most an hour.

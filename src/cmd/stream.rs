@@ -8,14 +8,19 @@
 //! robot file's units ([`servobus_robot::stream`]); a line may name some
 //! joints only (the others keep their targets). A robot with a mobile base
 //! also takes `{"base": {"x": m/s, "y": m/s, "theta": <units>/s}}`: its
-//! wheels' speeds, scaled together within their limits. A malformed line, one
+//! wheels' speeds, scaled together within their limits. A line's
+//! `{"grasp": {"<joint>": <effort %>}}` tells a gripper to close until it
+//! meets something and hold there with that share of its servo's torque
+//! (see [`servobus_robot::grasp`]); a later position releases it. A malformed line, one
 //! longer than 1 MiB or one that is not UTF-8 is reported on standard
 //! error with its number, skipped and counted. End of input stops the
 //! robot (jerk limited) and ends the run with its report: on standard
 //! error, or with `--json` as the last line of standard output,
 //! `{"report": {...}, "skipped_lines": <count>}`.
 //! With `--telemetry`, one JSON line per control cycle on standard output:
-//! `{"t", "commanded": {..}, "measured": {.. or null}, "faults": [..]}`.
+//! `{"t", "commanded": {..}, "measured": {.. or null}, "faults": [..]}`,
+//! and for a robot with a base its odometry, `base_x_m`, `base_y_m`,
+//! `base_theta_deg`.
 
 use std::io::{BufRead, Write};
 use std::process::ExitCode;

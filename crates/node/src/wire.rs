@@ -6,6 +6,7 @@
 //! | key | payload | parsed by |
 //! |---|---|---|
 //! | `target` | `{"t": s?, "joints": {"<name>": angle}, "sent_ns": ns?}` | [`parse_live`] ([`parse_target`]) |
+//! | `target` | `{"t": s?, "grasp": {"<name>": effort %}, "joints"?: ..., "base"?: ...}` | [`parse_live`] ([`parse_target`]) |
 //! | `target` | `{"chunk": {"t0": s?, "dt": s, "joints": {"<name>": [angle, ...]}}, "sent_ns": ns?}` | [`parse_live`] ([`parse_chunk`]) |
 //! | `command` | `play <motion> [at <UTC>]`, `stop`, `pause`, `resume`, `torque_off`, `shutdown` | [`parse_command`] |
 //! | `state` | [`StateMessage`] | (published) |
@@ -52,6 +53,12 @@ pub struct TargetMessage {
     /// units/s}` (each optional, 0 when absent); its wheels' speeds are the
     /// robot's to work out ([`Robot::wheel_targets`](servobus_robot::config::Robot::wheel_targets)).
     pub base: Option<servobus_robot::config::BaseTarget>,
+    /// `grasp`: joints told to grasp, by name, with their effort in
+    /// percent of the servo's torque (see
+    /// [`LiveTarget::with_grasps`](servobus_robot::LiveTarget::with_grasps));
+    /// empty when none. None of them is in `joints`; whether each effort is
+    /// one the joint can make is the target stream's to check.
+    pub grasps: Vec<(String, f64)>,
     /// `sent_ns`, when the sender says when it published the target (ns
     /// since the UNIX epoch): the target's latency is then counted from
     /// there, network included (on machines whose clocks agree).
@@ -120,7 +127,8 @@ fn sent_ns(obj: &Object) -> Result<Option<i64>, String> {
 }
 
 /// Parses what the `target` key carries: a target
-/// `{"t": <s, optional>, "joints": {"<name>": <angle>, ...}}` or an action
+/// `{"t": <s, optional>, "joints": {"<name>": <angle>, ...}}` (with a
+/// `base` velocity and `grasp` efforts, or either alone) or an action
 /// chunk `{"chunk": {"t0": <s, optional>, "dt": <s>, "joints": {"<name>":
 /// [<angle>, ...], ...}}}`, either with an optional `sent_ns`.
 pub fn parse_live(payload: &[u8]) -> Result<LiveMessage, WireError> {
@@ -146,27 +154,54 @@ fn target_of(obj: &Object) -> Result<TargetMessage, WireError> {
         None | Some(serde_json::Value::Null) => None,
         Some(b) => Some(base_of(b)?),
     };
+    let grasps = match obj.get("grasp") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(g) => Some(grasps_of(g)?),
+    };
     let none = Object::new();
     let joints = match obj.get("joints") {
         Some(j) => j
             .as_object()
             .ok_or_else(|| WireError::Target("`joints` is not an object".into()))?,
-        None if base.is_some() => &none,
+        None if base.is_some() || grasps.is_some() => &none,
         None => return Err(WireError::Target("no `joints` object".into())),
     };
+    let grasps = grasps.unwrap_or_default();
     let mut out = Vec::with_capacity(joints.len());
     for (name, angle) in joints {
         let a = angle.as_f64().ok_or_else(|| {
             WireError::Target(format!("joint `{name}`: the angle is not a number"))
         })?;
+        if grasps.iter().any(|(g, _)| g == name) {
+            return Err(WireError::Target(format!(
+                "joint `{name}` is given an angle and a `grasp`: a joint grasps or goes to an angle, not both"
+            )));
+        }
         out.push((name.clone(), a));
     }
     Ok(TargetMessage {
         t,
         joints: out,
         base,
+        grasps,
         sent_ns,
     })
+}
+
+/// A target's `grasp`: `{"<name>": effort %, ...}`.
+fn grasps_of(value: &serde_json::Value) -> Result<Vec<(String, f64)>, WireError> {
+    let obj = value.as_object().ok_or_else(|| {
+        WireError::Target("grasp: not an object: give {\"<name>\": effort %}".into())
+    })?;
+    obj.iter()
+        .map(|(name, effort)| {
+            effort.as_f64().map(|e| (name.clone(), e)).ok_or_else(|| {
+                WireError::Target(format!(
+                    "grasp `{name}`: the effort is not a number (percent of the servo's torque)"
+                ))
+            })
+        })
+        .collect()
 }
 
 /// A target's `base`: `{"x": m/s, "y": m/s, "theta": units/s}`, each
@@ -202,9 +237,12 @@ pub fn parse_chunk(payload: &[u8]) -> Result<ChunkMessage, WireError> {
 
 fn chunk_of(obj: &Object) -> Result<ChunkMessage, WireError> {
     let bad = WireError::Chunk;
-    if obj.contains_key("joints") || obj.contains_key("t") {
+    if ["joints", "t", "grasp"]
+        .iter()
+        .any(|k| obj.contains_key(*k))
+    {
         return Err(bad(
-            "give either a target (`t`, `joints`) or a `chunk`, not both".into(),
+            "give either a target (`t`, `joints`, `grasp`) or a `chunk`, not both".into(),
         ));
     }
     let sent_ns = sent_ns(obj).map_err(bad)?;

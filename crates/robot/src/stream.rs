@@ -7,11 +7,14 @@
 //! | `{"t": s, "joints": {"<name>": angle}}` | a target; `t` (the sender's clock, s) optional |
 //! | `{"chunk": {"t0": s, "dt": s, "joints": {"<name>": [angle, ...]}}}` | an action chunk: points `dt` apart from `t0` (optional: on arrival) |
 //! | `{"t": s, "base": {"x": m/s, "y": m/s, "theta": units/s}}` | a mobile base's velocity ([`parse_line_for`]): its wheels' speeds, with `joints` or alone |
+//! | `{"t": s, "grasp": {"<name>": effort %}}` | grippers told to grasp ([`LiveTarget::with_grasps`]): close until they meet something, then hold with `effort` percent of the servo's torque; with `joints` and `base` or alone |
 //!
 //! A target names some joints or all (the others keep theirs); a chunk's
 //! joints each give one angle per point; a wheel joint's value is a speed
-//! (units/s). What a line means is checked against the robot when it is
-//! sent ([`TargetSender`]).
+//! (units/s). A joint grasps or has a position in one target, not both.
+//! What a line means is checked against the robot when it is sent
+//! ([`TargetSender`]): an unknown joint, an effort not above 0 and at most
+//! 100, a grasp for a wheel.
 
 use servobus_config::{BaseTarget, Robot, Units};
 use servobus_runtime::{Chunk, LiveTarget, TargetError, TargetSender};
@@ -52,10 +55,11 @@ fn err(why: impl Into<String>) -> LineError {
 }
 
 /// Reads one line: a target (stamped `t`, or `arrival` when it has none,
-/// s) or a chunk.
+/// s), with its grasps if it has any, or a chunk.
 ///
 /// # Errors
-/// [`LineError`] saying what is wrong with the line.
+/// [`LineError`] saying what is wrong with the line (a joint given both a
+/// position and a grasp, a grasp beside a chunk among them).
 pub fn parse_line(line: &str, units: Units, arrival: f64) -> Result<Input, LineError> {
     parse(line, units, None, arrival)
 }
@@ -86,15 +90,22 @@ fn parse(
         .as_object()
         .ok_or_else(|| err(format!("not a JSON object: {SHAPE}")))?;
     if let Some(chunk) = obj.get("chunk") {
+        if obj.contains_key("grasp") {
+            return Err(err(
+                "a `grasp` goes in a target line, not beside a `chunk`: send it on its own line",
+            ));
+        }
         return parse_chunk(chunk, units).map(Input::Chunk);
     }
     let t = number_or_null(obj.get("t"), "t")?;
     let base = obj.get("base");
+    let grasp = obj.get("grasp").filter(|g| !g.is_null());
+    let grasps = grasps(grasp)?;
     let joints = match obj.get("joints") {
         Some(j) => j
             .as_object()
             .ok_or_else(|| err(format!("`joints` is not an object: {SHAPE}")))?,
-        None if base.is_some() => &serde_json::Map::new(),
+        None if base.is_some() || grasp.is_some() => &serde_json::Map::new(),
         None => return Err(err(format!("no `joints` object: {SHAPE}"))),
     };
     let mut out = Vec::with_capacity(joints.len());
@@ -115,7 +126,34 @@ fn parse(
             out.push((wheel, speed));
         }
     }
-    Ok(Input::Target(LiveTarget::named(t.unwrap_or(arrival), out)))
+    if let Some((name, _)) = grasps.iter().find(|(g, _)| out.iter().any(|(n, _)| n == g)) {
+        return Err(err(format!(
+            "joint `{name}` is given a position and a `grasp`: a joint grasps or goes to a position, not both"
+        )));
+    }
+    let target = LiveTarget::named(t.unwrap_or(arrival), out).with_grasps(grasps);
+    Ok(Input::Target(target))
+}
+
+/// A line's `grasp`: `{"<name>": effort %, ...}` (none when absent).
+/// Whether each effort is one the joint can make is the sender's to check.
+fn grasps(grasp: Option<&serde_json::Value>) -> Result<Vec<(String, f64)>, LineError> {
+    const SHAPE: &str = "give {\"grasp\": {\"<name>\": effort %}}";
+    let obj = match grasp {
+        None => return Ok(Vec::new()),
+        Some(g) => g
+            .as_object()
+            .ok_or_else(|| err(format!("`grasp` is not an object: {SHAPE}")))?,
+    };
+    obj.iter()
+        .map(|(name, effort)| {
+            effort.as_f64().map(|e| (name.clone(), e)).ok_or_else(|| {
+                err(format!(
+                    "grasp `{name}`: the effort is not a number (percent of the servo's torque)"
+                ))
+            })
+        })
+        .collect()
 }
 
 /// The wheel speeds (rad/s) of a line's `base` velocity on `robot`.
@@ -263,6 +301,71 @@ mod tests {
         assert!(why(r#"{"base": 3}"#).contains("not an object"));
         // Without the robot, or on a robot without a base: refused.
         assert!(parse_line(r#"{"base": {"x": 0.1}}"#, Units::Deg, 0.0).is_err());
+    }
+
+    #[test]
+    fn a_grasp_is_carried_alone_or_beside_joints_and_a_base() {
+        let t = parse_line(r#"{"t": 3, "grasp": {"gripper": 40}}"#, Units::Deg, 9.0);
+        let want = LiveTarget::named(3.0, Vec::new()).with_grasps(vec![("gripper".into(), 40.0)]);
+        assert_eq!(t, Ok(Input::Target(want)));
+        // The effort is a percentage, never converted as an angle.
+        let t = parse_line(
+            r#"{"joints": {"wrist": 90}, "grasp": {"gripper": 12.5, "thumb": 100}}"#,
+            Units::Deg,
+            9.0,
+        );
+        let want = LiveTarget::named(9.0, vec![("wrist".into(), std::f64::consts::FRAC_PI_2)])
+            .with_grasps(vec![("gripper".into(), 12.5), ("thumb".into(), 100.0)]);
+        assert_eq!(t, Ok(Input::Target(want)));
+        // A null grasp is none: the line is a plain target.
+        let t = parse_line(r#"{"joints": {"a": 1}, "grasp": null}"#, Units::Rad, 0.0);
+        assert_eq!(
+            t,
+            Ok(Input::Target(LiveTarget::named(
+                0.0,
+                vec![("a".into(), 1.0)]
+            )))
+        );
+        let cart = cart();
+        let Ok(Input::Target(t)) = parse_line_for(
+            r#"{"t": 2, "base": {"x": 0.1}, "grasp": {"arm": 30}}"#,
+            &cart,
+            9.0,
+        ) else {
+            panic!("a target");
+        };
+        let want = LiveTarget::named(2.0, vec![("l".into(), 2.0), ("r".into(), 2.0)])
+            .with_grasps(vec![("arm".into(), 30.0)]);
+        assert_eq!(t, want);
+    }
+
+    #[test]
+    fn a_bad_grasp_says_what_is_wrong() {
+        let why = |l: &str| match parse_line_for(l, &cart(), 0.0) {
+            Err(e) => e.to_string(),
+            Ok(i) => panic!("{l} read as {i:?}"),
+        };
+        let both = why(r#"{"joints": {"arm": 10}, "grasp": {"arm": 40}}"#);
+        assert!(
+            both.contains("joint `arm`") && both.contains("not both"),
+            "{both}"
+        );
+        // A wheel the base drives is a position (a speed) too.
+        let wheel = why(r#"{"base": {"x": 0.1}, "grasp": {"l": 40}}"#);
+        assert!(wheel.contains("joint `l`"), "{wheel}");
+        let hard = why(r#"{"grasp": {"arm": "hard"}}"#);
+        assert!(
+            hard.contains("grasp `arm`: the effort is not a number"),
+            "{hard}"
+        );
+        assert!(why(r#"{"grasp": [40]}"#).contains("`grasp` is not an object"));
+        assert!(why(r#"{"grasp": 40}"#).contains("`grasp` is not an object"));
+        assert!(
+            why(r#"{"chunk": {"dt": 0.1, "joints": {}}, "grasp": {"arm": 40}}"#)
+                .contains("not beside a `chunk`")
+        );
+        // The line is well formed; the run refuses efforts it cannot make.
+        assert!(parse_line_for(r#"{"grasp": {"arm": 150}}"#, &cart(), 0.0).is_ok());
     }
 
     #[test]

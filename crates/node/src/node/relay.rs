@@ -48,9 +48,9 @@ pub(super) struct Inputs {
     pub(super) commands: CommandSender,
 }
 
-/// A target or chunk from the network into the stream; a malformed one is
-/// counted and logged, never sent. The first one after `stop` resumes the
-/// following.
+/// A target (its grasps with it) or chunk from the network into the
+/// stream; a malformed one is counted and logged, never sent. The first
+/// one after `stop` resumes the following.
 pub(super) fn take_target(
     payload: &[u8],
     to: &Inputs,
@@ -85,7 +85,9 @@ pub(super) fn take_target(
                 .collect();
             joints.extend(wheels);
             let stamp = m.t.unwrap_or_else(|| started.elapsed().as_secs_f64());
-            let target = LiveTarget::named(stamp, joints).taken_at(taken_at(m.sent_ns));
+            let target = LiveTarget::named(stamp, joints)
+                .with_grasps(m.grasps)
+                .taken_at(taken_at(m.sent_ns));
             (to.targets.send(target), "target")
         }
         LiveMessage::Chunk(m) => {

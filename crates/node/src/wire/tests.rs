@@ -71,6 +71,7 @@ fn a_chunk_is_a_timed_list_per_joint() {
             t: Some(1.0),
             joints: vec![("elbow_flex".to_string(), 30.0)],
             base: None,
+            grasps: Vec::new(),
             sent_ns: None,
         })
     );
@@ -275,4 +276,47 @@ fn a_base_velocity_parses_with_or_without_joints_and_says_what_is_wrong() {
         let e = parse_target(payload).expect_err("malformed");
         assert!(e.to_string().contains(says), "{e}");
     }
+}
+
+#[test]
+fn a_grasp_parses_alone_or_beside_joints_and_a_base_and_says_what_is_wrong() {
+    let m = parse_target(br#"{"t": 4, "grasp": {"gripper": 40}}"#).expect("a grasp alone");
+    assert_eq!(m.t, Some(4.0));
+    assert!(m.joints.is_empty());
+    assert_eq!(m.grasps, vec![("gripper".to_string(), 40.0)]);
+    let m = parse_live(
+        br#"{"joints": {"wrist_roll": 90}, "base": {"x": 0.1}, "grasp": {"gripper": 12.5}, "sent_ns": 5}"#,
+    )
+    .expect("all three");
+    let LiveMessage::Target(m) = m else {
+        panic!("a target: {m:?}");
+    };
+    assert_eq!(m.joints, vec![("wrist_roll".to_string(), 90.0)]);
+    assert_eq!(m.base.map(|b| b.x), Some(0.1));
+    assert_eq!(m.grasps, vec![("gripper".to_string(), 12.5)]);
+    assert_eq!(m.sent_ns, Some(5));
+    // Null is none; without `grasp` there is none either.
+    let m = parse_target(br#"{"joints": {}, "grasp": null}"#).expect("a null grasp");
+    assert!(m.grasps.is_empty());
+    for (payload, says) in [
+        (
+            &br#"{"joints": {"gripper": 10}, "grasp": {"gripper": 40}}"#[..],
+            "joint `gripper` is given an angle and a `grasp`",
+        ),
+        (
+            br#"{"grasp": {"gripper": "firm"}}"#,
+            "grasp `gripper`: the effort is not a number",
+        ),
+        (br#"{"grasp": 40}"#, "grasp: not an object"),
+        (br#"{"grasp": ["gripper"]}"#, "grasp: not an object"),
+    ] {
+        let e = parse_target(payload).expect_err("malformed");
+        assert!(matches!(e, WireError::Target(_)), "{e:?}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+    let e = parse_live(br#"{"chunk": {"dt": 0.1, "joints": {"a": [1]}}, "grasp": {"a": 40}}"#)
+        .expect_err("a grasp beside a chunk");
+    assert!(matches!(e, WireError::Chunk(_)), "{e:?}");
+    // Well formed: the efforts the joint cannot make are the stream's to refuse.
+    assert!(parse_target(br#"{"grasp": {"gripper": 0, "elbow_flex": 150}}"#).is_ok());
 }

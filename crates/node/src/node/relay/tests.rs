@@ -330,3 +330,26 @@ fn a_base_velocity_for_an_arm_without_a_base_is_malformed_and_moves_nothing() {
     );
     assert_eq!(node.shared.counts.malformed.load(Ordering::Relaxed), 2);
 }
+
+#[test]
+fn a_grasp_reaches_the_stream_and_one_it_cannot_make_is_refused() {
+    let mut node = Node::new();
+    assert!(node.run_for(20, |_, _| {}));
+    node.target(r#"{"grasp": {"gripper": 40}}"#);
+    node.target(r#"{"joints": {"shoulder_pan": 5}, "grasp": {"gripper": 25}}"#);
+    let c = &node.shared.counts;
+    assert_eq!(c.targets.load(Ordering::Relaxed), 2, "both grasps taken");
+    // Well formed but not a grasp the gripper can make: the stream refuses
+    // them (not counted as taken, nor malformed).
+    node.target(r#"{"grasp": {"gripper": 150}}"#);
+    node.target(r#"{"grasp": {"gripper": 0}}"#);
+    node.target(r#"{"grasp": {"thumb": 40}}"#);
+    assert_eq!(c.targets.load(Ordering::Relaxed), 2);
+    assert_eq!(c.malformed.load(Ordering::Relaxed), 0);
+    // A joint with an angle and a grasp is malformed: nothing is sent.
+    node.target(r#"{"joints": {"gripper": 10}, "grasp": {"gripper": 40}}"#);
+    node.target(r#"{"grasp": {"gripper": "firm"}}"#);
+    assert_eq!(c.malformed.load(Ordering::Relaxed), 2);
+    assert_eq!(c.targets.load(Ordering::Relaxed), 2);
+    assert!(node.run_for(20, |_, _| {}));
+}

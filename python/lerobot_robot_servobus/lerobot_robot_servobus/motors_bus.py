@@ -248,9 +248,10 @@ class ServobusMotorsBus(FeetechMotorsBus):
         self._close()
         try:
             robot = servobus.Robot(design, port=self.port, calibration=calibration)
-            # As LeRobot's follower: a gripper closed on an object strains
-            # against it (its servo's own protection limits the current).
-            self._live = robot.stream(timeout=self.live_timeout, tracking_faults=False)
+            # The robot file's per-joint fault policy (see
+            # _live_robot_yaml): a gripper closed on an object is held
+            # there, an arm joint far off its path ends the loop.
+            self._live = robot.stream(timeout=self.live_timeout, tracking_faults=True)
         except servobus.Error:
             self._connect(handshake=False)
             raise
@@ -315,7 +316,7 @@ class ServobusMotorsBus(FeetechMotorsBus):
             v, a, j = limits[motor]
             joints.append(
                 f"      - {{name: {motor}, id: {m.id}, model: {m.model}, min: {-TURN_DEG!r}, max: {TURN_DEG!r}, "
-                f"max_velocity: {v!r}, max_acceleration: {a!r}, max_jerk: {j!r}}}"
+                f"max_velocity: {v!r}, max_acceleration: {a!r}, max_jerk: {j!r}, faults: {_faults(motor)}}}"
             )
         head = [f"name: {design.name}", "units: deg", f"rate: {design.rate_hz!r}", "buses:",
                 "  - name: lerobot", f"    baud: {self.baudrate}", "    latency_us: auto",
@@ -476,6 +477,23 @@ class ServobusMotorsBus(FeetechMotorsBus):
     def _sync_write(self, addr, length, ids_values, num_retry=0, raise_on_error=True, err_msg=""):
         self._bus().sync_write_raw(addr, length, ids_values)
         return scs.COMM_SUCCESS
+
+
+# How far (deg) an arm joint may be off its own path before the live loop
+# ends: a joint that far behind is blocked for good or not driven at all (a
+# blocked joint is held pressed long before, in a live session).
+ARM_FOLLOWING_TOLERANCE_DEG = 45.0
+
+
+def _faults(motor: str) -> str:
+    """The robot file's ``faults:`` of ``motor`` in the live loop: a
+    gripper closed on an object (or on its end stop) strains against it, as
+    with LeRobot's follower, so its stalls and following errors hold it
+    pressed; every other joint ends the loop when it is far off its path.
+    Heat, over-current and a missing servo end it whatever the joint."""
+    if motor == "gripper":
+        return "{stall: hold, following_error: hold}"
+    return f"{{following_tolerance: {ARM_FOLLOWING_TOLERANCE_DEG!r}}}"
 
 
 def _line(context: str, problem: str) -> str:

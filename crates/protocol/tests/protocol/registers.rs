@@ -330,7 +330,14 @@ fn goal_and_present_speed_are_sign_magnitude_at_zero_one_and_the_top() {
             assert_eq!(reg.decode(&bytes, ByteOrder::Little), Ok(value), "{name}");
         }
         // "-0": the sign bit alone is 0, as a servo may report at rest.
-        assert_eq!(reg.decode(&[0x00, 0x80], ByteOrder::Little), Ok(0), "{name}");
-        assert!(reg.encode(hi + 1, ByteOrder::Little, &mut b).is_err(), "{name}");
+        assert_eq!(
+            reg.decode(&[0x00, 0x80], ByteOrder::Little),
+            Ok(0),
+            "{name}"
+        );
+        assert!(
+            reg.encode(hi + 1, ByteOrder::Little, &mut b).is_err(),
+            "{name}"
+        );
     }
 }

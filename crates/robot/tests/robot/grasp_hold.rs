@@ -56,6 +56,39 @@ fn arm_with_object(robot: &Robot, name: &str) -> (SimRobot, servobus_sim::Truth)
     (sim, truth)
 }
 
+/// A live run of `sim`'s arm.
+fn live_run(robot: &Robot, sim: &SimRobot) -> VirtualRun<servobus_sim::SimBus> {
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        telemetry_capacity: 1 << 12,
+        ..RunOptions::default()
+    };
+    VirtualRun::live(robot, sim.driver_buses(), options).expect("a live run")
+}
+
+/// What a run published about the grasp.
+#[derive(Default)]
+struct Seen {
+    grasps: Vec<servobus_runtime::grasp::GraspReport>,
+    stalls: Vec<servobus_runtime::StallEvent>,
+    faults: Vec<servobus_runtime::Fault>,
+}
+
+impl Seen {
+    /// Takes in what `rx` holds.
+    fn take(&mut self, rx: &crossbeam_channel::Receiver<Telemetry>) {
+        while let Ok(m) = rx.try_recv() {
+            match m {
+                Telemetry::Grasp(g) => self.grasps.push(g),
+                Telemetry::Stall(s) => self.stalls.push(s),
+                Telemetry::Fault(f) => self.faults.push(f),
+                _ => {}
+            }
+        }
+    }
+}
+
 /// The other joints' targets at `t`, rad: where they are.
 fn arm_target(t: f64) -> LiveTarget {
     let names = [
@@ -79,17 +112,9 @@ fn arm_target(t: f64) -> LiveTarget {
 fn a_grasp_stops_at_the_object_and_holds_it_a_minute_without_heating() {
     let robot = common::robot("so101.yaml");
     let (sim, truth) = arm_with_object(&robot, "hold");
-    let options = RunOptions {
-        lead: Lead::None,
-        approach: None,
-        telemetry_capacity: 1 << 12,
-        ..RunOptions::default()
-    };
-    let mut run = VirtualRun::live(&robot, sim.driver_buses(), options).expect("a live run");
+    let mut run = live_run(&robot, &sim);
     let (tx, rx) = (run.targets(), run.telemetry());
-    let mut grasps = Vec::new();
-    let mut stalls = Vec::new();
-    let mut faults = Vec::new();
+    let mut seen = Seen::default();
     let seconds = 62.0;
     let release_at = 61.0;
     for _ in 0..(seconds / PERIOD) as u64 {
@@ -106,16 +131,14 @@ fn a_grasp_stops_at_the_object_and_holds_it_a_minute_without_heating() {
             tx.send(target).expect("a good target");
         }
         let going = run.step();
-        while let Ok(m) = rx.try_recv() {
-            match m {
-                Telemetry::Grasp(g) => grasps.push(g),
-                Telemetry::Stall(s) => stalls.push(s),
-                Telemetry::Fault(f) => faults.push(f),
-                _ => {}
-            }
-        }
-        assert!(going, "the run goes on: {faults:?} {grasps:?} {stalls:?}");
+        seen.take(&rx);
+        assert!(going, "the run goes on: {:?}", seen.faults);
     }
+    let Seen {
+        grasps,
+        stalls,
+        faults,
+    } = seen;
     assert!(faults.is_empty(), "{faults:?}");
     // Closing, then released: never lowered or let go.
     let events: Vec<GraspEvent> = grasps.iter().map(|g| g.event).collect();
@@ -217,19 +240,12 @@ fn a_raw_goal_past_the_object_heats_the_gripper_until_its_protection_lets_go() {
 fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself() {
     let robot = common::robot("so101.yaml");
     let (sim, _truth) = arm_with_object(&robot, "warm");
-    let options = RunOptions {
-        lead: Lead::None,
-        approach: None,
-        telemetry_capacity: 1 << 12,
-        ..RunOptions::default()
-    };
-    let mut run = VirtualRun::live(&robot, sim.driver_buses(), options).expect("a live run");
+    let mut run = live_run(&robot, &sim);
     let (tx, rx) = (run.targets(), run.telemetry());
     let heat = |c: f64| {
         sim.buses()[0].servo(GRIPPER_ID, |s| s.set_temperature(c, c));
     };
-    let mut grasps = Vec::new();
-    let mut faults = Vec::new();
+    let mut seen = Seen::default();
     for _ in 0..(6.0 / PERIOD) as u64 {
         let k = run.cycle();
         let t = k as f64 * PERIOD;
@@ -250,15 +266,10 @@ fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself(
             heat(DEFAULT_MAX_TEMPERATURE_C - 2.0);
         }
         let going = run.step();
-        while let Ok(m) = rx.try_recv() {
-            match m {
-                Telemetry::Grasp(g) => grasps.push(g),
-                Telemetry::Fault(f) => faults.push(f),
-                _ => {}
-            }
-        }
-        assert!(going, "the run goes on: {faults:?}");
+        seen.take(&rx);
+        assert!(going, "the run goes on: {:?}", seen.faults);
     }
+    let (grasps, faults) = (seen.grasps, seen.faults);
     assert!(faults.is_empty(), "{faults:?}");
     let lowered: Vec<f64> = grasps
         .iter()

@@ -297,13 +297,21 @@ impl Timeline {
     /// gripper holds on), none under any other segment.
     pub fn grasp_efforts(&self, x: f64, out: &mut [Option<f64>]) {
         out.fill(None);
+        if let Some(live) = self.live_at(x) {
+            live.grasp_efforts(out);
+        }
+    }
+
+    /// The live path in force at `x`, if the segment then is one.
+    fn live_at(&self, x: f64) -> Option<&LivePath> {
         let i = self
             .segments
             .iter()
             .rposition(|s| s.start <= x)
             .unwrap_or(0);
-        if let Some(Path::Live(live)) = self.segments.get(i).map(|s| &s.path) {
-            live.grasp_efforts(out);
+        match self.segments.get(i).map(|s| &s.path) {
+            Some(Path::Live(live)) => Some(live),
+            _ => None,
         }
     }
 
@@ -316,12 +324,7 @@ impl Timeline {
         for (o, _) in out.iter_mut().zip(&self.wheels).filter(|(_, &w)| w) {
             *o = 0.0;
         }
-        let i = self
-            .segments
-            .iter()
-            .rposition(|s| s.start <= x)
-            .unwrap_or(0);
-        if let Some(Path::Live(live)) = self.segments.get(i).map(|s| &s.path) {
+        if let Some(live) = self.live_at(x) {
             live.wheel_speeds(out);
         }
     }

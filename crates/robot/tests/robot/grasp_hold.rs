@@ -120,7 +120,7 @@ fn a_grasp_stops_at_the_object_and_holds_it_a_minute_without_heating() {
     for _ in 0..(seconds / PERIOD) as u64 {
         let k = run.cycle();
         let t = k as f64 * PERIOD;
-        if k % 6 == 0 {
+        if k.is_multiple_of(6) {
             let target = if t >= release_at {
                 LiveTarget::named(t, vec![("gripper".into(), 60f64.to_radians())])
             } else if k == 60 {
@@ -249,7 +249,7 @@ fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself(
     for _ in 0..(6.0 / PERIOD) as u64 {
         let k = run.cycle();
         let t = k as f64 * PERIOD;
-        if k % 6 == 0 {
+        if k.is_multiple_of(6) {
             let target = if k == 60 {
                 arm_target(t).with_grasps(vec![("gripper".into(), EFFORT)])
             } else {

@@ -65,7 +65,8 @@ pub use error::Source;
 pub use locate::FieldPath;
 pub use mapping::{Clamped, JointMap};
 pub use motion::{
-    load_motion, load_motion_calibrated, load_motion_text, Interpolation, Keyframe, Motion, OnLimit,
+    load_motion, load_motion_calibrated, load_motion_text, Interpolation, Keyframe, KeyframeGrasp,
+    Motion, OnLimit,
 };
 pub use pose_arg::{parse_pose, PoseError};
 pub use robot::{

@@ -59,10 +59,23 @@ pub struct Keyframe {
     pub tool: bool,
     /// Position of every robot joint (robot joint order), in the motion's units.
     pub positions: Vec<f64>,
+    /// The grasps the keyframe makes (its `grasp:`: the joint closes
+    /// towards its `min` on the way here) and ends (a grasping joint its
+    /// pose names).
+    pub grasps: Vec<KeyframeGrasp>,
     /// 1-based line of the keyframe in the motion file.
     pub line: usize,
     /// 1-based column of the keyframe in the motion file.
     pub column: usize,
+}
+
+/// A grasp a keyframe makes or ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KeyframeGrasp {
+    /// The joint, in the robot's joint order.
+    pub joint: usize,
+    /// The effort, percent of the servo's torque; `None`: the grasp ends.
+    pub effort: Option<f64>,
 }
 
 /// What to do when timed keyframes ask more than a joint's limits allow.

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use super::error::{ConfigError, Source};
 use super::limits::{check_duration, Rounded, MAX_MOTION_DURATION_S};
 use super::locate::FieldPath;
-use super::motion::Keyframe;
+use super::motion::{Keyframe, KeyframeGrasp};
 use super::motion_poses::{list, PoseList, PoseRef, Resolver};
 use super::robot::Robot;
 use super::spatial::{Context, MoveLimits, PathKind, RawBody, RawWalk};
@@ -15,7 +15,7 @@ use super::Units;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 #[serde(
-    expecting = "a keyframe: a mapping with `pose:`, `tool:`, `walk:` or `body:`, and optional `at:`"
+    expecting = "a keyframe: a mapping with `pose:`, `tool:`, `walk:`, `body:` or `grasp:`, and optional `at:`"
 )]
 pub(super) struct RawKeyframe {
     #[serde(default)]
@@ -38,6 +38,16 @@ pub(super) struct RawKeyframe {
     walk: Option<RawWalk>,
     #[serde(default)]
     body: Option<RawBody>,
+    #[serde(default)]
+    grasp: Option<std::collections::BTreeMap<String, RawGrasp>>,
+}
+
+/// A keyframe's grasp of one joint.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[serde(expecting = "a grasp: a mapping with `effort:` (percent of the servo's torque)")]
+pub(super) struct RawGrasp {
+    effort: f64,
 }
 
 impl RawKeyframe {
@@ -66,6 +76,10 @@ pub(super) struct KeyframeBuilder<'a> {
     keyframes: Vec<Keyframe>,
     /// Index and time of the last keyframe with an `at`.
     last_at: Option<(usize, f64)>,
+    /// Which joints grasp after the last keyframe.
+    grasping: Vec<bool>,
+    /// The joints the last keyframe's pose named.
+    named: Vec<usize>,
 }
 
 impl<'a> KeyframeBuilder<'a> {
@@ -85,6 +99,8 @@ impl<'a> KeyframeBuilder<'a> {
                 .collect(),
             keyframes: Vec::with_capacity(count),
             last_at: None,
+            grasping: vec![false; robot.joint_count()],
+            named: Vec::new(),
             spatial,
         }
     }
@@ -106,6 +122,7 @@ impl<'a> KeyframeBuilder<'a> {
         }
         check_spatial(self.src, kp, i, rk)?;
         let pose_name = self.apply_pose(kp, i, rk)?;
+        let grasps = self.grasps(kp, i, rk)?;
         if self.spatial_move(kp, i, rk)? {
             return Ok(());
         }
@@ -125,10 +142,76 @@ impl<'a> KeyframeBuilder<'a> {
             pose: pose_name,
             tool: rk.tool.is_some(),
             positions: self.current.clone(),
+            grasps,
             line,
             column,
         });
         Ok(())
+    }
+
+    /// Keyframe `i`'s grasps: those its `grasp:` makes (the joint's
+    /// position set to its `min`) and those its pose ends.
+    fn grasps(
+        &mut self,
+        kp: &FieldPath,
+        i: usize,
+        rk: &RawKeyframe,
+    ) -> Result<Vec<KeyframeGrasp>, ConfigError> {
+        let mut out = Vec::new();
+        for &ix in &self.named {
+            if self.grasping.get(ix).copied().unwrap_or(false) {
+                self.grasping[ix] = false;
+                out.push(KeyframeGrasp {
+                    joint: ix,
+                    effort: None,
+                });
+            }
+        }
+        let Some(grasp) = &rk.grasp else {
+            return Ok(out);
+        };
+        let field = kp.key("grasp");
+        if rk.walk.is_some() || rk.body.is_some() || rk.path.is_some() {
+            return Err(self.src.error(
+                &field,
+                format!("keyframe {i}: a grasp goes on a keyframe of joint positions, not on a move in space"),
+            ));
+        }
+        for (name, g) in grasp {
+            let at = field.key(name);
+            let Some(ix) = self.robot.joint_index(name) else {
+                let names: Vec<&str> = self.robot.joints().map(|j| j.name.as_str()).collect();
+                return Err(self.src.key_error(
+                    &at,
+                    format!("no joint `{name}` in the robot (joints: {})", list(&names)),
+                ));
+            };
+            let Some(joint) = self.robot.joints().nth(ix) else {
+                continue;
+            };
+            let why = if joint.is_wheel() {
+                Some("a wheel has nothing to close".to_owned())
+            } else if !(g.effort.is_finite() && g.effort > 0.0 && g.effort <= 100.0) {
+                Some(format!(
+                    "the effort is a percentage of the servo's torque, above 0 and at most 100, got {}",
+                    Rounded(g.effort)
+                ))
+            } else if self.named.contains(&ix) {
+                Some("the pose gives it a position too: a grasping joint closes until it meets something".to_owned())
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(self.src.error(&at, format!("keyframe {i}: {name}: {why}")));
+            }
+            self.current[ix] = self.robot.units.convert(joint.min, self.units);
+            self.grasping[ix] = true;
+            out.push(KeyframeGrasp {
+                joint: ix,
+                effort: Some(g.effort),
+            });
+        }
+        Ok(out)
     }
 
     /// Checks keyframe `i`'s time `at`: a time in range, 0 for the first
@@ -175,10 +258,15 @@ impl<'a> KeyframeBuilder<'a> {
     ) -> Result<Option<String>, ConfigError> {
         let poses = self.poses;
         let (pose_name, pairs) = match &rk.pose {
-            None if rk.tool.is_none() && rk.walk.is_none() && rk.body.is_none() => {
-                return Err(self
-                    .src
-                    .error(kp, "a keyframe needs a `pose`, `tool`, `walk` or `body`"))
+            None if rk.tool.is_none()
+                && rk.walk.is_none()
+                && rk.body.is_none()
+                && rk.grasp.is_none() =>
+            {
+                return Err(self.src.error(
+                    kp,
+                    "a keyframe needs a `pose`, `tool`, `walk`, `body` or `grasp`",
+                ))
             }
             None => (None, None),
             Some(PoseRef::Name(name)) => {
@@ -196,9 +284,11 @@ impl<'a> KeyframeBuilder<'a> {
                 (None, Some(map))
             }
         };
+        self.named.clear();
         for (joint, value) in pairs.iter().flat_map(|p| &p.0) {
             if let Some(ix) = self.robot.joint_index(joint) {
                 self.current[ix] = *value;
+                self.named.push(ix);
             }
         }
         Ok(pose_name)

@@ -144,7 +144,7 @@ use std::path::{Path, PathBuf};
 
 pub use connect::{live_options, Connection, SlowAdapter, Target, APPROACH, SETTLE};
 pub use error::Error;
-pub use run::{Play, Run};
+pub use run::{motion_grasps, Play, Run};
 
 pub use calibrate::Refusal;
 /// The robot, motion and calibration files ([`servobus_config`]).

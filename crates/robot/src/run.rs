@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use crossbeam_channel::Receiver;
 use servobus_config::Motion;
+use servobus_runtime::grasp::GraspAt;
 use servobus_runtime::{
     spawn, Command, CommandSender, Report, RunOptions, Runner, TargetSender, Telemetry, VirtualRun,
     Work,
@@ -42,6 +43,25 @@ impl From<&Motion> for Play {
     }
 }
 
+/// The grasps `motion`'s keyframes make and end (`grasp:`), at their
+/// times on `trajectory` (planned from it): each from the start of the
+/// move to its keyframe, in every repetition. Give them to a played run
+/// as [`RunOptions::grasps`]; [`Connection::play`] of a motion does.
+pub fn motion_grasps(motion: &Motion, trajectory: &Trajectory) -> Vec<GraspAt> {
+    let mut out = Vec::new();
+    for seg in trajectory.segments() {
+        let Some(k) = motion.keyframes.get(seg.keyframe) else {
+            continue;
+        };
+        out.extend(k.grasps.iter().map(|g| GraspAt {
+            at_s: seg.start,
+            joint: g.joint,
+            effort: g.effort.map(|e| e / 100.0),
+        }));
+    }
+    out
+}
+
 impl Connection {
     /// Plays `what` on the buses with `options` (see
     /// [`Connection::options`] for the robot's defaults): on the simulator
@@ -59,7 +79,11 @@ impl Connection {
             Play::Motion(motion) => {
                 options.units = options.units.or(Some(motion.units));
                 options.rate_hz = options.rate_hz.or(Some(motion.rate_hz(&self.robot)));
-                servobus_config::plan_motion(&motion, &self.robot)?
+                let trajectory = servobus_config::plan_motion(&motion, &self.robot)?;
+                if options.grasps.is_empty() {
+                    options.grasps = motion_grasps(&motion, &trajectory);
+                }
+                trajectory
             }
         };
         self.start(Work::Path(trajectory), options)

@@ -25,6 +25,10 @@
 //!   backs off behind where it stands, so the jaws open from the object
 //!   and the servo rests and cools) and says so. Each is a
 //!   [`Telemetry::Grasp`](crate::Telemetry::Grasp) event.
+//! - **In a motion.** A keyframe's `grasp: {gripper: {effort: 40}}` closes
+//!   the joint towards its `min` on the way to that keyframe and grasps
+//!   from the start of that move ([`GraspAt`]); a later keyframe whose
+//!   pose names the joint ends it. A stop or a pause keeps the grip.
 //! - **Release.** A position target for the joint ends the grasp: the
 //!   torque limit goes back to the joint's (its `servo: torque_limit`, else
 //!   the whole torque) and the joint follows its targets again.
@@ -82,6 +86,29 @@ pub const DEFAULT_MAX_TEMPERATURE_C: f64 = 70.0;
 /// with its whole torque: 1600 / P ticks of a 4096-tick turn.
 pub fn full_effort_error(p: f64) -> f64 {
     1600.0 / p.max(1.0) * std::f64::consts::TAU / 4096.0
+}
+
+/// A grasp a played path makes (`effort`: a share of the servo's torque)
+/// or ends (`None`) at `at_s` s on the path: from there the joint grasps
+/// as a live target's grasp does, its path (the motion's) closing it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GraspAt {
+    /// The time on the path, s.
+    pub at_s: f64,
+    /// The joint, in the robot's joint order.
+    pub joint: usize,
+    /// The effort, 0..=1 of the torque; `None` ends the grasp.
+    pub effort: Option<f64>,
+}
+
+/// The efforts of `schedule` (sorted by time) at path time `t` into `out`
+/// (robot order): per joint, its latest entry at or before `t`.
+pub(crate) fn efforts_at(schedule: &[GraspAt], t: f64, out: &mut [Option<f64>]) {
+    for g in schedule.iter().take_while(|g| g.at_s <= t) {
+        if let Some(o) = out.get_mut(g.joint) {
+            *o = g.effort;
+        }
+    }
 }
 
 /// What happened to a grasp.

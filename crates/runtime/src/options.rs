@@ -267,6 +267,9 @@ pub struct RunOptions {
     pub target_timeout: Duration,
     /// Capacity of the live target channel.
     pub target_capacity: usize,
+    /// The grasps a played path makes and ends (a motion's keyframe
+    /// `grasp:`), at their times on the path (see [`crate::grasp`]).
+    pub grasps: Vec<crate::grasp::GraspAt>,
 }
 
 impl Default for RunOptions {
@@ -286,6 +289,7 @@ impl Default for RunOptions {
             units: None,
             target_timeout: Duration::from_millis(250),
             target_capacity: 64,
+            grasps: Vec::new(),
         }
     }
 }

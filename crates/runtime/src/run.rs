@@ -213,6 +213,7 @@ fn plan_timeline(
         None => Timeline::live(limits.clone(), present, timeout),
     };
     timeline.set_live(timeout, limits);
+    timeline.set_grasps(o.grasps.clone());
     Ok(timeline)
 }
 

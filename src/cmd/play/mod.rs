@@ -52,7 +52,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let keyframes: Vec<f64> = std::iter::once(0.0)
         .chain(trajectory.segments().iter().map(|s| s.end))
         .collect();
-    let options = run_options(&args, &robot, units, rate_hz);
+    let mut options = run_options(&args, &robot, units, rate_hz);
+    // A keyframe's `grasp:` grasps from the start of its move.
+    options.grasps = servobus_robot::motion_grasps(&motion, &trajectory);
     let runner = start(&backend, &robot, &pose, trajectory, options, rate_hz)?;
 
     install_ctrl_c(runner.commands());

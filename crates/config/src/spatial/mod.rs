@@ -198,6 +198,7 @@ impl Context<'_> {
                 pose: None,
                 tool: false,
                 positions: q.iter().map(|&v| self.units.from_rad(v)).collect(),
+                grasps: Vec::new(),
                 line,
                 column,
             });

@@ -7,6 +7,7 @@ mod common;
 mod config_bounded;
 mod config_errors;
 mod config_files;
+mod config_grasp;
 mod config_mapping;
 mod config_motion;
 mod config_pose_arg;

@@ -371,6 +371,7 @@ fn paced_plan(robot: &Robot, keyframes: &[TimedPose]) -> Result<(), String> {
                 pose: None,
                 tool: false,
                 positions: p.clone(),
+                grasps: Vec::new(),
                 line: k + 1,
                 column: 1,
             })

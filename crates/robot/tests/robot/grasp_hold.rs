@@ -292,3 +292,77 @@ fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself(
     let load = u16::from_le_bytes([byte(60), byte(61)]) & 0x3ff;
     assert!(load < 50, "still pushing: {load}");
 }
+
+/// A motion that grasps the object at 1 s and lets it go at 4 s.
+const GRASPING_MOTION: &str = "\
+robot: so101
+units: deg
+keyframes:
+  - pose: {shoulder_pan: 0, shoulder_lift: 0, elbow_flex: 0, wrist_flex: 0, wrist_roll: 0, gripper: 40}
+  - {at: 1.0, pose: {shoulder_pan: 10}, grasp: {gripper: {effort: 30}}}
+  - {at: 3.0, pose: {shoulder_pan: -10}}
+  - {at: 4.0, pose: {gripper: 60}}
+";
+
+#[test]
+fn a_motions_keyframe_grasps_the_object_holds_it_through_the_next_move_and_lets_it_go() {
+    let robot = common::robot("so101.yaml");
+    let dir = std::env::temp_dir().join(format!("servobus-grasp-motion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("grasp.yaml");
+    std::fs::write(&file, GRASPING_MOTION).expect("writes the motion");
+    let (motion, _) = servobus_robot::config::load_motion(&file, None).expect("the motion loads");
+    // The grasping keyframe closes the gripper towards its min (0 deg).
+    assert_eq!(motion.keyframes[1].positions[GRIPPER], 0.0);
+    let trajectory = servobus_robot::config::plan_motion(&motion, &robot).expect("plans");
+    let grasps = servobus_robot::motion_grasps(&motion, &trajectory);
+    assert_eq!(grasps.len(), 2, "{grasps:?}");
+    assert_eq!((grasps[0].effort, grasps[1].effort), (Some(0.3), None));
+    assert!(
+        grasps[0].at_s < 0.01 && (grasps[1].at_s - 3.0).abs() < 1e-9,
+        "{grasps:?}"
+    );
+
+    let (sim, truth) = arm_with_object(&robot, "motion");
+    let options = RunOptions {
+        lead: Lead::None,
+        approach: None,
+        telemetry_capacity: 1 << 14,
+        grasps,
+        ..RunOptions::default()
+    };
+    let mut run =
+        VirtualRun::new(&robot, trajectory, sim.driver_buses(), options).expect("a played run");
+    let rx = run.telemetry();
+    let mut seen = Seen::default();
+    while run.step() {
+        seen.take(&rx);
+    }
+    seen.take(&rx);
+    assert!(seen.faults.is_empty(), "{:?}", seen.faults);
+    assert_eq!(run.finished(), Some(servobus_runtime::Finish::Completed));
+    let events: Vec<GraspEvent> = seen.grasps.iter().map(|g| g.event).collect();
+    assert_eq!(
+        events,
+        vec![
+            GraspEvent::Closing { effort_pct: EFFORT },
+            GraspEvent::Released
+        ]
+    );
+    let contact = seen.stalls.first().expect("the gripper met the object");
+    assert!((contact.position - CONTACT_DEG).abs() < 2.0, "{contact:?}");
+    // Held on the object while the arm moved (1.5 to 2.9 s), then open.
+    sim.settle();
+    let rows = truth.rows();
+    for r in rows.iter().filter(|r| r.time_s > 1.5 && r.time_s < 2.9) {
+        let g = r.angles_deg[GRIPPER];
+        assert!(
+            g > CONTACT_DEG - 2.0 && g <= CONTACT_DEG + 0.5,
+            "{} s: {g}",
+            r.time_s
+        );
+    }
+    let last = rows.last().expect("rows").angles_deg[GRIPPER];
+    assert!(last > 55.0, "opened: {last}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

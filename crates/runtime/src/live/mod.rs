@@ -222,6 +222,19 @@ impl LivePath {
         }
     }
 
+    /// Ends the grasp of every joint `t` gives a position (or a chunk's
+    /// points).
+    fn release_grasps(&mut self, t: &Checked) {
+        let chunked = t.chunk.as_ref().map(|c| &c.joints);
+        for (j, g) in self.grasps.iter_mut().enumerate() {
+            let positioned = t.joints.get(j).is_some_and(Option::is_some)
+                || chunked.is_some_and(|c| c.get(j).is_some_and(Option::is_some));
+            if positioned {
+                *g = None;
+            }
+        }
+    }
+
     /// Takes in a target (or a chunk) that arrived at run time `now`.
     pub fn target(&mut self, t: &Checked, now: f64) {
         let relative = t.chunk.as_ref().is_some_and(|c| c.relative);
@@ -290,15 +303,7 @@ impl LivePath {
             }
             self.grasp(&t.grasps, now, x);
         }
-        // A joint given a position (or a chunk's points) lets go.
-        let chunked = t.chunk.as_ref().map(|c| &c.joints);
-        for (j, g) in self.grasps.iter_mut().enumerate() {
-            let positioned = t.joints.get(j).is_some_and(Option::is_some)
-                || chunked.is_some_and(|c| c.get(j).is_some_and(Option::is_some));
-            if positioned {
-                *g = None;
-            }
-        }
+        self.release_grasps(t);
         self.arrived = alive;
         if self.mode == Mode::TimedOut {
             self.mode = Mode::Following;

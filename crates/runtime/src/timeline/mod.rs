@@ -158,6 +158,10 @@ pub(crate) struct Timeline {
     stays: bool,
     /// Which joints are wheels (robot order).
     wheels: Vec<bool>,
+    /// The grasps the played path makes, by its time.
+    grasps: Vec<crate::grasp::GraspAt>,
+    /// The furthest time on the played path the grasps were judged at.
+    grasp_tau: f64,
 }
 
 /// Limits scaled by `f` (positions unchanged).
@@ -194,6 +198,8 @@ impl Timeline {
             target_timeout: DEFAULT_TARGET_TIMEOUT,
             stays: false,
             wheels: vec![false; n],
+            grasps: Vec::new(),
+            grasp_tau: f64::NEG_INFINITY,
         }
     }
 
@@ -295,11 +301,40 @@ impl Timeline {
     /// order; `None` for a joint making none): those of the live targets
     /// while they are followed (a timeout or a pause keeps them: the
     /// gripper holds on), none under any other segment.
-    pub fn grasp_efforts(&self, x: f64, out: &mut [Option<f64>]) {
+    ///
+    /// On the played path, those of its schedule ([`Timeline::set_grasps`])
+    /// at the path's time; after it (a stop, a hold) those it ended with.
+    pub fn grasp_efforts(&mut self, x: f64, out: &mut [Option<f64>]) {
         out.fill(None);
         if let Some(live) = self.live_at(x) {
             live.grasp_efforts(out);
+            return;
         }
+        if self.grasps.is_empty() {
+            return;
+        }
+        let i = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= x)
+            .unwrap_or(0);
+        if let Some(seg) = self.segments.get(i) {
+            let tau = match (&seg.path, seg.kind) {
+                (Path::Scaled(_, scale), Kind::Main) => Some(scale.at(x).0),
+                (Path::Plain(_), Kind::Main) => Some(x - seg.start),
+                _ => None,
+            };
+            if let Some(tau) = tau {
+                self.grasp_tau = self.grasp_tau.max(tau);
+            }
+        }
+        crate::grasp::efforts_at(&self.grasps, self.grasp_tau, out);
+    }
+
+    /// The grasps the played path makes, at its own times (sorted here).
+    pub fn set_grasps(&mut self, mut grasps: Vec<crate::grasp::GraspAt>) {
+        grasps.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        self.grasps = grasps;
     }
 
     /// The live path in force at `x`, if the segment then is one.

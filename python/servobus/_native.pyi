@@ -86,6 +86,8 @@ class Stream:
         """Sends a target; returns how many angles were clamped."""
     def send_base(self, x: float, y: float, theta: float) -> int:
         """Sends a mobile base's velocity (m/s, m/s, robot units/s)."""
+    def base_pose(self) -> Optional[Tuple[float, float, float]]:
+        """A mobile base's odometry (m, m, robot units), or None."""
     def send_grasp(self, grasps: Mapping[str, float]) -> None:
         """Tells joints to grasp: joint name to effort, percent of the
         servo's torque (above 0, at most 100)."""

@@ -270,6 +270,14 @@ class Stream:
         times = [float(t) for t in np.asarray(times_or_dt, dtype=float).ravel()]
         return self._stream.send_chunk(joints, times=times)
 
+    @property
+    def base_pose(self):
+        """A mobile base's odometry so far, from its wheels' measured
+        speeds: ``(x, y, theta)``, metres forward and to the left of where
+        the stream started and the heading in the robot's units
+        (counter-clockwise); ``None`` for a robot without a ``base:``."""
+        return self._stream.base_pose()
+
     def state(self) -> State:
         """The joints' latest positions, velocities, errors and faults."""
         t, pos, vel, err, cmd, flags, faults = self._stream.state()

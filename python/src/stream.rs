@@ -11,6 +11,8 @@ use servobus_robot::{
     Chunk, Command, LiveTarget, Run, RunOptions, TargetError, TargetSender, Telemetry,
 };
 
+use servobus_robot::odometry::Odometer;
+
 use crate::errors::{chain, poisoned, Class, Failure, Outcome};
 
 /// The latest state of every joint, in the robot's units.
@@ -23,6 +25,8 @@ struct State {
     commanded: Vec<f64>,
     flags: Vec<u8>,
     faults: Vec<String>,
+    /// A mobile base's odometry: x, y (m) and heading (rad).
+    base: Option<(f64, f64, f64)>,
 }
 
 /// The state of the joints as Python gets it: `(time, position, velocity,
@@ -96,6 +100,7 @@ impl Stream {
         }));
         let telemetry = runner.telemetry();
         let shared = Arc::clone(&state);
+        let mut odometer = Odometer::of(config, config.units);
         let watcher = std::thread::Builder::new()
             .name("servobus-py-state".into())
             .spawn(move || {
@@ -104,6 +109,10 @@ impl Stream {
                     match message {
                         Telemetry::Cycle(c) => {
                             s.time = c.time_s;
+                            if let Some(o) = odometer.as_mut() {
+                                let p = o.take(&c);
+                                s.base = Some((p.x_m, p.y_m, p.theta_rad));
+                            }
                             for j in c.joints() {
                                 let k = j.joint;
                                 if k < s.position.len() {
@@ -298,6 +307,16 @@ impl Stream {
             flags,
             s.faults,
         ))
+    }
+
+    /// A mobile base's odometry so far, from its wheels' measured speeds:
+    /// `(x, y, theta)`, metres forward and to the left of where it started
+    /// and its heading in the robot's units, counter-clockwise; `None` for
+    /// a robot without a base.
+    fn base_pose(&self) -> PyResult<Option<(f64, f64, f64)>> {
+        let s = self.state.lock().map_err(poisoned)?;
+        let units = self.units;
+        Ok(s.base.map(|(x, y, theta)| (x, y, units.from_rad(theta))))
     }
 
     /// Whether the run has ended (a stop, torque off or a fault).

@@ -36,6 +36,10 @@ pub(super) struct RawRobot {
     pub kinematics: Option<servobus_kinematics::Spec>,
     #[serde(default)]
     pub base: Option<servobus_kinematics::BaseSpec>,
+    /// `servo:` settings per servo model, for every joint of that model
+    /// (a joint's own `servo:` keys win).
+    #[serde(default)]
+    pub servo_defaults: std::collections::BTreeMap<String, RawServo>,
 }
 
 fn default_rate() -> f64 {
@@ -134,7 +138,7 @@ pub(super) struct RawJoint {
 /// A joint's `servo:` ([`ServoSettings`](super::ServoSettings)), the values
 /// as written: wide types, so that an out-of-range gain or a negative
 /// current is refused in validation with the accepted range.
-#[derive(Deserialize)]
+#[derive(Deserialize, Clone, Default)]
 #[serde(deny_unknown_fields)]
 #[serde(
     expecting = "servo settings: a mapping with any of `p:`, `d:`, `i:`, `torque_limit:`, `protection_current:`, `acceleration:`, `max_temperature:`"
@@ -154,4 +158,19 @@ pub(super) struct RawServo {
     pub acceleration: Option<f64>,
     #[serde(default)]
     pub max_temperature: Option<i64>,
+}
+
+impl RawServo {
+    /// These settings, each one not given taken from `defaults`.
+    pub fn or(&self, defaults: &RawServo) -> RawServo {
+        RawServo {
+            p: self.p.or(defaults.p),
+            d: self.d.or(defaults.d),
+            i: self.i.or(defaults.i),
+            torque_limit: self.torque_limit.or(defaults.torque_limit),
+            protection_current: self.protection_current.or(defaults.protection_current),
+            acceleration: self.acceleration.or(defaults.acceleration),
+            max_temperature: self.max_temperature.or(defaults.max_temperature),
+        }
+    }
 }

@@ -165,3 +165,65 @@ fn an_acceleration_in_radians_is_converted_from_radians() {
     .expect("in range");
     assert_eq!(s.writes()[0].raw, 130);
 }
+
+/// Two STS3215 joints and an SCS0009 one, with `defaults` as the robot's
+/// `servo_defaults:` and the first joint's own `servo:` line `own`.
+fn with_defaults(defaults: &str, own: &str) -> String {
+    format!(
+        "name: r\nservo_defaults:\n{defaults}buses:\n  - name: b\n    joints:\n      \
+         - {{name: a, id: 1, model: sts3215, min: -90, max: 90, max_velocity: 180, max_acceleration: 900{own}}}\n      \
+         - {{name: b, id: 2, model: STS3215, min: -90, max: 90, max_velocity: 180, max_acceleration: 900}}\n  \
+         - name: c\n    joints:\n      \
+         - {{name: c, id: 3, model: scs0009, min: -90, max: 90, max_velocity: 180, max_acceleration: 900}}\n"
+    )
+}
+
+#[test]
+fn servo_defaults_apply_to_every_joint_of_the_model_and_a_joints_own_keys_win() {
+    let r = from_text(&with_defaults(
+        "  sts3215: {p: 16, torque_limit: 80}\n",
+        ", servo: {torque_limit: 50}",
+    ))
+    .expect("loads");
+    let (a, b, c) = (
+        r.joint("a")
+            .expect("a")
+            .servo
+            .as_ref()
+            .expect("a's settings"),
+        r.joint("b")
+            .expect("b")
+            .servo
+            .as_ref()
+            .expect("b's settings"),
+        r.joint("c").expect("c"),
+    );
+    assert_eq!((a.p, a.torque_limit), (Some(16), Some(50.0)));
+    assert_eq!((b.p, b.torque_limit), (Some(16), Some(80.0)));
+    assert!(c.servo.is_none(), "another model's joint is left alone");
+}
+
+#[test]
+fn a_bad_servo_default_names_its_model_and_setting() {
+    let e = from_text(&with_defaults("  sts3215: {p: 300}\n", ""))
+        .expect_err("p 300 is refused")
+        .to_string();
+    assert!(
+        e.contains("servo_defaults.sts3215.p") && e.contains("model `STS3215`"),
+        "{e}"
+    );
+    let e = from_text(&with_defaults("  sts9999: {p: 16}\n", ""))
+        .expect_err("an unknown model")
+        .to_string();
+    assert!(
+        e.contains("servo_defaults.sts9999") && e.contains("unknown model `sts9999`"),
+        "{e}"
+    );
+    let e = from_text(&with_defaults(
+        "  sts3215: {p: 16}\n  STS3215: {p: 20}\n",
+        "",
+    ))
+    .expect_err("a model twice")
+    .to_string();
+    assert!(e.contains("given twice"), "{e}");
+}

@@ -43,7 +43,7 @@ fn positive(v: f64) -> bool {
 }
 
 /// The robot `raw` describes, checked field by field.
-pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
+pub(super) fn robot(mut raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
     let root = FieldPath::root();
     if raw.name.trim().is_empty() {
         return Err(src.error(&root.key("name"), "must not be empty"));
@@ -66,7 +66,17 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
     if raw.buses.is_empty() {
         return Err(src.error(&root.key("buses"), "a robot needs at least one bus"));
     }
-    let pose = raw.calibration_pose;
+    let pose = std::mem::take(&mut raw.calibration_pose);
+    let given = std::mem::take(&mut raw.servo_defaults);
+    let defaults = servo_defaults(&given, raw.units, src)?;
+    for rb in &mut raw.buses {
+        for rj in &mut rb.joints {
+            let own = model_by_name(&rj.model).map(|m| m.number);
+            if let Some(&(_, d)) = defaults.iter().find(|(n, _)| Some(*n) == own) {
+                rj.servo = Some(rj.servo.as_ref().map_or_else(|| d.clone(), |s| s.or(d)));
+            }
+        }
+    }
     let mut bus_names = HashSet::new();
     let mut joint_names: HashMap<String, FieldPath> = HashMap::new();
     let mut buses = Vec::with_capacity(raw.buses.len());
@@ -100,6 +110,40 @@ pub(super) fn robot(raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
         robot.base = Some(base(&robot, spec, src)?);
     }
     Ok(robot)
+}
+
+/// The `servo_defaults:` section: per servo model (by any of its names),
+/// its `servo:` settings checked against the model's registers; a problem
+/// is reported at the model's entry, naming its field. Each with its
+/// model's number.
+fn servo_defaults<'r>(
+    raw: &'r std::collections::BTreeMap<String, super::raw::RawServo>,
+    units: Units,
+    src: &Source,
+) -> Result<Vec<(u16, &'r super::raw::RawServo)>, ConfigError> {
+    let at = FieldPath::root().key("servo_defaults");
+    let mut out: Vec<(u16, &super::raw::RawServo)> = Vec::with_capacity(raw.len());
+    for (name, settings) in raw {
+        let Some(model) = model_by_name(name) else {
+            let known: Vec<&str> = MODELS.iter().map(|m| m.name).collect();
+            return Err(src.key_error(
+                &at.key(name),
+                format!("unknown model `{name}` (known: {})", known.join(", ")),
+            ));
+        };
+        if out.iter().any(|(n, _)| *n == model.number) {
+            return Err(src.key_error(
+                &at.key(name),
+                format!("model `{}` is given twice, by two of its names", model.name),
+            ));
+        }
+        servo::settings(settings, model, units).map_err(|r| {
+            let reason = format!("model `{}`: {}", model.name, r.reason);
+            src.error(&at.key(name).key(r.setting), reason)
+        })?;
+        out.push((model.number, settings));
+    }
+    Ok(out)
 }
 
 /// The `base:` section checked against the robot's joints: each wheel a

@@ -48,22 +48,15 @@ impl ServoSetup {
         let servos = config
             .joints
             .iter()
-            .map(|j| Servo {
-                joint: j.name.clone(),
-                id: j.id,
-                mode: j.mode.operating_mode(),
-                writes: j
-                    .servo_writes()
-                    .iter()
-                    .filter(|w| !w.eeprom)
-                    .copied()
-                    .collect(),
-                eeprom: j
-                    .servo_writes()
-                    .iter()
-                    .filter(|w| w.eeprom)
-                    .copied()
-                    .collect(),
+            .map(|j| {
+                let (eeprom, writes) = j.servo_writes().iter().partition(|w| w.eeprom);
+                Servo {
+                    joint: j.name.clone(),
+                    id: j.id,
+                    mode: j.mode.operating_mode(),
+                    writes,
+                    eeprom,
+                }
             })
             .collect();
         ServoSetup { mode, servos }

@@ -194,7 +194,9 @@ impl LivePath {
     /// The efforts of the grasps being made into `out` (robot order; `None`
     /// for a joint making none).
     pub fn grasp_efforts(&self, out: &mut [Option<f64>]) {
-        out.copy_from_slice(&self.grasps[..out.len().min(self.grasps.len())]);
+        for (o, g) in out.iter_mut().zip(&self.grasps) {
+            *o = *g;
+        }
     }
 
     /// Starts the grasps `grasps` (per joint, an effort) from the

@@ -269,12 +269,17 @@ impl Timeline {
         self.approach
     }
 
-    fn active(&mut self, x: f64) -> Option<&mut Segment> {
-        let i = self
-            .segments
+    /// The index of the segment in force at `x` (the first before any
+    /// starts).
+    fn index_at(&self, x: f64) -> usize {
+        self.segments
             .iter()
             .rposition(|s| s.start <= x)
-            .unwrap_or(0);
+            .unwrap_or(0)
+    }
+
+    fn active(&mut self, x: f64) -> Option<&mut Segment> {
+        let i = self.index_at(x);
         self.segments.get_mut(i)
     }
 
@@ -313,12 +318,7 @@ impl Timeline {
         if self.grasps.is_empty() {
             return;
         }
-        let i = self
-            .segments
-            .iter()
-            .rposition(|s| s.start <= x)
-            .unwrap_or(0);
-        if let Some(seg) = self.segments.get(i) {
+        if let Some(seg) = self.segment_at(x) {
             let tau = match (&seg.path, seg.kind) {
                 (Path::Scaled(_, scale), Kind::Main) => Some(scale.at(x).0),
                 (Path::Plain(_), Kind::Main) => Some(x - seg.start),
@@ -337,14 +337,14 @@ impl Timeline {
         self.grasps = grasps;
     }
 
+    /// The segment in force at `x` (the first before any starts).
+    fn segment_at(&self, x: f64) -> Option<&Segment> {
+        self.segments.get(self.index_at(x))
+    }
+
     /// The live path in force at `x`, if the segment then is one.
     fn live_at(&self, x: f64) -> Option<&LivePath> {
-        let i = self
-            .segments
-            .iter()
-            .rposition(|s| s.start <= x)
-            .unwrap_or(0);
-        match self.segments.get(i).map(|s| &s.path) {
+        match self.segment_at(x).map(|s| &s.path) {
             Some(Path::Live(live)) => Some(live),
             _ => None,
         }
@@ -417,12 +417,7 @@ impl Timeline {
 
     /// The kind of segment active at `x`.
     pub fn kind_at(&self, x: f64) -> Option<Kind> {
-        let i = self
-            .segments
-            .iter()
-            .rposition(|s| s.start <= x)
-            .unwrap_or(0);
-        self.segments.get(i).map(|s| s.kind)
+        self.segment_at(x).map(|s| s.kind)
     }
 
     /// The latest commanded time.

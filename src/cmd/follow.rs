@@ -227,8 +227,12 @@ fn drive<T: Transport>(
     let rate = options.rate_hz.unwrap_or(robot.rate_hz).min(LEADER_HZ);
     let terminal = std::io::stderr().is_terminal();
     let mut seen = Seen::new(args, robot, &names, terminal)?;
-    let runner =
-        crate::shared::ports::start_live(robot, args.robot.hardware.port.as_deref(), options)?;
+    let runner = crate::shared::ports::start_live(
+        robot,
+        args.robot.hardware.port.as_deref(),
+        options,
+        args.store.write_servos,
+    )?;
     crate::shared::install_ctrl_c(runner.commands());
     let mut session = Session::new(args, &names, robot.units, &runner, rate, terminal);
     // Counted from ERRORS_FROM on, on the clock both arms' readings are

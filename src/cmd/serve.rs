@@ -37,6 +37,10 @@ pub struct Args {
     /// calibration.
     #[command(flatten)]
     pub robot: crate::shared::flags::RobotArgs,
+    /// `--write-servos`: store what the robot file asks of the servos'
+    /// EEPROM before the run.
+    #[command(flatten)]
+    pub store: crate::shared::flags::WriteServosArg,
     /// A Zenoh configuration file (JSON5): authentication, TLS, scouting.
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
@@ -107,8 +111,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..live_options(&robot)
     };
     let rate_hz = args.rate.unwrap_or(robot.rate_hz);
-    let runner =
-        crate::shared::ports::start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
+    let runner = crate::shared::ports::start_live(
+        &robot,
+        args.robot.hardware.port.as_deref(),
+        options,
+        args.store.write_servos,
+    )?;
     crate::shared::install_ctrl_c(runner.commands());
     let info = RobotInfo {
         name: args.name.clone().unwrap_or_else(|| robot.name.clone()),

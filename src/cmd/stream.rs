@@ -46,6 +46,10 @@ pub struct Args {
     /// calibration.
     #[command(flatten)]
     pub robot: crate::shared::flags::RobotArgs,
+    /// `--write-servos`: store what the robot file asks of the servos'
+    /// EEPROM before the run.
+    #[command(flatten)]
+    pub store: crate::shared::flags::WriteServosArg,
     /// Write one JSON line per control cycle on stdout: time, commanded and
     /// measured angles per joint, faults.
     #[arg(long)]
@@ -74,7 +78,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         target_timeout: args.timeout,
         ..live_options(&robot)
     };
-    let runner = start_live(&robot, args.robot.hardware.port.as_deref(), options)?;
+    let runner = start_live(
+        &robot,
+        args.robot.hardware.port.as_deref(),
+        options,
+        args.store.write_servos,
+    )?;
     crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let commands = runner.commands();

@@ -32,6 +32,19 @@ pub struct RobotArgs {
     pub hardware: HardwareArgs,
 }
 
+/// `--write-servos` on the commands that run a robot (play, stream,
+/// follow, serve).
+#[derive(Debug, Clone, Copy, Default, clap::Args)]
+pub struct WriteServosArg {
+    /// On real servos: first store in their EEPROM what the robot file
+    /// asks of them and they do not hold (each joint's operating mode, with
+    /// the torque off; its `servo:` p, d, i, protection_current and
+    /// max_temperature). Without it a run writes no EEPROM and refuses a
+    /// servo in the wrong operating mode.
+    #[arg(long)]
+    pub write_servos: bool,
+}
+
 /// Parses a robot argument: a file, or a built-in robot's name.
 pub(crate) fn robot_arg(arg: &str) -> Result<PathBuf, std::convert::Infallible> {
     Ok(servobus::builtin::robot_path_or_name(arg.as_ref()))

@@ -95,15 +95,22 @@ pub(crate) fn no_port(robot: &Robot, bus: &str, hint: Option<&str>) -> anyhow::E
 }
 
 /// Connects to `robot`'s buses at `target` through the library (on ports,
-/// each opened for a run and the calibration checked), saying a slow FTDI
-/// adapter on stderr and what to run when the servos do not match the
-/// calibration.
+/// each opened for a run and the calibration checked; with `write_servos`
+/// what the robot file asks of the servos' EEPROM stored first, each
+/// register stored said on stderr), saying a slow FTDI adapter on stderr
+/// and what to run when the servos do not match the calibration.
 ///
 /// # Errors
-/// When a port cannot be opened or the servos are refused.
-pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connection> {
+/// When a port cannot be opened, a servo does not take a write, or the
+/// servos are refused.
+pub(crate) fn connect(
+    robot: &Robot,
+    target: Target,
+    write_servos: bool,
+) -> anyhow::Result<Connection> {
+    let options = servobus_robot::ConnectOptions { write_servos };
     let connection = servobus_robot::Robot::from(robot.clone())
-        .connect(target)
+        .connect_with(target, options)
         .map_err(|e| match e {
             servobus_robot::Error::Refused { port, refusal, .. } => {
                 super::refusal::refused(robot, &refusal, &port)
@@ -111,6 +118,9 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
             servobus_robot::Error::NoPort { bus } => no_port(robot, &bus, None),
             e => e.into(),
         })?;
+    for stored in connection.stored_settings() {
+        errln!("{stored}");
+    }
     for slow in connection.slow_adapters() {
         if let Some(warning) = slow.timer.warning() {
             errln!("warning: {warning}");
@@ -120,18 +130,20 @@ pub(crate) fn connect(robot: &Robot, target: Target) -> anyhow::Result<Connectio
 }
 
 /// Starts a live run of `robot` through the library's connection: on its
-/// ports (`port` for the first bus), through its calibration, or on the
-/// built-in simulator in real time.
+/// ports (`port` for the first bus), through its calibration (what the
+/// robot file asks of the servos' EEPROM stored first with
+/// `write_servos`), or on the built-in simulator in real time.
 pub(crate) fn start_live(
     robot: &Robot,
     port: Option<&str>,
     options: servobus_robot::RunOptions,
+    write_servos: bool,
 ) -> anyhow::Result<servobus_robot::Run> {
     let target = match every_port(robot, port.as_slice()) {
         Ports::None => servobus_robot::Target::Simulator,
         Ports::Every(ports) => servobus_robot::Target::Ports(ports),
         Ports::Missing(bus) => return Err(no_port(robot, &bus.name, None)),
     };
-    let connection = connect(robot, target)?;
+    let connection = connect(robot, target, write_servos)?;
     Ok(connection.live(options)?)
 }

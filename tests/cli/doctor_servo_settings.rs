@@ -219,3 +219,46 @@ fn on_a_pty_the_mode_is_written_only_with_write_servos_and_stays_written() {
     sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_run_refuses_a_servo_in_the_wrong_mode_and_stores_it_with_write_servos() {
+    let dir = scratch("run-write-servos-pty");
+    let (sim, robot) = fresh_servos(&dir);
+    let stream = ["stream", "--robot", arg(&robot), "--port", sim.port()];
+
+    // Without the flag: refused before anything moves, naming the flag.
+    let out = servobus(&stream);
+    assert!(!out.status.success(), "{out:?}");
+    let text = common::stderr(&out);
+    says(
+        &text,
+        &[
+            "joint `drive` (servo 2) is in operating mode 0 (position)",
+            "`--write-servos` on the command that runs",
+        ],
+    );
+    assert_eq!(sim.read("2", "mode"), 0, "nothing written without the flag");
+    assert_eq!(sim.read("1", "p_coefficient"), 32);
+
+    // With it: each register stored is said, and the run goes on (its
+    // input ends at once, so it stops and reports).
+    let out = servobus(&[&stream[..], &["--write-servos"]].concat());
+    let (_, text) = exited(&out, 0);
+    says(
+        &text,
+        &[
+            "bus `b`: joint `drive` (servo 2): stored mode (register 33) position (0) -> wheel (1)",
+            "bus `b`: joint `arm` (servo 1): stored p_coefficient (register 21) 32 -> 16",
+        ],
+    );
+    assert_eq!(sim.read("2", "mode"), 1);
+    assert_eq!(sim.read("1", "p_coefficient"), 16);
+    assert_eq!(sim.read("2", "lock"), 1, "locked again");
+
+    // A servo that holds what the file asks is left alone.
+    let out = servobus(&[&stream[..], &["--write-servos"]].concat());
+    let (_, text) = exited(&out, 0);
+    assert!(!text.contains("stored"), "{text}");
+    sim.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}

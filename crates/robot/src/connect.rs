@@ -5,6 +5,7 @@ use std::fmt;
 use std::time::Duration;
 
 use crate::calibrate::prepare_bus;
+use crate::doctor::{store_wanted_settings, StoredSetting};
 use crate::sim::SimRobot;
 use servobus_config::Robot;
 use servobus_driver::FtdiLatency;
@@ -35,6 +36,19 @@ pub enum Target {
     VirtualSimulator,
     /// The built-in simulator in this process, paced by the wall clock.
     Simulator,
+}
+
+/// What connecting does beside opening the buses and checking them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ConnectOptions {
+    /// On serial ports: store in each servo's EEPROM what the robot file
+    /// asks of it and it does not hold (its joint's operating mode, the
+    /// EEPROM `servo:` settings), before the calibration is checked
+    /// ([`crate::doctor::store_wanted_settings`]). Without it nothing is
+    /// written to EEPROM and a servo in the wrong operating mode is
+    /// refused when the run starts. The built-in simulator's servos are
+    /// the robot file's design: nothing to store.
+    pub write_servos: bool,
 }
 
 /// An FTDI adapter whose latency timer slows every reply of a bus down.
@@ -77,6 +91,7 @@ pub struct Connection {
     pub(crate) robot: Robot,
     buses: Buses,
     slow: Vec<SlowAdapter>,
+    stored: Vec<StoredSetting>,
 }
 
 impl fmt::Debug for Connection {
@@ -105,8 +120,14 @@ fn resolve(robot: &Robot, ports: &[String]) -> Result<Vec<String>, Error> {
 }
 
 impl Connection {
-    /// Opens `robot`'s buses at `target` and checks its calibration.
-    pub(crate) fn open(robot: &Robot, target: Target) -> Result<Connection, Error> {
+    /// Opens `robot`'s buses at `target`, stores what the robot file asks
+    /// of the servos' EEPROM when `options` say so, and checks its
+    /// calibration.
+    pub(crate) fn open(
+        robot: &Robot,
+        target: Target,
+        options: ConnectOptions,
+    ) -> Result<Connection, Error> {
         let ports = match target {
             Target::RobotFile => resolve(robot, &[])?,
             Target::Ports(p) => resolve(robot, &p)?,
@@ -126,7 +147,18 @@ impl Connection {
             }
             buses.push(bus);
         }
+        let mut stored = Vec::new();
         for (index, (bus, port)) in buses.iter_mut().zip(ports).enumerate() {
+            if options.write_servos {
+                let done = store_wanted_settings(bus, robot, index, &port).map_err(|source| {
+                    Error::Store {
+                        bus: robot.buses[index].name.clone(),
+                        port: port.clone(),
+                        source: Box::new(source),
+                    }
+                })?;
+                stored.extend(done);
+            }
             prepare_bus(robot, index, bus).map_err(|refusal| Error::Refused {
                 bus: robot.buses[index].name.clone(),
                 port,
@@ -137,6 +169,7 @@ impl Connection {
             robot: robot.clone(),
             buses: Buses::Serial(buses),
             slow,
+            stored,
         })
     }
 
@@ -162,6 +195,7 @@ impl Connection {
             robot: robot.clone(),
             buses,
             slow: Vec::new(),
+            stored: Vec::new(),
         })
     }
 
@@ -179,6 +213,13 @@ impl Connection {
     /// (empty on the simulator and on other adapters).
     pub fn slow_adapters(&self) -> &[SlowAdapter] {
         &self.slow
+    }
+
+    /// What was stored in the servos' EEPROM at connect
+    /// ([`ConnectOptions::write_servos`]); empty when nothing differed or
+    /// nothing was asked.
+    pub fn stored_settings(&self) -> &[StoredSetting] {
+        &self.stored
     }
 
     /// The serial buses, to read or write registers between runs (`None` on

@@ -47,6 +47,18 @@ pub enum Error {
         #[source]
         refusal: Box<Refusal>,
     },
+    /// Storing what the robot file asks of the servos' EEPROM at connect
+    /// failed ([`ConnectOptions::write_servos`](crate::ConnectOptions)).
+    #[error("bus `{bus}` on {port}: {source}")]
+    Store {
+        /// The bus.
+        bus: String,
+        /// Its port.
+        port: String,
+        /// What failed.
+        #[source]
+        source: Box<crate::doctor::StoreError>,
+    },
     /// The run could not start, a command could not reach it, or a bus
     /// thread failed.
     #[error(transparent)]

@@ -142,7 +142,9 @@ pub mod timing;
 
 use std::path::{Path, PathBuf};
 
-pub use connect::{live_options, Connection, SlowAdapter, Target, APPROACH, SETTLE};
+pub use connect::{
+    live_options, ConnectOptions, Connection, SlowAdapter, Target, APPROACH, SETTLE,
+};
 pub use error::Error;
 pub use run::{motion_grasps, Play, Run};
 
@@ -376,7 +378,23 @@ impl Robot {
     /// match the calibration; [`Error::Simulator`] when the robot cannot be
     /// simulated.
     pub fn connect(&self, target: Target) -> Result<Connection, Error> {
-        Connection::open(&self.config, target)
+        Connection::open(&self.config, target, ConnectOptions::default())
+    }
+
+    /// Connects as [`Robot::connect`] does, and does what `options` ask
+    /// beside: with [`ConnectOptions::write_servos`], what the robot file
+    /// asks of the servos' EEPROM is stored before the calibration is
+    /// checked ([`Connection::stored_settings`] says what was).
+    ///
+    /// # Errors
+    /// Those of [`Robot::connect`], and [`Error::Store`] when a servo does
+    /// not take a write.
+    pub fn connect_with(
+        &self,
+        target: Target,
+        options: ConnectOptions,
+    ) -> Result<Connection, Error> {
+        Connection::open(&self.config, target, options)
     }
 
     /// Connects to the robot's built-in simulator (`target` is

@@ -96,11 +96,13 @@ pub enum RunError {
     },
     /// A servo's operating mode (register `mode`, 33) is not its joint's:
     /// a wheel needs mode 1 (constant speed), a position joint mode 0. The
-    /// mode is an EEPROM setting, which a run never writes.
+    /// mode is an EEPROM setting, which a run writes only when asked (the
+    /// facade's `ConnectOptions::write_servos`).
     #[error(
         "bus `{bus}`: joint `{joint}` (servo {id}) is in operating mode {found} ({}), \
          a {} joint needs mode {wanted} ({}): `servobus doctor --robot FILE --port PORT --fix \
-         --write-servos` sets it (an EEPROM register, which a run never writes)",
+         --write-servos` sets it, or `--write-servos` on the command that runs (an EEPROM \
+         register, which a run writes only when asked)",
         mode_name(*found), if *wanted == 1 { "wheel" } else { "position" }, mode_name(*wanted)
     )]
     Mode {

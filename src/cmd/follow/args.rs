@@ -10,6 +10,10 @@ pub struct Args {
     /// The follower: robot file or built-in name, its port and calibration.
     #[command(flatten)]
     pub robot: crate::shared::flags::RobotArgs,
+    /// `--write-servos`: store what the robot file asks of the servos'
+    /// EEPROM before the run.
+    #[command(flatten)]
+    pub store: crate::shared::flags::WriteServosArg,
     /// Serial port of the leader arm (absent: a simulated leader).
     #[arg(long)]
     pub leader: Option<String>,

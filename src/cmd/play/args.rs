@@ -17,6 +17,10 @@ pub struct Args {
     /// The port of real servos and their calibration.
     #[command(flatten)]
     pub hardware: crate::shared::flags::HardwareArgs,
+    /// `--write-servos`: store what the robot file asks of the servos'
+    /// EEPROM before the run.
+    #[command(flatten)]
+    pub store: crate::shared::flags::WriteServosArg,
     /// Control rate in Hz (default: the motion's, else the robot's).
     #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,

@@ -55,7 +55,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut options = run_options(&args, &robot, units, rate_hz);
     // A keyframe's `grasp:` grasps from the start of its move.
     options.grasps = servobus_robot::motion_grasps(&motion, &trajectory);
-    let runner = start(&backend, &robot, &pose, trajectory, options, rate_hz)?;
+    let runner = start(
+        &backend,
+        &robot,
+        &pose,
+        trajectory,
+        options,
+        (rate_hz, args.store.write_servos),
+    )?;
 
     install_ctrl_c(runner.commands());
     let shown = Shown {

@@ -119,14 +119,15 @@ pub(super) fn run_options(args: &Args, robot: &Robot, units: Units, rate_hz: f64
 }
 
 /// Starts playing `trajectory` where `backend` says: the simulated joints
-/// from `pose`, real servos once their measured rates are checked.
+/// from `pose`, real servos once their measured rates are checked (what
+/// the robot file asks of their EEPROM stored first with `write_servos`).
 pub(super) fn start(
     backend: &Backend,
     robot: &Robot,
     pose: &[f64],
     trajectory: Trajectory,
     options: RunOptions,
-    rate_hz: f64,
+    (rate_hz, write_servos): (f64, bool),
 ) -> anyhow::Result<Run> {
     Ok(match backend {
         // The built-in simulator in this process: in virtual time, or
@@ -146,6 +147,7 @@ pub(super) fn start(
             let mut connection = crate::shared::ports::connect(
                 robot,
                 servobus_robot::Target::Ports(ports.to_vec()),
+                write_servos,
             )?;
             check_measured_rates(&mut connection, ports, rate_hz)?;
             connection.play(trajectory, options)?

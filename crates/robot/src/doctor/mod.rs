@@ -14,8 +14,9 @@
 //! operating mode of its joint (`mode:`; a wheel turns at constant speed,
 //! mode 1, a position joint needs mode 0) and the EEPROM registers of its
 //! `servo:` settings (`p`, `d`, `i`, `protection_current`,
-//! `max_temperature`). A run writes none of them, so a servo that holds
-//! other values is a [`Finding`] with a [`SettingMismatch`], fixed only when
+//! `max_temperature`). A run writes none of them unless asked
+//! ([`store_wanted_settings`], `--write-servos` on a run), so a servo that
+//! holds other values is a [`Finding`] with a [`SettingMismatch`], fixed only when
 //! [`Fixing::write_servos`] asks for EEPROM writes ([`Action::Store`]; the
 //! mode with the torque off). The RAM settings (`torque_limit`,
 //! `acceleration`) are not checked: a run writes them at every start and
@@ -37,6 +38,7 @@ mod fix;
 mod probe;
 mod robot;
 mod settings;
+mod store;
 
 use serde::Serialize;
 use servobus_config::Robot;
@@ -49,6 +51,7 @@ pub use probe::fix_all_command;
 pub use probe::{examine, BusPort, Examined, PortKind};
 pub use robot::{check, BusCheck, CheckOptions, Checkup};
 pub use settings::SettingMismatch;
+pub use store::{store_wanted_settings, StoreError, StoredSetting};
 
 /// How bad a finding is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]

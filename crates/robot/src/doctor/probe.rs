@@ -463,7 +463,7 @@ fn collision_among(
 
 /// Reads servo `id`'s table from address 0, in the layout of the series its
 /// model number names (tried in both byte orders).
-fn read_state<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<ServoState, BusError> {
+pub(crate) fn read_state<T: Transport>(bus: &mut Bus<T>, id: u8) -> Result<ServoState, BusError> {
     let mut bytes = vec![0u8; read_len(Series::Sts)];
     let flags = bus.read(id, addr::FIRMWARE_MAJOR, &mut bytes)?;
     let number = |n: u16| registers::model_by_number(n).map(|m| m.series);

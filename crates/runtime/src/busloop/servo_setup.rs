@@ -2,7 +2,8 @@
 //!
 //! - its operating mode (register `mode`, 33) must be its joint's: 1
 //!   (constant speed) for a wheel, 0 for a position joint. A mode is an
-//!   EEPROM setting: a run never writes it, and refuses to start instead
+//!   EEPROM setting: the loop never writes it (the facade stores it at
+//!   connect when asked, `--write-servos`), and refuses to start instead
 //!   ([`RunError::Mode`]), naming the doctor command that sets it. A
 //!   series without the register (SCS) has position joints only and is
 //!   not asked.

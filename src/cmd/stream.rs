@@ -32,7 +32,7 @@ use servobus_robot::{
     live_options, Command, LiveEvent, Report, Run, RunOptions, TargetSender, Telemetry,
 };
 
-use servobus_robot::grasp::GraspEvent;
+use servobus_robot::grasp::{GraspCause, GraspEvent};
 use servobus_robot::odometry::{pose_figures, Odometer, Odometry};
 use servobus_robot::stream::{parse_line_for, MAX_LINE_BYTES};
 
@@ -234,6 +234,20 @@ fn telemetry_line(
     line
 }
 
+/// What lowered a grasp or made it let go, as stderr says it: `warm (62
+/// C)` (`hot` the word for temperature), or `drawing 1450 mA`.
+fn grasp_cause(
+    cause: GraspCause,
+    temperature_c: f64,
+    current_ma: Option<f64>,
+    hot: &str,
+) -> String {
+    match (cause, current_ma) {
+        (GraspCause::Current, Some(ma)) => format!("drawing {ma:.0} mA"),
+        _ => format!("{hot} ({temperature_c:.0} C)"),
+    }
+}
+
 /// Says on stderr what a telemetry message other than a cycle, a fault or
 /// the end tells: the live following stopped or resumed, a grasp's news, a
 /// command refused (`names`: the joints').
@@ -248,10 +262,20 @@ fn say(m: &Telemetry, names: &[String]) {
                 GraspEvent::Lowered {
                     effort_pct,
                     temperature_c,
-                } => format!("warm ({temperature_c:.0} C): its grasp eased to {effort_pct:.0} %"),
-                GraspEvent::LetGo { temperature_c } => {
-                    format!("hot ({temperature_c:.0} C): it let go of what it held")
-                }
+                    current_ma,
+                    cause,
+                } => format!(
+                    "{}: its grasp eased to {effort_pct:.0} %",
+                    grasp_cause(cause, temperature_c, current_ma, "warm")
+                ),
+                GraspEvent::LetGo {
+                    temperature_c,
+                    current_ma,
+                    cause,
+                } => format!(
+                    "{}: it let go of what it held",
+                    grasp_cause(cause, temperature_c, current_ma, "hot")
+                ),
                 GraspEvent::Released => "released".to_owned(),
                 _ => return,
             };

@@ -78,6 +78,20 @@ pub const LOWER_EVERY_S: f64 = 1.0;
 /// The least effort a warm grasp is lowered to, as a share of the torque.
 pub const LOWEST_EFFORT: f64 = 0.05;
 
+/// The share of its servo's protection current (register
+/// `protection_current`, or the joint's `servo: protection_current`) above
+/// which a held grasp's effort is lowered, as when warm.
+pub const CURRENT_WARNING_SHARE: f64 = 0.8;
+
+/// The share of its protection current at which a held grasp lets go,
+/// when [`CURRENT_READINGS`] readings in a row reach it (one spike does
+/// not).
+pub const CURRENT_LET_GO_SHARE: f64 = 0.95;
+
+/// How many readings in a row over [`CURRENT_LET_GO_SHARE`] make a grasp
+/// let go.
+pub const CURRENT_READINGS: u8 = 2;
+
 /// The temperature limit of a joint whose robot file sets none (register
 /// `max_temperature` as an STS3215 comes), degrees C.
 pub const DEFAULT_MAX_TEMPERATURE_C: f64 = 70.0;
@@ -121,22 +135,42 @@ pub enum GraspEvent {
         /// The effort asked, percent of the servo's torque.
         effort_pct: f64,
     },
-    /// Warm: the effort was lowered.
+    /// Warm, or drawing much current: the effort was lowered.
     Lowered {
         /// The effort now, percent.
         effort_pct: f64,
         /// The temperature read, degrees C.
         temperature_c: f64,
+        /// The current read, mA (`None`: the series has no current
+        /// register).
+        current_ma: Option<f64>,
+        /// Which of them lowered it.
+        cause: GraspCause,
     },
-    /// Near its temperature limit: the gripper let go (backed off from
-    /// the object).
+    /// Near its temperature limit, or at its protection current: the
+    /// gripper let go (backed off from the object).
     LetGo {
         /// The temperature read, degrees C.
         temperature_c: f64,
+        /// The current read, mA (`None`: the series has no current
+        /// register).
+        current_ma: Option<f64>,
+        /// Which of them made it let go.
+        cause: GraspCause,
     },
     /// A position target ended the grasp; the torque limit is the
     /// joint's again.
     Released,
+}
+
+/// What lowered a grasp's effort, or made it let go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraspCause {
+    /// The servo's temperature, near its limit.
+    Temperature,
+    /// The servo's current, near its protection current.
+    Current,
 }
 
 /// A grasp event of one joint, at a cycle's time.

@@ -6,7 +6,9 @@
 //! under the warning level; a position target releases it and the torque
 //! limit is put back. The same gripper written a raw position goal past the
 //! object (as a program writing Goal_Position does) strains at full torque
-//! and heats until the simulator's overheat protection lets go.
+//! and heats until the simulator's overheat protection lets go. A held
+//! grasp that draws near its protection current is eased, and one whose
+//! effort draws past it lets go, with no fault.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -365,4 +367,107 @@ fn a_motions_keyframe_grasps_the_object_holds_it_through_the_next_move_and_lets_
     let last = rows.last().expect("rows").angles_deg[GRIPPER];
     assert!(last > 55.0, "opened: {last}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The SO-101 with its gripper's protection current at `ma` (`servo:
+/// protection_current`), for test `name`.
+fn arm_protected_at(ma: f64, name: &str) -> Robot {
+    let text = std::fs::read_to_string(common::repo("configs/robots/so101.yaml")).expect("so101");
+    let text = text.replace(
+        "        offset: -20          # servo angle at \"closed\", from its midpoint\n",
+        &format!("        offset: -20\n        servo: {{protection_current: {ma}}}\n"),
+    );
+    assert!(
+        text.contains("protection_current"),
+        "the gripper's entry moved"
+    );
+    let dir = std::env::temp_dir().join(format!("servobus-grasp-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("so101.yaml");
+    std::fs::write(&file, text).expect("writes the robot file");
+    servobus_robot::config::load_robot(&file, &servobus_robot::config::RobotOptions::default())
+        .expect("the robot file loads")
+}
+
+/// Grasps the object with `effort` % on `robot` for 4 s: what was seen.
+fn grasp_for_4_s(robot: &Robot, name: &str, effort: f64) -> (Seen, SimRobot) {
+    let (sim, _truth) = arm_with_object(robot, name);
+    let mut run = live_run(robot, &sim);
+    let (tx, rx) = (run.targets(), run.telemetry());
+    let mut seen = Seen::default();
+    for _ in 0..(4.0 / PERIOD) as u64 {
+        let k = run.cycle();
+        let t = k as f64 * PERIOD;
+        if k.is_multiple_of(6) {
+            let target = if k == 60 {
+                arm_target(t).with_grasps(vec![("gripper".into(), effort)])
+            } else {
+                arm_target(t)
+            };
+            tx.send(target).expect("a good target");
+        }
+        let going = run.step();
+        seen.take(&rx);
+        assert!(going, "the run goes on: {:?}", seen.faults);
+    }
+    (seen, sim)
+}
+
+#[test]
+fn a_grasp_drawing_much_current_is_eased_and_one_at_its_protection_current_lets_go() {
+    use servobus_runtime::grasp::GraspCause;
+    // Held at 30 %, the simulated gripper draws about 650 mA: over 80 % of
+    // a 780 mA protection current, under 95 % of it.
+    let (seen, _sim) = grasp_for_4_s(&arm_protected_at(780.0, "eased"), "current-eased", EFFORT);
+    assert!(seen.faults.is_empty(), "{:?}", seen.faults);
+    let eased: Vec<(f64, Option<f64>)> = seen
+        .grasps
+        .iter()
+        .filter_map(|g| match g.event {
+            GraspEvent::Lowered {
+                effort_pct,
+                current_ma,
+                cause: GraspCause::Current,
+                ..
+            } => Some((effort_pct, current_ma)),
+            _ => None,
+        })
+        .collect();
+    println!("eased {eased:?}; {:?}", seen.grasps);
+    assert!(!eased.is_empty(), "{:?}", seen.grasps);
+    assert!(eased[0].0 < EFFORT, "{eased:?}");
+    let ma = eased[0].1.expect("the current read");
+    assert!((0.8 * 780.0..0.95 * 780.0).contains(&ma), "{eased:?}");
+    assert!(
+        !seen
+            .grasps
+            .iter()
+            .any(|g| matches!(g.event, GraspEvent::LetGo { .. })),
+        "{:?}",
+        seen.grasps
+    );
+
+    // At 60 % against a 600 mA protection current it lets go, reported,
+    // before the servo's own protection ends anything.
+    let (seen, sim) = grasp_for_4_s(&arm_protected_at(600.0, "let-go"), "current-let-go", 60.0);
+    assert!(seen.faults.is_empty(), "{:?}", seen.faults);
+    let let_go = seen
+        .grasps
+        .iter()
+        .find_map(|g| match g.event {
+            GraspEvent::LetGo {
+                current_ma, cause, ..
+            } => Some((current_ma, cause)),
+            _ => None,
+        })
+        .expect("it let go");
+    println!("let go {let_go:?}; {:?}", seen.grasps);
+    assert_eq!(let_go.1, GraspCause::Current, "{let_go:?}");
+    assert!(
+        let_go.0.expect("the current read") >= 0.95 * 600.0,
+        "{let_go:?}"
+    );
+    let byte = |a: u8| sim.buses()[0].register(GRIPPER_ID, a).expect("the servo");
+    let load = u16::from_le_bytes([byte(60), byte(61)]) & 0x3ff;
+    assert!(load < 50, "still pushing: {load}");
 }

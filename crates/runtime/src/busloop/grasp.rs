@@ -1,22 +1,25 @@
 //! The grasps of one bus's joints (see [`crate::grasp`]): each grasping
 //! servo's torque limit set to its effort and put back when the grasp
-//! ends, its press's push set from the effort, and its temperature read
-//! while it grasps, lowering the effort when warm and letting go near its
-//! limit.
+//! ends, its press's push set from the effort, and its load, temperature
+//! and current read while it grasps, lowering the effort when warm or
+//! drawing much current, and letting go near its temperature limit or at
+//! its protection current.
 //!
 //! A write or read that fails (a servo that missed it) is tried again the
 //! next cycle; only a lost port is an error. At most one joint's torque
-//! limit is written and one temperature read in a cycle, so a grasp costs
-//! a cycle one short exchange at most.
+//! limit is written and one joint's readings read (one READ of the
+//! registers from its load to its current) in a cycle, so a grasp costs a
+//! cycle two short exchanges at most.
 
 use servobus_driver::{Bus, Transport};
-use servobus_protocol::registers::Register;
+use servobus_protocol::registers::{ByteOrder, Register, RegisterMap};
 
 use super::tracking::Tracker;
 use crate::config::BusConfig;
 use crate::error::PortGone;
 use crate::grasp::{
-    full_effort_error, GraspEvent, DEFAULT_MAX_TEMPERATURE_C, FACTORY_P, HOLD_GAIN, HOLD_SHARE,
+    full_effort_error, GraspCause, GraspEvent, CURRENT_LET_GO_SHARE, CURRENT_READINGS,
+    CURRENT_WARNING_SHARE, DEFAULT_MAX_TEMPERATURE_C, FACTORY_P, HOLD_GAIN, HOLD_SHARE,
     HOLD_TARGET, LET_GO_BELOW_LIMIT_C, LOWER_BY, LOWER_EVERY_S, LOWEST_EFFORT, READ_EVERY_S,
     WARNING_BELOW_LIMIT_C,
 };
@@ -33,6 +36,11 @@ struct Joint {
     restore: i32,
     /// Its temperature limit, degrees C.
     max_temp: f64,
+    /// Its protection current, mA: the robot file's, or what the servo
+    /// held when the grasp began (`None`: not known, not watched).
+    max_current: Option<f64>,
+    /// How many readings in a row reached the let-go current.
+    over_current: u8,
     /// The effort asked (a share of the torque), while it grasps.
     asked: Option<f64>,
     /// The effort in force (lowered when warm).
@@ -57,26 +65,110 @@ struct Joint {
 /// effort is lowered (a factor of the target).
 const SETTLED: f64 = 1.1;
 
+/// One reading of a grasping servo.
+#[derive(Debug, Clone, Copy, Default)]
+struct Reading {
+    /// Its load, a share of the torque.
+    load: Option<f64>,
+    /// Its temperature, degrees C.
+    temperature_c: Option<f64>,
+    /// Its current, mA.
+    current_ma: Option<f64>,
+}
+
+/// The registers a grasp reads, read in one READ from the first's address
+/// to the end of the last.
+#[derive(Debug)]
+struct Readings {
+    load: Option<&'static Register>,
+    temperature: Option<&'static Register>,
+    current: Option<&'static Register>,
+    /// mA per step of `current` (`None`: its unit is not a current).
+    current_step_ma: Option<f64>,
+    order: ByteOrder,
+    /// The span read: first address, length.
+    span: Option<(u8, usize)>,
+}
+
 /// The grasps of one bus.
 #[derive(Debug)]
 pub(crate) struct GraspWatch {
     joints: Vec<Joint>,
     torque_limit: Option<&'static Register>,
-    load: Option<&'static Register>,
-    temperature: Option<&'static Register>,
+    /// The protection current register, read when a grasp begins on a
+    /// joint whose robot file gives none.
+    protection: Option<&'static Register>,
+    readings: Readings,
+}
+
+/// The mA of one step of `reg`, when it counts in mA (`6.5 mA`).
+fn ma_per_step(reg: &Register) -> Option<f64> {
+    let step = reg.unit.trim().strip_suffix("mA")?.trim();
+    let step: f64 = step.parse().ok()?;
+    (step > 0.0).then_some(step)
+}
+
+impl Readings {
+    fn new(map: &RegisterMap, order: ByteOrder) -> Readings {
+        let (load, temperature) = (map.get("present_load"), map.get("present_temperature"));
+        let current = map.get("present_current");
+        let current_step_ma = current.and_then(ma_per_step);
+        let regs = [load, temperature, current];
+        let first = regs.iter().flatten().map(|r| r.address).min();
+        let end = regs.iter().flatten().map(|r| r.end()).max();
+        let span = first
+            .zip(end)
+            .map(|(a, e)| (a, usize::from(e).saturating_sub(usize::from(a))));
+        Readings {
+            load,
+            temperature,
+            current,
+            current_step_ma,
+            order,
+            span,
+        }
+    }
+
+    /// Reads servo `id`'s load, temperature and current in one READ
+    /// (`None`: the servo missed it).
+    fn read<T: Transport>(&self, bus: &mut Bus<T>, id: u8) -> Result<Option<Reading>, PortGone> {
+        let Some((first, len)) = self.span else {
+            return Ok(None);
+        };
+        let mut bytes = [0u8; 32];
+        let Some(bytes) = bytes.get_mut(..len) else {
+            return Ok(None);
+        };
+        if PortGone::check(bus.read(id, first, bytes))?.is_none() {
+            return Ok(None);
+        }
+        let value = |reg: Option<&'static Register>| {
+            let reg = reg?;
+            let at = usize::from(reg.address - first);
+            let raw = bytes.get(at..at + usize::from(reg.size))?;
+            reg.decode(raw, self.order).ok().map(f64::from)
+        };
+        Ok(Some(Reading {
+            load: value(self.load).map(|raw| (raw / 1000.0).abs()),
+            temperature_c: value(self.temperature),
+            current_ma: value(self.current)
+                .zip(self.current_step_ma)
+                .map(|(raw, step)| raw.abs() * step),
+        }))
+    }
 }
 
 impl GraspWatch {
     /// The grasps `config`'s joints (the first is robot joint
-    /// `first_joint`) may make, with the series' `torque_limit`,
-    /// `present_load` and `present_temperature` registers (`None`: that
-    /// part is not done).
+    /// `first_joint`) may make, with the registers of the series' `map`
+    /// (in byte order `order`): `torque_limit`, `protection_current`,
+    /// `present_load`, `present_temperature` and `present_current` (one
+    /// missing: that part is not done).
     pub fn new(
         config: &BusConfig,
         first_joint: usize,
-        torque_limit: Option<&'static Register>,
-        load: Option<&'static Register>,
-        temperature: Option<&'static Register>,
+        map: &RegisterMap,
+        order: ByteOrder,
     ) -> Self {
         let joints = config
             .joints
@@ -96,6 +188,8 @@ impl GraspWatch {
                     max_temp: s
                         .and_then(|s| s.max_temperature)
                         .map_or(DEFAULT_MAX_TEMPERATURE_C, f64::from),
+                    max_current: s.and_then(|s| s.protection_current),
+                    over_current: 0,
                     asked: None,
                     effort: 0.0,
                     push: 0.0,
@@ -109,9 +203,9 @@ impl GraspWatch {
             .collect();
         GraspWatch {
             joints,
-            torque_limit,
-            load,
-            temperature,
+            torque_limit: map.get("torque_limit"),
+            protection: map.get("protection_current"),
+            readings: Readings::new(map, order),
         }
     }
 
@@ -139,14 +233,7 @@ impl GraspWatch {
             match now {
                 Some(effort) => {
                     if j.asked.is_none() {
-                        // What the servo held before: put back after.
-                        if let Some(reg) = self.torque_limit {
-                            if let Some((held, _)) = PortGone::check(bus.read_register(j.id, reg))?
-                            {
-                                j.restore = held;
-                                j.limit = (held, true);
-                            }
-                        }
+                        begin(bus, j, self.torque_limit, self.protection)?;
                     }
                     j.effort = effort;
                     j.push = HOLD_SHARE * effort * j.full_error;
@@ -199,38 +286,47 @@ impl GraspWatch {
         let Some(i) = due else { return Ok(()) };
         let j = &mut self.joints[i];
         j.next_read = t + READ_EVERY_S;
+        let Some(reading) = self.readings.read(bus, j.id)? else {
+            return Ok(());
+        };
         let held = track.joints.get(i).is_some_and(|tj| tj.press.is_some());
-        if let (Some(reg), true) = (self.load, held) {
-            if let Some((raw, _)) = PortGone::check(bus.read_register(j.id, reg))? {
-                let load = (f64::from(raw) / 1000.0).abs();
-                j.load = load;
-                let wanted = HOLD_TARGET * j.effort;
-                let most = j.effort * j.full_error;
-                j.push = (j.push + HOLD_GAIN * (wanted - load) * j.full_error).clamp(-most, most);
-                track.set_grasp(i, Some(j.push));
-            }
+        if let (Some(load), true) = (reading.load, held) {
+            j.load = load;
+            let wanted = HOLD_TARGET * j.effort;
+            let most = j.effort * j.full_error;
+            j.push = (j.push + HOLD_GAIN * (wanted - load) * j.full_error).clamp(-most, most);
+            track.set_grasp(i, Some(j.push));
         }
-        let Some(reg) = self.temperature else {
+        let temperature_c = reading.temperature_c.unwrap_or(0.0);
+        let current_ma = reading.current_ma;
+        let share = current_ma.zip(j.max_current).map(|(c, most)| c / most);
+        // The current counts once the load has settled at the effort in
+        // force (the first push of a contact strains at the torque limit
+        // for a moment): a grasp whose effort itself draws too much.
+        let settled = held && j.load <= HOLD_TARGET * j.effort * SETTLED;
+        let over = settled && share.is_some_and(|s| s >= CURRENT_LET_GO_SHARE);
+        j.over_current = if over { j.over_current + 1 } else { 0 };
+        let hot = temperature_c >= j.max_temp - LET_GO_BELOW_LIMIT_C;
+        if hot || j.over_current >= CURRENT_READINGS {
+            j.let_go(track, i);
+            let cause = if hot {
+                GraspCause::Temperature
+            } else {
+                GraspCause::Current
+            };
+            publish(
+                j.robot_index,
+                GraspEvent::LetGo {
+                    temperature_c,
+                    current_ma,
+                    cause,
+                },
+            );
             return Ok(());
-        };
-        let Some((raw, _)) = PortGone::check(bus.read_register(j.id, reg))? else {
-            return Ok(());
-        };
-        let temperature_c = f64::from(raw);
-        if temperature_c >= j.max_temp - LET_GO_BELOW_LIMIT_C {
-            // Let go: the goal backs off behind where the joint stands (the
-            // press bounds it from the furthest point it reached), so the
-            // jaws open from the object and the servo rests.
-            let depth = track
-                .joints
-                .get(i)
-                .and_then(|tj| Some((tj.measured? - tj.press?.anchor).abs()))
-                .unwrap_or(0.0);
-            j.push = -(depth + j.effort * j.full_error);
-            j.let_go = true;
-            j.set_limit(track, i);
-            publish(j.robot_index, GraspEvent::LetGo { temperature_c });
-        } else if temperature_c >= j.max_temp - WARNING_BELOW_LIMIT_C
+        }
+        let warm = temperature_c >= j.max_temp - WARNING_BELOW_LIMIT_C;
+        let drawing = settled && share.is_some_and(|s| s >= CURRENT_WARNING_SHARE);
+        if (warm || drawing)
             && j.effort > LOWEST_EFFORT
             && t >= j.next_lower
             && j.load <= HOLD_TARGET * j.effort * SETTLED
@@ -241,11 +337,18 @@ impl GraspWatch {
             j.effort = (j.effort * LOWER_BY).max(LOWEST_EFFORT);
             j.push = j.push.min(j.effort * j.full_error);
             j.set_limit(track, i);
+            let cause = if warm {
+                GraspCause::Temperature
+            } else {
+                GraspCause::Current
+            };
             publish(
                 j.robot_index,
                 GraspEvent::Lowered {
                     effort_pct: 100.0 * j.effort,
                     temperature_c,
+                    current_ma,
+                    cause,
                 },
             );
         }
@@ -253,7 +356,48 @@ impl GraspWatch {
     }
 }
 
+/// What a grasp of joint `j` takes from its servo when it begins: the
+/// torque limit it held (put back after), and its protection current when
+/// the robot file gives none.
+fn begin<T: Transport>(
+    bus: &mut Bus<T>,
+    j: &mut Joint,
+    torque_limit: Option<&'static Register>,
+    protection: Option<&'static Register>,
+) -> Result<(), PortGone> {
+    if let Some(reg) = torque_limit {
+        if let Some((held, _)) = PortGone::check(bus.read_register(j.id, reg))? {
+            j.restore = held;
+            j.limit = (held, true);
+        }
+    }
+    if let (None, Some(reg)) = (j.max_current, protection) {
+        if let (Some((raw, _)), Some(step)) = (
+            PortGone::check(bus.read_register(j.id, reg))?,
+            ma_per_step(reg),
+        ) {
+            j.max_current = (raw > 0).then(|| f64::from(raw) * step);
+        }
+    }
+    j.over_current = 0;
+    Ok(())
+}
+
 impl Joint {
+    /// Lets go: the goal backs off behind where the joint stands (the
+    /// press bounds it from the furthest point it reached), so the jaws
+    /// open from the object and the servo rests.
+    fn let_go(&mut self, track: &mut Tracker, i: usize) {
+        let depth = track
+            .joints
+            .get(i)
+            .and_then(|tj| Some((tj.measured? - tj.press?.anchor).abs()))
+            .unwrap_or(0.0);
+        self.push = -(depth + self.effort * self.full_error);
+        self.let_go = true;
+        self.set_limit(track, i);
+    }
+
     /// The torque limit and the press's push for the grasp's state, `i`
     /// the joint's index in the bus.
     fn set_limit(&mut self, track: &mut Tracker, i: usize) {

@@ -170,13 +170,7 @@ impl<T: Transport> BusLoop<T> {
             ),
             setup: ServoSetup::new(config, map.at(addr::MODE)),
             eeprom_differences: Vec::new(),
-            grasps: GraspWatch::new(
-                config,
-                c.first_joint,
-                map.get("torque_limit"),
-                map.get("present_load"),
-                map.get("present_temperature"),
-            ),
+            grasps: GraspWatch::new(config, c.first_joint, map, order),
             feedback: Feedback::new(pos_reg, feedback_speed, order, ids),
             track: Tracker::new(
                 config,

@@ -39,6 +39,12 @@
 //!   integrates the measured velocity into a pose on the floor, exactly
 //!   along arcs.
 //!
+//! - [`Urdf`] imports a robot's geometry from its URDF ([`UrdfSpec`]: the
+//!   file and which URDF joint each servobus joint is), giving the same
+//!   [`Spec`] a hand-typed section does, with the URDF's joint limits
+//!   ([`UrdfLimits`]) and visual meshes ([`LinkVisuals`]); every refusal
+//!   names the file and line ([`UrdfError`]).
+//!
 //! Angles are radians and lengths millimetres throughout (except a base's
 //! velocities, in metres); the caller converts the robot file's angle unit.
 //! Failures are typed ([`IkError`]): unreachable (with the distance
@@ -54,6 +60,7 @@ mod legs;
 mod line;
 mod spec;
 mod support;
+mod urdf;
 
 pub use arm::{ArmIk, ArmTarget, MAX_DOF};
 pub use base::{
@@ -74,3 +81,7 @@ pub use line::{
 pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};
 pub use support::{planar_motion, support_margin};
+pub use urdf::{
+    LinkVisuals, Placement, Urdf, UrdfError, UrdfFrame, UrdfLimits, UrdfPlace, UrdfSpec, Visual,
+    VisualGeometry, MAX_URDF_BYTES,
+};

@@ -75,14 +75,14 @@ pub(super) fn load_design(path: &Path) -> Result<(Robot, Source, Option<PathBuf>
 }
 
 /// The robot as designed in `source`, and the calibration file it names
-/// (relative to `dir`).
+/// (relative to `dir`, as is a URDF its `kinematics:` names).
 pub(super) fn design_of(
     source: Source,
     dir: &Path,
 ) -> Result<(Robot, Source, Option<PathBuf>), ConfigError> {
     let raw: RawRobot = source.parse()?;
     let named = raw.calibration.as_ref().map(|rel| dir.join(rel));
-    let robot = validate::robot(raw, &source)?;
+    let robot = validate::robot(raw, &source, dir)?;
     check_servo_range(&robot, &source)?;
     Ok((robot, source, named))
 }

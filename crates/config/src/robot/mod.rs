@@ -17,6 +17,9 @@ mod tests;
 mod tests_faults;
 #[cfg(test)]
 mod tests_servo;
+#[cfg(test)]
+mod tests_urdf;
+mod urdf;
 mod validate;
 
 use std::path::{Path, PathBuf};

@@ -33,7 +33,7 @@ pub(super) struct RawRobot {
     pub calibration_pose: HashMap<String, f64>,
     pub buses: Vec<RawBus>,
     #[serde(default)]
-    pub kinematics: Option<servobus_kinematics::Spec>,
+    pub kinematics: Option<super::urdf::RawKinematics>,
     #[serde(default)]
     pub base: Option<servobus_kinematics::BaseSpec>,
     /// `servo:` settings per servo model, for every joint of that model

@@ -2,13 +2,14 @@
 //! problem reported at its place in the file.
 
 use std::collections::{HashMap, HashSet};
+use std::path::Path;
 use std::time::Duration;
 
 use servobus_protocol::registers::{model_by_name, Model, MODELS};
 use servobus_protocol::MAX_ID;
 
 use super::raw::{LatencySpec, RawBus, RawJoint, RawRobot};
-use super::{faults, servo, BusConfig, JointConfig, JointMode, Robot, RobotCalibration};
+use super::{faults, servo, urdf, BusConfig, JointConfig, JointMode, Robot, RobotCalibration};
 use crate::error::{ConfigError, Source};
 use crate::limits::{check_baud, check_latency_us, check_rate_hz};
 use crate::locate::FieldPath;
@@ -42,8 +43,9 @@ fn positive(v: f64) -> bool {
     v.is_finite() && v > 0.0
 }
 
-/// The robot `raw` describes, checked field by field.
-pub(super) fn robot(mut raw: RawRobot, src: &Source) -> Result<Robot, ConfigError> {
+/// The robot `raw` describes, checked field by field; a URDF its
+/// `kinematics:` names is relative to `dir`.
+pub(super) fn robot(mut raw: RawRobot, src: &Source, dir: &Path) -> Result<Robot, ConfigError> {
     let root = FieldPath::root();
     if raw.name.trim().is_empty() {
         return Err(src.error(&root.key("name"), "must not be empty"));
@@ -77,6 +79,8 @@ pub(super) fn robot(mut raw: RawRobot, src: &Source) -> Result<Robot, ConfigErro
             }
         }
     }
+    let imported = urdf::import(raw.kinematics.as_ref(), dir, raw.units, src)?;
+    urdf::fill_limits(&mut raw.buses, imported.as_ref(), raw.units);
     let mut bus_names = HashSet::new();
     let mut joint_names: HashMap<String, FieldPath> = HashMap::new();
     let mut buses = Vec::with_capacity(raw.buses.len());
@@ -103,8 +107,8 @@ pub(super) fn robot(mut raw: RawRobot, src: &Source) -> Result<Robot, ConfigErro
         base: None,
     };
     robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
-    if let Some(spec) = &raw.kinematics {
-        robot.kinematics = Some(kinematics(&robot, spec, src)?);
+    if let Some(section) = &raw.kinematics {
+        robot.kinematics = Some(urdf::kinematics(&robot, section, imported.as_ref(), src)?);
     }
     if let Some(spec) = &raw.base {
         robot.base = Some(base(&robot, spec, src)?);
@@ -171,28 +175,6 @@ fn base(
         }
     }
     Ok(base)
-}
-
-/// The `kinematics:` section checked against the robot's joints; a problem
-/// is reported at its entry and field.
-fn kinematics(
-    robot: &Robot,
-    spec: &servobus_kinematics::Spec,
-    src: &Source,
-) -> Result<servobus_kinematics::Geometry, ConfigError> {
-    let names = robot.joints().map(|j| j.name.as_str());
-    servobus_kinematics::Geometry::new(spec, names, robot.units.to_rad(1.0)).map_err(|e| {
-        let (section, entry, field) = e.location();
-        let mut at = FieldPath::root().key("kinematics").key(section.key());
-        let Some(entry) = entry else {
-            return src.error(&at, e.to_string());
-        };
-        at = at.key(entry);
-        match field {
-            Some(field) => src.error(&at.key(field), e.to_string()),
-            None => src.key_error(&at, e.to_string()),
-        }
-    })
 }
 
 /// One bus of the robot at `bp` (angles in `units`), its joints' names

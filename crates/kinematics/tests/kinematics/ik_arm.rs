@@ -4,7 +4,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use servobus_kinematics::{ArmIk, ArmTarget, IkError, Point3, UnitQuaternion, Vector3};
 
-use crate::robots::shipped;
+use crate::robots::{shipped, Shipped};
 
 fn home(ik: &ArmIk, names: &[String]) -> Vec<f64> {
     // so101.yaml's home: lift -90, elbow 90, wrist 45.
@@ -23,7 +23,15 @@ fn home(ik: &ArmIk, names: &[String]) -> Vec<f64> {
 /// a random pose inside the limits), each from `seed(q)`, and returns how
 /// many were refused; every answer given is checked.
 fn round_trips(seed: impl Fn(&mut SmallRng, &[f64]) -> Vec<f64>) -> usize {
-    let s = shipped("so101");
+    round_trips_on(&shipped("so101"), seed)
+}
+
+/// [`round_trips`] on any SO-101 geometry (the shipped one, one imported
+/// from the URDF).
+pub(crate) fn round_trips_on(
+    s: &Shipped,
+    seed: impl Fn(&mut SmallRng, &[f64]) -> Vec<f64>,
+) -> usize {
     let ik = ArmIk::new(&s.model, "tool").expect("an arm");
     assert_eq!(
         ik.joints().len(),

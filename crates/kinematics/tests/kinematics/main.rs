@@ -7,6 +7,7 @@ mod ik_leg;
 mod robots;
 mod spatial;
 mod spec;
+mod urdf;
 
 #[global_allocator]
 static GLOBAL: servobus_alloc_count::Counting = servobus_alloc_count::Counting;

@@ -309,11 +309,7 @@ impl GraspWatch {
         let hot = temperature_c >= j.max_temp - LET_GO_BELOW_LIMIT_C;
         if hot || j.over_current >= CURRENT_READINGS {
             j.let_go(track, i);
-            let cause = if hot {
-                GraspCause::Temperature
-            } else {
-                GraspCause::Current
-            };
+            let cause = cause_of(hot);
             publish(
                 j.robot_index,
                 GraspEvent::LetGo {
@@ -337,11 +333,7 @@ impl GraspWatch {
             j.effort = (j.effort * LOWER_BY).max(LOWEST_EFFORT);
             j.push = j.push.min(j.effort * j.full_error);
             j.set_limit(track, i);
-            let cause = if warm {
-                GraspCause::Temperature
-            } else {
-                GraspCause::Current
-            };
+            let cause = cause_of(warm);
             publish(
                 j.robot_index,
                 GraspEvent::Lowered {
@@ -353,6 +345,15 @@ impl GraspWatch {
             );
         }
         Ok(())
+    }
+}
+
+/// The temperature when `by_temperature`, else the current.
+fn cause_of(by_temperature: bool) -> GraspCause {
+    if by_temperature {
+        GraspCause::Temperature
+    } else {
+        GraspCause::Current
     }
 }
 

@@ -241,36 +241,19 @@ fn a_raw_goal_past_the_object_heats_the_gripper_until_its_protection_lets_go() {
 #[test]
 fn a_warm_grasp_is_eased_and_a_hot_one_lets_go_before_the_servo_protects_itself() {
     let robot = common::robot("so101.yaml");
-    let (sim, _truth) = arm_with_object(&robot, "warm");
-    let mut run = live_run(&robot, &sim);
-    let (tx, rx) = (run.targets(), run.telemetry());
-    let heat = |c: f64| {
+    let heat = |sim: &SimRobot, c: f64| {
         sim.buses()[0].servo(GRIPPER_ID, |s| s.set_temperature(c, c));
     };
-    let mut seen = Seen::default();
-    for _ in 0..(6.0 / PERIOD) as u64 {
-        let k = run.cycle();
-        let t = k as f64 * PERIOD;
-        if k.is_multiple_of(6) {
-            let target = if k == 60 {
-                arm_target(t).with_grasps(vec![("gripper".into(), EFFORT)])
-            } else {
-                arm_target(t)
-            };
-            tx.send(target).expect("a good target");
-        }
-        // Warm from 2 s (above the warning level), hot from 4 s (within
-        // the let-go margin of its limit, still under the limit itself).
+    // Warm from 2 s (above the warning level), hot from 4 s (within the
+    // let-go margin of its limit, still under the limit itself).
+    let (seen, sim) = grasp_for(&robot, "warm", EFFORT, 6.0, |k, sim| {
         if k == 400 {
-            heat(DEFAULT_MAX_TEMPERATURE_C - WARNING_BELOW_LIMIT_C + 2.0);
+            heat(sim, DEFAULT_MAX_TEMPERATURE_C - WARNING_BELOW_LIMIT_C + 2.0);
         }
         if k == 800 {
-            heat(DEFAULT_MAX_TEMPERATURE_C - 2.0);
+            heat(sim, DEFAULT_MAX_TEMPERATURE_C - 2.0);
         }
-        let going = run.step();
-        seen.take(&rx);
-        assert!(going, "the run goes on: {:?}", seen.faults);
-    }
+    });
     let (grasps, faults) = (seen.grasps, seen.faults);
     assert!(faults.is_empty(), "{faults:?}");
     let lowered: Vec<f64> = grasps
@@ -389,13 +372,21 @@ fn arm_protected_at(ma: f64, name: &str) -> Robot {
         .expect("the robot file loads")
 }
 
-/// Grasps the object with `effort` % on `robot` for 4 s: what was seen.
-fn grasp_for_4_s(robot: &Robot, name: &str, effort: f64) -> (Seen, SimRobot) {
+/// Grasps the object with `effort` % on `robot` for `seconds` (from 0.3 s;
+/// `each` called before every cycle `k` with the simulator): what was
+/// seen, and the simulator.
+fn grasp_for(
+    robot: &Robot,
+    name: &str,
+    effort: f64,
+    seconds: f64,
+    mut each: impl FnMut(u64, &SimRobot),
+) -> (Seen, SimRobot) {
     let (sim, _truth) = arm_with_object(robot, name);
     let mut run = live_run(robot, &sim);
     let (tx, rx) = (run.targets(), run.telemetry());
     let mut seen = Seen::default();
-    for _ in 0..(4.0 / PERIOD) as u64 {
+    for _ in 0..(seconds / PERIOD) as u64 {
         let k = run.cycle();
         let t = k as f64 * PERIOD;
         if k.is_multiple_of(6) {
@@ -406,6 +397,7 @@ fn grasp_for_4_s(robot: &Robot, name: &str, effort: f64) -> (Seen, SimRobot) {
             };
             tx.send(target).expect("a good target");
         }
+        each(k, &sim);
         let going = run.step();
         seen.take(&rx);
         assert!(going, "the run goes on: {:?}", seen.faults);
@@ -418,7 +410,13 @@ fn a_grasp_drawing_much_current_is_eased_and_one_at_its_protection_current_lets_
     use servobus_runtime::grasp::GraspCause;
     // Held at 30 %, the simulated gripper draws about 650 mA: over 80 % of
     // a 780 mA protection current, under 95 % of it.
-    let (seen, _sim) = grasp_for_4_s(&arm_protected_at(780.0, "eased"), "current-eased", EFFORT);
+    let (seen, _sim) = grasp_for(
+        &arm_protected_at(780.0, "eased"),
+        "current-eased",
+        EFFORT,
+        4.0,
+        |_, _| {},
+    );
     assert!(seen.faults.is_empty(), "{:?}", seen.faults);
     let eased: Vec<(f64, Option<f64>)> = seen
         .grasps
@@ -449,7 +447,13 @@ fn a_grasp_drawing_much_current_is_eased_and_one_at_its_protection_current_lets_
 
     // At 60 % against a 600 mA protection current it lets go, reported,
     // before the servo's own protection ends anything.
-    let (seen, sim) = grasp_for_4_s(&arm_protected_at(600.0, "let-go"), "current-let-go", 60.0);
+    let (seen, sim) = grasp_for(
+        &arm_protected_at(600.0, "let-go"),
+        "current-let-go",
+        60.0,
+        4.0,
+        |_, _| {},
+    );
     assert!(seen.faults.is_empty(), "{:?}", seen.faults);
     let let_go = seen
         .grasps

@@ -51,10 +51,14 @@ fn fk_json_gives_every_joint_frame_and_named_frame() {
             "wrist_roll"
         ]
     );
-    // The calibration pose: 30.4 + 28 + 134.9 + 61.1 + 98.1 forward,
-    // 94.9 + 54.2 + 112.6 + 5.2 up, level.
-    close(xyz(&frames["tool"]), [352.5, 0.0, 266.9], 1e-6);
-    assert_eq!(frames["tool"]["rpy"], serde_json::json!([0.0, 0.0, 0.0]));
+    // The calibration pose: 30.4 + 28 + 134.9 + 61.1 + 98.13 forward,
+    // 18.28 right then 18.1 + 0.17 left, 64.8 + 54.2 + 112.57 + 5.2 up and
+    // 7.9 down; turned as the tool is on the roll joint, every joint
+    // frame being level.
+    close(xyz(&frames["tool"]), [352.53, -0.01, 228.87], 1e-6);
+    let rpy = frames["tool"]["rpy"].as_array().expect("rpy");
+    let rpy = [0, 1, 2].map(|i| rpy[i].as_f64().expect("a number"));
+    close(rpy, [2.789, -0.001, 0.001], 1e-6);
 }
 
 #[test]
@@ -67,12 +71,14 @@ fn fk_pose_is_in_the_robot_file_s_units() {
         "{shoulder_pan: 90, elbow_flex: 90}",
         "--json",
     ]);
-    // Elbow down: the tool 5.2 beyond the elbow (58.4) and 294.1 below it
-    // (261.7), all turned to the left.
-    close(xyz(&v["frames"]["tool"]), [0.0, 63.6, -32.4], 1e-6);
+    // Elbow down: the tool 5.2 - 7.9 beyond the elbow (58.4) and 134.9 +
+    // 159.23 below it (231.57), 0.01 right of the pan axis, all turned to
+    // the left; pointing down but for the tool's own 0.001 deg of pitch
+    // and yaw on the roll joint (0.0014 deg together).
+    close(xyz(&v["frames"]["tool"]), [0.01, 55.7, -62.56], 1e-6);
     let rpy = v["frames"]["tool"]["rpy"].as_array().expect("rpy");
     assert!(
-        (rpy[1].as_f64().expect("pitch") - 90.0).abs() < 1e-6,
+        (rpy[1].as_f64().expect("pitch") - 90.0).abs() < 0.002,
         "{rpy:?}"
     );
 }
@@ -153,25 +159,27 @@ fn ik_places_a_hexapod_foot_with_negative_coordinates() {
 
 #[test]
 fn ik_out_of_reach_exits_1_with_the_distance_short() {
-    // Straight ahead at the lift axis's height: 569.6 from it, the arm
-    // reaches 116.03 + 135.0 + 159.2.
-    let out = ik("so101", "tool", "600,0,149.1", &["--json"]);
+    // Straight ahead at the lift axis's height (119.0): 569.6 from it,
+    // the arm reaches 116.0 + 135.0 + 159.43 (the tool 159.23 beyond the
+    // wrist flex axis and 7.9 below the roll axis) = 410.43.
+    let out = ik("so101", "tool", "600,0,119", &["--json"]);
     let (_, _) = exited(&out, 1);
     let v = json(&out);
-    assert!((num(&v, "short_mm") - 159.37).abs() < 0.5, "{v}");
-    let text = ik("so101", "tool", "600,0,149.1", &[]);
+    assert!((num(&v, "short_mm") - 159.17).abs() < 0.5, "{v}");
+    let text = ik("so101", "tool", "600,0,119", &[]);
     let (o, _) = exited(&text, 1);
-    says(&o, &["unreachable", "159.3"]);
+    says(&o, &["unreachable", "159.17"]);
 }
 
 #[test]
 fn ik_beyond_a_limit_names_the_joint() {
-    // Roll 170 deg needs wrist_roll at -170 (its axis points back); its
-    // limits are +-160.
+    // The tool where it is at zero, rolled 170 deg: it sits rolled 2.789
+    // deg on the roll joint, so wrist_roll (its axis points back) would go
+    // to -167.2; its limits are +-160.
     let out = ik(
         "so101",
         "tool",
-        "352.5,0,266.9",
+        "352.53,-0.01,228.87",
         &["--pitch", "0", "--roll", "170", "--json"],
     );
     exited(&out, 1);
@@ -228,7 +236,7 @@ fn a_geometry_problem_is_reported_at_its_place_in_the_file() {
 fn every_robot_joint_needs_geometry() {
     let text = edited(
         "configs/robots/so101.yaml",
-        &[("    gripper: {parent: wrist_roll, xyz: [23.4, 0, -20.2], rpy: [0, 0, 0], axis: [0, 1, 0]}\n", "")],
+        &[("    gripper: {parent: wrist_roll, xyz: [23.4, 17.79, 21.09], rpy: [0, 0, 0], axis: [0, -0.998815, -0.048663]}\n", "")],
     );
     let robot = temp_file("kinematics_cli", "no_gripper.yaml", &text);
     let out = servobus(&["fk", "--robot", arg(&robot)]);
@@ -310,8 +318,9 @@ fn tool_keyframes_become_joint_keyframes_at_load() {
 
 #[test]
 fn an_unreachable_tool_keyframe_is_refused_at_its_line() {
-    let motion = arm_motion("far.yaml", "tool: {xyz: [600, 0, 149.1]}");
+    // As `ik` out of reach: 159.17 short.
+    let motion = arm_motion("far.yaml", "tool: {xyz: [600, 0, 119]}");
     let out = servobus(&["plan", arg(&motion), "--robot", "so101"]);
     let (_, e) = exited(&out, 2);
-    says(&e, &[":7:", "keyframes[3].tool", "unreachable", "159.3"]);
+    says(&e, &[":7:", "keyframes[3].tool", "unreachable", "159.17"]);
 }

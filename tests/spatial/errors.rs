@@ -27,14 +27,16 @@ const ARM_START: &str = "  - pose: {shoulder_lift: -90, elbow_flex: 90, wrist_fl
 
 #[test]
 fn a_line_to_the_stretched_arm_is_refused_at_its_keyframe_as_a_singularity() {
-    // Level at the lift axis's height, out to 0.1 mm short of full reach
-    // (see the kinematics crate's test of the same line).
+    // At the lift axis's height, pitched up 2.84 deg so that the tool,
+    // 7.9 below the roll axis, lines up with the arm stretched straight,
+    // out to 0.1 mm short of full reach (see the kinematics crate's test
+    // of the same line).
     let text = refused(
         "stretched.yaml",
         "so101",
         &format!(
-            "{ARM_START}  - tool: {{xyz: [250, 0, 149.1], pitch: 0}}\n  \
-             - tool: {{xyz: [440.5, 0, 149.1], pitch: 0}}\n    path: line\n"
+            "{ARM_START}  - tool: {{xyz: [250, 0, 119], pitch: -2.84}}\n  \
+             - tool: {{xyz: [440.73, 0, 119], pitch: -2.84}}\n    path: line\n"
         ),
     );
     assert!(

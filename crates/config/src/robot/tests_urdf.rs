@@ -75,11 +75,13 @@ fn the_so101_robot_file_takes_its_geometry_and_limits_from_the_urdf() {
     assert!((tool.rotation * Vector3::x()).x > 0.9999);
 }
 
-/// so101_urdf.yaml with the hand-typed `kinematics:` block of
-/// so101_exact_kinematics.yaml instead of its URDF section.
-fn exact_text() -> String {
-    let exact = std::fs::read_to_string(testdata("so101_exact_kinematics.yaml")).unwrap();
-    let block = &exact[exact.find("\nkinematics:").unwrap() + 1..];
+/// so101_urdf.yaml with the hand-typed `kinematics:` block of the shipped
+/// configs/robots/so101.yaml instead of its URDF section.
+fn hand_typed_text() -> String {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/robots/so101.yaml");
+    let shipped = std::fs::read_to_string(shipped).unwrap();
+    let block = &shipped[shipped.find("\nkinematics:").unwrap() + 1..];
+    let block = &block[..block.find("\nbuses:").unwrap() + 1];
     let text = so101_text();
     let (start, end) = (
         text.find("\nkinematics:").unwrap() + 1,
@@ -89,24 +91,24 @@ fn exact_text() -> String {
 }
 
 #[test]
-fn the_urdf_geometry_is_the_exact_hand_typed_one() {
+fn the_urdf_geometry_is_the_shipped_hand_typed_one() {
     // Typed by hand, a joint's limits are not taken from anywhere.
     let source = RobotSource::Text {
-        name: Path::new("exact.yaml"),
-        text: &exact_text(),
+        name: Path::new("hand_typed.yaml"),
+        text: &hand_typed_text(),
     };
     let (field, reason) = refusal(load_robot(source, &RobotOptions::default()));
     assert_eq!(field, "buses[0].joints[0]");
     assert!(reason.contains("missing field `min`"), "{reason}");
     // With the limits the URDF gave, the same geometry.
     let urdf = edited(&[]).expect("loads");
-    let mut text = exact_text();
+    let mut text = hand_typed_text();
     for j in urdf.joints().filter(|j| j.name != "gripper") {
         let at = text.find(&format!("{{name: {},", j.name)).unwrap() + 1;
         text.insert_str(at, &format!("min: {}, max: {}, ", j.min, j.max));
     }
     let source = RobotSource::Text {
-        name: Path::new("exact.yaml"),
+        name: Path::new("hand_typed.yaml"),
         text: &text,
     };
     let hand = load_robot(source, &RobotOptions::default()).expect("loads");

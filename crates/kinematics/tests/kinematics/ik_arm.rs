@@ -108,9 +108,11 @@ fn a_move_in_small_steps_never_flips_a_joint() {
     let s = shipped("so101");
     let ik = ArmIk::new(&s.model, "tool").expect("an arm");
     let mut out = vec![0.0; 5];
-    // A 200 mm straight line across the front, gripper pointing down.
+    // A 200 mm straight line across the front, gripper pointing down, 69
+    // below the lift axis (at 119.0). 30 mm higher, its ends would need
+    // wrist_flex past its 95 deg limit.
     let target = |y: f64| ArmTarget {
-        xyz: Point3::new(200.0, y, 80.0),
+        xyz: Point3::new(200.0, y, 50.0),
         pitch: Some(90f64.to_radians() - 1e-3),
         roll: Some(0.0),
     };
@@ -136,20 +138,21 @@ fn a_move_in_small_steps_never_flips_a_joint() {
 
 #[test]
 fn refuses_a_target_out_of_reach_with_the_distance_short() {
-    // Straight ahead at the lift axis's height (149.1): the lift axis is
-    // 569.6 away; the arm reaches 116.03 (upper arm) + 135.0 (forearm) +
-    // 159.2 (wrist to tool) = 410.23 from it.
+    // Straight ahead at the lift axis's height (119.0): the lift axis is
+    // 569.6 away; the arm reaches 116.0 (upper arm) + 135.0 (forearm) +
+    // 159.43 (wrist flex axis to the tool, 159.23 along and 7.9 below the
+    // roll axis) = 410.43 from it.
     let s = shipped("so101");
     let ik = ArmIk::new(&s.model, "tool").expect("an arm");
     let target = ArmTarget {
-        xyz: Point3::new(600.0, 0.0, 149.1),
+        xyz: Point3::new(600.0, 0.0, 119.0),
         pitch: None,
         roll: None,
     };
     let mut out = vec![0.0; 5];
     match ik.solve(&target, &home(&ik, &s.names), &mut out) {
         Err(IkError::Unreachable { short }) => {
-            assert!((short - 159.37).abs() < 0.5, "short {short}");
+            assert!((short - 159.17).abs() < 0.5, "short {short}");
         }
         other => panic!("{other:?}"),
     }
@@ -157,11 +160,13 @@ fn refuses_a_target_out_of_reach_with_the_distance_short() {
 
 #[test]
 fn refuses_a_roll_beyond_the_wrist_roll_limit_naming_it() {
-    // Roll 170 deg needs wrist_roll at -170 (its axis is -x); limit 160.
+    // The tool where it is at zero, rolled 170 deg: the tool itself is
+    // rolled 2.789 deg on the roll joint, so wrist_roll (its axis is -x)
+    // would go to -167.2; limit 160.
     let s = shipped("so101");
     let ik = ArmIk::new(&s.model, "tool").expect("an arm");
     let target = ArmTarget {
-        xyz: Point3::new(352.5, 0.0, 266.9),
+        xyz: Point3::new(352.53, -0.01, 228.87),
         pitch: Some(0.0),
         roll: Some(170f64.to_radians()),
     };

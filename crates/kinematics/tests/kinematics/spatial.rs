@@ -80,14 +80,17 @@ fn a_line_keeps_joint_steps_within_the_tolerance_of_the_line() {
 fn a_line_to_the_arm_stretched_straight_is_refused_as_near_a_singularity() {
     let s = shipped("so101");
     let arm = ArmIk::new(&s.model, "tool").expect("an arm");
-    // The tool level at the shoulder_lift axis's height (94.9 + 54.2),
-    // moving straight out to 440.5 mm: the lift axis is at x = 30.4 and
-    // the arm reaches 410.2 from it (116.03 + 135.0 + 159.2), so the end
-    // is 0.1 mm short of the arm stretched straight.
-    let chain = arm_at(&s, &arm, [250.0, 0.0, 149.1], 0.0);
+    // At the shoulder_lift axis's height (64.8 + 54.2), moving straight
+    // out to 440.73 mm. The tool sits 7.9 below the roll axis, 159.23
+    // beyond the wrist flex axis: pitched up atan(7.9 / 159.23) = 2.84 deg,
+    // that 159.43 runs level, in line with the upper arm (116.0) and the
+    // forearm (135.0) stretched straight. The lift axis is at x = 30.4 and
+    // the arm reaches 410.43 from it, so the end is 0.1 mm short of the
+    // arm stretched straight.
+    let chain = arm_at(&s, &arm, [250.0, 0.0, 119.0], -2.84);
     let from = arm.frame_pose(&chain);
     let mut to = from;
-    to.translation.vector.x = 440.5;
+    to.translation.vector.x = 440.73;
     let line = PoseLine::new(from, to);
     let held = Held {
         pitch: true,
@@ -104,8 +107,8 @@ fn a_line_to_the_arm_stretched_straight_is_refused_as_near_a_singularity() {
     )
     .expect_err("to the stretched arm");
     assert!(matches!(err.reason, IkError::Singular { .. }), "{err}");
-    // Refused near the end of the 190.5 mm line, not at its start.
-    assert!(err.along_mm > 150.0 && err.along_mm <= 190.5, "{err}");
+    // Refused near the end of the 190.73 mm line, not at its start.
+    assert!(err.along_mm > 150.0 && err.along_mm <= 190.73, "{err}");
 }
 
 #[test]

@@ -7,6 +7,8 @@
 #![cfg(feature = "zenoh")]
 
 mod common;
+#[path = "zenoh/serve_ros2.rs"]
+mod serve_ros2;
 
 use std::process::Command;
 use std::sync::{Arc, Mutex};

@@ -27,6 +27,12 @@ Keys, under servobus/<name>/: state (published), target (subscribed: \
 {\"chunk\": {\"t0\": s, \"dt\": s, \"joints\": {\"<joint>\": [angle, ...]}}}), \
 command (subscribed), report (queryable), alive (liveliness).
 
+With --ros2 (rmw_zenoh's layout, ROS domain --ros-domain), under the namespace \
+--ros-namespace (default /<name>): joint_states (published), joint_trajectory \
+(trajectory_msgs/JointTrajectory), joint_commands (sensor_msgs/JointState or \
+std_msgs/Float64MultiArray, rad) and the follow_joint_trajectory action \
+(control_msgs/action/FollowJointTrajectory).
+
 Commands: play <motion> [at <UTC time>]; stop (the joints stop, jerk limited, \
 and hold: the node goes on serving, and the next target, chunk or play moves \
 the robot again); pause; resume; torque_off; shutdown (stop, hold and end the \
@@ -61,12 +67,18 @@ pub struct Args {
     /// How often `state` is published, Hz.
     #[arg(long, default_value = "50", value_parser = crate::shared::args::refresh_rate_arg)]
     pub state_hz: f64,
-    /// Also publish sensor_msgs/msg/JointState for ROS 2 over rmw_zenoh.
+    /// ROS 2 over rmw_zenoh: publish <ns>/joint_states; take
+    /// <ns>/joint_trajectory, <ns>/joint_commands and the
+    /// <ns>/follow_joint_trajectory action.
     #[arg(long)]
     pub ros2: bool,
-    /// The ROS domain of the JointState topic.
+    /// The ROS domain of the ROS 2 topics and action.
     #[arg(long, default_value_t = 0, requires = "ros2")]
     pub ros_domain: u32,
+    /// The ROS 2 namespace of the topics and action (default: the robot's
+    /// name; `/` for the root, as a controller manager's topics are).
+    #[arg(long, value_name = "NS", requires = "ros2")]
+    pub ros_namespace: Option<String>,
     /// Control rate in Hz (default: the robot's).
     #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,
@@ -100,6 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         listen: args.listen.clone(),
         connect: args.connect.clone(),
         ros2_domain: args.ros2.then_some(args.ros_domain),
+        ros_namespace: args.ros_namespace.clone(),
         state_hz: args.state_hz,
         group: args.group.clone(),
     };
@@ -142,7 +155,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &config,
         Duration::try_from_secs_f64(args.linger).unwrap_or_default(),
     )?;
-    if args.json {
+    print_served(&served, args.json)?;
+    Ok(crate::shared::exit::of_finish(served.report.finish))
+}
+
+/// The end of `serve`: the report and the node's counts, as one JSON line
+/// on stdout with `--json`, else as text on stderr.
+fn print_served(served: &servobus_node::node::Served, json: bool) -> anyhow::Result<()> {
+    if json {
         outln!(
             "{}",
             serde_json::json!({
@@ -150,21 +170,24 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 "node": served.counts(),
             })
         )?;
-    } else {
-        let mut err = std::io::stderr().lock();
-        crate::shared::write_report(&mut err, &served.report, false)?;
-        errln!(
-            "  node: {} targets, {} malformed, {} commands, {} states published",
-            served.targets,
-            served.malformed,
-            served.commands,
-            served.states
-        );
-        for o in &served.start_offsets {
-            errln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
-        }
+        return Ok(());
     }
-    Ok(crate::shared::exit::of_finish(served.report.finish))
+    let mut err = std::io::stderr().lock();
+    crate::shared::write_report(&mut err, &served.report, false)?;
+    errln!(
+        "  node: {} targets, {} malformed, {} commands, {} trajectories, {} goals, \
+         {} states published",
+        served.targets,
+        served.malformed,
+        served.commands,
+        served.trajectories,
+        served.goals,
+        served.states
+    );
+    for o in &served.start_offsets {
+        errln!("  timed start: {:+.2} ms from the agreed instant", o * 1e3);
+    }
+    Ok(())
 }
 
 /// The command that plays `motion` (a built-in motion's name, a file, or

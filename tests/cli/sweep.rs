@@ -186,6 +186,7 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("serve", "--connect"),
     ("serve", "--name"),
     ("serve", "--group"),
+    ("serve", "--ros-namespace"),
     ("play", "--zenoh-group"),
     ("play", "--connect"),
 ];

@@ -16,9 +16,19 @@
 //! `shutdown` (or Ctrl-C, or SIGTERM) stops, holds and ends the run; the
 //! node answers `report` for its linger, then returns.
 //!
-//! With ROS 2 output on, the node also publishes
-//! `sensor_msgs/msg/JointState` the way rmw_zenoh does ([`ros2`]), so a
-//! ROS 2 machine running rmw_zenoh sees `/<robot>/joint_states`.
+//! With ROS 2 on ([`node::NodeConfig::ros2_domain`]), the node is also a
+//! ROS 2 node the way rmw_zenoh lays one out ([`ros2`] has the wire
+//! formats), under a namespace `<ns>` (by default the robot's name):
+//!
+//! | ROS 2 name | interface | what the node does |
+//! |---|---|---|
+//! | `<ns>/joint_states` | `sensor_msgs/msg/JointState` | publishes every state |
+//! | `<ns>/joint_trajectory` | `trajectory_msgs/msg/JointTrajectory` | follows it as a timed chunk (a new one replaces the rest of the last) |
+//! | `<ns>/joint_commands` | `sensor_msgs/msg/JointState`, `std_msgs/msg/Float64MultiArray` | live targets, as `target`'s |
+//! | `<ns>/follow_joint_trajectory` | `control_msgs/action/FollowJointTrajectory` | the action server MoveIt drives: goals, feedback, tolerances, cancel, results |
+//!
+//! A ROS 2 message that is not what its key carries is counted as
+//! malformed, said on stderr and never moves the robot.
 //!
 //! The wire formats ([`wire`], [`ros2`]) build without Zenoh; the session
 //! itself needs the `zenoh` feature.

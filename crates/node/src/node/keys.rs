@@ -1,9 +1,8 @@
 //! The keys a serving robot declares, held for as long as it serves: its
 //! liveliness, `state`, `target`, `command`, `report` and, with ROS 2 on,
-//! the JointState topic.
+//! its ROS 2 entities ([`super::ros`]).
 
 use std::sync::Arc;
-use std::time::Instant;
 
 use servobus_robot::Run;
 use zenoh::bytes::Encoding;
@@ -13,7 +12,7 @@ use zenoh::query::Queryable;
 use zenoh::Wait;
 
 use super::relay::{take_command, take_target, Inputs};
-use super::state::Ros2;
+use super::ros::Ros2;
 use super::{
     group_command_key, group_member_key, lock, zerr, NodeConfig, NodeError, Planner, RobotInfo,
     Shared,
@@ -74,7 +73,14 @@ impl Keys {
         let commands = subscribe_commands(session, &base, robot, runner, planner, config, shared)?;
         let report = answer_reports(session, &base, shared)?;
         let ros = match config.ros2_domain {
-            Some(domain) => Some(Ros2::declare(session, domain, &robot.name)?),
+            Some(domain) => Some(Ros2::declare(
+                session,
+                domain,
+                robot,
+                config,
+                inputs(runner),
+                shared,
+            )?),
             None => None,
         };
         Ok(Keys {
@@ -109,7 +115,7 @@ fn subscribe_targets(
     let shared = Arc::clone(shared);
     let units = robot.units;
     let config = robot.config.clone();
-    let started = Instant::now();
+    let started = shared.started;
     session
         .declare_subscriber(format!("{base}/target"))
         .callback(move |sample| {

@@ -4,15 +4,18 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use servobus_robot::config::Units;
 use servobus_robot::{Command, CycleSample, Report, Run, Telemetry};
 
 mod keys;
 mod relay;
+mod ros;
 mod session;
 mod state;
+#[cfg(test)]
+mod virtual_node;
 
 use keys::Keys;
 use relay::Motion;
@@ -58,6 +61,10 @@ pub struct Served {
     pub malformed: u64,
     /// Commands carried out.
     pub commands: u64,
+    /// ROS 2 `joint_trajectory` messages taken into the stream.
+    pub trajectories: u64,
+    /// ROS 2 `follow_joint_trajectory` goals accepted.
+    pub goals: u64,
     /// States published on `state`.
     pub states: u64,
     /// Timed `play` commands: the start cycle's measured start minus the
@@ -67,14 +74,16 @@ pub struct Served {
 
 impl Served {
     /// The node's own counts as JSON: `targets`, `chunks`, `malformed`,
-    /// `commands`, `states`, `start_offsets_s` (what `report` and
-    /// `serve --json` show).
+    /// `commands`, `trajectories`, `goals`, `states`, `start_offsets_s`
+    /// (what `report` and `serve --json` show).
     pub fn counts(&self) -> serde_json::Value {
         serde_json::json!({
             "targets": self.targets,
             "chunks": self.chunks,
             "malformed": self.malformed,
             "commands": self.commands,
+            "trajectories": self.trajectories,
+            "goals": self.goals,
             "states": self.states,
             "start_offsets_s": self.start_offsets,
         })
@@ -87,11 +96,44 @@ struct Counts {
     chunks: AtomicU64,
     malformed: AtomicU64,
     commands: AtomicU64,
+    trajectories: AtomicU64,
+    goals: AtomicU64,
+}
+
+/// The commanded state of the latest whole cycle, for inputs that start
+/// from where the joints are heading (ROS 2 trajectories).
+#[derive(Debug, Default, Clone)]
+struct Latest {
+    /// When the cycle's sample was taken in.
+    at: Option<Instant>,
+    /// Per joint, the commanded position, rad.
+    position: Vec<f64>,
+    /// Per joint, the commanded velocity (from the last two cycles), rad/s.
+    velocity: Vec<f64>,
+}
+
+impl Latest {
+    /// Joint `j`'s commanded position `now`, carried on at its velocity
+    /// from the cycle seen (for at most 0.1 s); `None` before any cycle.
+    fn position_at(&self, j: usize, now: Instant) -> Option<f64> {
+        let at = self.at?;
+        let age = now.saturating_duration_since(at).as_secs_f64().min(0.1);
+        let p = *self.position.get(j)?;
+        Some(p + self.velocity.get(j).copied().unwrap_or(0.0) * age)
+    }
 }
 
 /// What the callbacks and the telemetry loop share.
-#[derive(Default)]
 struct Shared {
+    /// The node's stream clock starts here: targets without a stamp, and
+    /// ROS 2 messages, are stamped with the seconds since.
+    started: Instant,
+    /// Counts every input that set the robot moving (a target, a chunk, a
+    /// trajectory, a command): a goal that sees it change has been taken
+    /// over.
+    generation: AtomicU64,
+    /// The latest whole cycle's commanded state.
+    latest: Mutex<Latest>,
     /// Wall-clock time of cycle 0's deadline, once the first cycle ran.
     start: Mutex<Option<SystemTime>>,
     /// Timed starts waiting to be measured: (cycle, agreed instant).
@@ -101,6 +143,28 @@ struct Shared {
     counts: Counts,
     /// Whether `stop` holds the robot (see [`relay`]).
     motion: Mutex<Motion>,
+}
+
+impl Default for Shared {
+    fn default() -> Self {
+        Shared {
+            started: Instant::now(),
+            generation: AtomicU64::new(0),
+            latest: Mutex::new(Latest::default()),
+            start: Mutex::new(None),
+            timed: Mutex::new(Vec::new()),
+            report: Mutex::new(String::new()),
+            counts: Counts::default(),
+            motion: Mutex::new(Motion::default()),
+        }
+    }
+}
+
+impl Shared {
+    /// The node's stream clock now: seconds since [`Shared::started`].
+    fn stream_now(&self) -> f64 {
+        self.started.elapsed().as_secs_f64()
+    }
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -142,6 +206,10 @@ pub fn serve(
             _ => {}
         }
     }
+    if let Some(ros) = &keys.ros {
+        // Goals still running end with the run, their results answered.
+        ros.finish("the run ended");
+    }
     let report = runner.join()?;
     let c = &shared.counts;
     let served = Served {
@@ -149,6 +217,8 @@ pub fn serve(
         chunks: c.chunks.load(Ordering::Relaxed),
         malformed: c.malformed.load(Ordering::Relaxed),
         commands: c.commands.load(Ordering::Relaxed),
+        trajectories: c.trajectories.load(Ordering::Relaxed),
+        goals: c.goals.load(Ordering::Relaxed),
         states: out.states,
         start_offsets: out.offsets,
         report,
@@ -178,6 +248,8 @@ struct Outbound<'a> {
     ros_seq: i64,
     /// The timed starts measured, s (see [`Served::start_offsets`]).
     offsets: Vec<f64>,
+    /// The control period, s.
+    period: f64,
 }
 
 impl<'a> Outbound<'a> {
@@ -192,6 +264,7 @@ impl<'a> Outbound<'a> {
             states: 0,
             ros_seq: 0,
             offsets: Vec::new(),
+            period: 1.0 / robot.rate_hz,
         }
     }
 
@@ -202,11 +275,40 @@ impl<'a> Outbound<'a> {
             self.note_start(c);
         }
         if let Some(done) = self.watch.cycle(c) {
+            self.note_commanded(&done);
+            if let Some(ros) = &self.keys.ros {
+                ros.cycle(&done, self.units);
+            }
             if done.cycle % self.every == 0 {
                 self.publish(&done)?;
             }
         }
         Ok(())
+    }
+
+    /// Keeps the commanded state of the whole cycle `done` (rad, rad/s)
+    /// for the inputs that start from it.
+    fn note_commanded(&self, done: &Done) {
+        let mut latest = lock(&self.shared.latest);
+        let position: Vec<f64> = done
+            .commanded()
+            .iter()
+            .map(|&a| self.units.to_rad(a))
+            .collect();
+        let velocity = if latest.position.len() == position.len() {
+            position
+                .iter()
+                .zip(&latest.position)
+                .map(|(now, before)| (now - before) / self.period)
+                .collect()
+        } else {
+            vec![0.0; position.len()]
+        };
+        *latest = Latest {
+            at: Some(Instant::now()),
+            position,
+            velocity,
+        };
     }
 
     /// Estimates cycle 0's deadline on the wall clock from bus 0's sample

@@ -43,6 +43,7 @@ pub(super) struct Motion {
 }
 
 /// The loop's two inputs, as the node's callbacks hold them.
+#[derive(Clone)]
 pub(super) struct Inputs {
     pub(super) targets: TargetSender,
     pub(super) commands: CommandSender,
@@ -73,9 +74,6 @@ pub(super) fn take_target(
         Ok(w) => w,
         Err(why) => return malformed(&why),
     };
-    // Sent under the lock: a `stop` never comes between a target and the
-    // resume it needs.
-    let mut motion = lock(&shared.motion);
     let (sent, what) = match msg {
         LiveMessage::Target(m) => {
             let mut joints: Vec<(String, f64)> = m
@@ -88,7 +86,7 @@ pub(super) fn take_target(
             let target = LiveTarget::named(stamp, joints)
                 .with_grasps(m.grasps)
                 .taken_at(taken_at(m.sent_ns));
-            (to.targets.send(target), "target")
+            (deliver(to, shared, "target", |t| t.send(target)), "target")
         }
         LiveMessage::Chunk(m) => {
             let joints = m
@@ -97,31 +95,51 @@ pub(super) fn take_target(
                 .map(|(n, a)| (n, a.into_iter().map(|a| units.to_rad(a)).collect()))
                 .collect();
             let chunk = Chunk::named(m.t0, m.dt, joints).taken_at(taken_at(m.sent_ns));
-            (to.targets.send_chunk(chunk), "chunk")
+            (
+                deliver(to, shared, "chunk", |t| t.send_chunk(chunk)),
+                "chunk",
+            )
         }
     };
     match sent {
-        Ok(clamped) => {
+        Ok(_) => {
             let count = match what {
                 "chunk" => &shared.counts.chunks,
                 _ => &shared.counts.targets,
             };
             count.fetch_add(1, Ordering::Relaxed);
-            if clamped > 0 {
-                eprintln!("{what}: {clamped} angle(s) beyond the joint limits, clamped");
-            }
-            motion.playing = false;
-            if motion.stopped {
-                // The target reached the paused follower first (it was sent
-                // first): following resumes towards it.
-                if to.commands.send(Command::Resume).is_ok() {
-                    motion.stopped = false;
-                }
-            }
         }
         // The stream counts its refusals for the report.
         Err(why) => eprintln!("{what}: {why}; refused"),
     }
+}
+
+/// Sends what `send` gives the stream (a target, a chunk, a trajectory's
+/// targets), the way every input reaches it: under the motion's lock (a
+/// `stop` never comes between a target and the resume it needs), clamping
+/// said on stderr as `what`, and, the first time after `stop`, followed by
+/// the resume. Returns what `send` returned.
+pub(super) fn deliver(
+    to: &Inputs,
+    shared: &Shared,
+    what: &str,
+    send: impl FnOnce(&TargetSender) -> Result<usize, TargetError>,
+) -> Result<usize, TargetError> {
+    let mut motion = lock(&shared.motion);
+    let clamped = send(&to.targets)?;
+    shared.generation.fetch_add(1, Ordering::Relaxed);
+    if clamped > 0 {
+        eprintln!("{what}: {clamped} angle(s) beyond the joint limits, clamped");
+    }
+    motion.playing = false;
+    if motion.stopped {
+        // The target reached the paused follower first (it was sent
+        // first): following resumes towards it.
+        if to.commands.send(Command::Resume).is_ok() {
+            motion.stopped = false;
+        }
+    }
+    Ok(clamped)
 }
 
 /// The wheel speeds (rad/s) a message's base velocity asks for: none
@@ -213,6 +231,15 @@ pub(super) fn take_command(
     count(shared, sent.is_ok());
 }
 
+/// `stop` for the node's own reasons (a goal canceled or aborted): the
+/// joints stop (jerk limited) and hold until the next target, chunk or
+/// motion. Returns whether the loop took it.
+pub(super) fn stop_and_hold(to: &Inputs, shared: &Shared) -> bool {
+    let mut motion = lock(&shared.motion);
+    shared.generation.fetch_add(1, Ordering::Relaxed);
+    halt(to, &mut motion)
+}
+
 /// `stop`: the joints stop (jerk limited) and hold, and the run goes on.
 /// Returns whether the loop took it.
 fn halt(to: &Inputs, motion: &mut Motion) -> bool {
@@ -238,6 +265,7 @@ fn halt(to: &Inputs, motion: &mut Motion) -> bool {
 
 fn count(shared: &Shared, taken: bool) {
     if taken {
+        shared.generation.fetch_add(1, Ordering::Relaxed);
         shared.counts.commands.fetch_add(1, Ordering::Relaxed);
     } else {
         eprintln!("command: the run has ended; ignored");

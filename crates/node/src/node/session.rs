@@ -19,8 +19,12 @@ pub struct NodeConfig {
     pub listen: Vec<String>,
     /// Peers to connect to.
     pub connect: Vec<String>,
-    /// ROS 2 JointState output in this ROS domain, if wanted.
+    /// ROS 2 in this ROS domain, if wanted: JointState out; trajectories,
+    /// joint commands and the FollowJointTrajectory action in.
     pub ros2_domain: Option<u32>,
+    /// The ROS 2 namespace of the node's topics and action (`None`: the
+    /// robot's name, `/<robot>/joint_states`; `"/"`: the root).
+    pub ros_namespace: Option<String>,
     /// How often `state` is published, Hz.
     pub state_hz: f64,
     /// A group whose commands this robot also takes, from

@@ -6,6 +6,7 @@
 #   SERVOBUS_FEETECH_PYTHON=...   a Python with Feetech's SDK (scservo_sdk)
 #   SERVOBUS_LEROBOT_PYTHON=...   a Python with LeRobot's FeetechMotorsBus
 #   SERVOBUS_ZENOH_PYTHON=...     a Python with eclipse-zenoh and rosbags
+#   SERVOBUS_RERUN_PYTHON=...     a Python with Rerun's SDK (rerun-sdk)
 #
 # Usage: eval "$(scripts/python_clients.sh)"
 # Env:   SERVOBUS_VENVS (default ~/.cache/servobus/venvs).
@@ -77,11 +78,18 @@ fi
 # serve` in tests/serve_cli.rs.
 zenoh_py=$(make_venv zenoh-1.10.1 3.9 'eclipse-zenoh==1.10.1' 'rosbags==0.10.11')
 
+# Rerun's Python SDK, pinned to the release of the Rust `rerun` crate that
+# servobus records with (crates/robot/Cargo.toml): the independent reader
+# of the recordings in tests/rerun_cli.rs.
+rerun_py=$(make_venv rerun-sdk-0.36.3 3.10 'rerun-sdk[datafusion]==0.36.3')
+
 "$feetech" -c 'import scservo_sdk' || { say "FAIL scservo_sdk does not import"; exit 1; }
 "$lerobot" -c "import scservo_sdk, deepdiff, draccus" ||
     { say "FAIL lerobot does not import"; exit 1; }
 "$zenoh_py" -c "import zenoh, rosbags" || { say "FAIL eclipse-zenoh does not import"; exit 1; }
+"$rerun_py" -c "import rerun, rerun.experimental, datafusion" || { say "FAIL rerun-sdk does not import"; exit 1; }
 
 printf 'export SERVOBUS_FEETECH_PYTHON=%q\n' "$feetech"
 printf 'export SERVOBUS_LEROBOT_PYTHON=%q\n' "$lerobot"
 printf 'export SERVOBUS_ZENOH_PYTHON=%q\n' "$zenoh_py"
+printf 'export SERVOBUS_RERUN_PYTHON=%q\n' "$rerun_py"

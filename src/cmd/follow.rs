@@ -166,6 +166,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             crate::shared::flags::check_writable(flag, path)?;
         }
     }
+    args.rerun.check()?;
     let robot = load_robot(
         &args.robot.path,
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
@@ -227,12 +228,14 @@ fn drive<T: Transport>(
     let rate = options.rate_hz.unwrap_or(robot.rate_hz).min(LEADER_HZ);
     let terminal = std::io::stderr().is_terminal();
     let mut seen = Seen::new(args, robot, &names, terminal)?;
-    let runner = crate::shared::ports::start_live(
+    let started = crate::shared::ports::start_live(
         robot,
         args.robot.hardware.port.as_deref(),
         options,
         args.store.write_servos,
-    )?;
+    );
+    let (runner, rerun) = std::mem::take(&mut seen.rerun).unless_refused(started)?;
+    seen.rerun = rerun;
     crate::shared::install_ctrl_c(runner.commands());
     let mut session = Session::new(args, &names, robot.units, &runner, rate, terminal);
     // Counted from ERRORS_FROM on, on the clock both arms' readings are
@@ -257,7 +260,7 @@ fn drive<T: Transport>(
         if matches!(m, Telemetry::Finished(_)) {
             break;
         }
-        take_message(&mut seen, m, args.record.is_some());
+        seen.take(m, args.record.is_some());
     }
     let report = runner.join()?;
     let code = finish(args, robot, &report, seen, lost.as_deref())?;
@@ -397,7 +400,7 @@ impl<'a> Session<'a> {
             return Err(format!("at {t:.1} s: {e}"));
         }
         while let Ok(m) = self.telemetry.try_recv() {
-            take_message(seen, m, self.args.record.is_some());
+            seen.take(m, self.args.record.is_some());
         }
         seen.errors.settle(&self.trail, self.units);
         Ok(())
@@ -427,34 +430,6 @@ fn send(targets: &TargetSender, target: LiveTarget) -> anyhow::Result<()> {
     match targets.send(target) {
         Ok(_) | Err(servobus_robot::TargetError::Ended) => Ok(()),
         Err(e) => Err(anyhow::anyhow!("the leader's reading was refused: {e}")),
-    }
-}
-
-fn take_message(seen: &mut Seen, m: Telemetry, record: bool) {
-    match m {
-        Telemetry::Cycle(s) => seen.sample(&s, record),
-        Telemetry::Fault(f) => {
-            errln!("fault: {f}");
-            seen.faults.push(f.to_string());
-        }
-        Telemetry::Stall(e) => {
-            let name = seen.names.get(e.joint).map_or("?", String::as_str);
-            let start = if seen.live_line { "\n" } else { "" };
-            if e.held {
-                errln!(
-                    "{start}warning: {name} (ID {}) stalled at {:.1} at {:.2} s: held there with its \
-                     goal within {:.1} of it (bounded effort); the session goes on",
-                    e.servo_id,
-                    e.position,
-                    e.time_s,
-                    e.push.abs()
-                );
-            } else {
-                errln!("{start}{name} follows again at {:.2} s", e.time_s);
-            }
-            seen.stalls.push((e.joint, e.held, e.time_s, e.position));
-        }
-        _ => {}
     }
 }
 

@@ -13,6 +13,8 @@ use servobus_robot::odometry::{pose_figures, Odometry, TruthBase};
 use servobus_robot::sim::{new_truth, Hand, Mounting, SimRobot, SimRobotBuilder, SimRobotError};
 use servobus_robot::sim::{Faults, PtyServer, SimServo, Truth};
 
+use crate::shared::flags::Recording;
+
 const FAULTS_HELP: &str = "\
 Fault injection: comma-separated items, applied to every reply independently.
   drop=P        a reply is not sent, with probability P (0..1)
@@ -77,6 +79,12 @@ pub struct Args {
     /// simulator serves: a simulator refused at start leaves it untouched.
     #[arg(long, value_name = "T.csv")]
     pub truth: Option<std::path::PathBuf>,
+    /// `--rerun FILE.rrd`, `--rerun-connect [ADDR]`: the simulator's truth
+    /// (the physical joint angles, 100 a second) in the Rerun viewer,
+    /// whatever client moves the servos; the file is written whole when
+    /// the simulator stops.
+    #[command(flatten)]
+    pub rerun: crate::shared::flags::RerunArgs,
 }
 
 /// How long the truth writer sleeps between passes (rows are sampled every
@@ -89,11 +97,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let robot = load_robot(&args.robot, &RobotOptions::default())?;
     let faults = faults_of(&args)?;
     let mut builder = builder_of(&args, &robot)?;
+    args.rerun.check()?;
     let truth = truth_of(&args, &robot)?;
-    if let Some((truth, _)) = &truth {
+    if let Some(truth) = &truth {
         builder = builder.truth(truth);
     }
-    let (mut server, count) = open_server(&args, &builder, faults, truth.is_some())?;
+    let rerun = args.rerun.start(&robot, robot.units)?;
+    let opened = open_server(&args, &builder, faults, truth.is_some());
+    let ((mut server, count), rerun) = rerun.unless_refused(opened)?;
     // Started: the truth file is created (or truncated) now, its header
     // written before the simulator says it serves, so that a reader who
     // opens it then finds at least the header. An error here drops the
@@ -101,8 +112,20 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // A mobile base's true pose goes with its wheels' angles.
     let base = truth
         .as_ref()
-        .and_then(|(t, _)| TruthBase::of(&robot, &t.names()));
-    let truth = truth.map(|t| create_truth(t, base.is_some())).transpose()?;
+        .and_then(|t| TruthBase::of(&robot, &t.names()));
+    let file = match &args.truth {
+        Some(path) => Some(create_truth(truth.as_ref(), path, base.is_some())?),
+        None => None,
+    };
+    let truth = truth.map(|truth| Streams {
+        columns: columns_of(&robot, &truth.names()),
+        joints: robot.joint_count(),
+        truth,
+        base,
+        file,
+        rerun,
+        units: robot.units,
+    });
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -115,7 +138,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     )?;
     crate::shared::out::flush()?;
 
-    let writer = truth.map(|(truth, out, path)| TruthWriter::spawn(truth, base, out, path, &stop));
+    let writer = truth.map(|streams| TruthWriter::spawn(streams, &stop));
     let served = server.serve(&stop);
     server.settle();
     // Dropping the server removes the link, also after an I/O error.
@@ -154,19 +177,21 @@ fn builder_of<'a>(args: &Args, robot: &'a Robot) -> anyhow::Result<SimRobotBuild
     Ok(builder)
 }
 
-/// The truth `--truth` records, one column per served joint, and its path
-/// (checked, not yet opened).
-fn truth_of(args: &Args, robot: &Robot) -> anyhow::Result<Option<(Truth, PathBuf)>> {
+/// The truth `--truth` writes and `--rerun` records, one column per
+/// served joint; `None` when neither is asked for. The truth file's path
+/// is checked, not yet opened.
+fn truth_of(args: &Args, robot: &Robot) -> anyhow::Result<Option<Truth>> {
     // The truth is a stream that others follow while the simulator runs,
     // so it is written in place, not atomically. Its path is checked now
     // (a directory, a missing directory: refused before anything is
     // served), and the file opened only once the simulator serves (in
     // `run`), so that a simulator refused at start leaves an earlier file
     // as it was.
-    let Some(path) = &args.truth else {
+    if let Some(path) = &args.truth {
+        servobus_robot::files::check_output(path)?;
+    } else if !args.rerun.wanted() {
         return Ok(None);
-    };
-    servobus_robot::files::check_output(path)?;
+    }
     let truth = match args.bus.as_deref() {
         Some(name) => Truth::new(
             robot
@@ -179,7 +204,12 @@ fn truth_of(args: &Args, robot: &Robot) -> anyhow::Result<Option<(Truth, PathBuf
         ),
         None => new_truth(robot),
     };
-    Ok(Some((truth, path.clone())))
+    Ok(Some(truth))
+}
+
+/// Each truth column's joint, in the robot's joint order.
+fn columns_of(robot: &Robot, names: &[String]) -> Vec<Option<usize>> {
+    names.iter().map(|n| robot.joint_index(n)).collect()
 }
 
 /// The pty server of the served servos, set up as the flags say, and how
@@ -206,17 +236,19 @@ fn open_server(
     Ok((server, count))
 }
 
-/// Creates (or truncates) the truth file and writes its header.
+/// Creates (or truncates) the truth file at `path` and writes its header
+/// (the columns of `truth`, and the base's pose with `base`).
 fn create_truth(
-    (truth, path): (Truth, PathBuf),
+    truth: Option<&Truth>,
+    path: &std::path::Path,
     base: bool,
-) -> Result<(Truth, std::fs::File, PathBuf), OutputError> {
+) -> Result<(std::fs::File, PathBuf), OutputError> {
     let write_err = |source| OutputError::Write {
-        path: path.clone(),
+        path: path.to_owned(),
         source,
     };
-    let mut file = std::fs::File::create(&path).map_err(write_err)?;
-    let mut header = truth.csv_header();
+    let mut file = std::fs::File::create(path).map_err(write_err)?;
+    let mut header = truth.map_or_else(String::new, Truth::csv_header);
     if base {
         for (name, _) in pose_figures(&Odometry::default()) {
             header.push(',');
@@ -224,37 +256,53 @@ fn create_truth(
         }
     }
     writeln!(file, "{header}").map_err(write_err)?;
-    Ok((truth, file, path))
+    Ok((file, path.to_owned()))
 }
 
-/// The thread that streams the truth to its file while the simulator serves.
+/// Where the truth goes while the simulator serves: its CSV file
+/// (`--truth`) and the recording for the Rerun viewer (`--rerun`).
+struct Streams {
+    truth: Truth,
+    /// Each column's joint in the robot's order.
+    columns: Vec<Option<usize>>,
+    /// How many joints the robot has.
+    joints: usize,
+    base: Option<TruthBase>,
+    /// The truth file and its path.
+    file: Option<(std::fs::File, PathBuf)>,
+    rerun: Recording,
+    /// The robot's angle unit, the recording's.
+    units: servobus_config::Units,
+}
+
+/// The thread that streams the truth to its file and recording while the
+/// simulator serves.
 struct TruthWriter {
     handle: std::thread::JoinHandle<anyhow::Result<()>>,
     /// Set once the server has made its last step.
     done: Arc<AtomicBool>,
-    path: PathBuf,
 }
 
 impl TruthWriter {
-    /// Starts streaming `truth` to `out` (the file at `path`), with the
-    /// `base`'s true pose on each row when the robot has one.
-    fn spawn(
-        truth: Truth,
-        mut base: Option<TruthBase>,
-        out: std::fs::File,
-        path: PathBuf,
-        stop: &Arc<AtomicBool>,
-    ) -> Self {
+    /// Starts streaming the truth of `streams`, with the base's true pose
+    /// on each row when the robot has one.
+    fn spawn(streams: Streams, stop: &Arc<AtomicBool>) -> Self {
         let stop = Arc::clone(stop);
         let done = Arc::new(AtomicBool::new(false));
         let finished = Arc::clone(&done);
-        let name = path.clone();
         let handle = std::thread::spawn(move || -> anyhow::Result<()> {
-            let mut out = out;
-            write_truth(&truth, &mut base, &mut out, &stop, &finished)
-                .map_err(|source| OutputError::Write { path: name, source }.into())
+            let mut streams = streams;
+            let written = write_truth(&mut streams, &stop, &finished);
+            let recorded = streams.rerun.finish();
+            if let (Err(source), Some((_, path))) = (written, streams.file) {
+                return Err(OutputError::Write { path, source }.into());
+            }
+            if let Some(what) = recorded? {
+                crate::shared::out::errln!("rerun: {what}");
+            }
+            Ok(())
         });
-        TruthWriter { handle, done, path }
+        TruthWriter { handle, done }
     }
 
     /// Writes the last rows and waits for the thread: its error, if any.
@@ -262,33 +310,36 @@ impl TruthWriter {
         self.done.store(true, Ordering::SeqCst);
         match self.handle.join() {
             Ok(result) => result,
-            Err(_) => anyhow::bail!("{}: the truth writer failed", self.path.display()),
+            Err(_) => anyhow::bail!("the truth writer failed"),
         }
     }
 }
 
-/// Streams the truth's complete rows to `out` until `done`, every
-/// [`TRUTH_PASS`]. Each pass's rows are formatted first and handed to
-/// `out` in one write, unbuffered: a reader following the file sees whole
-/// rows only, and memory does not grow with a long session.
-fn write_truth(
-    truth: &Truth,
-    base: &mut Option<TruthBase>,
-    out: &mut impl Write,
-    stop: &AtomicBool,
-    done: &AtomicBool,
-) -> std::io::Result<()> {
+/// Streams the truth's complete rows until `done`, every [`TRUTH_PASS`]:
+/// to the file, each pass's rows formatted first and handed to it in one
+/// write, unbuffered (a reader following the file sees whole rows only,
+/// and memory does not grow with a long session); and to the recording,
+/// as the robot's measured pose (angles in the robot's unit).
+fn write_truth(streams: &mut Streams, stop: &AtomicBool, done: &AtomicBool) -> std::io::Result<()> {
     let mut text = String::new();
+    let mut measured: Vec<Option<f64>> = vec![None; streams.joints];
     loop {
         // `done` is set after the server's last step: one more pass then
         // writes every row up to the end.
         let last = done.load(Ordering::SeqCst);
         text.clear();
-        for row in truth.take_rows() {
-            let pose = base.as_mut().map(|b| b.take(&row));
+        for row in streams.truth.take_rows() {
+            let pose = streams.base.as_mut().map(|b| b.take(&row));
             push_row(&mut text, row.time_s, &row.angles_deg, pose);
+            measured.fill(None);
+            for (column, deg) in streams.columns.iter().zip(&row.angles_deg) {
+                if let Some(slot) = column.and_then(|j| measured.get_mut(j)) {
+                    *slot = Some(streams.units.from_rad(deg.to_radians()));
+                }
+            }
+            streams.rerun.pose(row.time_s, &[], &measured);
         }
-        if !text.is_empty() {
+        if let (false, Some((out, _))) = (text.is_empty(), &mut streams.file) {
             out.write_all(text.as_bytes())?;
             out.flush()?;
         }

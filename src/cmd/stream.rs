@@ -36,6 +36,7 @@ use servobus_robot::grasp::{GraspCause, GraspEvent};
 use servobus_robot::odometry::{pose_figures, Odometer, Odometry};
 use servobus_robot::stream::{parse_line_for, MAX_LINE_BYTES};
 
+use crate::shared::flags::Recording;
 use crate::shared::out::{errln, outln};
 use crate::shared::ports::start_live;
 
@@ -61,6 +62,10 @@ pub struct Args {
     /// Control rate in Hz (default: the robot's).
     #[arg(long, value_parser = crate::shared::args::rate_arg)]
     pub rate: Option<f64>,
+    /// `--rerun FILE.rrd`, `--rerun-connect [ADDR]`: the robot following
+    /// the targets, in the Rerun viewer.
+    #[command(flatten)]
+    pub rerun: crate::shared::flags::RerunArgs,
     /// Seconds without a target after which the joints stop (jerk
     /// limited) and hold until targets come back.
     #[arg(long, default_value = "0.25", value_parser = crate::shared::args::timeout_arg)]
@@ -73,17 +78,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &args.robot.path,
         &RobotOptions::default().calibration(args.robot.hardware.calibration.as_deref()),
     )?;
+    let rerun = args.rerun.start(&robot, robot.units)?;
     let options = RunOptions {
         rate_hz: args.rate,
         target_timeout: args.timeout,
         ..live_options(&robot)
     };
-    let runner = start_live(
+    let started = start_live(
         &robot,
         args.robot.hardware.port.as_deref(),
         options,
         args.store.write_servos,
-    )?;
+    );
+    let (runner, mut rerun) = rerun.unless_refused(started)?;
     crate::shared::install_ctrl_c(runner.commands());
     let targets = runner.targets();
     let commands = runner.commands();
@@ -100,8 +107,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         })?;
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
     let odometer = servobus_robot::odometry::Odometer::of(&robot, robot.units);
-    let lost = watch(&runner, &names, odometer, args.telemetry)?;
-    let report = runner.join()?;
+    let lost = watch(&runner, &names, (odometer, &mut rerun), args.telemetry)?;
+    let (report, rerun) = rerun.unless_refused(runner.join().map_err(Into::into))?;
+    if let Some(what) = rerun.finish()? {
+        errln!("rerun: {what}");
+    }
     let skipped = skipped.load(Ordering::Relaxed);
     let code = finish(&report, skipped, args.json && !lost)?;
     if lost {
@@ -294,13 +304,14 @@ fn say(m: &Telemetry, names: &[String]) {
 }
 
 /// One telemetry line per cycle (all buses' joints, and a mobile base's
-/// odometry when `odometer` is given) while the run goes on. Returns
+/// odometry when `odometer` is given) while the run goes on, every message
+/// handed to the recording for the Rerun viewer too. Returns
 /// whether the telemetry could not all be written (the run was then
 /// stopped).
 fn watch(
     runner: &Run,
     names: &[String],
-    mut odometer: Option<Odometer>,
+    (mut odometer, rerun): (Option<Odometer>, &mut Recording),
     mut telemetry: bool,
 ) -> anyhow::Result<bool> {
     let mut lost = false;
@@ -324,7 +335,7 @@ fn watch(
         writeln!(out, "{text}")?;
         out.flush()
     };
-    for m in rx.iter() {
+    for m in rx.iter().inspect(|m| rerun.telemetry(m)) {
         match m {
             Telemetry::Cycle(c) => {
                 if let Some((_, t)) = cycle.filter(|(k, _)| *k != c.cycle) {

@@ -168,3 +168,27 @@ fn a_bad_motion_file_names_the_place_and_moves_nothing() {
     sim.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Built without the `rerun` feature, every command that records refuses
+/// `--rerun` before anything moves, and says how to build with it.
+#[cfg(not(feature = "rerun"))]
+#[test]
+fn rerun_flags_without_the_feature_are_refused_before_anything_moves() {
+    let dir = common::scratch("play-rerun-refused");
+    let rrd = dir.join("x.rrd");
+    let runs: [&[&str]; 3] = [
+        &["play", "arm-wave", "--fast", "--rerun", common::arg(&rrd)],
+        &["plan", "arm-wave", "--rerun", common::arg(&rrd)],
+        &["play", "arm-wave", "--fast", "--rerun-connect"],
+    ];
+    for args in runs {
+        let out = common::servobus(args);
+        let text = common::error(&out, 2);
+        assert!(
+            text.contains("built without Rerun: cargo install --path . --features rerun"),
+            "{args:?}: {text}"
+        );
+        assert!(!rrd.exists(), "{args:?} wrote the recording");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

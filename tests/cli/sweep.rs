@@ -161,6 +161,7 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("*", "--calibration"),
     ("*", "--log"),
     ("*", "--plot"),
+    ("*", "--rerun"),
     ("*", "--bus"),
     ("*", "--output"),
     ("calibrate", "--from-lerobot"),

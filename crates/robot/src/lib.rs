@@ -132,6 +132,8 @@ pub mod monitor;
 pub mod odometry;
 pub mod path;
 pub mod ports;
+#[cfg(feature = "rerun")]
+pub mod rerun;
 mod run;
 pub mod scan;
 pub mod sim;

@@ -40,6 +40,10 @@ pub struct Args {
     /// in degrees, which `servobus play TAKE.csv --robot ...` plays.
     #[arg(long, value_name = "TAKE.csv")]
     pub record: Option<PathBuf>,
+    /// `--rerun FILE.rrd`, `--rerun-connect [ADDR]`: the follower in the
+    /// Rerun viewer (measured, with its goals as a ghost).
+    #[command(flatten)]
+    pub rerun: crate::shared::flags::RerunArgs,
     /// Print the report as one JSON object (no live line).
     #[arg(long)]
     pub json: bool,

@@ -23,7 +23,12 @@ pub(super) fn finish(
     lost: Option<&str>,
 ) -> anyhow::Result<ExitCode> {
     let names: Vec<String> = robot.joints().map(|j| j.name.clone()).collect();
+    if let Some(why) = lost {
+        seen.rerun.refused(&anyhow::anyhow!(why.to_owned()));
+    }
+    let recorded = std::mem::take(&mut seen.rerun).finish();
     write_outputs(args, robot, &names, &mut seen)?;
+    let recorded = recorded?;
     let joints = joint_errors(&names, &seen.errors);
     if args.json {
         let follow = follow_json(report, &names, &joints, &seen.stalls, lost);
@@ -34,6 +39,9 @@ pub(super) fn finish(
         outln!("{}", crate::shared::json::pretty(&value)?)?;
     } else {
         write_text(args, report, &joints, robot.units)?;
+        if let Some(what) = recorded {
+            outln!("rerun: {what}")?;
+        }
     }
     Ok(crate::shared::exit::of_finish(report.finish))
 }

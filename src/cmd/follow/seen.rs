@@ -1,13 +1,16 @@
 //! What `servobus follow` keeps of the follower's telemetry while it
 //! follows: the log and plot being written, the take for `--record`, the
-//! errors against the leader, the faults and the stalls.
+//! recording for the Rerun viewer, the errors against the leader, the
+//! faults and the stalls.
 
 use servobus_config::Robot;
-use servobus_robot::CycleSample;
+use servobus_robot::{CycleSample, Telemetry};
 
 use super::against::FollowErrors;
 use super::args::Args;
 use crate::record::{CsvLog, PlotData};
+use crate::shared::flags::Recording;
+use crate::shared::out::errln;
 
 /// What the follower's telemetry gives while following.
 pub(super) struct Seen {
@@ -32,11 +35,15 @@ pub(super) struct Seen {
     /// A live line rewritten in place is on stderr (a terminal): a warning
     /// starts a line of its own.
     pub(super) live_line: bool,
+    /// The recording for the Rerun viewer (`--rerun`, `--rerun-connect`),
+    /// every message of the follower's telemetry handed to it.
+    pub(super) rerun: Recording,
 }
 
 impl Seen {
-    /// Nothing seen yet: the log created (`--log`) and the plot's series
-    /// ready (`--plot`); `terminal`: stderr is one.
+    /// Nothing seen yet: the log created (`--log`), the plot's series
+    /// ready (`--plot`), the recording started (`--rerun`: the follower's
+    /// tree and meshes logged); `terminal`: stderr is one.
     pub(super) fn new(
         args: &Args,
         robot: &Robot,
@@ -74,7 +81,39 @@ impl Seen {
             names: names.to_vec(),
             stalls: Vec::new(),
             live_line: !args.json && terminal,
+            rerun: args.rerun.start(robot, units)?,
         })
+    }
+
+    /// Takes a message of the follower's telemetry in: a cycle
+    /// ([`Seen::sample`]), a fault or a stall said on stderr and kept.
+    pub(super) fn take(&mut self, m: Telemetry, record: bool) {
+        self.rerun.telemetry(&m);
+        match m {
+            Telemetry::Cycle(s) => self.sample(&s, record),
+            Telemetry::Fault(f) => {
+                errln!("fault: {f}");
+                self.faults.push(f.to_string());
+            }
+            Telemetry::Stall(e) => {
+                let name = self.names.get(e.joint).map_or("?", String::as_str);
+                let start = if self.live_line { "\n" } else { "" };
+                if e.held {
+                    errln!(
+                        "{start}warning: {name} (ID {}) stalled at {:.1} at {:.2} s: held there \
+                         with its goal within {:.1} of it (bounded effort); the session goes on",
+                        e.servo_id,
+                        e.position,
+                        e.time_s,
+                        e.push.abs()
+                    );
+                } else {
+                    errln!("{start}{name} follows again at {:.2} s", e.time_s);
+                }
+                self.stalls.push((e.joint, e.held, e.time_s, e.position));
+            }
+            _ => {}
+        }
     }
 
     /// Takes one follower cycle: logged, plotted, its errors counted, and

@@ -30,6 +30,11 @@ pub struct Args {
     /// Draw position and velocity of every joint over time (SVG).
     #[arg(long)]
     pub plot: Option<std::path::PathBuf>,
+    /// `--rerun FILE.rrd`, `--rerun-connect [ADDR]`: the planned motion in
+    /// 3D in the Rerun viewer, in its own time (nothing moves), with each
+    /// joint's margin to its limits and the workspace.
+    #[command(flatten)]
+    pub rerun: crate::shared::flags::RerunArgs,
 }
 
 /// Runs `servobus plan`.
@@ -38,6 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         // The plan's plot is drawn as SVG only.
         crate::shared::flags::check_plot_format(path, &["svg"])?;
     }
+    args.rerun.check()?;
     let (motion, robot) = load_motion_calibrated(
         &args.motion,
         args.robot.as_deref(),
@@ -49,12 +55,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let paths = space::paths(spatial.as_ref());
         plot::write(&motion, robot.geometry().as_ref(), &traj, &paths, path)?;
     }
+    let mut rerun = args.rerun.start(&robot, motion.units)?;
+    rerun.plan(&traj, motion.rate_hz(&robot));
+    let recorded = rerun.finish()?;
     if args.json {
         outln!("{}", crate::shared::json::pretty(&report)?)?;
     } else {
         print_text(&report, &motion)?;
         if let Some(path) = &args.plot {
             outln!("plot: {}", path.display())?;
+        }
+        if let Some(what) = recorded {
+            outln!("rerun: {what}")?;
         }
     }
     Ok(ExitCode::SUCCESS)

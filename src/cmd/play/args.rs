@@ -37,6 +37,10 @@ pub struct Args {
     /// Write one CSV row per cycle and joint.
     #[arg(long)]
     pub log: Option<PathBuf>,
+    /// `--rerun FILE.rrd`, `--rerun-connect [ADDR]`: the run in the Rerun
+    /// viewer.
+    #[command(flatten)]
+    pub rerun: crate::shared::flags::RerunArgs,
     /// Draw planned vs measured positions and the tracking error: SVG
     /// (.svg) or PNG (.png); any other extension is refused before moving.
     #[arg(long)]
@@ -57,7 +61,7 @@ pub struct Args {
     /// Show the live servo view of `servobus monitor` while playing, from
     /// the run's telemetry (no extra bus traffic). Needs a terminal: refused
     /// (exit 2) before anything moves without one.
-    #[arg(long, conflicts_with_all = ["json", "log", "plot"])]
+    #[arg(long, conflicts_with_all = ["json", "log", "plot", "rerun", "rerun_connect"])]
     pub monitor: bool,
     /// Start the simulated joints at these angles instead of their rest
     /// positions (robot units, robot joint order, comma-separated, e.g.

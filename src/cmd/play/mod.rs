@@ -13,6 +13,7 @@ use servobus_config::{Motion, Robot};
 use servobus_robot::Trajectory;
 
 use crate::record::CsvLog;
+use crate::shared::flags::Recording;
 
 // `run` below is the order of events; each step's details live by concern:
 // reading the inputs, where the run happens, what is shown while it runs
@@ -45,6 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         backend,
         pose,
         log,
+        rerun,
     } = prepare(&args)?;
     let units = motion.units;
     let duration = trajectory.duration();
@@ -55,29 +57,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut options = run_options(&args, &robot, units, rate_hz);
     // A keyframe's `grasp:` grasps from the start of its move.
     options.grasps = servobus_robot::motion_grasps(&motion, &trajectory);
-    let runner = start(
+    let started = start(
         &backend,
         &robot,
         &pose,
         trajectory,
         options,
         (rate_hz, args.store.write_servos),
-    )?;
-
+    );
+    let (runner, mut rerun) = rerun.unless_refused(started)?;
     install_ctrl_c(runner.commands());
-    let shown = Shown {
-        names: names_of(&robot),
-        bus_of: robot
-            .buses
-            .iter()
-            .flat_map(|bus| bus.joints.iter().map(|_| bus.name.clone()))
-            .collect(),
-        keyframes,
-        approach: runner.approach().as_secs_f64(),
-        settle: SETTLE.as_secs_f64(),
-        geometry: robot.geometry(),
-        recording: recording.as_ref().map(|r| r.series.as_slice()),
-    };
+    let recorded = recording.as_ref().map(|r| r.series.as_slice());
+    let shown = shown_of(&robot, keyframes, &runner, recorded);
     let outcome = if args.monitor {
         crate::shared::screen::watch_run(&runner, &robot, units, rate_hz).map(|()| Followed {
             log: None,
@@ -85,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             stdout: None,
         })
     } else {
-        follow(&runner, &args, log, &shown, units, duration)
+        follow(&runner, &args, (log, &mut rerun), &shown, units, duration)
     };
     let report = runner.join();
     let Followed { log, plot, stdout } = outcome?;
@@ -96,10 +87,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let report = match report {
         Ok(report) => report,
         Err(e) => {
+            let e = e.into();
+            rerun.refused(&e);
+            outputs.finish_rerun(rerun);
             outputs.say_failed();
-            return Err(e.into());
+            return Err(e);
         }
     };
+    outputs.finish_rerun(rerun);
     if let (Some(plot), Some(path)) = (plot, &args.plot) {
         outputs.draw_plot(&plot, path, &motion, &robot);
     }
@@ -115,6 +110,29 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(crate::shared::exit::of_finish(report.finish))
 }
 
+/// What the live view and the plot show of `robot`'s run of a path with
+/// `keyframes` (path times) on `runner`, beside the `recording` replayed.
+fn shown_of<'a>(
+    robot: &Robot,
+    keyframes: Vec<f64>,
+    runner: &servobus_robot::Run,
+    recording: Option<&'a [Vec<(f64, f64)>]>,
+) -> Shown<'a> {
+    Shown {
+        names: names_of(robot),
+        bus_of: robot
+            .buses
+            .iter()
+            .flat_map(|bus| bus.joints.iter().map(|_| bus.name.clone()))
+            .collect(),
+        keyframes,
+        approach: runner.approach().as_secs_f64(),
+        settle: SETTLE.as_secs_f64(),
+        geometry: robot.geometry(),
+        recording,
+    }
+}
+
 /// What is known and made before anything moves.
 struct Prepared {
     motion: Motion,
@@ -127,6 +145,9 @@ struct Prepared {
     pose: Vec<f64>,
     /// The log's temporary, with `--log`.
     log: Option<CsvLog>,
+    /// The recording for the Rerun viewer, with `--rerun` or
+    /// `--rerun-connect`.
+    rerun: Recording,
 }
 
 /// Checks everything before anything moves: the terminal `--monitor`
@@ -139,6 +160,7 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
         crate::shared::screen::check_play_terminal()?;
     }
     check_outputs(args)?;
+    args.rerun.check()?;
     let (motion, robot, trajectory, recording, rate_hz) = load(args)?;
     let backend = backend(args, &robot)?;
     let pose = sim_pose(args, &robot, &backend)?;
@@ -163,6 +185,9 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
         )?),
         None => None,
     };
+    // Its temporary (or the viewer's connection) too: the robot's tree and
+    // meshes are logged before anything moves.
+    let rerun = args.rerun.start(&robot, motion.units)?;
     Ok(Prepared {
         motion,
         robot,
@@ -172,5 +197,6 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
         backend,
         pose,
         log,
+        rerun,
     })
 }

@@ -10,6 +10,7 @@ use servobus_robot::Trajectory;
 use super::args::Args;
 use super::setup::Backend;
 use crate::record::{CsvLog, PlotData};
+use crate::shared::flags::Recording;
 use crate::shared::out::{err, out, outln, StdoutError};
 use crate::shared::write_report;
 
@@ -84,6 +85,8 @@ pub(super) struct Outputs {
     failed: Vec<anyhow::Error>,
     log_written: bool,
     plot_written: bool,
+    /// Where the recording for the Rerun viewer went, once finished.
+    rerun: Option<String>,
 }
 
 impl Outputs {
@@ -94,6 +97,15 @@ impl Outputs {
                 Ok(()) => self.log_written = true,
                 Err(e) => self.failed.push(e),
             }
+        }
+    }
+
+    /// Finishes the recording for the Rerun viewer, if any: kept also
+    /// when the run ended in an error (which it shows).
+    pub(super) fn finish_rerun(&mut self, rerun: Recording) {
+        match rerun.finish() {
+            Ok(what) => self.rerun = what,
+            Err(e) => self.failed.push(e),
         }
     }
 
@@ -175,6 +187,18 @@ pub(super) fn report_text(
         }
         if let (true, Some(path)) = (outputs.plot_written, &args.plot) {
             writeln!(text, "plot: {}", path.display())?;
+        }
+        match (&outputs.rerun, &args.rerun.rerun) {
+            (Some(_), Some(path)) => {
+                writeln!(
+                    text,
+                    "rerun: {} (`rerun {}` opens it)",
+                    path.display(),
+                    path.display()
+                )?;
+            }
+            (Some(what), None) => writeln!(text, "rerun: sent to {what}")?,
+            (None, _) => {}
         }
     }
     Ok(text)

@@ -11,6 +11,7 @@ use servobus_robot::{Command, CommandSender, Run, Telemetry};
 
 use super::args::Args;
 use crate::record::{CsvLog, PlotData};
+use crate::shared::flags::Recording;
 use crate::shared::out::{errln, outln, StdoutError};
 
 /// How long the final position is held (and tracked) after the path.
@@ -54,7 +55,7 @@ pub(super) struct Followed {
 pub(super) fn follow(
     runner: &Run,
     args: &Args,
-    mut log: Option<CsvLog>,
+    (mut log, rerun): (Option<CsvLog>, &mut Recording),
     shown: &Shown,
     units: Units,
     duration: f64,
@@ -67,7 +68,11 @@ pub(super) fn follow(
     let mut progress = Progress::new(args.json, duration, &units.to_string(), runner.commands());
     let telemetry = runner.telemetry();
     loop {
-        match telemetry.recv_timeout(Duration::from_millis(100)) {
+        let message = telemetry.recv_timeout(Duration::from_millis(100));
+        if let Ok(m) = &message {
+            rerun.telemetry(m);
+        }
+        match message {
             Ok(Telemetry::Cycle(sample)) => {
                 if !announced {
                     announced = true;

@@ -62,6 +62,10 @@ pub struct Robot {
     /// The robot's geometry (`kinematics:`), checked against its joints;
     /// joint limits unset ([`Robot::geometry`] sets them).
     pub kinematics: Option<servobus_kinematics::Geometry>,
+    /// The URDF the geometry was imported from (`kinematics: {urdf: FILE}`),
+    /// kept for its links' visuals (meshes resolved relative to the URDF);
+    /// `None` for geometry typed by hand, or none.
+    pub urdf: Option<servobus_kinematics::Urdf>,
     /// The mobile base its wheel joints drive (`base:`), checked against
     /// its joints: every wheel of the base is a `mode: wheel` joint.
     pub base: Option<servobus_kinematics::Base>,

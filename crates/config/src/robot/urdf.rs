@@ -15,7 +15,7 @@ use servobus_kinematics::{
     FrameSpec, Geometry, JointSpec, Placement, Spec, Urdf, UrdfError, UrdfFrame, UrdfSpec,
 };
 
-use super::raw::RawBus;
+use super::raw::{RawBus, RawRobot};
 use super::{JointMode, Robot};
 use crate::error::{ConfigError, Source};
 use crate::locate::FieldPath;
@@ -119,9 +119,22 @@ fn section() -> FieldPath {
     FieldPath::root().key("kinematics")
 }
 
-/// The URDF a `kinematics:` section names (relative to `dir`, the robot
-/// file's directory), imported; `None` for a hand-typed section or none.
+/// The URDF the robot file's `kinematics:` section names (relative to
+/// `dir`, the robot file's directory), imported, with every position joint
+/// that lacks `min` or `max` given the URDF's limit; `None` for a
+/// hand-typed section or none.
 pub(super) fn import(
+    raw: &mut RawRobot,
+    dir: &Path,
+    src: &Source,
+) -> Result<Option<Urdf>, ConfigError> {
+    let imported = load(raw.kinematics.as_ref(), dir, raw.units, src)?;
+    fill_limits(&mut raw.buses, imported.as_ref(), raw.units);
+    Ok(imported)
+}
+
+/// The URDF a `kinematics:` section names, imported; see [`import`].
+fn load(
     raw: Option<&RawKinematics>,
     dir: &Path,
     units: Units,
@@ -217,7 +230,7 @@ fn urdf_error(e: &UrdfError, raw: &RawKinematics, src: &Source) -> ConfigError {
 
 /// Gives every position joint of `buses` that lacks `min` or `max` the
 /// URDF's limit, in `units`.
-pub(super) fn fill_limits(buses: &mut [RawBus], urdf: Option<&Urdf>, units: Units) {
+fn fill_limits(buses: &mut [RawBus], urdf: Option<&Urdf>, units: Units) {
     let Some(urdf) = urdf else { return };
     for joint in buses.iter_mut().flat_map(|b| b.joints.iter_mut()) {
         let limit = urdf.limits.get(&joint.name).and_then(|l| l.position);
@@ -339,4 +352,39 @@ fn check_limits(robot: &Robot, urdf: &Urdf, src: &Source) -> Result<(), ConfigEr
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod kept {
+    use std::path::Path;
+
+    use crate::{load_robot, RobotOptions, RobotSource};
+
+    #[test]
+    fn a_robot_keeps_the_urdf_it_imports_for_its_meshes_and_none_typed_by_hand() {
+        let file =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/urdf/so101_urdf.yaml");
+        let robot = load_robot(&file, &RobotOptions::default()).expect("loads");
+        let urdf = robot.urdf.as_ref().expect("the imported URDF");
+        assert!(urdf.file.ends_with("so101/so101_new_calib.urdf"));
+        let meshes = urdf
+            .links
+            .iter()
+            .flat_map(|l| &l.visuals)
+            .filter(|v| matches!(v.geometry, servobus_kinematics::VisualGeometry::Mesh { .. }))
+            .count();
+        assert!(meshes > 10, "{meshes} meshes");
+        // Every link hangs on a joint of the robot, or on its base.
+        for link in &urdf.links {
+            assert!(
+                link.parent == "base" || robot.joint(&link.parent).is_some(),
+                "{}: {}",
+                link.link,
+                link.parent
+            );
+        }
+        let hand =
+            load_robot(RobotSource::Builtin("so101"), &RobotOptions::default()).expect("so101");
+        assert!(hand.kinematics.is_some() && hand.urdf.is_none());
+    }
 }

@@ -79,8 +79,7 @@ pub(super) fn robot(mut raw: RawRobot, src: &Source, dir: &Path) -> Result<Robot
             }
         }
     }
-    let imported = urdf::import(raw.kinematics.as_ref(), dir, raw.units, src)?;
-    urdf::fill_limits(&mut raw.buses, imported.as_ref(), raw.units);
+    let imported = urdf::import(&mut raw, dir, src)?;
     let mut bus_names = HashSet::new();
     let mut joint_names: HashMap<String, FieldPath> = HashMap::new();
     let mut buses = Vec::with_capacity(raw.buses.len());
@@ -104,11 +103,12 @@ pub(super) fn robot(mut raw: RawRobot, src: &Source, dir: &Path) -> Result<Robot
         calibration: RobotCalibration::None,
         calibration_pose: Vec::new(),
         kinematics: None,
+        urdf: imported,
         base: None,
     };
     robot.calibration_pose = calibration_pose(&robot, &pose, src)?;
     if let Some(section) = &raw.kinematics {
-        robot.kinematics = Some(urdf::kinematics(&robot, section, imported.as_ref(), src)?);
+        robot.kinematics = Some(urdf::kinematics(&robot, section, robot.urdf.as_ref(), src)?);
     }
     if let Some(spec) = &raw.base {
         robot.base = Some(base(&robot, spec, src)?);

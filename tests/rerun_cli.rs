@@ -54,6 +54,21 @@ fn read_back(args: &[&str]) {
     assert!(text.contains("PASS"), "no check ran: {text}");
 }
 
+/// Checks `recording`, of the SO-101 `robot` whose URDF is [`URDF`]: a
+/// whole recording, read back as an arm.
+fn read_back_arm(recording: &Path, robot: &Path) {
+    is_recording(recording);
+    let joints = SO101_JOINTS.join(",");
+    read_back(&[
+        "arm",
+        arg(recording),
+        common::BIN,
+        arg(robot),
+        arg(&repo(URDF)),
+        &joints,
+    ]);
+}
+
 /// Runs `servobus ARGS` in `dir`: it must succeed.
 fn ok(dir: &Path, args: &[&str]) -> String {
     let out = servobus_in(dir, args);
@@ -94,16 +109,7 @@ fn play_of_the_urdf_so101_reads_back_as_its_meshes_on_its_joints_at_the_measured
     );
     assert!(stdout.contains("rerun: run.rrd"), "{stdout}");
     let run = dir.join("run.rrd");
-    is_recording(&run);
-    let joints = SO101_JOINTS.join(",");
-    read_back(&[
-        "arm",
-        arg(&run),
-        common::BIN,
-        arg(&robot),
-        arg(&repo(URDF)),
-        &joints,
-    ]);
+    read_back_arm(&run, &robot);
 }
 
 #[test]
@@ -215,16 +221,7 @@ fn stream_records_the_targets_it_follows() {
     let out = feed(child, &lines);
     assert!(out.status.success(), "{out:?}");
     let recording = dir.join("stream.rrd");
-    is_recording(&recording);
-    let joints = SO101_JOINTS.join(",");
-    read_back(&[
-        "arm",
-        arg(&recording),
-        common::BIN,
-        arg(&robot),
-        arg(&repo(URDF)),
-        &joints,
-    ]);
+    read_back_arm(&recording, &robot);
 }
 
 #[test]
@@ -247,16 +244,7 @@ fn follow_records_the_follower_and_its_goals() {
     );
     assert!(stdout.contains("rerun: follow.rrd"), "{stdout}");
     let recording = dir.join("follow.rrd");
-    is_recording(&recording);
-    let joints = SO101_JOINTS.join(",");
-    read_back(&[
-        "arm",
-        arg(&recording),
-        common::BIN,
-        arg(&robot),
-        arg(&repo(URDF)),
-        &joints,
-    ]);
+    read_back_arm(&recording, &robot);
 }
 
 #[test]

@@ -80,7 +80,7 @@ pub use line::{
 };
 pub use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 pub use spec::{FrameSpec, JointSpec, Location, Section, Spec, SpecError, BASE};
-pub use support::{planar_motion, support_margin};
+pub use support::{move_on_feet, planar_motion, support_margin};
 pub use urdf::{
     LinkVisuals, Placement, Urdf, UrdfError, UrdfFrame, UrdfLimits, UrdfPlace, UrdfSpec, Visual,
     VisualGeometry, MAX_URDF_BYTES,

@@ -70,6 +70,23 @@ pub fn support_margin(feet: &[Vector2<f64>], body: &Isometry3<f64>) -> f64 {
     margin
 }
 
+/// The body's planar move (as [`planar_motion`]: a turn, rad, then a
+/// shift, mm, in its frame before) between two samples of its feet in its
+/// frame (`now` and `before`, one entry per foot: its x, y when it is on
+/// the ground, `None` in the air), from the feet on the ground at both;
+/// `None` when fewer than three are.
+pub fn move_on_feet(
+    now: &[Option<Vector2<f64>>],
+    before: &[Option<Vector2<f64>>],
+) -> Option<(f64, Vector2<f64>)> {
+    let (a, b): (Vec<_>, Vec<_>) = now
+        .iter()
+        .zip(before)
+        .filter_map(|(n, b)| n.zip(*b))
+        .unzip();
+    (a.len() >= 3).then(|| planar_motion(&a, &b))
+}
+
 /// The planar move (a turn about z, rad, then a shift, mm) that takes the
 /// points `a` onto the points `b` (x, y; the same points seen twice) in
 /// the least-squares sense. Seen from a body, feet planted on the ground

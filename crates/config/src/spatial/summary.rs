@@ -4,7 +4,7 @@
 //! rise and the worst stability margin.
 
 use servobus_kinematics::{
-    planar_motion, support_margin, ArmIk, Geometry, Isometry3, Legs, Point3, Poses, Vector2,
+    move_on_feet, support_margin, ArmIk, Geometry, Isometry3, Legs, Point3, Poses, Vector2,
     LOW_MARGIN_MM,
 };
 use servobus_trajectory::{JointState, Trajectory};
@@ -238,13 +238,7 @@ impl FeetTrack {
             .iter()
             .map(|p| ((p.z - ground).abs() < ON_GROUND_MM).then(|| Vector2::new(p.x, p.y)))
             .collect();
-        let (a, b): (Vec<_>, Vec<_>) = now
-            .iter()
-            .zip(&self.before)
-            .filter_map(|(n, b)| n.zip(*b))
-            .unzip();
-        if a.len() >= 3 {
-            let (angle, shift) = planar_motion(&a, &b);
+        if let Some((angle, shift)) = move_on_feet(&now, &self.before) {
             self.distance += shift.norm();
             self.turn += angle;
         }

@@ -4,7 +4,7 @@
 //! they move by the inverse of its move); an arm's base stays where it is.
 //! And the paths of the tool and the feet in the world.
 
-use servobus_kinematics::{planar_motion, Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
+use servobus_kinematics::{move_on_feet, Isometry3, Point3, UnitQuaternion, Vector2, Vector3};
 
 /// A planned (or commanded) foot this close to the ground plane stands on
 /// it, mm: the plan puts it exactly there, and a foot lifting off or
@@ -67,13 +67,7 @@ impl Odometer {
             .zip(&down)
             .map(|(p, &d)| d.then(|| Vector2::new(p.x, p.y)))
             .collect();
-        let (a, b): (Vec<_>, Vec<_>) = now
-            .iter()
-            .zip(&self.before)
-            .filter_map(|(n, b)| n.zip(*b))
-            .unzip();
-        if a.len() >= 3 {
-            let (angle, shift) = planar_motion(&a, &b);
+        if let Some((angle, shift)) = move_on_feet(&now, &self.before) {
             let (s, c) = self.heading.sin_cos();
             self.x += c * shift.x - s * shift.y;
             self.y += s * shift.x + c * shift.y;
